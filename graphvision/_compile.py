@@ -1,0 +1,288 @@
+"""Checking a graph against a registry, before anything runs.
+
+:func:`compile_graph` resolves every op, port, type and parameter of a
+:class:`~graphvision.Graph` and returns a :class:`CompiledGraph` ready to
+schedule, or raises one :class:`~graphvision.PipelineError` listing every
+problem, each with its YAML file and line:
+
+* unknown op, port, node or output (with a "did you mean"),
+* missing required input port, type mismatch naming both ends and both types,
+* invalid parameter (type, range, unknown name), unknown ``${params.x}``,
+* cycles, printed as ``a -> b -> a``,
+* graph inputs that are unused, of unknown type, or missing a value.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Any
+
+import networkx as nx
+import pydantic
+
+from ._errors import PipelineError, Problem, UnknownNameError
+from ._graph import Graph, Ref
+from ._node import SINGLE_OUTPUT, NodeSpec
+from ._ports import PortType
+from ._registry import Registry, did_you_mean
+
+__all__ = ["CompiledGraph", "Step", "compile_graph"]
+
+PARAM_REF = re.compile(r"\$\{params\.([A-Za-z_][A-Za-z0-9_]*)\}")
+
+
+@dataclass(frozen=True)
+class Step:
+    """A node ready to run: its spec, validated parameters and where each input comes from.
+
+    ``inputs`` maps port -> (producer, output port); the output port is '' for a graph
+    input. ``outputs`` are the output types with the node's type variables bound.
+    """
+
+    name: str
+    spec: NodeSpec
+    params: dict[str, Any]
+    inputs: dict[str, tuple[str, str]]
+    outputs: dict[str, type[PortType]]
+
+
+@dataclass(frozen=True)
+class CompiledGraph:
+    """A validated graph: steps in topological order, typed inputs and outputs."""
+
+    graph: Graph
+    steps: dict[str, Step]
+    input_types: dict[str, type[PortType]]
+    outputs: dict[str, tuple[str, str]]
+
+    def output_type(self, name: str) -> type[PortType]:
+        producer, port = self.outputs[name]
+        if producer in self.input_types:
+            return self.input_types[producer]
+        return self.steps[producer].outputs[port]
+
+    def needed_for(self, outputs: list[str]) -> list[str]:
+        """Steps that the given outputs depend on, in topological order."""
+        wanted: set[str] = set()
+        stack = [self.outputs[o][0] for o in outputs]
+        while stack:
+            name = stack.pop()
+            if name in wanted or name not in self.steps:
+                continue
+            wanted.add(name)
+            stack.extend(src for src, _ in self.steps[name].inputs.values())
+        return [name for name in self.steps if name in wanted]
+
+
+class _Checker:
+    def __init__(self, graph: Graph, registry: Registry) -> None:
+        self.graph, self.registry = graph, registry
+        self.problems: list[Problem] = []
+        self.resolved: dict[str, dict[str, type[PortType]]] = {}
+
+    def report(self, where: str, message: str) -> None:
+        self.problems.append(Problem(self.graph.line_of(where), where, message, self.graph.source))
+
+    # -- parameters -------------------------------------------------------------
+
+    def substitute(self, value: Any, where: str, used: set[str]) -> Any:
+        if isinstance(value, str):
+            names = PARAM_REF.findall(value)
+            for name in names:
+                used.add(name)
+                if name not in self.graph.params:
+                    self.report(where, f"unknown pipeline param '${{params.{name}}}'"
+                                f"{did_you_mean(name, self.graph.params)}")
+                    return value
+            whole = PARAM_REF.fullmatch(value)
+            if whole:
+                return self.graph.params[whole.group(1)]
+            return PARAM_REF.sub(lambda m: str(self.graph.params[m.group(1)]), value)
+        if isinstance(value, list):
+            return [self.substitute(v, f"{where}.{i}", used) for i, v in enumerate(value)]
+        if isinstance(value, dict):
+            return {k: self.substitute(v, f"{where}.{k}", used) for k, v in value.items()}
+        return value
+
+    def check_params(self, name: str, spec: NodeSpec, params: dict[str, Any]) -> dict[str, Any]:
+        try:
+            return spec.validate_params(params)
+        except pydantic.ValidationError as error:
+            allowed = list(spec.params_model.model_fields)
+            for item in error.errors():
+                param = ".".join(str(p) for p in item["loc"])
+                where = f"nodes.{name}.params.{param}"
+                if item["type"] == "extra_forbidden":
+                    listing = ", ".join(allowed) if allowed else "none"
+                    self.report(where, f"unknown parameter '{param}' of {spec.id}"
+                                f"{did_you_mean(param, allowed)}; parameters: {listing}")
+                else:
+                    self.report(where, f"invalid value {item.get('input')!r} for parameter "
+                                f"'{param}' of {spec.id}: {item['msg']}")
+            return {}
+
+    # -- connections --------------------------------------------------------------
+
+    def source_type(self, ref: Ref, where: str) -> tuple[tuple[str, str], type[PortType]] | None:
+        graph = self.graph
+        if ref.node in graph.inputs:
+            if ref.port is not None:
+                self.report(where, f"graph input '{ref.node}' has no port '{ref.port}'")
+                return None
+            try:
+                return (ref.node, ""), self.registry.port_type(graph.inputs[ref.node].type)
+            except UnknownNameError:
+                return None  # reported once, on the input
+        if ref.node not in graph.nodes:
+            options = list(graph.nodes) + list(graph.inputs)
+            self.report(where, f"unknown node or input '{ref.node}'{did_you_mean(ref.node, options)}")
+            return None
+        op = graph.nodes[ref.node].op
+        if op not in self.registry.nodes:
+            return None  # reported on that node
+        outputs = self.resolved.get(ref.node) or self.registry.nodes[op].outputs
+        port = ref.port
+        if port is None:
+            if len(outputs) != 1:
+                self.report(where, f"node '{ref.node}' ({op}) has outputs "
+                            f"{', '.join(outputs)}; name one, e.g. '{ref.node}.{next(iter(outputs))}'")
+                return None
+            port = next(iter(outputs))
+        elif port not in outputs:
+            self.report(where, f"node '{ref.node}' ({op}) has no output '{port}'"
+                        f"{did_you_mean(port, outputs)}; outputs: {', '.join(outputs)}")
+            return None
+        return (ref.node, port), outputs[port]
+
+    def check_inputs(self, name: str, spec: NodeSpec) -> dict[str, tuple[str, str]]:
+        """Wire the node's inputs, check their types, bind its type variables."""
+        decl = self.graph.nodes[name]
+        wired: dict[str, tuple[str, str]] = {}
+        bindings: dict[str, type[PortType]] = {}
+        for port, ref in decl.inputs.items():
+            where = f"nodes.{name}.in.{port}"
+            if port not in spec.inputs:
+                listing = ", ".join(spec.inputs) or "none"
+                self.report(where, f"{spec.id} has no input port '{port}'"
+                            f"{did_you_mean(port, spec.inputs)}; inputs: {listing}")
+                continue
+            found = self.source_type(ref, where)
+            if found is None:
+                continue
+            wired[port], given = found
+            wanted = spec.inputs[port].type
+            if not given.is_a(wanted):
+                self.report(where, f"type mismatch: '{ref}' gives {given.type_name()} but "
+                            f"'{name}.{port}' ({spec.id}) takes {wanted.type_name()}")
+            elif spec.inputs[port].typevar:
+                var = spec.inputs[port].typevar
+                bound = bindings.get(var, given)
+                bindings[var] = bound if given.is_a(bound) else given if bound.is_a(given) else wanted
+        for port, declared in spec.inputs.items():
+            if port not in decl.inputs and not declared.optional:
+                self.report(f"nodes.{name}.in", f"missing input port '{port}' of {spec.id} "
+                            f"({declared.type.type_name()})")
+        self.resolved[name] = {
+            port: bindings.get(spec.output_vars.get(port, ""), kind)
+            for port, kind in spec.outputs.items()
+        }
+        return wired
+
+    # -- whole graph ----------------------------------------------------------------
+
+    def check_cycles(self) -> list[str] | None:
+        nx_graph = self.graph.to_networkx()
+        try:
+            return [n for n in nx.topological_sort(nx_graph) if n in self.graph.nodes]
+        except nx.NetworkXUnfeasible:
+            reported: set[frozenset[str]] = set()
+            for cycle in nx.simple_cycles(nx_graph):
+                if frozenset(cycle) in reported:
+                    continue
+                reported.add(frozenset(cycle))
+                start = min(cycle)
+                at = cycle.index(start)
+                ordered = cycle[at:] + cycle[:at] + [start]
+                self.report(f"nodes.{start}", f"cycle: {' -> '.join(ordered)}")
+                if len(reported) >= 5:
+                    break
+            return None
+
+    def run(self, provided: set[str] | None) -> CompiledGraph:
+        graph, registry = self.graph, self.registry
+        input_types: dict[str, type[PortType]] = {}
+        for name, decl in graph.inputs.items():
+            try:
+                input_types[name] = registry.port_type(decl.type)
+            except UnknownNameError as error:
+                self.report(f"inputs.{name}.type", str(error))
+            if provided is not None and name not in provided and decl.default is None:
+                self.report(f"inputs.{name}", f"missing input '{name}': no value given "
+                            f"(--input {name}=PATH) and no default")
+        clashes = set(graph.inputs) & set(graph.nodes)
+        for name in sorted(clashes):
+            self.report(f"nodes.{name}", f"'{name}' is both a graph input and a node")
+
+        order = self.check_cycles()
+        used_params: set[str] = set()
+        steps: dict[str, Step] = {}
+        for name in order or list(graph.nodes):
+            decl = graph.nodes[name]
+            try:
+                spec = registry.node(decl.op)
+            except UnknownNameError as error:
+                self.report(f"nodes.{name}.op", str(error))
+                for port, ref in decl.inputs.items():  # still check the references
+                    if ref.node not in graph.nodes and ref.node not in graph.inputs:
+                        self.source_type(ref, f"nodes.{name}.in.{port}")
+                continue
+            params = self.substitute(decl.params, f"nodes.{name}.params", used_params)
+            checked = self.check_params(name, spec, params)
+            wired = self.check_inputs(name, spec)
+            steps[name] = Step(name, spec, checked, wired, self.resolved[name])
+
+        outputs: dict[str, tuple[str, str]] = {}
+        if not graph.outputs:
+            self.report("outputs", "a pipeline needs at least one output")
+        for out_name, ref in graph.outputs.items():
+            found = self.source_type(ref, f"outputs.{out_name}")
+            if found is not None:
+                outputs[out_name] = found[0]
+
+        referenced = {ref.node for d in graph.nodes.values() for ref in d.inputs.values()}
+        referenced |= {ref.node for ref in graph.outputs.values()}
+        for name in graph.inputs:
+            if name not in referenced:
+                self.report(f"inputs.{name}", f"unused input '{name}': no node or output reads it")
+        for name in graph.params:
+            if name not in used_params:
+                self.report(f"params.{name}", f"unused pipeline param '{name}': "
+                            "no node refers to ${params." + name + "}")
+
+        if self.problems:
+            raise PipelineError(self.problems, graph.source)
+        return CompiledGraph(graph, {n: steps[n] for n in order or []}, input_types, outputs)
+
+
+def compile_graph(
+    graph: Graph, registry: Registry, *, provided: set[str] | None = None
+) -> CompiledGraph:
+    """Validate ``graph`` against ``registry`` and resolve it for running.
+
+    Parameters
+    ----------
+    graph : Graph
+        The pipeline, from YAML or the Python builder.
+    registry : Registry
+        Where ops and port types are looked up.
+    provided : set of str, optional
+        Names of graph inputs given values for a run; inputs neither provided
+        nor defaulted are then reported. None skips that check (``validate``).
+
+    Raises
+    ------
+    PipelineError
+        Listing every problem found, sorted by line.
+    """
+    return _Checker(graph, registry).run(provided)

@@ -1,0 +1,130 @@
+"""Exceptions raised by graphvision.
+
+Every error a user can cause derives from :class:`GraphvisionError`; the CLI
+prints those without a traceback (exit 2 for a bad pipeline or usage, 1 for a
+failed run). Anything else is a bug and keeps its traceback.
+
+::
+
+    GraphvisionError
+    ├── RegistrationError        a node, port type or source rejected at registration
+    │   └── DuplicateNodeError   two plugins define one node id
+    ├── PluginLoadError          a plugin failed to import (the others keep working)
+    ├── UnknownNameError         an op, port type or source that is not registered
+    ├── PortValueError           a value does not satisfy its port type
+    ├── PipelineError            a pipeline is invalid; carries every Problem at once
+    ├── InputError               a graph input cannot be resolved (file missing, ...)
+    ├── NodeExecutionError       a node raised; names node, op, params and inputs
+    └── RunError                 a run finished with failed nodes
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = [
+    "DuplicateNodeError",
+    "GraphvisionError",
+    "InputError",
+    "NodeExecutionError",
+    "PipelineError",
+    "PluginLoadError",
+    "PortValueError",
+    "Problem",
+    "RegistrationError",
+    "RunError",
+    "UnknownNameError",
+]
+
+
+class GraphvisionError(Exception):
+    """Base class of every error a user of graphvision can cause."""
+
+
+class RegistrationError(GraphvisionError):
+    """A node, port type or input source was rejected when it registered."""
+
+
+class DuplicateNodeError(RegistrationError):
+    """Two plugins define the same node id and neither declares an override."""
+
+
+class PluginLoadError(GraphvisionError):
+    """A plugin could not be imported."""
+
+
+class UnknownNameError(GraphvisionError, KeyError):
+    """A name (op, port type, source scheme) that is not registered."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+class PortValueError(GraphvisionError, ValueError):
+    """A value does not satisfy the port type it is given to."""
+
+
+class InputError(GraphvisionError):
+    """A graph input could not be resolved to a value."""
+
+
+@dataclass(frozen=True, order=True)
+class Problem:
+    """One problem found in a pipeline, located in its file when known.
+
+    Attributes
+    ----------
+    line : int
+        1-based line in ``file`` (0 when unknown).
+    where : str
+        Dotted location in the pipeline, e.g. ``nodes.blur.params.sigma``.
+    message : str
+        What is wrong, in words a user can act on.
+    file : str
+        The pipeline file ('' for graphs built in Python).
+    """
+
+    line: int
+    where: str
+    message: str
+    file: str = ""
+
+    def __str__(self) -> str:
+        place = self.where
+        if self.file:
+            place += f" at {self.file}:{self.line}" if self.line else f" in {self.file}"
+        return f"{place}: {self.message}"
+
+
+class PipelineError(GraphvisionError):
+    """A pipeline is invalid. ``problems`` lists every problem, sorted by line."""
+
+    def __init__(self, problems: list[Problem], source: str = "") -> None:
+        self.problems = sorted(problems)
+        self.source = source
+        head = f"invalid pipeline {source}" if source else "invalid pipeline"
+        count = len(self.problems)
+        lines = [f"{head}: {count} problem{'s' if count != 1 else ''}"]
+        lines += [f"  - {p}" for p in self.problems]
+        super().__init__("\n".join(lines))
+
+
+class NodeExecutionError(GraphvisionError):
+    """A node raised. The original exception is chained as ``__cause__``."""
+
+    def __init__(self, node: str, op: str, params: dict, inputs: dict[str, str], error: str):
+        self.node, self.op, self.params, self.inputs = node, op, params, inputs
+        summary = ", ".join(f"{k}={v}" for k, v in inputs.items()) or "none"
+        super().__init__(
+            f"node '{node}' (op {op}) failed: {error}\n"
+            f"    params: {params}\n    inputs: {summary}"
+        )
+
+
+class RunError(GraphvisionError):
+    """A run ended with failed nodes; ``failures`` maps node name to its error."""
+
+    def __init__(self, failures: dict[str, GraphvisionError], record: object = None) -> None:
+        self.failures = failures
+        self.record = record
+        super().__init__("\n".join(str(e) for e in failures.values()))

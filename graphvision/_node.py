@@ -1,0 +1,368 @@
+"""Nodes: a typed Python function plus a decorator.
+
+::
+
+    @node("filters.gaussian", version=1)
+    def gaussian(image: Image, *, sigma: Annotated[float, Field(gt=0)] = 1.0) -> Image:
+        '''NumPy-style docstring: the node's documentation.'''
+
+* positional parameters are **input ports**, annotated with a port type
+  (``Optional[T] = None`` makes the port optional);
+* keyword-only parameters are **parameters**, with defaults, validated by a
+  pydantic model built from their annotations (``Annotated[..., Field(...)]``
+  for constraints, ``Literal[...]`` for choices);
+* the return annotation is the **output**: one port type (port ``out``) or a
+  ``NamedTuple`` whose fields are port types (one port per field);
+* a ``TypeVar`` bound to a port type makes a node generic: ``def gaussian(
+  image: T) -> T`` with ``T = TypeVar("T", bound=FloatImage)`` gives a
+  ``GrayImage`` out for a ``GrayImage`` in. The checker binds the variable to
+  the type actually connected.
+
+The decorator only attaches metadata and returns the function unchanged, so a
+node stays an ordinary function to call and test. Signatures are checked when
+a plugin registers (:func:`build_spec`), not when the node first runs.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import importlib
+import inspect
+import re
+import sys
+import textwrap
+import types
+import typing
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any, TypeVar, Union, get_args, get_origin
+
+import pydantic
+
+from ._errors import RegistrationError
+from ._ports import PortType
+
+__all__ = [
+    "FunctionRef",
+    "InputPort",
+    "NodeSpec",
+    "SourceSpec",
+    "build_spec",
+    "node",
+    "source",
+]
+
+NODE_ID = re.compile(r"^[a-z][a-z0-9_]*\.[a-z][a-z0-9_]*$")
+SINGLE_OUTPUT = "out"
+
+
+@dataclass(frozen=True)
+class _NodeMark:
+    id: str
+    version: int
+    cache: bool
+    overrides: bool
+
+
+@dataclass(frozen=True)
+class _SourceMark:
+    scheme: str
+
+
+def node(
+    id: str, *, version: int = 1, cache: bool = True, overrides: bool = False
+) -> Callable[[Callable], Callable]:
+    """Mark a function as the graphvision node ``id`` (``family.name``).
+
+    Parameters
+    ----------
+    id : str
+        Stable node id, ``family.name`` in lower snake case.
+    version : int
+        Bump it when the node's results change for reasons its own source does
+        not show (a helper it calls changed); it is part of every cache key.
+    cache : bool
+        False opts the node out of caching (it is recomputed on every run).
+    overrides : bool
+        True lets this node replace another plugin's node of the same id.
+    """
+
+    def mark(func: Callable) -> Callable:
+        func.__graphvision_node__ = _NodeMark(id, version, cache, overrides)  # type: ignore[attr-defined]
+        return func
+
+    return mark
+
+
+def source(scheme: str) -> Callable[[Callable], Callable]:
+    """Mark ``func(reference: str)`` as the loader of graph-input values ``scheme:reference``.
+
+    The scheme ``file`` is used for values without a scheme (paths).
+    """
+
+    def mark(func: Callable) -> Callable:
+        func.__graphvision_source__ = _SourceMark(scheme)  # type: ignore[attr-defined]
+        return func
+
+    return mark
+
+
+@dataclass(frozen=True)
+class FunctionRef:
+    """Where a function lives, so another process can import it by name."""
+
+    module: str
+    qualname: str
+    path: str = ""  # file of a local plugin that is not importable by module name
+
+    def resolve(self) -> Callable:
+        module = sys.modules.get(self.module)
+        if module is None:
+            if self.path:
+                from ._plugins import import_file
+
+                module = import_file(self.path, self.module)
+            else:
+                module = importlib.import_module(self.module)
+        obj: Any = module
+        for part in self.qualname.split("."):
+            obj = getattr(obj, part)
+        return obj
+
+
+@dataclass(frozen=True)
+class InputPort:
+    """An input port: its type (a TypeVar's bound), optional or not, its TypeVar name."""
+
+    type: type[PortType]
+    optional: bool = False
+    typevar: str = ""
+
+
+@dataclass(frozen=True)
+class SourceSpec:
+    scheme: str
+    func: Callable[[str], Any]
+    plugin: str
+
+
+@dataclass(frozen=True, eq=False)
+class NodeSpec:
+    """Everything the engine knows about a registered node."""
+
+    id: str
+    version: int
+    func: Callable
+    ref: FunctionRef
+    inputs: dict[str, InputPort]
+    outputs: dict[str, type[PortType]]
+    params_model: type[pydantic.BaseModel]
+    doc: str
+    plugin: str
+    cache: bool = True
+    overrides: bool = False
+    output_tuple: type | None = field(default=None, repr=False)
+    output_vars: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def family(self) -> str:
+        return self.id.split(".", 1)[0]
+
+    @property
+    def summary(self) -> str:
+        return self.doc.strip().splitlines()[0] if self.doc.strip() else ""
+
+    @cached_property
+    def source_hash(self) -> str:
+        """Hash of the function's code with comments and docstrings stripped."""
+        return source_fingerprint(self.func)
+
+    def params_schema(self) -> dict[str, Any]:
+        return self.params_model.model_json_schema()
+
+    def validate_params(self, params: dict[str, Any]) -> dict[str, Any]:
+        """Validated, canonical parameters (JSON-able) or a pydantic ValidationError."""
+        return self.params_model.model_validate(params).model_dump(mode="json")
+
+    def split_outputs(self, result: Any) -> dict[str, Any]:
+        if self.output_tuple is None:
+            return {SINGLE_OUTPUT: result}
+        if not isinstance(result, tuple) or len(result) != len(self.outputs):
+            raise TypeError(
+                f"node {self.id} must return {self.output_tuple.__name__} "
+                f"with fields {list(self.outputs)}, got {type(result).__name__}"
+            )
+        return dict(zip(self.outputs, result, strict=True))
+
+    def describe(self) -> dict[str, Any]:
+        return {
+            "id": self.id,
+            "version": self.version,
+            "plugin": self.plugin,
+            "function": f"{self.ref.module}:{self.ref.qualname}",
+            "inputs": {
+                k: {"type": p.type.type_name(), "optional": p.optional}
+                for k, p in self.inputs.items()
+            },
+            "outputs": {k: t.type_name() for k, t in self.outputs.items()},
+            "params": self.params_schema(),
+            "cache": self.cache,
+            "doc": inspect.cleandoc(self.doc),
+        }
+
+
+def source_fingerprint(func: Callable) -> str:
+    """blake2b of the function's AST with docstrings removed (comments never reach the AST)."""
+    try:
+        text = textwrap.dedent(inspect.getsource(func))
+    except (OSError, TypeError):
+        return "no-source"
+    tree = ast.parse(text)
+    for item in ast.walk(tree):
+        if isinstance(item, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Module)):
+            body = item.body
+            if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
+                if isinstance(body[0].value.value, str):
+                    item.body = body[1:] or [ast.Pass()]
+    return hashlib.blake2b(ast.dump(tree).encode(), digest_size=16).hexdigest()
+
+
+def _port_type(annotation: Any) -> tuple[type[PortType] | None, bool]:
+    """(port type, optional) of an input annotation, or (None, False)."""
+    if isinstance(annotation, TypeVar):
+        bound = annotation.__bound__
+        return (bound, False) if _is_port_type(bound) else (None, False)
+    if get_origin(annotation) is typing.Annotated:
+        found = [a for a in get_args(annotation)[1:] if _is_port_type(a)]
+        return (found[0], False) if found else (None, False)
+    if get_origin(annotation) in (Union, types.UnionType):
+        args = [a for a in get_args(annotation) if a is not type(None)]
+        if len(args) == 1 and len(get_args(annotation)) == 2:
+            inner, _ = _port_type(args[0])
+            return inner, inner is not None
+        return None, False
+    return (annotation, False) if _is_port_type(annotation) else (None, False)
+
+
+def _is_port_type(obj: Any) -> bool:
+    return isinstance(obj, type) and issubclass(obj, PortType) and obj is not PortType
+
+
+def _is_named_tuple(obj: Any) -> bool:
+    return isinstance(obj, type) and issubclass(obj, tuple) and hasattr(obj, "_fields")
+
+
+def _ref_for(func: Callable) -> FunctionRef:
+    module = sys.modules.get(func.__module__)
+    path = getattr(module, "__graphvision_path__", "") if module else ""
+    return FunctionRef(func.__module__, func.__qualname__, path)
+
+
+def build_spec(func: Callable, plugin: str) -> NodeSpec:
+    """Check a decorated function's signature and build its :class:`NodeSpec`.
+
+    Raises
+    ------
+    RegistrationError
+        Naming the plugin and the function, for any signature that is not a node.
+    """
+    mark: _NodeMark = func.__graphvision_node__  # type: ignore[attr-defined]
+    where = f"plugin '{plugin}', function {func.__module__}.{func.__qualname__}"
+
+    def reject(reason: str) -> RegistrationError:
+        return RegistrationError(f"{where} (node '{mark.id}'): {reason}")
+
+    if not NODE_ID.match(mark.id):
+        raise reject("node id must be 'family.name' in lower snake case")
+    if not isinstance(mark.version, int) or isinstance(mark.version, bool) or mark.version < 1:
+        raise reject(f"version must be a positive integer, got {mark.version!r}")
+    if not (func.__doc__ or "").strip():
+        raise reject("a node needs a docstring (it is the node's documentation)")
+    try:
+        hints = typing.get_type_hints(func, include_extras=True)
+    except Exception as error:  # NameError etc. from an unresolvable annotation
+        raise reject(f"cannot resolve annotations: {error}") from error
+
+    inputs: dict[str, InputPort] = {}
+    fields: dict[str, Any] = {}
+    for name, parameter in inspect.signature(func).parameters.items():
+        annotation = hints.get(name, inspect.Parameter.empty)
+        if parameter.kind in (parameter.VAR_POSITIONAL, parameter.VAR_KEYWORD):
+            raise reject(f"*{name} / **{name} are not allowed; declare each port and parameter")
+        if parameter.kind is parameter.POSITIONAL_ONLY or (
+            parameter.kind is parameter.POSITIONAL_OR_KEYWORD
+        ):
+            port, optional = _port_type(annotation)
+            if port is None:
+                raise reject(
+                    f"input '{name}' must be annotated with a port type "
+                    f"(e.g. Image), got {annotation!r}; parameters go after '*'"
+                )
+            if optional and parameter.default is not None:
+                raise reject(f"optional input '{name}' must default to None")
+            if not optional and parameter.default is not parameter.empty:
+                raise reject(f"input '{name}' has a default; only Optional[...] = None inputs may")
+            typevar = annotation.__name__ if isinstance(annotation, TypeVar) else ""
+            inputs[name] = InputPort(port, optional, typevar)
+        else:
+            if parameter.default is parameter.empty:
+                raise reject(f"parameter '{name}' needs a default value")
+            if annotation is inspect.Parameter.empty:
+                raise reject(f"parameter '{name}' needs a type annotation")
+            fields[name] = (annotation, parameter.default)
+
+    returned = hints.get("return", inspect.Parameter.empty)
+    output_tuple = None
+    output_vars: dict[str, str] = {}
+    bound_vars = {port.typevar for port in inputs.values() if port.typevar}
+    if isinstance(returned, TypeVar):
+        if returned.__name__ not in bound_vars or not _is_port_type(returned.__bound__):
+            raise reject(f"output type variable {returned.__name__} must also annotate an input")
+        outputs = {SINGLE_OUTPUT: returned.__bound__}
+        output_vars[SINGLE_OUTPUT] = returned.__name__
+    elif _is_port_type(returned):
+        outputs = {SINGLE_OUTPUT: returned}
+    elif _is_named_tuple(returned):
+        field_hints = typing.get_type_hints(returned)
+        outputs = {}
+        for name in returned._fields:
+            if not _is_port_type(field_hints.get(name)):
+                raise reject(f"output '{name}' of {returned.__name__} must be a port type")
+            outputs[name] = field_hints[name]
+        output_tuple = returned
+    else:
+        raise reject(
+            "the return annotation must be a port type or a NamedTuple of port types, "
+            f"got {returned!r}"
+        )
+
+    try:
+        model = pydantic.create_model(  # type: ignore[call-overload]
+            f"{mark.id}.params",
+            __config__=pydantic.ConfigDict(extra="forbid", strict=False),
+            **fields,
+        )
+        model.model_validate({})
+        model.model_json_schema()
+    except Exception as error:
+        raise reject(f"parameters cannot be validated: {error}") from error
+
+    return NodeSpec(
+        id=mark.id,
+        version=mark.version,
+        func=func,
+        ref=_ref_for(func),
+        inputs=inputs,
+        outputs=outputs,
+        params_model=model,
+        doc=func.__doc__ or "",
+        plugin=plugin,
+        cache=mark.cache,
+        overrides=mark.overrides,
+        output_tuple=output_tuple,
+        output_vars=output_vars,
+    )
+
+

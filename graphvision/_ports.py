@@ -1,0 +1,400 @@
+"""Port types: what flows along an edge, how it is checked and how it is stored.
+
+A port type is a class used only through its class methods; values themselves
+are plain numpy arrays, Python scalars, column tables or frozen dataclasses of
+arrays. Subclassing draws the lattice: a ``GrayImage`` is an ``Image``, so an
+edge from a ``GrayImage`` output into an ``Image`` input type-checks, the
+reverse does not. ``BinaryImage`` and ``LabelImage`` are *not* images: a mask
+is not an intensity, and feeding one to a filter is a mistake to report.
+
+::
+
+    Array ─┬─ FloatImage ── Image ─┬─ GrayImage
+           │                       └─ ColorImage
+           ├─ BinaryImage
+           ├─ LabelImage
+           └─ Kernel
+    Float ── Int        Bool        Text        Table        Record (dataclasses)
+
+Each type encodes a value as named arrays plus a small JSON header, and back.
+That encoding is the disk cache's format and the process executor's transport:
+pickle is never written nor loaded.
+
+Conventions (tested in ``tests/test_ports.py``): images are ``float32`` in
+[0, 1], gray ``H×W``, colour ``H×W×3`` RGB; masks are ``bool``; labels
+``int32`` with 0 as background; kernels ``float64``.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ._errors import PortValueError
+
+__all__ = [
+    "Array",
+    "BinaryImage",
+    "Bool",
+    "ColorImage",
+    "Float",
+    "FloatImage",
+    "GrayImage",
+    "Image",
+    "Int",
+    "Kernel",
+    "LabelImage",
+    "PortType",
+    "Record",
+    "Table",
+    "Text",
+    "builtin_port_types",
+    "freeze",
+]
+
+Arrays = dict[str, np.ndarray]
+Meta = dict[str, Any]
+
+
+def freeze(array: np.ndarray) -> np.ndarray:
+    """Mark ``array`` read-only so that no node can change a value it was given."""
+    array.flags.writeable = False
+    return array
+
+
+class PortType:
+    """Base class of port types. Subclass it to add a type (a plugin may)."""
+
+    description: ClassVar[str] = ""
+
+    @classmethod
+    def type_name(cls) -> str:
+        return cls.__name__
+
+    @classmethod
+    def is_a(cls, other: type[PortType]) -> bool:
+        """True when a value of this type may flow into a port of type ``other``."""
+        return issubclass(cls, other)
+
+    @classmethod
+    def validate(cls, value: Any) -> Any:
+        """Return ``value`` (normalised) or raise :class:`PortValueError`."""
+        raise NotImplementedError
+
+    @classmethod
+    def encode(cls, value: Any) -> tuple[Arrays, Meta]:
+        """Named arrays and a JSON-able header that :meth:`decode` turns back into ``value``."""
+        raise NotImplementedError
+
+    @classmethod
+    def decode(cls, arrays: Arrays, meta: Meta) -> Any:
+        raise NotImplementedError
+
+    @classmethod
+    def summary(cls, value: Any) -> str:
+        """A one-line description for error messages and reports."""
+        return f"{cls.type_name()}"
+
+    @classmethod
+    def write(cls, value: Any, stem: Path) -> list[Path]:
+        """Write ``value`` next to ``stem`` (no suffix) and return the files written."""
+        arrays, meta = cls.encode(value)
+        if list(arrays) == ["data"] and not meta:
+            path = stem.with_suffix(".npy")
+            np.save(path, arrays["data"], allow_pickle=False)
+            return [path]
+        path = stem.with_suffix(".npz")
+        np.savez(path, **arrays)
+        meta_path = stem.with_suffix(".json")
+        meta_path.write_text(json.dumps(meta, indent=2))
+        return [path, meta_path]
+
+    @classmethod
+    def schema(cls) -> dict[str, Any]:
+        """JSON description of the type for ``graphvision describe --json``."""
+        parents = [c.type_name() for c in cls.__mro__[1:] if issubclass(c, PortType)]
+        return {"type": cls.type_name(), "is_a": parents[:-1], "description": cls.description}
+
+
+def _fail(cls: type[PortType], expected: str, value: Any) -> PortValueError:
+    return PortValueError(f"expected {cls.type_name()} ({expected}), got {describe_value(value)}")
+
+
+def describe_value(value: Any) -> str:
+    """Shape and dtype of an array, or the type of anything else."""
+    if isinstance(value, np.ndarray):
+        return f"array shape={value.shape} dtype={value.dtype}"
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return type(value).__name__
+    return f"{type(value).__name__} {value!r:.60}"
+
+
+class Array(PortType):
+    """Any numeric or boolean numpy array (never an object array)."""
+
+    ndims: ClassVar[tuple[int, ...]] = ()
+    dtypes: ClassVar[tuple[type, ...]] = ()
+    expected: ClassVar[str] = "a numeric numpy array"
+
+    @classmethod
+    def validate(cls, value: Any) -> np.ndarray:
+        if not isinstance(value, np.ndarray) or value.dtype.hasobject:
+            raise _fail(cls, cls.expected, value)
+        if cls.ndims and value.ndim not in cls.ndims:
+            raise _fail(cls, cls.expected, value)
+        if cls.dtypes and value.dtype.type not in cls.dtypes:
+            raise _fail(cls, cls.expected, value)
+        if value.size == 0 and cls is not Array:
+            raise PortValueError(f"expected {cls.type_name()}, got an empty array {value.shape}")
+        return value
+
+    @classmethod
+    def encode(cls, value: np.ndarray) -> tuple[Arrays, Meta]:
+        return {"data": value}, {}
+
+    @classmethod
+    def decode(cls, arrays: Arrays, meta: Meta) -> np.ndarray:
+        return arrays["data"]
+
+    @classmethod
+    def summary(cls, value: np.ndarray) -> str:
+        return f"{cls.type_name()} {'×'.join(map(str, value.shape))} {value.dtype}"
+
+
+class FloatImage(Array):
+    """A filter response: finite ``float32``, ``H×W`` or ``H×W×3``, any range."""
+
+    ndims = (2, 3)
+    dtypes = (np.float32,)
+    expected = "finite float32, H×W or H×W×3"
+
+    @classmethod
+    def validate(cls, value: Any) -> np.ndarray:
+        value = super().validate(value)
+        if value.ndim == 3 and value.shape[2] != 3:
+            raise _fail(cls, cls.expected, value)
+        if cls is FloatImage and not np.isfinite(value.min() + value.max()):
+            raise PortValueError(f"expected {cls.type_name()} with finite values, got NaN or inf")
+        return value
+
+
+class Image(FloatImage):
+    """An intensity image: ``float32`` in [0, 1], gray ``H×W`` or RGB ``H×W×3``."""
+
+    expected = "float32 in [0, 1], H×W or H×W×3"
+
+    @classmethod
+    def validate(cls, value: Any) -> np.ndarray:
+        value = super().validate(value)
+        low, high = float(value.min()), float(value.max())
+        if not (low >= 0.0 and high <= 1.0):  # also rejects NaN
+            raise PortValueError(
+                f"expected {cls.type_name()} values in [0, 1], got range [{low:g}, {high:g}]"
+            )
+        return value
+
+    @classmethod
+    def write(cls, value: np.ndarray, stem: Path) -> list[Path]:
+        import imageio.v3 as iio
+
+        path = stem.with_suffix(".png")
+        iio.imwrite(path, np.round(value * 255.0).astype(np.uint8))
+        return [path]
+
+
+class GrayImage(Image):
+    """A gray image: ``float32`` ``H×W`` in [0, 1]."""
+
+    ndims = (2,)
+    expected = "float32 in [0, 1], H×W"
+
+
+class ColorImage(Image):
+    """An RGB image: ``float32`` ``H×W×3`` in [0, 1]."""
+
+    ndims = (3,)
+    expected = "float32 in [0, 1], H×W×3"
+
+
+class BinaryImage(Array):
+    """A mask: ``bool`` ``H×W``; True is foreground."""
+
+    ndims = (2,)
+    dtypes = (np.bool_,)
+    expected = "bool H×W"
+
+    @classmethod
+    def write(cls, value: np.ndarray, stem: Path) -> list[Path]:
+        import imageio.v3 as iio
+
+        path = stem.with_suffix(".png")
+        iio.imwrite(path, value.astype(np.uint8) * 255)
+        return [path]
+
+
+class LabelImage(Array):
+    """A label image: ``int32`` ``H×W``, 0 is background, regions 1..N."""
+
+    ndims = (2,)
+    dtypes = (np.int32,)
+    expected = "int32 H×W, 0 = background"
+
+
+class Kernel(Array):
+    """A filter kernel: ``float64`` 2-D array, centred at ``(rows // 2, cols // 2)``."""
+
+    ndims = (2,)
+    dtypes = (np.float64,)
+    expected = "float64 2-D array"
+
+
+class _Scalar(PortType):
+    python_type: ClassVar[type] = object
+
+    @classmethod
+    def validate(cls, value: Any) -> Any:
+        if isinstance(value, np.generic):
+            value = value.item()
+        if not isinstance(value, cls.python_type) or (
+            cls.python_type is not bool and isinstance(value, bool)
+        ):
+            raise _fail(cls, cls.python_type.__name__, value)
+        return value
+
+    @classmethod
+    def encode(cls, value: Any) -> tuple[Arrays, Meta]:
+        return {}, {"value": value}
+
+    @classmethod
+    def decode(cls, arrays: Arrays, meta: Meta) -> Any:
+        return meta["value"]
+
+    @classmethod
+    def summary(cls, value: Any) -> str:
+        return f"{cls.type_name()} {value!r:.40}"
+
+    @classmethod
+    def write(cls, value: Any, stem: Path) -> list[Path]:
+        path = stem.with_suffix(".json")
+        path.write_text(json.dumps(value) + "\n")
+        return [path]
+
+
+class Float(_Scalar):
+    """A real number (an ``Int`` is accepted where a ``Float`` is expected)."""
+
+    python_type = float
+
+    @classmethod
+    def validate(cls, value: Any) -> Any:
+        if isinstance(value, np.generic):
+            value = value.item()
+        if isinstance(value, int) and not isinstance(value, bool) and cls is Float:
+            value = float(value)
+        return super().validate(value)
+
+
+class Int(Float):
+    """An integer."""
+
+    python_type = int
+
+
+class Bool(_Scalar):
+    """True or False."""
+
+    python_type = bool
+
+
+class Text(_Scalar):
+    """A string."""
+
+    python_type = str
+
+
+class Table(PortType):
+    """Columns of equal length: ``dict[str, 1-D ndarray]``; written as CSV and JSON."""
+
+    @classmethod
+    def validate(cls, value: Any) -> dict[str, np.ndarray]:
+        if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
+            raise _fail(cls, "dict of column name to 1-D array", value)
+        lengths = set()
+        for name, column in value.items():
+            if not isinstance(column, np.ndarray) or column.ndim != 1 or column.dtype.hasobject:
+                raise PortValueError(
+                    f"expected Table column '{name}' to be a 1-D numeric array, "
+                    f"got {describe_value(column)}"
+                )
+            lengths.add(len(column))
+        if len(lengths) > 1:
+            raise PortValueError(f"expected Table columns of equal length, got {sorted(lengths)}")
+        return value
+
+    @classmethod
+    def encode(cls, value: dict[str, np.ndarray]) -> tuple[Arrays, Meta]:
+        return dict(value), {"columns": list(value)}
+
+    @classmethod
+    def decode(cls, arrays: Arrays, meta: Meta) -> dict[str, np.ndarray]:
+        return {name: arrays[name] for name in meta["columns"]}
+
+    @classmethod
+    def summary(cls, value: dict[str, np.ndarray]) -> str:
+        rows = len(next(iter(value.values()))) if value else 0
+        return f"Table {rows} rows × {len(value)} columns"
+
+    @classmethod
+    def write(cls, value: dict[str, np.ndarray], stem: Path) -> list[Path]:
+        csv_path, json_path = stem.with_suffix(".csv"), stem.with_suffix(".json")
+        columns = list(value)
+        rows = zip(*(value[c].tolist() for c in columns), strict=True)
+        with csv_path.open("w", newline="") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(columns)
+            writer.writerows(rows)
+        json_path.write_text(json.dumps({c: value[c].tolist() for c in columns}) + "\n")
+        return [csv_path, json_path]
+
+
+class Record(PortType):
+    """Base for frozen dataclasses whose fields are arrays or JSON scalars.
+
+    Subclasses set ``value_class``; encoding stores array fields as arrays and
+    the other fields in the header.
+    """
+
+    value_class: ClassVar[type] = object
+
+    @classmethod
+    def validate(cls, value: Any) -> Any:
+        if not isinstance(value, cls.value_class):
+            raise _fail(cls, cls.value_class.__name__, value)
+        return value
+
+    @classmethod
+    def encode(cls, value: Any) -> tuple[Arrays, Meta]:
+        arrays: Arrays = {}
+        meta: Meta = {}
+        for field in dataclasses.fields(value):
+            item = getattr(value, field.name)
+            if isinstance(item, np.ndarray):
+                arrays[field.name] = item
+            else:
+                meta[field.name] = item
+        return arrays, meta
+
+    @classmethod
+    def decode(cls, arrays: Arrays, meta: Meta) -> Any:
+        return cls.value_class(**arrays, **meta)
+
+
+def builtin_port_types() -> list[type[PortType]]:
+    """The port types the engine defines (plugins may register more)."""
+    return [Array, FloatImage, Image, GrayImage, ColorImage, BinaryImage, LabelImage, Kernel,
+            Float, Int, Bool, Text, Table]

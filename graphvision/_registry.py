@@ -1,0 +1,150 @@
+"""The registry: nodes, port types and input sources, by name.
+
+A plugin is a Python module (or package) whose namespace holds functions
+marked with :func:`~graphvision.node` or :func:`~graphvision.source` and,
+optionally, new :class:`~graphvision.PortType` subclasses. Registering a
+plugin is all or nothing: every node is checked first, then all are added.
+
+Two plugins that define the same node id are an error naming both, unless one
+of the nodes declares ``overrides=True``; the overriding node then wins
+whatever the loading order.
+"""
+
+from __future__ import annotations
+
+import difflib
+import inspect
+import types
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+from ._errors import DuplicateNodeError, RegistrationError, UnknownNameError
+from ._node import NodeSpec, SourceSpec, build_spec
+from ._ports import PortType, builtin_port_types
+
+__all__ = ["PluginStatus", "Registry", "did_you_mean"]
+
+
+def did_you_mean(name: str, options: Iterable[str]) -> str:
+    """`` (did you mean 'x'?)`` for the closest option, or ''."""
+    close = difflib.get_close_matches(name, list(options), n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+@dataclass
+class PluginStatus:
+    """What loading one plugin gave: its nodes, or the error that stopped it."""
+
+    name: str
+    origin: str
+    nodes: list[str] = field(default_factory=list)
+    error: str = ""
+
+
+class Registry:
+    """Nodes by id, port types by name, input sources by scheme, and plugin statuses."""
+
+    def __init__(self) -> None:
+        self.nodes: dict[str, NodeSpec] = {}
+        self.port_types: dict[str, type[PortType]] = {
+            t.type_name(): t for t in builtin_port_types()
+        }
+        self.sources: dict[str, SourceSpec] = {}
+        self.plugins: dict[str, PluginStatus] = {}
+
+    # -- registration -------------------------------------------------------------
+
+    def add_plugin(self, module: types.ModuleType, name: str, origin: str = "") -> PluginStatus:
+        """Register every node, source and port type that ``module`` exposes.
+
+        Raises
+        ------
+        RegistrationError
+            If any node is malformed or clashes with a registered one; then
+            nothing of the plugin is registered.
+        """
+        members = [getattr(module, n) for n in getattr(module, "__all__", dir(module))]
+        specs = [build_spec(m, name) for m in members if hasattr(m, "__graphvision_node__")]
+        sources = [
+            SourceSpec(m.__graphvision_source__.scheme, m, name)
+            for m in members
+            if hasattr(m, "__graphvision_source__")
+        ]
+        port_types = [
+            m for m in members
+            if inspect.isclass(m) and issubclass(m, PortType) and m.__module__ != "graphvision._ports"
+            and not m.__name__.startswith("_")
+        ]
+        kept = self._check_new_nodes(specs)
+        for spec in kept:
+            self.nodes[spec.id] = spec
+        for source_spec in sources:
+            self.sources[source_spec.scheme] = source_spec
+        for port_type in port_types:
+            self.port_types.setdefault(port_type.type_name(), port_type)
+        status = PluginStatus(name, origin or module.__name__, [s.id for s in kept])
+        self.plugins[name] = status
+        return status
+
+    def _check_new_nodes(self, specs: list[NodeSpec]) -> list[NodeSpec]:
+        kept, seen = [], {}
+        for spec in specs:
+            if spec.id in seen:
+                raise DuplicateNodeError(
+                    f"node id '{spec.id}' is defined twice in plugin '{spec.plugin}': "
+                    f"{seen[spec.id].ref.qualname} and {spec.ref.qualname}"
+                )
+            seen[spec.id] = spec
+            old = self.nodes.get(spec.id)
+            if old is None or (spec.overrides and not old.overrides):
+                kept.append(spec)
+            elif old.overrides and not spec.overrides:
+                continue  # the overriding node loaded first and stays
+            else:
+                raise DuplicateNodeError(
+                    f"node id '{spec.id}' is defined by plugin '{old.plugin}' "
+                    f"({old.ref.module}.{old.ref.qualname}) and by plugin '{spec.plugin}' "
+                    f"({spec.ref.module}.{spec.ref.qualname}); rename one, or mark the "
+                    "replacement with @node(..., overrides=True)"
+                )
+        return kept
+
+    def record_failure(self, name: str, origin: str, error: str) -> None:
+        self.plugins[name] = PluginStatus(name, origin, error=error)
+
+    # -- look-up ------------------------------------------------------------------
+
+    def node(self, op: str) -> NodeSpec:
+        try:
+            return self.nodes[op]
+        except KeyError:
+            raise UnknownNameError(f"unknown op '{op}'{did_you_mean(op, self.nodes)}") from None
+
+    def port_type(self, name: str) -> type[PortType]:
+        try:
+            return self.port_types[name]
+        except KeyError:
+            raise UnknownNameError(
+                f"unknown port type '{name}'{did_you_mean(name, self.port_types)}"
+            ) from None
+
+    def source(self, scheme: str) -> SourceSpec:
+        try:
+            return self.sources[scheme]
+        except KeyError:
+            known = ", ".join(sorted(self.sources)) or "none"
+            raise UnknownNameError(
+                f"no plugin loads '{scheme}:' values (known: {known})"
+                f"{did_you_mean(scheme, self.sources)}"
+            ) from None
+
+    def failed_plugins(self) -> list[PluginStatus]:
+        return [p for p in self.plugins.values() if p.error]
+
+    def families(self) -> dict[str, list[NodeSpec]]:
+        grouped: dict[str, list[NodeSpec]] = {}
+        for op in sorted(self.nodes):
+            grouped.setdefault(self.nodes[op].family, []).append(self.nodes[op])
+        return grouped
+
+

@@ -1,0 +1,419 @@
+"""Running a graph: inputs, keys, cache plan, execution, record.
+
+:func:`run` does, in order:
+
+1. compile the graph (every problem reported at once, before anything runs);
+2. prune it to what the requested outputs need;
+3. resolve graph inputs (literals, paths, ``sample:NAME``...) and key them by
+   content;
+4. chain the Merkle keys of every node output without computing anything;
+5. plan from the outputs backwards: an output found in the cache is loaded
+   and its producers are not visited, so a fully cached re-run reads only the
+   requested outputs; everything else is computed;
+6. hand the computed steps to :func:`~graphvision._scheduler.run_tasks` with
+   the chosen executor, validating, freezing and caching each result, and
+   releasing each intermediate value once its last consumer has run.
+
+Hooks (:class:`RunHooks`) observe it; the run record is always produced.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Iterable, Sequence
+from concurrent.futures import Future
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import yaml
+
+from ._cache import Cache, content_key, output_key
+from ._compile import CompiledGraph, Step, compile_graph
+from ._errors import (
+    GraphvisionError,
+    InputError,
+    NodeExecutionError,
+    PortValueError,
+    RunError,
+    UnknownNameError,
+)
+from ._executors import Executor, call_node, call_node_encoded, make_executor
+from ._graph import Graph
+from ._ports import PortType, Text, _Scalar, freeze
+from ._registry import Registry, did_you_mean
+from ._scheduler import run_tasks
+
+__all__ = ["NodeRecord", "RunHooks", "RunRecord", "RunResult", "resolve_input", "run"]
+
+
+@dataclass
+class NodeRecord:
+    """What happened to one node: ``computed``, ``cached`` (loaded), ``failed`` or ``skipped``."""
+
+    name: str
+    op: str
+    status: str
+    seconds: float = 0.0
+    output_bytes: int = 0
+    error: str = ""
+
+
+@dataclass
+class RunRecord:
+    """Per-node wall time, cache hit or miss and output sizes of one run."""
+
+    pipeline: str
+    executor: str
+    seconds: float = 0.0
+    nodes: list[NodeRecord] = field(default_factory=list)
+    outputs: dict[str, str] = field(default_factory=dict)
+
+    def count(self, status: str) -> int:
+        return sum(n.status == status for n in self.nodes)
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), indent=2)
+
+    def table(self) -> str:
+        """The record as an aligned text table."""
+        rows = [("node", "op", "status", "ms", "bytes")]
+        rows += [(n.name, n.op, n.status, f"{n.seconds * 1e3:.1f}", str(n.output_bytes))
+                 for n in self.nodes]
+        widths = [max(len(r[i]) for r in rows) for i in range(5)]
+        lines = ["  ".join(c.ljust(w) if i < 3 else c.rjust(w) for i, (c, w) in
+                           enumerate(zip(row, widths, strict=True))) for row in rows]
+        lines.append(f"{self.count('computed')} computed, {self.count('cached')} cached, "
+                     f"{self.count('failed')} failed, {self.count('skipped')} skipped "
+                     f"in {self.seconds:.3f} s ({self.executor})")
+        return "\n".join(lines)
+
+
+@dataclass
+class RunResult:
+    """Outputs produced, the run record, failures by node, and the compiled graph."""
+
+    outputs: dict[str, Any]
+    record: RunRecord
+    compiled: CompiledGraph
+    failures: dict[str, GraphvisionError] = field(default_factory=dict)
+
+
+class RunHooks:
+    """Observe a run. Override what you need; every argument is keyword-only.
+
+    ``run_finished`` is called from a ``finally`` block, with ``failed``.
+    """
+
+    def run_started(self, *, pipeline: str, steps: list[str]) -> None:
+        """Before any node runs; ``steps`` are the nodes to compute."""
+
+    def node_started(self, *, name: str, op: str) -> None:
+        """A node was handed to the executor."""
+
+    def node_finished(self, *, name: str, op: str, status: str, seconds: float) -> None:
+        """A node was computed, loaded from the cache, or failed."""
+
+    def run_finished(self, *, record: RunRecord, failed: bool) -> None:
+        """After the run, whatever happened."""
+
+
+def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Registry) -> Any:
+    """Turn a given value into a validated port value.
+
+    A string for a non-``Text`` port is a reference: ``scheme:rest`` goes to the
+    plugin source of that scheme (e.g. ``sample:camera``), a scalar port parses
+    it as YAML (``--input sigma=2``), anything else is a path for the ``file``
+    source.
+
+    Raises
+    ------
+    InputError
+        Naming the input, the value and what is wrong.
+    """
+    if isinstance(value, str) and not issubclass(port_type, Text):
+        scheme, sep, rest = value.partition(":")
+        try:
+            if sep and scheme in registry.sources:
+                value = registry.sources[scheme].func(rest)
+            elif issubclass(port_type, _Scalar):
+                value = yaml.safe_load(value)
+            else:
+                value = registry.source("file").func(value)
+        except UnknownNameError as error:
+            raise InputError(f"input '{name}': cannot load '{value}': {error}") from None
+        except Exception as error:
+            raise InputError(f"input '{name}': cannot load '{value}': {error}") from error
+    try:
+        return port_type.validate(value)
+    except PortValueError as error:
+        raise InputError(f"input '{name}': {error}") from None
+
+
+def _freeze(port_type: type[PortType], value: Any) -> Any:
+    for array in port_type.encode(value)[0].values():
+        freeze(array)
+    return value
+
+
+class _Run:
+    """The state of one run (see the module docstring for the steps)."""
+
+    def __init__(self, compiled: CompiledGraph, cache: Cache | None, executor: Executor,
+                 hooks: Sequence[RunHooks], record: RunRecord) -> None:
+        self.compiled, self.cache, self.executor = compiled, cache, executor
+        self.hooks, self.record = hooks, record
+        self.values: dict[tuple[str, str], Any] = {}
+        self.keys: dict[tuple[str, str], str] = {}
+        self.nodes: dict[str, NodeRecord] = {}
+        self.failures: dict[str, GraphvisionError] = {}
+        self.started: dict[str, float] = {}
+        self.consumers: dict[tuple[str, str], int] = {}
+        self.pinned: set[tuple[str, str]] = set()
+
+    def track_consumers(self, compute: list[str], pinned: list[tuple[str, str]]) -> None:
+        """Count readers of each value so intermediates are dropped after their last one."""
+        for name in compute:
+            for source in self.compiled.steps[name].inputs.values():
+                self.consumers[source] = self.consumers.get(source, 0) + 1
+        self.pinned = set(pinned)
+
+    def release_inputs(self, step: Step) -> None:
+        for source in step.inputs.values():
+            self.consumers[source] -= 1
+            if self.consumers[source] == 0 and source not in self.pinned:
+                self.values.pop(source, None)
+
+    def key_inputs(self, values: dict[str, Any]) -> None:
+        for name, value in values.items():
+            self.values[(name, "")] = value
+            self.keys[(name, "")] = content_key(self.compiled.input_types[name], value)
+
+    def key_steps(self, names: list[str]) -> None:
+        for name in names:
+            step = self.compiled.steps[name]
+            inputs = {port: self.keys[source] for port, source in step.inputs.items()}
+            spec = step.spec
+            for port in spec.outputs:
+                self.keys[(name, port)] = output_key(spec.id, spec.version, spec.source_hash,
+                                                     step.params, inputs, port)
+
+    def plan(self, wanted: Iterable[tuple[str, str]]) -> list[str]:
+        """Load what the cache has, from the outputs backwards; return the steps to compute."""
+        compute: set[str] = set()
+        stack = list(wanted)
+        steps = self.compiled.steps
+        while stack:
+            source = stack.pop()
+            name, port = source
+            if source in self.values or name in compute:
+                continue
+            step = steps[name]
+            if step.spec.cache and self.cache is not None:
+                began = time.perf_counter()
+                hit, value = self.cache.get(self.keys[source], step.outputs[port])
+                if hit:
+                    self.values[source] = value
+                    node = self.nodes.setdefault(name, NodeRecord(name, step.spec.id, "cached"))
+                    node.seconds += time.perf_counter() - began
+                    continue
+            compute.add(name)
+            self.nodes[name] = NodeRecord(name, step.spec.id, "skipped")
+            stack.extend(step.inputs.values())
+        return [name for name in steps if name in compute]
+
+    # -- execution --------------------------------------------------------------------
+
+    def start(self, name: str) -> Future:
+        step = self.compiled.steps[name]
+        inputs = {port: self.values[source] for port, source in step.inputs.items()}
+        for hook in self.hooks:
+            hook.node_started(name=name, op=step.spec.id)
+        self.started[name] = time.perf_counter()
+        if getattr(self.executor, "encodes_values", False):
+            payload = {}
+            for port, value in inputs.items():
+                kind = step.spec.inputs[port].type
+                payload[port] = (kind, *kind.encode(value))
+            return self.executor.submit(
+                call_node_encoded, step.spec.ref, step.params, payload, step.outputs,
+                step.spec.output_tuple is not None,
+            )
+        return self.executor.submit(call_node, step.spec.func, step.params, inputs)
+
+    def finish(self, name: str, future: Future) -> bool:
+        step = self.compiled.steps[name]
+        node = self.nodes[name]
+        try:
+            result, seconds = future.result()
+            outputs = self.accept(step, result)
+        except Exception as error:
+            node.status, node.seconds = "failed", time.perf_counter() - self.started[name]
+            node.error = f"{type(error).__name__}: {error}"
+            self.failures[name] = self.wrap(step, error)
+            self.release_inputs(step)
+            for hook in self.hooks:
+                hook.node_finished(name=name, op=step.spec.id, status="failed", seconds=node.seconds)
+            return False
+        node.status, node.seconds = "computed", seconds
+        for port, value in outputs.items():
+            kind = step.outputs[port]
+            self.values[(name, port)] = value
+            if step.spec.cache and self.cache is not None:
+                node.output_bytes += self.cache.put(self.keys[(name, port)], kind, value)
+            else:
+                node.output_bytes += sum(a.nbytes for a in kind.encode(value)[0].values())
+        self.release_inputs(step)
+        for hook in self.hooks:
+            hook.node_finished(name=name, op=step.spec.id, status="computed", seconds=seconds)
+        return True
+
+    def accept(self, step: Step, result: Any) -> dict[str, Any]:
+        if getattr(self.executor, "encodes_values", False):
+            return {port: _freeze(kind, kind.decode(arrays, meta))
+                    for port, (kind, arrays, meta) in result.items()}
+        outputs = {}
+        for port, value in step.spec.split_outputs(result).items():
+            kind = step.outputs[port]
+            try:
+                outputs[port] = _freeze(kind, kind.validate(value))
+            except PortValueError as error:
+                raise PortValueError(f"node returned an invalid output '{port}': {error}") from None
+        return outputs
+
+    def wrap(self, step: Step, error: Exception) -> NodeExecutionError:
+        summary = {}
+        for port, source in step.inputs.items():
+            value = self.values.get(source)
+            summary[port] = step.spec.inputs[port].type.summary(value) if value is not None else "?"
+        wrapped = NodeExecutionError(step.name, step.spec.id, step.params, summary,
+                                     f"{type(error).__name__}: {error}")
+        wrapped.__cause__ = error
+        return wrapped
+
+
+def run(
+    graph: Graph | CompiledGraph,
+    registry: Registry | None = None,
+    *,
+    inputs: dict[str, Any] | None = None,
+    outputs: Sequence[str] | None = None,
+    overrides: dict[str, Any] | None = None,
+    executor: str | Executor = "threads",
+    workers: int | None = None,
+    cache: Cache | None = None,
+    keep_going: bool = False,
+    hooks: Sequence[RunHooks] = (),
+) -> RunResult:
+    """Run a pipeline and return its outputs and run record.
+
+    Parameters
+    ----------
+    graph : Graph or CompiledGraph
+        The pipeline (validated here if it is a Graph).
+    registry : Registry, optional
+        Defaults to the installed plugins plus the graph's ``plugins:``.
+    inputs : dict, optional
+        Values of graph inputs: arrays, scalars, or strings (paths, ``sample:NAME``).
+    outputs : sequence of str, optional
+        The outputs to produce (default: all); only what they need runs.
+    overrides : dict, optional
+        ``{"node.param": value, "params.name": value}`` applied before validation.
+    executor : {"threads", "sync", "processes"} or Executor
+        Where nodes run. An executor instance is used and not shut down.
+    cache : Cache, optional
+        Where results are looked up and stored; None disables caching.
+    keep_going : bool
+        After a failure, still run every branch that does not depend on it.
+    hooks : sequence of RunHooks
+        Observers of the run.
+
+    Raises
+    ------
+    PipelineError
+        The graph is invalid (nothing ran).
+    InputError
+        A graph input could not be resolved (nothing ran).
+    RunError
+        Nodes failed; ``error.failures`` names them, ``error.result`` holds
+        the outputs that were produced and the record.
+    """
+    inputs = dict(inputs or {})
+    if isinstance(graph, Graph):
+        if registry is None:
+            from ._plugins import discover
+
+            registry = discover(graph.plugins)
+        if overrides:
+            try:
+                graph = graph.with_overrides(overrides)
+            except KeyError as error:
+                raise UnknownNameError(str(error.args[0])) from None
+        compiled = compile_graph(graph, registry, provided=set(inputs))
+    else:
+        compiled = graph
+        if registry is None:
+            from ._plugins import discover
+
+            registry = discover(compiled.graph.plugins)
+    wanted_names = list(outputs) if outputs is not None else list(compiled.outputs)
+    for name in wanted_names:
+        if name not in compiled.outputs:
+            raise UnknownNameError(f"unknown output '{name}'{did_you_mean(name, compiled.outputs)}"
+                                   f"; outputs: {', '.join(compiled.outputs)}")
+    for name in inputs:
+        if name not in compiled.input_types:
+            raise UnknownNameError(
+                f"unknown input '{name}'{did_you_mean(name, compiled.input_types)}; "
+                f"inputs: {', '.join(compiled.input_types) or 'none'}")
+
+    needed = compiled.needed_for(wanted_names)
+    used_inputs = {src for n in needed for src, port in compiled.steps[n].inputs.values() if not port}
+    used_inputs |= {compiled.outputs[o][0] for o in wanted_names
+                    if compiled.outputs[o][0] in compiled.input_types}
+    values = {}
+    for name in compiled.input_types:
+        if name in used_inputs:
+            given = inputs.get(name, compiled.graph.inputs[name].default)
+            values[name] = resolve_input(name, compiled.input_types[name], given, registry)
+
+    own_executor = isinstance(executor, str)
+    pool = make_executor(executor, workers) if isinstance(executor, str) else executor
+    record = RunRecord(compiled.graph.name, executor if isinstance(executor, str)
+                       else type(executor).__name__)
+    state = _Run(compiled, cache, pool, hooks, record)
+    began = time.perf_counter()
+    failed = True
+    try:
+        state.key_inputs(values)
+        state.key_steps(needed)
+        compute = state.plan(compiled.outputs[o] for o in wanted_names)
+        for hook in hooks:
+            hook.run_started(pipeline=compiled.graph.name, steps=compute)
+        dependencies = {
+            name: {src for src, _ in compiled.steps[name].inputs.values() if src in compute}
+            for name in compute
+        }
+        state.track_consumers(compute, [compiled.outputs[o] for o in wanted_names])
+        run_tasks(dependencies, state.start, state.finish, keep_going=keep_going)
+        failed = bool(state.failures)
+    finally:
+        if own_executor:
+            pool.shutdown(wait=True)
+        record.seconds = time.perf_counter() - began
+        record.nodes = [state.nodes[n] for n in compiled.steps if n in state.nodes]
+        for hook in hooks:
+            hook.run_finished(record=record, failed=failed)
+
+    produced = {}
+    for name in wanted_names:
+        source = compiled.outputs[name]
+        if source in state.values:
+            produced[name] = state.values[source]
+            record.outputs[name] = compiled.output_type(name).summary(produced[name])
+    result = RunResult(produced, record, compiled, state.failures)
+    if state.failures:
+        error = RunError(state.failures, record)
+        error.result = result  # type: ignore[attr-defined]
+        raise error
+    return result

@@ -1,0 +1,121 @@
+"""The scheduler: run a DAG of named tasks through an executor.
+
+Pure and small, after dask's local scheduler. It knows nothing of nodes or
+caches: it gets each task's dependencies, a ``start`` function that submits a
+task and returns a future, and a ``finish`` function that consumes a finished
+future and says whether it succeeded.
+
+State machine of a task::
+
+    waiting --(all dependencies succeeded)--> running --> done | failed
+    waiting --(a dependency failed, or the run is stopping)--> skipped
+
+Finished futures are handed back through a queue fed by done-callbacks, so
+each completion costs O(1) however many tasks are in flight. On a failure
+without ``keep_going`` no new task starts; tasks already running finish (and
+their results are kept), then the loop returns.
+
+>>> from concurrent.futures import Future
+>>> def start(name):
+...     future = Future(); future.set_result(name.upper()); return future
+>>> order = []
+>>> skipped = run_tasks({"a": set(), "b": {"a"}, "c": {"b"}}, start,
+...                     lambda name, future: order.append(future.result()) or True)
+>>> order, skipped
+(['A', 'B', 'C'], [])
+"""
+
+from __future__ import annotations
+
+import queue
+from collections.abc import Callable, Mapping, Set
+from concurrent.futures import Future
+
+__all__ = ["run_tasks", "topological_order"]
+
+
+def topological_order(dependencies: Mapping[str, Set[str]]) -> list[str]:
+    """Kahn's algorithm; the order of ``dependencies`` breaks ties.
+
+    >>> topological_order({"c": {"b"}, "b": {"a"}, "a": set()})
+    ['a', 'b', 'c']
+    """
+    waiting = {name: len(deps) for name, deps in dependencies.items()}
+    dependents: dict[str, list[str]] = {name: [] for name in dependencies}
+    for name, deps in dependencies.items():
+        for dep in deps:
+            dependents[dep].append(name)
+    ready = [name for name, count in waiting.items() if count == 0]
+    order = []
+    while ready:
+        name = ready.pop(0)
+        order.append(name)
+        for child in dependents[name]:
+            waiting[child] -= 1
+            if waiting[child] == 0:
+                ready.append(child)
+    if len(order) != len(dependencies):
+        raise ValueError("dependencies contain a cycle")
+    return order
+
+
+def run_tasks(
+    dependencies: Mapping[str, Set[str]],
+    start: Callable[[str], Future],
+    finish: Callable[[str, Future], bool],
+    *,
+    keep_going: bool = False,
+) -> list[str]:
+    """Run every task once its dependencies succeeded; return the tasks skipped.
+
+    Parameters
+    ----------
+    dependencies : mapping of task name to the names it waits for
+        Every dependency must itself be a key.
+    start : callable
+        Submits a task, returns its future (may be already done).
+    finish : callable
+        Called in this thread with each finished future; returns False when
+        the task failed.
+    keep_going : bool
+        Keep starting tasks that do not depend on a failed one.
+    """
+    waiting = {name: len(deps) for name, deps in dependencies.items()}
+    dependents: dict[str, list[str]] = {name: [] for name in dependencies}
+    for name, deps in dependencies.items():
+        for dep in deps:
+            dependents[dep].append(name)
+
+    finished: queue.SimpleQueue[tuple[str, Future]] = queue.SimpleQueue()
+    started: set[str] = set()
+    blocked: set[str] = set()
+    stopping = False
+
+    def launch(name: str) -> None:
+        started.add(name)
+        start(name).add_done_callback(lambda future: finished.put((name, future)))
+
+    def block(name: str) -> None:
+        stack = [name]
+        while stack:
+            for child in dependents[stack.pop()]:
+                if child not in blocked:
+                    blocked.add(child)
+                    stack.append(child)
+
+    for name in [name for name, count in waiting.items() if count == 0]:
+        launch(name)
+    running = len(started)
+    while running:
+        name, future = finished.get()
+        running -= 1
+        if finish(name, future):
+            for child in dependents[name]:
+                waiting[child] -= 1
+                if waiting[child] == 0 and child not in blocked and not stopping:
+                    launch(child)
+                    running += 1
+        else:
+            block(name)
+            stopping = stopping or not keep_going
+    return [name for name in dependencies if name not in started]
