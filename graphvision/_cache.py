@@ -236,7 +236,7 @@ class DiskStore:
 
     def put(self, key: str, entry: Encoded) -> None:
         path = self.path(key)
-        path.parent.mkdir(exist_ok=True)
+        path.parent.mkdir(parents=True, exist_ok=True)
         handle, temp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=SUFFIX)
         try:
             with os.fdopen(handle, "wb") as stream:

@@ -26,6 +26,7 @@ from ._graph import Graph, Ref
 from ._node import SINGLE_OUTPUT, NodeSpec
 from ._ports import PortType
 from ._registry import Registry, did_you_mean
+from ._scheduler import topological_order
 
 __all__ = ["CompiledGraph", "Step", "compile_graph"]
 
@@ -193,9 +194,12 @@ class _Checker:
 
     def check_cycles(self) -> list[str] | None:
         nx_graph = self.graph.to_networkx()
+        nodes = self.graph.nodes
+        dependencies = {name: {r.node for r in decl.inputs.values() if r.node in nodes}
+                        for name, decl in nodes.items()}
         try:
-            return [n for n in nx.topological_sort(nx_graph) if n in self.graph.nodes]
-        except nx.NetworkXUnfeasible:
+            return topological_order(dependencies)
+        except ValueError:
             reported: set[frozenset[str]] = set()
             for cycle in nx.simple_cycles(nx_graph):
                 if frozenset(cycle) in reported:

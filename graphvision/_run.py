@@ -145,15 +145,22 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
         except Exception as error:
             raise InputError(f"input '{name}': cannot load '{value}': {error}") from error
     try:
-        return port_type.validate(value)
+        return _read_only_view(port_type, port_type.validate(value))
     except PortValueError as error:
         raise InputError(f"input '{name}': {error}") from None
 
 
 def _freeze(port_type: type[PortType], value: Any) -> Any:
+    """Make a node's own output arrays read-only, in place."""
     for array in port_type.encode(value)[0].values():
         freeze(array)
     return value
+
+
+def _read_only_view(port_type: type[PortType], value: Any) -> Any:
+    """The value over read-only views of its arrays (the caller's arrays stay writable)."""
+    arrays, meta = port_type.encode(value)
+    return port_type.decode({name: freeze(a.view()) for name, a in arrays.items()}, meta)
 
 
 class _Run:

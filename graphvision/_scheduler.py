@@ -27,6 +27,7 @@ their results are kept), then the loop returns.
 
 from __future__ import annotations
 
+import heapq
 import queue
 from collections.abc import Callable, Mapping, Set
 from concurrent.futures import Future
@@ -35,25 +36,30 @@ __all__ = ["run_tasks", "topological_order"]
 
 
 def topological_order(dependencies: Mapping[str, Set[str]]) -> list[str]:
-    """Kahn's algorithm; the order of ``dependencies`` breaks ties.
+    """Kahn's algorithm; among ready tasks the one declared first goes first.
 
     >>> topological_order({"c": {"b"}, "b": {"a"}, "a": set()})
     ['a', 'b', 'c']
+    >>> topological_order({"a": set(), "b": {"a"}, "c": set()})
+    ['a', 'b', 'c']
     """
+    index = {name: i for i, name in enumerate(dependencies)}
     waiting = {name: len(deps) for name, deps in dependencies.items()}
     dependents: dict[str, list[str]] = {name: [] for name in dependencies}
     for name, deps in dependencies.items():
         for dep in deps:
             dependents[dep].append(name)
-    ready = [name for name, count in waiting.items() if count == 0]
+    ready = [index[name] for name, count in waiting.items() if count == 0]
+    heapq.heapify(ready)
+    names = list(dependencies)
     order = []
     while ready:
-        name = ready.pop(0)
+        name = names[heapq.heappop(ready)]
         order.append(name)
         for child in dependents[name]:
             waiting[child] -= 1
             if waiting[child] == 0:
-                ready.append(child)
+                heapq.heappush(ready, index[child])
     if len(order) != len(dependencies):
         raise ValueError("dependencies contain a cycle")
     return order

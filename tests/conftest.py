@@ -1,0 +1,38 @@
+"""Shared fixtures: registries with the built-in and toy plugins, graphs, caches."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import graphvision as gv
+
+FIXTURES = Path(__file__).parent / "fixtures"
+TOY = FIXTURES / "toy.py"
+PIPELINES = Path(__file__).parent.parent / "pipelines"
+
+
+@pytest.fixture(scope="session")
+def registry() -> gv.Registry:
+    """Installed plugins plus the toy plugin."""
+    found = gv.discover([TOY])
+    assert not found.failed_plugins(), found.failed_plugins()
+    return found
+
+
+@pytest.fixture
+def cache(tmp_path: Path) -> gv.Cache:
+    return gv.Cache(gv.MemoryStore(), gv.DiskStore(tmp_path / "cache"))
+
+
+@pytest.fixture(autouse=True)
+def isolated_cache_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The CLI's default disk cache goes to a per-test folder."""
+    monkeypatch.setenv("GRAPHVISION_CACHE_DIR", str(tmp_path / "default-cache"))
+
+
+def write(tmp_path: Path, name: str, text: str) -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path

@@ -1,0 +1,126 @@
+"""Validation against the registry: every problem at once, each with file and line."""
+
+from __future__ import annotations
+
+import pytest
+
+import graphvision as gv
+
+BROKEN = """\
+version: 1
+name: broken
+inputs:
+  x: {type: Float, default: 1.0}
+  unused: {type: Float, default: 0.0}
+  img: {type: Imagee}
+params:
+  spare: 3
+nodes:
+  a:    {op: toy.cnst}
+  b:    {op: toy.add, in: {a: x, c: x}, params: {offset: -1, ofset: 2}}
+  d:    {op: toy.darken, in: {image: x}, params: {factor: "${params.nope}"}}
+  e:    {op: toy.add, in: {a: ghost, b: s.mid}}
+  s:    {op: toy.split, in: {x: x}}
+  f:    {op: toy.add, in: {a: s, b: x}}
+outputs:
+  out: b
+  missing: zzz
+"""
+
+
+@pytest.fixture
+def problems(registry):
+    with pytest.raises(gv.PipelineError) as info:
+        gv.compile_graph(gv.parse_pipeline(BROKEN, "broken.yaml"), registry)
+    return {(p.where, p.line): p.message for p in info.value.problems}, str(info.value)
+
+
+def test_all_problems_are_reported_sorted_by_line(problems):
+    found, text = problems
+    lines = [int(line.split(":")[1].split(":")[0]) for line in text.splitlines()[1:]
+             if "broken.yaml:" in line for line in [line.split("broken.yaml")[1]]]
+    assert lines == sorted(lines)
+    assert len(found) >= 12
+
+
+@pytest.mark.parametrize(
+    ("where", "line", "message"),
+    [
+        ("inputs.img.type", 6, "unknown port type 'Imagee' (did you mean 'Image'?)"),
+        ("inputs.unused", 5, "unused input 'unused': no node or output reads it"),
+        ("params.spare", 8, "unused pipeline param 'spare'"),
+        ("nodes.a.op", 10, "unknown op 'toy.cnst' (did you mean 'toy.const'?)"),
+        ("nodes.b.in.c", 11, "toy.add has no input port 'c'; inputs: a, b"),
+        ("nodes.b.in", 11, "missing input port 'b' of toy.add (Float)"),
+        ("nodes.b.params.offset", 11, "invalid value -1 for parameter 'offset' of toy.add: "
+         "Input should be greater than or equal to 0"),
+        ("nodes.b.params.ofset", 11, "unknown parameter 'ofset' of toy.add (did you mean 'offset'?)"),
+        ("nodes.d.in.image", 12, "type mismatch: 'x' gives Float but 'd.image' (toy.darken) "
+         "takes GrayImage"),
+        ("nodes.d.params.factor", 12, "unknown pipeline param '${params.nope}'"),
+        ("nodes.e.in.a", 13, "unknown node or input 'ghost'"),
+        ("nodes.e.in.b", 13, "node 's' (toy.split) has no output 'mid'; outputs: low, high"),
+        ("nodes.f.in.a", 15, "node 's' (toy.split) has outputs low, high; name one"),
+        ("outputs.missing", 18, "unknown node or input 'zzz'"),
+    ],
+)
+def test_each_problem_is_named_and_located(problems, where, line, message):
+    found, _ = problems
+    assert (where, line) in found, sorted(found)
+    assert message in found[(where, line)]
+
+
+def test_cycle_is_printed_as_a_path(registry):
+    text = """\
+name: loop
+nodes:
+  a: {op: toy.add, in: {a: b, b: c}}
+  b: {op: toy.add, in: {a: a, b: c}}
+  c: {op: toy.const}
+outputs: {out: a}
+"""
+    with pytest.raises(gv.PipelineError, match=r"nodes.a at loop.yaml:3: cycle: a -> b -> a"):
+        gv.compile_graph(gv.parse_pipeline(text, "loop.yaml"), registry)
+
+
+def test_missing_input_value_is_reported_for_a_run(registry):
+    text = "name: m\ninputs:\n  x: {type: Float}\nnodes:\n  c: {op: toy.add, in: {a: x, b: x}}\noutputs: {o: c}\n"
+    graph = gv.parse_pipeline(text, "m.yaml")
+    gv.compile_graph(graph, registry)  # fine for `validate`
+    with pytest.raises(gv.PipelineError, match=r"inputs.x at m.yaml:3: missing input 'x'"):
+        gv.compile_graph(graph, registry, provided=set())
+
+
+def test_type_variables_follow_the_connected_type(registry):
+    graph = gv.Graph("tv")
+    image = graph.input("image", "GrayImage")
+    smooth = graph.add("smooth", "filters.gaussian", image=image)
+    graph.add("dark", "toy.darken", image=smooth)  # needs GrayImage: gaussian keeps it
+    graph.output("out", "dark")
+    compiled = gv.compile_graph(graph, registry)
+    assert compiled.steps["smooth"].outputs["out"] is gv.GrayImage
+
+    colour = gv.Graph("tv2")
+    rgb = colour.input("image", "ColorImage")
+    colour.add("smooth", "filters.gaussian", image=rgb)
+    colour.add("dark", "toy.darken", image="smooth")
+    colour.output("out", "dark")
+    with pytest.raises(gv.PipelineError, match="'smooth' gives ColorImage but 'dark.image'"):
+        gv.compile_graph(colour, registry)
+
+
+def test_overrides_and_params_substitution(registry):
+    text = "name: s\nparams: {k: 2.0}\nnodes:\n  c: {op: toy.const, params: {value: '${params.k}'}}\noutputs: {o: c}\n"
+    graph = gv.parse_pipeline(text)
+    assert gv.compile_graph(graph, registry).steps["c"].params == {"value": 2.0}
+    changed = graph.with_overrides({"params.k": 5})
+    assert changed.params == {"k": 5}
+    assert gv.compile_graph(changed, registry).steps["c"].params == {"value": 5.0}
+    direct = gv.Graph("d")
+    direct.add("c", "toy.const", params={"value": 1})
+    direct.output("o", "c")
+    assert gv.compile_graph(direct.with_overrides({"c.value": 7}), registry).steps["c"].params == {
+        "value": 7.0
+    }
+    with pytest.raises(KeyError, match="no node 'cc' \\(did you mean 'c'\\?\\)"):
+        graph.with_overrides({"cc.value": 1})

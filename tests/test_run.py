@@ -1,0 +1,239 @@
+"""Running graphs: pruning, parallelism, failures, caching, executors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graphvision as gv
+
+
+def chain(registry):
+    graph = gv.Graph("chain")
+    x = graph.input("x", "Float", default=1.0)
+    a = graph.add("a", "toy.add", a=x, b=x)                       # 2
+    b = graph.add("b", "toy.add", params={"offset": 1.0}, a=a, b=a)  # 5
+    c = graph.add("c", "toy.add", a=x, b=x, params={"offset": 10.0})  # 12
+    graph.output("b", b)
+    graph.output("c", c)
+    return graph
+
+
+def statuses(record):
+    return {n.name: n.status for n in record.nodes}
+
+
+def test_values_and_record(registry):
+    result = gv.run(chain(registry), registry)
+    assert result.outputs == {"b": 5.0, "c": 12.0}
+    assert statuses(result.record) == {"a": "computed", "b": "computed", "c": "computed"}
+    assert all(n.seconds >= 0 for n in result.record.nodes)
+
+
+def test_only_what_requested_outputs_need_runs(registry):
+    result = gv.run(chain(registry), registry, outputs=["c"])
+    assert result.outputs == {"c": 12.0}
+    assert statuses(result.record) == {"c": "computed"}
+    with pytest.raises(gv.UnknownNameError, match=r"unknown output 'cc' \(did you mean 'c'\?\)"):
+        gv.run(chain(registry), registry, outputs=["cc"])
+
+
+def test_inputs_override_defaults(registry):
+    assert gv.run(chain(registry), registry, inputs={"x": 2.0}).outputs == {"b": 9.0, "c": 14.0}
+    assert gv.run(chain(registry), registry, inputs={"x": "3"}).outputs["c"] == 16.0
+    with pytest.raises(gv.InputError, match=r"input 'x': expected Float \(float\), got str 'a'"):
+        gv.run(chain(registry), registry, inputs={"x": "'a'"})
+
+
+def test_multi_output_ports(registry):
+    graph = gv.Graph("split")
+    s = graph.add("s", "toy.split", x=graph.input("x", "Float", default=5.0))
+    graph.output("low", s["low"])
+    graph.output("high", s["high"])
+    assert gv.run(graph, registry).outputs == {"low": 4.0, "high": 6.0}
+
+
+def test_independent_branches_run_at_the_same_time(registry):
+    graph = gv.Graph("par")
+    x = graph.input("x", "Float", default=1.0)
+    graph.output("p", graph.add("p", "toy.rendezvous", x=x))
+    graph.output("q", graph.add("q", "toy.rendezvous", x=x))
+    # Each node blocks until the other one runs: a serial scheduler would time out.
+    result = gv.run(graph, registry, executor="threads", workers=2)
+    assert result.outputs == {"p": 1.0, "q": 1.0}
+
+
+def failing_graph():
+    graph = gv.Graph("fails")
+    x = graph.input("x", "Float", default=1.0)
+    bad = graph.add("bad", "toy.fail", params={"message": "no luck"}, x=x)
+    graph.output("after", graph.add("after", "toy.add", a=bad, b=x))
+    graph.output("slow", graph.add("slow", "toy.sleep", params={"seconds": 0.1}, x=x))
+    graph.output("other", graph.add("other", "toy.add", a=graph.add("o1", "toy.const"), b=x))
+    return graph
+
+
+def test_a_failing_node_is_named_with_params_and_inputs(registry):
+    with pytest.raises(gv.RunError) as info:
+        gv.run(failing_graph(), registry, executor="sync")
+    error = info.value.failures["bad"]
+    assert isinstance(error, gv.NodeExecutionError)
+    assert "node 'bad' (op toy.fail) failed: RuntimeError: no luck" in str(error)
+    assert "params: {'message': 'no luck'}" in str(error)
+    assert "inputs: x=Float 1.0" in str(error)
+    assert isinstance(error.__cause__, RuntimeError)
+    assert statuses(info.value.record)["after"] == "skipped"
+
+
+def test_keep_going_finishes_and_caches_independent_branches(registry, cache):
+    with pytest.raises(gv.RunError) as info:
+        gv.run(failing_graph(), registry, keep_going=True, cache=cache)
+    result = info.value.result
+    assert result.outputs == {"slow": 1.0, "other": 2.0}
+    assert statuses(result.record) == {"bad": "failed", "after": "skipped", "slow": "computed",
+                                       "o1": "computed", "other": "computed"}
+    again = gv.run(failing_graph(), registry, outputs=["other"], cache=cache)
+    assert statuses(again.record) == {"other": "cached"}
+
+
+def test_invalid_node_output_is_a_node_failure(registry):
+    graph = gv.Graph("bad")
+    graph.output("o", graph.add("o", "toy.bad_output", x=graph.input("x", "Float", default=1.0)))
+    with pytest.raises(gv.RunError, match=r"invalid output 'out': expected GrayImage"):
+        gv.run(graph, registry)
+
+
+def test_nodes_cannot_change_their_inputs(registry):
+    graph = gv.Graph("mutate")
+    image = graph.input("image", "GrayImage")
+    graph.output("o", graph.add("o", "toy.mutate", image=image))
+    with pytest.raises(gv.RunError, match="read-only"):
+        gv.run(graph, registry, inputs={"image": np.ones((4, 4), np.float32)})
+
+
+def test_changing_one_parameter_recomputes_only_what_depends_on_it(registry, cache):
+    graph = chain(registry)
+    gv.run(graph, registry, cache=cache)
+    result = gv.run(graph, registry, cache=cache, overrides={"b.offset": 2.0})
+    assert result.outputs == {"b": 6.0, "c": 12.0}
+    assert statuses(result.record) == {"a": "cached", "b": "computed", "c": "cached"}
+
+
+def test_a_warm_run_reads_only_the_requested_outputs(registry, cache):
+    graph = chain(registry)
+    gv.run(graph, registry, cache=cache)
+    fresh = gv.Cache(None, cache.disk)  # a new process: memory empty, disk warm
+    result = gv.run(graph, registry, cache=fresh)
+    assert statuses(result.record) == {"b": "cached", "c": "cached"}  # 'a' is never read
+    assert result.outputs == {"b": 5.0, "c": 12.0}
+
+
+def test_cache_opt_out(registry, cache):
+    graph = gv.Graph("v")
+    graph.output("o", graph.add("o", "toy.volatile", x=graph.input("x", "Float", default=2.0)))
+    gv.run(graph, registry, cache=cache)
+    assert statuses(gv.run(graph, registry, cache=cache).record) == {"o": "computed"}
+
+
+def test_input_content_is_the_key(registry, cache):
+    graph = gv.Graph("k")
+    graph.output("o", graph.add("o", "toy.darken", image=graph.input("image", "GrayImage")))
+    image = np.full((8, 8), 0.5, np.float32)
+    gv.run(graph, registry, cache=cache, inputs={"image": image})
+    same = gv.run(graph, registry, cache=cache, inputs={"image": image.copy()})
+    assert statuses(same.record) == {"o": "cached"}
+    changed = image.copy()
+    changed[3, 3] = 0.25
+    assert statuses(gv.run(graph, registry, cache=cache, inputs={"image": changed}).record) == {
+        "o": "computed"}
+    reshaped = gv.run(graph, registry, cache=cache, inputs={"image": image.reshape(4, 16)})
+    assert statuses(reshaped.record) == {"o": "computed"}
+
+
+def test_editing_a_node_invalidates_its_entries(tmp_path, cache):
+    plugin = tmp_path / "editable.py"
+    source = ("from graphvision import Float, node\n\n@node('edit.f')\n"
+              "def f(x: Float) -> Float:\n    '''Doc.'''\n    return x + {}\n")
+    graph = gv.Graph("e")
+    graph.output("o", graph.add("o", "edit.f", x=graph.input("x", "Float", default=1.0)))
+    plugin.write_text(source.format(1))
+    first = gv.discover([plugin], entry_points=False)
+    assert gv.run(graph, first, cache=cache).outputs["o"] == 2.0
+    import sys
+
+    for name in [n for n in sys.modules if n.startswith("graphvision_local_editable")]:
+        del sys.modules[name]
+    plugin.write_text(source.format(5).replace("'''Doc.'''", "'''Edited doc.'''  # comment"))
+    second = gv.discover([plugin], entry_points=False)
+    result = gv.run(graph, second, cache=cache)
+    assert result.outputs["o"] == 6.0
+    assert statuses(result.record) == {"o": "computed"}
+
+
+def test_docstring_and_comment_edits_keep_entries(registry):
+    spec = registry.node("toy.add")
+    from graphvision._node import source_fingerprint
+
+    def add(a, b, *, offset=0.0):
+        return a + b + offset
+
+    def add_documented(a, b, *, offset=0.0):
+        """Documented."""
+        # a comment
+        return a + b + offset
+
+    def add_changed(a, b, *, offset=0.0):
+        return a + b - offset
+
+    assert source_fingerprint(add).startswith(source_fingerprint(add_documented)[:0])
+    assert len(spec.source_hash) == 32
+    body = source_fingerprint
+    assert body(add) != body(add_changed)
+
+
+@pytest.mark.parametrize("executor", ["sync", "threads", "processes"])
+def test_every_executor_gives_the_same_results(registry, executor):
+    graph = gv.parse_pipeline(
+        "name: p\ninputs:\n  image: {type: Image, default: 'sample:camera'}\nnodes:\n"
+        "  g: {op: color.to_gray, in: {image: image}}\n"
+        "  s: {op: filters.gaussian, in: {image: g}, params: {sigma: 2.0}}\n"
+        "  m: {op: filters.median, in: {image: g}}\n"
+        "  q: {op: metrics.psnr, in: {a: s, b: m}}\n"
+        "outputs: {smooth: s, psnr: q}\n"
+    )
+    result = gv.run(graph, registry, executor=executor, workers=2)
+    reference = gv.run(graph, registry, executor="sync")
+    np.testing.assert_array_equal(result.outputs["smooth"], reference.outputs["smooth"])
+    assert result.outputs["psnr"] == reference.outputs["psnr"]
+    assert result.record.executor == executor
+
+
+def test_process_executor_runs_local_plugin_nodes(registry):
+    result = gv.run(chain(registry), registry, executor="processes", workers=2)
+    assert result.outputs == {"b": 5.0, "c": 12.0}
+
+
+class Recorder(gv.RunHooks):
+    def __init__(self):
+        self.events = []
+
+    def run_started(self, *, pipeline, steps):
+        self.events.append(("start", pipeline, tuple(steps)))
+
+    def node_finished(self, *, name, op, status, seconds):
+        self.events.append(("node", name, status))
+
+    def run_finished(self, *, record, failed):
+        self.events.append(("end", failed))
+
+
+def test_hooks_see_the_run_and_the_finish_even_on_failure(registry):
+    hooks = Recorder()
+    gv.run(chain(registry), registry, hooks=[hooks], executor="sync")
+    assert hooks.events[0] == ("start", "chain", ("a", "b", "c"))
+    assert hooks.events[-1] == ("end", False)
+    failing = Recorder()
+    with pytest.raises(gv.RunError):
+        gv.run(failing_graph(), registry, hooks=[failing], executor="sync")
+    assert ("node", "bad", "failed") in failing.events
+    assert failing.events[-1] == ("end", True)
