@@ -341,7 +341,7 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
     try:
         model = pydantic.create_model(  # type: ignore[call-overload]
             f"{mark.id}.params",
-            __config__=pydantic.ConfigDict(extra="forbid", strict=False),
+            __config__=pydantic.ConfigDict(extra="forbid", validate_default=True),
             **fields,
         )
         model.model_validate({})
