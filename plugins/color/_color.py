@@ -41,7 +41,7 @@ def to_gray(image: Image, *, method: Literal["mean", "luminance"] = "mean") -> G
     Examples
     --------
     >>> rgb = np.array([[[0.3, 0.6, 0.9]]], dtype=np.float32)
-    >>> float(to_gray(rgb)[0, 0])
+    >>> round(float(to_gray(rgb)[0, 0]), 6)
     0.6
     """
     if image.ndim == 2:

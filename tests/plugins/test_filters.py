@@ -1,0 +1,152 @@
+"""Filters against hand-computed values, identities, and scipy/scikit-image references."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.ndimage as ndi
+
+from graphvision_plugins import filters
+
+ROW = (np.arange(1, 7, dtype=np.float32) / 10)[None, :]  # [[.1 .2 .3 .4 .5 .6]]
+PICK_LEFT_2 = np.array([[1.0, 0, 0, 0, 0]])  # correlation: out[i] = in[i - 2]
+
+
+@pytest.mark.parametrize(
+    ("boundary", "expected"),
+    [
+        ("mirror", [0.2, 0.1, 0.1, 0.2, 0.3, 0.4]),     # b a | a b c ...
+        ("replicate", [0.1, 0.1, 0.1, 0.2, 0.3, 0.4]),  # a a | a b c ...
+        ("wrap", [0.5, 0.6, 0.1, 0.2, 0.3, 0.4]),       # e f | a b c ...
+        ("zero", [0.0, 0.0, 0.1, 0.2, 0.3, 0.4]),       # 0 0 | a b c ...
+        ("crop", [0.1, 0.2]),                            # only where the window fits
+    ],
+)
+def test_boundary_conditions_by_hand(boundary, expected):
+    out = filters.correlate(ROW, PICK_LEFT_2, boundary=boundary)
+    np.testing.assert_allclose(out[0], expected, atol=1e-7)
+    assert out.dtype == np.float32
+
+
+def test_convolution_flips_the_kernel():
+    impulse = np.zeros((7, 7), np.float32)
+    impulse[3, 3] = 1.0
+    kernel = np.arange(9, dtype=np.float64).reshape(3, 3)
+    np.testing.assert_allclose(filters.convolve(impulse, kernel)[2:5, 2:5], kernel)
+    np.testing.assert_allclose(filters.correlate(impulse, kernel)[2:5, 2:5], kernel[::-1, ::-1])
+
+
+def test_convolution_is_commutative_and_associative():
+    rng = np.random.default_rng(0)
+    f, g = rng.random((5, 5)), rng.random((3, 3))
+    image = np.zeros((15, 15), np.float32)
+    image[4:9, 4:9] = f
+    both = filters.convolve(filters.convolve(image, g, boundary="zero"), g, boundary="zero")
+    g_g = filters.convolve(np.pad(g, 2).astype(np.float32), g, boundary="zero").astype(np.float64)
+    once = filters.convolve(image, g_g, boundary="zero")
+    np.testing.assert_allclose(both, once, atol=1e-5)
+
+
+def test_gaussian_kernel_half_size_is_three_sigma():
+    for sigma, side in [(0.5, 5), (1.0, 7), (1.2, 9), (2.0, 13)]:
+        kernel = filters.gaussian_kernel(sigma=sigma)
+        assert kernel.shape == (side, side)
+        assert kernel.sum() == pytest.approx(1.0)
+        h = side // 2
+        # ratio of centre to edge-of-axis weight is exp(h^2 / 2 sigma^2)
+        assert kernel[h, h] / kernel[h, 0] == pytest.approx(np.exp(h * h / (2 * sigma**2)))
+    assert filters.gaussian_kernel(sigma=1.0, half_size=1).shape == (3, 3)
+
+
+@pytest.mark.parametrize("sigma", [1.0, 2.0])
+@pytest.mark.parametrize("shape", [(40, 50), (30, 20, 3)])
+def test_separable_gaussian_matches_2d_correlation_and_scipy(sigma, shape):
+    image = np.random.default_rng(1).random(shape).astype(np.float32)
+    fast = filters.gaussian(image, sigma=sigma)
+    direct = filters.correlate(image, filters.gaussian_kernel(sigma=sigma))
+    np.testing.assert_allclose(fast, direct, atol=2e-6)
+    # reference: scipy.ndimage.gaussian_filter(image, sigma, mode="reflect", truncate=3.0),
+    # whose radius int(3 sigma + 0.5) equals ceil(3 sigma) for these sigmas
+    axes_sigma = (sigma, sigma, 0) if len(shape) == 3 else sigma
+    reference = ndi.gaussian_filter(image.astype(np.float64), axes_sigma, mode="reflect", truncate=3.0)
+    np.testing.assert_allclose(fast, reference, atol=2e-6)
+
+
+def test_gaussian_crop_shrinks_by_the_kernel():
+    image = np.random.default_rng(2).random((30, 30)).astype(np.float32)
+    cropped = filters.gaussian(image, sigma=1.0, boundary="crop")
+    assert cropped.shape == (24, 24)
+    np.testing.assert_allclose(cropped, filters.gaussian(image, sigma=1.0)[3:-3, 3:-3], atol=1e-6)
+    with pytest.raises(ValueError, match=r"filter window 7×7 is larger than the image 5×5"):
+        filters.gaussian(image[:5, :5], sigma=1.0, boundary="crop")
+
+
+def test_box_filter_is_the_window_mean():
+    image = np.random.default_rng(3).random((20, 20)).astype(np.float32)
+    out = filters.box(image, size=5, boundary="replicate")
+    assert out[10, 10] == pytest.approx(image[8:13, 8:13].mean(), abs=1e-6)
+    np.testing.assert_allclose(out, ndi.uniform_filter(image.astype(np.float64), 5, mode="nearest"),
+                               atol=1e-6)
+
+
+def test_sharpen_default_is_the_course_kernel():
+    image = np.random.default_rng(4).random((25, 25)).astype(np.float32) * 0.5 + 0.25
+    kernel = -np.full((3, 3), 1 / 9)
+    kernel[1, 1] += 2.0
+    expected = np.clip(filters.correlate(image, kernel), 0, 1)
+    np.testing.assert_allclose(filters.sharpen(image), expected, atol=1e-6)
+    np.testing.assert_array_equal(filters.sharpen(image, amount=0.0), image)
+
+
+@pytest.mark.parametrize("size", [3, 5, 7])
+@pytest.mark.parametrize(("boundary", "mode"), [("mirror", "reflect"), ("replicate", "nearest"),
+                                                 ("wrap", "wrap"), ("zero", "constant")])
+def test_median_matches_scipy(size, boundary, mode):
+    image = np.random.default_rng(size).random((37, 41)).astype(np.float32)
+    # reference: scipy.ndimage.median_filter(image, size, mode=mode)
+    np.testing.assert_array_equal(filters.median(image, size=size, boundary=boundary),
+                                  ndi.median_filter(image, size=size, mode=mode))
+
+
+def test_median_colour_and_crop():
+    image = np.random.default_rng(9).random((20, 22, 3)).astype(np.float32)
+    out = filters.median(image, size=3)
+    for c in range(3):
+        np.testing.assert_array_equal(out[..., c], ndi.median_filter(image[..., c], 3, mode="reflect"))
+    np.testing.assert_array_equal(filters.median(image, size=3, boundary="crop"), out[1:-1, 1:-1])
+
+
+def test_median_removes_salt_and_pepper_that_a_gaussian_smears():
+    clean = np.full((64, 64), 0.5, np.float32)
+    noisy = filters.add_salt_and_pepper(clean, amount=0.05, seed=0)
+    assert np.abs(filters.median(noisy, size=3) - clean).max() < 1e-6  # 5% never fills a window half
+    assert np.abs(filters.gaussian(noisy, sigma=1.0) - clean).max() > 0.05
+
+
+def test_noise_is_seeded_and_has_the_asked_statistics():
+    clean = np.full((200, 200), 0.5, np.float32)
+    noisy = filters.add_gaussian_noise(clean, sigma=0.05, seed=3)
+    np.testing.assert_array_equal(noisy, filters.add_gaussian_noise(clean, sigma=0.05, seed=3))
+    assert not np.array_equal(noisy, filters.add_gaussian_noise(clean, sigma=0.05, seed=4))
+    # 40,000 samples: the std estimate is within 2% of sigma (about 6 standard errors)
+    assert (noisy - clean).std() == pytest.approx(0.05, rel=0.02)
+    sp = filters.add_salt_and_pepper(clean, amount=0.1, salt_ratio=0.25, seed=0)
+    hit = sp != 0.5
+    assert hit.mean() == pytest.approx(0.1, abs=0.01)
+    assert (sp[hit] == 1.0).mean() == pytest.approx(0.25, abs=0.03)
+    impulse = filters.add_impulse_noise(clean, amount=0.1, seed=0)
+    assert set(np.unique(impulse).tolist()) == {0.5, 1.0}
+
+
+def test_colour_noise_hits_whole_pixels():
+    clean = np.full((50, 50, 3), 0.5, np.float32)
+    sp = filters.add_salt_and_pepper(clean, amount=0.2, seed=1)
+    changed = sp != 0.5
+    assert np.array_equal(changed.any(axis=2), changed.all(axis=2))
+
+
+def test_to_image():
+    response = np.array([[-1.0, 0.5, 2.0]], np.float32)
+    np.testing.assert_array_equal(filters.to_image(response), [[0.0, 0.5, 1.0]])
+    np.testing.assert_allclose(filters.to_image(response, method="minmax"), [[0.0, 0.5, 1.0]])
+    assert filters.to_image(np.ones((2, 2), np.float32), method="minmax").max() == 0.0

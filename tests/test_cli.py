@@ -1,0 +1,177 @@
+"""The command line: exit codes, messages without tracebacks, outputs and reports."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from graphvision.cli import main
+
+from .conftest import PIPELINES, TOY, write
+
+DEMO = PIPELINES / "denoise.yaml"
+
+
+def cli(capsys, *args):
+    status = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err
+    return status, out, err
+
+
+def test_run_writes_outputs_record_and_report(capsys, tmp_path):
+    status, _, err = cli(capsys, "run", DEMO, "--output-dir", tmp_path, "--record", "--no-progress")
+    assert status == 0, err
+    names = {p.name for p in tmp_path.iterdir()}
+    assert {"median_on_salt_pepper.png", "psnr_median_on_salt_pepper.json", "record.json",
+            "report.md"} <= names
+    record = json.loads((tmp_path / "record.json").read_text())
+    assert {n["status"] for n in record["nodes"]} == {"computed"}
+    report = (tmp_path / "report.md").read_text()
+    assert "## Run record" in report and "median_on_salt_pepper.png" in report
+
+
+def test_rerun_with_a_changed_parameter_uses_the_disk_cache(capsys, tmp_path):
+    cache = tmp_path / "c"
+    cli(capsys, "run", DEMO, "--cache-dir", cache, "-o", "psnr_median_on_salt_pepper")
+    status, out, _ = cli(capsys, "run", DEMO, "--cache-dir", cache, "--record",
+                         "-o", "psnr_median_on_salt_pepper", "--set", "median_on_sp.size=5")
+    assert status == 0
+    table = out.splitlines()[out.splitlines().index(next(x for x in out.splitlines()
+                                                         if x.startswith("node "))):]
+    rows = {line.split()[0]: line.split()[2] for line in table[1:-1]}
+    assert rows == {"gray": "cached", "noisy_sp": "cached", "median_on_sp": "computed",
+                    "psnr_median_on_sp": "computed"}
+
+
+def test_input_from_a_file(capsys, tmp_path):
+    image = tmp_path / "img.npy"
+    np.save(image, np.full((16, 16), 0.5, np.float32))
+    status, out, err = cli(capsys, "run", DEMO, "--no-cache", "-i", f"image={image}",
+                           "-o", "psnr_noisy_gaussian")
+    assert status == 0, err
+    assert out.startswith("psnr_noisy_gaussian: Float ")
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda d: d / "missing.png", "input 'image': cannot load '.*missing.png': no such file"),
+        (lambda d: write(d, "text.png", "not a png"), "text.png is not a readable image"),
+        (lambda d: _npy(d, np.zeros((0, 5), np.float32)), "is empty"),
+        (lambda d: _npy(d, np.zeros((2, 3, 4, 5), np.float32)), r"must be H×W .* got shape \(2, 3, 4, 5\)"),
+        (lambda d: _npy(d, np.full((4, 4), 3.0)), r"float values in \[3, 3\]; expected \[0, 1\]"),
+    ],
+)
+def test_bad_input_files_exit_2_with_a_message(capsys, tmp_path, make, message):
+    status, _, err = cli(capsys, "run", DEMO, "--no-cache", "-i", f"image={make(tmp_path)}")
+    assert status == 2
+    assert pytest.importorskip("re").search(message, err), err
+
+
+def _npy(folder, array):
+    path = folder / "a.npy"
+    np.save(path, array)
+    return path
+
+
+def test_unreadable_input_file(capsys, tmp_path):
+    import os
+
+    if os.geteuid() == 0:
+        pytest.skip("root reads any file")
+    path = write(tmp_path, "secret.png", "x")
+    path.chmod(0)
+    status, _, err = cli(capsys, "run", DEMO, "--no-cache", "-i", f"image={path}")
+    assert status == 2 and "Permission denied" in err
+
+
+def test_unknown_sample(capsys):
+    status, _, err = cli(capsys, "run", DEMO, "--no-cache", "-i", "image=sample:camra")
+    assert status == 2
+    assert "unknown sample image 'camra' (did you mean 'camera'?)" in err
+
+
+def test_invalid_pipeline_exits_2_listing_problems(capsys, tmp_path):
+    path = write(tmp_path, "bad.yaml", "name: bad\nnodes:\n  a: {op: filters.gausian}\n"
+                 "outputs: {o: a}\n")
+    status, _, err = cli(capsys, "run", path)
+    assert status == 2
+    assert f"nodes.a.op at {path}:3: unknown op 'filters.gausian' (did you mean" in err
+    status, _, err = cli(capsys, "validate", path)
+    assert status == 2 and "unknown op" in err
+
+
+def test_bad_parameter_from_the_command_line(capsys):
+    status, _, err = cli(capsys, "run", DEMO, "--set", "median_on_sp.size=4")
+    assert status == 2
+    assert "invalid value 4 for parameter 'size' of filters.median" in err
+    assert "size must be odd" in err
+    status, _, err = cli(capsys, "run", DEMO, "--set", "nosuch.size=4")
+    assert status == 2 and "no node 'nosuch'" in err
+    status, _, err = cli(capsys, "run", DEMO, "--set", "oops")
+    assert status == 2 and "--set expects NAME=VALUE, got 'oops'" in err
+
+
+def test_a_failing_node_exits_1_and_keeps_other_outputs(capsys, tmp_path):
+    path = write(tmp_path, "f.yaml", "name: f\ninputs: {x: {type: Float, default: 1.0}}\nnodes:\n"
+                 "  bad: {op: toy.fail, in: {x: x}}\n  ok: {op: toy.add, in: {a: x, b: x}}\n"
+                 "outputs: {bad: bad, ok: ok}\n")
+    status, _, err = cli(capsys, "run", path, "--plugins", TOY, "--keep-going", "-d", tmp_path / "o")
+    assert status == 1
+    assert "node 'bad' (op toy.fail) failed: RuntimeError: boom" in err
+    assert (tmp_path / "o" / "ok.json").read_text().strip() == "2.0"
+    assert "| bad | not produced |" in (tmp_path / "o" / "report.md").read_text()
+    status = main(["run", str(path), "--plugins", str(TOY), "--debug"])
+    err = capsys.readouterr().err
+    assert status == 1 and "Traceback" in err and 'raise RuntimeError(message)' in err
+
+
+def test_usage_errors_exit_2(capsys):
+    assert cli(capsys, "frobnicate")[0] == 2
+    assert cli(capsys, "run")[0] == 2
+    status, _, err = cli(capsys, "describe", "filters.gausian")
+    assert status == 2 and "did you mean 'filters.gaussian'" in err
+
+
+def test_nodes_and_describe(capsys):
+    status, out, _ = cli(capsys, "nodes")
+    assert status == 0 and "filters\n" in out and "filters.median" in out
+    status, out, _ = cli(capsys, "describe", "filters.median")
+    assert "size: " in out and "inputs:\n  image: Image" in out
+    status, out, _ = cli(capsys, "describe", "filters.median", "--json")
+    info = json.loads(out)
+    assert info["params"]["properties"]["size"]["maximum"] == 31
+    status, out, _ = cli(capsys, "nodes", "--json")
+    assert "metrics.psnr" in json.loads(out)
+
+
+def test_schema_and_graph(capsys):
+    status, out, _ = cli(capsys, "schema")
+    assert json.loads(out)["title"] == "graphvision pipeline"
+    status, out, _ = cli(capsys, "graph", DEMO)
+    assert out.startswith("digraph pipeline {") and "gray -> noisy_gauss" in out
+    status, out, _ = cli(capsys, "graph", DEMO, "--format", "mermaid")
+    assert out.startswith("flowchart LR")
+
+
+def test_cache_commands(capsys, tmp_path):
+    cache = tmp_path / "c"
+    cli(capsys, "run", DEMO, "--cache-dir", cache, "-o", "psnr_noisy_gaussian")
+    status, out, _ = cli(capsys, "cache", "info", "--cache-dir", cache)
+    assert status == 0 and "entries:   3" in out
+    status, out, _ = cli(capsys, "cache", "prune", "--cache-dir", cache, "--max-bytes", "1M")
+    assert "freed" in out
+    status, out, _ = cli(capsys, "cache", "clear", "--cache-dir", cache)
+    assert out.startswith("removed ")
+    assert "entries:   0" in cli(capsys, "cache", "info", "--cache-dir", cache)[1]
+
+
+def test_unwritable_cache_dir_warns_and_the_run_goes_on(capsys, tmp_path):
+    blocker = write(tmp_path, "file", "x")
+    status, out, err = cli(capsys, "run", DEMO, "--cache-dir", blocker / "c",
+                           "-o", "psnr_noisy_gaussian")
+    assert status == 0
+    assert "warning: cache directory" in err and "running without the disk cache" in err
