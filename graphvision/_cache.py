@@ -25,6 +25,7 @@ recomputed. Reads touch the file's mtime, which orders eviction (LRU).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -66,7 +67,7 @@ class CacheWarning(UserWarning):
 
 
 def default_cache_dir() -> Path:
-    """``$GRAPHVISION_CACHE_DIR``, else ``$XDG_CACHE_HOME/graphvision``, else ``~/.cache/graphvision``."""
+    """``$GRAPHVISION_CACHE_DIR``, else ``$XDG_CACHE_HOME/graphvision``, else ``~/.cache/...``."""
     if os.environ.get("GRAPHVISION_CACHE_DIR"):
         return Path(os.environ["GRAPHVISION_CACHE_DIR"])
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
@@ -94,13 +95,18 @@ def content_key(port_type: type[PortType], value: Any) -> str:
 
 
 def output_key(
-    op: str, version: int, source_hash: str, params: dict[str, Any], input_keys: dict[str, str],
+    op: str,
+    version: int,
+    source_hash: str,
+    params: dict[str, Any],
+    input_keys: dict[str, str],
     port: str,
 ) -> str:
     """Key of one node output, from everything that determines it (not from values)."""
     text = json.dumps(
         [op, version, source_hash, params, sorted(input_keys.items()), port],
-        sort_keys=True, separators=(",", ":"),
+        sort_keys=True,
+        separators=(",", ":"),
     )
     return hashlib.blake2b(text.encode(), digest_size=20).hexdigest()
 
@@ -228,10 +234,8 @@ class DiskStore:
             )
             path.unlink(missing_ok=True)
             return None
-        try:
+        with contextlib.suppress(OSError):  # read-only cache, or pruned meanwhile: value is good
             os.utime(path)
-        except OSError:
-            pass  # read-only cache or pruned meanwhile: the value read is still good
         return entry
 
     def put(self, key: str, entry: Encoded) -> None:
@@ -266,8 +270,9 @@ class DiskStore:
 
     def info(self) -> CacheInfo:
         entries = [(p, s) for p, s in self._files() if not p.name.startswith(".")]
-        return CacheInfo(str(self.directory), len(entries), sum(s.st_size for _, s in entries),
-                         self.max_bytes)
+        return CacheInfo(
+            str(self.directory), len(entries), sum(s.st_size for _, s in entries), self.max_bytes
+        )
 
     def prune(self, max_bytes: int | None = None) -> int:
         """Evict least recently used entries until the store holds at most ``max_bytes``.
@@ -306,12 +311,26 @@ def _encode_blob(entry: Encoded) -> Iterator[bytes | memoryview]:
     for name, array in arrays.items():
         if array.dtype.hasobject:
             raise TypeError(f"cannot cache object array '{name}'")
-        specs.append({"name": name, "dtype": array.dtype.str, "shape": list(array.shape),
-                      "offset": offset, "nbytes": array.nbytes})
+        specs.append(
+            {
+                "name": name,
+                "dtype": array.dtype.str,
+                "shape": list(array.shape),
+                "offset": offset,
+                "nbytes": array.nbytes,
+            }
+        )
         offset += array.nbytes
         digest.update(memoryview(array).cast("B") if array.size else b"")
-    header = json.dumps({"type": entry.type_name, "meta": entry.meta, "arrays": specs,
-                         "payload": offset, "digest": digest.hexdigest()}).encode()
+    header = json.dumps(
+        {
+            "type": entry.type_name,
+            "meta": entry.meta,
+            "arrays": specs,
+            "payload": offset,
+            "digest": digest.hexdigest(),
+        }
+    ).encode()
     yield MAGIC + struct.pack("<Q", len(header)) + header
     for array in arrays.values():
         if array.size:
@@ -381,6 +400,9 @@ class Cache:
             try:
                 self.disk.put(key, entry)
             except OSError as error:
-                warnings.warn(f"could not write cache entry {key}: {error}; continuing",
-                              CacheWarning, stacklevel=2)
+                warnings.warn(
+                    f"could not write cache entry {key}: {error}; continuing",
+                    CacheWarning,
+                    stacklevel=2,
+                )
         return entry.nbytes

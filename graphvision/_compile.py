@@ -23,7 +23,7 @@ import pydantic
 
 from ._errors import PipelineError, Problem, UnknownNameError
 from ._graph import Graph, Ref
-from ._node import SINGLE_OUTPUT, NodeSpec
+from ._node import NodeSpec
 from ._ports import PortType
 from ._registry import Registry, did_you_mean
 from ._scheduler import topological_order
@@ -93,8 +93,11 @@ class _Checker:
             for name in names:
                 used.add(name)
                 if name not in self.graph.params:
-                    self.report(where, f"unknown pipeline param '${{params.{name}}}'"
-                                f"{did_you_mean(name, self.graph.params)}")
+                    self.report(
+                        where,
+                        f"unknown pipeline param '${{params.{name}}}'"
+                        f"{did_you_mean(name, self.graph.params)}",
+                    )
                     return value
             whole = PARAM_REF.fullmatch(value)
             if whole:
@@ -116,11 +119,17 @@ class _Checker:
                 where = f"nodes.{name}.params.{param}"
                 if item["type"] == "extra_forbidden":
                     listing = ", ".join(allowed) if allowed else "none"
-                    self.report(where, f"unknown parameter '{param}' of {spec.id}"
-                                f"{did_you_mean(param, allowed)}; parameters: {listing}")
+                    self.report(
+                        where,
+                        f"unknown parameter '{param}' of {spec.id}"
+                        f"{did_you_mean(param, allowed)}; parameters: {listing}",
+                    )
                 else:
-                    self.report(where, f"invalid value {item.get('input')!r} for parameter "
-                                f"'{param}' of {spec.id}: {item['msg']}")
+                    self.report(
+                        where,
+                        f"invalid value {item.get('input')!r} for parameter "
+                        f"'{param}' of {spec.id}: {item['msg']}",
+                    )
             return {}
 
     # -- connections --------------------------------------------------------------
@@ -137,7 +146,9 @@ class _Checker:
                 return None  # reported once, on the input
         if ref.node not in graph.nodes:
             options = list(graph.nodes) + list(graph.inputs)
-            self.report(where, f"unknown node or input '{ref.node}'{did_you_mean(ref.node, options)}")
+            self.report(
+                where, f"unknown node or input '{ref.node}'{did_you_mean(ref.node, options)}"
+            )
             return None
         op = graph.nodes[ref.node].op
         if op not in self.registry.nodes:
@@ -146,13 +157,19 @@ class _Checker:
         port = ref.port
         if port is None:
             if len(outputs) != 1:
-                self.report(where, f"node '{ref.node}' ({op}) has outputs "
-                            f"{', '.join(outputs)}; name one, e.g. '{ref.node}.{next(iter(outputs))}'")
+                self.report(
+                    where,
+                    f"node '{ref.node}' ({op}) has outputs "
+                    f"{', '.join(outputs)}; name one, e.g. '{ref.node}.{next(iter(outputs))}'",
+                )
                 return None
             port = next(iter(outputs))
         elif port not in outputs:
-            self.report(where, f"node '{ref.node}' ({op}) has no output '{port}'"
-                        f"{did_you_mean(port, outputs)}; outputs: {', '.join(outputs)}")
+            self.report(
+                where,
+                f"node '{ref.node}' ({op}) has no output '{port}'"
+                f"{did_you_mean(port, outputs)}; outputs: {', '.join(outputs)}",
+            )
             return None
         return (ref.node, port), outputs[port]
 
@@ -165,8 +182,11 @@ class _Checker:
             where = f"nodes.{name}.in.{port}"
             if port not in spec.inputs:
                 listing = ", ".join(spec.inputs) or "none"
-                self.report(where, f"{spec.id} has no input port '{port}'"
-                            f"{did_you_mean(port, spec.inputs)}; inputs: {listing}")
+                self.report(
+                    where,
+                    f"{spec.id} has no input port '{port}'"
+                    f"{did_you_mean(port, spec.inputs)}; inputs: {listing}",
+                )
                 continue
             found = self.source_type(ref, where)
             if found is None:
@@ -174,16 +194,23 @@ class _Checker:
             wired[port], given = found
             wanted = spec.inputs[port].type
             if not given.is_a(wanted):
-                self.report(where, f"type mismatch: '{ref}' gives {given.type_name()} but "
-                            f"'{name}.{port}' ({spec.id}) takes {wanted.type_name()}")
+                self.report(
+                    where,
+                    f"type mismatch: '{ref}' gives {given.type_name()} but "
+                    f"'{name}.{port}' ({spec.id}) takes {wanted.type_name()}",
+                )
             elif spec.inputs[port].typevar:
                 var = spec.inputs[port].typevar
                 bound = bindings.get(var, given)
-                bindings[var] = bound if given.is_a(bound) else given if bound.is_a(given) else wanted
+                bindings[var] = (
+                    bound if given.is_a(bound) else given if bound.is_a(given) else wanted
+                )
         for port, declared in spec.inputs.items():
             if port not in decl.inputs and not declared.optional:
-                self.report(f"nodes.{name}.in", f"missing input port '{port}' of {spec.id} "
-                            f"({declared.type.type_name()})")
+                self.report(
+                    f"nodes.{name}.in",
+                    f"missing input port '{port}' of {spec.id} ({declared.type.type_name()})",
+                )
         self.resolved[name] = {
             port: bindings.get(spec.output_vars.get(port, ""), kind)
             for port, kind in spec.outputs.items()
@@ -195,8 +222,10 @@ class _Checker:
     def check_cycles(self) -> list[str] | None:
         nx_graph = self.graph.to_networkx()
         nodes = self.graph.nodes
-        dependencies = {name: {r.node for r in decl.inputs.values() if r.node in nodes}
-                        for name, decl in nodes.items()}
+        dependencies = {
+            name: {r.node for r in decl.inputs.values() if r.node in nodes}
+            for name, decl in nodes.items()
+        }
         try:
             return topological_order(dependencies)
         except ValueError:
@@ -222,8 +251,10 @@ class _Checker:
             except UnknownNameError as error:
                 self.report(f"inputs.{name}.type", str(error))
             if provided is not None and name not in provided and decl.default is None:
-                self.report(f"inputs.{name}", f"missing input '{name}': no value given "
-                            f"(--input {name}=PATH) and no default")
+                self.report(
+                    f"inputs.{name}",
+                    f"missing input '{name}': no value given (--input {name}=PATH) and no default",
+                )
         clashes = set(graph.inputs) & set(graph.nodes)
         for name in sorted(clashes):
             self.report(f"nodes.{name}", f"'{name}' is both a graph input and a node")
@@ -261,8 +292,10 @@ class _Checker:
                 self.report(f"inputs.{name}", f"unused input '{name}': no node or output reads it")
         for name in graph.params:
             if name not in used_params:
-                self.report(f"params.{name}", f"unused pipeline param '{name}': "
-                            "no node refers to ${params." + name + "}")
+                self.report(
+                    f"params.{name}",
+                    f"unused pipeline param '{name}': no node refers to ${{params." + name + "}",
+                )
 
         if self.problems:
             raise PipelineError(self.problems, graph.source)

@@ -116,8 +116,7 @@ class NodeExecutionError(GraphvisionError):
         self.node, self.op, self.params, self.inputs = node, op, params, inputs
         summary = ", ".join(f"{k}={v}" for k, v in inputs.items()) or "none"
         super().__init__(
-            f"node '{node}' (op {op}) failed: {error}\n"
-            f"    params: {params}\n    inputs: {summary}"
+            f"node '{node}' (op {op}) failed: {error}\n    params: {params}\n    inputs: {summary}"
         )
 
 

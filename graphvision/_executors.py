@@ -27,7 +27,14 @@ from typing import Any, Literal, Protocol
 from ._node import FunctionRef
 from ._ports import PortType
 
-__all__ = ["EXECUTORS", "Executor", "SyncExecutor", "call_node", "call_node_encoded", "make_executor"]
+__all__ = [
+    "EXECUTORS",
+    "Executor",
+    "SyncExecutor",
+    "call_node",
+    "call_node_encoded",
+    "make_executor",
+]
 
 ExecutorName = Literal["sync", "threads", "processes"]
 EXECUTORS: tuple[str, ...] = ("sync", "threads", "processes")
@@ -91,7 +98,10 @@ Payload = dict[str, tuple[type[PortType], dict, dict]]
 
 
 def call_node_encoded(
-    ref: FunctionRef, params: dict[str, Any], inputs: Payload, outputs: dict[str, type[PortType]],
+    ref: FunctionRef,
+    params: dict[str, Any],
+    inputs: Payload,
+    outputs: dict[str, type[PortType]],
     output_tuple: bool,
 ) -> tuple[Payload, float]:
     """:func:`call_node` for another process: inputs and outputs travel encoded."""

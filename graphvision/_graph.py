@@ -103,7 +103,9 @@ class Graph:
     ) -> Ref:
         """Add node ``name`` running ``op``; keyword arguments connect its input ports."""
         self._check_new_name(name)
-        refs = {port: ref if isinstance(ref, Ref) else Ref.parse(ref) for port, ref in inputs.items()}
+        refs = {
+            port: ref if isinstance(ref, Ref) else Ref.parse(ref) for port, ref in inputs.items()
+        }
         self.nodes[name] = NodeDecl(op, refs, dict(params or {}))
         return Ref(name)
 

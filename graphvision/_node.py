@@ -223,9 +223,10 @@ def source_fingerprint(func: Callable) -> str:
     for item in ast.walk(tree):
         if isinstance(item, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Module)):
             body = item.body
-            if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
-                if isinstance(body[0].value.value, str):
-                    item.body = body[1:] or [ast.Pass()]
+            first = body[0] if body else None
+            is_docstring = isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant)
+            if is_docstring and isinstance(first.value.value, str):
+                item.body = body[1:] or [ast.Pass()]
     return hashlib.blake2b(ast.dump(tree).encode(), digest_size=16).hexdigest()
 
 
@@ -364,5 +365,3 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
         output_tuple=output_tuple,
         output_vars=output_vars,
     )
-
-

@@ -80,7 +80,10 @@ def pipeline_json_schema() -> dict[str, Any]:
     schema["title"] = "graphvision pipeline"
     for section in ("nodes", "inputs"):
         schema["properties"][section]["propertyNames"] = {"pattern": NAME_PATTERN}
-    schema["properties"]["outputs"]["additionalProperties"] = {"type": "string", "pattern": REF_PATTERN}
+    schema["properties"]["outputs"]["additionalProperties"] = {
+        "type": "string",
+        "pattern": REF_PATTERN,
+    }
     node = schema["$defs"]["NodeModel"]["properties"]["in"]
     node["additionalProperties"] = {"type": "string", "pattern": REF_PATTERN}
     return schema
@@ -97,8 +100,9 @@ def _positions(root: yaml.Node, problems: list[Problem], file: str) -> dict[str,
                 key = str(key_node.value)
                 where = ".".join([*path, key])
                 if key in seen:
-                    problems.append(Problem(key_node.start_mark.line + 1, where,
-                                            f"duplicate key '{key}'", file))
+                    problems.append(
+                        Problem(key_node.start_mark.line + 1, where, f"duplicate key '{key}'", file)
+                    )
                 seen.add(key)
                 lines[where] = key_node.start_mark.line + 1
                 walk(value_node, [*path, key])
@@ -111,8 +115,9 @@ def _positions(root: yaml.Node, problems: list[Problem], file: str) -> dict[str,
     return lines
 
 
-def _model_problems(error: pydantic.ValidationError, lines: dict[str, int], file: str,
-                    data: Any) -> list[Problem]:
+def _model_problems(
+    error: pydantic.ValidationError, lines: dict[str, int], file: str, data: Any
+) -> list[Problem]:
     problems = []
     for item in error.errors():
         loc = [str(p) for p in item["loc"] if not str(p).startswith(("InputModel", "str"))]
@@ -120,7 +125,9 @@ def _model_problems(error: pydantic.ValidationError, lines: dict[str, int], file
         message = item["msg"]
         if item["type"] == "extra_forbidden":
             parent_model = _model_at(loc[:-1])
-            options = [f.alias or n for n, f in parent_model.model_fields.items()] if parent_model else []
+            options = (
+                [f.alias or n for n, f in parent_model.model_fields.items()] if parent_model else []
+            )
             message = f"unknown key '{loc[-1]}'{did_you_mean(loc[-1], options)}"
             if options:
                 message += f"; allowed: {', '.join(options)}"
@@ -162,10 +169,16 @@ def parse_pipeline(text: str, file: str = "<string>") -> Graph:
         mark = getattr(error, "problem_mark", None)
         line = mark.line + 1 if mark else 0
         reason = getattr(error, "problem", None) or str(error)
-        raise PipelineError([Problem(line, "yaml", f"malformed YAML: {reason}", file)], file) from None
+        raise PipelineError(
+            [Problem(line, "yaml", f"malformed YAML: {reason}", file)], file
+        ) from None
     if not isinstance(data, dict) or root is None:
         raise PipelineError(
-            [Problem(1, "pipeline", "a pipeline file must be a YAML mapping (name, nodes, ...)", file)],
+            [
+                Problem(
+                    1, "pipeline", "a pipeline file must be a YAML mapping (name, nodes, ...)", file
+                )
+            ],
             file,
         )
     problems: list[Problem] = []
@@ -178,8 +191,14 @@ def parse_pipeline(text: str, file: str = "<string>") -> Graph:
     for section in ("nodes", "inputs"):
         for name in getattr(model, section):
             if not isinstance(name, str) or not pydantic_name_ok(name):
-                problems.append(Problem(lines.get(f"{section}.{name}", 0), f"{section}.{name}",
-                                        "names must be identifiers (letters, digits, _)", file))
+                problems.append(
+                    Problem(
+                        lines.get(f"{section}.{name}", 0),
+                        f"{section}.{name}",
+                        "names must be identifiers (letters, digits, _)",
+                        file,
+                    )
+                )
     if problems:
         raise PipelineError(problems, file)
     return _graph_from_model(model, file, lines)
@@ -193,7 +212,8 @@ def pydantic_name_ok(name: str) -> bool:
 
 def _graph_from_model(model: PipelineModel, file: str, lines: dict[str, int]) -> Graph:
     inputs = {
-        name: InputDecl(decl) if isinstance(decl, str)
+        name: InputDecl(decl)
+        if isinstance(decl, str)
         else InputDecl(decl.type, decl.default, decl.description)
         for name, decl in model.inputs.items()
     }
@@ -231,10 +251,13 @@ def load_pipeline(path: str | Path) -> Graph:
     try:
         text = path.read_text()
     except (OSError, UnicodeDecodeError) as error:
-        raise PipelineError([Problem(0, "file", f"cannot read pipeline: {error}", str(path))],
-                            str(path)) from None
+        raise PipelineError(
+            [Problem(0, "file", f"cannot read pipeline: {error}", str(path))], str(path)
+        ) from None
     graph = parse_pipeline(text, str(path))
-    graph.plugins = [str((path.parent / p)) if not Path(p).is_absolute() else p for p in graph.plugins]
+    graph.plugins = [
+        str(path.parent / p) if not Path(p).is_absolute() else p for p in graph.plugins
+    ]
     return graph
 
 

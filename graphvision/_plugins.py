@@ -60,9 +60,8 @@ def import_file(path: str | Path, module_name: str = "") -> types.ModuleType:
     """
     path = Path(path).resolve()
     target = path / "__init__.py" if path.is_dir() else path
-    name = module_name or (
-        f"graphvision_local_{path.stem}_{hashlib.blake2b(str(path).encode(), digest_size=4).hexdigest()}"
-    )
+    digest = hashlib.blake2b(str(path).encode(), digest_size=4).hexdigest()
+    name = module_name or f"graphvision_local_{path.stem}_{digest}"
     if name in sys.modules:
         return sys.modules[name]
     spec = importlib.util.spec_from_file_location(

@@ -396,5 +396,18 @@ class Record(PortType):
 
 def builtin_port_types() -> list[type[PortType]]:
     """The port types the engine defines (plugins may register more)."""
-    return [Array, FloatImage, Image, GrayImage, ColorImage, BinaryImage, LabelImage, Kernel,
-            Float, Int, Bool, Text, Table]
+    return [
+        Array,
+        FloatImage,
+        Image,
+        GrayImage,
+        ColorImage,
+        BinaryImage,
+        LabelImage,
+        Kernel,
+        Float,
+        Int,
+        Bool,
+        Text,
+        Table,
+    ]

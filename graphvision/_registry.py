@@ -18,7 +18,7 @@ import types
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from ._errors import DuplicateNodeError, RegistrationError, UnknownNameError
+from ._errors import DuplicateNodeError, UnknownNameError
 from ._node import NodeSpec, SourceSpec, build_spec
 from ._ports import PortType, builtin_port_types
 
@@ -71,8 +71,11 @@ class Registry:
             if hasattr(m, "__graphvision_source__")
         ]
         port_types = [
-            m for m in members
-            if inspect.isclass(m) and issubclass(m, PortType) and m.__module__ != "graphvision._ports"
+            m
+            for m in members
+            if inspect.isclass(m)
+            and issubclass(m, PortType)
+            and m.__module__ != "graphvision._ports"
             and not m.__name__.startswith("_")
         ]
         kept = self._check_new_nodes(specs)
@@ -146,5 +149,3 @@ class Registry:
         for op in sorted(self.nodes):
             grouped.setdefault(self.nodes[op].family, []).append(self.nodes[op])
         return grouped
-
-

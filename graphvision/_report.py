@@ -18,7 +18,9 @@ from ._run import RunRecord
 __all__ = ["write_outputs", "write_report"]
 
 
-def write_outputs(compiled: CompiledGraph, outputs: dict[str, Any], directory: Path) -> dict[str, list[str]]:
+def write_outputs(
+    compiled: CompiledGraph, outputs: dict[str, Any], directory: Path
+) -> dict[str, list[str]]:
     """Write every produced output to ``directory``; return output name -> file names."""
     directory.mkdir(parents=True, exist_ok=True)
     written = {}
@@ -29,8 +31,11 @@ def write_outputs(compiled: CompiledGraph, outputs: dict[str, Any], directory: P
 
 
 def write_report(
-    compiled: CompiledGraph, outputs: dict[str, Any], files: dict[str, list[str]],
-    record: RunRecord, directory: Path,
+    compiled: CompiledGraph,
+    outputs: dict[str, Any],
+    files: dict[str, list[str]],
+    record: RunRecord,
+    directory: Path,
 ) -> Path:
     """``record.json`` and ``report.md`` in ``directory``; returns the report's path."""
     (directory / "record.json").write_text(record.to_json() + "\n")
@@ -44,7 +49,9 @@ def write_report(
             lines.append(f"| {name} | not produced | |")
             continue
         kind = compiled.output_type(name)
-        shown = json.dumps(outputs[name]) if issubclass(kind, _Scalar) else kind.summary(outputs[name])
+        shown = (
+            json.dumps(outputs[name]) if issubclass(kind, _Scalar) else kind.summary(outputs[name])
+        )
         links = ", ".join(f"[{f}]({f})" for f in files.get(name, []))
         lines.append(f"| {name} | {shown} | {links} |")
     images = [f for fs in files.values() for f in fs if f.endswith(".png")]

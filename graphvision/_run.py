@@ -78,14 +78,23 @@ class RunRecord:
     def table(self) -> str:
         """The record as an aligned text table."""
         rows = [("node", "op", "status", "ms", "bytes")]
-        rows += [(n.name, n.op, n.status, f"{n.seconds * 1e3:.1f}", str(n.output_bytes))
-                 for n in self.nodes]
+        rows += [
+            (n.name, n.op, n.status, f"{n.seconds * 1e3:.1f}", str(n.output_bytes))
+            for n in self.nodes
+        ]
         widths = [max(len(r[i]) for r in rows) for i in range(5)]
-        lines = ["  ".join(c.ljust(w) if i < 3 else c.rjust(w) for i, (c, w) in
-                           enumerate(zip(row, widths, strict=True))) for row in rows]
-        lines.append(f"{self.count('computed')} computed, {self.count('cached')} cached, "
-                     f"{self.count('failed')} failed, {self.count('skipped')} skipped "
-                     f"in {self.seconds:.3f} s ({self.executor})")
+        lines = [
+            "  ".join(
+                c.ljust(w) if i < 3 else c.rjust(w)
+                for i, (c, w) in enumerate(zip(row, widths, strict=True))
+            )
+            for row in rows
+        ]
+        lines.append(
+            f"{self.count('computed')} computed, {self.count('cached')} cached, "
+            f"{self.count('failed')} failed, {self.count('skipped')} skipped "
+            f"in {self.seconds:.3f} s ({self.executor})"
+        )
         return "\n".join(lines)
 
 
@@ -166,8 +175,14 @@ def _read_only_view(port_type: type[PortType], value: Any) -> Any:
 class _Run:
     """The state of one run (see the module docstring for the steps)."""
 
-    def __init__(self, compiled: CompiledGraph, cache: Cache | None, executor: Executor,
-                 hooks: Sequence[RunHooks], record: RunRecord) -> None:
+    def __init__(
+        self,
+        compiled: CompiledGraph,
+        cache: Cache | None,
+        executor: Executor,
+        hooks: Sequence[RunHooks],
+        record: RunRecord,
+    ) -> None:
         self.compiled, self.cache, self.executor = compiled, cache, executor
         self.hooks, self.record = hooks, record
         self.values: dict[tuple[str, str], Any] = {}
@@ -202,8 +217,9 @@ class _Run:
             inputs = {port: self.keys[source] for port, source in step.inputs.items()}
             spec = step.spec
             for port in spec.outputs:
-                self.keys[(name, port)] = output_key(spec.id, spec.version, spec.source_hash,
-                                                     step.params, inputs, port)
+                self.keys[(name, port)] = output_key(
+                    spec.id, spec.version, spec.source_hash, step.params, inputs, port
+                )
 
     def plan(self, wanted: Iterable[tuple[str, str]]) -> list[str]:
         """Load what the cache has, from the outputs backwards; return the steps to compute."""
@@ -243,7 +259,11 @@ class _Run:
                 kind = step.spec.inputs[port].type
                 payload[port] = (kind, *kind.encode(value))
             return self.executor.submit(
-                call_node_encoded, step.spec.ref, step.params, payload, step.outputs,
+                call_node_encoded,
+                step.spec.ref,
+                step.params,
+                payload,
+                step.outputs,
                 step.spec.output_tuple is not None,
             )
         return self.executor.submit(call_node, step.spec.func, step.params, inputs)
@@ -260,7 +280,9 @@ class _Run:
             self.failures[name] = self.wrap(step, error)
             self.release_inputs(step)
             for hook in self.hooks:
-                hook.node_finished(name=name, op=step.spec.id, status="failed", seconds=node.seconds)
+                hook.node_finished(
+                    name=name, op=step.spec.id, status="failed", seconds=node.seconds
+                )
             return False
         node.status, node.seconds = "computed", seconds
         for port, value in outputs.items():
@@ -277,8 +299,10 @@ class _Run:
 
     def accept(self, step: Step, result: Any) -> dict[str, Any]:
         if getattr(self.executor, "encodes_values", False):
-            return {port: _freeze(kind, kind.decode(arrays, meta))
-                    for port, (kind, arrays, meta) in result.items()}
+            return {
+                port: _freeze(kind, kind.decode(arrays, meta))
+                for port, (kind, arrays, meta) in result.items()
+            }
         outputs = {}
         for port, value in step.spec.split_outputs(result).items():
             kind = step.outputs[port]
@@ -293,8 +317,9 @@ class _Run:
         for port, source in step.inputs.items():
             value = self.values.get(source)
             summary[port] = step.spec.inputs[port].type.summary(value) if value is not None else "?"
-        wrapped = NodeExecutionError(step.name, step.spec.id, step.params, summary,
-                                     f"{type(error).__name__}: {error}")
+        wrapped = NodeExecutionError(
+            step.name, step.spec.id, step.params, summary, f"{type(error).__name__}: {error}"
+        )
         wrapped.__cause__ = error
         return wrapped
 
@@ -366,18 +391,26 @@ def run(
     wanted_names = list(outputs) if outputs is not None else list(compiled.outputs)
     for name in wanted_names:
         if name not in compiled.outputs:
-            raise UnknownNameError(f"unknown output '{name}'{did_you_mean(name, compiled.outputs)}"
-                                   f"; outputs: {', '.join(compiled.outputs)}")
+            raise UnknownNameError(
+                f"unknown output '{name}'{did_you_mean(name, compiled.outputs)}"
+                f"; outputs: {', '.join(compiled.outputs)}"
+            )
     for name in inputs:
         if name not in compiled.input_types:
             raise UnknownNameError(
                 f"unknown input '{name}'{did_you_mean(name, compiled.input_types)}; "
-                f"inputs: {', '.join(compiled.input_types) or 'none'}")
+                f"inputs: {', '.join(compiled.input_types) or 'none'}"
+            )
 
     needed = compiled.needed_for(wanted_names)
-    used_inputs = {src for n in needed for src, port in compiled.steps[n].inputs.values() if not port}
-    used_inputs |= {compiled.outputs[o][0] for o in wanted_names
-                    if compiled.outputs[o][0] in compiled.input_types}
+    used_inputs = {
+        src for n in needed for src, port in compiled.steps[n].inputs.values() if not port
+    }
+    used_inputs |= {
+        compiled.outputs[o][0]
+        for o in wanted_names
+        if compiled.outputs[o][0] in compiled.input_types
+    }
     values = {}
     for name in compiled.input_types:
         if name in used_inputs:
@@ -386,8 +419,9 @@ def run(
 
     own_executor = isinstance(executor, str)
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
-    record = RunRecord(compiled.graph.name, executor if isinstance(executor, str)
-                       else type(executor).__name__)
+    record = RunRecord(
+        compiled.graph.name, executor if isinstance(executor, str) else type(executor).__name__
+    )
     state = _Run(compiled, cache, pool, hooks, record)
     began = time.perf_counter()
     failed = True

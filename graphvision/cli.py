@@ -78,8 +78,10 @@ class Progress(RunHooks):
         if status == "cached":
             return
         self.done += 1
-        print(f"  [{self.done}/{self.total}] {name} ({op}) {status} {seconds * 1e3:.0f} ms",
-              file=sys.stderr)
+        print(
+            f"  [{self.done}/{self.total}] {name} ({op}) {status} {seconds * 1e3:.0f} ms",
+            file=sys.stderr,
+        )
 
 
 def _registry(args: argparse.Namespace, extra: Sequence[str] = ()) -> Registry:
@@ -105,9 +107,18 @@ def cmd_run(args: argparse.Namespace) -> int:
     hooks = [Progress()] if args.progress or (args.progress is None and sys.stderr.isatty()) else []
     status = EXIT_OK
     try:
-        result = run(graph, registry, inputs=inputs, outputs=args.output or None,
-                     overrides=overrides, executor=args.executor, workers=args.workers,
-                     cache=_cache(args), keep_going=args.keep_going, hooks=hooks)
+        result = run(
+            graph,
+            registry,
+            inputs=inputs,
+            outputs=args.output or None,
+            overrides=overrides,
+            executor=args.executor,
+            workers=args.workers,
+            cache=_cache(args),
+            keep_going=args.keep_going,
+            hooks=hooks,
+        )
     except RunError as error:
         result = error.result  # type: ignore[attr-defined]
         print(f"error: run failed\n{error}", file=sys.stderr)
@@ -144,8 +155,11 @@ def cmd_validate(args: argparse.Namespace) -> int:
 def cmd_nodes(args: argparse.Namespace) -> int:
     registry = _registry(args)
     if args.json:
-        print(json.dumps({op: spec.describe() for op, spec in sorted(registry.nodes.items())},
-                         indent=2))
+        print(
+            json.dumps(
+                {op: spec.describe() for op, spec in sorted(registry.nodes.items())}, indent=2
+            )
+        )
         return EXIT_OK
     for family, specs in registry.families().items():
         print(f"{family}")
@@ -189,18 +203,30 @@ def cmd_graph(args: argparse.Namespace) -> int:
     compile_graph(graph, _registry(args, graph.plugins))
     lines = ["digraph pipeline {", "  rankdir=LR;"] if args.format == "dot" else ["flowchart LR"]
     for name, decl in graph.inputs.items():
-        lines.append(f'  {name} [shape=ellipse, label="{name}\\n{decl.type}"];' if args.format == "dot"
-                     else f"  {name}([{name}: {decl.type}])")
+        lines.append(
+            f'  {name} [shape=ellipse, label="{name}\\n{decl.type}"];'
+            if args.format == "dot"
+            else f"  {name}([{name}: {decl.type}])"
+        )
     for name, decl in graph.nodes.items():
-        lines.append(f'  {name} [shape=box, label="{name}\\n{decl.op}"];' if args.format == "dot"
-                     else f'  {name}["{name}<br/>{decl.op}"]')
+        lines.append(
+            f'  {name} [shape=box, label="{name}\\n{decl.op}"];'
+            if args.format == "dot"
+            else f'  {name}["{name}<br/>{decl.op}"]'
+        )
         for port, ref in decl.inputs.items():
             label = f"{ref.port or ''}→{port}"
-            lines.append(f'  {ref.node} -> {name} [label="{label}"];' if args.format == "dot"
-                         else f"  {ref.node} -->|{label}| {name}")
+            lines.append(
+                f'  {ref.node} -> {name} [label="{label}"];'
+                if args.format == "dot"
+                else f"  {ref.node} -->|{label}| {name}"
+            )
     for name, ref in graph.outputs.items():
-        lines.append(f'  out_{name} [shape=note, label="{name}"];\n  {ref.node} -> out_{name};'
-                     if args.format == "dot" else f"  {ref.node} --> out_{name}[/{name}/]")
+        lines.append(
+            f'  out_{name} [shape=note, label="{name}"];\n  {ref.node} -> out_{name};'
+            if args.format == "dot"
+            else f"  {ref.node} --> out_{name}[/{name}/]"
+        )
     if args.format == "dot":
         lines.append("}")
     print("\n".join(lines))
@@ -211,8 +237,10 @@ def cmd_cache(args: argparse.Namespace) -> int:
     store = DiskStore(args.cache_dir or default_cache_dir(), args.cache_max_bytes)
     if args.action == "info":
         info = store.info()
-        print(f"directory: {info.directory}\nentries:   {info.entries}\n"
-              f"size:      {info.bytes / 2**20:.1f} MiB of {info.max_bytes / 2**20:.0f} MiB")
+        print(
+            f"directory: {info.directory}\nentries:   {info.entries}\n"
+            f"size:      {info.bytes / 2**20:.1f} MiB of {info.max_bytes / 2**20:.0f} MiB"
+        )
     elif args.action == "prune":
         freed = store.prune(args.max_bytes if args.max_bytes is not None else store.max_bytes)
         print(f"freed {freed / 2**20:.1f} MiB")
@@ -234,36 +262,72 @@ def _byte_size(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     common = _Parser(add_help=False)
-    common.add_argument("--plugins", action="append", default=[], metavar="PATH",
-                        help="load a local plugin file or folder (repeatable)")
+    common.add_argument(
+        "--plugins",
+        action="append",
+        default=[],
+        metavar="PATH",
+        help="load a local plugin file or folder (repeatable)",
+    )
     common.add_argument("--debug", action="store_true", help="show Python tracebacks")
     cache_opts = _Parser(add_help=False)
-    cache_opts.add_argument("--cache-dir", metavar="DIR",
-                            help=f"disk cache folder (default {default_cache_dir()})")
-    cache_opts.add_argument("--cache-max-bytes", type=_byte_size, default=4 * 2**30, metavar="SIZE",
-                            help="disk cache bound, e.g. 500M, 4G (default 4G)")
+    cache_opts.add_argument(
+        "--cache-dir", metavar="DIR", help=f"disk cache folder (default {default_cache_dir()})"
+    )
+    cache_opts.add_argument(
+        "--cache-max-bytes",
+        type=_byte_size,
+        default=4 * 2**30,
+        metavar="SIZE",
+        help="disk cache bound, e.g. 500M, 4G (default 4G)",
+    )
 
-    parser = _Parser(prog="graphvision", description="Run classical computer-vision pipelines.",
-                     parents=[common])
+    parser = _Parser(
+        prog="graphvision", description="Run classical computer-vision pipelines.", parents=[common]
+    )
     commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = commands.add_parser("run", parents=[common, cache_opts], help="run a pipeline")
     p.add_argument("pipeline")
-    p.add_argument("--input", "-i", action="append", default=[], metavar="NAME=VALUE",
-                   help="graph input: a path, sample:NAME, or a literal")
-    p.add_argument("--set", "-s", action="append", default=[], metavar="NODE.PARAM=VALUE",
-                   help="override a node parameter (params.NAME for a pipeline param)")
-    p.add_argument("--output", "-o", action="append", metavar="NAME",
-                   help="produce only this output (repeatable); only what it needs runs")
+    p.add_argument(
+        "--input",
+        "-i",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="graph input: a path, sample:NAME, or a literal",
+    )
+    p.add_argument(
+        "--set",
+        "-s",
+        action="append",
+        default=[],
+        metavar="NODE.PARAM=VALUE",
+        help="override a node parameter (params.NAME for a pipeline param)",
+    )
+    p.add_argument(
+        "--output",
+        "-o",
+        action="append",
+        metavar="NAME",
+        help="produce only this output (repeatable); only what it needs runs",
+    )
     p.add_argument("--output-dir", "-d", metavar="DIR", help="write outputs, record and report")
     p.add_argument("--executor", choices=EXECUTORS, default="threads")
     p.add_argument("--workers", type=int, default=None)
     p.add_argument("--no-cache", action="store_true", help="neither read nor write the disk cache")
-    p.add_argument("--keep-going", action="store_true",
-                   help="after a node fails, finish every branch that does not depend on it")
+    p.add_argument(
+        "--keep-going",
+        action="store_true",
+        help="after a node fails, finish every branch that does not depend on it",
+    )
     p.add_argument("--record", action="store_true", help="print the run record")
-    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                   help="print progress (default: when stderr is a terminal)")
+    p.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="print progress (default: when stderr is a terminal)",
+    )
     p.set_defaults(func=cmd_run)
 
     p = commands.add_parser("validate", parents=[common], help="check pipelines without running")
@@ -287,16 +351,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--format", choices=("dot", "mermaid"), default="dot")
     p.set_defaults(func=cmd_graph)
 
-    p = commands.add_parser("cache", parents=[common, cache_opts], help="inspect or empty the cache")
+    p = commands.add_parser(
+        "cache", parents=[common, cache_opts], help="inspect or empty the cache"
+    )
     p.add_argument("action", choices=("info", "prune", "clear"))
-    p.add_argument("--max-bytes", type=_byte_size, default=None, metavar="SIZE",
-                   help="with prune: size to prune down to")
+    p.add_argument(
+        "--max-bytes",
+        type=_byte_size,
+        default=None,
+        metavar="SIZE",
+        help="with prune: size to prune down to",
+    )
     p.set_defaults(func=cmd_cache)
     return parser
 
 
-def _show_warning(message: Any, category: type, filename: str, lineno: int,
-                  file: Any = None, line: str | None = None) -> None:
+def _show_warning(
+    message: Any,
+    category: type,
+    filename: str,
+    lineno: int,
+    file: Any = None,
+    line: str | None = None,
+) -> None:
     print(f"warning: {message}", file=sys.stderr)
 
 

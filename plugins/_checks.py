@@ -32,9 +32,7 @@ def to_float_image(array: np.ndarray, *, source: str = "image") -> np.ndarray:
         if array.shape[2] == 1:
             array = array[..., 0]
     if array.ndim not in (2, 3) or (array.ndim == 3 and array.shape[2] != 3):
-        raise ValueError(
-            f"{source} must be H×W (gray) or H×W×3 (RGB), got shape {array.shape}"
-        )
+        raise ValueError(f"{source} must be H×W (gray) or H×W×3 (RGB), got shape {array.shape}")
     if array.dtype == np.bool_:
         return array.astype(np.float32)
     if np.issubdtype(array.dtype, np.unsignedinteger):
@@ -51,12 +49,15 @@ def to_float_image(array: np.ndarray, *, source: str = "image") -> np.ndarray:
 def check_same_shape(a: np.ndarray, b: np.ndarray, names: tuple[str, str] = ("a", "b")) -> None:
     """Raise ValueError naming both arguments when their shapes differ."""
     if a.shape != b.shape:
-        raise ValueError(f"{names[0]} and {names[1]} must have the same shape, "
-                         f"got {a.shape} and {b.shape}")
+        raise ValueError(
+            f"{names[0]} and {names[1]} must have the same shape, got {a.shape} and {b.shape}"
+        )
 
 
 def check_window(image: np.ndarray, window: tuple[int, int], what: str) -> None:
     """Raise ValueError when a ``window`` does not fit inside the image."""
     if image.shape[0] < window[0] or image.shape[1] < window[1]:
-        raise ValueError(f"{what} {window[0]}×{window[1]} is larger than the image "
-                         f"{image.shape[0]}×{image.shape[1]}")
+        raise ValueError(
+            f"{what} {window[0]}×{window[1]} is larger than the image "
+            f"{image.shape[0]}×{image.shape[1]}"
+        )

@@ -80,7 +80,8 @@ def test_an_interrupted_write_leaves_no_entry(tmp_path, monkeypatch):
         store.put("k", entry([1.0]))
     assert store.get("k") is None
     assert list(tmp_path.rglob("*")) == [tmp_path / "k"] or not any(
-        p.is_file() for p in tmp_path.rglob("*"))
+        p.is_file() for p in tmp_path.rglob("*")
+    )
 
 
 def test_unwritable_cache_dir_warns_and_runs_without_it(tmp_path, registry):
@@ -134,8 +135,12 @@ def test_memory_store_is_bounded_in_bytes():
 
 def test_keys_depend_on_dtype_shape_and_bytes():
     a = np.zeros((4, 4), np.float32)
-    keys = {content_key(gv.Array, a), content_key(gv.Array, a.reshape(2, 8)),
-            content_key(gv.Array, a.astype(np.float64)), content_key(gv.Array, a + 1)}
+    keys = {
+        content_key(gv.Array, a),
+        content_key(gv.Array, a.reshape(2, 8)),
+        content_key(gv.Array, a.astype(np.float64)),
+        content_key(gv.Array, a + 1),
+    }
     assert len(keys) == 4
     assert content_key(gv.Array, a) == content_key(gv.Array, a.copy())
     base = output_key("f.g", 1, "h", {"s": 1.0}, {"image": "k"}, "out")
@@ -151,19 +156,28 @@ def test_two_processes_share_one_cache_directory(tmp_path):
         import sys
         import numpy as np
         import graphvision as gv
-        graph = gv.load_pipeline({str(tmp_path / 'p.yaml')!r})
-        cache = gv.Cache(None, gv.DiskStore({str(tmp_path / 'cache')!r}))
+        graph = gv.load_pipeline({str(tmp_path / "p.yaml")!r})
+        cache = gv.Cache(None, gv.DiskStore({str(tmp_path / "cache")!r}))
         result = gv.run(graph, cache=cache, executor="sync")
         np.save(sys.argv[1], result.outputs["smooth"])
     """)
     (tmp_path / "p.yaml").write_text(
         "name: p\ninputs:\n  image: {type: Image, default: 'sample:astronaut'}\nnodes:\n"
         "  g: {op: color.to_gray, in: {image: image}}\n"
-        + "".join(f"  s{i}: {{op: filters.gaussian, in: {{image: {'g' if i == 0 else f's{i-1}'}}}}}\n"
-                  for i in range(6))
-        + "outputs: {smooth: s5}\n")
-    runs = [subprocess.Popen([sys.executable, "-c", script, str(tmp_path / f"out{i}.npy")],
-                             stderr=subprocess.PIPE, text=True) for i in range(2)]
+        + "".join(
+            f"  s{i}: {{op: filters.gaussian, in: {{image: {'g' if i == 0 else f's{i - 1}'}}}}}\n"
+            for i in range(6)
+        )
+        + "outputs: {smooth: s5}\n"
+    )
+    runs = [
+        subprocess.Popen(
+            [sys.executable, "-c", script, str(tmp_path / f"out{i}.npy")],
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for i in range(2)
+    ]
     for proc in runs:
         _, err = proc.communicate(timeout=120)
         assert proc.returncode == 0, err

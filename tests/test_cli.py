@@ -25,8 +25,12 @@ def test_run_writes_outputs_record_and_report(capsys, tmp_path):
     status, _, err = cli(capsys, "run", DEMO, "--output-dir", tmp_path, "--record", "--no-progress")
     assert status == 0, err
     names = {p.name for p in tmp_path.iterdir()}
-    assert {"median_on_salt_pepper.png", "psnr_median_on_salt_pepper.json", "record.json",
-            "report.md"} <= names
+    assert {
+        "median_on_salt_pepper.png",
+        "psnr_median_on_salt_pepper.json",
+        "record.json",
+        "report.md",
+    } <= names
     record = json.loads((tmp_path / "record.json").read_text())
     assert {n["status"] for n in record["nodes"]} == {"computed"}
     report = (tmp_path / "report.md").read_text()
@@ -36,21 +40,37 @@ def test_run_writes_outputs_record_and_report(capsys, tmp_path):
 def test_rerun_with_a_changed_parameter_uses_the_disk_cache(capsys, tmp_path):
     cache = tmp_path / "c"
     cli(capsys, "run", DEMO, "--cache-dir", cache, "-o", "psnr_median_on_salt_pepper")
-    status, out, _ = cli(capsys, "run", DEMO, "--cache-dir", cache, "--record",
-                         "-o", "psnr_median_on_salt_pepper", "--set", "median_on_sp.size=5")
+    status, out, _ = cli(
+        capsys,
+        "run",
+        DEMO,
+        "--cache-dir",
+        cache,
+        "--record",
+        "-o",
+        "psnr_median_on_salt_pepper",
+        "--set",
+        "median_on_sp.size=5",
+    )
     assert status == 0
-    table = out.splitlines()[out.splitlines().index(next(x for x in out.splitlines()
-                                                         if x.startswith("node "))):]
+    table = out.splitlines()[
+        out.splitlines().index(next(x for x in out.splitlines() if x.startswith("node "))) :
+    ]
     rows = {line.split()[0]: line.split()[2] for line in table[1:-1]}
-    assert rows == {"gray": "cached", "noisy_sp": "cached", "median_on_sp": "computed",
-                    "psnr_median_on_sp": "computed"}
+    assert rows == {
+        "gray": "cached",
+        "noisy_sp": "cached",
+        "median_on_sp": "computed",
+        "psnr_median_on_sp": "computed",
+    }
 
 
 def test_input_from_a_file(capsys, tmp_path):
     image = tmp_path / "img.npy"
     np.save(image, np.full((16, 16), 0.5, np.float32))
-    status, out, err = cli(capsys, "run", DEMO, "--no-cache", "-i", f"image={image}",
-                           "-o", "psnr_noisy_gaussian")
+    status, out, err = cli(
+        capsys, "run", DEMO, "--no-cache", "-i", f"image={image}", "-o", "psnr_noisy_gaussian"
+    )
     assert status == 0, err
     assert out.startswith("psnr_noisy_gaussian: Float ")
 
@@ -61,7 +81,10 @@ def test_input_from_a_file(capsys, tmp_path):
         (lambda d: d / "missing.png", "input 'image': cannot load '.*missing.png': no such file"),
         (lambda d: write(d, "text.png", "not a png"), "text.png is not a readable image"),
         (lambda d: _npy(d, np.zeros((0, 5), np.float32)), "is empty"),
-        (lambda d: _npy(d, np.zeros((2, 3, 4, 5), np.float32)), r"must be H×W .* got shape \(2, 3, 4, 5\)"),
+        (
+            lambda d: _npy(d, np.zeros((2, 3, 4, 5), np.float32)),
+            r"must be H×W .* got shape \(2, 3, 4, 5\)",
+        ),
         (lambda d: _npy(d, np.full((4, 4), 3.0)), r"float values in \[3, 3\]; expected \[0, 1\]"),
     ],
 )
@@ -95,8 +118,9 @@ def test_unknown_sample(capsys):
 
 
 def test_invalid_pipeline_exits_2_listing_problems(capsys, tmp_path):
-    path = write(tmp_path, "bad.yaml", "name: bad\nnodes:\n  a: {op: filters.gausian}\n"
-                 "outputs: {o: a}\n")
+    path = write(
+        tmp_path, "bad.yaml", "name: bad\nnodes:\n  a: {op: filters.gausian}\noutputs: {o: a}\n"
+    )
     status, _, err = cli(capsys, "run", path)
     assert status == 2
     assert f"nodes.a.op at {path}:3: unknown op 'filters.gausian' (did you mean" in err
@@ -116,17 +140,23 @@ def test_bad_parameter_from_the_command_line(capsys):
 
 
 def test_a_failing_node_exits_1_and_keeps_other_outputs(capsys, tmp_path):
-    path = write(tmp_path, "f.yaml", "name: f\ninputs: {x: {type: Float, default: 1.0}}\nnodes:\n"
-                 "  bad: {op: toy.fail, in: {x: x}}\n  ok: {op: toy.add, in: {a: x, b: x}}\n"
-                 "outputs: {bad: bad, ok: ok}\n")
-    status, _, err = cli(capsys, "run", path, "--plugins", TOY, "--keep-going", "-d", tmp_path / "o")
+    path = write(
+        tmp_path,
+        "f.yaml",
+        "name: f\ninputs: {x: {type: Float, default: 1.0}}\nnodes:\n"
+        "  bad: {op: toy.fail, in: {x: x}}\n  ok: {op: toy.add, in: {a: x, b: x}}\n"
+        "outputs: {bad: bad, ok: ok}\n",
+    )
+    status, _, err = cli(
+        capsys, "run", path, "--plugins", TOY, "--keep-going", "-d", tmp_path / "o"
+    )
     assert status == 1
     assert "node 'bad' (op toy.fail) failed: RuntimeError: boom" in err
     assert (tmp_path / "o" / "ok.json").read_text().strip() == "2.0"
     assert "| bad | not produced |" in (tmp_path / "o" / "report.md").read_text()
     status = main(["run", str(path), "--plugins", str(TOY), "--debug"])
     err = capsys.readouterr().err
-    assert status == 1 and "Traceback" in err and 'raise RuntimeError(message)' in err
+    assert status == 1 and "Traceback" in err and "raise RuntimeError(message)" in err
 
 
 def test_usage_errors_exit_2(capsys):
@@ -151,9 +181,9 @@ def test_nodes_and_describe(capsys):
 def test_schema_and_graph(capsys):
     status, out, _ = cli(capsys, "schema")
     assert json.loads(out)["title"] == "graphvision pipeline"
-    status, out, _ = cli(capsys, "graph", DEMO)
+    _, out, _ = cli(capsys, "graph", DEMO)
     assert out.startswith("digraph pipeline {") and "gray -> noisy_gauss" in out
-    status, out, _ = cli(capsys, "graph", DEMO, "--format", "mermaid")
+    _, out, _ = cli(capsys, "graph", DEMO, "--format", "mermaid")
     assert out.startswith("flowchart LR")
 
 
@@ -171,7 +201,8 @@ def test_cache_commands(capsys, tmp_path):
 
 def test_unwritable_cache_dir_warns_and_the_run_goes_on(capsys, tmp_path):
     blocker = write(tmp_path, "file", "x")
-    status, out, err = cli(capsys, "run", DEMO, "--cache-dir", blocker / "c",
-                           "-o", "psnr_noisy_gaussian")
+    status, _, err = cli(
+        capsys, "run", DEMO, "--cache-dir", blocker / "c", "-o", "psnr_noisy_gaussian"
+    )
     assert status == 0
     assert "warning: cache directory" in err and "running without the disk cache" in err

@@ -37,8 +37,12 @@ def problems(registry):
 
 def test_all_problems_are_reported_sorted_by_line(problems):
     found, text = problems
-    lines = [int(line.split(":")[1].split(":")[0]) for line in text.splitlines()[1:]
-             if "broken.yaml:" in line for line in [line.split("broken.yaml")[1]]]
+    lines = [
+        int(line.split(":")[1].split(":")[0])
+        for line in text.splitlines()[1:]
+        if "broken.yaml:" in line
+        for line in [line.split("broken.yaml")[1]]
+    ]
     assert lines == sorted(lines)
     assert len(found) >= 12
 
@@ -52,11 +56,22 @@ def test_all_problems_are_reported_sorted_by_line(problems):
         ("nodes.a.op", 10, "unknown op 'toy.cnst' (did you mean 'toy.const'?)"),
         ("nodes.b.in.c", 11, "toy.add has no input port 'c'; inputs: a, b"),
         ("nodes.b.in", 11, "missing input port 'b' of toy.add (Float)"),
-        ("nodes.b.params.offset", 11, "invalid value -1 for parameter 'offset' of toy.add: "
-         "Input should be greater than or equal to 0"),
-        ("nodes.b.params.ofset", 11, "unknown parameter 'ofset' of toy.add (did you mean 'offset'?)"),
-        ("nodes.d.in.image", 12, "type mismatch: 'x' gives Float but 'd.image' (toy.darken) "
-         "takes GrayImage"),
+        (
+            "nodes.b.params.offset",
+            11,
+            "invalid value -1 for parameter 'offset' of toy.add: "
+            "Input should be greater than or equal to 0",
+        ),
+        (
+            "nodes.b.params.ofset",
+            11,
+            "unknown parameter 'ofset' of toy.add (did you mean 'offset'?)",
+        ),
+        (
+            "nodes.d.in.image",
+            12,
+            "type mismatch: 'x' gives Float but 'd.image' (toy.darken) takes GrayImage",
+        ),
         ("nodes.d.params.factor", 12, "unknown pipeline param '${params.nope}'"),
         ("nodes.e.in.a", 13, "unknown node or input 'ghost'"),
         ("nodes.e.in.b", 13, "node 's' (toy.split) has no output 'mid'; outputs: low, high"),
@@ -84,7 +99,10 @@ outputs: {out: a}
 
 
 def test_missing_input_value_is_reported_for_a_run(registry):
-    text = "name: m\ninputs:\n  x: {type: Float}\nnodes:\n  c: {op: toy.add, in: {a: x, b: x}}\noutputs: {o: c}\n"
+    text = (
+        "name: m\ninputs:\n  x: {type: Float}\nnodes:\n"
+        "  c: {op: toy.add, in: {a: x, b: x}}\noutputs: {o: c}\n"
+    )
     graph = gv.parse_pipeline(text, "m.yaml")
     gv.compile_graph(graph, registry)  # fine for `validate`
     with pytest.raises(gv.PipelineError, match=r"inputs.x at m.yaml:3: missing input 'x'"):
@@ -105,12 +123,15 @@ def test_type_variables_follow_the_connected_type(registry):
     colour.add("smooth", "filters.gaussian", image=rgb)
     colour.add("dark", "toy.darken", image="smooth")
     colour.output("out", "dark")
-    with pytest.raises(gv.PipelineError, match="'smooth' gives ColorImage but 'dark.image'"):
+    with pytest.raises(gv.PipelineError, match=r"'smooth' gives ColorImage but 'dark\.image'"):
         gv.compile_graph(colour, registry)
 
 
 def test_overrides_and_params_substitution(registry):
-    text = "name: s\nparams: {k: 2.0}\nnodes:\n  c: {op: toy.const, params: {value: '${params.k}'}}\noutputs: {o: c}\n"
+    text = (
+        "name: s\nparams: {k: 2.0}\nnodes:\n"
+        "  c: {op: toy.const, params: {value: '${params.k}'}}\noutputs: {o: c}\n"
+    )
     graph = gv.parse_pipeline(text)
     assert gv.compile_graph(graph, registry).steps["c"].params == {"value": 2.0}
     changed = graph.with_overrides({"params.k": 5})

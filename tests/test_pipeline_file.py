@@ -83,7 +83,9 @@ def test_duplicate_keys_are_reported():
 
 def test_node_names_must_be_identifiers():
     text = GOOD.replace("  c:   {op", "  c-1: {op").replace("b: c}", "b: c-1}")
-    with pytest.raises(gv.PipelineError, match=r"nodes.c-1 at <string>:8: names must be identifiers"):
+    with pytest.raises(
+        gv.PipelineError, match=r"nodes.c-1 at <string>:8: names must be identifiers"
+    ):
         gv.parse_pipeline(text)
 
 

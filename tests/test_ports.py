@@ -67,7 +67,9 @@ def test_encode_decode_round_trip(port, value):
 
 
 def test_writing_by_type(tmp_path):
-    assert [p.name for p in gv.Image.write(np.zeros((2, 2), np.float32), tmp_path / "i")] == ["i.png"]
+    assert [p.name for p in gv.Image.write(np.zeros((2, 2), np.float32), tmp_path / "i")] == [
+        "i.png"
+    ]
     assert [p.name for p in gv.Array.write(np.zeros(3), tmp_path / "a")] == ["a.npy"]
     files = gv.Table.write({"x": np.arange(2)}, tmp_path / "t")
     assert (tmp_path / "t.csv").read_text().splitlines() == ["x", "0", "1"] and len(files) == 2

@@ -16,9 +16,15 @@ def test_all_is_sorted_and_exported():
     assert public == set(graphvision.__all__)
 
 
-@pytest.mark.parametrize("module", ["graphvision._scheduler", "graphvision_plugins.color._color",
-                                    "graphvision_plugins.filters._linear",
-                                    "graphvision_plugins.metrics._quality"])
+@pytest.mark.parametrize(
+    "module",
+    [
+        "graphvision._scheduler",
+        "graphvision_plugins.color._color",
+        "graphvision_plugins.filters._linear",
+        "graphvision_plugins.metrics._quality",
+    ],
+)
 def test_doctests(module):
     result = doctest.testmod(importlib.import_module(module))
     assert result.attempted > 0 and result.failed == 0

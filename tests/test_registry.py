@@ -36,29 +36,48 @@ def test_a_node_is_described_without_running(registry):
     sigma = info["params"]["properties"]["sigma"]
     assert sigma["exclusiveMinimum"] == 0 and sigma["default"] == 1.0
     assert info["params"]["properties"]["boundary"]["enum"] == [
-        "mirror", "replicate", "wrap", "zero", "crop"]
+        "mirror",
+        "replicate",
+        "wrap",
+        "zero",
+        "crop",
+    ]
     assert "3\\sigma" in info["doc"] and spec.version == 1 and spec.plugin == "filters"
 
 
 @pytest.mark.parametrize(
     ("source", "message"),
     [
-        ("@gv.node('Bad')\ndef f(x: gv.Float) -> gv.Float:\n    'd'\n",
-         "node id must be 'family.name'"),
+        (
+            "@gv.node('Bad')\ndef f(x: gv.Float) -> gv.Float:\n    'd'\n",
+            "node id must be 'family.name'",
+        ),
         ("@gv.node('a.b')\ndef f(x: gv.Float) -> gv.Float:\n    pass\n", "needs a docstring"),
-        ("@gv.node('a.b')\ndef f(x: int) -> gv.Float:\n    'd'\n",
-         "input 'x' must be annotated with a port type"),
-        ("@gv.node('a.b')\ndef f(x: gv.Float, *, s: float) -> gv.Float:\n    'd'\n",
-         "parameter 's' needs a default value"),
-        ("@gv.node('a.b')\ndef f(x: gv.Float, *, s=1) -> gv.Float:\n    'd'\n",
-         "parameter 's' needs a type annotation"),
+        (
+            "@gv.node('a.b')\ndef f(x: int) -> gv.Float:\n    'd'\n",
+            "input 'x' must be annotated with a port type",
+        ),
+        (
+            "@gv.node('a.b')\ndef f(x: gv.Float, *, s: float) -> gv.Float:\n    'd'\n",
+            "parameter 's' needs a default value",
+        ),
+        (
+            "@gv.node('a.b')\ndef f(x: gv.Float, *, s=1) -> gv.Float:\n    'd'\n",
+            "parameter 's' needs a type annotation",
+        ),
         ("@gv.node('a.b')\ndef f(x: gv.Float, **kw) -> gv.Float:\n    'd'\n", "are not allowed"),
-        ("@gv.node('a.b')\ndef f(x: gv.Float) -> float:\n    'd'\n",
-         "return annotation must be a port type"),
-        ("@gv.node('a.b', version=0)\ndef f(x: gv.Float) -> gv.Float:\n    'd'\n",
-         "version must be a positive integer"),
-        ("@gv.node('a.b')\ndef f(x: gv.Float, *, s: int = 'x') -> gv.Float:\n    'd'\n",
-         "parameters cannot be validated"),
+        (
+            "@gv.node('a.b')\ndef f(x: gv.Float) -> float:\n    'd'\n",
+            "return annotation must be a port type",
+        ),
+        (
+            "@gv.node('a.b', version=0)\ndef f(x: gv.Float) -> gv.Float:\n    'd'\n",
+            "version must be a positive integer",
+        ),
+        (
+            "@gv.node('a.b')\ndef f(x: gv.Float, *, s: int = 'x') -> gv.Float:\n    'd'\n",
+            "parameters cannot be validated",
+        ),
     ],
 )
 def test_bad_nodes_are_rejected_naming_plugin_and_function(source, message):
@@ -98,8 +117,11 @@ def make(id, overrides=False, value=1.0):
 def test_duplicate_ids_name_both_plugins():
     registry = gv.Registry()
     registry.add_plugin(plugin(f=make("x.same")), "first")
-    with pytest.raises(gv.DuplicateNodeError, match=r"defined by plugin 'first' .* and by plugin "
-                       r"'second' .*overrides=True"):
+    with pytest.raises(
+        gv.DuplicateNodeError,
+        match=r"defined by plugin 'first' .* and by plugin "
+        r"'second' .*overrides=True",
+    ):
         registry.add_plugin(plugin(f=make("x.same")), "second")
 
 
@@ -116,12 +138,15 @@ def test_a_plugin_that_fails_to_import_is_reported_and_others_work(tmp_path):
     (tmp_path / "broken.py").write_text("import not_a_module_anywhere\n")
     (tmp_path / "fine.py").write_text(
         "from graphvision import Float, node\n@node('fine.one')\n"
-        "def one() -> Float:\n    'One.'\n    return 1.0\n")
+        "def one() -> Float:\n    'One.'\n    return 1.0\n"
+    )
     registry = gv.discover([tmp_path])
     failed = {p.name: p.error for p in registry.failed_plugins()}
     assert list(failed) == [str(tmp_path / "broken.py")]
-    assert "ModuleNotFoundError: No module named 'not_a_module_anywhere'" in failed[
-        str(tmp_path / "broken.py")]
+    assert (
+        "ModuleNotFoundError: No module named 'not_a_module_anywhere'"
+        in failed[str(tmp_path / "broken.py")]
+    )
     assert "fine.one" in registry.nodes and "filters.gaussian" in registry.nodes
 
 
@@ -131,8 +156,11 @@ def test_missing_plugin_path_is_reported(tmp_path):
 
 
 def test_unknown_op_suggests(registry):
-    with pytest.raises(gv.UnknownNameError, match=r"unknown op 'filters.gausian' \(did you mean "
-                       r"'filters.gaussian'\?\)"):
+    with pytest.raises(
+        gv.UnknownNameError,
+        match=r"unknown op 'filters.gausian' \(did you mean "
+        r"'filters.gaussian'\?\)",
+    ):
         registry.node("filters.gausian")
 
 
@@ -142,8 +170,10 @@ def test_builtins_come_through_entry_points(registry):
 
 
 def test_listing_nodes_does_not_import_heavy_modules():
-    code = ("import sys, graphvision as gv; r = gv.discover(); assert r.nodes; "
-            "print(sorted(m for m in ('scipy.ndimage', 'skimage', 'imageio') if m in sys.modules))")
+    code = (
+        "import sys, graphvision as gv; r = gv.discover(); assert r.nodes; "
+        "print(sorted(m for m in ('scipy.ndimage', 'skimage', 'imageio') if m in sys.modules))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
 
@@ -151,9 +181,20 @@ def test_listing_nodes_does_not_import_heavy_modules():
 def test_a_third_party_package_installed_with_pip_is_found(tmp_path):
     target = tmp_path / "site"
     subprocess.run(
-        [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
-         "--target", str(target), str(FIXTURES / "toy_pkg")],
-        check=True, capture_output=True,
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--no-deps",
+            "--no-build-isolation",
+            "--target",
+            str(target),
+            str(FIXTURES / "toy_pkg"),
+        ],
+        check=True,
+        capture_output=True,
     )
     pipeline = tmp_path / "p.yaml"
     pipeline.write_text(
@@ -161,13 +202,19 @@ def test_a_third_party_package_installed_with_pip_is_found(tmp_path):
         "  g: {op: color.to_gray, in: {image: image}}\n"
         "  inv: {op: thirdparty.invert, in: {image: g}}\n"
         "  again: {op: thirdparty.invert, in: {image: inv}}\n"
-        "  diff: {op: metrics.mse, in: {a: g, b: again}}\noutputs: {mse: diff}\n")
+        "  diff: {op: metrics.mse, in: {a: g, b: again}}\noutputs: {mse: diff}\n"
+    )
     env = dict(os.environ, PYTHONPATH=str(target))
-    out = subprocess.run([sys.executable, "-m", "graphvision.cli", "run", str(pipeline),
-                          "--no-cache"], capture_output=True, text=True, env=env)
+    out = subprocess.run(
+        [sys.executable, "-m", "graphvision.cli", "run", str(pipeline), "--no-cache"],
+        capture_output=True,
+        text=True,
+        env=env,
+    )
     assert out.returncode == 0, out.stderr
     label, kind, value = out.stdout.split()
     assert (label, kind) == ("mse:", "Float") and float(value) < 1e-12  # 1 - (1 - x) == x
-    listing = subprocess.run([sys.executable, "-m", "graphvision.cli", "nodes"],
-                             capture_output=True, text=True, env=env)
+    listing = subprocess.run(
+        [sys.executable, "-m", "graphvision.cli", "nodes"], capture_output=True, text=True, env=env
+    )
     assert "thirdparty.invert" in listing.stdout

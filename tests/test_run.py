@@ -11,7 +11,7 @@ import graphvision as gv
 def chain(registry):
     graph = gv.Graph("chain")
     x = graph.input("x", "Float", default=1.0)
-    a = graph.add("a", "toy.add", a=x, b=x)                       # 2
+    a = graph.add("a", "toy.add", a=x, b=x)  # 2
     b = graph.add("b", "toy.add", params={"offset": 1.0}, a=a, b=a)  # 5
     c = graph.add("c", "toy.add", a=x, b=x, params={"offset": 10.0})  # 12
     graph.output("b", b)
@@ -90,8 +90,13 @@ def test_keep_going_finishes_and_caches_independent_branches(registry, cache):
         gv.run(failing_graph(), registry, keep_going=True, cache=cache)
     result = info.value.result
     assert result.outputs == {"slow": 1.0, "other": 2.0}
-    assert statuses(result.record) == {"bad": "failed", "after": "skipped", "slow": "computed",
-                                       "o1": "computed", "other": "computed"}
+    assert statuses(result.record) == {
+        "bad": "failed",
+        "after": "skipped",
+        "slow": "computed",
+        "o1": "computed",
+        "other": "computed",
+    }
     again = gv.run(failing_graph(), registry, outputs=["other"], cache=cache)
     assert statuses(again.record) == {"other": "cached"}
 
@@ -145,15 +150,18 @@ def test_input_content_is_the_key(registry, cache):
     changed = image.copy()
     changed[3, 3] = 0.25
     assert statuses(gv.run(graph, registry, cache=cache, inputs={"image": changed}).record) == {
-        "o": "computed"}
+        "o": "computed"
+    }
     reshaped = gv.run(graph, registry, cache=cache, inputs={"image": image.reshape(4, 16)})
     assert statuses(reshaped.record) == {"o": "computed"}
 
 
 def test_editing_a_node_invalidates_its_entries(tmp_path, cache):
     plugin = tmp_path / "editable.py"
-    source = ("from graphvision import Float, node\n\n@node('edit.f')\n"
-              "def f(x: Float) -> Float:\n    '''Doc.'''\n    return x + {}\n")
+    source = (
+        "from graphvision import Float, node\n\n@node('edit.f')\n"
+        "def f(x: Float) -> Float:\n    '''Doc.'''\n    return x + {}\n"
+    )
     graph = gv.Graph("e")
     graph.output("o", graph.add("o", "edit.f", x=graph.input("x", "Float", default=1.0)))
     plugin.write_text(source.format(1))

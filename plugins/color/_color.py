@@ -46,10 +46,7 @@ def to_gray(image: Image, *, method: Literal["mean", "luminance"] = "mean") -> G
     """
     if image.ndim == 2:
         return image
-    if method == "mean":
-        gray = image.mean(axis=2, dtype=np.float32)
-    else:
-        gray = image @ LUMINANCE_WEIGHTS
+    gray = image.mean(axis=2, dtype=np.float32) if method == "mean" else image @ LUMINANCE_WEIGHTS
     return np.clip(gray, 0.0, 1.0, out=gray)
 
 

@@ -27,8 +27,13 @@ __all__ = ["BOUNDARIES", "Boundary", "crop_valid", "scipy_mode"]
 Boundary = Literal["mirror", "replicate", "wrap", "zero", "crop"]
 BOUNDARIES: tuple[str, ...] = get_args(Boundary)
 
-_SCIPY = {"zero": "constant", "wrap": "grid-wrap", "replicate": "nearest", "mirror": "reflect",
-          "crop": "nearest"}
+_SCIPY = {
+    "zero": "constant",
+    "wrap": "grid-wrap",
+    "replicate": "nearest",
+    "mirror": "reflect",
+    "crop": "nearest",
+}
 
 
 def scipy_mode(boundary: str) -> str:
@@ -40,4 +45,6 @@ def crop_valid(filtered: np.ndarray, window: tuple[int, int]) -> np.ndarray:
     """Keep the pixels whose whole window lies in the image (window centred at ``k // 2``)."""
     (kh, kw) = window
     top, left = kh // 2, kw // 2
-    return filtered[top : filtered.shape[0] - (kh - 1 - top), left : filtered.shape[1] - (kw - 1 - left)]
+    return filtered[
+        top : filtered.shape[0] - (kh - 1 - top), left : filtered.shape[1] - (kw - 1 - left)
+    ]

@@ -28,7 +28,9 @@ def add_gaussian_noise(
     sigma: Annotated[float, Field(ge=0, le=1)] = 0.05,
     seed: Seed = 0,
 ) -> ImageT:
-    r"""Add independent Gaussian noise to every pixel: :math:`F' = F + n`, :math:`n \sim N(0, \sigma^2)`.
+    r"""Add independent Gaussian noise to every pixel.
+
+    :math:`F' = F + n` with :math:`n \sim N(0, \sigma^2)` drawn per pixel and channel.
 
     The result is clipped to [0, 1] (so near black and white the noise is
     not exactly zero-mean).

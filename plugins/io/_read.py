@@ -14,8 +14,21 @@ from .._checks import to_float_image
 __all__ = ["SAMPLES", "read_file", "read_sample", "sample"]
 
 SampleName = Literal[
-    "astronaut", "brick", "camera", "cat", "checkerboard", "clock", "coffee", "coins",
-    "grass", "gravel", "horse", "moon", "page", "rocket", "text",
+    "astronaut",
+    "brick",
+    "camera",
+    "cat",
+    "checkerboard",
+    "clock",
+    "coffee",
+    "coins",
+    "grass",
+    "gravel",
+    "horse",
+    "moon",
+    "page",
+    "rocket",
+    "text",
 ]
 SAMPLES: tuple[str, ...] = get_args(SampleName)
 

@@ -7,15 +7,17 @@ import numpy as np
 import pytest
 import skimage.data
 import skimage.metrics
-
 from graphvision_plugins import color, io, metrics
 
 
 def test_gray_is_the_channel_mean_or_bt601_luminance():
     rgb = np.array([[[0.3, 0.6, 0.9], [1.0, 0.0, 0.0]]], np.float32)
     np.testing.assert_allclose(color.to_gray(rgb), [[0.6, 1 / 3]], rtol=1e-6)
-    np.testing.assert_allclose(color.to_gray(rgb, method="luminance"),
-                               [[0.299 * 0.3 + 0.587 * 0.6 + 0.114 * 0.9, 0.299]], rtol=1e-6)
+    np.testing.assert_allclose(
+        color.to_gray(rgb, method="luminance"),
+        [[0.299 * 0.3 + 0.587 * 0.6 + 0.114 * 0.9, 0.299]],
+        rtol=1e-6,
+    )
     gray = np.full((2, 2), 0.25, np.float32)
     assert color.to_gray(gray) is gray
 
@@ -33,10 +35,12 @@ def test_mse_and_psnr_against_scikit_image():
     a = np.random.default_rng(1).random((30, 30)).astype(np.float32)
     b = np.clip(a + 0.1, 0, 1).astype(np.float32)
     assert metrics.mse(np.zeros((2, 2), np.float32), np.full((2, 2), 0.1, np.float32)) == (
-        pytest.approx(0.01))
+        pytest.approx(0.01)
+    )
     # reference: skimage.metrics.peak_signal_noise_ratio(a, b, data_range=1.0)
     assert metrics.psnr(a, b) == pytest.approx(
-        skimage.metrics.peak_signal_noise_ratio(a, b, data_range=1.0), rel=1e-6)
+        skimage.metrics.peak_signal_noise_ratio(a, b, data_range=1.0), rel=1e-6
+    )
     assert metrics.psnr(a, a) == 100.0
     with pytest.raises(ValueError, match=r"a and b must have the same shape, got \(30, 30\) and"):
         metrics.mse(a, a[:10])
@@ -58,7 +62,7 @@ def test_reading_files(tmp_path):
     iio.imwrite(tmp_path / "a.png", rgba)
     image = io.read_file(str(tmp_path / "a.png"))
     assert image.shape == (4, 5, 3) and image[..., 0].min() == 1.0
-    deep = (np.arange(12, dtype=np.uint16).reshape(3, 4) * 5000)
+    deep = np.arange(12, dtype=np.uint16).reshape(3, 4) * 5000
     iio.imwrite(tmp_path / "d.png", deep)
     np.testing.assert_allclose(io.read_file(str(tmp_path / "d.png")), deep / 65535, rtol=1e-6)
     with pytest.raises(FileNotFoundError, match="no such file"):

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.ndimage as ndi
-
 from graphvision_plugins import filters
 
 ROW = (np.arange(1, 7, dtype=np.float32) / 10)[None, :]  # [[.1 .2 .3 .4 .5 .6]]
@@ -15,11 +14,11 @@ PICK_LEFT_2 = np.array([[1.0, 0, 0, 0, 0]])  # correlation: out[i] = in[i - 2]
 @pytest.mark.parametrize(
     ("boundary", "expected"),
     [
-        ("mirror", [0.2, 0.1, 0.1, 0.2, 0.3, 0.4]),     # b a | a b c ...
+        ("mirror", [0.2, 0.1, 0.1, 0.2, 0.3, 0.4]),  # b a | a b c ...
         ("replicate", [0.1, 0.1, 0.1, 0.2, 0.3, 0.4]),  # a a | a b c ...
-        ("wrap", [0.5, 0.6, 0.1, 0.2, 0.3, 0.4]),       # e f | a b c ...
-        ("zero", [0.0, 0.0, 0.1, 0.2, 0.3, 0.4]),       # 0 0 | a b c ...
-        ("crop", [0.1, 0.2]),                            # only where the window fits
+        ("wrap", [0.5, 0.6, 0.1, 0.2, 0.3, 0.4]),  # e f | a b c ...
+        ("zero", [0.0, 0.0, 0.1, 0.2, 0.3, 0.4]),  # 0 0 | a b c ...
+        ("crop", [0.1, 0.2]),  # only where the window fits
     ],
 )
 def test_boundary_conditions_by_hand(boundary, expected):
@@ -68,7 +67,9 @@ def test_separable_gaussian_matches_2d_correlation_and_scipy(sigma, shape):
     # reference: scipy.ndimage.gaussian_filter(image, sigma, mode="reflect", truncate=3.0),
     # whose radius int(3 sigma + 0.5) equals ceil(3 sigma) for these sigmas
     axes_sigma = (sigma, sigma, 0) if len(shape) == 3 else sigma
-    reference = ndi.gaussian_filter(image.astype(np.float64), axes_sigma, mode="reflect", truncate=3.0)
+    reference = ndi.gaussian_filter(
+        image.astype(np.float64), axes_sigma, mode="reflect", truncate=3.0
+    )
     np.testing.assert_allclose(fast, reference, atol=2e-6)
 
 
@@ -85,8 +86,9 @@ def test_box_filter_is_the_window_mean():
     image = np.random.default_rng(3).random((20, 20)).astype(np.float32)
     out = filters.box(image, size=5, boundary="replicate")
     assert out[10, 10] == pytest.approx(image[8:13, 8:13].mean(), abs=1e-6)
-    np.testing.assert_allclose(out, ndi.uniform_filter(image.astype(np.float64), 5, mode="nearest"),
-                               atol=1e-6)
+    np.testing.assert_allclose(
+        out, ndi.uniform_filter(image.astype(np.float64), 5, mode="nearest"), atol=1e-6
+    )
 
 
 def test_sharpen_default_is_the_course_kernel():
@@ -99,27 +101,35 @@ def test_sharpen_default_is_the_course_kernel():
 
 
 @pytest.mark.parametrize("size", [3, 5, 7])
-@pytest.mark.parametrize(("boundary", "mode"), [("mirror", "reflect"), ("replicate", "nearest"),
-                                                 ("wrap", "wrap"), ("zero", "constant")])
+@pytest.mark.parametrize(
+    ("boundary", "mode"),
+    [("mirror", "reflect"), ("replicate", "nearest"), ("wrap", "wrap"), ("zero", "constant")],
+)
 def test_median_matches_scipy(size, boundary, mode):
     image = np.random.default_rng(size).random((37, 41)).astype(np.float32)
     # reference: scipy.ndimage.median_filter(image, size, mode=mode)
-    np.testing.assert_array_equal(filters.median(image, size=size, boundary=boundary),
-                                  ndi.median_filter(image, size=size, mode=mode))
+    np.testing.assert_array_equal(
+        filters.median(image, size=size, boundary=boundary),
+        ndi.median_filter(image, size=size, mode=mode),
+    )
 
 
 def test_median_colour_and_crop():
     image = np.random.default_rng(9).random((20, 22, 3)).astype(np.float32)
     out = filters.median(image, size=3)
     for c in range(3):
-        np.testing.assert_array_equal(out[..., c], ndi.median_filter(image[..., c], 3, mode="reflect"))
+        np.testing.assert_array_equal(
+            out[..., c], ndi.median_filter(image[..., c], 3, mode="reflect")
+        )
     np.testing.assert_array_equal(filters.median(image, size=3, boundary="crop"), out[1:-1, 1:-1])
 
 
 def test_median_removes_salt_and_pepper_that_a_gaussian_smears():
     clean = np.full((64, 64), 0.5, np.float32)
     noisy = filters.add_salt_and_pepper(clean, amount=0.05, seed=0)
-    assert np.abs(filters.median(noisy, size=3) - clean).max() < 1e-6  # 5% never fills a window half
+    assert (
+        np.abs(filters.median(noisy, size=3) - clean).max() < 1e-6
+    )  # 5% never fills a window half
     assert np.abs(filters.gaussian(noisy, sigma=1.0) - clean).max() > 0.05
 
 
