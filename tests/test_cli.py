@@ -179,7 +179,7 @@ def test_nodes_and_describe(capsys):
 
 
 def test_schema_and_graph(capsys):
-    status, out, _ = cli(capsys, "schema")
+    _, out, _ = cli(capsys, "schema")
     assert json.loads(out)["title"] == "graphvision pipeline"
     _, out, _ = cli(capsys, "graph", DEMO)
     assert out.startswith("digraph pipeline {") and "gray -> noisy_gauss" in out

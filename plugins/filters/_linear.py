@@ -112,7 +112,8 @@ def convolve(image: FloatImage, kernel: Kernel, *, boundary: Boundary = "mirror"
 def gaussian_kernel_1d(sigma: float, half_size: int | None = None) -> np.ndarray:
     r"""Sampled, normalised 1-D Gaussian :math:`g(u) \propto e^{-u^2 / 2\sigma^2}`.
 
-    Samples :math:`|u| \le h`; ``h`` defaults to the course's half size :math:`\lceil 3\sigma \rceil`.
+    Samples :math:`|u| \le h`, where ``h`` defaults to the course's half size
+    :math:`\lceil 3\sigma \rceil`.
     """
     h = math.ceil(3.0 * sigma) if half_size is None else half_size
     u = np.arange(-h, h + 1, dtype=np.float64)
