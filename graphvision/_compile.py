@@ -18,7 +18,6 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
-import networkx as nx
 import pydantic
 
 from ._errors import PipelineError, Problem, UnknownNameError
@@ -220,7 +219,6 @@ class _Checker:
     # -- whole graph ----------------------------------------------------------------
 
     def check_cycles(self) -> list[str] | None:
-        nx_graph = self.graph.to_networkx()
         nodes = self.graph.nodes
         dependencies = {
             name: {r.node for r in decl.inputs.values() if r.node in nodes}
@@ -230,7 +228,9 @@ class _Checker:
             return topological_order(dependencies)
         except ValueError:
             reported: set[frozenset[str]] = set()
-            for cycle in nx.simple_cycles(nx_graph):
+            import networkx as nx  # only on the error path: keeps start-up fast
+
+            for cycle in nx.simple_cycles(self.graph.to_networkx()):
                 if frozenset(cycle) in reported:
                     continue
                 reported.add(frozenset(cycle))

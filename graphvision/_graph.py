@@ -19,9 +19,11 @@ from __future__ import annotations
 import copy
 import re
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import networkx as nx
+if TYPE_CHECKING:
+    import networkx as nx
+
 
 __all__ = ["Graph", "InputDecl", "NodeDecl", "Ref"]
 
@@ -123,6 +125,8 @@ class Graph:
 
     def to_networkx(self) -> nx.DiGraph:
         """Nodes and graph inputs as vertices, one edge per connection (port names on edges)."""
+        import networkx as nx  # imported on use: start-up of the CLI stays fast
+
         graph = nx.DiGraph()
         for name, decl in self.inputs.items():
             graph.add_node(name, kind="input", type=decl.type)

@@ -38,13 +38,15 @@ from ._errors import (
     RunError,
     UnknownNameError,
 )
-from ._executors import Executor, call_node, call_node_encoded, make_executor
+from ._executors import Executor, SyncExecutor, call_node, call_node_encoded, make_executor
 from ._graph import Graph
 from ._ports import PortType, Text, _Scalar, freeze
 from ._registry import Registry, did_you_mean
 from ._scheduler import run_tasks
 
 __all__ = ["NodeRecord", "RunHooks", "RunRecord", "RunResult", "resolve_input", "run"]
+
+_INLINE = SyncExecutor()
 
 
 @dataclass
@@ -248,17 +250,25 @@ class _Run:
     # -- execution --------------------------------------------------------------------
 
     def start(self, name: str) -> Future:
+        """Hand a step to the run's executor."""
+        return self._submit(name, self.executor)
+
+    def start_inline(self, name: str) -> Future:
+        """Run a step in this thread (the scheduler does when nothing else can run)."""
+        return self._submit(name, _INLINE)
+
+    def _submit(self, name: str, executor: Executor) -> Future:
         step = self.compiled.steps[name]
         inputs = {port: self.values[source] for port, source in step.inputs.items()}
         for hook in self.hooks:
             hook.node_started(name=name, op=step.spec.id)
         self.started[name] = time.perf_counter()
-        if getattr(self.executor, "encodes_values", False):
+        if getattr(executor, "encodes_values", False):
             payload = {}
             for port, value in inputs.items():
                 kind = step.spec.inputs[port].type
                 payload[port] = (kind, *kind.encode(value))
-            return self.executor.submit(
+            return executor.submit(
                 call_node_encoded,
                 step.spec.ref,
                 step.params,
@@ -266,7 +276,7 @@ class _Run:
                 step.outputs,
                 step.spec.output_tuple is not None,
             )
-        return self.executor.submit(call_node, step.spec.func, step.params, inputs)
+        return executor.submit(call_node, step.spec.func, step.params, inputs)
 
     def finish(self, name: str, future: Future) -> bool:
         step = self.compiled.steps[name]
@@ -431,12 +441,16 @@ def run(
         compute = state.plan(compiled.outputs[o] for o in wanted_names)
         for hook in hooks:
             hook.run_started(pipeline=compiled.graph.name, steps=compute)
+        computed = set(compute)
         dependencies = {
-            name: {src for src, _ in compiled.steps[name].inputs.values() if src in compute}
+            name: {src for src, _ in compiled.steps[name].inputs.values() if src in computed}
             for name in compute
         }
         state.track_consumers(compute, [compiled.outputs[o] for o in wanted_names])
-        run_tasks(dependencies, state.start, state.finish, keep_going=keep_going)
+        inline = None if getattr(pool, "encodes_values", False) else state.start_inline
+        run_tasks(
+            dependencies, state.start, state.finish, keep_going=keep_going, start_inline=inline
+        )
         failed = bool(state.failures)
     finally:
         if own_executor:

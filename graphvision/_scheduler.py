@@ -71,6 +71,7 @@ def run_tasks(
     finish: Callable[[str, Future], bool],
     *,
     keep_going: bool = False,
+    start_inline: Callable[[str], Future] | None = None,
 ) -> list[str]:
     """Run every task once its dependencies succeeded; return the tasks skipped.
 
@@ -85,6 +86,11 @@ def run_tasks(
         the task failed.
     keep_going : bool
         Keep starting tasks that do not depend on a failed one.
+    start_inline : callable, optional
+        Runs a task in this thread. Used when a task is the only one that can
+        run (nothing else running or ready), where a hand-off to a worker
+        would cost time and buy no parallelism: a chain runs at the cost of
+        plain calls.
     """
     waiting = {name: len(deps) for name, deps in dependencies.items()}
     dependents: dict[str, list[str]] = {name: [] for name in dependencies}
@@ -96,10 +102,16 @@ def run_tasks(
     started: set[str] = set()
     blocked: set[str] = set()
     stopping = False
+    running = 0
 
-    def launch(name: str) -> None:
-        started.add(name)
-        start(name).add_done_callback(lambda future: finished.put((name, future)))
+    def launch(names: list[str]) -> None:
+        nonlocal running
+        alone = start_inline is not None and running == 0 and len(names) == 1
+        for name in names:
+            started.add(name)
+            running += 1
+            future = start_inline(name) if alone else start(name)  # type: ignore[misc]
+            future.add_done_callback(lambda done, name=name: finished.put((name, done)))
 
     def block(name: str) -> None:
         stack = [name]
@@ -109,18 +121,17 @@ def run_tasks(
                     blocked.add(child)
                     stack.append(child)
 
-    for name in [name for name, count in waiting.items() if count == 0]:
-        launch(name)
-    running = len(started)
+    launch([name for name, count in waiting.items() if count == 0])
     while running:
         name, future = finished.get()
         running -= 1
         if finish(name, future):
+            ready = []
             for child in dependents[name]:
                 waiting[child] -= 1
                 if waiting[child] == 0 and child not in blocked and not stopping:
-                    launch(child)
-                    running += 1
+                    ready.append(child)
+            launch(ready)
         else:
             block(name)
             stopping = stopping or not keep_going

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import skimage.data
 import skimage.metrics
+
 from graphvision_plugins import color, io, metrics
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.ndimage as ndi
+
 from graphvision_plugins import filters
 
 ROW = (np.arange(1, 7, dtype=np.float32) / 10)[None, :]  # [[.1 .2 .3 .4 .5 .6]]

@@ -1,0 +1,43 @@
+"""Run every benchmark and write ``bench/results/latest.md`` (``make bench``)."""
+
+from __future__ import annotations
+
+import platform
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).parent
+sys.path.insert(0, str(HERE))
+
+import bench_cache  # noqa: E402
+import bench_filters  # noqa: E402
+import bench_scheduler  # noqa: E402
+
+
+def main() -> None:
+    sections = [
+        ("Scheduler overhead (engine issue)", bench_scheduler.main),
+        ("Cache (engine issue)", bench_cache.main),
+        ("Filters (engine issue)", bench_filters.main),
+    ]
+    lines = [
+        f"# graphvision benchmarks — {time.strftime('%Y-%m-%d %H:%M')}",
+        "",
+        f"Python {platform.python_version()}, {platform.machine()}, "
+        f"{__import__('os').cpu_count()} cores",
+        "",
+    ]
+    for title, func in sections:
+        print(f"== {title}", flush=True)
+        rows = func()
+        print("\n".join(rows), flush=True)
+        lines += [f"## {title}", "", *rows, ""]
+    out = HERE / "results" / "latest.md"
+    out.parent.mkdir(exist_ok=True)
+    out.write_text("\n".join(lines))
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
