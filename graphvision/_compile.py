@@ -191,24 +191,26 @@ class _Checker:
             if found is None:
                 continue
             wired[port], given = found
-            wanted = spec.inputs[port].type
-            if not given.is_a(wanted):
+            declared = spec.inputs[port]
+            if not declared.accepts(given):
                 self.report(
                     where,
                     f"type mismatch: '{ref}' gives {given.type_name()} but "
-                    f"'{name}.{port}' ({spec.id}) takes {wanted.type_name()}",
+                    f"'{name}.{port}' ({spec.id}) takes {declared.type_label()}",
                 )
-            elif spec.inputs[port].typevar:
-                var = spec.inputs[port].typevar
-                bound = bindings.get(var, given)
-                bindings[var] = (
-                    bound if given.is_a(bound) else given if bound.is_a(given) else wanted
-                )
+            elif declared.typevar:
+                given = declared.bind(given)
+                bound = bindings.get(declared.typevar, given)
+                if given.is_a(bound):
+                    given = bound
+                elif not bound.is_a(given):
+                    given = declared.type
+                bindings[declared.typevar] = given
         for port, declared in spec.inputs.items():
             if port not in decl.inputs and not declared.optional:
                 self.report(
                     f"nodes.{name}.in",
-                    f"missing input port '{port}' of {spec.id} ({declared.type.type_name()})",
+                    f"missing input port '{port}' of {spec.id} ({declared.type_label()})",
                 )
         self.resolved[name] = {
             port: bindings.get(spec.output_vars.get(port, ""), kind)

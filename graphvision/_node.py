@@ -139,6 +139,23 @@ class InputPort:
     type: type[PortType]
     optional: bool = False
     typevar: str = ""
+    choices: tuple[type[PortType], ...] = ()
+
+    def accepts(self, given: type[PortType]) -> bool:
+        """True when a value of type ``given`` may be connected to this port."""
+        if self.choices:
+            return any(given.is_a(choice) for choice in self.choices)
+        return given.is_a(self.type)
+
+    def bind(self, given: type[PortType]) -> type[PortType]:
+        """The type this port's TypeVar takes for a connected ``given`` type."""
+        for choice in self.choices:
+            if given.is_a(choice):
+                return choice
+        return given
+
+    def type_label(self) -> str:
+        return " or ".join(c.type_name() for c in self.choices) or self.type.type_name()
 
 
 @dataclass(frozen=True)
@@ -196,6 +213,13 @@ class NodeSpec:
             )
         return dict(zip(self.outputs, result, strict=True))
 
+    def _output_label(self, port: str) -> str:
+        var = self.output_vars.get(port)
+        for declared in self.inputs.values():
+            if var and declared.typevar == var:
+                return f"{declared.type_label()} (as connected)"
+        return self.outputs[port].type_name()
+
     def describe(self) -> dict[str, Any]:
         return {
             "id": self.id,
@@ -203,10 +227,9 @@ class NodeSpec:
             "plugin": self.plugin,
             "function": f"{self.ref.module}:{self.ref.qualname}",
             "inputs": {
-                k: {"type": p.type.type_name(), "optional": p.optional}
-                for k, p in self.inputs.items()
+                k: {"type": p.type_label(), "optional": p.optional} for k, p in self.inputs.items()
             },
-            "outputs": {k: t.type_name() for k, t in self.outputs.items()},
+            "outputs": {k: self._output_label(k) for k in self.outputs},
             "params": self.params_schema(),
             "cache": self.cache,
             "doc": inspect.cleandoc(self.doc),
@@ -233,6 +256,12 @@ def source_fingerprint(func: Callable) -> str:
 def _port_type(annotation: Any) -> tuple[type[PortType] | None, bool]:
     """(port type, optional) of an input annotation, or (None, False)."""
     if isinstance(annotation, TypeVar):
+        if annotation.__constraints__:
+            choices = annotation.__constraints__
+            if not all(_is_port_type(c) for c in choices):
+                return None, False
+            common = next(c for c in choices[0].__mro__ if all(issubclass(o, c) for o in choices))
+            return common, False
         bound = annotation.__bound__
         return (bound, False) if _is_port_type(bound) else (None, False)
     if get_origin(annotation) is typing.Annotated:
@@ -306,7 +335,8 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
             if not optional and parameter.default is not parameter.empty:
                 raise reject(f"input '{name}' has a default; only Optional[...] = None inputs may")
             typevar = annotation.__name__ if isinstance(annotation, TypeVar) else ""
-            inputs[name] = InputPort(port, optional, typevar)
+            choices = annotation.__constraints__ if isinstance(annotation, TypeVar) else ()
+            inputs[name] = InputPort(port, optional, typevar, choices)
         else:
             if parameter.default is parameter.empty:
                 raise reject(f"parameter '{name}' needs a default value")
@@ -319,9 +349,9 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
     output_vars: dict[str, str] = {}
     bound_vars = {port.typevar for port in inputs.values() if port.typevar}
     if isinstance(returned, TypeVar):
-        if returned.__name__ not in bound_vars or not _is_port_type(returned.__bound__):
+        if returned.__name__ not in bound_vars:
             raise reject(f"output type variable {returned.__name__} must also annotate an input")
-        outputs = {SINGLE_OUTPUT: returned.__bound__}
+        outputs = {SINGLE_OUTPUT: _port_type(returned)[0]}
         output_vars[SINGLE_OUTPUT] = returned.__name__
     elif _is_port_type(returned):
         outputs = {SINGLE_OUTPUT: returned}

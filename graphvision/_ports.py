@@ -244,6 +244,13 @@ class LabelImage(Array):
     dtypes = (np.int32,)
     expected = "int32 H×W, 0 = background"
 
+    @classmethod
+    def validate(cls, value: Any) -> np.ndarray:
+        value = super().validate(value)
+        if value.min() < 0:
+            raise PortValueError(f"expected LabelImage labels >= 0, got {int(value.min())}")
+        return value
+
 
 class Kernel(Array):
     """A filter kernel: ``float64`` 2-D array, centred at ``(rows // 2, cols // 2)``."""

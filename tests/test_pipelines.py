@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import graphvision as gv
@@ -21,3 +22,24 @@ def test_denoise_shows_what_each_filter_is_for():
     assert out["psnr_median_on_salt_pepper"] > out["psnr_gaussian_on_salt_pepper"] + 3
     assert out["psnr_median_on_salt_pepper"] > out["psnr_noisy_salt_pepper"] + 10
     assert out["psnr_gaussian_on_gaussian"] > out["psnr_noisy_gaussian"] + 3
+
+
+def test_coins_counts_24_coins_in_four_rows_of_six():
+    out = gv.run(gv.load_pipeline(PIPELINES / "coins.yaml")).outputs
+    assert out["count"] == 24  # the photograph shows 24 coins
+    rows = np.sort(out["regions"]["centroid_y"])
+    gaps = np.diff(rows)
+    assert (gaps > 30).sum() == 3  # 4 rows, separated by more than 30 pixels
+    assert all(len(group) == 6 for group in np.split(rows, np.flatnonzero(gaps > 30) + 1))
+    assert out["overlay"].shape == (303, 384, 3)
+
+
+def test_document_local_threshold_survives_where_otsu_fails():
+    out = gv.run(gv.load_pipeline(PIPELINES / "document.yaml")).outputs
+    dim_corner = (slice(120, 191), slice(0, 60))  # lower left: the light falls off there
+    text_block = (slice(40, 110), slice(200, 384))
+    # printed text covers well under half of any part of a page
+    assert out["ink_otsu"][dim_corner].mean() > 0.5
+    assert out["ink_local"][dim_corner].mean() < 0.35
+    assert 0.05 < out["ink_local"][text_block].mean() < 0.35
+    assert out["disagreement"][dim_corner].mean() > 0.3

@@ -32,7 +32,7 @@ def test_a_node_is_described_without_running(registry):
     spec = registry.node("filters.gaussian")
     info = spec.describe()
     assert info["inputs"] == {"image": {"type": "Image", "optional": False}}
-    assert info["outputs"] == {"out": "Image"}
+    assert info["outputs"] == {"out": "Image (as connected)"}
     sigma = info["params"]["properties"]["sigma"]
     assert sigma["exclusiveMinimum"] == 0 and sigma["default"] == 1.0
     assert info["params"]["properties"]["boundary"]["enum"] == [
