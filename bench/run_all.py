@@ -13,6 +13,7 @@ sys.path.insert(0, str(HERE))
 import bench_cache  # noqa: E402
 import bench_filters  # noqa: E402
 import bench_scheduler  # noqa: E402
+import bench_segmentation  # noqa: E402
 
 
 def main() -> None:
@@ -20,6 +21,7 @@ def main() -> None:
         ("Scheduler overhead (engine issue)", bench_scheduler.main),
         ("Cache (engine issue)", bench_cache.main),
         ("Filters (engine issue)", bench_filters.main),
+        ("Segmentation (segmentation issue)", bench_segmentation.main),
     ]
     lines = [
         f"# graphvision benchmarks — {time.strftime('%Y-%m-%d %H:%M')}",

@@ -10,6 +10,7 @@ from pydantic import Field
 from graphvision import BinaryImage, GrayImage, node
 
 from ._footprints import Footprint
+from ._packed import MAX_HALF_WIDTH, binary_extreme
 
 __all__ = ["close", "dilate", "erode", "fill_holes", "logical", "open", "remove_small_objects"]
 
@@ -23,13 +24,16 @@ def _is_rectangle(footprint: np.ndarray) -> bool:
 def _extreme(image: np.ndarray, footprint: np.ndarray, kind: str) -> np.ndarray:
     """Min (erosion) or max (dilation) over the footprint, centred on each pixel.
 
-    A full rectangle is separable: a 1-D running min/max along rows then
-    columns (van Herk / Gil-Werman, O(1) per pixel). Other shapes use the
+    Masks go through bit-packed rows (:mod:`._packed`). For gray images a
+    full rectangle is separable: a 1-D running min/max along rows then
+    columns (van Herk / Gil-Werman, O(1) per pixel); other shapes use the
     footprint directly. Outside the image counts as foreground for erosion
     and background for dilation, so the border neither eats nor grows objects.
     """
     import scipy.ndimage as ndi
 
+    if image.dtype == np.bool_ and footprint.shape[1] // 2 <= MAX_HALF_WIDTH:
+        return binary_extreme(image, footprint, erode=kind == "erode")
     boolean = image.dtype == np.bool_
     data = image.view(np.uint8) if boolean else image
     rectangle = _is_rectangle(footprint)

@@ -37,22 +37,24 @@ def window_mean_std(image: np.ndarray, window: int) -> tuple[np.ndarray, np.ndar
        Document Recognition and Retrieval XV, SPIE 6815, 2008.
     """
     half = window // 2
-    padded = np.pad(image.astype(np.float64), half + 1, mode="symmetric")[1:, 1:]
     rows, cols = image.shape
-    n = float(window * window)
+    padded = np.pad(image, half, mode="symmetric").astype(np.float64)
+    area = float(window * window)
     stats = []
-    for values in (padded, padded * padded):
-        integral = values.cumsum(axis=0).cumsum(axis=1)
-        integral = np.pad(integral, ((1, 0), (1, 0)))
-        window_sum = (
-            integral[window : window + rows, window : window + cols]
-            - integral[:rows, window : window + cols]
-            - integral[window : window + rows, :cols]
-            + integral[:rows, :cols]
-        )
-        stats.append(window_sum / n)
-    mean, mean_sq = stats
-    return mean, np.sqrt(np.maximum(mean_sq - mean * mean, 0.0))
+    for values in (padded, np.square(padded)):
+        integral = np.zeros((values.shape[0] + 1, values.shape[1] + 1))
+        np.cumsum(values, axis=0, out=integral[1:, 1:])
+        np.cumsum(integral[1:, 1:], axis=1, out=integral[1:, 1:])
+        window_sum = integral[window : window + rows, window : window + cols].copy()
+        window_sum -= integral[:rows, window : window + cols]
+        window_sum -= integral[window : window + rows, :cols]
+        window_sum += integral[:rows, :cols]
+        window_sum /= area
+        stats.append(window_sum)
+    mean, variance = stats
+    variance -= mean * mean
+    np.maximum(variance, 0.0, out=variance)
+    return mean, np.sqrt(variance, out=variance)
 
 
 @node("threshold.local", version=1)
@@ -98,9 +100,12 @@ def local(
     .. [2] J. Sauvola, M. Pietikäinen, "Adaptive document image binarization",
        Pattern Recognition 33(2), 2000.
     """
-    mean, std = window_mean_std(image, window)
+    threshold, std = window_mean_std(image, window)
     if method == "niblack":
-        threshold = mean + k * std
+        std *= k
+        threshold += std
     else:
-        threshold = mean * (1.0 + k * (std / r - 1.0))
+        std *= k / r
+        std += 1.0 - k
+        threshold *= std
     return image < threshold if foreground == "dark" else image > threshold

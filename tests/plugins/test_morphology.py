@@ -124,3 +124,22 @@ def test_a_colour_image_is_refused_where_gray_or_binary_is_required(registry):
         r"\(morphology.erode\) takes BinaryImage or GrayImage",
     ):
         gv.compile_graph(graph, registry)
+
+
+@pytest.mark.parametrize("width", [1, 63, 64, 65, 130])
+def test_packed_rows_handle_every_width_and_asymmetric_elements(width):
+    mask = np.random.default_rng(width).random((17, width)) > 0.4
+    element = np.array([[1, 0, 0], [1, 1, 0], [0, 1, 1]], bool)  # not symmetric
+    # reference: scipy.ndimage binary_erosion / binary_dilation with the same structure
+    np.testing.assert_array_equal(
+        morph.erode(mask, element), ndi.binary_erosion(mask, element, border_value=1)
+    )
+    np.testing.assert_array_equal(morph.dilate(mask, element), ndi.binary_dilation(mask, element))
+
+
+def test_wide_elements_fall_back_to_scipy_with_the_same_result():
+    mask = np.random.default_rng(0).random((40, 200)) > 0.3
+    element = morph.footprint(shape="rectangle", height=3, width=71)  # half width 35 > 31
+    np.testing.assert_array_equal(
+        morph.erode(mask, element), ndi.binary_erosion(mask, element, border_value=1)
+    )
