@@ -159,3 +159,13 @@ def test_manual_band():
     )
     with pytest.raises(ValueError, match="high"):
         threshold.manual(image, low=0.6, high=0.3)
+
+
+def test_a_colour_image_is_refused_before_running(registry):
+    import graphvision as gv
+
+    graph = gv.Graph("t")
+    graph.output("m", graph.add("o", "threshold.otsu", image=graph.input("image", "Image"))["mask"])
+    with pytest.raises(gv.PipelineError, match=r"'image' gives Image but 'o.image' "
+                       r"\(threshold.otsu\) takes GrayImage"):
+        gv.compile_graph(graph, registry)
