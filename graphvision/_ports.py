@@ -13,7 +13,8 @@ is not an intensity, and feeding one to a filter is a mistake to report.
            │                       └─ ColorImage
            ├─ BinaryImage
            ├─ LabelImage
-           └─ Kernel
+           ├─ Kernel
+           ├─ Points2D, Descriptors, Homography
     Float ── Int        Bool        Text        Table        Record (dataclasses)
 
 Each type encodes a value as named arrays plus a small JSON header, and back.
@@ -42,13 +43,16 @@ __all__ = [
     "BinaryImage",
     "Bool",
     "ColorImage",
+    "Descriptors",
     "Float",
     "FloatImage",
     "GrayImage",
+    "Homography",
     "Image",
     "Int",
     "Kernel",
     "LabelImage",
+    "Points2D",
     "PortType",
     "Record",
     "Table",
@@ -401,8 +405,60 @@ class Record(PortType):
         return cls.value_class(**arrays, **meta)
 
 
+class Points2D(Array):
+    """Points ``(x, y)`` = (column, row): ``float64`` ``N×2`` (N may be 0), finite."""
+
+    ndims = (2,)
+    dtypes = (np.float64,)
+    expected = "float64 N×2 (x, y)"
+
+    @classmethod
+    def validate(cls, value: Any) -> np.ndarray:
+        if (
+            isinstance(value, np.ndarray)
+            and value.ndim == 2
+            and value.shape[1] == 2
+            and (value.dtype == np.float64)
+        ):
+            if not np.isfinite(value).all():
+                raise PortValueError("expected Points2D with finite coordinates, got NaN or inf")
+            return value
+        raise _fail(cls, cls.expected, value)
+
+
+class Descriptors(Array):
+    """Feature descriptors: ``float32`` ``N×D``, one row per keypoint (N may be 0)."""
+
+    ndims = (2,)
+    dtypes = (np.float32,)
+    expected = "float32 N×D"
+
+    @classmethod
+    def validate(cls, value: Any) -> np.ndarray:
+        if isinstance(value, np.ndarray) and value.ndim == 2 and value.dtype == np.float32:
+            return value
+        raise _fail(cls, cls.expected, value)
+
+
+class Homography(Array):
+    """A plane-to-plane projective map: ``float64`` 3×3, finite, ``x' ~ H x``."""
+
+    ndims = (2,)
+    dtypes = (np.float64,)
+    expected = "float64 3×3"
+
+    @classmethod
+    def validate(cls, value: Any) -> np.ndarray:
+        value = super().validate(value)
+        if value.shape != (3, 3) or not np.isfinite(value).all():
+            raise _fail(cls, "finite float64 3×3", value)
+        return value
+
+
 def builtin_port_types() -> list[type[PortType]]:
     """The port types the engine defines (plugins may register more)."""
+    from ._records import Keypoints, Matches
+
     return [
         Array,
         FloatImage,
@@ -412,6 +468,11 @@ def builtin_port_types() -> list[type[PortType]]:
         BinaryImage,
         LabelImage,
         Kernel,
+        Points2D,
+        Descriptors,
+        Homography,
+        Keypoints,
+        Matches,
         Float,
         Int,
         Bool,

@@ -1,0 +1,24 @@
+"""Local features (seed: "Local features", "Local descriptors"): Harris,
+Hessian and LoG detectors, Lowe's DoG detector with orientation assignment,
+SIFT and normalised-patch descriptors, and drawings of keypoints and matches.
+"""
+
+from ._corners import harris, hessian, log_blobs
+from ._draw import draw_keypoints, draw_matches
+from ._patch import patch_descriptor
+from ._sift import SiftParams, assign_orientations, detect_dog, dog, sift, sift_descriptors
+
+__all__ = [
+    "SiftParams",
+    "assign_orientations",
+    "detect_dog",
+    "dog",
+    "draw_keypoints",
+    "draw_matches",
+    "harris",
+    "hessian",
+    "log_blobs",
+    "patch_descriptor",
+    "sift",
+    "sift_descriptors",
+]

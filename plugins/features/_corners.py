@@ -1,0 +1,175 @@
+"""Harris and Hessian corners, Laplacian-of-Gaussian blobs with scale selection."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import numpy as np
+from pydantic import Field
+
+from graphvision import GrayImage, Keypoints, KeypointSet, node
+
+__all__ = ["harris", "harris_response", "hessian", "log_blobs"]
+
+Sigma = Annotated[float, Field(gt=0, le=50)]
+
+
+def _peaks(
+    response: np.ndarray, min_distance: int, threshold_rel: float, limit: int, scale: float
+) -> KeypointSet:
+    """Local maxima (non-maximum suppression in a (2d+1)² window) above a relative threshold."""
+    import scipy.ndimage as ndi
+
+    top = float(response.max())
+    if top <= 0:
+        return KeypointSet.empty()
+    local = ndi.maximum_filter(response, size=2 * min_distance + 1, mode="constant", cval=-np.inf)
+    peak = (response == local) & (response > threshold_rel * top)
+    border = min_distance
+    peak[:border] = peak[-border:] = False
+    peak[:, :border] = peak[:, -border:] = False
+    ys, xs = np.nonzero(peak)
+    strength = response[ys, xs].astype(np.float64)
+    order = np.argsort(-strength, kind="stable")
+    if limit:
+        order = order[:limit]
+    count = len(order)
+    return KeypointSet(
+        np.column_stack([xs[order], ys[order]]).astype(np.float64),
+        np.full(count, scale),
+        np.zeros(count),
+        strength[order],
+    )
+
+
+def harris_response(image: np.ndarray, sigma_d: float, sigma_i: float, alpha: float) -> np.ndarray:
+    r""":math:`R = \det M - \alpha\,\mathrm{tr}^2 M` with the Gaussian-weighted gradient covariance M."""
+    import scipy.ndimage as ndi
+
+    data = image.astype(np.float64)
+    ix = ndi.gaussian_filter(data, sigma_d, order=(0, 1))
+    iy = ndi.gaussian_filter(data, sigma_d, order=(1, 0))
+    sxx = ndi.gaussian_filter(ix * ix, sigma_i)
+    syy = ndi.gaussian_filter(iy * iy, sigma_i)
+    sxy = ndi.gaussian_filter(ix * iy, sigma_i)
+    return sxx * syy - sxy * sxy - alpha * (sxx + syy) ** 2
+
+
+@node("features.harris", version=1)
+def harris(
+    image: GrayImage,
+    *,
+    sigma_d: Sigma = 1.0,
+    sigma_i: Sigma = 2.0,
+    alpha: Annotated[float, Field(ge=0, le=0.25)] = 0.04,
+    threshold_rel: Annotated[float, Field(ge=0, le=1)] = 0.01,
+    min_distance: Annotated[int, Field(ge=1)] = 3,
+    max_keypoints: Annotated[int, Field(ge=0)] = 2000,
+) -> Keypoints:
+    r"""Harris corners: both eigenvalues of the gradient covariance large.
+
+    .. math::
+        M = \begin{bmatrix} G(\sigma_i) * I_x^2 & G(\sigma_i) * I_x I_y \\
+                            G(\sigma_i) * I_x I_y & G(\sigma_i) * I_y^2 \end{bmatrix},
+        \qquad R = \det M - \alpha\, \mathrm{tr}^2 M
+
+    with derivatives of a Gaussian of :math:`\sigma_d`; corners are local
+    maxima of :math:`R` (non-maximum suppression within ``min_distance``)
+    above ``threshold_rel`` times the strongest.
+
+    Returns
+    -------
+    keypoints : scale :math:`\sigma_i`, orientation 0, response R, strongest first
+
+    References
+    ----------
+    .. [1] C. Harris, M. Stephens, "A combined corner and edge detector",
+       Alvey Vision Conference, 1988.
+    """
+    response = harris_response(image, sigma_d, sigma_i, alpha)
+    return _peaks(response, min_distance, threshold_rel, max_keypoints, sigma_i)
+
+
+@node("features.hessian", version=1)
+def hessian(
+    image: GrayImage,
+    *,
+    sigma: Sigma = 2.0,
+    threshold_rel: Annotated[float, Field(ge=0, le=1)] = 0.01,
+    min_distance: Annotated[int, Field(ge=1)] = 3,
+    max_keypoints: Annotated[int, Field(ge=0)] = 2000,
+) -> Keypoints:
+    r"""Hessian detector: maxima of the scale-normalised determinant of the Hessian.
+
+    .. math:: R = \sigma^4 \det \begin{bmatrix} I_{xx} & I_{xy} \\ I_{xy} & I_{yy} \end{bmatrix}
+              = \sigma^4 (I_{xx} I_{yy} - I_{xy}^2)
+
+    with second derivatives of a Gaussian of :math:`\sigma`. It responds to
+    blobs and corners (strong curvature in both directions), not to edges.
+
+    Returns
+    -------
+    keypoints : scale σ, orientation 0, response R
+
+    References
+    ----------
+    .. [1] P. R. Beaudet, "Rotationally invariant image operators", ICPR 1978.
+    """
+    import scipy.ndimage as ndi
+
+    data = image.astype(np.float64)
+    ixx = ndi.gaussian_filter(data, sigma, order=(0, 2))
+    iyy = ndi.gaussian_filter(data, sigma, order=(2, 0))
+    ixy = ndi.gaussian_filter(data, sigma, order=(1, 1))
+    response = sigma**4 * (ixx * iyy - ixy * ixy)
+    return _peaks(response, min_distance, threshold_rel, max_keypoints, sigma)
+
+
+@node("features.log", version=1)
+def log_blobs(
+    image: GrayImage,
+    *,
+    min_sigma: Sigma = 2.0,
+    max_sigma: Sigma = 16.0,
+    scales: Annotated[int, Field(ge=2, le=64)] = 10,
+    threshold: Annotated[float, Field(ge=0)] = 0.05,
+    max_keypoints: Annotated[int, Field(ge=0)] = 2000,
+) -> Keypoints:
+    r"""Blobs at their characteristic scale: extrema of the scale-normalised LoG in scale space.
+
+    .. math:: L(x, y, \sigma) = \sigma^2 \,|\nabla^2 G(\sigma) * I|
+
+    over ``scales`` values of σ spaced geometrically from ``min_sigma`` to
+    ``max_sigma``; a keypoint is a maximum among its 26 neighbours in
+    (x, y, σ) above ``threshold``, and its σ is the characteristic scale (a
+    disk of radius r responds most at :math:`\sigma = r / \sqrt 2`).
+
+    Returns
+    -------
+    keypoints : scale σ, orientation 0, response L
+
+    References
+    ----------
+    .. [1] T. Lindeberg, "Feature detection with automatic scale selection",
+       IJCV 30(2), 1998.
+    """
+    import scipy.ndimage as ndi
+
+    if max_sigma < min_sigma:
+        raise ValueError(f"max_sigma ({max_sigma}) must not be below min_sigma ({min_sigma})")
+    sigmas = np.geomspace(min_sigma, max_sigma, scales)
+    data = image.astype(np.float64)
+    stack = np.stack([s * s * np.abs(ndi.gaussian_laplace(data, s)) for s in sigmas])
+    local = ndi.maximum_filter(stack, size=3, mode="constant", cval=-np.inf)
+    peak = (stack == local) & (stack > threshold)
+    level, ys, xs = np.nonzero(peak)
+    strength = stack[level, ys, xs]
+    order = np.argsort(-strength, kind="stable")
+    if max_keypoints:
+        order = order[:max_keypoints]
+    return KeypointSet(
+        np.column_stack([xs[order], ys[order]]).astype(np.float64),
+        sigmas[level[order]],
+        np.zeros(len(order)),
+        strength[order],
+    )

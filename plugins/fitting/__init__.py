@@ -1,0 +1,33 @@
+"""Fitting parametric models (seed: "Least squares", "Outliers, RANSAC"): least
+squares, weighted, constrained (total) least squares, Gauss-Newton
+refinement, and one generic RANSAC built from a minimal solver, a residual,
+a sample size and a refit.
+"""
+
+from ._lines import (
+    Line2D,
+    fit_line_lstsq,
+    fit_line_ransac,
+    fit_line_total,
+    fit_line_weighted,
+    fit_line_weighted_node,
+    line_residuals,
+    refine_line,
+    sample_line_points,
+)
+from ._ransac import RansacResult, ransac, ransac_iterations
+
+__all__ = [
+    "Line2D",
+    "RansacResult",
+    "fit_line_lstsq",
+    "fit_line_ransac",
+    "fit_line_total",
+    "fit_line_weighted",
+    "fit_line_weighted_node",
+    "line_residuals",
+    "ransac",
+    "ransac_iterations",
+    "refine_line",
+    "sample_line_points",
+]

@@ -1,0 +1,105 @@
+"""A generic RANSAC: minimal solver + residual + sample size + refit."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["RansacResult", "ransac", "ransac_iterations"]
+
+
+def ransac_iterations(outlier_ratio: float, sample_size: int, confidence: float) -> int:
+    r"""Samples needed to draw one all-inlier sample with probability ``confidence``.
+
+    .. math:: N = \frac{\log(1 - p)}{\log\left(1 - (1 - e)^s\right)}
+
+    >>> ransac_iterations(0.5, 4, 0.99)
+    72
+    """
+    good = (1.0 - outlier_ratio) ** sample_size
+    if good >= 1.0:
+        return 1
+    if good <= 0.0:
+        return 10**9
+    return math.ceil(math.log(1.0 - confidence) / math.log(1.0 - good))
+
+
+@dataclass(frozen=True)
+class RansacResult:
+    """The refit model (None when no sample gave one), its inlier mask and the samples drawn."""
+
+    model: Any
+    inliers: np.ndarray
+    iterations: int
+
+
+def ransac(
+    count: int,
+    sample_size: int,
+    solve: Callable[[np.ndarray], Any],
+    residuals: Callable[[Any], np.ndarray],
+    threshold: float,
+    *,
+    refit: Callable[[np.ndarray], Any] | None = None,
+    confidence: float = 0.99,
+    max_iterations: int = 10_000,
+    seed: int = 0,
+) -> RansacResult:
+    r"""RANSAC over ``count`` data items.
+
+    1. draw a minimal sample of ``sample_size`` distinct items;
+    2. ``solve(indices)`` fits a model to it (None for a degenerate sample);
+    3. items whose ``residuals(model)`` are below ``threshold`` (e.g. 2σ for
+       Gaussian noise of deviation σ) are its inliers; keep the model with
+       the most inliers;
+    4. after each improvement, lower the number of samples to
+       :func:`ransac_iterations` for the observed outlier ratio (``confidence`` p);
+    5. ``refit(inlier_indices)`` the best model on all its inliers (least
+       squares), and take the inliers of the refit model.
+
+    Parameters
+    ----------
+    count, sample_size : int
+    solve, residuals, refit : callables
+    threshold : float
+    confidence : float
+    max_iterations : int
+    seed : int
+        Seed of the sampler: the result is a pure function of the inputs.
+
+    Returns
+    -------
+    RansacResult
+
+    References
+    ----------
+    .. [1] M. A. Fischler, R. C. Bolles, "Random sample consensus", Comm. ACM
+       24(6), 1981.
+    """
+    rng = np.random.default_rng(seed)
+    best_model, best_inliers, best_count = None, np.zeros(count, dtype=bool), -1
+    needed, drawn = max_iterations, 0
+    if count < sample_size:
+        return RansacResult(None, best_inliers, 0)
+    while drawn < min(needed, max_iterations):
+        drawn += 1
+        sample = rng.choice(count, size=sample_size, replace=False)
+        model = solve(sample)
+        if model is None:
+            continue
+        inliers = residuals(model) < threshold
+        found = int(inliers.sum())
+        if found > best_count:
+            best_model, best_inliers, best_count = model, inliers, found
+            needed = ransac_iterations(1.0 - found / count, sample_size, confidence)
+    if best_model is not None and refit is not None and best_count >= sample_size:
+        refined = refit(np.flatnonzero(best_inliers))
+        if refined is not None:
+            refined_inliers = residuals(refined) < threshold
+            if refined_inliers.sum() >= best_count:
+                best_model, best_inliers = refined, refined_inliers
+    return RansacResult(best_model, best_inliers, drawn)

@@ -1,0 +1,197 @@
+"""Homography estimation: normalised DLT, Levenberg-Marquardt refinement, RANSAC."""
+
+from __future__ import annotations
+
+from typing import Annotated, NamedTuple
+
+import numpy as np
+from pydantic import Field
+
+from graphvision import Float, Homography, Keypoints, Matches, node
+
+from ..fitting import ransac
+
+__all__ = [
+    "apply_homography",
+    "corner_error",
+    "estimate_homography",
+    "homography_ransac",
+    "normalising_transform",
+    "refine_homography",
+    "transfer_error",
+]
+
+
+def apply_homography(h: np.ndarray, points: np.ndarray) -> np.ndarray:
+    r"""Map ``(x, y)`` points: :math:`x' = \frac{h_{11}x + h_{12}y + h_{13}}{h_{31}x + h_{32}y + h_{33}}`, ..."""
+    mapped = points @ h[:2, :2].T + h[:2, 2]
+    w = points @ h[2, :2] + h[2, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return mapped / w[:, None]
+
+
+def normalising_transform(points: np.ndarray) -> np.ndarray:
+    r"""The similarity :math:`T` moving the points' mean to 0 and their RMS distance to :math:`\sqrt 2`.
+
+    (Zero mean and unit variance per coordinate: Hartley's preconditioning.)
+    """
+    centre = points.mean(axis=0)
+    spread = np.sqrt(((points - centre) ** 2).sum(axis=1).mean())
+    scale = np.sqrt(2.0) / spread if spread > 0 else 1.0
+    return np.array([[scale, 0, -scale * centre[0]], [0, scale, -scale * centre[1]], [0, 0, 1.0]])
+
+
+def estimate_homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
+    r"""Normalised DLT: the homography with :math:`dst \simeq H\, src` from ≥ 4 correspondences.
+
+    1. precondition each point set: :math:`\tilde x = T x`, :math:`\tilde x' = T' x'`;
+    2. stack two rows per correspondence,
+       :math:`[-\tilde x^T, 0, x'\tilde x^T]` and :math:`[0, -\tilde x^T, y'\tilde x^T]`,
+       and take :math:`\tilde h` as the right singular vector of the smallest
+       singular value (:math:`\|\tilde h\| = 1`);
+    3. undo the preconditioning: :math:`H = T'^{-1} \tilde H T`, scaled so :math:`h_{33} = 1`.
+
+    Returns None for a degenerate configuration (three of four points
+    collinear, all points coincident, or a rank-deficient system), never NaN.
+
+    References
+    ----------
+    .. [1] R. Hartley, "In defense of the eight-point algorithm", IEEE TPAMI
+       19(6), 1997; Hartley & Zisserman, *Multiple View Geometry*, 2nd ed.,
+       2004, algorithm 4.2.
+    """
+    if len(src) < 4 or not (np.isfinite(src).all() and np.isfinite(dst).all()):
+        return None
+    t_src, t_dst = normalising_transform(src), normalising_transform(dst)
+    a = apply_homography(t_src, src)
+    b = apply_homography(t_dst, dst)
+    if len(src) == 4 and (_collinear_triple(a) or _collinear_triple(b)):
+        return None
+    ones, zeros = np.ones(len(a)), np.zeros((len(a), 3))
+    xs = np.column_stack([a, ones])
+    rows = np.empty((2 * len(a), 9))
+    rows[0::2] = np.hstack([-xs, zeros, b[:, :1] * xs])
+    rows[1::2] = np.hstack([zeros, -xs, b[:, 1:] * xs])
+    _, singular, vt = np.linalg.svd(rows)
+    if singular[-2] < 1e-10 * singular[0]:
+        return None  # the solution is not unique: degenerate points
+    h = np.linalg.inv(t_dst) @ vt[-1].reshape(3, 3) @ t_src
+    if abs(h[2, 2]) < 1e-12 or not np.isfinite(h).all():
+        return None
+    return h / h[2, 2]
+
+
+def _collinear_triple(points: np.ndarray) -> bool:
+    for i, j, k in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)):
+        u, v = points[j] - points[i], points[k] - points[i]
+        if abs(u[0] * v[1] - u[1] * v[0]) < 1e-6:
+            return True
+    return False
+
+
+def transfer_error(h: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    """Forward reprojection error ``|| H src - dst ||`` in pixels (inf behind the camera)."""
+    error = np.linalg.norm(apply_homography(h, src) - dst, axis=1)
+    return np.where(np.isfinite(error), error, np.inf)
+
+
+def refine_homography(h: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    """Levenberg-Marquardt on the reprojection error (8 parameters, ``h33 = 1``)."""
+    from scipy.optimize import least_squares
+
+    if len(src) < 5:
+        return h
+
+    def residual(p: np.ndarray) -> np.ndarray:
+        return (apply_homography(np.append(p, 1.0).reshape(3, 3), src) - dst).ravel()
+
+    fit = least_squares(residual, (h / h[2, 2]).ravel()[:8], method="lm", max_nfev=200)
+    refined = np.append(fit.x, 1.0).reshape(3, 3)
+    return refined if np.isfinite(refined).all() else h
+
+
+class HomographyFit(NamedTuple):
+    homography: Homography
+    inliers: Matches
+    inlier_ratio: Float
+
+
+@node("geometry.homography_ransac", version=1)
+def homography_ransac(
+    src: Keypoints,
+    dst: Keypoints,
+    matches: Matches,
+    *,
+    threshold: Annotated[float, Field(gt=0)] = 3.0,
+    confidence: Annotated[float, Field(gt=0, lt=1)] = 0.995,
+    max_iterations: Annotated[int, Field(ge=1)] = 5000,
+    refine: bool = True,
+    seed: Annotated[int, Field(ge=0)] = 0,
+) -> HomographyFit:
+    """The homography mapping ``src`` keypoints onto their matches in ``dst``, robust to outliers.
+
+    RANSAC (:func:`~graphvision_plugins.fitting.ransac`) over minimal samples
+    of 4 matches solved by normalised DLT, inliers within ``threshold`` pixels
+    of forward reprojection error, adaptive sample count for ``confidence``;
+    then DLT on all inliers and, with ``refine``, Levenberg-Marquardt on their
+    reprojection error.
+
+    Returns
+    -------
+    homography : (3, 3) float64, ``dst ~ H src``
+    inliers : the inlier matches
+    inlier_ratio : float
+
+    Raises
+    ------
+    ValueError
+        With fewer than 4 matches, or when every sample is degenerate (for
+        example all points collinear): no homography is defined.
+    """
+    if len(matches) < 4:
+        raise ValueError(f"need at least 4 matches to estimate a homography, got {len(matches)}")
+    a = src.xy[matches.pairs[:, 0]]
+    b = dst.xy[matches.pairs[:, 1]]
+
+    def refit(indices: np.ndarray) -> np.ndarray | None:
+        h = estimate_homography(a[indices], b[indices])
+        return refine_homography(h, a[indices], b[indices]) if h is not None and refine else h
+
+    result = ransac(
+        len(a),
+        4,
+        lambda s: estimate_homography(a[s], b[s]),
+        lambda h: transfer_error(h, a, b),
+        threshold,
+        refit=refit,
+        confidence=confidence,
+        max_iterations=max_iterations,
+        seed=seed,
+    )
+    if result.model is None:
+        raise ValueError(
+            f"no homography: all {result.iterations} samples of 4 matches were "
+            "degenerate (collinear or coincident points)"
+        )
+    inliers = result.inliers
+    return HomographyFit(result.model, matches.take(inliers), float(inliers.mean()))
+
+
+@node("geometry.corner_error", version=1)
+def corner_error(
+    estimated: Homography,
+    truth: Homography,
+    *,
+    width: Annotated[int, Field(ge=1)] = 512,
+    height: Annotated[int, Field(ge=1)] = 512,
+) -> Float:
+    """Mean distance in pixels between the image corners mapped by ``estimated`` and by ``truth``.
+
+    The corners are (0, 0), (w-1, 0), (w-1, h-1), (0, h-1): the usual accuracy
+    measure of a homography estimate (success when below 3 px).
+    """
+    corners = np.array([[0, 0], [width - 1, 0], [width - 1, height - 1], [0, height - 1]], float)
+    error = np.linalg.norm(
+        apply_homography(estimated, corners) - apply_homography(truth, corners), axis=1
+    )
+    return float(error.mean()) if np.isfinite(error).all() else float("inf")
