@@ -43,7 +43,7 @@ def _peaks(
 
 
 def harris_response(image: np.ndarray, sigma_d: float, sigma_i: float, alpha: float) -> np.ndarray:
-    r""":math:`R = \det M - \alpha\,\mathrm{tr}^2 M` with the Gaussian-weighted gradient covariance M."""
+    r""":math:`R = \det M - \alpha\,\mathrm{tr}^2 M`, M the weighted gradient covariance."""
     import scipy.ndimage as ndi
 
     data = image.astype(np.float64)

@@ -23,7 +23,10 @@ __all__ = [
 
 
 def apply_homography(h: np.ndarray, points: np.ndarray) -> np.ndarray:
-    r"""Map ``(x, y)`` points: :math:`x' = \frac{h_{11}x + h_{12}y + h_{13}}{h_{31}x + h_{32}y + h_{33}}`, ..."""
+    r"""Map ``(x, y)`` points through ``h`` (homogeneous coordinates, then divide by w).
+
+    :math:`x' = (h_{11}x + h_{12}y + h_{13}) / (h_{31}x + h_{32}y + h_{33})`, likewise :math:`y'`.
+    """
     mapped = points @ h[:2, :2].T + h[:2, 2]
     w = points @ h[2, :2] + h[2, 2]
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -31,7 +34,7 @@ def apply_homography(h: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 
 def normalising_transform(points: np.ndarray) -> np.ndarray:
-    r"""The similarity :math:`T` moving the points' mean to 0 and their RMS distance to :math:`\sqrt 2`.
+    r"""The similarity :math:`T` taking the points' mean to 0 and RMS distance to :math:`\sqrt 2`.
 
     (Zero mean and unit variance per coordinate: Hartley's preconditioning.)
     """
