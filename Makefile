@@ -13,8 +13,8 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/graphvision run pipelines/denoise.yaml --output-dir out/denoise --record
-	@echo "results and report in out/denoise (open out/denoise/report.md)"
+	$(BIN)/graphvision run pipelines/homography.yaml --output-dir out/homography --record
+	@echo "results and report in out/homography (open out/homography/report.md)"
 
 test: $(STAMP)
 	$(BIN)/python -m pytest

@@ -359,9 +359,17 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
         field_hints = typing.get_type_hints(returned)
         outputs = {}
         for name in returned._fields:
-            if not _is_port_type(field_hints.get(name)):
-                raise reject(f"output '{name}' of {returned.__name__} must be a port type")
-            outputs[name] = field_hints[name]
+            hint = field_hints.get(name)
+            if isinstance(hint, TypeVar) and hint.__name__ in bound_vars:
+                outputs[name] = _port_type(hint)[0]
+                output_vars[name] = hint.__name__
+            elif _is_port_type(hint):
+                outputs[name] = hint
+            else:
+                raise reject(
+                    f"output '{name}' of {returned.__name__} must be a port type "
+                    "(or a type variable of an input)"
+                )
         output_tuple = returned
     else:
         raise reject(

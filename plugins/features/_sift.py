@@ -8,7 +8,7 @@ sub-pixel refinement as batched 3×3 solves, histograms with ``bincount``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Annotated, NamedTuple
 
 import numpy as np
@@ -42,6 +42,7 @@ class _Pyramid:
     dogs: list[np.ndarray]  # per octave: (intervals + 2, H, W) float32
     factor: float  # input pixels per octave-0 pixel (0.5 when upsampled)
     params: SiftParams
+    gradients: dict = field(default_factory=dict)  # (octave, layer) -> (magnitude, angle)
 
     def layer_sigma(self, layer: np.ndarray) -> np.ndarray:
         """Blur, in octave pixels, of the (fractional) layer."""
@@ -140,6 +141,29 @@ def _refine(dog: np.ndarray, layer: np.ndarray, y: np.ndarray, x: np.ndarray, pa
     return alive, offset, gradient
 
 
+def _extreme3(stack: np.ndarray, pick) -> np.ndarray:
+    """Max (or min, with ``pick=np.minimum``) over each 3×3×3 block, for the interior points.
+
+    Three separable passes of two element-wise ``pick`` over shifted views.
+    """
+    out = pick(pick(stack[:-2], stack[1:-1]), stack[2:])
+    out = pick(pick(out[:, :-2], out[:, 1:-1]), out[:, 2:])
+    return pick(pick(out[:, :, :-2], out[:, :, 1:-1]), out[:, :, 2:])
+
+
+def _extrema(dog: np.ndarray, prefilter: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points of the inner layers, away from the border, that are maxima (or minima) of
+    their 3×3×3 neighbourhood and beyond ``prefilter`` in absolute value."""
+    centre = dog[1:-1, 1:-1, 1:-1]
+    extreme = (centre > prefilter) & (centre >= _extreme3(dog, np.maximum))
+    extreme |= (centre < -prefilter) & (centre <= _extreme3(dog, np.minimum))
+    edge = BORDER - 1
+    extreme[:, :edge] = extreme[:, -edge:] = False
+    extreme[:, :, :edge] = extreme[:, :, -edge:] = False
+    layer, y, x = np.nonzero(extreme)
+    return layer + 1, y + 1, x + 1
+
+
 def detect_dog(
     image: np.ndarray, params: SiftParams = SiftParams()
 ) -> tuple[KeypointSet, _Pyramid, np.ndarray]:
@@ -148,20 +172,13 @@ def detect_dog(
     Returns the keypoints in input coordinates, the pyramid, and for each
     keypoint its (octave, layer, x, y) in octave coordinates.
     """
-    import scipy.ndimage as ndi
 
     pyramid = _pyramid(image, params)
     s = params.intervals
     prefilter = 0.5 * params.contrast_threshold / s
     found = []
     for octave, dog in enumerate(pyramid.dogs):
-        peak = ndi.maximum_filter(dog, size=3, mode="nearest")
-        trough = ndi.minimum_filter(dog, size=3, mode="nearest")
-        extreme = ((dog == peak) & (dog > prefilter)) | ((dog == trough) & (dog < -prefilter))
-        extreme[[0, -1]] = False
-        extreme[:, :BORDER] = extreme[:, -BORDER:] = False
-        extreme[:, :, :BORDER] = extreme[:, :, -BORDER:] = False
-        layer, y, x = np.nonzero(extreme)
+        layer, y, x = _extrema(dog, prefilter)
         alive, offset, gradient = _refine(dog, layer, y, x, params)
         layer, y, x, offset, gradient = (
             layer[alive],
@@ -213,7 +230,14 @@ def detect_dog(
 
 
 def _gradients(pyramid: _Pyramid, octave: int, layer: int) -> tuple[np.ndarray, np.ndarray]:
-    image = pyramid.gaussians[octave][layer]
+    """Gradient magnitude and angle of a pyramid level (central differences), computed once."""
+    key = (octave, layer)
+    if key not in pyramid.gradients:
+        pyramid.gradients[key] = _central_gradients(pyramid.gaussians[octave][layer])
+    return pyramid.gradients[key]
+
+
+def _central_gradients(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     dx = np.zeros_like(image)
     dy = np.zeros_like(image)
     dx[:, 1:-1] = image[:, 2:] - image[:, :-2]
@@ -320,26 +344,30 @@ def sift_descriptors(pyramid: _Pyramid, where: np.ndarray, orientation: np.ndarr
             rbin = y_rot + d / 2 - 0.5
             cbin = x_rot + d / 2 - 0.5
             valid = inside & (rbin > -1) & (rbin < d) & (cbin > -1) & (cbin < d)
-            weight = np.exp(-(x_rot**2 + y_rot**2) / (2 * (0.5 * d) ** 2)) * magnitude[ys, xs]
-            obin = np.mod(angle[ys, xs] - theta, 2 * np.pi) * n / (2 * np.pi)
             sel = np.nonzero(valid)
             k = sel[0]
-            rb, cb, ob, wt = rbin[sel], cbin[sel], obin[sel], weight[sel]
+            py, px = np.broadcast_to(ys, valid.shape)[sel], np.broadcast_to(xs, valid.shape)[sel]
+            xr, yr = x_rot[sel], y_rot[sel]
+            wt = np.exp(-(xr * xr + yr * yr) / (2 * (0.5 * d) ** 2)) * magnitude[py, px]
+            ob = np.mod(angle[py, px] - orientation[chunk][k], 2 * np.pi) * (n / (2 * np.pi))
+            rb, cb = rbin[sel], cbin[sel]
             r0, c0, o0 = (
                 np.floor(rb).astype(int),
                 np.floor(cb).astype(int),
                 np.floor(ob).astype(int),
             )
             fr, fc, fo = rb - r0, cb - c0, ob - o0
-            hist = np.zeros(len(chunk) * (d + 2) * (d + 2) * n)
+            size = len(chunk) * (d + 2) * (d + 2) * n
+            base = ((k * (d + 2) + (r0 + 1)) * (d + 2) + (c0 + 1)) * n
+            indices, weights = [], []
             for dr in (0, 1):
                 wr = wt * (fr if dr else 1 - fr)
                 for dc in (0, 1):
                     wrc = wr * (fc if dc else 1 - fc)
                     for do in (0, 1):
-                        wrco = wrc * (fo if do else 1 - fo)
-                        cell = ((k * (d + 2) + (r0 + dr + 1)) * (d + 2) + (c0 + dc + 1)) * n
-                        hist += np.bincount(cell + (o0 + do) % n, wrco, hist.size)
+                        indices.append(base + (dr * (d + 2) + dc) * n + (o0 + do) % n)
+                        weights.append(wrc * (fo if do else 1 - fo))
+            hist = np.bincount(np.concatenate(indices), np.concatenate(weights), size)
             hist = hist.reshape(len(chunk), d + 2, d + 2, n)[:, 1:-1, 1:-1].reshape(len(chunk), -1)
             out[chunk] = hist
     norm = np.linalg.norm(out, axis=1, keepdims=True)

@@ -7,7 +7,7 @@ from typing import Annotated, Any, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import Array, Points2D, PortValueError, node
+from graphvision import Array, Float, Points2D, PortValueError, node
 
 from ._ransac import ransac
 
@@ -18,6 +18,7 @@ __all__ = [
     "fit_line_total",
     "fit_line_weighted",
     "fit_line_weighted_node",
+    "line_distance",
     "line_residuals",
     "refine_line",
     "sample_line_points",
@@ -216,6 +217,25 @@ def fit_line_ransac(
     if result.model is None:
         raise ValueError("all points coincide: no line is defined")
     return RobustLine(result.model, result.inliers)
+
+
+@node("fitting.line_distance", version=1)
+def line_distance(
+    line: Line2D, truth: Line2D, *, extent: Annotated[float, Field(gt=0)] = 100.0
+) -> Float:
+    """How far ``line`` is from ``truth``: the mean distance from ``line`` of 11 points
+    spread over ``extent`` pixels of ``truth``, centred where ``truth`` passes closest
+    to (50, 50), the centre of the sampled square.
+
+    Returns
+    -------
+    distance : float, pixels
+    """
+    normal = truth[:2]
+    foot = np.array([50.0, 50.0]) - (normal @ [50.0, 50.0] + truth[2]) * normal
+    direction = np.array([-normal[1], normal[0]])
+    samples = foot + np.linspace(-extent / 2, extent / 2, 11)[:, None] * direction
+    return float(line_residuals(line, samples).mean())
 
 
 class LineSample(NamedTuple):

@@ -108,7 +108,7 @@ def _random_homography(
 
 
 class RandomWarp(NamedTuple):
-    image: Image
+    image: ImageT
     homography: Homography
 
 
@@ -142,8 +142,8 @@ def random_warp(
 
 
 class TwoViews(NamedTuple):
-    left: Image
-    right: Image
+    left: ImageT
+    right: ImageT
     homography: Homography
 
 
