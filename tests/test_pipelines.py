@@ -43,3 +43,22 @@ def test_document_local_threshold_survives_where_otsu_fails():
     assert out["ink_local"][dim_corner].mean() < 0.35
     assert 0.05 < out["ink_local"][text_block].mean() < 0.35
     assert out["disagreement"][dim_corner].mean() > 0.3
+
+
+def test_homography_pipeline_recovers_the_true_warp():
+    out = gv.run(gv.load_pipeline(PIPELINES / "homography.yaml")).outputs
+    assert out["corner_error"] < 3.0  # the success criterion of the benchmark protocol
+    assert len(out["inliers"]) > 200 and out["inlier_ratio"] > 0.8
+    assert out["matches_drawn"].shape == (512, 1024, 3)
+
+
+def test_panorama_pipeline_stitches_the_two_views():
+    out = gv.run(gv.load_pipeline(PIPELINES / "panorama.yaml")).outputs
+    assert out["corner_error"] < 3.0
+    assert out["panorama"].shape[1] > out["left"].shape[1] + 100
+
+
+def test_line_fit_pipeline_shows_ransac_beating_least_squares():
+    out = gv.run(gv.load_pipeline(PIPELINES / "line_fit.yaml")).outputs
+    assert out["error_ransac"] < 0.5 < 2.0 < out["error_lstsq"]
+    assert out["ransac_inliers"].sum() == pytest.approx(120, abs=10)  # 60% of 200 are inliers

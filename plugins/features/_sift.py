@@ -41,6 +41,7 @@ class _Pyramid:
     gaussians: list[np.ndarray]  # per octave: (intervals + 3, H, W) float32
     dogs: list[np.ndarray]  # per octave: (intervals + 2, H, W) float32
     factor: float  # input pixels per octave-0 pixel (0.5 when upsampled)
+    shift: float  # input coordinate of octave-0 pixel 0 (-0.25 when upsampled)
     params: SiftParams
     gradients: dict = field(default_factory=dict)  # (octave, layer) -> (magnitude, angle)
 
@@ -55,9 +56,11 @@ def _pyramid(image: np.ndarray, params: SiftParams) -> _Pyramid:
     base = image.astype(np.float32)
     assumed = 0.5
     factor = 1.0
+    shift = 0.0
     if params.upsample:
-        base = ndi.zoom(base, 2, order=1)
-        assumed, factor = 1.0, 0.5
+        # pixel centres: up-sampled pixel j sits at input coordinate j / 2 - 1/4
+        base = ndi.zoom(base, 2, order=1, grid_mode=True, mode="nearest")
+        assumed, factor, shift = 1.0, 0.5, -0.25
     base = ndi.gaussian_filter(base, math.sqrt(max(params.sigma**2 - assumed**2, 0.01)))
     s = params.intervals
     octaves = max(1, int(math.log2(min(base.shape))) - 3)
@@ -74,7 +77,7 @@ def _pyramid(image: np.ndarray, params: SiftParams) -> _Pyramid:
         base = stack[s][::2, ::2]
         if min(base.shape) < 2 * BORDER + 4:
             break
-    return _Pyramid(gaussians, dogs, factor, params)
+    return _Pyramid(gaussians, dogs, factor, shift, params)
 
 
 def _refine(dog: np.ndarray, layer: np.ndarray, y: np.ndarray, x: np.ndarray, params: SiftParams):
@@ -221,7 +224,7 @@ def detect_dog(
     octave, layer, ox, oy, response = table.T
     scale_to_input = pyramid.factor * 2.0**octave
     keypoints = KeypointSet(
-        np.column_stack([ox * scale_to_input, oy * scale_to_input]),
+        np.column_stack([ox * scale_to_input, oy * scale_to_input]) + pyramid.shift,
         pyramid.layer_sigma(layer) * scale_to_input,
         np.zeros(len(table)),
         response.astype(np.float64),

@@ -166,6 +166,9 @@ def test_a_colour_image_is_refused_before_running(registry):
 
     graph = gv.Graph("t")
     graph.output("m", graph.add("o", "threshold.otsu", image=graph.input("image", "Image"))["mask"])
-    with pytest.raises(gv.PipelineError, match=r"'image' gives Image but 'o.image' "
-                       r"\(threshold.otsu\) takes GrayImage"):
+    with pytest.raises(
+        gv.PipelineError,
+        match=r"'image' gives Image but 'o.image' "
+        r"\(threshold.otsu\) takes GrayImage",
+    ):
         gv.compile_graph(graph, registry)
