@@ -3,7 +3,7 @@ Hessian and LoG detectors, Lowe's DoG detector with orientation assignment,
 SIFT and normalised-patch descriptors, and drawings of keypoints and matches.
 """
 
-from ._corners import harris, hessian, log_blobs
+from ._corners import harris, harris_response, hessian, log_blobs
 from ._draw import draw_keypoints, draw_matches
 from ._patch import patch_descriptor
 from ._sift import SiftParams, assign_orientations, detect_dog, dog, sift, sift_descriptors
@@ -16,6 +16,7 @@ __all__ = [
     "draw_keypoints",
     "draw_matches",
     "harris",
+    "harris_response",
     "hessian",
     "log_blobs",
     "patch_descriptor",

@@ -46,13 +46,14 @@ def harris_response(image: np.ndarray, sigma_d: float, sigma_i: float, alpha: fl
     r""":math:`R = \det M - \alpha\,\mathrm{tr}^2 M`, M the weighted gradient covariance."""
     import scipy.ndimage as ndi
 
-    data = image.astype(np.float64)
-    ix = ndi.gaussian_filter(data, sigma_d, order=(0, 1))
-    iy = ndi.gaussian_filter(data, sigma_d, order=(1, 0))
-    sxx = ndi.gaussian_filter(ix * ix, sigma_i)
-    syy = ndi.gaussian_filter(iy * iy, sigma_i)
-    sxy = ndi.gaussian_filter(ix * iy, sigma_i)
-    return sxx * syy - sxy * sxy - alpha * (sxx + syy) ** 2
+    data = image.astype(np.float32)
+    ix = ndi.gaussian_filter(data, sigma_d, order=(0, 1), truncate=3.0)
+    iy = ndi.gaussian_filter(data, sigma_d, order=(1, 0), truncate=3.0)
+    sxx = ndi.gaussian_filter(ix * ix, sigma_i, truncate=3.0)
+    syy = ndi.gaussian_filter(iy * iy, sigma_i, truncate=3.0)
+    sxy = ndi.gaussian_filter(ix * iy, sigma_i, truncate=3.0)
+    trace = sxx + syy
+    return (sxx * syy - sxy * sxy - np.float32(alpha) * trace * trace).astype(np.float64)
 
 
 @node("features.harris", version=1)
@@ -73,7 +74,8 @@ def harris(
                             G(\sigma_i) * I_x I_y & G(\sigma_i) * I_y^2 \end{bmatrix},
         \qquad R = \det M - \alpha\, \mathrm{tr}^2 M
 
-    with derivatives of a Gaussian of :math:`\sigma_d`; corners are local
+    with derivatives of a Gaussian of :math:`\sigma_d` (kernels of half size
+    :math:`3\sigma`, float32); corners are local
     maxima of :math:`R` (non-maximum suppression within ``min_distance``)
     above ``threshold_rel`` times the strongest.
 

@@ -71,7 +71,7 @@ def _pyramid(image: np.ndarray, params: SiftParams) -> _Pyramid:
         stack = np.empty((s + 3, *base.shape), np.float32)
         stack[0] = base
         for i, step in enumerate(steps, start=1):
-            ndi.gaussian_filter(stack[i - 1], step, output=stack[i], truncate=4.0)
+            ndi.gaussian_filter(stack[i - 1], step, output=stack[i], truncate=3.0)
         gaussians.append(stack)
         dogs.append(np.diff(stack, axis=0))
         base = stack[s][::2, ::2]
@@ -319,60 +319,32 @@ def assign_orientations(
 
 
 def sift_descriptors(pyramid: _Pyramid, where: np.ndarray, orientation: np.ndarray) -> np.ndarray:
-    r"""128-d SIFT descriptors (Lowe 2004, section 6), vectorised per (octave, layer).
+    r"""128-d SIFT descriptors (Lowe 2004, section 6), one (octave, layer) group at a time.
 
     A grid of 4×4 cells of width :math:`3\sigma` around the keypoint, rotated
     to its orientation; each pixel's gradient, weighted by its magnitude and a
     Gaussian of half the window, votes into 8 orientation bins of the cells
     with trilinear interpolation (over row, column and orientation). The 128
-    values are normalised, clipped at 0.2 and renormalised.
+    values are normalised, clipped at 0.2 and renormalised. The scatter loop
+    is compiled with numba (:mod:`._kernels`).
     """
+    from ._kernels import descriptor_histograms
+
     d, n = DESCRIPTOR_CELLS, DESCRIPTOR_BINS
     out = np.zeros((len(where), d * d * n), np.float32)
     for octave, layer, index in _groups(where):
         magnitude, angle = _gradients(pyramid, octave, layer)
-        for chunk in np.array_split(index, max(1, len(index) // 128)):
-            width = 3.0 * pyramid.layer_sigma(where[chunk, 1])
-            radius = int(np.round(width.max() * math.sqrt(2) * (d + 1) / 2))
-            radius = min(radius, int(math.hypot(*magnitude.shape)))
-            cx, cy = where[chunk, 2], where[chunk, 3]
-            ys, xs, inside = _patches(magnitude.shape, cx, cy, radius)
-            theta = orientation[chunk][:, None, None]
-            cos, sin = np.cos(theta), np.sin(theta)
-            dx = xs - cx[:, None, None]
-            dy = ys - cy[:, None, None]
-            w = width[:, None, None]
-            x_rot = (cos * dx + sin * dy) / w
-            y_rot = (-sin * dx + cos * dy) / w
-            rbin = y_rot + d / 2 - 0.5
-            cbin = x_rot + d / 2 - 0.5
-            valid = inside & (rbin > -1) & (rbin < d) & (cbin > -1) & (cbin < d)
-            sel = np.nonzero(valid)
-            k = sel[0]
-            py, px = np.broadcast_to(ys, valid.shape)[sel], np.broadcast_to(xs, valid.shape)[sel]
-            xr, yr = x_rot[sel], y_rot[sel]
-            wt = np.exp(-(xr * xr + yr * yr) / (2 * (0.5 * d) ** 2)) * magnitude[py, px]
-            ob = np.mod(angle[py, px] - orientation[chunk][k], 2 * np.pi) * (n / (2 * np.pi))
-            rb, cb = rbin[sel], cbin[sel]
-            r0, c0, o0 = (
-                np.floor(rb).astype(int),
-                np.floor(cb).astype(int),
-                np.floor(ob).astype(int),
-            )
-            fr, fc, fo = rb - r0, cb - c0, ob - o0
-            size = len(chunk) * (d + 2) * (d + 2) * n
-            base = ((k * (d + 2) + (r0 + 1)) * (d + 2) + (c0 + 1)) * n
-            indices, weights = [], []
-            for dr in (0, 1):
-                wr = wt * (fr if dr else 1 - fr)
-                for dc in (0, 1):
-                    wrc = wr * (fc if dc else 1 - fc)
-                    for do in (0, 1):
-                        indices.append(base + (dr * (d + 2) + dc) * n + (o0 + do) % n)
-                        weights.append(wrc * (fo if do else 1 - fo))
-            hist = np.bincount(np.concatenate(indices), np.concatenate(weights), size)
-            hist = hist.reshape(len(chunk), d + 2, d + 2, n)[:, 1:-1, 1:-1].reshape(len(chunk), -1)
-            out[chunk] = hist
+        width = 3.0 * pyramid.layer_sigma(where[index, 1])
+        out[index] = descriptor_histograms(
+            magnitude,
+            angle,
+            where[index, 2].copy(),
+            where[index, 3].copy(),
+            width,
+            orientation[index].astype(np.float64),
+            d,
+            n,
+        )
     norm = np.linalg.norm(out, axis=1, keepdims=True)
     out /= np.maximum(norm, 1e-12)
     np.minimum(out, 0.2, out=out)
