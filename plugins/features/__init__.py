@@ -3,6 +3,7 @@ Hessian and LoG detectors, Lowe's DoG detector with orientation assignment,
 SIFT and normalised-patch descriptors, and drawings of keypoints and matches.
 """
 
+from ._affine import affine_adapt
 from ._corners import harris, harris_response, hessian, log_blobs
 from ._draw import draw_keypoints, draw_matches
 from ._patch import patch_descriptor
@@ -10,6 +11,7 @@ from ._sift import SiftParams, assign_orientations, detect_dog, dog, sift, sift_
 
 __all__ = [
     "SiftParams",
+    "affine_adapt",
     "assign_orientations",
     "detect_dog",
     "dog",

@@ -131,3 +131,22 @@ def test_drawings_have_the_expected_shapes(astronaut, astronaut_features):
     both = features.draw_matches(astronaut, astronaut[:200], kp, kp, pairs, pairs.take([0, 1]))
     assert both.shape == (512, 1024, 3)
     assert (both == np.float32(0.95)).any()  # red outliers drawn
+
+
+@pytest.mark.parametrize(("a", "b", "angle"), [(8, 4, 0.0), (8, 4, 0.6), (6, 6, 0.0)])
+def test_affine_adaptation_recovers_an_elliptical_blob(a, b, angle):
+    yy, xx = np.mgrid[:128, :128].astype(float)
+    u = (xx - 64) * np.cos(angle) + (yy - 64) * np.sin(angle)
+    v = -(xx - 64) * np.sin(angle) + (yy - 64) * np.cos(angle)
+    blob = np.exp(-(u**2 / (2 * a * a) + v**2 / (2 * b * b))).astype(np.float32)
+    kp = gv.KeypointSet(
+        np.array([[64.0, 64.0]]), np.array([np.sqrt(a * b)]), np.zeros(1), np.ones(1)
+    )
+    shape = features.affine_adapt(blob, kp).affine[0]
+    left, singular, _ = np.linalg.svd(shape)
+    # the adapted region is the blob's own ellipse: axes ratio a / b, major axis at `angle`
+    assert singular[0] / singular[1] == pytest.approx(a / b, rel=0.05)
+    assert abs(np.linalg.det(shape)) == pytest.approx(1.0)
+    if a != b:
+        turn = np.mod(np.arctan2(left[1, 0], left[0, 0]) - angle, np.pi)
+        assert min(turn, np.pi - turn) < 0.05
