@@ -7,12 +7,21 @@ from ._affine import affine_adapt
 from ._corners import harris, harris_response, hessian, log_blobs
 from ._draw import draw_keypoints, draw_matches
 from ._patch import patch_descriptor
-from ._sift import SiftParams, assign_orientations, detect_dog, dog, sift, sift_descriptors
+from ._sift import (
+    SiftParams,
+    assign_orientations,
+    describe_sift,
+    detect_dog,
+    dog,
+    sift,
+    sift_descriptors,
+)
 
 __all__ = [
     "SiftParams",
     "affine_adapt",
     "assign_orientations",
+    "describe_sift",
     "detect_dog",
     "dog",
     "draw_keypoints",

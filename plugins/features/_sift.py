@@ -16,7 +16,15 @@ from pydantic import Field
 
 from graphvision import Descriptors, GrayImage, Keypoints, KeypointSet, node
 
-__all__ = ["SiftParams", "assign_orientations", "detect_dog", "dog", "sift", "sift_descriptors"]
+__all__ = [
+    "SiftParams",
+    "assign_orientations",
+    "describe_sift",
+    "detect_dog",
+    "dog",
+    "sift",
+    "sift_descriptors",
+]
 
 BORDER = 5
 ORIENTATION_BINS = 36
@@ -433,3 +441,40 @@ def dog(
     params = SiftParams(intervals, sigma, contrast_threshold, edge_ratio, upsample)
     keypoints, pyramid, where = detect_dog(image, params)
     return assign_orientations(pyramid, where, keypoints)[0]
+
+
+def _locate(pyramid: _Pyramid, keypoints: KeypointSet) -> np.ndarray:
+    """(octave, layer, x, y) in pyramid coordinates of keypoints given in input coordinates."""
+    s = pyramid.params.intervals
+    total = s * np.log2(np.maximum(keypoints.scale, 1e-6) / (pyramid.params.sigma * pyramid.factor))
+    octave = np.clip(np.floor(total / s), 0, len(pyramid.gaussians) - 1)
+    layer = np.clip(total - octave * s, 0, s + 2)
+    step = pyramid.factor * 2.0**octave
+    xy = (keypoints.xy - pyramid.shift) / step[:, None]
+    return np.column_stack([octave, layer, xy])
+
+
+@node("features.describe_sift", version=1)
+def describe_sift(
+    image: GrayImage,
+    keypoints: Keypoints,
+    *,
+    intervals: Annotated[int, Field(ge=1, le=8)] = 3,
+    sigma: Annotated[float, Field(gt=0)] = 1.6,
+    upsample: bool = True,
+) -> Descriptors:
+    """SIFT descriptors of given keypoints (any detector), at their scales and orientations.
+
+    Each keypoint is described in the Gaussian pyramid level nearest its
+    scale, exactly as ``features.sift`` describes its own keypoints, so
+    ``describe_sift(image, sift(image).keypoints)`` reproduces its descriptors.
+
+    Returns
+    -------
+    descriptors : (N, 128) float32
+    """
+    params = SiftParams(intervals, sigma, upsample=upsample)
+    if len(keypoints) == 0:
+        return np.zeros((0, DESCRIPTOR_CELLS * DESCRIPTOR_CELLS * DESCRIPTOR_BINS), np.float32)
+    pyramid = _pyramid(image, params)
+    return sift_descriptors(pyramid, _locate(pyramid, keypoints), keypoints.orientation)

@@ -150,3 +150,12 @@ def test_affine_adaptation_recovers_an_elliptical_blob(a, b, angle):
     if a != b:
         turn = np.mod(np.arctan2(left[1, 0], left[0, 0]) - angle, np.pi)
         assert min(turn, np.pi - turn) < 0.05
+
+
+def test_describe_sift_reproduces_sift_and_describes_other_detectors(astronaut, astronaut_features):
+    again = features.describe_sift(astronaut, astronaut_features.keypoints)
+    same = np.abs(again - astronaut_features.descriptors).max(axis=1) < 1e-4
+    # keypoints whose scale lies between two levels may be described in the other one
+    assert same.mean() > 0.85
+    corners = features.harris(astronaut, max_keypoints=100)
+    assert features.describe_sift(astronaut, corners).shape == (100, 128)
