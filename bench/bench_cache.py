@@ -1,6 +1,6 @@
 """Cache figures: warm against cold runs of the demo pipeline, and input hashing speed.
 
-* Cold: a new process runs ``pipelines/denoise.yaml`` with an empty disk
+* Cold: a new process runs ``pipelines/homography.yaml`` with an empty disk
   cache. Warm: another new process runs it again on the same cache (every
   output is read from disk, no intermediate). Both as the CLI runs them,
   process start-up included, and as the run record times the run alone.
@@ -25,7 +25,7 @@ import graphvision as gv
 from graphvision._cache import content_key
 
 ROOT = Path(__file__).parent.parent
-DEMO = ROOT / "pipelines" / "denoise.yaml"
+DEMO = ROOT / "pipelines" / "homography.yaml"  # what make demo runs
 
 
 def cli_run(cache: Path, out: Path) -> tuple[float, float]:

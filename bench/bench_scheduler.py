@@ -79,13 +79,13 @@ def main() -> list[str]:
         began = time.perf_counter()
         compiled = gv.compile_graph(builder(n), registry)
         build = (time.perf_counter() - began) / n
-        threads = best_of(3, lambda c=compiled: gv.run(c, registry, executor="threads")) / n
-        sync = best_of(3, lambda c=compiled: gv.run(c, registry, executor="sync")) / n
+        threads = best_of(7, lambda c=compiled: gv.run(c, registry, executor="threads")) / n
+        sync = best_of(7, lambda c=compiled: gv.run(c, registry, executor="sync")) / n
         result = gv.run(compiled, registry, executor="sync").outputs
         expected = float(n) if name == "chain" else 1.0
         assert next(iter(result.values())) == expected
         tasks = dask_builder(n)
-        dask_time = best_of(3, lambda t=tasks: dask.compute(t, scheduler="threads")) / n
+        dask_time = best_of(7, lambda t=tasks: dask.compute(t, scheduler="threads")) / n
         rows.append(
             f"| {name} | {n} | {threads * 1e6:.1f} | {sync * 1e6:.1f} | "
             f"{dask_time * 1e6:.1f} | {dask_time / threads:.1f}× | {build * 1e6:.1f} |"
