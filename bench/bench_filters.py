@@ -10,24 +10,13 @@ Run: ``python bench/bench_filters.py`` (OpenCV from the ``bench`` extra).
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import scipy.ndimage as ndi
 import skimage.data
 import skimage.filters
+from timing import best
 
 from graphvision_plugins import filters
-
-
-def best(func, repeats: int = 5) -> float:
-    func()
-    times = []
-    for _ in range(repeats):
-        began = time.perf_counter()
-        func()
-        times.append(time.perf_counter() - began)
-    return min(times)
 
 
 def cases(image: np.ndarray, cv2):

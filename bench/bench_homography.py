@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import skimage.data
+from timing import best
 
 from graphvision_plugins import features, geometry, matching
 
@@ -139,10 +140,6 @@ def harris_rows(cv2) -> list[str]:
     import skimage.feature
 
     camera = (skimage.data.camera() / 255).astype(np.float32)
-
-    def best(func, repeats=5):
-        func()
-        return min(timed(func)[1] for _ in range(repeats))
 
     own = best(lambda: features.harris(camera))
     response = best(lambda: features.harris_response(camera, 1.0, 2.0, 0.04))

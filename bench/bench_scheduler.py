@@ -13,6 +13,8 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from timing import best
+
 import graphvision as gv
 
 HERE = Path(__file__).parent
@@ -37,15 +39,6 @@ def fan_graph(n: int) -> gv.Graph:
     for i in range(n):
         graph.output(f"o{i}", graph.add(f"n{i}", "bench.inc", x=x))
     return graph
-
-
-def best_of(repeats: int, func) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        began = time.perf_counter()
-        func()
-        best = min(best, time.perf_counter() - began)
-    return best
 
 
 def dask_chain(n: int):
@@ -79,13 +72,13 @@ def main() -> list[str]:
         began = time.perf_counter()
         compiled = gv.compile_graph(builder(n), registry)
         build = (time.perf_counter() - began) / n
-        threads = best_of(7, lambda c=compiled: gv.run(c, registry, executor="threads")) / n
-        sync = best_of(7, lambda c=compiled: gv.run(c, registry, executor="sync")) / n
+        threads = best(lambda c=compiled: gv.run(c, registry, executor="threads"), 7) / n
+        sync = best(lambda c=compiled: gv.run(c, registry, executor="sync"), 7) / n
         result = gv.run(compiled, registry, executor="sync").outputs
         expected = float(n) if name == "chain" else 1.0
         assert next(iter(result.values())) == expected
         tasks = dask_builder(n)
-        dask_time = best_of(7, lambda t=tasks: dask.compute(t, scheduler="threads")) / n
+        dask_time = best(lambda t=tasks: dask.compute(t, scheduler="threads"), 7) / n
         rows.append(
             f"| {name} | {n} | {threads * 1e6:.1f} | {sync * 1e6:.1f} | "
             f"{dask_time * 1e6:.1f} | {dask_time / threads:.1f}× | {build * 1e6:.1f} |"

@@ -13,7 +13,6 @@ Run: ``python bench/bench_segmentation.py``.
 
 from __future__ import annotations
 
-import time
 import warnings
 
 import numpy as np
@@ -22,18 +21,9 @@ import skimage.data
 import skimage.filters
 import skimage.measure
 import skimage.morphology
+from timing import best
 
 from graphvision_plugins import morphology, regions, threshold
-
-
-def best(func, repeats: int = 5) -> float:
-    func()
-    times = []
-    for _ in range(repeats):
-        began = time.perf_counter()
-        func()
-        times.append(time.perf_counter() - began)
-    return min(times)
 
 
 def otsu_rows(cv2) -> list[str]:

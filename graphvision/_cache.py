@@ -54,6 +54,7 @@ __all__ = [
     "Store",
     "content_key",
     "default_cache_dir",
+    "node_fingerprint",
     "output_key",
 ]
 
@@ -94,20 +95,19 @@ def content_key(port_type: type[PortType], value: Any) -> str:
     return "i" + hasher.hexdigest()
 
 
-def output_key(
-    op: str,
-    version: int,
-    source_hash: str,
-    params: dict[str, Any],
-    input_keys: dict[str, str],
-    port: str,
-) -> str:
-    """Key of one node output, from everything that determines it (not from values)."""
-    text = json.dumps(
-        [op, version, source_hash, params, sorted(input_keys.items()), port],
-        sort_keys=True,
-        separators=(",", ":"),
-    )
+def node_fingerprint(op: str, version: int, source_hash: str, params: dict[str, Any]) -> str:
+    """Canonical text of what a node is: id, version, code fingerprint, parameters."""
+    return json.dumps([op, version, source_hash, params], sort_keys=True, separators=(",", ":"))
+
+
+def output_key(fingerprint: str, input_keys: dict[str, str], port: str) -> str:
+    """Key of one node output, from everything that determines it (not from values).
+
+    ``fingerprint`` comes from :func:`node_fingerprint`; input keys are taken
+    in port order, so the key does not depend on how the graph was written.
+    """
+    inputs = "|".join(f"{name}={key}" for name, key in sorted(input_keys.items()))
+    text = f"{fingerprint}\n{inputs}\n{port}"
     return hashlib.blake2b(text.encode(), digest_size=20).hexdigest()
 
 

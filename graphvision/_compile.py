@@ -16,10 +16,12 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import pydantic
 
+from ._cache import node_fingerprint
 from ._errors import PipelineError, Problem, UnknownNameError
 from ._graph import Graph, Ref
 from ._node import NodeSpec
@@ -45,6 +47,12 @@ class Step:
     params: dict[str, Any]
     inputs: dict[str, tuple[str, str]]
     outputs: dict[str, type[PortType]]
+
+    @cached_property
+    def fingerprint(self) -> str:
+        """What the node is (id, version, code, parameters), for its cache keys."""
+        spec = self.spec
+        return node_fingerprint(spec.id, spec.version, spec.source_hash, self.params)
 
 
 @dataclass(frozen=True)

@@ -217,11 +217,8 @@ class _Run:
         for name in names:
             step = self.compiled.steps[name]
             inputs = {port: self.keys[source] for port, source in step.inputs.items()}
-            spec = step.spec
-            for port in spec.outputs:
-                self.keys[(name, port)] = output_key(
-                    spec.id, spec.version, spec.source_hash, step.params, inputs, port
-                )
+            for port in step.outputs:
+                self.keys[(name, port)] = output_key(step.fingerprint, inputs, port)
 
     def plan(self, wanted: Iterable[tuple[str, str]]) -> list[str]:
         """Load what the cache has, from the outputs backwards; return the steps to compute."""

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-from graphvision._cache import Encoded, content_key, output_key
+from graphvision._cache import Encoded, content_key, node_fingerprint, output_key
 
 
 def entry(values):
@@ -143,11 +143,22 @@ def test_keys_depend_on_dtype_shape_and_bytes():
     }
     assert len(keys) == 4
     assert content_key(gv.Array, a) == content_key(gv.Array, a.copy())
-    base = output_key("f.g", 1, "h", {"s": 1.0}, {"image": "k"}, "out")
-    assert base != output_key("f.g", 2, "h", {"s": 1.0}, {"image": "k"}, "out")
-    assert base != output_key("f.g", 1, "h2", {"s": 1.0}, {"image": "k"}, "out")
-    assert base != output_key("f.g", 1, "h", {"s": 2.0}, {"image": "k"}, "out")
-    assert base != output_key("f.g", 1, "h", {"s": 1.0}, {"image": "k2"}, "out")
+
+    def key(op="f.g", version=1, code="h", params=None, inputs=None, port="out"):
+        fingerprint = node_fingerprint(op, version, code, params or {"s": 1.0, "t": [1, 2]})
+        return output_key(fingerprint, inputs or {"image": "k", "mask": "m"}, port)
+
+    base = key()
+    assert base == key(params={"t": [1, 2], "s": 1.0}, inputs={"mask": "m", "image": "k"})
+    changed = [
+        key(op="f.h"),
+        key(version=2),
+        key(code="h2"),
+        key(params={"s": 2.0}),
+        key(inputs={"image": "k2", "mask": "m"}),
+        key(port="other"),
+    ]
+    assert len({base, *changed}) == 7
 
 
 def test_two_processes_share_one_cache_directory(tmp_path):
