@@ -66,6 +66,8 @@ def read_file(path: str) -> np.ndarray:
         unsupported shape or dtype.
     """
     file = Path(path)
+    if file.is_dir():
+        raise IsADirectoryError(f"{file} is a folder, not an image file")
     if not file.is_file():
         raise FileNotFoundError(f"no such file: {file}")
     if file.suffix.lower() == ".npy":
