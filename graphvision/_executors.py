@@ -22,7 +22,7 @@ import os
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
-from typing import Any, Literal, Protocol
+from typing import Any, Protocol
 
 from ._node import FunctionRef
 from ._ports import PortType
@@ -36,7 +36,6 @@ __all__ = [
     "make_executor",
 ]
 
-ExecutorName = Literal["sync", "threads", "processes"]
 EXECUTORS: tuple[str, ...] = ("sync", "threads", "processes")
 
 

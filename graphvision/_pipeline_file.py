@@ -13,6 +13,7 @@ loader checks.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any, Literal
 
@@ -116,7 +117,7 @@ def _positions(root: yaml.Node, problems: list[Problem], file: str) -> dict[str,
 
 
 def _model_problems(
-    error: pydantic.ValidationError, lines: dict[str, int], file: str, data: Any
+    error: pydantic.ValidationError, lines: dict[str, int], file: str
 ) -> list[Problem]:
     problems = []
     for item in error.errors():
@@ -186,11 +187,11 @@ def parse_pipeline(text: str, file: str = "<string>") -> Graph:
     try:
         model = PipelineModel.model_validate(data)
     except pydantic.ValidationError as error:
-        problems += _model_problems(error, lines, file, data)
+        problems += _model_problems(error, lines, file)
         raise PipelineError(problems, file) from None
     for section in ("nodes", "inputs"):
         for name in getattr(model, section):
-            if not isinstance(name, str) or not pydantic_name_ok(name):
+            if not isinstance(name, str) or not re.match(NAME_PATTERN, name):
                 problems.append(
                     Problem(
                         lines.get(f"{section}.{name}", 0),
@@ -202,12 +203,6 @@ def parse_pipeline(text: str, file: str = "<string>") -> Graph:
     if problems:
         raise PipelineError(problems, file)
     return _graph_from_model(model, file, lines)
-
-
-def pydantic_name_ok(name: str) -> bool:
-    import re
-
-    return re.match(NAME_PATTERN, name) is not None
 
 
 def _graph_from_model(model: PipelineModel, file: str, lines: dict[str, int]) -> Graph:
