@@ -4,6 +4,7 @@
 
     graphvision run PIPELINE [--input NAME=VALUE]... [--set NODE.PARAM=VALUE]...
                              [--output-dir DIR] [--output NAME]... [--executor KIND]
+                             [--batch NAME=GLOB]
                              [--no-cache | --cache-dir DIR] [--keep-going] [--record]
     graphvision validate PIPELINE...
     graphvision nodes [--json]
@@ -19,6 +20,8 @@ mistakes print a message, not a traceback (``--debug`` shows it).
 from __future__ import annotations
 
 import argparse
+import csv
+import glob
 import json
 import sys
 import time
@@ -32,13 +35,13 @@ import yaml
 
 from ._cache import Cache, DiskStore, MemoryStore, default_cache_dir
 from ._compile import compile_graph
-from ._errors import GraphvisionError, PipelineError, RunError
-from ._executors import EXECUTORS
+from ._errors import GraphvisionError, InputError, PipelineError, RunError
+from ._executors import EXECUTORS, make_executor
 from ._pipeline_file import load_pipeline, pipeline_json_schema
 from ._plugins import discover
 from ._registry import Registry
 from ._report import write_outputs, write_report
-from ._run import RunHooks, run
+from ._run import RunHooks, RunResult, run
 
 __all__ = ["main"]
 
@@ -98,45 +101,131 @@ def _cache(args: argparse.Namespace) -> Cache | None:
     return Cache(MemoryStore(), disk)
 
 
-def cmd_run(args: argparse.Namespace) -> int:
-    graph = load_pipeline(args.pipeline)
-    registry = _registry(args, graph.plugins)
-    overrides: dict[str, Any] = {k: yaml.safe_load(v) for k, v in _pairs(args.set, "--set").items()}
-    inputs = _pairs(args.input, "--input")
-    out_dir = Path(args.output_dir) if args.output_dir else None
-    hooks = [Progress()] if args.progress or (args.progress is None and sys.stderr.isatty()) else []
-    status = EXIT_OK
+def _run_once(
+    graph: Any, registry: Registry, inputs: dict[str, Any], args: argparse.Namespace, **options: Any
+) -> tuple[int, RunResult]:
+    """One run; a failed run still returns what it produced (exit status 1)."""
     try:
-        result = run(
+        return EXIT_OK, run(
             graph,
             registry,
             inputs=inputs,
             outputs=args.output or None,
-            overrides=overrides,
-            executor=args.executor,
-            workers=args.workers,
-            cache=_cache(args),
             keep_going=args.keep_going,
-            hooks=hooks,
+            **options,
         )
     except RunError as error:
-        result = error.result  # type: ignore[attr-defined]
         print(f"error: run failed\n{error}", file=sys.stderr)
         if args.debug:
             for failure in error.failures.values():
                 traceback.print_exception(failure.__cause__ or failure, file=sys.stderr)
-        status = EXIT_FAILED
-    outputs, record, compiled = result.outputs, result.record, result.compiled
+        return EXIT_FAILED, error.result  # type: ignore[attr-defined]
+
+
+def _write(result: RunResult, out_dir: Path) -> dict[str, list[str]]:
+    files = write_outputs(result.compiled, result.outputs, out_dir)
+    write_report(result.compiled, result.outputs, files, result.record, out_dir)
+    return files
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    graph = load_pipeline(args.pipeline)
+    registry = _registry(args, graph.plugins)
+    overrides: dict[str, Any] = {k: yaml.safe_load(v) for k, v in _pairs(args.set, "--set").items()}
+    inputs: dict[str, Any] = dict(_pairs(args.input, "--input"))
+    out_dir = Path(args.output_dir) if args.output_dir else None
+    progress = args.progress or (args.progress is None and sys.stderr.isatty())
+    options = {
+        "overrides": overrides,
+        "workers": args.workers,
+        "cache": _cache(args),
+        "hooks": [Progress()] if progress and not args.batch else [],
+    }
+    if args.batch:
+        return _batch(graph, registry, inputs, args, options)
+    status, result = _run_once(graph, registry, inputs, args, executor=args.executor, **options)
     if out_dir is not None:
-        files = write_outputs(compiled, outputs, out_dir)
-        report = write_report(compiled, outputs, files, record, out_dir)
-        print(f"wrote {len(files)} output(s), record.json and {report}", file=sys.stderr)
+        files = _write(result, out_dir)
+        print(
+            f"wrote {len(files)} output(s), record.json and {out_dir / 'report.md'}",
+            file=sys.stderr,
+        )
     else:
-        for name, summary in record.outputs.items():
+        for name, summary in result.record.outputs.items():
             print(f"{name}: {summary}")
     if args.record:
-        print(record.table())
+        print(result.record.table())
     return status
+
+
+def _batch(
+    graph: Any,
+    registry: Registry,
+    inputs: dict[str, Any],
+    args: argparse.Namespace,
+    options: dict[str, Any],
+) -> int:
+    """Map the pipeline over every file a glob matches, one output folder per file.
+
+    Items run one after another on one shared executor and cache; a bad file
+    or a failed run is reported and the batch goes on. ``batch.csv`` lists
+    every item with its status, time and scalar outputs.
+    """
+    name, pattern = next(iter(_pairs(args.batch, "--batch").items()))
+    if len(args.batch) > 1:
+        raise UsageError("--batch maps one input; give it once")
+    if not args.output_dir:
+        raise UsageError("--batch needs --output-dir (one folder per input file)")
+    files = sorted(Path(p) for p in glob.glob(pattern))
+    if not files:
+        raise UsageError(f"--batch {name}={pattern}: no file matches")
+    out_dir = Path(args.output_dir)
+    stems = [
+        f.stem if [g.stem for g in files].count(f.stem) == 1 else f"{f.stem}_{f.suffix[1:]}"
+        for f in files
+    ]
+    rows, failed = [], 0
+    executor = make_executor(args.executor, args.workers)
+    try:
+        for number, (path, stem) in enumerate(zip(files, stems, strict=True), start=1):
+            began = time.perf_counter()
+            try:
+                status, result = _run_once(
+                    graph, registry, {**inputs, name: str(path)}, args, executor=executor, **options
+                )
+            except InputError as error:
+                print(f"error: {error}", file=sys.stderr)
+                status, result = EXIT_USAGE, None
+            seconds = time.perf_counter() - began
+            row: dict[str, Any] = {
+                "file": str(path),
+                "status": "ok" if status == EXIT_OK else "failed",
+                "seconds": round(seconds, 4),
+            }
+            if result is not None:
+                _write(result, out_dir / stem)
+                for key, value in result.outputs.items():
+                    if isinstance(value, (int, float, str, bool)):
+                        row[key] = value
+            failed += status != EXIT_OK
+            rows.append(row)
+            print(
+                f"  [{number}/{len(files)}] {path}: {row['status']} ({seconds:.2f} s)",
+                file=sys.stderr,
+            )
+    finally:
+        executor.shutdown()
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with (out_dir / "batch.csv").open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns)
+        writer.writeheader()
+        writer.writerows(rows)
+    print(
+        f"{len(files) - failed} of {len(files)} succeeded; summary in {out_dir / 'batch.csv'}",
+        file=sys.stderr,
+    )
+    return EXIT_FAILED if failed else EXIT_OK
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
@@ -313,6 +402,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="produce only this output (repeatable); only what it needs runs",
     )
     p.add_argument("--output-dir", "-d", metavar="DIR", help="write outputs, record and report")
+    p.add_argument(
+        "--batch",
+        action="append",
+        default=[],
+        metavar="NAME=GLOB",
+        help="run once per file matching GLOB (given to input NAME); needs -d",
+    )
     p.add_argument("--executor", choices=EXECUTORS, default="threads")
     p.add_argument("--workers", type=int, default=None)
     p.add_argument("--no-cache", action="store_true", help="neither read nor write the disk cache")

@@ -202,3 +202,41 @@ def test_unwritable_cache_dir_warns_and_the_run_goes_on(capsys, tmp_path):
     )
     assert status == 0
     assert "warning: cache directory" in err and "running without the disk cache" in err
+
+
+def test_batch_runs_each_file_and_keeps_going(capsys, tmp_path):
+    import csv
+
+    import imageio.v3 as iio
+
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    iio.imwrite(photos / "a.png", np.full((20, 30), 128, np.uint8))
+    iio.imwrite(photos / "b.png", np.full((25, 20), 64, np.uint8))
+    (photos / "c.png").write_text("not an image")
+    out = tmp_path / "out"
+    status, _, err = cli(
+        capsys,
+        "run",
+        DEMO,
+        "--no-cache",
+        "--batch",
+        f"image={photos}/*.png",
+        "-d",
+        out,
+        "-o",
+        "psnr_noisy_gaussian",
+    )
+    assert status == 1  # one file failed, the others finished
+    rows = list(csv.DictReader((out / "batch.csv").open()))
+    assert [r["status"] for r in rows] == ["ok", "ok", "failed"]
+    assert float(rows[0]["psnr_noisy_gaussian"]) > 15
+    assert (out / "a" / "psnr_noisy_gaussian.json").exists() and (out / "b" / "report.md").exists()
+    assert "c.png is not a readable image" in err and "2 of 3 succeeded" in err
+
+
+def test_batch_usage_errors(capsys, tmp_path):
+    status, _, err = cli(capsys, "run", DEMO, "--batch", f"image={tmp_path}/*.png", "-d", tmp_path)
+    assert status == 2 and "no file matches" in err
+    status, _, err = cli(capsys, "run", DEMO, "--batch", f"image={tmp_path}/*.png")
+    assert status == 2 and "--batch needs --output-dir" in err
