@@ -66,9 +66,16 @@ def test_line_fit_pipeline_shows_ransac_beating_least_squares():
 
 def test_homography_of_identical_images_is_the_identity():
     graph = gv.load_pipeline(PIPELINES / "homography.yaml")
-    result = gv.run(graph, overrides={"warp.max_rotation": 0, "warp.min_scale": 1.0,
-                                      "warp.max_scale": 1.0, "warp.perspective": 0},
-                    outputs=["homography", "corner_error"])
+    result = gv.run(
+        graph,
+        overrides={
+            "warp.max_rotation": 0,
+            "warp.min_scale": 1.0,
+            "warp.max_scale": 1.0,
+            "warp.perspective": 0,
+        },
+        outputs=["homography", "corner_error"],
+    )
     np.testing.assert_allclose(result.outputs["homography"], np.eye(3), atol=1e-3)
     assert result.outputs["corner_error"] < 0.1
 
@@ -76,8 +83,13 @@ def test_homography_of_identical_images_is_the_identity():
 def test_a_featureless_image_fails_in_the_named_node():
     flat = np.full((128, 128, 3), 0.5, np.float32)
     with pytest.raises(gv.RunError) as info:
-        gv.run(gv.load_pipeline(PIPELINES / "homography.yaml"), inputs={"image": flat},
-               outputs=["homography"])
+        gv.run(
+            gv.load_pipeline(PIPELINES / "homography.yaml"),
+            inputs={"image": flat},
+            outputs=["homography"],
+        )
     assert list(info.value.failures) == ["fit"]
-    assert ("node 'fit' (op geometry.homography_ransac) failed: ValueError: need at least 4 "
-            "matches to estimate a homography, got 0") in str(info.value)
+    assert (
+        "node 'fit' (op geometry.homography_ransac) failed: ValueError: need at least 4 "
+        "matches to estimate a homography, got 0"
+    ) in str(info.value)
