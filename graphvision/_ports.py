@@ -114,6 +114,8 @@ class PortType:
             return [path]
         path = stem.with_suffix(".npz")
         np.savez(path, **arrays)
+        if not meta:
+            return [path]
         meta_path = stem.with_suffix(".json")
         meta_path.write_text(json.dumps(meta, indent=2))
         return [path, meta_path]

@@ -11,6 +11,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ._compile import CompiledGraph
 from ._ports import _Scalar
 from ._run import RunRecord
@@ -49,9 +51,13 @@ def write_report(
             lines.append(f"| {name} | not produced | |")
             continue
         kind = compiled.output_type(name)
-        shown = (
-            json.dumps(outputs[name]) if issubclass(kind, _Scalar) else kind.summary(outputs[name])
-        )
+        value = outputs[name]
+        if issubclass(kind, _Scalar):
+            shown = json.dumps(value)
+        elif isinstance(value, np.ndarray) and value.size <= 16:  # e.g. a homography
+            shown = f"{kind.summary(value)}: `{json.dumps(np.round(value, 6).tolist())}`"
+        else:
+            shown = kind.summary(value)
         links = ", ".join(f"[{f}]({f})" for f in files.get(name, []))
         lines.append(f"| {name} | {shown} | {links} |")
     images = [f for fs in files.values() for f in fs if f.endswith(".png")]
