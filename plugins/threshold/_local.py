@@ -28,7 +28,8 @@ def window_mean_std(image: np.ndarray, window: int) -> tuple[np.ndarray, np.ndar
     :math:`I_2` of :math:`f^2` (image mirrored at the border), each window
     sum is four look-ups: :math:`S = I(y_1, x_1) - I(y_0, x_1) - I(y_1, x_0)
     + I(y_0, x_0)`, so the cost per pixel does not depend on the window.
-    :math:`\sigma^2 = S_2 / n - (S / n)^2`.
+    :math:`\sigma^2 = S_2 / n - (S / n)^2`. The two integral images and the
+    look-ups run in one loop compiled with numba.
 
     References
     ----------
@@ -36,25 +37,11 @@ def window_mean_std(image: np.ndarray, window: int) -> tuple[np.ndarray, np.ndar
        local adaptive thresholding techniques using integral images",
        Document Recognition and Retrieval XV, SPIE 6815, 2008.
     """
+    from ._kernels import integral_mean_std
+
     half = window // 2
-    rows, cols = image.shape
-    padded = np.pad(image, half, mode="symmetric").astype(np.float64)
-    area = float(window * window)
-    stats = []
-    for values in (padded, np.square(padded)):
-        integral = np.zeros((values.shape[0] + 1, values.shape[1] + 1))
-        np.cumsum(values, axis=0, out=integral[1:, 1:])
-        np.cumsum(integral[1:, 1:], axis=1, out=integral[1:, 1:])
-        window_sum = integral[window : window + rows, window : window + cols].copy()
-        window_sum -= integral[:rows, window : window + cols]
-        window_sum -= integral[window : window + rows, :cols]
-        window_sum += integral[:rows, :cols]
-        window_sum /= area
-        stats.append(window_sum)
-    mean, variance = stats
-    variance -= mean * mean
-    np.maximum(variance, 0.0, out=variance)
-    return mean, np.sqrt(variance, out=variance)
+    padded = np.pad(image, half, mode="symmetric")
+    return integral_mean_std(padded, window, image.shape[0], image.shape[1])
 
 
 @node("threshold.local", version=1)
