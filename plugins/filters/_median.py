@@ -29,8 +29,32 @@ def _odd(size: int) -> int:
 OddSize = Annotated[int, Field(ge=1, le=31), AfterValidator(_odd)]
 
 
+def _median_of_three(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    return np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c))
+
+
+def _median_3x3(padded: np.ndarray, out: np.ndarray) -> None:
+    """Exact 3×3 median from sorted column triples (Paeth's network), shared by neighbours.
+
+    With each column of three sorted into (low, mid, high), the median of the
+    nine is the median of (largest low, median of mids, smallest high).
+    """
+    top, centre, bottom = padded[:-2], padded[1:-1], padded[2:]
+    low = np.minimum(np.minimum(top, centre), bottom)
+    high = np.maximum(np.maximum(top, centre), bottom)
+    mid = _median_of_three(top, centre, bottom)
+    cols = out.shape[1]
+    lows = np.maximum(np.maximum(low[:, :cols], low[:, 1 : cols + 1]), low[:, 2:])
+    highs = np.minimum(np.minimum(high[:, :cols], high[:, 1 : cols + 1]), high[:, 2:])
+    mids = _median_of_three(mid[:, :cols], mid[:, 1 : cols + 1], mid[:, 2:])
+    out[:] = _median_of_three(lows, mids, highs)
+
+
 def _median_2d(padded: np.ndarray, size: int, out: np.ndarray) -> None:
     """Median of every ``size × size`` window of ``padded`` into ``out`` (row chunks)."""
+    if size == 3:
+        _median_3x3(padded, out)
+        return
     rows, cols = out.shape
     count = size * size
     chunk = max(1, _CHUNK_BYTES // (count * cols * 4))
@@ -50,9 +74,11 @@ def median(image: ImageT, *, size: OddSize = 3, boundary: Boundary = "mirror") -
 
     A nonlinear filter: it adds no new gray levels and discards outliers, so
     it removes impulse and salt-and-pepper noise that a Gaussian only smears.
-    The :math:`k^2` shifted copies of each row block are stacked and
-    partitioned at the middle element (``numpy.partition``, introselect, O(k²)
-    per pixel), in blocks of about 32 MiB. Colour images are filtered per
+    A 3×3 window uses the exact min/max network on sorted column triples
+    (about 15 element-wise operations per pixel in all). For larger windows
+    the :math:`k^2` shifted copies of each row block are stacked and
+    partitioned at the middle element (``numpy.partition``, introselect,
+    O(k²) per pixel), in blocks of about 32 MiB. Colour images are filtered per
     channel.
 
     Parameters
