@@ -146,6 +146,8 @@ class Array(PortType):
     ndims: ClassVar[tuple[int, ...]] = ()
     dtypes: ClassVar[tuple[type, ...]] = ()
     expected: ClassVar[str] = "a numeric numpy array"
+    # Array itself and sets of things (points, descriptors) may be empty; images may not
+    allow_empty: ClassVar[bool] = False
 
     @classmethod
     def validate(cls, value: Any) -> np.ndarray:
@@ -155,7 +157,7 @@ class Array(PortType):
             raise _fail(cls, cls.expected, value)
         if cls.dtypes and value.dtype.type not in cls.dtypes:
             raise _fail(cls, cls.expected, value)
-        if value.size == 0 and cls is not Array:
+        if value.size == 0 and cls is not Array and not cls.allow_empty:
             raise PortValueError(f"expected {cls.type_name()}, got an empty array {value.shape}")
         return value
 
@@ -413,19 +415,16 @@ class Points2D(Array):
     ndims = (2,)
     dtypes = (np.float64,)
     expected = "float64 N×2 (x, y)"
+    allow_empty = True
 
     @classmethod
     def validate(cls, value: Any) -> np.ndarray:
-        if (
-            isinstance(value, np.ndarray)
-            and value.ndim == 2
-            and value.shape[1] == 2
-            and (value.dtype == np.float64)
-        ):
-            if not np.isfinite(value).all():
-                raise PortValueError("expected Points2D with finite coordinates, got NaN or inf")
-            return value
-        raise _fail(cls, cls.expected, value)
+        value = super().validate(value)
+        if value.shape[1] != 2:
+            raise _fail(cls, cls.expected, value)
+        if not np.isfinite(value).all():
+            raise PortValueError("expected Points2D with finite coordinates, got NaN or inf")
+        return value
 
 
 class Descriptors(Array):
@@ -434,12 +433,7 @@ class Descriptors(Array):
     ndims = (2,)
     dtypes = (np.float32,)
     expected = "float32 N×D"
-
-    @classmethod
-    def validate(cls, value: Any) -> np.ndarray:
-        if isinstance(value, np.ndarray) and value.ndim == 2 and value.dtype == np.float32:
-            return value
-        raise _fail(cls, cls.expected, value)
+    allow_empty = True
 
 
 class Homography(Array):

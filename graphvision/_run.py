@@ -151,8 +151,6 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
                 value = yaml.safe_load(value)
             else:
                 value = registry.source("file").func(value)
-        except UnknownNameError as error:
-            raise InputError(f"input '{name}': cannot load '{value}': {error}") from None
         except Exception as error:
             raise InputError(f"input '{name}': cannot load '{value}': {error}") from error
     try:
