@@ -3,20 +3,22 @@
 ::
 
     @node("filters.gaussian", version=1)
-    def gaussian(image: Image, *, sigma: Annotated[float, Field(gt=0)] = 1.0) -> Image:
+    def gaussian(image: ImageT, *, sigma: Annotated[float, Field(gt=0)] = 1.0) -> ImageT:
         '''NumPy-style docstring: the node's documentation.'''
 
-* positional parameters are **input ports**, annotated with a port type
-  (``Optional[T] = None`` makes the port optional);
+* positional parameters are **input ports**, annotated with an alias of
+  :mod:`graphvision.types` (``Annotated[value type, port type]``; a bare port
+  class is still read) and ``Optional[T] = None`` makes the port optional;
 * keyword-only parameters are **parameters**, with defaults, validated by a
   pydantic model built from their annotations (``Annotated[..., Field(...)]``
   for constraints, ``Literal[...]`` for choices);
 * the return annotation is the **output**: one port type (port ``out``) or a
   ``NamedTuple`` whose fields are port types (one port per field);
-* a ``TypeVar`` bound to a port type makes a node generic: ``def gaussian(
-  image: T) -> T`` with ``T = TypeVar("T", bound=FloatImage)`` gives a
+* a ``TypeVar`` makes a node generic: ``def gaussian(image: ImageT) -> ImageT``
+  with ``ImageT = TypeVar("ImageT", GrayImage, ColorImage, Image)`` gives a
   ``GrayImage`` out for a ``GrayImage`` in. The checker binds the variable to
-  the type actually connected.
+  the first constraint the connected type is a subtype of (a bound works
+  too, binding to the connected type itself).
 
 The decorator only attaches metadata and returns the function unchanged, so a
 node stays an ordinary function to call and test. Signatures are checked when
@@ -43,6 +45,7 @@ import pydantic
 
 from ._errors import RegistrationError
 from ._ports import PortType
+from .types import port_of
 
 __all__ = [
     "FunctionRef",
@@ -155,7 +158,10 @@ class InputPort:
         return given
 
     def type_label(self) -> str:
-        return " or ".join(c.type_name() for c in self.choices) or self.type.type_name()
+        """The accepted type: the common one when a choice covers the others, else each."""
+        if not self.choices or self.type in self.choices:
+            return self.type.type_name()
+        return " or ".join(c.type_name() for c in self.choices)
 
 
 @dataclass(frozen=True)
@@ -254,30 +260,33 @@ def source_fingerprint(func: Callable) -> str:
 
 
 def _port_type(annotation: Any) -> tuple[type[PortType] | None, bool]:
-    """(port type, optional) of an input annotation, or (None, False)."""
+    """(port type, optional) of an input annotation, or (None, False).
+
+    A ``TypeVar``'s port type is its bound's, or the most specific port type
+    all its constraints share.
+    """
     if isinstance(annotation, TypeVar):
         if annotation.__constraints__:
-            choices = annotation.__constraints__
-            if not all(_is_port_type(c) for c in choices):
+            choices = [port_of(c) for c in annotation.__constraints__]
+            if any(c is None for c in choices):
                 return None, False
-            common = next(c for c in choices[0].__mro__ if all(issubclass(o, c) for o in choices))
+            ports = typing.cast(list[type[PortType]], choices)
+            common = next(c for c in ports[0].__mro__ if all(issubclass(o, c) for o in ports))
             return common, False
-        bound = annotation.__bound__
-        return (bound, False) if _is_port_type(bound) else (None, False)
-    if get_origin(annotation) is typing.Annotated:
-        found = [a for a in get_args(annotation)[1:] if _is_port_type(a)]
-        return (found[0], False) if found else (None, False)
+        return port_of(annotation.__bound__), False
     if get_origin(annotation) in (Union, types.UnionType):
         args = [a for a in get_args(annotation) if a is not type(None)]
         if len(args) == 1 and len(get_args(annotation)) == 2:
             inner, _ = _port_type(args[0])
             return inner, inner is not None
         return None, False
-    return (annotation, False) if _is_port_type(annotation) else (None, False)
+    return port_of(annotation), False
 
 
-def _is_port_type(obj: Any) -> bool:
-    return isinstance(obj, type) and issubclass(obj, PortType) and obj is not PortType
+def _typevar_choices(annotation: Any) -> tuple[type[PortType], ...]:
+    if not isinstance(annotation, TypeVar):
+        return ()
+    return tuple(typing.cast(type[PortType], port_of(c)) for c in annotation.__constraints__)
 
 
 def _is_named_tuple(obj: Any) -> bool:
@@ -335,8 +344,7 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
             if not optional and parameter.default is not parameter.empty:
                 raise reject(f"input '{name}' has a default; only Optional[...] = None inputs may")
             typevar = annotation.__name__ if isinstance(annotation, TypeVar) else ""
-            choices = annotation.__constraints__ if isinstance(annotation, TypeVar) else ()
-            inputs[name] = InputPort(port, optional, typevar, choices)
+            inputs[name] = InputPort(port, optional, typevar, _typevar_choices(annotation))
         else:
             if parameter.default is parameter.empty:
                 raise reject(f"parameter '{name}' needs a default value")
@@ -353,18 +361,18 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
             raise reject(f"output type variable {returned.__name__} must also annotate an input")
         outputs = {SINGLE_OUTPUT: _port_type(returned)[0]}
         output_vars[SINGLE_OUTPUT] = returned.__name__
-    elif _is_port_type(returned):
-        outputs = {SINGLE_OUTPUT: returned}
+    elif (single := port_of(returned)) is not None:
+        outputs = {SINGLE_OUTPUT: single}
     elif _is_named_tuple(returned):
-        field_hints = typing.get_type_hints(returned)
+        field_hints = typing.get_type_hints(returned, include_extras=True)
         outputs = {}
         for name in returned._fields:
             hint = field_hints.get(name)
             if isinstance(hint, TypeVar) and hint.__name__ in bound_vars:
                 outputs[name] = _port_type(hint)[0]
                 output_vars[name] = hint.__name__
-            elif _is_port_type(hint):
-                outputs[name] = hint
+            elif (field_port := port_of(hint)) is not None:
+                outputs[name] = field_port
             else:
                 raise reject(
                     f"output '{name}' of {returned.__name__} must be a port type "

@@ -1,8 +1,14 @@
 """Port types: what flows along an edge, how it is checked and how it is stored.
 
-A port type is a class used only through its class methods; values themselves
-are plain numpy arrays, Python scalars, column tables or frozen dataclasses of
-arrays. Subclassing draws the lattice: a ``GrayImage`` is an ``Image``, so an
+A port type is a class used only through its class methods (``GrayImagePort``);
+values themselves are plain numpy arrays, Python scalars, column tables or
+frozen dataclasses of arrays. Node signatures do not name these classes: they
+use the aliases of :mod:`graphvision.types` (``GrayImage = Annotated[
+NDArray[np.float32], GrayImagePort]``), which a type checker reads as the
+value's type and the registry reads as the port type. A class's name without
+its ``Port`` suffix is the type's name in pipeline files and messages.
+
+Subclassing draws the lattice: a ``GrayImage`` is an ``Image``, so an
 edge from a ``GrayImage`` output into an ``Image`` input type-checks, the
 reverse does not. ``BinaryImage`` and ``LabelImage`` are *not* images: a mask
 is not an intensity, and feeding one to a filter is a mistake to report.
@@ -39,24 +45,24 @@ import numpy as np
 from ._errors import PortValueError
 
 __all__ = [
-    "Array",
-    "BinaryImage",
-    "Bool",
-    "ColorImage",
-    "Descriptors",
-    "Float",
-    "FloatImage",
-    "GrayImage",
-    "Homography",
-    "Image",
-    "Int",
-    "Kernel",
-    "LabelImage",
-    "Points2D",
+    "ArrayPort",
+    "BinaryImagePort",
+    "BoolPort",
+    "ColorImagePort",
+    "DescriptorsPort",
+    "FloatImagePort",
+    "FloatPort",
+    "GrayImagePort",
+    "HomographyPort",
+    "ImagePort",
+    "IntPort",
+    "KernelPort",
+    "LabelImagePort",
+    "Points2DPort",
     "PortType",
-    "Record",
-    "Table",
-    "Text",
+    "RecordPort",
+    "TablePort",
+    "TextPort",
     "builtin_port_types",
     "freeze",
 ]
@@ -78,7 +84,9 @@ class PortType:
 
     @classmethod
     def type_name(cls) -> str:
-        return cls.__name__
+        """The name used in pipeline files and messages: the class name without ``Port``."""
+        name = cls.__name__
+        return name[: -len("Port")] if name.endswith("Port") and name != "Port" else name
 
     @classmethod
     def is_a(cls, other: type[PortType]) -> bool:
@@ -140,7 +148,7 @@ def describe_value(value: Any) -> str:
     return f"{type(value).__name__} {value!r:.60}"
 
 
-class Array(PortType):
+class ArrayPort(PortType):
     """Any numeric or boolean numpy array (never an object array)."""
 
     ndims: ClassVar[tuple[int, ...]] = ()
@@ -157,7 +165,7 @@ class Array(PortType):
             raise _fail(cls, cls.expected, value)
         if cls.dtypes and value.dtype.type not in cls.dtypes:
             raise _fail(cls, cls.expected, value)
-        if value.size == 0 and cls is not Array and not cls.allow_empty:
+        if value.size == 0 and cls is not ArrayPort and not cls.allow_empty:
             raise PortValueError(f"expected {cls.type_name()}, got an empty array {value.shape}")
         return value
 
@@ -174,7 +182,7 @@ class Array(PortType):
         return f"{cls.type_name()} {'×'.join(map(str, value.shape))} {value.dtype}"
 
 
-class FloatImage(Array):
+class FloatImagePort(ArrayPort):
     """A filter response: finite ``float32``, ``H×W`` or ``H×W×3``, any range."""
 
     ndims = (2, 3)
@@ -186,12 +194,12 @@ class FloatImage(Array):
         value = super().validate(value)
         if value.ndim == 3 and value.shape[2] != 3:
             raise _fail(cls, cls.expected, value)
-        if cls is FloatImage and not np.isfinite(value.min() + value.max()):
+        if cls is FloatImagePort and not np.isfinite(value.min() + value.max()):
             raise PortValueError(f"expected {cls.type_name()} with finite values, got NaN or inf")
         return value
 
 
-class Image(FloatImage):
+class ImagePort(FloatImagePort):
     """An intensity image: ``float32`` in [0, 1], gray ``H×W`` or RGB ``H×W×3``."""
 
     expected = "float32 in [0, 1], H×W or H×W×3"
@@ -215,21 +223,21 @@ class Image(FloatImage):
         return [path]
 
 
-class GrayImage(Image):
+class GrayImagePort(ImagePort):
     """A gray image: ``float32`` ``H×W`` in [0, 1]."""
 
     ndims = (2,)
     expected = "float32 in [0, 1], H×W"
 
 
-class ColorImage(Image):
+class ColorImagePort(ImagePort):
     """An RGB image: ``float32`` ``H×W×3`` in [0, 1]."""
 
     ndims = (3,)
     expected = "float32 in [0, 1], H×W×3"
 
 
-class BinaryImage(Array):
+class BinaryImagePort(ArrayPort):
     """A mask: ``bool`` ``H×W``; True is foreground."""
 
     ndims = (2,)
@@ -245,7 +253,7 @@ class BinaryImage(Array):
         return [path]
 
 
-class LabelImage(Array):
+class LabelImagePort(ArrayPort):
     """A label image: ``int32`` ``H×W``, 0 is background, regions 1..N."""
 
     ndims = (2,)
@@ -260,7 +268,7 @@ class LabelImage(Array):
         return value
 
 
-class Kernel(Array):
+class KernelPort(ArrayPort):
     """A filter kernel: ``float64`` 2-D array, centred at ``(rows // 2, cols // 2)``."""
 
     ndims = (2,)
@@ -268,7 +276,7 @@ class Kernel(Array):
     expected = "float64 2-D array"
 
 
-class _Scalar(PortType):
+class _ScalarPort(PortType):
     python_type: ClassVar[type] = object
 
     @classmethod
@@ -300,7 +308,7 @@ class _Scalar(PortType):
         return [path]
 
 
-class Float(_Scalar):
+class FloatPort(_ScalarPort):
     """A real number (an ``Int`` is accepted where a ``Float`` is expected)."""
 
     python_type = float
@@ -309,30 +317,30 @@ class Float(_Scalar):
     def validate(cls, value: Any) -> Any:
         if isinstance(value, np.generic):
             value = value.item()
-        if isinstance(value, int) and not isinstance(value, bool) and cls is Float:
+        if isinstance(value, int) and not isinstance(value, bool) and cls is FloatPort:
             value = float(value)
         return super().validate(value)
 
 
-class Int(Float):
+class IntPort(FloatPort):
     """An integer."""
 
     python_type = int
 
 
-class Bool(_Scalar):
+class BoolPort(_ScalarPort):
     """True or False."""
 
     python_type = bool
 
 
-class Text(_Scalar):
+class TextPort(_ScalarPort):
     """A string."""
 
     python_type = str
 
 
-class Table(PortType):
+class TablePort(PortType):
     """Columns of equal length: ``dict[str, 1-D ndarray]``; written as CSV and JSON."""
 
     @classmethod
@@ -377,7 +385,7 @@ class Table(PortType):
         return [csv_path, json_path]
 
 
-class Record(PortType):
+class RecordPort(PortType):
     """Base for frozen dataclasses whose fields are arrays or JSON scalars.
 
     Subclasses set ``value_class``; encoding stores array fields as arrays and
@@ -409,7 +417,7 @@ class Record(PortType):
         return cls.value_class(**arrays, **meta)
 
 
-class Points2D(Array):
+class Points2DPort(ArrayPort):
     """Points ``(x, y)`` = (column, row): ``float64`` ``N×2`` (N may be 0), finite."""
 
     ndims = (2,)
@@ -427,7 +435,7 @@ class Points2D(Array):
         return value
 
 
-class Descriptors(Array):
+class DescriptorsPort(ArrayPort):
     """Feature descriptors: ``float32`` ``N×D``, one row per keypoint (N may be 0)."""
 
     ndims = (2,)
@@ -436,7 +444,7 @@ class Descriptors(Array):
     allow_empty = True
 
 
-class Homography(Array):
+class HomographyPort(ArrayPort):
     """A plane-to-plane projective map: ``float64`` 3×3, finite, ``x' ~ H x``."""
 
     ndims = (2,)
@@ -453,25 +461,25 @@ class Homography(Array):
 
 def builtin_port_types() -> list[type[PortType]]:
     """The port types the engine defines (plugins may register more)."""
-    from ._records import Keypoints, Matches
+    from ._records import KeypointsPort, MatchesPort
 
     return [
-        Array,
-        FloatImage,
-        Image,
-        GrayImage,
-        ColorImage,
-        BinaryImage,
-        LabelImage,
-        Kernel,
-        Points2D,
-        Descriptors,
-        Homography,
-        Keypoints,
-        Matches,
-        Float,
-        Int,
-        Bool,
-        Text,
-        Table,
+        ArrayPort,
+        FloatImagePort,
+        ImagePort,
+        GrayImagePort,
+        ColorImagePort,
+        BinaryImagePort,
+        LabelImagePort,
+        KernelPort,
+        Points2DPort,
+        DescriptorsPort,
+        HomographyPort,
+        KeypointsPort,
+        MatchesPort,
+        FloatPort,
+        IntPort,
+        BoolPort,
+        TextPort,
+        TablePort,
     ]

@@ -8,9 +8,9 @@ from typing import Any
 import numpy as np
 
 from ._errors import PortValueError
-from ._ports import Record
+from ._ports import RecordPort
 
-__all__ = ["KeypointSet", "Keypoints", "MatchSet", "Matches"]
+__all__ = ["KeypointSet", "KeypointsPort", "MatchSet", "MatchesPort"]
 
 
 def _column(name: str, value: Any, count: int, dtype: type, shape: tuple = ()) -> None:
@@ -58,7 +58,7 @@ class KeypointSet:
         )
 
 
-class Keypoints(Record):
+class KeypointsPort(RecordPort):
     """A :class:`KeypointSet`."""
 
     value_class = KeypointSet
@@ -95,7 +95,7 @@ class MatchSet:
         return MatchSet(self.pairs[index], self.distance[index])
 
 
-class Matches(Record):
+class MatchesPort(RecordPort):
     """A :class:`MatchSet`."""
 
     value_class = MatchSet

@@ -78,6 +78,10 @@ class Registry:
             and m.__module__ != "graphvision._ports"
             and not m.__name__.startswith("_")
         ]
+        for spec in specs:  # a type its nodes use is registered even if only its alias is exported
+            port_types += [port.type for port in spec.inputs.values()]
+            port_types += [c for port in spec.inputs.values() for c in port.choices]
+            port_types += list(spec.outputs.values())
         kept = self._check_new_nodes(specs)
         for spec in kept:
             self.nodes[spec.id] = spec

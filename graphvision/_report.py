@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ._compile import CompiledGraph
-from ._ports import _Scalar
+from ._ports import _ScalarPort
 from ._run import RunRecord
 
 __all__ = ["write_outputs", "write_report"]
@@ -52,7 +52,7 @@ def write_report(
             continue
         kind = compiled.output_type(name)
         value = outputs[name]
-        if issubclass(kind, _Scalar):
+        if issubclass(kind, _ScalarPort):
             shown = json.dumps(value)
         elif isinstance(value, np.ndarray) and value.size <= 16:  # e.g. a homography
             shown = f"{kind.summary(value)}: `{json.dumps(np.round(value, 6).tolist())}`"

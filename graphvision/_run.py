@@ -40,7 +40,7 @@ from ._errors import (
 )
 from ._executors import Executor, SyncExecutor, call_node, call_node_encoded, make_executor
 from ._graph import Graph
-from ._ports import PortType, Text, _Scalar, freeze
+from ._ports import PortType, TextPort, _ScalarPort, freeze
 from ._registry import Registry, did_you_mean
 from ._scheduler import run_tasks
 
@@ -142,12 +142,12 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
     InputError
         Naming the input, the value and what is wrong.
     """
-    if isinstance(value, str) and not issubclass(port_type, Text):
+    if isinstance(value, str) and not issubclass(port_type, TextPort):
         scheme, sep, rest = value.partition(":")
         try:
             if sep and scheme in registry.sources:
                 value = registry.sources[scheme].func(rest)
-            elif issubclass(port_type, _Scalar):
+            elif issubclass(port_type, _ScalarPort):
                 value = yaml.safe_load(value)
             else:
                 value = registry.source("file").func(value)

@@ -10,17 +10,22 @@ In a plugin's test suite::
 :func:`check_plugin` imports the module, registers it in a fresh registry
 (so every signature is checked), and checks each node: its description is
 JSON, its documentation has a summary line, its default parameters are
-valid, and its port types are registered. It raises one
-:class:`PluginCheckError` listing every problem.
+valid, its annotations are the type-checkable aliases of
+:mod:`graphvision.types` (not bare port classes), and no two of its port
+types share a name. It raises one :class:`PluginCheckError` listing every
+problem.
 """
 
 from __future__ import annotations
 
 import importlib
+import inspect
 import json
 import types
+import typing
 
 from ._errors import GraphvisionError
+from ._ports import PortType
 from ._registry import Registry
 
 __all__ = ["PluginCheckError", "check_plugin"]
@@ -66,9 +71,25 @@ def check_plugin(module: str | types.ModuleType) -> Registry:
         for port, kind in [*((p, i.type) for p, i in spec.inputs.items()), *spec.outputs.items()]:
             if registry.port_types.get(kind.type_name()) is not kind:
                 problems.append(
-                    f"{op}: port '{port}' has type {kind.type_name()}, which no "
-                    "plugin registers (export the PortType from the plugin module)"
+                    f"{op}: port '{port}' has type {kind.type_name()}, but another port "
+                    "type of that name is registered (give the class another name)"
                 )
+        problems += [f"{op}: {problem}" for problem in _bare_port_classes(spec.func)]
     if problems:
         raise PluginCheckError(module.__name__, problems)
     return registry
+
+
+def _bare_port_classes(func: typing.Callable[..., object]) -> list[str]:
+    """Annotations that name a port class instead of its type-checkable alias."""
+    hints = typing.get_type_hints(func)  # without extras: an alias shows its value type
+    found = []
+    for name, hint in hints.items():
+        for item in (hint, *typing.get_args(hint)):
+            if inspect.isclass(item) and issubclass(item, PortType):
+                where = "the return value" if name == "return" else f"'{name}'"
+                found.append(
+                    f"{where} is annotated with the port class {item.__name__}; use an "
+                    f"Annotated alias (see graphvision.types) so type checkers see the value type"
+                )
+    return found

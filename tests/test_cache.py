@@ -22,8 +22,8 @@ def test_disk_round_trip_and_no_pickle(tmp_path):
     store = gv.DiskStore(tmp_path)
     table = {"x": np.arange(3, dtype=np.int64), "y": np.array([0.5, 1.5, 2.5])}
     cache = gv.Cache(None, store)
-    cache.put("k1", gv.Table, table)
-    hit, value = gv.Cache(None, store).get("k1", gv.Table)
+    cache.put("k1", gv.TablePort, table)
+    hit, value = gv.Cache(None, store).get("k1", gv.TablePort)
     assert hit and list(value) == ["x", "y"]
     np.testing.assert_array_equal(value["y"], table["y"])
     assert not value["x"].flags.writeable
@@ -136,13 +136,13 @@ def test_memory_store_is_bounded_in_bytes():
 def test_keys_depend_on_dtype_shape_and_bytes():
     a = np.zeros((4, 4), np.float32)
     keys = {
-        content_key(gv.Array, a),
-        content_key(gv.Array, a.reshape(2, 8)),
-        content_key(gv.Array, a.astype(np.float64)),
-        content_key(gv.Array, a + 1),
+        content_key(gv.ArrayPort, a),
+        content_key(gv.ArrayPort, a.reshape(2, 8)),
+        content_key(gv.ArrayPort, a.astype(np.float64)),
+        content_key(gv.ArrayPort, a + 1),
     }
     assert len(keys) == 4
-    assert content_key(gv.Array, a) == content_key(gv.Array, a.copy())
+    assert content_key(gv.ArrayPort, a) == content_key(gv.ArrayPort, a.copy())
 
     def key(op="f.g", version=1, code="h", params=None, inputs=None, port="out"):
         fingerprint = node_fingerprint(op, version, code, params or {"s": 1.0, "t": [1, 2]})

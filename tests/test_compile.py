@@ -116,7 +116,7 @@ def test_type_variables_follow_the_connected_type(registry):
     graph.add("dark", "toy.darken", image=smooth)  # needs GrayImage: gaussian keeps it
     graph.output("out", "dark")
     compiled = gv.compile_graph(graph, registry)
-    assert compiled.steps["smooth"].outputs["out"] is gv.GrayImage
+    assert compiled.steps["smooth"].outputs["out"] is gv.GrayImagePort
 
     colour = gv.Graph("tv2")
     rgb = colour.input("image", "ColorImage")

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import types
 from importlib.metadata import entry_points
+from typing import Annotated
 
+import numpy as np
 import pytest
 
 import graphvision as gv
@@ -22,19 +24,46 @@ def test_built_in_plugins_conform(module):
     assert check_plugin(module).nodes
 
 
-class Secret(gv.Array):
-    """A port type that the plugin below does not export."""
+class ImagePort(gv.ArrayPort):
+    """A port type whose name clashes with the built-in ``Image``."""
 
 
-def test_a_private_port_type_is_reported():
+class SecretPort(gv.ArrayPort):
+    """A port type that the plugin below uses without exporting it."""
+
+
+def test_a_port_type_used_by_a_node_is_registered_with_it():
     @gv.node("odd.one")
-    def one(x: Secret) -> gv.Float:
+    def one(x: Annotated[np.ndarray, SecretPort]) -> gv.Float:
         """One."""
         return 1.0
 
     module = types.ModuleType("odd_plugin")
     module.one = one
-    with pytest.raises(PluginCheckError, match="port 'x' has type Secret, which no plugin"):
+    assert check_plugin(module).port_types["Secret"] is SecretPort
+
+
+def test_a_port_type_name_clash_is_reported():
+    @gv.node("odd.one")
+    def one(x: Annotated[np.ndarray, ImagePort]) -> gv.Float:
+        """One."""
+        return 1.0
+
+    module = types.ModuleType("odd_plugin")
+    module.one = one
+    with pytest.raises(PluginCheckError, match="port 'x' has type Image, but another port type"):
+        check_plugin(module)
+
+
+def test_a_bare_port_class_annotation_is_reported():
+    @gv.node("odd.bare")
+    def bare(x: gv.FloatPort) -> gv.FloatPort:  # type: ignore[valid-type]
+        """The form before graphvision.types: the registry reads it, type checkers cannot."""
+        return x
+
+    module = types.ModuleType("odd_plugin")
+    module.bare = bare
+    with pytest.raises(PluginCheckError, match="'x' is annotated with the port class FloatPort"):
         check_plugin(module)
 
 

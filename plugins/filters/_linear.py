@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal, TypeVar
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field
 
-from graphvision import FloatImage, Image, Kernel, node
+from graphvision import FloatImage, Image, ImageT, Kernel, node
 
 from .._checks import check_window
 from ._boundary import Boundary, crop_valid, scipy_mode
@@ -25,7 +25,6 @@ __all__ = [
     "to_image",
 ]
 
-ImageT = TypeVar("ImageT", bound=Image)
 Sigma = Annotated[float, Field(gt=0, le=100, description="Standard deviation in pixels.")]
 Size = Annotated[int, Field(ge=1, le=255, description="Window side in pixels.")]
 

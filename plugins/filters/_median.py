@@ -2,19 +2,18 @@
 
 from __future__ import annotations
 
-from typing import Annotated, TypeVar
+from typing import Annotated
 
 import numpy as np
 from pydantic import AfterValidator, Field
 
-from graphvision import Image, node
+from graphvision import ImageT, node
 
 from .._checks import check_window
 from ._boundary import Boundary
 
 __all__ = ["median"]
 
-ImageT = TypeVar("ImageT", bound=Image)
 
 _NUMPY_PAD = {"zero": "constant", "wrap": "wrap", "replicate": "edge", "mirror": "symmetric"}
 _CHUNK_BYTES = 32 * 2**20

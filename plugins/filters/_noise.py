@@ -2,16 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Annotated, TypeVar
+from typing import Annotated
 
 import numpy as np
 from pydantic import Field
 
-from graphvision import Image, node
+from graphvision import ImageT, node
 
 __all__ = ["add_gaussian_noise", "add_impulse_noise", "add_salt_and_pepper"]
 
-ImageT = TypeVar("ImageT", bound=Image)
 Fraction = Annotated[float, Field(ge=0, le=1, description="Fraction of pixels affected.")]
 Seed = Annotated[int, Field(ge=0, description="Seed of the random generator.")]
 

@@ -6,6 +6,7 @@ a sample size and a refit.
 
 from ._lines import (
     Line2D,
+    Line2DPort,
     fit_line_lstsq,
     fit_line_ransac,
     fit_line_total,
@@ -20,6 +21,7 @@ from ._ransac import RansacResult, ransac, ransac_iterations
 
 __all__ = [
     "Line2D",
+    "Line2DPort",
     "RansacResult",
     "fit_line_lstsq",
     "fit_line_ransac",

@@ -5,14 +5,16 @@ from __future__ import annotations
 from typing import Annotated, Any, NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import Field
 
-from graphvision import Array, Float, Points2D, PortValueError, node
+from graphvision import Array, ArrayPort, Float, Points2D, PortValueError, node
 
 from ._ransac import ransac
 
 __all__ = [
     "Line2D",
+    "Line2DPort",
     "fit_line_lstsq",
     "fit_line_ransac",
     "fit_line_total",
@@ -25,7 +27,7 @@ __all__ = [
 ]
 
 
-class Line2D(Array):
+class Line2DPort(ArrayPort):
     """A line ``a x + b y + c = 0`` as ``float64 (3,)`` with ``a² + b² = 1``."""
 
     ndims = (1,)
@@ -42,6 +44,10 @@ class Line2D(Array):
         ):
             raise PortValueError(f"expected Line2D ({cls.expected}), got {value!r}")
         return value
+
+
+Line2D = Annotated[NDArray[np.float64], Line2DPort]
+"""The annotation of a line (see :class:`Line2DPort`)."""
 
 
 def _check_points(points: np.ndarray, needed: int = 2) -> None:

@@ -2,18 +2,16 @@
 
 from __future__ import annotations
 
-from typing import Annotated, NamedTuple, TypeVar
+from typing import Annotated, NamedTuple
 
 import numpy as np
 from pydantic import Field
 
-from graphvision import BinaryImage, ColorImage, Homography, Image, node
+from graphvision import BinaryImage, ColorImage, Homography, Image, ImageT, node
 
 from ._homography import apply_homography
 
 __all__ = ["random_warp", "stitch", "two_views", "warp"]
-
-ImageT = TypeVar("ImageT", bound=Image)
 
 
 def _sample(

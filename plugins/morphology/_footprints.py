@@ -5,14 +5,15 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import Field
 
-from graphvision import Array, BinaryImage, PortValueError, node
+from graphvision import ArrayPort, BinaryImage, PortValueError, node
 
-__all__ = ["Footprint", "footprint", "footprint_from_mask"]
+__all__ = ["Footprint", "FootprintPort", "footprint", "footprint_from_mask"]
 
 
-class Footprint(Array):
+class FootprintPort(ArrayPort):
     """A structuring element: ``bool`` 2-D, odd sides (it has a centre), at least one True."""
 
     ndims = (2,)
@@ -31,6 +32,9 @@ class Footprint(Array):
             raise PortValueError("structuring element is empty (no True element)")
         return value
 
+
+Footprint = Annotated[NDArray[np.bool_], FootprintPort]
+"""The annotation of a structuring element (see :class:`FootprintPort`)."""
 
 Side = Annotated[int, Field(ge=1, le=501, description="Side in pixels (odd).")]
 
@@ -84,4 +88,4 @@ def footprint_from_mask(mask: BinaryImage) -> Footprint:
     -------
     footprint : bool ndarray (odd sides, not empty)
     """
-    return Footprint.validate(np.ascontiguousarray(mask))
+    return FootprintPort.validate(np.ascontiguousarray(mask))

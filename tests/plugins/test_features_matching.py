@@ -54,7 +54,7 @@ def test_sift_features_are_well_formed(astronaut_features):
     np.testing.assert_allclose(np.linalg.norm(desc, axis=1), 1.0, atol=1e-5)
     assert desc.min() >= 0 and desc.max() < 0.5  # clipped at 0.2 before renormalising
     assert (kp.scale > 0.5).all() and ((kp.orientation >= 0) & (kp.orientation < 2 * np.pi)).all()
-    gv.Keypoints.validate(kp)
+    gv.KeypointsPort.validate(kp)
 
 
 @pytest.mark.parametrize("seed", [0, 5])

@@ -69,7 +69,7 @@ def test_homography_ransac_bad_inputs():
     with pytest.raises(ValueError, match="degenerate"):
         geometry.homography_ransac(collinear, collinear, identity_matches(10))
     with pytest.raises(gv.PortValueError, match="keypoint positions must be finite"):
-        gv.Keypoints.validate(keypoints([[np.nan, 1.0]]))
+        gv.KeypointsPort.validate(keypoints([[np.nan, 1.0]]))
 
 
 def test_identical_points_give_the_identity():

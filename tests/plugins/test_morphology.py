@@ -38,7 +38,7 @@ def test_footprints():
 )
 def test_bad_structuring_elements(value, message):
     with pytest.raises(gv.PortValueError, match=message):
-        morph.Footprint.validate(value)
+        morph.FootprintPort.validate(value)
 
 
 @pytest.mark.parametrize("shape", ["square", "disk", "cross", "diamond"])

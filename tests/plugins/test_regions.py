@@ -61,9 +61,9 @@ def test_label_overflow_is_named():
     with pytest.raises(OverflowError, match=r"2147483648 regions do not fit in int32"):
         regions.check_label_count(regions.MAX_LABEL + 1)
     with pytest.raises(gv.PortValueError, match="expected LabelImage"):
-        gv.LabelImage.validate(np.zeros((3, 3), np.int64))
+        gv.LabelImagePort.validate(np.zeros((3, 3), np.int64))
     with pytest.raises(gv.PortValueError, match="labels >= 0"):
-        gv.LabelImage.validate(np.full((3, 3), -1, np.int32))
+        gv.LabelImagePort.validate(np.full((3, 3), -1, np.int32))
 
 
 def test_relabel():
