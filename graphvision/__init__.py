@@ -41,12 +41,13 @@ from ._ports import (
     KernelPort,
     LabelImagePort,
     Points2DPort,
+    Points3DPort,
     PortType,
     RecordPort,
     TablePort,
     TextPort,
 )
-from ._records import KeypointSet, KeypointsPort, MatchesPort, MatchSet
+from ._records import CameraPort, KeypointSet, KeypointsPort, MatchesPort, MatchSet, PinholeCamera
 from ._registry import Registry
 from ._run import NodeRecord, RunHooks, RunRecord, RunResult, run
 from .types import (
@@ -54,6 +55,7 @@ from .types import (
     Array,
     BinaryImage,
     Bool,
+    Camera,
     ColorImage,
     Descriptors,
     Float,
@@ -68,6 +70,7 @@ from .types import (
     LabelImage,
     Matches,
     Points2D,
+    Points3D,
     Table,
     Text,
     port_of,
@@ -83,6 +86,8 @@ __all__ = [
     "BoolPort",
     "Cache",
     "CacheWarning",
+    "Camera",
+    "CameraPort",
     "ColorImage",
     "ColorImagePort",
     "CompiledGraph",
@@ -120,10 +125,13 @@ __all__ = [
     "NodeExecutionError",
     "NodeRecord",
     "NodeSpec",
+    "PinholeCamera",
     "PipelineError",
     "PluginLoadError",
     "Points2D",
     "Points2DPort",
+    "Points3D",
+    "Points3DPort",
     "PortType",
     "PortValueError",
     "Problem",

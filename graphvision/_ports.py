@@ -20,7 +20,7 @@ is not an intensity, and feeding one to a filter is a mistake to report.
            ├─ BinaryImage
            ├─ LabelImage
            ├─ Kernel
-           ├─ Points2D, Descriptors, Homography
+           ├─ Points2D, Points3D, Descriptors, Homography
     Float ── Int        Bool        Text        Table        Record (dataclasses)
 
 Each type encodes a value as named arrays plus a small JSON header, and back.
@@ -59,6 +59,7 @@ __all__ = [
     "KernelPort",
     "LabelImagePort",
     "Points2DPort",
+    "Points3DPort",
     "PortType",
     "RecordPort",
     "TablePort",
@@ -444,6 +445,35 @@ class DescriptorsPort(ArrayPort):
     allow_empty = True
 
 
+class Points3DPort(ArrayPort):
+    """3-D points ``(X, Y, Z)``: ``float64`` ``N×3`` (N may be 0), finite; written as PLY."""
+
+    ndims = (2,)
+    dtypes = (np.float64,)
+    expected = "float64 N×3 (X, Y, Z)"
+    allow_empty = True
+
+    @classmethod
+    def validate(cls, value: Any) -> np.ndarray:
+        value = super().validate(value)
+        if value.shape[1] != 3:
+            raise _fail(cls, cls.expected, value)
+        if not np.isfinite(value).all():
+            raise PortValueError("expected Points3D with finite coordinates, got NaN or inf")
+        return value
+
+    @classmethod
+    def write(cls, value: np.ndarray, stem: Path) -> list[Path]:
+        path = stem.with_suffix(".ply")
+        header = (
+            f"ply\nformat ascii 1.0\nelement vertex {len(value)}\n"
+            "property double x\nproperty double y\nproperty double z\nend_header\n"
+        )
+        body = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in value.tolist())
+        path.write_text(header + body)
+        return [path]
+
+
 class HomographyPort(ArrayPort):
     """A plane-to-plane projective map: ``float64`` 3×3, finite, ``x' ~ H x``."""
 
@@ -461,7 +491,7 @@ class HomographyPort(ArrayPort):
 
 def builtin_port_types() -> list[type[PortType]]:
     """The port types the engine defines (plugins may register more)."""
-    from ._records import KeypointsPort, MatchesPort
+    from ._records import CameraPort, KeypointsPort, MatchesPort
 
     return [
         ArrayPort,
@@ -473,10 +503,12 @@ def builtin_port_types() -> list[type[PortType]]:
         LabelImagePort,
         KernelPort,
         Points2DPort,
+        Points3DPort,
         DescriptorsPort,
         HomographyPort,
         KeypointsPort,
         MatchesPort,
+        CameraPort,
         FloatPort,
         IntPort,
         BoolPort,

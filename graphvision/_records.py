@@ -1,4 +1,4 @@
-"""Port types whose values are small frozen dataclasses of arrays: keypoints and matches."""
+"""Port types whose values are small frozen dataclasses of arrays: keypoints, matches, cameras."""
 
 from __future__ import annotations
 
@@ -10,7 +10,14 @@ import numpy as np
 from ._errors import PortValueError
 from ._ports import RecordPort
 
-__all__ = ["KeypointSet", "KeypointsPort", "MatchSet", "MatchesPort"]
+__all__ = [
+    "CameraPort",
+    "KeypointSet",
+    "KeypointsPort",
+    "MatchSet",
+    "MatchesPort",
+    "PinholeCamera",
+]
 
 
 def _column(name: str, value: Any, count: int, dtype: type, shape: tuple = ()) -> None:
@@ -111,3 +118,65 @@ class MatchesPort(RecordPort):
     @classmethod
     def summary(cls, value: MatchSet) -> str:
         return f"Matches {len(value)}"
+
+
+@dataclass(frozen=True, eq=False)
+class PinholeCamera:
+    r"""A calibrated pinhole camera with lens distortion.
+
+    ``K`` is the 3×3 calibration matrix, ``R`` the 3×3 rotation from world to
+    camera coordinates and ``C`` the camera centre in world coordinates, so
+    that a world point :math:`\tilde X` projects as
+
+    .. math:: x \sim P X, \qquad P = K [R \mid -R \tilde C]
+
+    (the seed's "Camera geometry"). ``distortion`` holds the radial and
+    tangential coefficients in OpenCV's order ``(k1, k2, p1, p2, k3)``,
+    applied to normalised coordinates before ``K``. ``size`` is the image
+    ``(width, height)`` in pixels.
+    """
+
+    K: np.ndarray
+    R: np.ndarray = field(default_factory=lambda: np.eye(3))
+    C: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    distortion: np.ndarray = field(default_factory=lambda: np.zeros(5))
+    size: np.ndarray = field(default_factory=lambda: np.zeros(2, np.int64))
+
+    @property
+    def t(self) -> np.ndarray:
+        """The translation :math:`t = -R \tilde C` of :math:`[R \\mid t]`."""
+        return -self.R @ self.C
+
+    @property
+    def P(self) -> np.ndarray:
+        """The 3×4 projection matrix :math:`K [R \\mid -R \tilde C]`."""
+        return self.K @ np.hstack([self.R, self.t[:, None]])
+
+
+class CameraPort(RecordPort):
+    """A :class:`PinholeCamera`: finite float64 K (upper triangular, K[2, 2] = 1), R a
+    rotation, C (3,), distortion (5,), size (2,) int64."""
+
+    value_class = PinholeCamera
+
+    @classmethod
+    def validate(cls, value: Any) -> PinholeCamera:
+        value = super().validate(value)
+        for name, shape in (("K", (3, 3)), ("R", (3, 3)), ("C", (3,)), ("distortion", (5,))):
+            item = getattr(value, name)
+            if not isinstance(item, np.ndarray) or item.dtype != np.float64 or item.shape != shape:
+                got = f"{item.dtype} {item.shape}" if isinstance(item, np.ndarray) else type(item)
+                raise PortValueError(f"camera '{name}' must be float64 {shape}, got {got}")
+            if not np.isfinite(item).all():
+                raise PortValueError(f"camera '{name}' must be finite")
+        _column("size", value.size, 2, np.int64)
+        K, R = value.K, value.R
+        if K[2, 2] != 1.0 or K[1, 0] != 0.0 or K[2, 0] != 0.0 or K[2, 1] != 0.0:
+            raise PortValueError(f"camera K must be upper triangular with K[2, 2] = 1, got {K}")
+        if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
+            raise PortValueError("camera R must be a rotation (R Rᵀ = I, det R = +1)")
+        return value
+
+    @classmethod
+    def summary(cls, value: PinholeCamera) -> str:
+        return f"Camera f=({value.K[0, 0]:.4g}, {value.K[1, 1]:.4g})"

@@ -51,17 +51,26 @@ from ._ports import (
     KernelPort,
     LabelImagePort,
     Points2DPort,
+    Points3DPort,
     PortType,
     TablePort,
     TextPort,
 )
-from ._records import KeypointSet, KeypointsPort, MatchesPort, MatchSet
+from ._records import (
+    CameraPort,
+    KeypointSet,
+    KeypointsPort,
+    MatchesPort,
+    MatchSet,
+    PinholeCamera,
+)
 
 __all__ = [
     "AnyImageT",
     "Array",
     "BinaryImage",
     "Bool",
+    "Camera",
     "ColorImage",
     "Descriptors",
     "Float",
@@ -76,6 +85,7 @@ __all__ = [
     "LabelImage",
     "Matches",
     "Points2D",
+    "Points3D",
     "Table",
     "Text",
     "port_of",
@@ -90,10 +100,12 @@ BinaryImage = Annotated[NDArray[np.bool_], BinaryImagePort]
 LabelImage = Annotated[NDArray[np.int32], LabelImagePort]
 Kernel = Annotated[NDArray[np.float64], KernelPort]
 Points2D = Annotated[NDArray[np.float64], Points2DPort]
+Points3D = Annotated[NDArray[np.float64], Points3DPort]
 Descriptors = Annotated[NDArray[np.float32], DescriptorsPort]
 Homography = Annotated[NDArray[np.float64], HomographyPort]
 Keypoints = Annotated[KeypointSet, KeypointsPort]
 Matches = Annotated[MatchSet, MatchesPort]
+Camera = Annotated[PinholeCamera, CameraPort]
 Float = Annotated[float, FloatPort]
 Int = Annotated[int, IntPort]
 Bool = Annotated[bool, BoolPort]

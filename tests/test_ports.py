@@ -75,3 +75,34 @@ def test_writing_by_type(tmp_path):
     assert [p.name for p in gv.ArrayPort.write(np.zeros(3), tmp_path / "a")] == ["a.npy"]
     files = gv.TablePort.write({"x": np.arange(2)}, tmp_path / "t")
     assert (tmp_path / "t.csv").read_text().splitlines() == ["x", "0", "1"] and len(files) == 2
+
+
+def _camera(**changes):
+    fields = {"K": np.array([[500.0, 0, 320], [0, 500, 240], [0, 0, 1]]), **changes}
+    return gv.PinholeCamera(**fields)
+
+
+def test_camera_projection_and_checks():
+    # a point on the optical axis 2 m ahead of a camera at C = (0, 0, -1) lands on the principal point
+    camera = _camera(C=np.array([0.0, 0.0, -1.0]))
+    x = camera.P @ np.array([0.0, 0.0, 1.0, 1.0])
+    np.testing.assert_allclose(x[:2] / x[2], [320.0, 240.0])
+    np.testing.assert_allclose(camera.t, [0.0, 0.0, 1.0])
+    with pytest.raises(gv.PortValueError, match="camera R must be a rotation"):
+        gv.CameraPort.validate(_camera(R=np.diag([1.0, 1.0, -1.0])))
+    with pytest.raises(gv.PortValueError, match=r"camera 'K' must be float64 \(3, 3\)"):
+        gv.CameraPort.validate(_camera(K=np.eye(3, dtype=np.float32)))
+    with pytest.raises(gv.PortValueError, match="upper triangular"):
+        gv.CameraPort.validate(_camera(K=np.ones((3, 3))))
+    arrays, meta = gv.CameraPort.encode(camera)
+    np.testing.assert_array_equal(gv.CameraPort.decode(arrays, meta).P, camera.P)
+
+
+def test_points3d_checks_and_ply(tmp_path):
+    with pytest.raises(gv.PortValueError, match="expected Points3D"):
+        gv.Points3DPort.validate(np.zeros((2, 2)))
+    with pytest.raises(gv.PortValueError, match="finite"):
+        gv.Points3DPort.validate(np.full((1, 3), np.nan))
+    (path,) = gv.Points3DPort.write(np.array([[1.0, 2.0, 3.5]]), tmp_path / "cloud")
+    lines = path.read_text().splitlines()
+    assert lines[2] == "element vertex 1" and lines[-1] == "1.0 2.0 3.5"
