@@ -83,7 +83,7 @@ def _camera(**changes):
 
 
 def test_camera_projection_and_checks():
-    # a point on the optical axis 2 m ahead of a camera at C = (0, 0, -1) lands on the principal point
+    # a point on the optical axis, 2 m ahead of a camera at C = (0, 0, -1): the principal point
     camera = _camera(C=np.array([0.0, 0.0, -1.0]))
     x = camera.P @ np.array([0.0, 0.0, 1.0, 1.0])
     np.testing.assert_allclose(x[:2] / x[2], [320.0, 240.0])
