@@ -207,13 +207,13 @@ class _Checker:
                     f"'{name}.{port}' ({spec.id}) takes {declared.type_label()}",
                 )
             elif declared.typevar:
-                given = declared.bind(given)
-                bound = bindings.get(declared.typevar, given)
-                if given.is_a(bound):
-                    given = bound
-                elif not bound.is_a(given):
-                    given = declared.type
-                bindings[declared.typevar] = given
+                chosen = declared.bind(given)
+                bound = bindings.get(declared.typevar, chosen)
+                if chosen.is_a(bound):
+                    chosen = bound
+                elif not bound.is_a(chosen):
+                    chosen = declared.type
+                bindings[declared.typevar] = chosen
         for port, declared in spec.inputs.items():
             if port not in decl.inputs and not declared.optional:
                 self.report(
@@ -255,12 +255,12 @@ class _Checker:
     def run(self, provided: set[str] | None) -> CompiledGraph:
         graph, registry = self.graph, self.registry
         input_types: dict[str, type[PortType]] = {}
-        for name, decl in graph.inputs.items():
+        for name, input_decl in graph.inputs.items():
             try:
-                input_types[name] = registry.port_type(decl.type)
+                input_types[name] = registry.port_type(input_decl.type)
             except UnknownNameError as error:
                 self.report(f"inputs.{name}.type", str(error))
-            if provided is not None and name not in provided and decl.default is None:
+            if provided is not None and name not in provided and input_decl.default is None:
                 self.report(
                     f"inputs.{name}",
                     f"missing input '{name}': no value given (--input {name}=PATH) and no default",

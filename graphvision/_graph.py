@@ -128,12 +128,12 @@ class Graph:
         import networkx as nx  # imported on use: start-up of the CLI stays fast
 
         graph = nx.DiGraph()
-        for name, decl in self.inputs.items():
-            graph.add_node(name, kind="input", type=decl.type)
-        for name, decl in self.nodes.items():
-            graph.add_node(name, kind="node", op=decl.op)
-        for name, decl in self.nodes.items():
-            for port, ref in decl.inputs.items():
+        for name, input_decl in self.inputs.items():
+            graph.add_node(name, kind="input", type=input_decl.type)
+        for name, node_decl in self.nodes.items():
+            graph.add_node(name, kind="node", op=node_decl.op)
+        for name, node_decl in self.nodes.items():
+            for port, ref in node_decl.inputs.items():
                 if ref.node in graph:
                     graph.add_edge(ref.node, name, port=port, source_port=ref.port)
         return graph

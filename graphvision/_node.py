@@ -135,22 +135,26 @@ class FunctionRef:
         return obj
 
 
+PortClass = type[PortType]
+"""A port-type class (named so that a field called ``type`` cannot shadow it)."""
+
+
 @dataclass(frozen=True)
 class InputPort:
     """An input port: its type (a TypeVar's bound), optional or not, its TypeVar name."""
 
-    type: type[PortType]
+    type: PortClass
     optional: bool = False
     typevar: str = ""
-    choices: tuple[type[PortType], ...] = ()
+    choices: tuple[PortClass, ...] = ()
 
-    def accepts(self, given: type[PortType]) -> bool:
+    def accepts(self, given: PortClass) -> bool:
         """True when a value of type ``given`` may be connected to this port."""
         if self.choices:
             return any(given.is_a(choice) for choice in self.choices)
         return given.is_a(self.type)
 
-    def bind(self, given: type[PortType]) -> type[PortType]:
+    def bind(self, given: PortClass) -> PortClass:
         """The type this port's TypeVar takes for a connected ``given`` type."""
         for choice in self.choices:
             if given.is_a(choice):
@@ -283,6 +287,14 @@ def _port_type(annotation: Any) -> tuple[type[PortType] | None, bool]:
     return port_of(annotation), False
 
 
+def _typevar_port(annotation: TypeVar) -> type[PortType]:
+    """The port type of an output TypeVar, which an input's annotation has already checked."""
+    port, _ = _port_type(annotation)
+    if port is None:  # pragma: no cover - the same TypeVar annotates a checked input
+        raise TypeError(f"type variable {annotation.__name__} has no port type")
+    return port
+
+
 def _typevar_choices(annotation: Any) -> tuple[type[PortType], ...]:
     if not isinstance(annotation, TypeVar):
         return ()
@@ -359,17 +371,18 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
     if isinstance(returned, TypeVar):
         if returned.__name__ not in bound_vars:
             raise reject(f"output type variable {returned.__name__} must also annotate an input")
-        outputs = {SINGLE_OUTPUT: _port_type(returned)[0]}
+        outputs = {SINGLE_OUTPUT: _typevar_port(returned)}
         output_vars[SINGLE_OUTPUT] = returned.__name__
     elif (single := port_of(returned)) is not None:
         outputs = {SINGLE_OUTPUT: single}
-    elif _is_named_tuple(returned):
+    elif _is_named_tuple(tuple_class := get_origin(returned) or returned):
+        returned = tuple_class  # a generic NamedTuple's fields name its TypeVars
         field_hints = typing.get_type_hints(returned, include_extras=True)
         outputs = {}
         for name in returned._fields:
             hint = field_hints.get(name)
             if isinstance(hint, TypeVar) and hint.__name__ in bound_vars:
-                outputs[name] = _port_type(hint)[0]
+                outputs[name] = _typevar_port(hint)
                 output_vars[name] = hint.__name__
             elif (field_port := port_of(hint)) is not None:
                 outputs[name] = field_port
@@ -386,7 +399,7 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
         )
 
     try:
-        model = pydantic.create_model(  # type: ignore[call-overload]
+        model = pydantic.create_model(
             f"{mark.id}.params",
             __config__=pydantic.ConfigDict(extra="forbid", validate_default=True),
             **fields,

@@ -122,7 +122,7 @@ class PortType:
             np.save(path, arrays["data"], allow_pickle=False)
             return [path]
         path = stem.with_suffix(".npz")
-        np.savez(path, **arrays)
+        np.savez(path, **arrays)  # type: ignore[arg-type]  # numpy's stub types **kwds as bool
         if not meta:
             return [path]
         meta_path = stem.with_suffix(".json")
@@ -186,7 +186,7 @@ class ArrayPort(PortType):
 class FloatImagePort(ArrayPort):
     """A filter response: finite ``float32``, ``H×W`` or ``H×W×3``, any range."""
 
-    ndims = (2, 3)
+    ndims: ClassVar[tuple[int, ...]] = (2, 3)
     dtypes = (np.float32,)
     expected = "finite float32, H×W or H×W×3"
 
@@ -312,7 +312,7 @@ class _ScalarPort(PortType):
 class FloatPort(_ScalarPort):
     """A real number (an ``Int`` is accepted where a ``Float`` is expected)."""
 
-    python_type = float
+    python_type: ClassVar[type] = float
 
     @classmethod
     def validate(cls, value: Any) -> Any:

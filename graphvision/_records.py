@@ -39,10 +39,10 @@ class KeypointSet:
     scale: np.ndarray
     orientation: np.ndarray
     response: np.ndarray
-    affine: np.ndarray = field(default=None)  # type: ignore[assignment]
+    affine: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)))
 
     def __post_init__(self) -> None:
-        if self.affine is None:
+        if len(self.affine) == 0 and len(self.xy) > 0:  # default: identity shapes
             count = len(self.xy)
             object.__setattr__(self, "affine", np.tile(np.eye(2), (count, 1, 1)))
 

@@ -94,7 +94,8 @@ class Registry:
         return status
 
     def _check_new_nodes(self, specs: list[NodeSpec]) -> list[NodeSpec]:
-        kept, seen = [], {}
+        kept: list[NodeSpec] = []
+        seen: dict[str, NodeSpec] = {}
         for spec in specs:
             if spec.id in seen:
                 raise DuplicateNodeError(

@@ -104,14 +104,17 @@ def run_tasks(
     stopping = False
     running = 0
 
+    def report_to_loop(name: str) -> Callable[[Future], None]:
+        return lambda done: finished.put((name, done))
+
     def launch(names: list[str]) -> None:
         nonlocal running
-        alone = start_inline is not None and running == 0 and len(names) == 1
+        run_here = start_inline if running == 0 and len(names) == 1 else None
         for name in names:
             started.add(name)
             running += 1
-            future = start_inline(name) if alone else start(name)  # type: ignore[misc]
-            future.add_done_callback(lambda done, name=name: finished.put((name, done)))
+            future = run_here(name) if run_here is not None else start(name)
+            future.add_done_callback(report_to_loop(name))
 
     def block(name: str) -> None:
         stack = [name]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, NamedTuple
+from typing import Annotated, Generic, NamedTuple
 
 import numpy as np
 from pydantic import Field
@@ -105,7 +105,7 @@ def _random_homography(
     return h / h[2, 2]
 
 
-class RandomWarp(NamedTuple):
+class RandomWarp(NamedTuple, Generic[ImageT]):
     image: ImageT
     homography: Homography
 
@@ -119,7 +119,7 @@ def random_warp(
     max_scale: Annotated[float, Field(gt=0)] = 1.3,
     perspective: Annotated[float, Field(ge=0, le=1)] = 0.3,
     seed: Annotated[int, Field(ge=0)] = 0,
-) -> RandomWarp:
+) -> RandomWarp[ImageT]:
     """Warp the image by a seeded random homography about its centre, same output size.
 
     The homography is a rotation by up to ``max_rotation`` degrees, a scale
@@ -139,7 +139,7 @@ def random_warp(
     return RandomWarp(warped.astype(np.float32), h)
 
 
-class TwoViews(NamedTuple):
+class TwoViews(NamedTuple, Generic[ImageT]):
     left: ImageT
     right: ImageT
     homography: Homography
@@ -153,7 +153,7 @@ def two_views(
     rotation: Annotated[float, Field(ge=0, le=45)] = 8.0,
     perspective: Annotated[float, Field(ge=0, le=0.5)] = 0.1,
     seed: Annotated[int, Field(ge=0)] = 0,
-) -> TwoViews:
+) -> TwoViews[ImageT]:
     """Two overlapping views of one image: the left and right crops, each under its own homography.
 
     Each view is ``(1 + overlap) / 2`` of the width. The left one is the left

@@ -133,7 +133,7 @@ def fill_holes(
     -------
     filled : (H, W) bool ndarray
     """
-    from graphvision_plugins.regions import label_components
+    from ..regions import label_components
 
     holes = label_components(~mask, connectivity=connectivity)
     border = np.unique(np.concatenate([holes[0], holes[-1], holes[:, 0], holes[:, -1]]))
@@ -158,7 +158,7 @@ def remove_small_objects(
     -------
     cleaned : (H, W) bool ndarray
     """
-    from graphvision_plugins.regions import label_components
+    from ..regions import label_components
 
     labels = label_components(mask, connectivity=connectivity)
     keep = np.bincount(labels.ravel()) >= min_area

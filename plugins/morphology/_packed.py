@@ -47,14 +47,14 @@ def binary_extreme(mask: np.ndarray, footprint: np.ndarray, erode: bool) -> np.n
     )
     words = np.packbits(padded, axis=1).view(">u8").astype(np.uint64)
     shifted = {s: _shift_left(words, s, erode) for s in np.unique(offsets[:, 1] + half_x)}
-    result = None
-    for dy, dx in offsets:
-        rows_slice = shifted[dx + half_x][half_y + dy : half_y + dy + rows]
-        if result is None:
-            result = rows_slice.copy()
-        elif erode:
-            result &= rows_slice
+    def window(dy: int, dx: int) -> np.ndarray:
+        return shifted[dx + half_x][half_y + dy : half_y + dy + rows]
+
+    result = window(*offsets[0]).copy()  # the footprint has at least one element
+    for dy, dx in offsets[1:]:
+        if erode:
+            result &= window(dy, dx)
         else:
-            result |= rows_slice
+            result |= window(dy, dx)
     packed = result.astype(">u8").view(np.uint8)
     return np.unpackbits(packed, axis=1, count=cols).view(np.bool_)

@@ -154,7 +154,7 @@ def describe(labels: LabelImage, image: GrayImage | None = None) -> Table:
 class Kept(NamedTuple):
     labels: LabelImage
     table: Table
-    count: Int
+    count: Int  # type: ignore[assignment]  # the port is named count in pipelines; hides tuple.count
 
 
 Range = Annotated[list[float | None], Field(min_length=2, max_length=2)]
