@@ -47,6 +47,7 @@ def binary_extreme(mask: np.ndarray, footprint: np.ndarray, erode: bool) -> np.n
     )
     words = np.packbits(padded, axis=1).view(">u8").astype(np.uint64)
     shifted = {s: _shift_left(words, s, erode) for s in np.unique(offsets[:, 1] + half_x)}
+
     def window(dy: int, dx: int) -> np.ndarray:
         return shifted[dx + half_x][half_y + dy : half_y + dy + rows]
 
