@@ -120,23 +120,8 @@ class _Checker:
         try:
             return spec.validate_params(params)
         except pydantic.ValidationError as error:
-            allowed = list(spec.params_model.model_fields)
-            for item in error.errors():
-                param = ".".join(str(p) for p in item["loc"])
-                where = f"nodes.{name}.params.{param}"
-                if item["type"] == "extra_forbidden":
-                    listing = ", ".join(allowed) if allowed else "none"
-                    self.report(
-                        where,
-                        f"unknown parameter '{param}' of {spec.id}"
-                        f"{did_you_mean(param, allowed)}; parameters: {listing}",
-                    )
-                else:
-                    self.report(
-                        where,
-                        f"invalid value {item.get('input')!r} for parameter "
-                        f"'{param}' of {spec.id}: {item['msg']}",
-                    )
+            for param, message in spec.param_problems(error):
+                self.report(f"nodes.{name}.params.{param}", message)
             return {}
 
     # -- connections --------------------------------------------------------------

@@ -27,6 +27,7 @@ __all__ = [
     "GraphvisionError",
     "InputError",
     "NodeExecutionError",
+    "ParameterError",
     "PipelineError",
     "PluginLoadError",
     "PortValueError",
@@ -62,6 +63,10 @@ class UnknownNameError(GraphvisionError, KeyError):
 
 class PortValueError(GraphvisionError, ValueError):
     """A value does not satisfy the port type it is given to."""
+
+
+class ParameterError(GraphvisionError, ValueError):
+    """A node parameter is unknown or fails its constraint."""
 
 
 class InputError(GraphvisionError):

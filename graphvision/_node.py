@@ -20,14 +20,21 @@
   the first constraint the connected type is a subtype of (a bound works
   too, binding to the connected type itself).
 
-The decorator only attaches metadata and returns the function unchanged, so a
-node stays an ordinary function to call and test. Signatures are checked when
-a plugin registers (:func:`build_spec`), not when the node first runs.
+Signatures are checked when a plugin registers (:func:`build_spec`), not when
+the node first runs. The decorator returns the function wrapped so that a
+direct call (``gaussian(image, sigma=2)`` in a script or a test) validates its
+inputs with the same port types and its parameters with the same pydantic
+model as a run does, and fails with a :class:`~graphvision.PortValueError` or
+:class:`~graphvision.ParameterError` naming the node and the port or
+parameter. The engine validates values itself and calls the unchecked
+function (``NodeSpec.func``, also ``checked.__wrapped__``), so nothing is
+checked twice on a run's hot path.
 """
 
 from __future__ import annotations
 
 import ast
+import functools
 import hashlib
 import importlib
 import inspect
@@ -43,7 +50,7 @@ from typing import Any, TypeVar, Union, get_args, get_origin
 
 import pydantic
 
-from ._errors import RegistrationError
+from ._errors import ParameterError, PortValueError, RegistrationError
 from ._ports import PortType
 from .types import port_of
 
@@ -55,6 +62,7 @@ __all__ = [
     "build_spec",
     "node",
     "source",
+    "unchecked",
 ]
 
 NODE_ID = re.compile(r"^[a-z][a-z0-9_]*\.[a-z][a-z0-9_]*$")
@@ -94,9 +102,30 @@ def node(
 
     def mark(func: Callable) -> Callable:
         func.__graphvision_node__ = _NodeMark(id, version, cache, overrides)  # type: ignore[attr-defined]
-        return func
+        return _checked_call(func)
 
     return mark
+
+
+def _checked_call(func: Callable) -> Callable:
+    """``func`` behind the checks a run makes: inputs by port type, parameters by model."""
+    specs: list[NodeSpec] = []  # built on the first call: registration stays the checker
+
+    @functools.wraps(func)
+    def checked(*args: Any, **kwargs: Any) -> Any:
+        if not specs:
+            specs.append(build_spec(func, plugin=func.__module__))
+        inputs, params = specs[0].check_call(args, kwargs)
+        return func(*inputs, **params)
+
+    return checked
+
+
+def unchecked(func: Callable) -> Callable:
+    """The function a node decorator wrapped (``func`` itself when it is not a node)."""
+    while hasattr(func, "__graphvision_node__") and hasattr(func, "__wrapped__"):
+        func = func.__wrapped__
+    return func
 
 
 def source(scheme: str) -> Callable[[Callable], Callable]:
@@ -132,7 +161,7 @@ class FunctionRef:
         obj: Any = module
         for part in self.qualname.split("."):
             obj = getattr(obj, part)
-        return obj
+        return unchecked(obj)  # the engine validates values itself
 
 
 PortClass = type[PortType]
@@ -160,6 +189,18 @@ class InputPort:
             if given.is_a(choice):
                 return choice
         return given
+
+    def check(self, value: Any, where: str) -> tuple[Any, PortClass]:
+        """(validated value, the port type it satisfies), or a PortValueError naming ``where``."""
+        failures: dict[PortClass, str] = {}
+        for choice in self.choices or (self.type,):
+            try:
+                return choice.validate(value), choice
+            except PortValueError as error:
+                failures[choice] = str(error)
+        # The common type's message covers the choices when it is one of them.
+        message = failures.get(self.type) or " or ".join(failures.values())
+        raise PortValueError(f"{where} {message}")
 
     def type_label(self) -> str:
         """The accepted type: the common one when a choice covers the others, else each."""
@@ -212,6 +253,78 @@ class NodeSpec:
     def validate_params(self, params: dict[str, Any]) -> dict[str, Any]:
         """Validated, canonical parameters (JSON-able) or a pydantic ValidationError."""
         return self.params_model.model_validate(params).model_dump(mode="json")
+
+    def param_problems(self, error: pydantic.ValidationError) -> list[tuple[str, str]]:
+        """(parameter, message) for each problem of a parameter validation."""
+        from ._registry import did_you_mean
+
+        allowed = list(self.params_model.model_fields)
+        problems = []
+        for item in error.errors():
+            param = ".".join(str(p) for p in item["loc"])
+            if item["type"] == "extra_forbidden":
+                listing = ", ".join(allowed) if allowed else "none"
+                message = (
+                    f"unknown parameter '{param}' of {self.id}"
+                    f"{did_you_mean(param, allowed)}; parameters: {listing}"
+                )
+            else:
+                message = (
+                    f"invalid value {item.get('input')!r} for parameter "
+                    f"'{param}' of {self.id}: {item['msg']}"
+                )
+            problems.append((param, message))
+        return problems
+
+    def check_call(
+        self, args: tuple[Any, ...], kwargs: dict[str, Any]
+    ) -> tuple[list[Any], dict[str, Any]]:
+        """Validated (inputs, parameters) of a direct call, as a run would validate them.
+
+        Raises
+        ------
+        PortValueError
+            An input is missing, or fails its port type, or two inputs of one
+            type variable have different types (a gray and a colour image).
+        ParameterError
+            A parameter is unknown or invalid.
+        """
+        names = list(self.inputs)
+        if len(args) > len(names):
+            raise PortValueError(
+                f"{self.id} takes {len(names)} input(s) ({', '.join(names)}), got {len(args)}"
+            )
+        given = dict(zip(names, args, strict=False))
+        for name in names:
+            if name in kwargs:
+                if name in given:
+                    raise PortValueError(f"{self.id}: input '{name}' given twice")
+                given[name] = kwargs.pop(name)
+        values: list[Any] = []
+        bound: dict[str, type[PortType]] = {}
+        for name, port in self.inputs.items():
+            value = given.get(name)
+            if value is None:
+                if not port.optional:
+                    raise PortValueError(f"{self.id}: missing input '{name}'")
+                values.append(None)
+                continue
+            value, chosen = port.check(value, f"{self.id}: input '{name}'")
+            if port.typevar:
+                first = bound.setdefault(port.typevar, chosen)
+                if not chosen.is_a(first):
+                    raise PortValueError(
+                        f"{self.id}: input '{name}' is {chosen.type_name()} but an earlier "
+                        f"input of type {port.typevar} is {first.type_name()}"
+                    )
+            values.append(value)
+        try:
+            model = self.params_model.model_validate(kwargs)
+        except pydantic.ValidationError as error:
+            raise ParameterError(
+                "; ".join(message for _, message in self.param_problems(error))
+            ) from None
+        return values, {name: getattr(model, name) for name in type(model).model_fields}
 
     def split_outputs(self, result: Any) -> dict[str, Any]:
         if self.output_tuple is None:
@@ -319,6 +432,7 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
     RegistrationError
         Naming the plugin and the function, for any signature that is not a node.
     """
+    func = unchecked(func)
     mark: _NodeMark = func.__graphvision_node__  # type: ignore[attr-defined]
     where = f"plugin '{plugin}', function {func.__module__}.{func.__qualname__}"
 
