@@ -22,11 +22,11 @@ from typing import Any
 import pydantic
 
 from ._cache import node_fingerprint
-from ._errors import PipelineError, Problem, UnknownNameError
+from ._errors import PipelineError, Problem, UnknownNameError, did_you_mean
 from ._graph import Graph, Ref
 from ._node import NodeSpec
 from ._ports import PortType
-from ._registry import Registry, did_you_mean
+from ._registry import Registry
 from ._scheduler import topological_order
 
 __all__ = ["CompiledGraph", "Step", "compile_graph"]

@@ -20,6 +20,8 @@ failed run). Anything else is a bug and keeps its traceback.
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 __all__ = [
@@ -35,6 +37,7 @@ __all__ = [
     "RegistrationError",
     "RunError",
     "UnknownNameError",
+    "did_you_mean",
 ]
 
 
@@ -132,3 +135,9 @@ class RunError(GraphvisionError):
         self.failures = failures
         self.record = record
         super().__init__("\n".join(str(e) for e in failures.values()))
+
+
+def did_you_mean(name: str, options: Iterable[str]) -> str:
+    """`` (did you mean 'x'?)`` for the closest option, or ''."""
+    close = difflib.get_close_matches(name, list(options), n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}'?)" if close else ""

@@ -21,6 +21,8 @@ import re
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from ._errors import did_you_mean
+
 if TYPE_CHECKING:
     import networkx as nx
 
@@ -156,8 +158,6 @@ class Graph:
             elif target in graph.nodes:
                 graph.nodes[target].params[param] = value
             else:
-                from ._registry import did_you_mean
-
                 raise KeyError(
                     f"override '{key}': no node '{target}'{did_you_mean(target, graph.nodes)}"
                 )

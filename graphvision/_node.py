@@ -50,7 +50,7 @@ from typing import Any, TypeVar, Union, get_args, get_origin
 
 import pydantic
 
-from ._errors import ParameterError, PortValueError, RegistrationError
+from ._errors import ParameterError, PortValueError, RegistrationError, did_you_mean
 from ._ports import PortType
 from .types import port_of
 
@@ -256,7 +256,6 @@ class NodeSpec:
 
     def param_problems(self, error: pydantic.ValidationError) -> list[tuple[str, str]]:
         """(parameter, message) for each problem of a parameter validation."""
-        from ._registry import did_you_mean
 
         allowed = list(self.params_model.model_fields)
         problems = []

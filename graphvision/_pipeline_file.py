@@ -21,9 +21,8 @@ import pydantic
 import yaml
 from pydantic import BaseModel, ConfigDict, Field
 
-from ._errors import PipelineError, Problem
+from ._errors import PipelineError, Problem, did_you_mean
 from ._graph import Graph, InputDecl, NodeDecl, Ref
-from ._registry import did_you_mean
 
 __all__ = ["dump_pipeline", "load_pipeline", "parse_pipeline", "pipeline_json_schema"]
 

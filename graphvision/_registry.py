@@ -12,23 +12,15 @@ whatever the loading order.
 
 from __future__ import annotations
 
-import difflib
 import inspect
 import types
-from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from ._errors import DuplicateNodeError, UnknownNameError
+from ._errors import DuplicateNodeError, UnknownNameError, did_you_mean
 from ._node import NodeSpec, SourceSpec, build_spec
 from ._ports import PortType, builtin_port_types
 
 __all__ = ["PluginStatus", "Registry", "did_you_mean"]
-
-
-def did_you_mean(name: str, options: Iterable[str]) -> str:
-    """`` (did you mean 'x'?)`` for the closest option, or ''."""
-    close = difflib.get_close_matches(name, list(options), n=1, cutoff=0.6)
-    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 @dataclass

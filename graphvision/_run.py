@@ -37,11 +37,12 @@ from ._errors import (
     PortValueError,
     RunError,
     UnknownNameError,
+    did_you_mean,
 )
 from ._executors import Executor, SyncExecutor, call_node, call_node_encoded, make_executor
 from ._graph import Graph
 from ._ports import PortType, TextPort, _ScalarPort, freeze
-from ._registry import Registry, did_you_mean
+from ._registry import Registry
 from ._scheduler import run_tasks
 
 __all__ = ["NodeRecord", "RunHooks", "RunRecord", "RunResult", "resolve_input", "run"]
