@@ -10,7 +10,8 @@ In a plugin's test suite::
 :func:`check_plugin` imports the module, registers it in a fresh registry
 (so every signature is checked), and checks each node: its description is
 JSON, its documentation has a summary line, its default parameters are
-valid, its annotations are the type-checkable aliases of
+valid, its docstring's NumPy-style ``Parameters`` section names every input
+port and parameter, its annotations are the type-checkable aliases of
 :mod:`graphvision.types` (not bare port classes), and no two of its port
 types share a name. It raises one :class:`PluginCheckError` listing every
 problem.
@@ -21,6 +22,8 @@ from __future__ import annotations
 import importlib
 import inspect
 import json
+import re
+import textwrap
 import types
 import typing
 
@@ -28,7 +31,7 @@ from ._errors import GraphvisionError
 from ._ports import PortType
 from ._registry import Registry
 
-__all__ = ["PluginCheckError", "check_plugin"]
+__all__ = ["PluginCheckError", "check_plugin", "documented_parameters"]
 
 
 class PluginCheckError(GraphvisionError):
@@ -74,10 +77,45 @@ def check_plugin(module: str | types.ModuleType) -> Registry:
                     f"{op}: port '{port}' has type {kind.type_name()}, but another port "
                     "type of that name is registered (give the class another name)"
                 )
+        undocumented = [
+            name
+            for name in (*spec.inputs, *spec.params_model.model_fields)
+            if name not in documented_parameters(spec.doc)
+        ]
+        if undocumented:
+            problems.append(
+                f"{op}: the docstring's Parameters section does not describe "
+                + ", ".join(f"'{name}'" for name in undocumented)
+            )
         problems += [f"{op}: {problem}" for problem in _bare_port_classes(spec.func)]
     if problems:
         raise PluginCheckError(module.__name__, problems)
     return registry
+
+
+_SECTION = re.compile(r"^(\w[\w ]*)\n-{3,}\s*$", re.MULTILINE)
+
+
+def documented_parameters(doc: str) -> set[str]:
+    """Names listed in a NumPy-style docstring's ``Parameters`` section.
+
+    An entry is a line at the section's indentation, ``name : description``,
+    ``name`` alone, or ``a, b : description`` for several names.
+    """
+    text = textwrap.dedent("\n".join(doc.splitlines()[1:]))  # the summary is not indented
+    headers = list(_SECTION.finditer(text))
+    for header, following in zip(headers, [*headers[1:], None], strict=False):
+        if header.group(1).strip() != "Parameters":
+            continue
+        body = text[header.end() : following.start() if following else len(text)]
+        names: set[str] = set()
+        for line in body.splitlines():
+            if line[:1].isspace() or not line.strip():
+                continue
+            head = line.split(":", 1)[0]
+            names.update(name.strip().lstrip("*") for name in head.split(","))
+        return names
+    return set()
 
 
 def _bare_port_classes(func: typing.Callable[..., object]) -> list[str]:

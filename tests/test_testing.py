@@ -35,7 +35,12 @@ class SecretPort(gv.ArrayPort):
 def test_a_port_type_used_by_a_node_is_registered_with_it():
     @gv.node("odd.one")
     def one(x: Annotated[np.ndarray, SecretPort]) -> gv.Float:
-        """One."""
+        """One.
+
+        Parameters
+        ----------
+        x : the secret value
+        """
         return 1.0
 
     module = types.ModuleType("odd_plugin")
@@ -46,7 +51,12 @@ def test_a_port_type_used_by_a_node_is_registered_with_it():
 def test_a_port_type_name_clash_is_reported():
     @gv.node("odd.one")
     def one(x: Annotated[np.ndarray, ImagePort]) -> gv.Float:
-        """One."""
+        """One.
+
+        Parameters
+        ----------
+        x : the secret value
+        """
         return 1.0
 
     module = types.ModuleType("odd_plugin")

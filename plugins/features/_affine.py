@@ -44,6 +44,19 @@ def affine_adapt(
     in :math:`E = U S U^T` terms, the rotation is :math:`U^{-1}`, the scale
     :math:`S^{-1/2}`.
 
+    Parameters
+    ----------
+    image : GrayImage
+        The image the keypoints were detected in.
+    keypoints : Keypoints
+        Keypoints to adapt (their scales set the integration windows).
+    iterations : int
+        Maximum number of normalise–re-estimate steps per keypoint.
+    window : float
+        Integration window radius in units of the keypoint's scale.
+    isotropy : float
+        Stop when the ratio of the second-moment eigenvalues reaches this (1 = a circle).
+
     Returns
     -------
     keypoints : the same keypoints with ``affine`` set to U (2×2, det 1, acting on (x, y))

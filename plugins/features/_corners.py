@@ -79,6 +79,23 @@ def harris(
     maxima of :math:`R` (non-maximum suppression within ``min_distance``)
     above ``threshold_rel`` times the strongest.
 
+    Parameters
+    ----------
+    image : GrayImage
+        The image to detect in.
+    sigma_d : float
+        Derivative scale: σ of the Gaussian derivative filters.
+    sigma_i : float
+        Integration scale: σ of the Gaussian window over the gradient products.
+    alpha : float
+        The α of :math:`R = \det M - \alpha \operatorname{tr}^2 M` (0.04–0.06).
+    threshold_rel : float
+        Keep responses above this fraction of the largest response.
+    min_distance : int
+        Minimum distance in pixels between two kept corners (non-maximum suppression).
+    max_keypoints : int
+        Keep at most this many, strongest first (0: no limit).
+
     Returns
     -------
     keypoints : scale :math:`\sigma_i`, orientation 0, response R, strongest first
@@ -108,6 +125,19 @@ def hessian(
 
     with second derivatives of a Gaussian of :math:`\sigma`. It responds to
     blobs and corners (strong curvature in both directions), not to edges.
+
+    Parameters
+    ----------
+    image : GrayImage
+        The image to detect in.
+    sigma : float
+        Scale of the Gaussian second derivatives.
+    threshold_rel : float
+        Keep responses above this fraction of the largest response.
+    min_distance : int
+        Minimum distance in pixels between two kept points.
+    max_keypoints : int
+        Keep at most this many, strongest first (0: no limit).
 
     Returns
     -------
@@ -145,6 +175,19 @@ def log_blobs(
     ``max_sigma``; a keypoint is a maximum among its 26 neighbours in
     (x, y, σ) above ``threshold``, and its σ is the characteristic scale (a
     disk of radius r responds most at :math:`\sigma = r / \sqrt 2`).
+
+    Parameters
+    ----------
+    image : GrayImage
+        The image to detect in.
+    min_sigma, max_sigma : float
+        The range of scales searched.
+    scales : int
+        Number of scales, spaced geometrically from ``min_sigma`` to ``max_sigma``.
+    threshold : float
+        Minimum absolute scale-normalised response.
+    max_keypoints : int
+        Keep at most this many, strongest first (0: no limit).
 
     Returns
     -------

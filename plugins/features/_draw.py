@@ -29,6 +29,13 @@ def _line(canvas: np.ndarray, p: np.ndarray, q: np.ndarray, colour: tuple) -> No
 def draw_keypoints(image: Image, keypoints: Keypoints) -> ColorImage:
     """Each keypoint as a circle of radius 3σ with a line showing its orientation.
 
+    Parameters
+    ----------
+    image : Image
+        The image to draw on (gray is drawn in colour).
+    keypoints : Keypoints
+        The keypoints to draw.
+
     Returns
     -------
     image : (H, W, 3) float32
@@ -59,6 +66,17 @@ def draw_matches(
     """The two images side by side with a line per match: green for inliers, red for the rest.
 
     Without ``inliers`` every match is drawn green.
+
+    Parameters
+    ----------
+    a, b : Image
+        The two images, drawn side by side.
+    keypoints_a, keypoints_b : Keypoints
+        Keypoints of ``a`` and of ``b``.
+    matches : Matches
+        Pairs (index in ``keypoints_a``, index in ``keypoints_b``).
+    inliers : Matches, optional
+        The matches to draw in green (the others in red); all green when absent.
 
     Returns
     -------

@@ -28,6 +28,17 @@ def patch_descriptor(
     which makes them invariant to affine changes of intensity
     (:math:`I \mapsto aI + b`).
 
+    Parameters
+    ----------
+    image : GrayImage
+        The image the keypoints belong to.
+    keypoints : Keypoints
+        Where to sample, at each keypoint's scale and orientation.
+    size : int
+        Side of the sampling grid (the descriptor has ``size²`` values).
+    extent : float
+        Half-width of the patch in units of the keypoint's scale.
+
     Returns
     -------
     descriptors : (N, size²) float32

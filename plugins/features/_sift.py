@@ -432,7 +432,23 @@ def dog(
     edge_ratio: Annotated[float, Field(gt=1)] = 10.0,
     upsample: bool = True,
 ) -> Keypoints:
-    """Lowe's DoG keypoints with orientations (the detector half of ``features.sift``).
+    r"""Lowe's DoG keypoints with orientations (the detector half of ``features.sift``).
+
+    Parameters
+    ----------
+    image : GrayImage
+        The image to detect in.
+    intervals : int
+        Scales per octave, s; the DoG stack has s + 2 levels per octave.
+    sigma : float
+        Blur of the first scale of each octave (Lowe: 1.6).
+    contrast_threshold : float
+        Minimum absolute DoG response at the refined extremum (image in [0, 1]).
+    edge_ratio : float
+        Maximum ratio r of the Hessian's principal curvatures: keep
+        :math:`\operatorname{tr}^2 / \det < (r + 1)^2 / r`.
+    upsample : bool
+        Double the image first (octave −1), which finds about four times more keypoints.
 
     Returns
     -------
@@ -468,6 +484,19 @@ def describe_sift(
     Each keypoint is described in the Gaussian pyramid level nearest its
     scale, exactly as ``features.sift`` describes its own keypoints, so
     ``describe_sift(image, sift(image).keypoints)`` reproduces its descriptors.
+
+    Parameters
+    ----------
+    image : GrayImage
+        The image the keypoints belong to.
+    keypoints : Keypoints
+        Keypoints from any detector (positions, scales, orientations).
+    intervals : int
+        Scales per octave of the Gaussian scale space the descriptors are sampled in.
+    sigma : float
+        Blur of the first scale of each octave.
+    upsample : bool
+        Double the image first (Lowe's octave −1), as the detector did.
 
     Returns
     -------

@@ -153,6 +153,11 @@ def gaussian_kernel(
 def box_kernel(*, size: Size = 3) -> Kernel:
     """A ``size × size`` kernel of equal weights summing to one (a moving average).
 
+    Parameters
+    ----------
+    size : int
+        Odd side of the kernel.
+
     Returns
     -------
     kernel : (size, size) float64 ndarray
@@ -263,6 +268,14 @@ def to_image(image: FloatImage, *, method: Literal["clip", "minmax"] = "clip") -
     ``clip`` keeps values and clips them to [0, 1]; ``minmax`` rescales
     linearly, :math:`(F - \min F) / (\max F - \min F)` (a constant image
     becomes 0).
+
+    Parameters
+    ----------
+    image : FloatImage
+        A filter response (any range).
+    method : {"clip", "minmax"}
+        ``clip`` keeps values in [0, 1] and clips the rest; ``minmax`` maps the
+        smallest value to 0 and the largest to 1.
 
     Returns
     -------

@@ -76,6 +76,11 @@ def fit_line_lstsq(points: Points2D) -> Line2D:
     Vertical errors make it unusable for near-vertical lines (use
     ``fitting.line_total``), and one outlier can pull it anywhere.
 
+    Parameters
+    ----------
+    points : Points2D
+        At least two points (x, y).
+
     Returns
     -------
     line : (3,) float64, ``a x + b y + c = 0`` with ``a² + b² = 1``
@@ -126,6 +131,11 @@ def fit_line_total(points: Points2D) -> Line2D:
     :math:`(a, b)` minimising :math:`\|A n\|^2` subject to :math:`\|n\| = 1`
     is the eigenvector of :math:`A^T A` of the smallest eigenvalue: the last
     right singular vector of :math:`A` (SVD). Then :math:`c = -(a \bar x + b \bar y)`.
+
+    Parameters
+    ----------
+    points : Points2D
+        At least two points (x, y).
 
     Returns
     -------
@@ -185,6 +195,20 @@ def fit_line_ransac(
     The best line is refit to all its inliers by total least squares and
     refined with Gauss-Newton (see :func:`~graphvision_plugins.fitting.ransac`).
 
+    Parameters
+    ----------
+    points : Points2D
+        The points, inliers and outliers.
+    threshold : float
+        Inlier distance from a line, in the points' units.
+    confidence : float
+        Probability of drawing at least one outlier-free sample; sets the
+        number of iterations adaptively.
+    max_iterations : int
+        Upper bound on the iterations.
+    seed : int
+        Seed of the sample draws.
+
     Returns
     -------
     line : (3,) float64
@@ -233,6 +257,15 @@ def line_distance(
     spread over ``extent`` pixels of ``truth``, centred where ``truth`` passes closest
     to (50, 50), the centre of the sampled square.
 
+    Parameters
+    ----------
+    line : Line2D
+        The estimated line.
+    truth : Line2D
+        The true line.
+    extent : float
+        The points compared lie along ``truth`` within ``[-extent, extent]`` in x.
+
     Returns
     -------
     distance : float, pixels
@@ -262,6 +295,19 @@ def sample_line_points(
 
     The line passes through (50, 50) at ``angle`` radians from +x; inliers
     lie along a 100-pixel stretch, outliers anywhere in the 100×100 square.
+
+    Parameters
+    ----------
+    count : int
+        Number of points, inliers and outliers together.
+    outlier_ratio : float
+        Fraction of the points drawn uniformly instead of on the line.
+    noise : float
+        σ of the Gaussian noise added to the inliers, perpendicular and along.
+    angle : float
+        Angle of the line in radians.
+    seed : int
+        Seed of every draw.
 
     Returns
     -------

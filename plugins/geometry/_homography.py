@@ -139,6 +139,24 @@ def homography_ransac(
     then DLT on all inliers and, with ``refine``, Levenberg-Marquardt on their
     reprojection error.
 
+    Parameters
+    ----------
+    src, dst : Keypoints
+        Keypoints of the first and of the second image.
+    matches : Matches
+        Pairs (index in ``src``, index in ``dst``).
+    threshold : float
+        Inlier threshold on the symmetric transfer error, in pixels.
+    confidence : float
+        Probability of drawing at least one outlier-free sample; sets the
+        number of iterations adaptively.
+    max_iterations : int
+        Upper bound on the iterations.
+    refine : bool
+        Refine the inliers' fit by minimising the geometric error.
+    seed : int
+        Seed of the sample draws.
+
     Returns
     -------
     homography : (3, 3) float64, ``dst ~ H src``
@@ -192,6 +210,17 @@ def corner_error(
 
     The corners are (0, 0), (w-1, 0), (w-1, h-1), (0, h-1): the usual accuracy
     measure of a homography estimate (success when below 3 px).
+
+    Parameters
+    ----------
+    estimated, truth : Homography
+        The estimate and the true homography.
+    width, height : int
+        Size of the image whose corners are mapped, in pixels.
+
+    Returns
+    -------
+    error : float, pixels (inf when a corner maps to infinity)
     """
     corners = np.array([[0, 0], [width - 1, 0], [width - 1, height - 1], [0, height - 1]], float)
     error = np.linalg.norm(

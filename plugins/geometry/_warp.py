@@ -126,6 +126,19 @@ def random_warp(
     in ``[min_scale, max_scale]`` and a perspective term of up to
     ``perspective`` (in units of the image size), all about the image centre.
 
+    Parameters
+    ----------
+    image : Image
+        The image to warp.
+    max_rotation : float
+        Largest rotation, in degrees, either way.
+    min_scale, max_scale : float
+        Range of the isotropic scale.
+    perspective : float
+        Largest perspective term, in units of the image size.
+    seed : int
+        Seed of the random homography.
+
     Returns
     -------
     image : the warped image
@@ -160,6 +173,19 @@ def two_views(
     crop as it is; the right one is the right crop seen through a seeded
     homography (rotation up to ``rotation`` degrees, a perspective term).
 
+    Parameters
+    ----------
+    image : Image
+        The scene both views look at.
+    overlap : float
+        Fraction of the image width the two crops share.
+    rotation : float
+        Largest rotation of each view, in degrees.
+    perspective : float
+        Largest perspective term of each view, in units of the image size.
+    seed : int
+        Seed of both homographies.
+
     Returns
     -------
     left, right : the two views
@@ -186,6 +212,15 @@ def stitch(base: Image, other: Image, homography: Homography) -> ColorImage:
     canvas is the bounding box of ``base`` and the mapped corners of
     ``other``; each image is weighted by its pixels' distance to its own
     border (feathering), so seams fade out.
+
+    Parameters
+    ----------
+    base : Image
+        The image that keeps its frame.
+    other : Image
+        The image mapped into ``base``'s frame.
+    homography : Homography
+        Maps ``other``'s pixel coordinates to ``base``'s.
 
     Returns
     -------

@@ -71,6 +71,17 @@ def match(
     ``brute`` is exact and fast with BLAS for a few thousand descriptors;
     ``kdtree`` helps for low-dimensional descriptors or very large sets.
 
+    Parameters
+    ----------
+    a, b : Descriptors
+        Descriptors of the first and of the second image.
+    ratio : float
+        Lowe's ratio: nearest distance below ``ratio`` times the second nearest.
+    symmetric : bool
+        Keep only mutual nearest neighbours.
+    method : {"brute", "kdtree"}
+        Exact search by matrix product, or with a k-d tree.
+
     Returns
     -------
     matches : pairs ``(i, j)`` sorted by distance, with their distances

@@ -60,6 +60,15 @@ def footprint(
 
     Sides must be odd so that the element has a centre.
 
+    Parameters
+    ----------
+    shape : {"square", "rectangle", "disk", "cross", "diamond"}
+        The shape.
+    size : int
+        Odd side of a square, disk, cross or diamond.
+    height, width : int
+        Odd sides of a rectangle.
+
     Returns
     -------
     footprint : bool ndarray
@@ -83,6 +92,11 @@ def footprint(
 @node("morphology.footprint_from_mask", version=1)
 def footprint_from_mask(mask: BinaryImage) -> Footprint:
     """Use a mask (e.g. read from a file) as a structuring element, checked for a centre.
+
+    Parameters
+    ----------
+    mask : BinaryImage
+        Any mask with odd sides and at least one pixel set: the element itself.
 
     Returns
     -------

@@ -98,6 +98,13 @@ def dilate(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
 def open(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     """Opening: erosion then dilation. Removes objects smaller than the element, keeps rough shape.
 
+    Parameters
+    ----------
+    image : BinaryImage or GrayImage
+        A mask, or a gray image (grey-level opening: min then max filters).
+    footprint : Footprint
+        The structuring element.
+
     Returns
     -------
     opened : same type as ``image``
@@ -108,6 +115,13 @@ def open(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
 @node("morphology.close", version=1)
 def close(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     """Closing: dilation then erosion. Fills holes and gaps smaller than the element.
+
+    Parameters
+    ----------
+    image : BinaryImage or GrayImage
+        A mask, or a gray image (grey-level closing: max then min filters).
+    footprint : Footprint
+        The structuring element.
 
     Returns
     -------
@@ -128,6 +142,15 @@ def fill_holes(
     Background components are labelled (with the complement of the
     foreground's connectivity by default, 4); those not reaching the image
     border are holes. ``max_area`` fills only holes up to that many pixels.
+
+    Parameters
+    ----------
+    mask : BinaryImage
+        The foreground.
+    max_area : int, optional
+        Fill only holes of at most this many pixels (all holes when absent).
+    connectivity : {4, 8}
+        Connectivity of the background components.
 
     Returns
     -------
@@ -154,6 +177,15 @@ def remove_small_objects(
 ) -> BinaryImage:
     """Drop connected components with fewer than ``min_area`` pixels.
 
+    Parameters
+    ----------
+    mask : BinaryImage
+        The foreground.
+    min_area : int
+        Components with fewer pixels are removed.
+    connectivity : {4, 8}
+        Connectivity of the components.
+
     Returns
     -------
     cleaned : (H, W) bool ndarray
@@ -171,6 +203,13 @@ def logical(
     a: BinaryImage, b: BinaryImage, *, op: Literal["and", "or", "xor", "and_not"] = "and"
 ) -> BinaryImage:
     """Combine two masks pixel by pixel: ``a & b``, ``a | b``, ``a ^ b`` or ``a & ~b``.
+
+    Parameters
+    ----------
+    a, b : BinaryImage
+        Masks of the same shape.
+    op : {"and", "or", "xor", "and_not"}
+        The operation.
 
     Returns
     -------

@@ -35,6 +35,11 @@ def _palette(count: int) -> np.ndarray:
 def colorize(labels: LabelImage) -> ColorImage:
     """Each region in its own colour (background black); colours follow the label, no seed needed.
 
+    Parameters
+    ----------
+    labels : LabelImage
+        Regions 1..N, 0 the background.
+
     Returns
     -------
     image : (H, W, 3) float32 ndarray
@@ -49,6 +54,15 @@ def overlay(image: Image, labels: LabelImage, table: Table | None = None) -> Col
     Outline pixels are region pixels with a 4-neighbour in another region or
     the background. Centroids come from ``table`` (``centroid_x``,
     ``centroid_y``) when it is connected.
+
+    Parameters
+    ----------
+    image : Image
+        The image to draw on.
+    labels : LabelImage
+        Regions whose outlines are drawn.
+    table : Table, optional
+        Their descriptors; when given, centroids are marked.
 
     Returns
     -------

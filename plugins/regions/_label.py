@@ -68,6 +68,11 @@ def label(mask: BinaryImage, *, connectivity: Literal[4, 8] = 8) -> LabelImage:
 def relabel(labels: LabelImage) -> LabelImage:
     """Renumber labels to 1..N in increasing order of the old labels (0 stays background).
 
+    Parameters
+    ----------
+    labels : LabelImage
+        Any labels, 0 the background.
+
     Returns
     -------
     labels : (H, W) int32 ndarray with consecutive labels

@@ -77,6 +77,13 @@ def describe(labels: LabelImage, image: GrayImage | None = None) -> Table:
 
     All columns come from one pass of ``bincount`` over the pixels.
 
+    Parameters
+    ----------
+    labels : LabelImage
+        Regions 1..N, 0 the background.
+    image : GrayImage, optional
+        When connected, adds the ``mean_intensity`` column.
+
     Returns
     -------
     table : dict of column name to 1-D ndarray
@@ -173,6 +180,15 @@ def filter_regions(
     ``null``/None leaves that side open), e.g. ``{area: [400, null],
     circularity: [0.8, null]}``. Kept regions are renumbered in their old
     order; the returned table has the new labels.
+
+    Parameters
+    ----------
+    labels : LabelImage
+        Regions 1..N.
+    table : Table
+        Their descriptors (``regions.describe``), one row per label.
+    ranges : dict
+        Column name → ``[low, high]``, inclusive, ``null`` for an open side.
 
     Returns
     -------

@@ -225,6 +225,15 @@ def multi_otsu(
     of cutting the histogram into ``classes`` contiguous ranges is solved
     exactly by dynamic programming over the bins, :math:`O(K L^2)`.
 
+    Parameters
+    ----------
+    image : GrayImage
+        The image to split.
+    classes : int
+        Number of classes (thresholds + 1).
+    bins : int
+        Histogram bins over [0, 1].
+
     Returns
     -------
     labels : (H, W) int32 ndarray
