@@ -129,12 +129,6 @@ class PortType:
         meta_path.write_text(json.dumps(meta, indent=2))
         return [path, meta_path]
 
-    @classmethod
-    def schema(cls) -> dict[str, Any]:
-        """JSON description of the type for ``graphvision describe --json``."""
-        parents = [c.type_name() for c in cls.__mro__[1:] if issubclass(c, PortType)]
-        return {"type": cls.type_name(), "is_a": parents[:-1], "description": cls.description}
-
 
 def _fail(cls: type[PortType], expected: str, value: Any) -> PortValueError:
     return PortValueError(f"expected {cls.type_name()} ({expected}), got {describe_value(value)}")
