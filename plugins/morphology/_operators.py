@@ -85,7 +85,9 @@ def dilate(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     Parameters
     ----------
     image : (H, W) bool or float32 ndarray
+        The mask (or gray image) to grow.
     footprint : bool ndarray with odd sides
+        The element; it is reflected about its centre before it is applied.
 
     Returns
     -------
@@ -101,9 +103,10 @@ def open(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     Parameters
     ----------
     image : BinaryImage or GrayImage
-        A mask, or a gray image (grey-level opening: min then max filters).
+        Bright structures that the element cannot fit inside are removed
+        (a gray image is opened by a minimum filter, then a maximum filter).
     footprint : Footprint
-        The structuring element.
+        The element; its shape decides what survives.
 
     Returns
     -------
@@ -119,9 +122,9 @@ def close(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     Parameters
     ----------
     image : BinaryImage or GrayImage
-        A mask, or a gray image (grey-level closing: max then min filters).
+        Dark gaps and holes that the element cannot fit inside are filled.
     footprint : Footprint
-        The structuring element.
+        The element (closing with it is opening the complement).
 
     Returns
     -------
