@@ -2,7 +2,7 @@
 
 Protocol (the features issue): gray astronaut from ``skimage.data``; 10 seeded
 random homographies (rotation up to 30°, scale 0.7–1.3, perspective up to
-0.3 of the image size) applied with ``geometry.random_warp``; each method
+0.3 of the image size) applied with ``synthetic.random_warp``; each method
 estimates the homography back from the image to its warp.
 
 * graphvision: ``features.sift`` + ``matching.match`` (ratio 0.8, symmetric)
@@ -29,7 +29,7 @@ import numpy as np
 import skimage.data
 from timing import best
 
-from graphvision_plugins import features, geometry, matching
+from graphvision_plugins import features, geometry, matching, synthetic
 
 PAIRS = 10
 
@@ -173,7 +173,7 @@ def main() -> list[str]:
     image = (skimage.data.astronaut().mean(axis=2) / 255).astype(np.float32)
     tallies = {"graphvision": Tally(), "OpenCV": Tally(), "scikit-image": Tally()}
     for seed in range(PAIRS):
-        warp = geometry.random_warp(
+        warp = synthetic.random_warp(
             image, max_rotation=30, min_scale=0.7, max_scale=1.3, perspective=0.3, seed=seed
         )
         ours(image, warp.image, tallies["graphvision"], warp.homography)

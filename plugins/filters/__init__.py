@@ -1,8 +1,8 @@
 """Filtering and noise (seed: "Image processing 2").
 
 Linear filters (correlation, convolution, Gaussian, box, sharpening) with the
-course's boundary conditions, the median filter, and seeded noise models
-(Gaussian, salt and pepper, impulse).
+course's boundary conditions, and the median filter. Noise models are in the
+``synthetic`` family.
 """
 
 from ._boundary import BOUNDARIES, Boundary
@@ -18,14 +18,10 @@ from ._linear import (
     to_image,
 )
 from ._median import median
-from ._noise import add_gaussian_noise, add_impulse_noise, add_salt_and_pepper
 
 __all__ = [
     "BOUNDARIES",
     "Boundary",
-    "add_gaussian_noise",
-    "add_impulse_noise",
-    "add_salt_and_pepper",
     "box",
     "box_kernel",
     "convolve",

@@ -15,7 +15,6 @@ from ._lines import (
     line_distance,
     line_residuals,
     refine_line,
-    sample_line_points,
 )
 from ._ransac import RansacResult, ransac, ransac_iterations
 
@@ -33,5 +32,4 @@ __all__ = [
     "ransac",
     "ransac_iterations",
     "refine_line",
-    "sample_line_points",
 ]

@@ -23,7 +23,6 @@ __all__ = [
     "line_distance",
     "line_residuals",
     "refine_line",
-    "sample_line_points",
 ]
 
 
@@ -275,50 +274,3 @@ def line_distance(
     direction = np.array([-normal[1], normal[0]])
     samples = foot + np.linspace(-extent / 2, extent / 2, 11)[:, None] * direction
     return float(line_residuals(line, samples).mean())
-
-
-class LineSample(NamedTuple):
-    points: Points2D
-    truth: Line2D
-
-
-@node("fitting.sample_line_points", version=1)
-def sample_line_points(
-    *,
-    count: Annotated[int, Field(ge=2, le=100_000)] = 100,
-    outlier_ratio: Annotated[float, Field(ge=0, lt=1)] = 0.3,
-    noise: Annotated[float, Field(ge=0)] = 1.0,
-    angle: float = 0.5,
-    seed: Annotated[int, Field(ge=0)] = 0,
-) -> LineSample:
-    """Points on a known line with Gaussian noise, plus uniform outliers (seeded).
-
-    The line passes through (50, 50) at ``angle`` radians from +x; inliers
-    lie along a 100-pixel stretch, outliers anywhere in the 100×100 square.
-
-    Parameters
-    ----------
-    count : int
-        Number of points, inliers and outliers together.
-    outlier_ratio : float
-        Fraction of the points drawn uniformly instead of on the line.
-    noise : float
-        σ of the Gaussian noise added to the inliers, perpendicular and along.
-    angle : float
-        Angle of the line in radians.
-    seed : int
-        Seed of every draw.
-
-    Returns
-    -------
-    points : (count, 2) float64
-    truth : (3,) float64, the line the inliers were drawn from
-    """
-    rng = np.random.default_rng(seed)
-    outliers = int(round(count * outlier_ratio))
-    t = rng.uniform(-50, 50, count - outliers)
-    direction = np.array([np.cos(angle), np.sin(angle)])
-    normal = np.array([-direction[1], direction[0]])
-    inliers = 50 + t[:, None] * direction + rng.normal(0, noise, (len(t), 1)) * normal
-    points = np.vstack([inliers, rng.uniform(0, 100, (outliers, 2))])
-    return LineSample(points[rng.permutation(count)], np.array([*normal, -normal @ [50, 50]]))

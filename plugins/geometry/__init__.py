@@ -1,5 +1,6 @@
 """Homographies (seed: "Homography"): normalised DLT, RANSAC estimation,
-perspective warps, seeded random warps, corner error, two-view stitching.
+perspective warps, corner error, two-view stitching (random warps with
+their truth are in the ``synthetic`` family).
 """
 
 from ._homography import (
@@ -11,7 +12,7 @@ from ._homography import (
     refine_homography,
     transfer_error,
 )
-from ._warp import random_warp, stitch, two_views, warp
+from ._warp import sample_homography, stitch, warp
 
 __all__ = [
     "apply_homography",
@@ -19,10 +20,9 @@ __all__ = [
     "estimate_homography",
     "homography_ransac",
     "normalising_transform",
-    "random_warp",
     "refine_homography",
+    "sample_homography",
     "stitch",
     "transfer_error",
-    "two_views",
     "warp",
 ]

@@ -1,27 +1,32 @@
-"""Perspective warps, seeded random homographies, and two-view stitching."""
+"""Perspective warps and two-view stitching."""
 
 from __future__ import annotations
 
-from typing import Annotated, Generic, NamedTuple
+from typing import Annotated, NamedTuple
 
 import numpy as np
 from pydantic import Field
 
-from graphvision import BinaryImage, ColorImage, Homography, Image, ImageT, node
+from graphvision import BinaryImage, ColorImage, Homography, Image, node
 
 from ._homography import apply_homography
 
-__all__ = ["random_warp", "stitch", "two_views", "warp"]
+__all__ = ["sample_homography", "stitch", "warp"]
 
 
-def _sample(
+def sample_homography(
     image: np.ndarray,
     inverse: np.ndarray,
     shape: tuple[int, int],
     offset: tuple[float, float] = (0.0, 0.0),
     clip: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Bilinear samples of ``image`` at ``inverse`` applied to each output pixel, and validity."""
+    """Bilinear samples of ``image`` at ``inverse`` applied to each output pixel, and validity.
+
+    Output pixel ``(x, y)`` (plus ``offset``) takes the input at
+    :math:`H^{-1} (x, y, 1)^T`; pixels that map outside the input are 0 and
+    marked invalid. ``clip`` keeps the result in [0, 1].
+    """
     import scipy.ndimage as ndi
 
     rows, cols = shape
@@ -76,132 +81,8 @@ def warp(
         inverse = np.linalg.inv(homography)
     except np.linalg.LinAlgError:
         raise ValueError("the homography is singular: it has no inverse to warp with") from None
-    warped, inside = _sample(image, inverse, shape)
+    warped, inside = sample_homography(image, inverse, shape)
     return Warped(warped.astype(np.float32), inside)
-
-
-def _random_homography(
-    shape: tuple[int, int],
-    rng: np.random.Generator,
-    max_rotation: float,
-    scale_range: tuple[float, float],
-    perspective: float,
-) -> np.ndarray:
-    rows, cols = shape
-    centre = np.array([[1, 0, -(cols - 1) / 2], [0, 1, -(rows - 1) / 2], [0, 0, 1.0]])
-    angle = np.deg2rad(rng.uniform(-max_rotation, max_rotation))
-    scale = rng.uniform(*scale_range)
-    similarity = np.array(
-        [
-            [scale * np.cos(angle), -scale * np.sin(angle), 0],
-            [scale * np.sin(angle), scale * np.cos(angle), 0],
-            [0, 0, 1.0],
-        ]
-    )
-    size = max(rows, cols)
-    projective = np.eye(3)
-    projective[2, :2] = rng.uniform(-perspective, perspective, 2) / size
-    h = np.linalg.inv(centre) @ projective @ similarity @ centre
-    return h / h[2, 2]
-
-
-class RandomWarp(NamedTuple, Generic[ImageT]):
-    image: ImageT
-    homography: Homography
-
-
-@node("geometry.random_warp", version=1)
-def random_warp(
-    image: ImageT,
-    *,
-    max_rotation: Annotated[float, Field(ge=0, le=180)] = 30.0,
-    min_scale: Annotated[float, Field(gt=0)] = 0.7,
-    max_scale: Annotated[float, Field(gt=0)] = 1.3,
-    perspective: Annotated[float, Field(ge=0, le=1)] = 0.3,
-    seed: Annotated[int, Field(ge=0)] = 0,
-) -> RandomWarp[ImageT]:
-    """Warp the image by a seeded random homography about its centre, same output size.
-
-    The homography is a rotation by up to ``max_rotation`` degrees, a scale
-    in ``[min_scale, max_scale]`` and a perspective term of up to
-    ``perspective`` (in units of the image size), all about the image centre.
-
-    Parameters
-    ----------
-    image : Image
-        The image to warp.
-    max_rotation : float
-        Largest rotation, in degrees, either way.
-    min_scale, max_scale : float
-        Range of the isotropic scale.
-    perspective : float
-        Largest perspective term, in units of the image size.
-    seed : int
-        Seed of the random homography.
-
-    Returns
-    -------
-    image : the warped image
-    homography : the true homography, mapping ``image`` coordinates to the warped ones
-    """
-    if min_scale > max_scale:
-        raise ValueError(f"min_scale ({min_scale}) must not exceed max_scale ({max_scale})")
-    rng = np.random.default_rng(seed)
-    h = _random_homography(image.shape[:2], rng, max_rotation, (min_scale, max_scale), perspective)
-    warped, _ = _sample(image, np.linalg.inv(h), image.shape[:2])
-    return RandomWarp(warped.astype(np.float32), h)
-
-
-class TwoViews(NamedTuple, Generic[ImageT]):
-    left: ImageT
-    right: ImageT
-    homography: Homography
-
-
-@node("geometry.two_views", version=1)
-def two_views(
-    image: ImageT,
-    *,
-    overlap: Annotated[float, Field(gt=0.1, lt=1)] = 0.5,
-    rotation: Annotated[float, Field(ge=0, le=45)] = 8.0,
-    perspective: Annotated[float, Field(ge=0, le=0.5)] = 0.1,
-    seed: Annotated[int, Field(ge=0)] = 0,
-) -> TwoViews[ImageT]:
-    """Two overlapping views of one image: the left and right crops, each under its own homography.
-
-    Each view is ``(1 + overlap) / 2`` of the width. The left one is the left
-    crop as it is; the right one is the right crop seen through a seeded
-    homography (rotation up to ``rotation`` degrees, a perspective term).
-
-    Parameters
-    ----------
-    image : Image
-        The scene both views look at.
-    overlap : float
-        Fraction of the image width the two crops share.
-    rotation : float
-        Largest rotation of each view, in degrees.
-    perspective : float
-        Largest perspective term of each view, in units of the image size.
-    seed : int
-        Seed of both homographies.
-
-    Returns
-    -------
-    left, right : the two views
-    homography : the true map from ``right`` coordinates to ``left`` coordinates
-    """
-    rows, cols = image.shape[:2]
-    view = int(cols * (1 + overlap) / 2)
-    shift = cols - view
-    left = np.ascontiguousarray(image[:, :view])
-    rng = np.random.default_rng(seed)
-    local = _random_homography((rows, view), rng, rotation, (0.9, 1.1), perspective)
-    # right view pixel -> its crop pixel (inverse of local) -> full image (+shift) -> left view
-    crop_to_full = np.array([[1, 0, shift], [0, 1, 0], [0, 0, 1.0]])
-    right, _ = _sample(image[:, shift:], np.linalg.inv(local), (rows, view))
-    to_left = crop_to_full @ np.linalg.inv(local)
-    return TwoViews(left, right.astype(np.float32), to_left / to_left[2, 2])
 
 
 @node("geometry.stitch", version=1)
@@ -253,10 +134,14 @@ def stitch(base: Image, other: Image, homography: Homography) -> ColorImage:
         return ndi.distance_transform_cdt(weight)[1:-1, 1:-1].astype(np.float32)
 
     canvas_shape = (height, width)
-    moved_base, _ = _sample(colour(base), np.eye(3), canvas_shape, offset)
-    moved_other, _ = _sample(colour(other), np.linalg.inv(homography), canvas_shape, offset)
-    weight_base, _ = _sample(feather(base.shape[:2]), np.eye(3), canvas_shape, offset, False)
-    weight_other, _ = _sample(
+    moved_base, _ = sample_homography(colour(base), np.eye(3), canvas_shape, offset)
+    moved_other, _ = sample_homography(
+        colour(other), np.linalg.inv(homography), canvas_shape, offset
+    )
+    weight_base, _ = sample_homography(
+        feather(base.shape[:2]), np.eye(3), canvas_shape, offset, False
+    )
+    weight_other, _ = sample_homography(
         feather(other.shape[:2]), np.linalg.inv(homography), canvas_shape, offset, False
     )
     total = weight_base + weight_other

@@ -8,7 +8,7 @@ import scipy.ndimage as ndi
 import skimage.data
 
 import graphvision as gv
-from graphvision_plugins import features, geometry, matching
+from graphvision_plugins import features, geometry, matching, synthetic
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +59,7 @@ def test_sift_features_are_well_formed(astronaut_features):
 
 @pytest.mark.parametrize("seed", [0, 5])
 def test_sift_recovers_a_known_homography(astronaut, astronaut_features, seed):
-    warped = geometry.random_warp(astronaut, seed=seed)
+    warped = synthetic.random_warp(astronaut, seed=seed)
     other = features.sift(warped.image)
     found = matching.match(astronaut_features.descriptors, other.descriptors, ratio=0.8)
     fit = geometry.homography_ransac(astronaut_features.keypoints, other.keypoints, found)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.ndimage as ndi
 
-from graphvision_plugins import filters
+from graphvision_plugins import filters, synthetic
 
 ROW = (np.arange(1, 7, dtype=np.float32) / 10)[None, :]  # [[.1 .2 .3 .4 .5 .6]]
 PICK_LEFT_2 = np.array([[1.0, 0, 0, 0, 0]])  # correlation: out[i] = in[i - 2]
@@ -127,33 +127,11 @@ def test_median_colour_and_crop():
 
 def test_median_removes_salt_and_pepper_that_a_gaussian_smears():
     clean = np.full((64, 64), 0.5, np.float32)
-    noisy = filters.add_salt_and_pepper(clean, amount=0.05, seed=0)
+    noisy = synthetic.salt_and_pepper(clean, amount=0.05, seed=0)
     assert (
         np.abs(filters.median(noisy, size=3) - clean).max() < 1e-6
     )  # 5% never fills a window half
     assert np.abs(filters.gaussian(noisy, sigma=1.0) - clean).max() > 0.05
-
-
-def test_noise_is_seeded_and_has_the_asked_statistics():
-    clean = np.full((200, 200), 0.5, np.float32)
-    noisy = filters.add_gaussian_noise(clean, sigma=0.05, seed=3)
-    np.testing.assert_array_equal(noisy, filters.add_gaussian_noise(clean, sigma=0.05, seed=3))
-    assert not np.array_equal(noisy, filters.add_gaussian_noise(clean, sigma=0.05, seed=4))
-    # 40,000 samples: the std estimate is within 2% of sigma (about 6 standard errors)
-    assert (noisy - clean).std() == pytest.approx(0.05, rel=0.02)
-    sp = filters.add_salt_and_pepper(clean, amount=0.1, salt_ratio=0.25, seed=0)
-    hit = sp != 0.5
-    assert hit.mean() == pytest.approx(0.1, abs=0.01)
-    assert (sp[hit] == 1.0).mean() == pytest.approx(0.25, abs=0.03)
-    impulse = filters.add_impulse_noise(clean, amount=0.1, seed=0)
-    assert set(np.unique(impulse).tolist()) == {0.5, 1.0}
-
-
-def test_colour_noise_hits_whole_pixels():
-    clean = np.full((50, 50, 3), 0.5, np.float32)
-    sp = filters.add_salt_and_pepper(clean, amount=0.2, seed=1)
-    changed = sp != 0.5
-    assert np.array_equal(changed.any(axis=2), changed.all(axis=2))
 
 
 def test_to_image():

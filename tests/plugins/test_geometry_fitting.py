@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-from graphvision_plugins import fitting, geometry
+from graphvision_plugins import fitting, geometry, synthetic
 
 H_TRUE = np.array([[0.9, -0.2, 30.0], [0.15, 1.1, -12.0], [2e-4, -1e-4, 1.0]])
 
@@ -97,7 +97,7 @@ def test_warp_by_a_translation_shifts_the_image():
 
 def test_random_warp_is_seeded_and_within_its_ranges():
     image = np.random.default_rng(0).random((64, 64)).astype(np.float32)
-    a, b = geometry.random_warp(image, seed=3), geometry.random_warp(image, seed=3)
+    a, b = synthetic.random_warp(image, seed=3), synthetic.random_warp(image, seed=3)
     np.testing.assert_array_equal(a.homography, b.homography)
     affine = a.homography[:2, :2]
     scale = np.sqrt(abs(np.linalg.det(affine)))
@@ -108,7 +108,7 @@ def test_random_warp_is_seeded_and_within_its_ranges():
 
 def test_two_views_and_stitching_with_the_true_homography():
     image = np.random.default_rng(0).random((60, 100, 3)).astype(np.float32)
-    views = geometry.two_views(image, overlap=0.5, seed=0)
+    views = synthetic.two_views(image, overlap=0.5, seed=0)
     pano = geometry.stitch(views.left, views.right, views.homography)
     assert pano.shape[2] == 3 and pano.shape[1] >= 95
     rows, cols = views.right.shape[:2]
@@ -146,7 +146,7 @@ def test_weighted_least_squares_ignores_zero_weight():
 
 
 def test_ransac_line_beats_least_squares_with_outliers():
-    sample = fitting.sample_line_points(count=200, outlier_ratio=0.4, seed=0)
+    sample = synthetic.line_points(count=200, outlier_ratio=0.4, seed=0)
     robust = fitting.fit_line_ransac(sample.points, threshold=3.0)
     assert fitting.line_distance(robust.line, sample.truth) < 0.5
     assert fitting.line_distance(fitting.fit_line_lstsq(sample.points), sample.truth) > 2.0
@@ -154,7 +154,7 @@ def test_ransac_line_beats_least_squares_with_outliers():
 
 
 def test_gauss_newton_refinement_lowers_the_error():
-    sample = fitting.sample_line_points(count=100, outlier_ratio=0.0, noise=1.0, seed=1)
+    sample = synthetic.line_points(count=100, outlier_ratio=0.0, noise=1.0, seed=1)
     rough = sample.truth + np.array([0.02, -0.02, 1.0])
     rough /= np.hypot(*rough[:2])
     refined = fitting.refine_line(rough, sample.points)

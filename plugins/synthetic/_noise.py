@@ -1,4 +1,4 @@
-"""Seeded noise models: Gaussian, salt and pepper, impulse (seed: "Filtering")."""
+"""Seeded noise models: Gaussian, salt and pepper, impulse (notes: "Filtering")."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import ImageT, node
 
-__all__ = ["add_gaussian_noise", "add_impulse_noise", "add_salt_and_pepper"]
+__all__ = ["gaussian_noise", "impulse_noise", "salt_and_pepper"]
 
 Fraction = Annotated[float, Field(ge=0, le=1, description="Fraction of pixels affected.")]
 Seed = Annotated[int, Field(ge=0, description="Seed of the random generator.")]
@@ -20,8 +20,8 @@ def _pixel_mask(image: np.ndarray, amount: float, rng: np.random.Generator) -> n
     return rng.random(image.shape[:2]) < amount
 
 
-@node("filters.add_gaussian_noise", version=1)
-def add_gaussian_noise(
+@node("synthetic.gaussian_noise", version=1)
+def gaussian_noise(
     image: ImageT,
     *,
     sigma: Annotated[float, Field(ge=0, le=1)] = 0.05,
@@ -50,8 +50,8 @@ def add_gaussian_noise(
     return np.clip(noisy, 0.0, 1.0, out=noisy)
 
 
-@node("filters.add_salt_and_pepper", version=1)
-def add_salt_and_pepper(
+@node("synthetic.salt_and_pepper", version=1)
+def salt_and_pepper(
     image: ImageT,
     *,
     amount: Fraction = 0.05,
@@ -86,8 +86,8 @@ def add_salt_and_pepper(
     return noisy
 
 
-@node("filters.add_impulse_noise", version=1)
-def add_impulse_noise(image: ImageT, *, amount: Fraction = 0.05, seed: Seed = 0) -> ImageT:
+@node("synthetic.impulse_noise", version=1)
+def impulse_noise(image: ImageT, *, amount: Fraction = 0.05, seed: Seed = 0) -> ImageT:
     """Impulse noise: random white dots, each pixel turned white with probability ``amount``.
 
     Parameters

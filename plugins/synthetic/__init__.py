@@ -1,0 +1,21 @@
+"""Synthetic data with known truth: noise, random warps, sampled lines.
+
+Every node here is seeded and returns what a test or a benchmark measures
+against (the homography of a warp, the line the points were drawn from).
+Algorithms never live here; other families' tests and pipelines use these
+nodes as their ground truth.
+"""
+
+from ._lines import line_points
+from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
+from ._warps import random_homography, random_warp, two_views
+
+__all__ = [
+    "gaussian_noise",
+    "impulse_noise",
+    "line_points",
+    "random_homography",
+    "random_warp",
+    "salt_and_pepper",
+    "two_views",
+]
