@@ -4,78 +4,130 @@ Typed nodes in a plugin registry, pipelines as YAML or Python graphs, a
 parallel scheduler, and a Merkle-keyed cache so that changing one parameter
 recomputes only what depends on it. The engine holds no vision algorithm: the
 algorithms are plugins (``graphvision_plugins`` ships the built-in ones).
+
+Importing the package is cheap: each public name is imported from its module
+on first use (PEP 562), so ``graphvision --help`` does not pay for NumPy,
+pydantic and YAML. The ``TYPE_CHECKING`` block below is the one list of
+public names: type checkers read it, and :func:`__getattr__` reads it too.
 """
 
-from ._cache import Cache, CacheWarning, DiskStore, MemoryStore, default_cache_dir
-from ._compile import CompiledGraph, compile_graph
-from ._errors import (
-    DuplicateNodeError,
-    GraphvisionError,
-    InputError,
-    NodeExecutionError,
-    ParameterError,
-    PipelineError,
-    PluginLoadError,
-    PortValueError,
-    Problem,
-    RegistrationError,
-    RunError,
-    UnknownNameError,
-)
-from ._executors import SyncExecutor, make_executor
-from ._graph import Graph, Ref
-from ._node import NodeSpec, node, source
-from ._pipeline_file import dump_pipeline, load_pipeline, parse_pipeline, pipeline_json_schema
-from ._plugins import discover
-from ._ports import (
-    ArrayPort,
-    BinaryImagePort,
-    BoolPort,
-    ColorImagePort,
-    DescriptorsPort,
-    FloatImagePort,
-    FloatPort,
-    GrayImagePort,
-    HomographyPort,
-    ImagePort,
-    IntPort,
-    KernelPort,
-    LabelImagePort,
-    Points2DPort,
-    Points3DPort,
-    PortType,
-    RecordPort,
-    TablePort,
-    TextPort,
-)
-from ._records import CameraPort, KeypointSet, KeypointsPort, MatchesPort, MatchSet, PinholeCamera
-from ._registry import Registry
-from ._run import NodeRecord, RunHooks, RunRecord, RunResult, run
-from .types import (
-    AnyImageT,
-    Array,
-    BinaryImage,
-    Bool,
-    Camera,
-    ColorImage,
-    Descriptors,
-    Float,
-    FloatImage,
-    GrayImage,
-    Homography,
-    Image,
-    ImageT,
-    Int,
-    Kernel,
-    Keypoints,
-    LabelImage,
-    Matches,
-    Points2D,
-    Points3D,
-    Table,
-    Text,
-    port_of,
-)
+from __future__ import annotations
+
+import ast
+import importlib
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ._cache import Cache, CacheWarning, DiskStore, MemoryStore, default_cache_dir
+    from ._compile import CompiledGraph, compile_graph
+    from ._errors import (
+        DuplicateNodeError,
+        GraphvisionError,
+        InputError,
+        NodeExecutionError,
+        ParameterError,
+        PipelineError,
+        PluginLoadError,
+        PortValueError,
+        Problem,
+        RegistrationError,
+        RunError,
+        UnknownNameError,
+    )
+    from ._executors import SyncExecutor, make_executor
+    from ._graph import Graph, Ref
+    from ._node import NodeSpec, node, source
+    from ._pipeline_file import dump_pipeline, load_pipeline, parse_pipeline, pipeline_json_schema
+    from ._plugins import discover
+    from ._ports import (
+        ArrayPort,
+        BinaryImagePort,
+        BoolPort,
+        ColorImagePort,
+        DescriptorsPort,
+        FloatImagePort,
+        FloatPort,
+        GrayImagePort,
+        HomographyPort,
+        ImagePort,
+        IntPort,
+        KernelPort,
+        LabelImagePort,
+        Points2DPort,
+        Points3DPort,
+        PortType,
+        RecordPort,
+        TablePort,
+        TextPort,
+    )
+    from ._records import (
+        CameraPort,
+        KeypointSet,
+        KeypointsPort,
+        MatchesPort,
+        MatchSet,
+        PinholeCamera,
+    )
+    from ._registry import Registry
+    from ._run import NodeRecord, RunHooks, RunRecord, RunResult, run
+    from .types import (
+        AnyImageT,
+        Array,
+        BinaryImage,
+        Bool,
+        Camera,
+        ColorImage,
+        Descriptors,
+        Float,
+        FloatImage,
+        GrayImage,
+        Homography,
+        Image,
+        ImageT,
+        Int,
+        Kernel,
+        Keypoints,
+        LabelImage,
+        Matches,
+        Points2D,
+        Points3D,
+        Table,
+        Text,
+        port_of,
+    )
+
+
+def _public_names() -> dict[str, str]:
+    """Public name → module, read from this file's ``TYPE_CHECKING`` block."""
+    tree = ast.parse(Path(__file__).read_text(encoding="utf-8"))
+    block = next(
+        n for n in tree.body if isinstance(n, ast.If) and "TYPE_CHECKING" in ast.dump(n.test)
+    )
+    return {
+        alias.name: "." * item.level + (item.module or "")
+        for item in block.body
+        if isinstance(item, ast.ImportFrom)
+        for alias in item.names
+    }
+
+
+_WHERE: dict[str, str] = {}
+
+
+def __getattr__(name: str) -> Any:
+    if not _WHERE:
+        _WHERE.update(_public_names())
+    if name not in _WHERE:
+        raise AttributeError(f"module 'graphvision' has no attribute '{name}'")
+    value = getattr(importlib.import_module(_WHERE[name], __name__), name)
+    globals()[name] = value  # later look-ups are plain attribute reads
+    return value
+
+
+def __dir__() -> list[str]:
+    return list(__all__)
+
 
 __all__ = [
     "AnyImageT",

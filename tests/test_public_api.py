@@ -1,9 +1,11 @@
-"""The public names are what __all__ says, and the doctests hold."""
+"""Public names: one sorted list, each importable, a cheap import; the doctests hold."""
 
 from __future__ import annotations
 
 import doctest
 import importlib
+import subprocess
+import sys
 import types
 
 import pytest
@@ -33,3 +35,27 @@ def test_all_is_sorted_and_exported():
 def test_doctests(module):
     result = doctest.testmod(importlib.import_module(module))
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_every_public_name_resolves_and_the_lists_agree() -> None:
+    names = graphvision._public_names()
+    assert set(names) == set(graphvision.__all__)
+    for name in graphvision.__all__:
+        assert getattr(graphvision, name) is not None
+
+
+def test_an_unknown_name_is_an_attribute_error() -> None:
+    try:
+        graphvision.no_such_thing  # noqa: B018 - the attribute access is the test
+    except AttributeError as error:
+        assert "no_such_thing" in str(error)
+    else:  # pragma: no cover
+        raise AssertionError("expected AttributeError")
+
+
+def test_importing_the_package_imports_no_numpy_pydantic_or_yaml() -> None:
+    code = (
+        "import sys, graphvision; print(sorted({'numpy', 'pydantic', 'yaml'} & sys.modules.keys()))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
