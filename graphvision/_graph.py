@@ -125,6 +125,12 @@ class Graph:
 
     # -- views --------------------------------------------------------------------
 
+    def _repr_svg_(self) -> str:
+        """The graph's drawing, shown by Jupyter when a graph is the value of a cell."""
+        from ._svg import graph_svg
+
+        return graph_svg(self)
+
     def to_networkx(self) -> nx.DiGraph:
         """Nodes and graph inputs as vertices, one edge per connection (port names on edges)."""
         import networkx as nx  # imported on use: start-up of the CLI stays fast
