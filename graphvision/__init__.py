@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from ._cache import Cache, CacheWarning, DiskStore, MemoryStore, default_cache_dir
     from ._compile import CompiledGraph, compile_graph
+    from ._dask import DaskExecutor
     from ._errors import (
         DuplicateNodeError,
         GraphvisionError,
@@ -144,6 +145,7 @@ __all__ = [
     "ColorImage",
     "ColorImagePort",
     "CompiledGraph",
+    "DaskExecutor",
     "Descriptors",
     "DescriptorsPort",
     "DiskStore",

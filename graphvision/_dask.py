@@ -1,0 +1,140 @@
+"""Running nodes on a Dask cluster: :class:`DaskExecutor`.
+
+The executor hands each node to ``dask.distributed`` as one task. It keeps
+the transport of the ``processes`` executor: the node function travels as a
+:class:`~graphvision._node.FunctionRef` (the worker imports it by module and
+name, a local plugin file by its path), and values travel in their port
+type's array encoding (named arrays and a JSON header), never as pickled
+Python objects. Results come back to the client, which validates them and
+stores them in its own cache: the cache never has to be on storage the
+workers share, and a value is written once, by one process, with the cache's
+atomic rename.
+
+A worker that dies while it runs a node is replaced by Dask and the node is
+run again on another worker (``retries``), so one lost worker costs one node,
+not the run. Dask is an optional dependency (``pip install
+graphvision[dask]``), imported only when this executor is made.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from concurrent.futures import Future
+from typing import Any
+
+from ._errors import GraphvisionError
+from ._node import FunctionRef
+
+__all__ = ["SCHEDULER_VARIABLE", "DaskExecutor", "DaskUnavailableError"]
+
+SCHEDULER_VARIABLE = "GRAPHVISION_DASK_SCHEDULER"
+
+
+class DaskUnavailableError(GraphvisionError):
+    """Dask is not installed, or its scheduler cannot be reached."""
+
+
+class DaskExecutor:
+    """Nodes as tasks on a Dask cluster (an existing one, or a local one it starts).
+
+    Parameters
+    ----------
+    client : distributed.Client, optional
+        Use this client's cluster; the executor does not close it.
+    address : str, optional
+        Connect to the scheduler at this address (``tcp://host:port``);
+        default ``$GRAPHVISION_DASK_SCHEDULER``. Without either, a
+        ``LocalCluster`` is started and closed by :meth:`shutdown`.
+    workers : int
+        Worker processes of a local cluster.
+    threads_per_worker : int
+        Threads in each worker of a local cluster.
+    timeout : float
+        Seconds to wait for the scheduler before giving up.
+    retries : int
+        How many times a node whose worker died (or that raised) is run again.
+    """
+
+    encodes_values = True
+
+    def __init__(
+        self,
+        client: Any = None,
+        *,
+        address: str | None = None,
+        workers: int = 2,
+        threads_per_worker: int = 1,
+        timeout: float = 10.0,
+        retries: int = 1,
+    ) -> None:
+        try:
+            import distributed
+        except ImportError as error:
+            raise DaskUnavailableError(
+                "the dask executor needs Dask: pip install 'graphvision[dask]'"
+            ) from error
+        self.retries = retries
+        self._cluster: Any = None
+        self._owns_client = client is None
+        address = address or os.environ.get(SCHEDULER_VARIABLE) or None
+        if client is not None:
+            self.client = client
+        elif address:
+            try:
+                self.client = distributed.Client(address, timeout=timeout)
+            except (OSError, TimeoutError) as error:
+                raise DaskUnavailableError(
+                    f"cannot reach the Dask scheduler at {address} within {timeout:g} s "
+                    f"({type(error).__name__}); check the address, or leave out "
+                    f"--scheduler and ${SCHEDULER_VARIABLE} to start a local cluster"
+                ) from None
+        else:
+            self._cluster = distributed.LocalCluster(
+                n_workers=workers,
+                threads_per_worker=threads_per_worker,
+                processes=True,
+                scheduler_port=0,
+                dashboard_address=":0",
+            )
+            self.client = distributed.Client(self._cluster)
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
+        """Run ``fn(*args)`` as a Dask task; a ``concurrent.futures`` future of its result."""
+        task = self.client.submit(_on_worker, fn, *args, pure=False, retries=self.retries)
+        future: Future = Future()
+        future.set_running_or_notify_cancel()
+
+        def transfer(done: Any) -> None:
+            try:
+                future.set_result(done.result())
+            except BaseException as error:  # the run reports it as that node's failure
+                future.set_exception(error)
+
+        task.add_done_callback(transfer)
+        return future
+
+    def shutdown(self, wait: bool = True) -> None:
+        """Close the client and the local cluster this executor started (not a given client)."""
+        if self._owns_client:
+            self.client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+
+
+def _on_worker(fn: Callable[..., Any], *args: Any) -> Any:
+    """``fn(*args)`` on a worker; a node the worker cannot import is named with the worker."""
+    ref = args[0] if args and isinstance(args[0], FunctionRef) else None
+    if ref is not None:
+        try:
+            ref.resolve()
+        except Exception as error:
+            from distributed import get_worker
+
+            where = ref.path or ref.module
+            raise GraphvisionError(
+                f"worker {get_worker().address} cannot import {where} ({error}): install the "
+                "plugin in every worker's environment, or put local plugin files on storage "
+                "the workers share"
+            ) from None
+    return fn(*args)

@@ -1,0 +1,85 @@
+"""The Dask executor: same results as threads, a dead worker costs one retry, clear errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import graphvision as gv
+
+distributed = pytest.importorskip(
+    "distributed", reason="Dask is an optional extra: graphvision[dask]"
+)
+
+from graphvision._dask import DaskExecutor, DaskUnavailableError  # noqa: E402
+
+PIPELINES = Path(__file__).parent.parent / "pipelines"
+
+FLAKY_PLUGIN = '''
+import os
+from pathlib import Path
+from graphvision import Float, node
+
+
+@node("flaky.die_once")
+def die_once(x: Float, *, marker: str = "") -> Float:
+    """Kills its worker process the first time it runs; returns x + 1 after.
+
+    Parameters
+    ----------
+    x : the value
+    marker : a file whose existence says the first attempt happened
+    """
+    if not Path(marker).exists():
+        Path(marker).write_text("died once")
+        os._exit(1)
+    return x + 1.0
+'''
+
+
+@pytest.fixture(scope="module")
+def dask_executor():
+    executor = DaskExecutor(workers=2, threads_per_worker=1)
+    yield executor
+    executor.shutdown()
+
+
+def test_coins_on_dask_equal_coins_on_threads(dask_executor, tmp_path):
+    graph = gv.load_pipeline(PIPELINES / "coins.yaml")
+    on_dask = gv.run(graph, executor=dask_executor, cache=None).outputs
+    on_threads = gv.run(graph, executor="threads", cache=None).outputs
+    assert on_dask["count"] == on_threads["count"] == 24
+    np.testing.assert_array_equal(on_dask["labels"], on_threads["labels"])
+
+
+def test_a_worker_that_dies_costs_one_retry_not_the_run(dask_executor, tmp_path):
+    plugin = tmp_path / "flaky.py"
+    plugin.write_text(FLAKY_PLUGIN)
+    registry = gv.discover([plugin])
+    graph = gv.Graph("flaky")
+    x = graph.input("x", "Float", default=1.0)
+    graph.output("y", graph.add("y", "flaky.die_once", x=x, params={"marker": str(tmp_path / "m")}))
+    result = gv.run(graph, registry, executor=dask_executor, cache=None)
+    assert (tmp_path / "m").exists()  # the first attempt ran, and its worker died
+    assert result.outputs["y"] == 2.0
+
+
+def test_a_worker_that_cannot_import_the_plugin_is_named(dask_executor, tmp_path):
+    plugin = tmp_path / "gone.py"
+    plugin.write_text(FLAKY_PLUGIN.replace("flaky.die_once", "gone.die_once"))
+    registry = gv.discover([plugin])
+    plugin.unlink()  # the client has imported it; the workers cannot
+    graph = gv.Graph("gone")
+    x = graph.input("x", "Float", default=1.0)
+    graph.output("y", graph.add("y", "gone.die_once", x=x, params={"marker": str(tmp_path)}))
+    with pytest.raises(gv.RunError) as caught:
+        gv.run(graph, registry, executor=dask_executor, cache=None)
+    message = str(caught.value.failures["y"])
+    assert "worker tcp://" in message and "gone.py" in message
+
+
+def test_an_unreachable_scheduler_is_refused_naming_the_address():
+    with pytest.raises(DaskUnavailableError, match=r"cannot reach the Dask scheduler at tcp://127"):
+        DaskExecutor(address="tcp://127.0.0.1:9", timeout=1)
