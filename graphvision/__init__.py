@@ -72,6 +72,7 @@ if TYPE_CHECKING:
     )
     from ._registry import Registry
     from ._run import NodeRecord, RunHooks, RunRecord, RunResult, run
+    from ._sweep import SweepResult, sweep
     from .types import (
         AnyImageT,
         Array,
@@ -199,6 +200,7 @@ __all__ = [
     "RunHooks",
     "RunRecord",
     "RunResult",
+    "SweepResult",
     "SyncExecutor",
     "Table",
     "TablePort",
@@ -217,4 +219,5 @@ __all__ = [
     "port_of",
     "run",
     "source",
+    "sweep",
 ]

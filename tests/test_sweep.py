@@ -1,0 +1,94 @@
+"""Sweeps: each row equals the run it stands for, upstream work is shared, errors come first."""
+
+from __future__ import annotations
+
+import csv
+import xml.etree.ElementTree as ET
+from concurrent.futures import Future
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+import graphvision as gv
+from graphvision._sweep import sweep, sweep_plot_svg
+
+LINE_FIT = Path(__file__).parent.parent / "pipelines" / "line_fit.yaml"
+GRID = {"robust.threshold": [1.0, 3.0, 9.0], "robust.confidence": [0.9, 0.99]}
+
+
+class CountingExecutor(gv.SyncExecutor):
+    """Runs in the calling thread and counts the nodes it is handed."""
+
+    def __init__(self) -> None:
+        self.submitted = 0
+
+    def submit(self, fn: Any, /, *args: Any) -> Future:
+        self.submitted += 1
+        return super().submit(fn, *args)
+
+
+@pytest.fixture(scope="module")
+def line_sweep() -> gv.SweepResult:
+    return sweep(gv.load_pipeline(LINE_FIT), GRID, executor="sync")
+
+
+def test_each_row_equals_a_single_run_with_those_values(line_sweep) -> None:
+    graph = gv.load_pipeline(LINE_FIT)
+    assert len(line_sweep.rows) == 6
+    for row in line_sweep.rows[::2]:
+        overrides = {key: row[key] for key in GRID}
+        alone = gv.run(graph, overrides=overrides, executor="sync").outputs
+        assert row["status"] == "ok"
+        assert row["error_ransac"] == alone["error_ransac"]
+        assert row["error_lstsq"] == alone["error_lstsq"]
+
+
+def test_nodes_upstream_of_the_grid_run_once(line_sweep) -> None:
+    computed: dict[str, int] = {}
+    for record in line_sweep.records:
+        for node in record.nodes:
+            computed[node.name] = computed.get(node.name, 0) + (node.status == "computed")
+    assert computed["points"] == computed["lstsq"] == computed["total"] == 1
+    assert computed["robust"] == computed["error_ransac"] == 6
+    # later runs load points and the two unswept errors; lstsq and total are not even read
+    assert [row["cached"] for row in line_sweep.rows][1:] == [3] * 5
+
+
+def test_csv_has_a_row_per_combination_and_every_scalar_output(line_sweep, tmp_path) -> None:
+    path = line_sweep.write_csv(tmp_path / "sweep.csv")
+    with path.open() as stream:
+        rows = list(csv.DictReader(stream))
+    assert len(rows) == 6
+    assert {"robust.threshold", "robust.confidence", "error_ransac", "status"} <= set(rows[0])
+    assert [float(r["robust.threshold"]) for r in rows] == [1.0, 1.0, 3.0, 3.0, 9.0, 9.0]
+
+
+def test_plot_has_a_chart_per_parameter_and_a_line_per_other_combination(line_sweep) -> None:
+    root = ET.fromstring(sweep_plot_svg(line_sweep, "error_ransac"))
+    charts = root.findall("{http://www.w3.org/2000/svg}g")
+    assert len(charts) == 2
+    lines = [len(chart.findall("{http://www.w3.org/2000/svg}polyline")) for chart in charts]
+    assert lines == [2, 3]  # threshold chart: one line per confidence; and the reverse
+    with pytest.raises(gv.PipelineError, match=r"no scalar output 'error_ransc' \(did you mean"):
+        sweep_plot_svg(line_sweep, "error_ransc")
+
+
+@pytest.mark.parametrize(
+    ("grid", "message"),
+    [
+        (
+            {"robst.threshold": [1.0]},
+            r"grid robst.threshold: no node 'robst' \(did you mean 'robust'",
+        ),
+        ({"robust.treshold": [1.0]}, r"unknown parameter 'treshold'.*\(did you mean 'threshold'"),
+        ({"robust.threshold": [1.0, "wide"]}, r"invalid value 'wide'.*threshold='wide'"),
+        ({"robust.threshold": []}, r"grid robust.threshold: has no values"),
+        ({}, r"the grid is empty"),
+    ],
+)
+def test_a_bad_grid_is_refused_before_anything_runs(grid, message) -> None:
+    executor = CountingExecutor()
+    with pytest.raises(gv.PipelineError, match=message):
+        sweep(gv.load_pipeline(LINE_FIT), grid, executor=executor)
+    assert executor.submitted == 0
