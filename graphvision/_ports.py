@@ -114,6 +114,15 @@ class PortType:
         return f"{cls.type_name()}"
 
     @classmethod
+    def preview(cls, value: Any) -> np.ndarray | None:
+        """A picture of ``value`` for reports and notebooks, or None when it has none.
+
+        The picture is ``float32`` in [0, 1], ``H×W`` or ``H×W×3``. A plugin's
+        port type overrides this to show its values (lines drawn, boxes drawn).
+        """
+        return None
+
+    @classmethod
     def write(cls, value: Any, stem: Path) -> list[Path]:
         """Write ``value`` next to ``stem`` (no suffix) and return the files written."""
         arrays, meta = cls.encode(value)
@@ -193,6 +202,12 @@ class FloatImagePort(ArrayPort):
             raise PortValueError(f"expected {cls.type_name()} with finite values, got NaN or inf")
         return value
 
+    @classmethod
+    def preview(cls, value: np.ndarray) -> np.ndarray | None:
+        from ._pictures import stretch
+
+        return stretch(value)
+
 
 class ImagePort(FloatImagePort):
     """An intensity image: ``float32`` in [0, 1], gray ``H×W`` or RGB ``H×W×3``."""
@@ -216,6 +231,10 @@ class ImagePort(FloatImagePort):
         path = stem.with_suffix(".png")
         iio.imwrite(path, np.round(value * 255.0).astype(np.uint8))
         return [path]
+
+    @classmethod
+    def preview(cls, value: np.ndarray) -> np.ndarray | None:
+        return value
 
 
 class GrayImagePort(ImagePort):
@@ -247,6 +266,10 @@ class BinaryImagePort(ArrayPort):
         iio.imwrite(path, value.astype(np.uint8) * 255)
         return [path]
 
+    @classmethod
+    def preview(cls, value: np.ndarray) -> np.ndarray | None:
+        return value.astype(np.float32)
+
 
 class LabelImagePort(ArrayPort):
     """A label image: ``int32`` ``H×W``, 0 is background, regions 1..N."""
@@ -262,6 +285,12 @@ class LabelImagePort(ArrayPort):
             raise PortValueError(f"expected LabelImage labels >= 0, got {int(value.min())}")
         return value
 
+    @classmethod
+    def preview(cls, value: np.ndarray) -> np.ndarray | None:
+        from ._pictures import label_colours
+
+        return label_colours(value)
+
 
 class KernelPort(ArrayPort):
     """A filter kernel: ``float64`` 2-D array, centred at ``(rows // 2, cols // 2)``."""
@@ -269,6 +298,12 @@ class KernelPort(ArrayPort):
     ndims = (2,)
     dtypes = (np.float64,)
     expected = "float64 2-D array"
+
+    @classmethod
+    def preview(cls, value: np.ndarray) -> np.ndarray | None:
+        from ._pictures import stretch
+
+        return stretch(value)
 
 
 class _ScalarPort(PortType):
@@ -429,6 +464,12 @@ class Points2DPort(ArrayPort):
             raise PortValueError("expected Points2D with finite coordinates, got NaN or inf")
         return value
 
+    @classmethod
+    def preview(cls, value: np.ndarray) -> np.ndarray | None:
+        from ._pictures import scatter
+
+        return scatter(value)
+
 
 class DescriptorsPort(ArrayPort):
     """Feature descriptors: ``float32`` ``N×D``, one row per keypoint (N may be 0)."""
@@ -466,6 +507,12 @@ class Points3DPort(ArrayPort):
         body = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in value.tolist())
         path.write_text(header + body)
         return [path]
+
+    @classmethod
+    def preview(cls, value: np.ndarray) -> np.ndarray | None:
+        from ._pictures import scatter
+
+        return scatter(value[:, :2])  # seen along the z axis
 
 
 class HomographyPort(ArrayPort):

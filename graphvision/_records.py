@@ -101,6 +101,12 @@ class MatchSet:
     def take(self, index: np.ndarray) -> MatchSet:
         return MatchSet(self.pairs[index], self.distance[index])
 
+    @classmethod
+    def preview(cls, value: KeypointSet) -> np.ndarray | None:
+        from ._pictures import scatter
+
+        return scatter(value.xy)
+
 
 class MatchesPort(RecordPort):
     """A :class:`MatchSet`."""

@@ -1,0 +1,127 @@
+"""report.html: every output shown, every picture a decodable PNG, clean in a real browser."""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import re
+import shutil
+import subprocess
+from html.parser import HTMLParser
+from pathlib import Path
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+import graphvision as gv
+from graphvision._html import write_html_report
+from graphvision._svg import STATUS_COLOURS
+
+PIPELINES = Path(__file__).parent.parent / "pipelines"
+BROWSERS = ("chromium", "chromium-browser", "google-chrome", "chrome")
+
+
+class _Page(HTMLParser):
+    """The images, headings and links of a page."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.images: list[str] = []
+        self.headings: list[str] = []
+        self.external: list[str] = []
+        self._in_heading = False
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        found = dict(attrs)
+        if tag == "img":
+            self.images.append(found.get("src") or "")
+        for attr in ("src", "href"):
+            link = found.get(attr) or ""
+            if link.startswith(("http:", "https:", "//")):
+                self.external.append(link)
+        self._in_heading = tag == "h3"
+
+    def handle_data(self, data: str) -> None:
+        if self._in_heading and data.strip():
+            self.headings.append(data.strip())
+            self._in_heading = False
+
+
+@pytest.fixture(scope="module")
+def coins_report(tmp_path_factory) -> Path:
+    result = gv.run(gv.load_pipeline(PIPELINES / "coins.yaml"), cache=None)
+    directory = tmp_path_factory.mktemp("coins")
+    return write_html_report(result.compiled, result.outputs, result.record, directory)
+
+
+def test_every_output_has_a_section_and_pictures_are_pngs(coins_report: Path) -> None:
+    page = _Page()
+    page.feed(coins_report.read_text())
+    graph = gv.load_pipeline(PIPELINES / "coins.yaml")
+    assert page.headings[: len(graph.outputs)] == list(graph.outputs)
+    assert page.external == []  # self-contained: nothing from the network
+    image_outputs = 2  # labels (coloured) and the overlay
+    assert len(page.images) == image_outputs
+    for source in page.images:
+        assert source.startswith("data:image/png;base64,")
+        picture = iio.imread(io.BytesIO(base64.b64decode(source.split(",", 1)[1])))
+        assert picture.shape[0] > 0 and picture.shape[1] > 0
+    text = coins_report.read_text()
+    assert '<div class="value">24</div>' in text  # the count, as a number
+    assert STATUS_COLOURS["computed"] in text  # the graph is coloured by status
+
+
+def test_labels_are_coloured_and_background_black() -> None:
+    from graphvision._pictures import label_colours
+
+    labels = np.array([[0, 1, 2], [3, 0, 1]], np.int32)
+    rgb = label_colours(labels)
+    assert np.all(rgb[labels == 0] == 0)
+    assert np.array_equal(rgb[0, 1], rgb[1, 2])  # one label, one colour
+    assert len({tuple(rgb[0, 1]), tuple(rgb[0, 2]), tuple(rgb[1, 0])}) == 3
+
+
+def _browser() -> str | None:
+    return next((path for name in BROWSERS if (path := shutil.which(name))), None)
+
+
+CHECK = """<script>
+window.__errors = [];
+window.addEventListener("error", e => __errors.push(String(e.message || e.target.src)), true);
+const original = console.error;
+console.error = (...args) => { __errors.push(args.join(" ")); original(...args); };
+window.addEventListener("load", () => {
+  const images = [...document.images];
+  const broken = images.filter(i => !(i.complete && i.naturalWidth > 0)).length;
+  document.documentElement.setAttribute(
+    "data-check", JSON.stringify({images: images.length, broken, errors: __errors}));
+});
+</script>"""
+
+
+@pytest.mark.skipif(_browser() is None, reason="no Chromium installed (CI installs one)")
+def test_a_real_browser_loads_the_report_without_errors(coins_report: Path, tmp_path) -> None:
+    checked = tmp_path / "checked.html"
+    checked.write_text(coins_report.read_text().replace("<head>", "<head>" + CHECK, 1))
+    command = [
+        str(_browser()),
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        f"--user-data-dir={tmp_path / 'profile'}",
+        "--virtual-time-budget=5000",
+        "--dump-dom",
+        checked.as_uri(),
+    ]
+    dom = subprocess.run(command, capture_output=True, text=True, timeout=120).stdout
+    found = re.search(r'data-check="([^"]*)"', dom)
+    assert found, "the page's load handler did not run"
+    check = json.loads(html.unescape(found.group(1)))
+    assert check == {"images": 2, "broken": 0, "errors": []}
