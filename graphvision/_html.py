@@ -143,10 +143,8 @@ def html_report(
             else '<p class="failed">not produced</p>'
         )
         wide = " wide" if issubclass(kind, TablePort) else ""
-        sections.append(
-            f'<div class="output{wide}"><h3>{escape(name)} <small>{escape(kind.type_name())}</small>'
-            f"</h3>{shown}</div>"
-        )
+        title = f"{escape(name)} <small>{escape(kind.type_name())}</small>"
+        sections.append(f'<div class="output{wide}"><h3>{title}</h3>{shown}</div>')
     body.append(f'<div class="outputs">{"".join(sections)}</div>')
     if intermediates:
         thumbs = [
