@@ -19,7 +19,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ._cache import Cache, CacheWarning, DiskStore, MemoryStore, default_cache_dir
+    from ._cache import (
+        Cache,
+        CacheWarning,
+        DiskStore,
+        MemoryStore,
+        NotACacheError,
+        default_cache_dir,
+    )
     from ._compile import CompiledGraph, compile_graph
     from ._dask import DaskExecutor
     from ._errors import (
@@ -181,6 +188,7 @@ __all__ = [
     "NodeExecutionError",
     "NodeRecord",
     "NodeSpec",
+    "NotACacheError",
     "ParameterError",
     "PinholeCamera",
     "PipelineError",

@@ -10,17 +10,29 @@ no intermediate value is ever hashed.
 
 Disk format
 -----------
-One file per output, ``<dir>/<key[:2]>/<key>.gvc``::
+A cache directory holds a marker, ``CACHEDIR.TAG`` (the Cache Directory
+Tagging convention, so backup tools skip it, with a line naming graphvision),
+and one file per output, ``<dir>/<key[:2]>/<key>.gvc``::
 
-    b"GVC1" | header length (8 bytes, little endian) | JSON header | payload
+    b"GVC2" | header length (8 bytes, little endian) | digest (16 bytes) | JSON header | payload
 
-The header holds the port type, its JSON metadata, each array's name, dtype,
-shape and offset, and the xxh3-128 digest of the payload. Arrays are read back
-with ``numpy.frombuffer`` (object dtypes are refused): there is no pickle to
-load. Writes go to a temporary file in the same folder and are renamed into
-place, so a reader, another process, or an interrupted run never sees half an
-entry; a torn or altered file fails the digest, is dropped with a warning and
+The digest is xxh3-128 of the header and the payload together, so every
+byte after the fixed prefix is verified before any of it is used. The header
+holds the port type, its JSON metadata, and each array's name, dtype, shape,
+offset and size; after the digest, the header's structure is checked too
+(a JSON object, the fields and their types, sizes that add up to the
+payload), so an entry is used only if it is whole. Arrays are read back with
+``numpy.frombuffer`` over the immutable bytes of the file (object dtypes are
+refused): there is no pickle to load, and the values cannot be made writable.
+
+Writes go to a temporary file in the same folder and are renamed into place,
+so a reader, another process, or an interrupted run never sees half an
+entry. Any entry that fails a check is dropped with one warning line and
 recomputed. Reads touch the file's mtime, which orders eviction (LRU).
+
+The cache touches only what it wrote: it refuses a non-empty folder without
+its marker (``--cache-dir ~/thesis`` is an error, not a purge), and pruning
+and clearing remove only files of its own layout.
 """
 
 from __future__ import annotations
@@ -29,6 +41,7 @@ import contextlib
 import hashlib
 import json
 import os
+import re
 import struct
 import tempfile
 import threading
@@ -43,6 +56,7 @@ from typing import Any, Protocol
 import numpy as np
 import xxhash
 
+from ._errors import GraphvisionError
 from ._ports import PortType
 
 __all__ = [
@@ -51,6 +65,7 @@ __all__ = [
     "CacheWarning",
     "DiskStore",
     "MemoryStore",
+    "NotACacheError",
     "Store",
     "content_key",
     "default_cache_dir",
@@ -58,13 +73,25 @@ __all__ = [
     "output_key",
 ]
 
-MAGIC = b"GVC1"
+MAGIC = b"GVC2"
 SUFFIX = ".gvc"
 STALE_TEMP_SECONDS = 3600
+MARKER = "CACHEDIR.TAG"
+MARKER_TEXT = (
+    "Signature: 8a477f597d28d172789f06886806bc55\n"
+    "# This file is a cache directory tag created by graphvision.\n"
+    "# For information about cache directory tags see https://bford.info/cachedir/\n"
+)
+_PREFIX = struct.Struct("<4sQ16s")  # magic, header length, digest of header + payload
+_TEMP = re.compile(r"^\.tmp-[A-Za-z0-9_]+\.gvc$")
 
 
 class CacheWarning(UserWarning):
     """A cache problem that costs time but loses nothing (entry dropped, store disabled)."""
+
+
+class NotACacheError(GraphvisionError):
+    """A cache directory was asked for in a folder that holds other files."""
 
 
 def default_cache_dir() -> Path:
@@ -134,8 +161,6 @@ class Store(Protocol):
 
     def put(self, key: str, entry: Encoded) -> None: ...
 
-    def contains(self, key: str) -> bool: ...
-
 
 class MemoryStore:
     """An LRU of decoded values bounded in bytes (thread-safe)."""
@@ -166,9 +191,6 @@ class MemoryStore:
                 _, (_, size) = self._items.popitem(last=False)
                 self._bytes -= size
 
-    def contains(self, key: str) -> bool:
-        return key in self._items
-
     def __len__(self) -> int:
         return len(self._items)
 
@@ -186,65 +208,132 @@ class CacheInfo:
 
 
 class DiskStore:
-    """Content-verified files, atomic writes, LRU eviction; safe for several processes."""
+    """Verified files, atomic writes, LRU eviction; safe for several processes.
+
+    Parameters
+    ----------
+    directory : path
+        The cache folder: new, empty, or a graphvision cache (it has the
+        marker). A folder holding anything else is refused.
+    max_bytes : int
+        Size bound; least recently used entries are evicted beyond it.
+
+    Raises
+    ------
+    NotACacheError
+        ``directory`` is a file, or a non-empty folder that is not a graphvision cache.
+    ValueError
+        ``max_bytes`` is not positive.
+    """
 
     def __init__(self, directory: str | Path, max_bytes: int = 4 * 2**30) -> None:
+        if max_bytes <= 0:
+            raise ValueError(f"the cache size bound must be positive, got {max_bytes} bytes")
         self.directory = Path(directory)
         self.max_bytes = max_bytes
+        self.read_only = False
         self._since_check = 0
         self._lock = threading.Lock()
+        self._check_ownership()
+
+    def _check_ownership(self) -> None:
+        """Refuse a folder that holds files this cache did not write (see the module docs)."""
+        folder = self.directory
+        if folder.exists() and not folder.is_dir():
+            raise NotACacheError(f"cache directory {folder} is a file, not a folder")
+        if not folder.is_dir() or (folder / MARKER).is_file():
+            return
+        foreign = [
+            item.name
+            for item in sorted(folder.iterdir())
+            if not (_is_shard(item) and all(_is_own_file(item, f) for f in item.iterdir()))
+        ]
+        if foreign:
+            shown = ", ".join(f"'{name}'" for name in foreign[:3])
+            more = f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
+            raise NotACacheError(
+                f"{folder} is not a graphvision cache: it holds {shown}{more}, which "
+                "graphvision did not write; give --cache-dir a new or empty folder"
+            )
+        with contextlib.suppress(OSError):  # adopt a folder of our own layout (older versions)
+            (folder / MARKER).write_text(MARKER_TEXT)
 
     @classmethod
     def open(cls, directory: str | Path, max_bytes: int = 4 * 2**30) -> DiskStore | None:
-        """The store at ``directory``, or None (with a warning) if it cannot be written."""
+        """The store at ``directory``; read-only (with one warning) when it cannot be written.
+
+        Returns None, with a warning, when the folder neither exists nor can be made.
+        """
         store = cls(directory, max_bytes)
         try:
             store.directory.mkdir(parents=True, exist_ok=True)
-            with tempfile.NamedTemporaryFile(dir=store.directory, prefix=".probe-"):
-                pass
         except OSError as error:
             warnings.warn(
-                f"cache directory {directory} is not writable ({error.strerror or error}); "
+                f"cache directory {directory} cannot be created ({error.strerror or error}); "
                 "running without the disk cache",
                 CacheWarning,
                 stacklevel=2,
             )
             return None
+        try:
+            if not (store.directory / MARKER).is_file():
+                (store.directory / MARKER).write_text(MARKER_TEXT)
+            with tempfile.NamedTemporaryFile(dir=store.directory, prefix=".probe-"):
+                pass
+        except OSError as error:
+            store.read_only = True
+            warnings.warn(
+                f"cache directory {directory} is read-only ({error.strerror or error}); "
+                "cached results are read from it, new results are not stored",
+                CacheWarning,
+                stacklevel=2,
+            )
         return store
 
     def path(self, key: str) -> Path:
         return self.directory / key[:2] / f"{key}{SUFFIX}"
 
-    def contains(self, key: str) -> bool:
-        return self.path(key).is_file()
-
     def get(self, key: str) -> Encoded | None:
         path = self.path(key)
         try:
             blob = path.read_bytes()
-        except (FileNotFoundError, IsADirectoryError):
+        except FileNotFoundError:
+            return None
+        except OSError as error:  # a shard replaced by a file, an entry by a folder, no access
+            self._drop(path, f"unreadable: {error.strerror or error}", remove=False)
             return None
         try:
-            entry = _decode_blob(blob)
+            entry = decode_blob(blob)
         except ValueError as reason:
-            warnings.warn(
-                f"cache entry {path} is corrupt ({reason}); dropped, the result is recomputed",
-                CacheWarning,
-                stacklevel=2,
-            )
-            path.unlink(missing_ok=True)
+            self._drop(path, str(reason), remove=not self.read_only)
             return None
         with contextlib.suppress(OSError):  # read-only cache, or pruned meanwhile: value is good
             os.utime(path)
         return entry
 
+    def _drop(self, path: Path, reason: str, remove: bool) -> None:
+        warnings.warn(
+            f"cache entry {path} is corrupt ({reason}); dropped, the result is recomputed",
+            CacheWarning,
+            stacklevel=3,
+        )
+        if remove:
+            with contextlib.suppress(OSError):
+                path.unlink()
+
     def put(self, key: str, entry: Encoded) -> None:
+        if self.read_only:
+            return
         path = self.path(key)
-        path.parent.mkdir(parents=True, exist_ok=True)
+        if not self.directory.is_dir():
+            self.directory.mkdir(parents=True, exist_ok=True)
+        if not (self.directory / MARKER).is_file():
+            (self.directory / MARKER).write_text(MARKER_TEXT)
+        path.parent.mkdir(exist_ok=True)
         handle, temp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=SUFFIX)
         try:
             with os.fdopen(handle, "wb") as stream:
-                for chunk in _encode_blob(entry):
+                for chunk in encode_blob(entry):
                     stream.write(chunk)
             os.replace(temp, path)
         except BaseException:
@@ -259,12 +348,15 @@ class DiskStore:
             self.prune(self.max_bytes)
 
     def _files(self) -> Iterator[tuple[Path, os.stat_result]]:
-        for sub in self.directory.iterdir() if self.directory.is_dir() else ():
-            if not sub.is_dir():
+        """The entries and temporary files of this store: its own layout, nothing else."""
+        for shard in self.directory.iterdir() if self.directory.is_dir() else ():
+            if not _is_shard(shard):
                 continue
-            for path in sub.iterdir():
+            for path in shard.iterdir():
+                if not _is_own_file(shard, path):
+                    continue
                 try:
-                    yield path, path.stat()
+                    yield path, path.stat(follow_symlinks=False)
                 except FileNotFoundError:
                     continue
 
@@ -305,8 +397,22 @@ class DiskStore:
         return removed
 
 
-def _encode_blob(entry: Encoded) -> Iterator[bytes | memoryview]:
-    specs, offset, digest = [], 0, xxhash.xxh3_128()
+def _is_shard(item: Path) -> bool:
+    """A shard folder of the layout: two characters, a real folder (not a link)."""
+    return len(item.name) == 2 and item.is_dir() and not item.is_symlink()
+
+
+def _is_own_file(shard: Path, path: Path) -> bool:
+    """An entry ``<shard>/<key>.gvc`` with the key starting with the shard, or a temp file."""
+    name = path.name
+    if path.is_symlink() or not name.endswith(SUFFIX):
+        return False
+    return name.startswith(shard.name) or bool(_TEMP.match(name))
+
+
+def encode_blob(entry: Encoded) -> Iterator[bytes | memoryview]:
+    """The bytes of a disk entry for ``entry``, in chunks (arrays are not copied)."""
+    specs, offset = [], 0
     arrays = {name: np.ascontiguousarray(a) for name, a in entry.arrays.items()}
     for name, array in arrays.items():
         if array.dtype.hasobject:
@@ -321,45 +427,74 @@ def _encode_blob(entry: Encoded) -> Iterator[bytes | memoryview]:
             }
         )
         offset += array.nbytes
-        digest.update(memoryview(array).cast("B") if array.size else b"")
     header = json.dumps(
-        {
-            "type": entry.type_name,
-            "meta": entry.meta,
-            "arrays": specs,
-            "payload": offset,
-            "digest": digest.hexdigest(),
-        }
+        {"type": entry.type_name, "meta": entry.meta, "arrays": specs, "payload": offset}
     ).encode()
-    yield MAGIC + struct.pack("<Q", len(header)) + header
-    for array in arrays.values():
-        if array.size:
-            yield memoryview(array).cast("B")
+    chunks = [memoryview(a).cast("B") for a in arrays.values() if a.size]
+    digest = xxhash.xxh3_128(header)
+    for chunk in chunks:
+        digest.update(chunk)
+    yield _PREFIX.pack(MAGIC, len(header), digest.digest()) + header
+    yield from chunks
 
 
-def _decode_blob(blob: bytes) -> Encoded:
-    if len(blob) < 12 or blob[:4] != MAGIC:
-        raise ValueError("not a graphvision cache entry")
-    (length,) = struct.unpack("<Q", blob[4:12])
+def decode_blob(blob: bytes) -> Encoded:
+    """The entry in ``blob``, after checking every byte; ValueError says what is wrong."""
+    if len(blob) < _PREFIX.size:
+        raise ValueError(f"truncated: {len(blob)} bytes")
+    magic, length, digest = _PREFIX.unpack_from(blob)
+    if magic != MAGIC:
+        raise ValueError("not a graphvision cache entry of this version")
+    if length > len(blob) - _PREFIX.size:
+        raise ValueError("truncated: the header runs past the end of the file")
+    body = memoryview(blob)[_PREFIX.size :]
+    if xxhash.xxh3_128(body).digest() != digest:
+        raise ValueError("digest mismatch: the file was altered or cut short")
     try:
-        header = json.loads(blob[12 : 12 + length])
+        header = json.loads(bytes(body[:length]))
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(f"unreadable header: {error}") from None
-    payload = memoryview(blob)[12 + length :]
-    if len(payload) != header.get("payload"):
-        raise ValueError(f"payload is {len(payload)} bytes, header says {header.get('payload')}")
-    if xxhash.xxh3_128(payload).hexdigest() != header.get("digest"):
-        raise ValueError("payload digest mismatch")
+    payload = body[length:]
+    specs = _check_header(header, len(payload))
     arrays = {}
+    for name, dtype, shape, offset in specs:
+        count = int(np.prod(shape, dtype=np.int64))
+        arrays[name] = np.frombuffer(payload, dtype=dtype, count=count, offset=offset).reshape(
+            shape
+        )
+    return Encoded(header["type"], arrays, header["meta"])
+
+
+def _check_header(
+    header: Any, payload_bytes: int
+) -> list[tuple[str, np.dtype, tuple[int, ...], int]]:
+    """(name, dtype, shape, offset) of each array, or ValueError naming what does not hold."""
+    if not isinstance(header, dict):
+        raise ValueError("the header is not a JSON object")
+    for field, kind in (("type", str), ("meta", dict), ("arrays", list), ("payload", int)):
+        if not isinstance(header.get(field), kind):
+            raise ValueError(f"the header's '{field}' is missing or not a {kind.__name__}")
+    if header["payload"] != payload_bytes:
+        raise ValueError(f"payload is {payload_bytes} bytes, header says {header['payload']}")
+    specs, expected_offset = [], 0
     for spec in header["arrays"]:
-        dtype = np.dtype(spec["dtype"])
+        try:
+            name, shape = str(spec["name"]), tuple(int(n) for n in spec["shape"])
+            dtype = np.dtype(spec["dtype"])
+            offset, nbytes = int(spec["offset"]), int(spec["nbytes"])
+        except (KeyError, TypeError, ValueError) as error:
+            raise ValueError(f"an array description is malformed ({error})") from None
         if dtype.hasobject:
             raise ValueError("object dtype refused")
-        count = int(np.prod(spec["shape"], dtype=np.int64))
-        arrays[spec["name"]] = np.frombuffer(
-            payload, dtype=dtype, count=count, offset=spec["offset"]
-        ).reshape(spec["shape"])
-    return Encoded(header["type"], arrays, header["meta"])
+        if any(n < 0 for n in shape) or offset != expected_offset:
+            raise ValueError(f"array '{name}' has a bad shape or offset")
+        if nbytes != int(np.prod(shape, dtype=np.int64)) * dtype.itemsize:
+            raise ValueError(f"array '{name}': shape {list(shape)} disagrees with {nbytes} bytes")
+        specs.append((name, dtype, shape, offset))
+        expected_offset += nbytes
+    if expected_offset != payload_bytes:
+        raise ValueError(f"arrays add up to {expected_offset} bytes, payload is {payload_bytes}")
+    return specs
 
 
 class Cache:
@@ -368,11 +503,6 @@ class Cache:
     def __init__(self, memory: MemoryStore | None = None, disk: Store | None = None) -> None:
         self.memory = memory
         self.disk = disk
-
-    def contains(self, key: str) -> bool:
-        return bool(
-            (self.memory and self.memory.contains(key)) or (self.disk and self.disk.contains(key))
-        )
 
     def get(self, key: str, port_type: type[PortType]) -> tuple[bool, Any]:
         """(True, value) on a hit, (False, None) on a miss or an unusable entry."""
@@ -385,7 +515,16 @@ class Cache:
         entry = self.disk.get(key)
         if entry is None or entry.type_name != port_type.type_name():
             return False, None
-        value = port_type.decode(entry.arrays, entry.meta)
+        try:
+            value = port_type.decode(entry.arrays, entry.meta)
+        except Exception as error:  # whole and verified, yet not a value of its type
+            warnings.warn(
+                f"cache entry {key} does not decode as {port_type.type_name()} ({error}); "
+                "dropped, the result is recomputed",
+                CacheWarning,
+                stacklevel=2,
+            )
+            return False, None
         if self.memory is not None:
             self.memory.put(key, value, entry.nbytes)
         return True, value
