@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from ._cache import Cache, CacheWarning, DiskStore, MemoryStore, default_cache_dir
     from ._compile import CompiledGraph, compile_graph
     from ._dask import DaskExecutor
+    from ._dtype_policy import to_float_image
     from ._errors import (
         DuplicateNodeError,
         GraphvisionError,

@@ -14,10 +14,12 @@ from typing import Any
 import numpy as np
 
 from ._compile import CompiledGraph
-from ._ports import _ScalarPort
+from ._ports import PortType, _ScalarPort
 from ._run import RunRecord
 
-__all__ = ["write_outputs", "write_report"]
+__all__ = ["shown_value", "write_outputs", "write_report"]
+
+SMALL_ARRAY = 16  # arrays of at most this many elements are shown by value (a homography)
 
 
 def write_outputs(
@@ -50,14 +52,7 @@ def write_report(
         if name not in outputs:
             lines.append(f"| {name} | not produced | |")
             continue
-        kind = compiled.output_type(name)
-        value = outputs[name]
-        if issubclass(kind, _ScalarPort):
-            shown = json.dumps(value)
-        elif isinstance(value, np.ndarray) and value.size <= 16:  # e.g. a homography
-            shown = f"{kind.summary(value)}: `{json.dumps(np.round(value, 6).tolist())}`"
-        else:
-            shown = kind.summary(value)
+        shown = _cell(shown_value(compiled.output_type(name), outputs[name]))
         links = ", ".join(f"[{f}]({f})" for f in files.get(name, []))
         lines.append(f"| {name} | {shown} | {links} |")
     images = [f for fs in files.values() for f in fs if f.endswith(".png")]
@@ -67,3 +62,25 @@ def write_report(
     path = directory / "report.md"
     path.write_text("\n".join(lines))
     return path
+
+
+def shown_value(kind: type[PortType], value: Any) -> str:
+    """How the report shows a value: scalars as JSON, small arrays by value, else a summary.
+
+    Works for every dtype an array port can hold (bool, integers, floats with
+    NaN or inf): small arrays go through :func:`numpy.ndarray.tolist`, floats
+    rounded to 6 decimals, never through arithmetic that a dtype may refuse.
+    """
+    if issubclass(kind, _ScalarPort):
+        return json.dumps(value)
+    summary = kind.summary(value)
+    if isinstance(value, np.ndarray) and value.size <= SMALL_ARRAY:
+        if np.issubdtype(value.dtype, np.floating):
+            value = np.round(value.astype(np.float64), 6)
+        return f"{summary}: `{json.dumps(value.tolist(), default=str)}`"
+    return summary
+
+
+def _cell(text: str) -> str:
+    """``text`` safe inside a Markdown table cell (one line, pipes escaped)."""
+    return " ".join(text.split()).replace("|", "\\|")

@@ -136,13 +136,16 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
     A string for a non-``Text`` port is a reference: ``scheme:rest`` goes to the
     plugin source of that scheme (e.g. ``sample:camera``), a scalar port parses
     it as YAML (``--input sigma=2``), anything else is a path for the ``file``
-    source.
+    source. The loaded value, or an array the caller passed, then goes through
+    the port's dtype policy (:meth:`PortType.coerce`), so a ``uint8`` array
+    from OpenCV is the same image as the PNG it was read from.
 
     Raises
     ------
     InputError
         Naming the input, the value and what is wrong.
     """
+    origin = f"'{value}'" if isinstance(value, str) else f"the {type(value).__name__} given"
     if isinstance(value, str) and not issubclass(port_type, TextPort):
         scheme, sep, rest = value.partition(":")
         try:
@@ -155,6 +158,7 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
         except Exception as error:
             raise InputError(f"input '{name}': cannot load '{value}': {error}") from error
     try:
+        value = port_type.coerce(value, origin)
         return _read_only_view(port_type, port_type.validate(value))
     except PortValueError as error:
         raise InputError(f"input '{name}': {error}") from None
