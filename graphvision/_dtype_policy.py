@@ -66,9 +66,7 @@ def to_float_image(array: Any, *, source: str = "image", check_range: bool = Tru
         if array.shape[2] == 1:
             array = array[..., 0]
     if array.ndim not in (2, 3) or (array.ndim == 3 and array.shape[2] != 3):
-        raise PortValueError(
-            f"{source} must be H×W (gray) or H×W×3 (RGB), got shape {array.shape}"
-        )
+        raise PortValueError(f"{source} must be H×W (gray) or H×W×3 (RGB), got shape {array.shape}")
     if array.dtype == np.bool_:
         return array.astype(np.float32)
     if np.issubdtype(array.dtype, np.unsignedinteger):

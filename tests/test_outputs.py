@@ -153,7 +153,8 @@ def test_every_builtin_port_type_is_written_and_reported(tmp_path):
 
 
 def corners_mean_error(estimated: np.ndarray, truth: np.ndarray, width: int, height: int) -> float:
-    corners = np.array([[0, 0, 1], [width - 1, 0, 1], [width - 1, height - 1, 1], [0, height - 1, 1]])
+    w, h = width - 1, height - 1
+    corners = np.array([[0, 0, 1], [w, 0, 1], [w, h, 1], [0, h, 1]])
     a, b = corners @ estimated.T, corners @ truth.T
     return float(np.linalg.norm(a[:, :2] / a[:, 2:] - b[:, :2] / b[:, 2:], axis=1).mean())
 

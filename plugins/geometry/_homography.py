@@ -243,7 +243,9 @@ def corner_error(
     return float(error.mean()) if np.isfinite(error).all() else float("inf")
 
 
-def _mapped_size(image: np.ndarray | None, width: int | None, height: int | None) -> tuple[int, int]:
+def _mapped_size(
+    image: np.ndarray | None, width: int | None, height: int | None
+) -> tuple[int, int]:
     """(width, height) from the image, from the parameters, or a ValueError saying what to give."""
     given = None if width is None and height is None else (width, height)
     if image is None:

@@ -110,7 +110,7 @@ def read_array(path: str) -> np.ndarray:
 
 
 def read_file(path: str) -> np.ndarray:
-    """Read an image file or ``.npy`` array as a float32 image (:func:`read_array`, then the policy).
+    """An image file or ``.npy`` array as a float32 image: :func:`read_array`, then the policy.
 
     Raises
     ------
