@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from ._batch import BatchItem, BatchResult, run_batch
     from ._cache import Cache, CacheWarning, DiskStore, MemoryStore, default_cache_dir
     from ._compile import CompiledGraph, compile_graph
     from ._dask import DaskExecutor
@@ -28,6 +29,7 @@ if TYPE_CHECKING:
         GraphvisionError,
         InputError,
         NodeExecutionError,
+        OutputFolderError,
         ParameterError,
         PipelineError,
         PluginLoadError,
@@ -136,6 +138,8 @@ __all__ = [
     "AnyImageT",
     "Array",
     "ArrayPort",
+    "BatchItem",
+    "BatchResult",
     "BinaryImage",
     "BinaryImagePort",
     "Bool",
@@ -182,6 +186,7 @@ __all__ = [
     "NodeExecutionError",
     "NodeRecord",
     "NodeSpec",
+    "OutputFolderError",
     "ParameterError",
     "PinholeCamera",
     "PipelineError",
@@ -219,6 +224,8 @@ __all__ = [
     "pipeline_json_schema",
     "port_of",
     "run",
+    "run_batch",
     "source",
     "sweep",
+    "to_float_image",
 ]

@@ -3,21 +3,151 @@
 Each output is written by its port type (images as PNG, arrays as ``.npy``,
 tables as CSV and JSON, scalars as JSON); the run record goes to
 ``record.json`` and a human summary to ``report.md``.
+
+A folder holds one run. graphvision owns exactly the files its
+``record.json`` lists (``files``, plus the record and the report): writing a
+new run removes those of the previous run, so no output of an earlier run
+(an output this run did not produce, or could not because a node failed) is
+left looking current; any other file is the user's and is never removed nor
+overwritten: a run whose files would replace one is refused
+(:class:`~graphvision.OutputFolderError`), before it runs when the CLI can
+tell. The new files are written to a hidden staging folder first and moved
+in, ``record.json`` last.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ._compile import CompiledGraph
+from ._errors import OutputFolderError
 from ._ports import PortType, _ScalarPort
-from ._run import RunRecord
+from ._run import RunRecord, RunResult
 
-__all__ = ["shown_value", "write_outputs", "write_report"]
+__all__ = [
+    "RECORD",
+    "REPORT",
+    "check_output_folder",
+    "owned_files",
+    "remove_owned_files",
+    "shown_value",
+    "write_outputs",
+    "write_report",
+    "write_run",
+]
+
+RECORD, REPORT = "record.json", "report.md"
+OUTPUT_SUFFIXES = (".png", ".npy", ".npz", ".json", ".csv", ".ply")
+
+
+def owned_files(directory: Path) -> set[str]:
+    """The file names in ``directory`` that a previous graphvision run wrote (its record's list).
+
+    Raises
+    ------
+    OutputFolderError
+        When ``directory`` has a ``record.json`` that is not a graphvision
+        record listing its files (so what is ours there cannot be known).
+    """
+    record = directory / RECORD
+    if not record.is_file():
+        return set()
+    try:
+        content = json.loads(record.read_text())
+        listed = content["files"]
+        names = {name for files in listed.values() for name in files}
+        if not all(
+            isinstance(n, str) and n == Path(n).name and n not in ("", ".", "..") for n in names
+        ):
+            raise ValueError("a listed file is not a plain file name")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
+        raise OutputFolderError(
+            f"{record} is not a graphvision record listing its files ({type(error).__name__}), "
+            "so which files there are a previous run's is unknown; choose another "
+            "--output-dir or empty this one"
+        ) from None
+    return names | {RECORD, REPORT}
+
+
+def check_output_folder(directory: Path, outputs: Iterable[str]) -> set[str]:
+    """Refuse, before a run, a folder where the run's files would replace files not graphvision's.
+
+    A file counts as the run's when its name is ``record.json``, ``report.md``
+    or an output name with a suffix a port type writes. Returns the previous
+    run's files (:func:`owned_files`).
+
+    Raises
+    ------
+    OutputFolderError
+        Naming the folder and the first file in the way.
+    """
+    if directory.exists() and not directory.is_dir():
+        raise OutputFolderError(f"output folder {directory} is a file")
+    owned = owned_files(directory)
+    if not directory.is_dir():
+        return owned
+    stems = set(outputs)
+    for path in sorted(directory.iterdir()):
+        ours = path.name in (RECORD, REPORT) or (
+            path.stem in stems and path.suffix in OUTPUT_SUFFIXES
+        )
+        if ours and path.name not in owned:
+            _refuse(directory, path.name)
+    return owned
+
+
+def _refuse(directory: Path, name: str) -> None:
+    raise OutputFolderError(
+        f"output folder {directory} holds {name}, which no graphvision record there lists; "
+        "the run would replace it: move it, or choose another --output-dir"
+    )
+
+
+def remove_owned_files(directory: Path, names: Iterable[str]) -> None:
+    """Delete the listed files of a previous run (plain files directly in ``directory`` only)."""
+    for name in names:
+        path = directory / name
+        if path.is_file() or path.is_symlink():
+            path.unlink()
+
+
+def write_run(result: RunResult, directory: Path) -> dict[str, list[str]]:
+    """Write a run's outputs, ``record.json`` and ``report.md``, replacing the previous run's.
+
+    Returns output name -> file names. The record lists the files
+    (``record.files``), which is how the next run knows what is its to remove.
+
+    Raises
+    ------
+    OutputFolderError
+        When a file would replace one no graphvision record there lists.
+    """
+    owned = check_output_folder(directory, result.compiled.outputs)
+    directory.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=".graphvision-writing-", dir=directory))
+    try:
+        files = write_outputs(result.compiled, result.outputs, staging)
+        result.record.files = files
+        write_report(result.compiled, result.outputs, files, result.record, staging)
+        new = [name for names in files.values() for name in names] + [REPORT, RECORD]
+        for name in new:
+            if (directory / name).exists() and name not in owned:
+                _refuse(directory, name)
+        remove_owned_files(directory, owned)
+        for name in new:  # the record last: until it is in place, nothing claims to be current
+            os.replace(staging / name, directory / name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return files
+
 
 SMALL_ARRAY = 16  # arrays of at most this many elements are shown by value (a homography)
 
