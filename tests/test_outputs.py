@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 
 import imageio.v3 as iio
 import numpy as np
@@ -201,3 +202,87 @@ def test_cli_writes_a_bool_output_of_a_few_pixels(capsys, tmp_path):
     err = capsys.readouterr().err
     assert status == 0, err
     assert "[[false, false], [true, true]]" in (tmp_path / "o" / "report.md").read_text()
+
+
+# -- item 13: an output folder holds one run, and its record says how to reproduce it --------
+
+DEMO = PIPELINES / "denoise.yaml"
+
+
+def run_cli(capsys, *args):
+    status = main([str(a) for a in args])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    return status, err
+
+
+def test_a_rerun_removes_the_previous_runs_outputs_and_only_those(capsys, tmp_path):
+    out = tmp_path / "out"
+    assert run_cli(capsys, "run", DEMO, "-d", out)[0] == 0
+    first = {p.name for p in out.iterdir()}
+    assert "median_on_salt_pepper.png" in first
+    (out / "notes.txt").write_text("mine")
+    (out / "sub").mkdir()
+    (out / "sub" / "median_on_salt_pepper.png").write_text("mine too")
+    assert run_cli(capsys, "run", DEMO, "-d", out, "-o", "psnr_noisy_gaussian")[0] == 0
+    left = {p.name for p in out.iterdir()}
+    assert left == {"psnr_noisy_gaussian.json", "record.json", "report.md", "notes.txt", "sub"}
+    assert (out / "sub" / "median_on_salt_pepper.png").read_text() == "mine too"
+    record = json.loads((out / "record.json").read_text())
+    assert record["files"] == {"psnr_noisy_gaussian": ["psnr_noisy_gaussian.json"]}
+
+
+def test_a_folder_with_files_graphvision_did_not_write_is_refused_before_running(capsys, tmp_path):
+    (tmp_path / "report.md").write_text("my thesis notes")
+    status, err = run_cli(capsys, "run", DEMO, "-d", tmp_path, "--progress")
+    assert status == 2
+    assert re.search(r"output folder .* holds report.md, which no graphvision record", err)
+    assert "running" not in err  # refused before anything ran
+    assert (tmp_path / "report.md").read_text() == "my thesis notes"
+    (tmp_path / "report.md").unlink()
+    (tmp_path / "psnr_noisy_gaussian.json").write_text("{}")  # an output's name, not ours
+    status, err = run_cli(capsys, "run", DEMO, "-d", tmp_path, "-o", "psnr_noisy_gaussian")
+    assert status == 2 and "holds psnr_noisy_gaussian.json" in err
+    (tmp_path / "psnr_noisy_gaussian.json").unlink()
+    (tmp_path / "record.json").write_text('{"files": {"x": ["../escape.txt"]}}')
+    status, err = run_cli(capsys, "run", DEMO, "-d", tmp_path, "-o", "psnr_noisy_gaussian")
+    assert status == 2 and "is not a graphvision record listing its files" in err
+
+
+def test_the_record_holds_what_reproducing_the_run_needs(capsys, tmp_path):
+    import hashlib
+    import shutil
+    import subprocess
+
+    repo = tmp_path / "repo"
+    repo.mkdir()
+    pipeline = Path(shutil.copy(DEMO, repo / "denoise.yaml"))
+    git = ["git", "-C", str(repo), "-c", "user.name=t", "-c", "user.email=t@t"]
+    subprocess.run([*git, "init", "-q"], check=True)
+    subprocess.run([*git, "add", "denoise.yaml"], check=True)
+    subprocess.run([*git, "commit", "-qm", "pipeline"], check=True)
+    head = subprocess.run([*git, "rev-parse", "HEAD"], capture_output=True, text=True).stdout
+    image = tmp_path / "photo.png"
+    iio.imwrite(image, (np.random.default_rng(0).random((20, 24)) * 255).astype(np.uint8))
+    cache, out = tmp_path / "cache", tmp_path / "out"
+    args = ["run", pipeline, "-i", f"image={image}", "-s", "median_on_sp.size=5", "-d", out]
+    assert run_cli(capsys, *args, "--cache-dir", cache)[0] == 0
+    first = json.loads((out / "record.json").read_text())
+    assert first["pipeline_file"] == str(pipeline.resolve())
+    assert first["pipeline_sha256"] == hashlib.sha256(pipeline.read_bytes()).hexdigest()
+    assert first["git_commit"] == head.strip() and first["git_dirty"] is False
+    assert first["inputs"]["image"]["sha256"] == hashlib.sha256(image.read_bytes()).hexdigest()
+    assert first["inputs"]["image"]["path"] == str(image.resolve())
+    assert first["overrides"] == {"median_on_sp.size": 5}
+    assert first["params"] == {"seed": 0}
+    assert {"python", "graphvision", "numpy", "scipy", "plugin filters"} <= set(first["versions"])
+    assert first["date"].endswith("+00:00")
+    nodes = {n["name"]: n for n in first["nodes"]}
+    assert nodes["median_on_sp"]["params"]["size"] == 5
+    assert all(n["keys"] and n["status"] == "computed" for n in nodes.values())
+    assert run_cli(capsys, *args, "--cache-dir", cache)[0] == 0  # all from the cache
+    again = {n["name"]: n for n in json.loads((out / "record.json").read_text())["nodes"]}
+    cached = [name for name, node in again.items() if node["status"] == "cached"]
+    assert cached and all(again[name]["keys"] == nodes[name]["keys"] for name in cached)
+    images = [name for name in cached if name.startswith(("noisy", "gaussian", "median"))]
+    assert images and all(again[name]["output_bytes"] == 20 * 24 * 4 for name in images)
