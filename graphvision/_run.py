@@ -505,9 +505,9 @@ def run(
             pool.shutdown(wait=True)
         record.seconds = time.perf_counter() - began
         record.nodes = [state.nodes[n] for n in compiled.steps if n in state.nodes]
-        describe_run(record, compiled, registry, given, state.keys, overrides or {})
         for hook in hooks:
             hook.run_finished(record=record, failed=failed)
+    describe_run(record, compiled, registry, given, state.keys, overrides or {})
 
     produced = {}
     for name in wanted_names:
@@ -517,7 +517,7 @@ def run(
             record.outputs[name] = compiled.output_type(name).summary(produced[name])
     result = RunResult(produced, record, compiled, state.failures)
     if state.failures:
-        error = RunError(state.failures, record)
-        error.result = result  # type: ignore[attr-defined]
-        raise error
+        failure = RunError(state.failures, record)
+        failure.result = result  # type: ignore[attr-defined]  # read by callers as error.result
+        raise failure
     return result
