@@ -6,7 +6,9 @@ Each file gets its own folder, named after its path below the pattern's
 fixed part (``photos/a/img.png`` and ``photos/b/img.png`` give
 ``OUT/a/img`` and ``OUT/b/img``), so no two files ever share a folder
 (:func:`output_folders`). ``batch.csv`` lists every item: file, output
-folder, status, seconds, error message and the scalar outputs.
+folder, status, seconds, error message and the scalar outputs. A folder a
+previous batch into the same place listed, whose file is not in this batch,
+loses its graphvision files: nothing there is left looking current.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from typing import Any
 
 from ._cache import Cache
 from ._compile import CompiledGraph
-from ._errors import GraphvisionError, InputError, RunError
+from ._errors import GraphvisionError, InputError, OutputFolderError, RunError
 from ._executors import Executor, make_executor
 from ._graph import Graph
 from ._registry import Registry
@@ -35,6 +37,7 @@ __all__ = [
     "batch_files",
     "output_folders",
     "pattern_root",
+    "previous_folders",
     "run_batch",
     "write_summary",
 ]
@@ -160,8 +163,9 @@ def run_batch(
     InputError
         When the glob matches no file.
     OutputFolderError
-        When an item folder holds files graphvision did not write (checked
-        for every item before anything runs).
+        When an item folder holds files graphvision did not write, or
+        ``batch.csv`` is not a graphvision summary (checked before anything
+        runs).
     """
     if isinstance(files, str):
         paths, root = batch_files(files), pattern_root(files)
@@ -175,6 +179,9 @@ def run_batch(
     names = list(outputs) if outputs is not None else list(graph.outputs)
     for folder in folders:
         check_output_folder(folder, names)
+    current = {folder.resolve() for folder in folders}
+    for folder in previous_folders(out_dir) - current:  # its file is no longer in the batch
+        remove_owned_files(folder, owned_files(folder))
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     items: list[BatchItem] = []
     try:
@@ -242,6 +249,38 @@ def _run_item(
         if isinstance(value, int | float | str | bool)
     }
     return item
+
+
+def previous_folders(out_dir: Path) -> set[Path]:
+    """The item folders (resolved) a previous ``batch.csv`` lists, only those inside ``out_dir``.
+
+    Raises
+    ------
+    OutputFolderError
+        When ``out_dir`` holds a ``batch.csv`` that is not a graphvision
+        summary (the batch would overwrite it).
+    """
+    summary = out_dir / SUMMARY
+    if not summary.is_file():
+        return set()
+    try:
+        with summary.open(newline="") as handle:
+            reader = csv.DictReader(handle)
+            if (
+                not reader.fieldnames
+                or reader.fieldnames[0] != "file"
+                or ("status" not in reader.fieldnames)
+            ):
+                raise ValueError("not a batch summary")
+            listed = [row.get("output_dir") or "" for row in reader]
+    except (OSError, UnicodeDecodeError, ValueError, csv.Error):
+        raise OutputFolderError(
+            f"{summary} is not a graphvision batch summary; the batch would replace it: "
+            "move it, or choose another --output-dir"
+        ) from None
+    root = out_dir.resolve()
+    folders = {Path(folder).resolve() for folder in listed if folder}
+    return {folder for folder in folders if root in folder.parents and folder.is_dir()}
 
 
 def write_summary(items: Sequence[BatchItem], out_dir: Path) -> Path:

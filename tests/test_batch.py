@@ -153,3 +153,20 @@ def test_an_animated_gif_says_what_to_do(tmp_path):
     frames[0].save(tmp_path / "anim.gif", save_all=True, append_images=frames[1:])
     with pytest.raises(gv.InputError, match=r"anim.gif holds 3 frames .* save the frame you want"):
         resolved_image(tmp_path / "anim.gif")
+
+
+def test_a_file_dropped_from_the_batch_leaves_no_current_looking_folder(capsys, tmp_path):
+    photo(tmp_path / "in" / "a.png", 100)
+    dropped = photo(tmp_path / "in" / "b.png", 50)
+    out = tmp_path / "out"
+    args = ["run", str(DEMO), "--no-cache", "--batch", f"image={tmp_path}/in/*.png", "-d", str(out)]
+    assert main([*args, "-o", PSNR]) == 0
+    (out / "b" / "mine.txt").write_text("kept")
+    dropped.unlink()
+    assert main([*args, "-o", PSNR]) == 0
+    assert {p.name for p in (out / "b").iterdir()} == {"mine.txt"}
+    assert (out / "a" / "record.json").is_file()
+    (out / "batch.csv").write_text("name,score\nx,1\n")  # the user's own table
+    assert main([*args, "-o", PSNR]) == 2
+    assert "is not a graphvision batch summary" in capsys.readouterr().err
+    assert (out / "batch.csv").read_text() == "name,score\nx,1\n"
