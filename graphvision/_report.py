@@ -45,6 +45,7 @@ __all__ = [
 ]
 
 RECORD, REPORT = "record.json", "report.md"
+STAGING = ".graphvision-writing-"  # prefix of the hidden folder a run's files are written to
 OUTPUT_SUFFIXES = (".png", ".npy", ".npz", ".json", ".csv", ".ply")
 
 
@@ -87,14 +88,20 @@ def check_output_folder(directory: Path, outputs: Iterable[str]) -> set[str]:
     Raises
     ------
     OutputFolderError
-        Naming the folder and the first file in the way.
+        Naming the folder and the first file in the way, or an output named
+        ``record`` (its file would be the record's).
     """
     if directory.exists() and not directory.is_dir():
         raise OutputFolderError(f"output folder {directory} is a file")
+    stems = set(outputs)
+    if Path(RECORD).stem in stems:
+        raise OutputFolderError(
+            f"output '{Path(RECORD).stem}' cannot be written to an output folder: its file "
+            f"would be {RECORD}, the run record; rename the output"
+        )
     owned = owned_files(directory)
     if not directory.is_dir():
         return owned
-    stems = set(outputs)
     for path in sorted(directory.iterdir()):
         ours = path.name in (RECORD, REPORT) or (
             path.stem in stems and path.suffix in OUTPUT_SUFFIXES
@@ -132,7 +139,9 @@ def write_run(result: RunResult, directory: Path) -> dict[str, list[str]]:
     """
     owned = check_output_folder(directory, result.compiled.outputs)
     directory.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=".graphvision-writing-", dir=directory))
+    for left in directory.glob(f"{STAGING}*"):  # from a run killed while writing
+        shutil.rmtree(left, ignore_errors=True)
+    staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=directory))
     try:
         files = write_outputs(result.compiled, result.outputs, staging)
         result.record.files = files
@@ -141,8 +150,8 @@ def write_run(result: RunResult, directory: Path) -> dict[str, list[str]]:
         for name in new:
             if (directory / name).exists() and name not in owned:
                 _refuse(directory, name)
-        remove_owned_files(directory, owned)
-        for name in new:  # the record last: until it is in place, nothing claims to be current
+        remove_owned_files(directory, owned - {RECORD})  # the old record stays until replaced
+        for name in new:  # the record last, in one atomic replace
             os.replace(staging / name, directory / name)
     finally:
         shutil.rmtree(staging, ignore_errors=True)

@@ -146,6 +146,17 @@ def test_a_cmyk_jpeg_reads_as_its_rgb_colours(tmp_path):
     assert np.abs(image * 255 - rgb).mean() < 3  # JPEG loss only; as RGBA it is off by ~100
 
 
+def test_a_cmyk_jpeg_with_a_profile_that_cannot_apply_is_refused_by_name(tmp_path):
+    from PIL import Image as PILImage
+    from PIL import ImageCms
+
+    rgb_profile = ImageCms.ImageCmsProfile(ImageCms.createProfile("sRGB")).tobytes()
+    cmyk = PILImage.fromarray(np.zeros((4, 4, 3), np.uint8)).convert("CMYK")
+    cmyk.save(tmp_path / "print.jpg", icc_profile=rgb_profile)  # an RGB profile on CMYK data
+    with pytest.raises(gv.InputError, match=r"print.jpg is a CMYK image whose embedded colour"):
+        resolved_image(tmp_path / "print.jpg")
+
+
 def test_an_animated_gif_says_what_to_do(tmp_path):
     from PIL import Image as PILImage
 

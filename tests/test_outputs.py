@@ -286,3 +286,14 @@ def test_the_record_holds_what_reproducing_the_run_needs(capsys, tmp_path):
     assert cached and all(again[name]["keys"] == nodes[name]["keys"] for name in cached)
     images = [name for name in cached if name.startswith(("noisy", "gaussian", "median"))]
     assert images and all(again[name]["output_bytes"] == 20 * 24 * 4 for name in images)
+
+
+def test_an_output_named_record_is_refused_and_leftover_staging_is_cleared(capsys, tmp_path):
+    pipeline = tmp_path / "p.yaml"
+    pipeline.write_text(DEMO.read_text().replace("psnr_noisy_gaussian:", "record:"))
+    status, err = run_cli(capsys, "run", pipeline, "-d", tmp_path / "o", "-o", "record")
+    assert status == 2 and "output 'record' cannot be written to an output folder" in err
+    out = tmp_path / "out"
+    (out / ".graphvision-writing-x1").mkdir(parents=True)  # a run killed while writing
+    assert run_cli(capsys, "run", DEMO, "-d", out, "-o", "psnr_noisy_gaussian")[0] == 0
+    assert not (out / ".graphvision-writing-x1").exists()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 from typing import Literal, get_args
 
@@ -65,16 +66,18 @@ def read_array(path: str) -> np.ndarray:
 
     The graph input's port type then applies the dtype policy: a ``uint8``
     PNG becomes a ``float32`` image, a bool ``.npy`` a mask. A CMYK image
-    (JPEG or TIFF from print workflows) is converted to RGB by Pillow, not
-    read as four RGBA channels. An animated or multi-page file is refused
-    with what to do, since a graph input is one still image.
+    (JPEG or TIFF from print workflows) is converted to RGB (through its
+    embedded colour profile when it has one), not read as four RGBA
+    channels. An animated or multi-page file is refused with what to do,
+    since a graph input is one still image.
 
     Raises
     ------
     FileNotFoundError, PermissionError, IsADirectoryError
         With the path.
     ValueError
-        When the file is not an image or holds several frames.
+        When the file is not an image, holds several frames, or is CMYK
+        with a colour profile that cannot be applied.
     """
     file = Path(path)
     if file.is_dir():
@@ -100,7 +103,7 @@ def read_array(path: str) -> np.ndarray:
             )
         cmyk = _cmyk_as_rgb(file)
         data: np.ndarray = iio.imread(file) if cmyk is None else cmyk
-    except (PermissionError, _FramesError):
+    except (PermissionError, _FramesError, _ColourError):
         raise
     except Exception as error:  # imageio raises many types for undecodable files
         raise ValueError(f"{file} is not a readable image ({type(error).__name__})") from None
@@ -127,19 +130,47 @@ class _FramesError(ValueError):
     """A file with several frames where one image is expected."""
 
 
-def _cmyk_as_rgb(file: Path) -> np.ndarray | None:
-    """The RGB pixels of a CMYK image by Pillow's conversion, or None for any other mode.
+class _ColourError(ValueError):
+    """A colour space that cannot be converted to RGB correctly."""
 
-    Pillow undoes the inverted CMYK of Adobe JPEGs when it reads them, so
-    ``convert("RGB")`` gives R = 255 - min(255, C + K), likewise G and B.
+
+def _cmyk_as_rgb(file: Path) -> np.ndarray | None:
+    """The RGB pixels of a CMYK image, or None for any other mode.
+
+    With an embedded ICC profile the pixels go through it to sRGB
+    (LittleCMS, via Pillow's ``ImageCms``); a profile that cannot build that
+    transform is refused by name. Without one, Pillow's device conversion
+    R = 255 - min(255, C + K) (likewise G, B) is the definition; Pillow
+    undoes the inverted CMYK of Adobe JPEGs when it reads them.
+
+    Raises
+    ------
+    ValueError
+        For a CMYK image whose embedded colour profile cannot be applied.
     """
     from PIL import Image as PILImage
+    from PIL import ImageCms
 
     try:
         with PILImage.open(file) as image:
             if image.mode != "CMYK":
                 return None
-            return np.asarray(image.convert("RGB"))
+            profile = image.info.get("icc_profile")
+            if not profile:
+                return np.asarray(image.convert("RGB"))
+            try:
+                converted = ImageCms.profileToProfile(
+                    image,
+                    ImageCms.ImageCmsProfile(io.BytesIO(profile)),
+                    ImageCms.createProfile("sRGB"),
+                    outputMode="RGB",
+                )
+            except (ImageCms.PyCMSError, OSError) as error:
+                raise _ColourError(
+                    f"{file} is a CMYK image whose embedded colour profile cannot be applied "
+                    f"({error}); convert it to RGB with a colour-managed tool first"
+                ) from None
+            return np.asarray(converted)
     except PILImage.UnidentifiedImageError:
         return None
 
