@@ -69,9 +69,18 @@ class BatchResult:
         return sum(item.status != "ok" for item in self.items)
 
 
-def batch_files(pattern: str) -> list[Path]:
-    """The files a glob matches, sorted; ``**`` matches any depth of folders."""
-    return sorted(Path(p) for p in glob.glob(pattern, recursive=True) if Path(p).is_file())
+def batch_files(pattern: str, exclude: Path | None = None) -> list[Path]:
+    """The files a glob matches, sorted; ``**`` matches any depth of folders.
+
+    Files under ``exclude`` (the batch's output folder, when it lies inside
+    the searched folders) are left out, so a batch never reads its own outputs.
+    """
+    skipped = exclude.resolve() if exclude is not None else None
+    return sorted(
+        path
+        for path in map(Path, glob.glob(pattern, recursive=True))
+        if path.is_file() and (skipped is None or skipped not in path.resolve().parents)
+    )
 
 
 def pattern_root(pattern: str) -> Path:
@@ -167,14 +176,14 @@ def run_batch(
         ``batch.csv`` is not a graphvision summary (checked before anything
         runs).
     """
+    out_dir = Path(output_dir)
     if isinstance(files, str):
-        paths, root = batch_files(files), pattern_root(files)
+        paths, root = batch_files(files, exclude=out_dir), pattern_root(files)
         if not paths:
             raise InputError(f"batch input '{input}': no file matches '{files}'")
     else:
         paths = [Path(f) for f in files]
         root = Path(*_common_parts([p.parent.parts for p in paths])) if paths else Path()
-    out_dir = Path(output_dir)
     folders = output_folders(paths, root, out_dir)
     names = list(outputs) if outputs is not None else list(graph.outputs)
     for folder in folders:

@@ -197,10 +197,33 @@ def write_report(
     images = [f for fs in files.values() for f in fs if f.endswith(".png")]
     if images:
         lines += ["", *[f"![{f}]({f})" for f in images]]
+    lines += ["", "## Provenance", "", *_provenance_lines(record)]
     lines += ["", "## Run record", "", "```", record.table(), "```", ""]
     path = directory / "report.md"
     path.write_text("\n".join(lines))
     return path
+
+
+def _provenance_lines(record: RunRecord) -> list[str]:
+    """Where the run came from, for a reader (``record.json`` has everything)."""
+    lines = [f"- run {record.date or 'date unknown'}, {record.executor} executor"]
+    if record.pipeline_file:
+        commit = record.git_commit[:12] + (" with local changes" if record.git_dirty else "")
+        lines.append(
+            f"- pipeline `{record.pipeline_file}` (SHA-256 {record.pipeline_sha256[:12]}"
+            f"{f', git {commit}' if record.git_commit else ''})"
+        )
+    for name, entry in record.inputs.items():
+        digest = f" (SHA-256 {entry['sha256'][:12]})" if "sha256" in entry else ""
+        lines.append(f"- input `{name}`: `{entry.get('path', entry.get('given', ''))}`{digest}")
+    if record.overrides:
+        lines.append(f"- overrides: `{json.dumps(record.overrides, default=str)}`")
+    versions = ", ".join(
+        f"{k} {v}" for k, v in record.versions.items() if not k.startswith("plugin ")
+    )
+    if versions:
+        lines.append(f"- {versions}")
+    return lines
 
 
 def shown_value(kind: type[PortType], value: Any) -> str:

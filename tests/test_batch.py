@@ -181,3 +181,14 @@ def test_a_file_dropped_from_the_batch_leaves_no_current_looking_folder(capsys, 
     assert main([*args, "-o", PSNR]) == 2
     assert "is not a graphvision batch summary" in capsys.readouterr().err
     assert (out / "batch.csv").read_text() == "name,score\nx,1\n"
+
+
+def test_a_batch_never_reads_its_own_outputs(capsys, tmp_path):
+    photo(tmp_path / "photos" / "a.png", 100)
+    out = tmp_path / "photos" / "out"  # inside the searched folders
+    args = ["run", str(DEMO), "--no-cache", "--batch", f"image={tmp_path}/photos/**/*.png"]
+    for _ in range(2):
+        assert main([*args, "-d", str(out), "-o", "noisy_gaussian"]) == 0
+        rows = list(csv.DictReader((out / "batch.csv").open()))
+        assert [Path(r["file"]).name for r in rows] == ["a.png"]
+    capsys.readouterr()

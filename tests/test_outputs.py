@@ -277,6 +277,12 @@ def test_the_record_holds_what_reproducing_the_run_needs(capsys, tmp_path):
     assert first["params"] == {"seed": 0}
     assert {"python", "graphvision", "numpy", "scipy", "plugin filters"} <= set(first["versions"])
     assert first["date"].endswith("+00:00")
+    report = (out / "report.md").read_text()
+    assert f"SHA-256 {first['pipeline_sha256'][:12]}, git {head[:12]})" in report
+    assert (
+        f"input `image`: `{image.resolve()}` (SHA-256 {first['inputs']['image']['sha256'][:12]})"
+        in report
+    )
     nodes = {n["name"]: n for n in first["nodes"]}
     assert nodes["median_on_sp"]["params"]["size"] == 5
     assert all(n["keys"] and n["status"] == "computed" for n in nodes.values())
