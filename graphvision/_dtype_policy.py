@@ -43,12 +43,13 @@ def to_float_image(array: Any, *, source: str = "image", check_range: bool = Tru
     Unsigned integers are divided by their maximum (uint8 by 255, uint16 by
     65535), booleans map to {0, 1}, floats must already lie in [0, 1] (unless
     ``check_range`` is False: a filter response keeps its range). Colour
-    images keep RGB; an alpha channel is dropped, gray+alpha becomes gray.
+    images keep RGB; an alpha channel is dropped, gray+alpha becomes gray,
+    a single channel ``H×W×1`` becomes ``H×W``.
 
     Parameters
     ----------
     array : ndarray
-        ``H×W``, ``H×W×2`` (gray + alpha), ``H×W×3`` or ``H×W×4`` (RGBA).
+        ``H×W``, ``H×W×1``, ``H×W×2`` (gray + alpha), ``H×W×3`` or ``H×W×4`` (RGBA).
     source : str
         What the array is, for messages (a file name, an input name).
     check_range : bool
@@ -63,8 +64,8 @@ def to_float_image(array: Any, *, source: str = "image", check_range: bool = Tru
     array = _plain_array(array, source)
     if array.ndim == 3 and array.shape[2] in (2, 4):
         array = array[..., : array.shape[2] - 1]
-        if array.shape[2] == 1:
-            array = array[..., 0]
+    if array.ndim == 3 and array.shape[2] == 1:
+        array = array[..., 0]
     if array.ndim not in (2, 3) or (array.ndim == 3 and array.shape[2] != 3):
         raise PortValueError(f"{source} must be H×W (gray) or H×W×3 (RGB), got shape {array.shape}")
     if array.dtype == np.bool_:

@@ -46,7 +46,8 @@ __all__ = [
 
 RECORD, REPORT = "record.json", "report.md"
 STAGING = ".graphvision-writing-"  # prefix of the hidden folder a run's files are written to
-OUTPUT_SUFFIXES = (".png", ".npy", ".npz", ".json", ".csv", ".ply")
+OUTPUT_SUFFIXES = (".png", ".npy", ".npz", ".json", ".csv", ".ply")  # the built-in writers'
+SMALL_ARRAY = 16  # arrays of at most this many elements are shown by value (a homography)
 
 
 def owned_files(directory: Path) -> set[str]:
@@ -156,9 +157,6 @@ def write_run(result: RunResult, directory: Path) -> dict[str, list[str]]:
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return files
-
-
-SMALL_ARRAY = 16  # arrays of at most this many elements are shown by value (a homography)
 
 
 def write_outputs(
