@@ -81,6 +81,7 @@ def _distribution_of(module: str) -> str:
     return ""
 
 
+@functools.cache
 def _version(distribution: str) -> str:
     try:
         return metadata.version(distribution)
