@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from ._batch import BatchItem, BatchResult, run_batch
     from ._cache import (
         Cache,
         CacheWarning,
@@ -29,11 +30,13 @@ if TYPE_CHECKING:
     )
     from ._compile import CompiledGraph, compile_graph
     from ._dask import DaskExecutor
+    from ._dtype_policy import to_float_image
     from ._errors import (
         DuplicateNodeError,
         GraphvisionError,
         InputError,
         NodeExecutionError,
+        OutputFolderError,
         ParameterError,
         PipelineError,
         PluginLoadError,
@@ -142,6 +145,8 @@ __all__ = [
     "AnyImageT",
     "Array",
     "ArrayPort",
+    "BatchItem",
+    "BatchResult",
     "BinaryImage",
     "BinaryImagePort",
     "Bool",
@@ -189,6 +194,7 @@ __all__ = [
     "NodeRecord",
     "NodeSpec",
     "NotACacheError",
+    "OutputFolderError",
     "ParameterError",
     "PinholeCamera",
     "PipelineError",
@@ -226,6 +232,8 @@ __all__ = [
     "pipeline_json_schema",
     "port_of",
     "run",
+    "run_batch",
     "source",
     "sweep",
+    "to_float_image",
 ]

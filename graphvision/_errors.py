@@ -14,6 +14,7 @@ failed run). Anything else is a bug and keeps its traceback.
     ├── PortValueError           a value does not satisfy its port type
     ├── PipelineError            a pipeline is invalid; carries every Problem at once
     ├── InputError               a graph input cannot be resolved (file missing, ...)
+    ├── OutputFolderError        an output folder holds files graphvision did not write
     ├── NodeExecutionError       a node raised; names node, op, params and inputs
     └── RunError                 a run finished with failed nodes
 """
@@ -29,6 +30,7 @@ __all__ = [
     "GraphvisionError",
     "InputError",
     "NodeExecutionError",
+    "OutputFolderError",
     "ParameterError",
     "PipelineError",
     "PluginLoadError",
@@ -74,6 +76,10 @@ class ParameterError(GraphvisionError, ValueError):
 
 class InputError(GraphvisionError):
     """A graph input could not be resolved to a value."""
+
+
+class OutputFolderError(GraphvisionError):
+    """An output folder cannot take a run's files without losing files graphvision did not write."""
 
 
 @dataclass(frozen=True, order=True)

@@ -42,6 +42,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ._dtype_policy import to_dtype, to_float_image, to_labels, to_mask
 from ._errors import PortValueError
 
 __all__ = [
@@ -98,6 +99,17 @@ class PortType:
     def validate(cls, value: Any) -> Any:
         """Return ``value`` (normalised) or raise :class:`PortValueError`."""
         raise NotImplementedError
+
+    @classmethod
+    def coerce(cls, value: Any, source: str) -> Any:
+        """A value from outside (a file, a caller's array) in this type's convention.
+
+        Applied to graph inputs before :meth:`validate`, following the dtype
+        policy of :mod:`graphvision._dtype_policy` (a ``uint8`` array becomes
+        a ``float32`` image as a PNG file does). The default changes nothing.
+        Raises :class:`PortValueError` naming ``source``.
+        """
+        return value
 
     @classmethod
     def encode(cls, value: Any) -> tuple[Arrays, Meta]:
@@ -174,6 +186,11 @@ class ArrayPort(PortType):
         return value
 
     @classmethod
+    def coerce(cls, value: Any, source: str) -> Any:
+        """Cast to the one declared dtype when no value can change (int points to float64)."""
+        return to_dtype(value, cls.dtypes[0]) if len(cls.dtypes) == 1 else value
+
+    @classmethod
     def encode(cls, value: np.ndarray) -> tuple[Arrays, Meta]:
         return {"data": value}, {}
 
@@ -192,6 +209,13 @@ class FloatImagePort(ArrayPort):
     ndims: ClassVar[tuple[int, ...]] = (2, 3)
     dtypes = (np.float32,)
     expected = "finite float32, H×W or H×W×3"
+
+    @classmethod
+    def coerce(cls, value: Any, source: str) -> Any:
+        """The image dtype policy, keeping a float array's range."""
+        if not isinstance(value, np.ndarray):
+            return value
+        return to_float_image(value, source=source, check_range=False)
 
     @classmethod
     def validate(cls, value: Any) -> np.ndarray:
@@ -213,6 +237,11 @@ class ImagePort(FloatImagePort):
     """An intensity image: ``float32`` in [0, 1], gray ``H×W`` or RGB ``H×W×3``."""
 
     expected = "float32 in [0, 1], H×W or H×W×3"
+
+    @classmethod
+    def coerce(cls, value: Any, source: str) -> Any:
+        """The image dtype policy (:func:`~graphvision.to_float_image`)."""
+        return to_float_image(value, source=source) if isinstance(value, np.ndarray) else value
 
     @classmethod
     def validate(cls, value: Any) -> np.ndarray:
@@ -259,6 +288,11 @@ class BinaryImagePort(ArrayPort):
     expected = "bool H×W"
 
     @classmethod
+    def coerce(cls, value: Any, source: str) -> Any:
+        """bool, or 0 and one other value (a 0/255 PNG), as a mask."""
+        return to_mask(value, source=source) if isinstance(value, np.ndarray) else value
+
+    @classmethod
     def write(cls, value: np.ndarray, stem: Path) -> list[Path]:
         import imageio.v3 as iio
 
@@ -277,6 +311,11 @@ class LabelImagePort(ArrayPort):
     ndims = (2,)
     dtypes = (np.int32,)
     expected = "int32 H×W, 0 = background"
+
+    @classmethod
+    def coerce(cls, value: Any, source: str) -> Any:
+        """Any non-negative integer labels as int32 (scikit-image's are int64)."""
+        return to_labels(value, source=source) if isinstance(value, np.ndarray) else value
 
     @classmethod
     def validate(cls, value: Any) -> np.ndarray:

@@ -3,21 +3,160 @@
 Each output is written by its port type (images as PNG, arrays as ``.npy``,
 tables as CSV and JSON, scalars as JSON); the run record goes to
 ``record.json`` and a human summary to ``report.md``.
+
+A folder holds one run. graphvision owns exactly the files its
+``record.json`` lists (``files``, plus the record and the report): writing a
+new run removes those of the previous run, so no output of an earlier run
+(an output this run did not produce, or could not because a node failed) is
+left looking current; any other file is the user's and is never removed nor
+overwritten: a run whose files would replace one is refused
+(:class:`~graphvision.OutputFolderError`), before it runs when the CLI can
+tell. The new files are written to a hidden staging folder first and moved
+in, ``record.json`` last.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ._compile import CompiledGraph
-from ._ports import _ScalarPort
-from ._run import RunRecord
+from ._errors import OutputFolderError
+from ._ports import PortType, _ScalarPort
+from ._run import RunRecord, RunResult
 
-__all__ = ["write_outputs", "write_report"]
+__all__ = [
+    "RECORD",
+    "REPORT",
+    "check_output_folder",
+    "owned_files",
+    "remove_owned_files",
+    "shown_value",
+    "write_outputs",
+    "write_report",
+    "write_run",
+]
+
+RECORD, REPORT = "record.json", "report.md"
+STAGING = ".graphvision-writing-"  # prefix of the hidden folder a run's files are written to
+OUTPUT_SUFFIXES = (".png", ".npy", ".npz", ".json", ".csv", ".ply")  # the built-in writers'
+SMALL_ARRAY = 16  # arrays of at most this many elements are shown by value (a homography)
+
+
+def owned_files(directory: Path) -> set[str]:
+    """The file names in ``directory`` that a previous graphvision run wrote (its record's list).
+
+    Raises
+    ------
+    OutputFolderError
+        When ``directory`` has a ``record.json`` that is not a graphvision
+        record listing its files (so what is ours there cannot be known).
+    """
+    record = directory / RECORD
+    if not record.is_file():
+        return set()
+    try:
+        content = json.loads(record.read_text())
+        listed = content["files"]
+        names = {name for files in listed.values() for name in files}
+        if not all(
+            isinstance(n, str) and n == Path(n).name and n not in ("", ".", "..") for n in names
+        ):
+            raise ValueError("a listed file is not a plain file name")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
+        raise OutputFolderError(
+            f"{record} is not a graphvision record listing its files ({type(error).__name__}), "
+            "so which files there are a previous run's is unknown; choose another "
+            "--output-dir or empty this one"
+        ) from None
+    return names | {RECORD, REPORT}
+
+
+def check_output_folder(directory: Path, outputs: Iterable[str]) -> set[str]:
+    """Refuse, before a run, a folder where the run's files would replace files not graphvision's.
+
+    A file counts as the run's when its name is ``record.json``, ``report.md``
+    or an output name with a suffix a port type writes. Returns the previous
+    run's files (:func:`owned_files`).
+
+    Raises
+    ------
+    OutputFolderError
+        Naming the folder and the first file in the way, or an output named
+        ``record`` (its file would be the record's).
+    """
+    if directory.exists() and not directory.is_dir():
+        raise OutputFolderError(f"output folder {directory} is a file")
+    stems = set(outputs)
+    if Path(RECORD).stem in stems:
+        raise OutputFolderError(
+            f"output '{Path(RECORD).stem}' cannot be written to an output folder: its file "
+            f"would be {RECORD}, the run record; rename the output"
+        )
+    owned = owned_files(directory)
+    if not directory.is_dir():
+        return owned
+    for path in sorted(directory.iterdir()):
+        ours = path.name in (RECORD, REPORT) or (
+            path.stem in stems and path.suffix in OUTPUT_SUFFIXES
+        )
+        if ours and path.name not in owned:
+            _refuse(directory, path.name)
+    return owned
+
+
+def _refuse(directory: Path, name: str) -> None:
+    raise OutputFolderError(
+        f"output folder {directory} holds {name}, which no graphvision record there lists; "
+        "the run would replace it: move it, or choose another --output-dir"
+    )
+
+
+def remove_owned_files(directory: Path, names: Iterable[str]) -> None:
+    """Delete the listed files of a previous run (plain files directly in ``directory`` only)."""
+    for name in names:
+        path = directory / name
+        if path.is_file() or path.is_symlink():
+            path.unlink()
+
+
+def write_run(result: RunResult, directory: Path) -> dict[str, list[str]]:
+    """Write a run's outputs, ``record.json`` and ``report.md``, replacing the previous run's.
+
+    Returns output name -> file names. The record lists the files
+    (``record.files``), which is how the next run knows what is its to remove.
+
+    Raises
+    ------
+    OutputFolderError
+        When a file would replace one no graphvision record there lists.
+    """
+    owned = check_output_folder(directory, result.compiled.outputs)
+    directory.mkdir(parents=True, exist_ok=True)
+    for left in directory.glob(f"{STAGING}*"):  # from a run killed while writing
+        shutil.rmtree(left, ignore_errors=True)
+    staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=directory))
+    try:
+        files = write_outputs(result.compiled, result.outputs, staging)
+        result.record.files = files
+        write_report(result.compiled, result.outputs, files, result.record, staging)
+        new = [name for names in files.values() for name in names] + [REPORT, RECORD]
+        for name in new:
+            if (directory / name).exists() and name not in owned:
+                _refuse(directory, name)
+        remove_owned_files(directory, owned - {RECORD})  # the old record stays until replaced
+        for name in new:  # the record last, in one atomic replace
+            os.replace(staging / name, directory / name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return files
 
 
 def write_outputs(
@@ -50,20 +189,58 @@ def write_report(
         if name not in outputs:
             lines.append(f"| {name} | not produced | |")
             continue
-        kind = compiled.output_type(name)
-        value = outputs[name]
-        if issubclass(kind, _ScalarPort):
-            shown = json.dumps(value)
-        elif isinstance(value, np.ndarray) and value.size <= 16:  # e.g. a homography
-            shown = f"{kind.summary(value)}: `{json.dumps(np.round(value, 6).tolist())}`"
-        else:
-            shown = kind.summary(value)
+        shown = _cell(shown_value(compiled.output_type(name), outputs[name]))
         links = ", ".join(f"[{f}]({f})" for f in files.get(name, []))
         lines.append(f"| {name} | {shown} | {links} |")
     images = [f for fs in files.values() for f in fs if f.endswith(".png")]
     if images:
         lines += ["", *[f"![{f}]({f})" for f in images]]
+    lines += ["", "## Provenance", "", *_provenance_lines(record)]
     lines += ["", "## Run record", "", "```", record.table(), "```", ""]
     path = directory / "report.md"
     path.write_text("\n".join(lines))
     return path
+
+
+def _provenance_lines(record: RunRecord) -> list[str]:
+    """Where the run came from, for a reader (``record.json`` has everything)."""
+    lines = [f"- run {record.date or 'date unknown'}, {record.executor} executor"]
+    if record.pipeline_file:
+        commit = record.git_commit[:12] + (" with local changes" if record.git_dirty else "")
+        lines.append(
+            f"- pipeline `{record.pipeline_file}` (SHA-256 {record.pipeline_sha256[:12]}"
+            f"{f', git {commit}' if record.git_commit else ''})"
+        )
+    for name, entry in record.inputs.items():
+        digest = f" (SHA-256 {entry['sha256'][:12]})" if "sha256" in entry else ""
+        lines.append(f"- input `{name}`: `{entry.get('path', entry.get('given', ''))}`{digest}")
+    if record.overrides:
+        lines.append(f"- overrides: `{json.dumps(record.overrides, default=str)}`")
+    versions = ", ".join(
+        f"{k} {v}" for k, v in record.versions.items() if not k.startswith("plugin ")
+    )
+    if versions:
+        lines.append(f"- {versions}")
+    return lines
+
+
+def shown_value(kind: type[PortType], value: Any) -> str:
+    """How the report shows a value: scalars as JSON, small arrays by value, else a summary.
+
+    Works for every dtype an array port can hold (bool, integers, floats with
+    NaN or inf): small arrays go through :func:`numpy.ndarray.tolist`, floats
+    rounded to 6 decimals, never through arithmetic that a dtype may refuse.
+    """
+    if issubclass(kind, _ScalarPort):
+        return json.dumps(value)
+    summary = kind.summary(value)
+    if isinstance(value, np.ndarray) and value.size <= SMALL_ARRAY:
+        if np.issubdtype(value.dtype, np.floating):
+            value = np.round(value.astype(np.float64), 6)
+        return f"{summary}: `{json.dumps(value.tolist(), default=str)}`"
+    return summary
+
+
+def _cell(text: str) -> str:
+    """``text`` safe inside a Markdown table cell (one line, pipes escaped)."""
+    return " ".join(text.split()).replace("|", "\\|")

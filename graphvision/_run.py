@@ -26,6 +26,7 @@ from concurrent.futures import Future
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+import numpy as np
 import yaml
 
 from ._cache import Cache, content_key, output_key
@@ -42,17 +43,30 @@ from ._errors import (
 from ._executors import Executor, SyncExecutor, call_node, call_node_encoded, make_executor
 from ._graph import Graph
 from ._ports import PortType, TextPort, _ScalarPort, freeze
+from ._provenance import describe_run
 from ._registry import Registry
 from ._scheduler import run_tasks
 
-__all__ = ["NodeRecord", "RunHooks", "RunRecord", "RunResult", "resolve_input", "run"]
+__all__ = [
+    "NodeRecord",
+    "RunHooks",
+    "RunRecord",
+    "RunResult",
+    "resolve_input",
+    "run",
+    "value_bytes",
+]
 
 _INLINE = SyncExecutor()
 
 
 @dataclass
 class NodeRecord:
-    """What happened to one node: ``computed``, ``cached`` (loaded), ``failed`` or ``skipped``."""
+    """What happened to one node: ``computed``, ``cached`` (loaded), ``failed`` or ``skipped``.
+
+    ``params`` are the validated parameters it ran with and ``keys`` the cache
+    key of each output port; ``output_bytes`` counts loaded outputs too.
+    """
 
     name: str
     op: str
@@ -60,23 +74,44 @@ class NodeRecord:
     seconds: float = 0.0
     output_bytes: int = 0
     error: str = ""
+    params: dict[str, Any] = field(default_factory=dict)
+    keys: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass
 class RunRecord:
-    """Per-node wall time, cache hit or miss and output sizes of one run."""
+    """One run: what it ran on and with what (to reproduce it), and how each node went.
+
+    Provenance (filled by :func:`run`): ``date`` (UTC, ISO 8601, at its end), the
+    ``pipeline_file`` with its ``pipeline_sha256`` and the ``git_commit`` of
+    its folder (with ``git_dirty`` when the file differs from it), every
+    used input (``inputs``: what was given, the file's SHA-256 for a path,
+    the content key), pipeline ``params`` and command-line ``overrides``, and
+    ``versions`` of Python, graphvision, numpy, scipy and each plugin.
+    ``files`` lists the files written for each output (set by the writer).
+    """
 
     pipeline: str
     executor: str
     seconds: float = 0.0
     nodes: list[NodeRecord] = field(default_factory=list)
     outputs: dict[str, str] = field(default_factory=dict)
+    date: str = ""
+    pipeline_file: str = ""
+    pipeline_sha256: str = ""
+    git_commit: str = ""
+    git_dirty: bool = False
+    inputs: dict[str, dict[str, str]] = field(default_factory=dict)
+    params: dict[str, Any] = field(default_factory=dict)
+    overrides: dict[str, Any] = field(default_factory=dict)
+    versions: dict[str, str] = field(default_factory=dict)
+    files: dict[str, list[str]] = field(default_factory=dict)
 
     def count(self, status: str) -> int:
         return sum(n.status == status for n in self.nodes)
 
     def to_json(self) -> str:
-        return json.dumps(asdict(self), indent=2)
+        return json.dumps(asdict(self), indent=2, default=_json_default)
 
     def table(self) -> str:
         """The record as an aligned text table."""
@@ -99,6 +134,13 @@ class RunRecord:
             f"in {self.seconds:.3f} s ({self.executor})"
         )
         return "\n".join(lines)
+
+
+def _json_default(value: Any) -> Any:
+    """Parameters JSON cannot hold as they are: numpy values, tuples' items, paths."""
+    if isinstance(value, np.generic | np.ndarray):
+        return value.tolist()
+    return str(value)
 
 
 @dataclass
@@ -136,13 +178,16 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
     A string for a non-``Text`` port is a reference: ``scheme:rest`` goes to the
     plugin source of that scheme (e.g. ``sample:camera``), a scalar port parses
     it as YAML (``--input sigma=2``), anything else is a path for the ``file``
-    source.
+    source. The loaded value, or an array the caller passed, then goes through
+    the port's dtype policy (:meth:`PortType.coerce`), so a ``uint8`` array
+    from OpenCV is the same image as the PNG it was read from.
 
     Raises
     ------
     InputError
         Naming the input, the value and what is wrong.
     """
+    origin = f"'{value}'" if isinstance(value, str) else f"the {type(value).__name__} given"
     if isinstance(value, str) and not issubclass(port_type, TextPort):
         scheme, sep, rest = value.partition(":")
         try:
@@ -155,9 +200,15 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
         except Exception as error:
             raise InputError(f"input '{name}': cannot load '{value}': {error}") from error
     try:
+        value = port_type.coerce(value, origin)
         return _read_only_view(port_type, port_type.validate(value))
     except PortValueError as error:
         raise InputError(f"input '{name}': {error}") from None
+
+
+def value_bytes(port_type: type[PortType], value: Any) -> int:
+    """Bytes of a value's arrays (what a run record counts per node)."""
+    return sum(a.nbytes for a in port_type.encode(value)[0].values())
 
 
 def _freeze(port_type: type[PortType], value: Any) -> Any:
@@ -237,6 +288,7 @@ class _Run:
                     self.values[source] = value
                     node = self.nodes.setdefault(name, NodeRecord(name, step.spec.id, "cached"))
                     node.seconds += time.perf_counter() - began
+                    node.output_bytes += value_bytes(step.outputs[port], value)
                     continue
             compute.add(name)
             self.nodes[name] = NodeRecord(name, step.spec.id, "skipped")
@@ -297,7 +349,7 @@ class _Run:
             if step.spec.cache and self.cache is not None:
                 node.output_bytes += self.cache.put(self.keys[(name, port)], kind, value)
             else:
-                node.output_bytes += sum(a.nbytes for a in kind.encode(value)[0].values())
+                node.output_bytes += value_bytes(kind, value)
         self.release_inputs(step)
         for hook in self.hooks:
             hook.node_finished(name=name, op=step.spec.id, status="computed", seconds=seconds)
@@ -417,11 +469,11 @@ def run(
         for o in wanted_names
         if compiled.outputs[o][0] in compiled.input_types
     }
-    values = {}
+    values, given = {}, {}
     for name in compiled.input_types:
         if name in used_inputs:
-            given = inputs.get(name, compiled.graph.inputs[name].default)
-            values[name] = resolve_input(name, compiled.input_types[name], given, registry)
+            given[name] = inputs.get(name, compiled.graph.inputs[name].default)
+            values[name] = resolve_input(name, compiled.input_types[name], given[name], registry)
 
     own_executor = isinstance(executor, str)
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
@@ -455,6 +507,7 @@ def run(
         record.nodes = [state.nodes[n] for n in compiled.steps if n in state.nodes]
         for hook in hooks:
             hook.run_finished(record=record, failed=failed)
+    describe_run(record, compiled, registry, given, state.keys, overrides or {})
 
     produced = {}
     for name in wanted_names:
@@ -464,7 +517,7 @@ def run(
             record.outputs[name] = compiled.output_type(name).summary(produced[name])
     result = RunResult(produced, record, compiled, state.failures)
     if state.failures:
-        error = RunError(state.failures, record)
-        error.result = result  # type: ignore[attr-defined]
-        raise error
+        failure = RunError(state.failures, record)
+        failure.result = result  # type: ignore[attr-defined]  # read by callers as error.result
+        raise failure
     return result

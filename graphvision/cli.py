@@ -20,8 +20,6 @@ mistakes print a message, not a traceback (``--debug`` shows it).
 from __future__ import annotations
 
 import argparse
-import csv
-import glob
 import json
 import sys
 import time
@@ -33,14 +31,15 @@ from typing import Any
 
 import yaml
 
+from ._batch import BatchItem, run_batch
 from ._cache import Cache, DiskStore, MemoryStore, default_cache_dir
 from ._compile import compile_graph
 from ._errors import GraphvisionError, InputError, PipelineError, RunError
-from ._executors import EXECUTORS, make_executor
+from ._executors import EXECUTORS
 from ._pipeline_file import load_pipeline, pipeline_json_schema
 from ._plugins import discover
 from ._registry import Registry
-from ._report import write_outputs, write_report
+from ._report import check_output_folder, write_run
 from ._run import RunHooks, RunResult, run
 
 __all__ = ["main"]
@@ -123,9 +122,7 @@ def _run_once(
 
 
 def _write(result: RunResult, out_dir: Path) -> dict[str, list[str]]:
-    files = write_outputs(result.compiled, result.outputs, out_dir)
-    write_report(result.compiled, result.outputs, files, result.record, out_dir)
-    return files
+    return write_run(result, out_dir)
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -143,6 +140,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     }
     if args.batch:
         return _batch(graph, registry, inputs, args, options)
+    if out_dir is not None:  # refuse before running, not after
+        check_output_folder(out_dir, args.output or graph.outputs)
     status, result = _run_once(graph, registry, inputs, args, executor=args.executor, **options)
     if out_dir is not None:
         files = _write(result, out_dir)
@@ -165,67 +164,43 @@ def _batch(
     args: argparse.Namespace,
     options: dict[str, Any],
 ) -> int:
-    """Map the pipeline over every file a glob matches, one output folder per file.
-
-    Items run one after another on one shared executor and cache; a bad file
-    or a failed run is reported and the batch goes on. ``batch.csv`` lists
-    every item with its status, time and scalar outputs.
-    """
-    name, pattern = next(iter(_pairs(args.batch, "--batch").items()))
+    """``--batch NAME=GLOB``: :func:`~graphvision.run_batch` with a line per file on stderr."""
     if len(args.batch) > 1:
         raise UsageError("--batch maps one input; give it once")
+    name, pattern = next(iter(_pairs(args.batch, "--batch").items()))
     if not args.output_dir:
         raise UsageError("--batch needs --output-dir (one folder per input file)")
-    files = sorted(Path(p) for p in glob.glob(pattern))
-    if not files:
-        raise UsageError(f"--batch {name}={pattern}: no file matches")
-    out_dir = Path(args.output_dir)
-    stems = [
-        f.stem if [g.stem for g in files].count(f.stem) == 1 else f"{f.stem}_{f.suffix[1:]}"
-        for f in files
-    ]
-    rows, failed = [], 0
-    executor = make_executor(args.executor, args.workers)
+
+    def report(number: int, total: int, item: BatchItem) -> None:
+        if item.error:
+            print(f"error: {item.file}: {item.error}", file=sys.stderr)
+        print(
+            f"  [{number}/{total}] {item.file}: {item.status} ({item.seconds:.2f} s) "
+            f"-> {item.output_dir}",
+            file=sys.stderr,
+        )
+
     try:
-        for number, (path, stem) in enumerate(zip(files, stems, strict=True), start=1):
-            began = time.perf_counter()
-            try:
-                status, result = _run_once(
-                    graph, registry, {**inputs, name: str(path)}, args, executor=executor, **options
-                )
-            except InputError as error:
-                print(f"error: {error}", file=sys.stderr)
-                status, result = EXIT_USAGE, None
-            seconds = time.perf_counter() - began
-            row: dict[str, Any] = {
-                "file": str(path),
-                "status": "ok" if status == EXIT_OK else "failed",
-                "seconds": round(seconds, 4),
-            }
-            if result is not None:
-                _write(result, out_dir / stem)
-                for key, value in result.outputs.items():
-                    if isinstance(value, (int, float, str, bool)):
-                        row[key] = value
-            failed += status != EXIT_OK
-            rows.append(row)
-            print(
-                f"  [{number}/{len(files)}] {path}: {row['status']} ({seconds:.2f} s)",
-                file=sys.stderr,
-            )
-    finally:
-        executor.shutdown()
-    columns = list(dict.fromkeys(key for row in rows for key in row))
-    out_dir.mkdir(parents=True, exist_ok=True)
-    with (out_dir / "batch.csv").open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=columns)
-        writer.writeheader()
-        writer.writerows(rows)
+        batch = run_batch(
+            graph,
+            pattern,
+            input=name,
+            output_dir=args.output_dir,
+            registry=registry,
+            inputs=inputs,
+            outputs=args.output or None,
+            executor=args.executor,
+            keep_going=args.keep_going,
+            on_item=report,
+            **options,
+        )
+    except InputError as error:
+        raise UsageError(f"--batch {name}={pattern}: {error}") from None
+    total = len(batch.items)
     print(
-        f"{len(files) - failed} of {len(files)} succeeded; summary in {out_dir / 'batch.csv'}",
-        file=sys.stderr,
+        f"{total - batch.failed} of {total} succeeded; summary in {batch.summary}", file=sys.stderr
     )
-    return EXIT_FAILED if failed else EXIT_OK
+    return EXIT_FAILED if batch.failed else EXIT_OK
 
 
 def cmd_validate(args: argparse.Namespace) -> int:

@@ -7,7 +7,7 @@ from typing import Annotated, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import Float, Homography, Keypoints, Matches, node
+from graphvision import Float, FloatImage, Homography, Keypoints, Matches, node
 
 from ..fitting import ransac
 
@@ -198,32 +198,67 @@ def homography_ransac(
     return HomographyFit(result.model, matches.take(inliers), float(inliers.mean()))
 
 
-@node("geometry.corner_error", version=1)
+@node("geometry.corner_error", version=2)
 def corner_error(
     estimated: Homography,
     truth: Homography,
+    image: FloatImage | None = None,
     *,
-    width: Annotated[int, Field(ge=1)] = 512,
-    height: Annotated[int, Field(ge=1)] = 512,
+    width: Annotated[int, Field(ge=1)] | None = None,
+    height: Annotated[int, Field(ge=1)] | None = None,
 ) -> Float:
     """Mean distance in pixels between the image corners mapped by ``estimated`` and by ``truth``.
 
-    The corners are (0, 0), (w-1, 0), (w-1, h-1), (0, h-1): the usual accuracy
-    measure of a homography estimate (success when below 3 px).
+    The corners are (0, 0), (w-1, 0), (w-1, h-1), (0, h-1) of the image the
+    homographies map *from*: the usual accuracy measure of a homography
+    estimate (success when below 3 px). The size is the real one: connect
+    that image to ``image`` (its shape gives w and h), or give ``width`` and
+    ``height`` when no image is at hand; there is no default size, since a
+    wrong one silently scales the error.
 
     Parameters
     ----------
     estimated, truth : Homography
         The estimate and the true homography.
-    width, height : int
-        Size of the image whose corners are mapped, in pixels.
+    image : FloatImage, optional
+        The image whose corners are mapped; its ``H×W`` is the size.
+    width, height : int, optional
+        The size in pixels, when ``image`` is not connected.
 
     Returns
     -------
     error : float, pixels (inf when a corner maps to infinity)
+
+    Raises
+    ------
+    ValueError
+        When neither the image nor both width and height are given, or when
+        both are given and disagree.
     """
+    width, height = _mapped_size(image, width, height)
     corners = np.array([[0, 0], [width - 1, 0], [width - 1, height - 1], [0, height - 1]], float)
     error = np.linalg.norm(
         apply_homography(estimated, corners) - apply_homography(truth, corners), axis=1
     )
     return float(error.mean()) if np.isfinite(error).all() else float("inf")
+
+
+def _mapped_size(
+    image: np.ndarray | None, width: int | None, height: int | None
+) -> tuple[int, int]:
+    """(width, height) from the image, from the parameters, or a ValueError saying what to give."""
+    given = None if width is None and height is None else (width, height)
+    if image is None:
+        if given is None or None in given:
+            raise ValueError(
+                "corner error needs the size of the image the homographies map from: "
+                "connect it to input 'image', or set both 'width' and 'height'"
+            )
+        return int(width), int(height)  # type: ignore[arg-type]  # both checked above
+    shape = (int(image.shape[1]), int(image.shape[0]))
+    if given is not None and given != shape:
+        raise ValueError(
+            f"width×height {width}×{height} disagrees with the connected image "
+            f"({shape[0]}×{shape[1]}); give one or the other"
+        )
+    return shape

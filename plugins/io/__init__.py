@@ -5,10 +5,13 @@ Sources (values of graph inputs):
 * ``sample:NAME`` — an image shipped with scikit-image (no download);
 * a path — PNG, JPEG, TIFF, BMP, ... read with imageio, or ``.npy``.
 
-Every image goes through one dtype policy (:func:`to_float_image`): ``float32``
-in [0, 1], gray ``H×W`` or RGB ``H×W×3``.
+The sources return arrays as stored; the graph input's port type applies the
+one dtype policy (:mod:`graphvision._dtype_policy`): an ``Image`` input gets
+``float32`` in [0, 1], gray ``H×W`` or RGB ``H×W×3``, a ``BinaryImage`` input
+a bool mask. :func:`read_file` and :func:`read_sample` apply the image policy
+for scripts.
 """
 
-from ._read import SAMPLES, read_file, read_sample, sample
+from ._read import SAMPLES, read_array, read_file, read_sample, sample, sample_array
 
-__all__ = ["SAMPLES", "read_file", "read_sample", "sample"]
+__all__ = ["SAMPLES", "read_array", "read_file", "read_sample", "sample", "sample_array"]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 from typing import Literal, get_args
 
@@ -11,7 +12,7 @@ from graphvision import Image, node, source
 
 from .._checks import to_float_image
 
-__all__ = ["SAMPLES", "read_file", "read_sample", "sample"]
+__all__ = ["SAMPLES", "read_array", "read_file", "read_sample", "sample", "sample_array"]
 
 SampleName = Literal[
     "astronaut",
@@ -34,8 +35,8 @@ SAMPLES: tuple[str, ...] = get_args(SampleName)
 
 
 @source("sample")
-def read_sample(name: str) -> np.ndarray:
-    """Load ``skimage.data.<name>()`` as a float32 image (shipped with scikit-image, offline).
+def sample_array(name: str) -> np.ndarray:
+    """``skimage.data.<name>()`` as shipped (uint8 or bool); the input's port applies the policy.
 
     Raises
     ------
@@ -50,20 +51,33 @@ def read_sample(name: str) -> np.ndarray:
         raise ValueError(f"unknown sample image '{name}'{hint}; samples: {', '.join(SAMPLES)}")
     import skimage.data
 
-    return to_float_image(getattr(skimage.data, name)(), source=f"sample '{name}'")
+    data: np.ndarray = getattr(skimage.data, name)()
+    return data
+
+
+def read_sample(name: str) -> np.ndarray:
+    """Load ``skimage.data.<name>()`` as a float32 image (shipped with scikit-image, offline)."""
+    return to_float_image(sample_array(name), source=f"sample '{name}'")
 
 
 @source("file")
-def read_file(path: str) -> np.ndarray:
-    """Read an image file (any format imageio reads) or a ``.npy`` array.
+def read_array(path: str) -> np.ndarray:
+    """Decode an image file (any format imageio reads) or a ``.npy`` array, dtype as stored.
+
+    The graph input's port type then applies the dtype policy: a ``uint8``
+    PNG becomes a ``float32`` image, a bool ``.npy`` a mask. A CMYK image
+    (JPEG or TIFF from print workflows) is converted to RGB (through its
+    embedded colour profile when it has one), not read as four RGBA
+    channels. An animated or multi-page file is refused with what to do,
+    since a graph input is one still image.
 
     Raises
     ------
-    FileNotFoundError, PermissionError
+    FileNotFoundError, PermissionError, IsADirectoryError
         With the path.
     ValueError
-        When the file is not an image, or the image is empty or has an
-        unsupported shape or dtype.
+        When the file is not an image, holds several frames, or is CMYK
+        with a colour profile that cannot be applied.
     """
     file = Path(path)
     if file.is_dir():
@@ -72,21 +86,93 @@ def read_file(path: str) -> np.ndarray:
         raise FileNotFoundError(f"no such file: {file}")
     if file.suffix.lower() == ".npy":
         try:
-            data = np.load(file, allow_pickle=False)
+            array: np.ndarray = np.load(file, allow_pickle=False)
         except ValueError as error:
             raise ValueError(f"{file} is not a plain numpy array file: {error}") from None
-        return to_float_image(data, source=str(file))
+        return array
     import imageio.v3 as iio
 
     try:
-        data = iio.imread(file)
-    except PermissionError:
+        frames = iio.improps(file).n_images
+        if frames is not None and frames > 1:
+            raise _FramesError(
+                f"{file} holds {frames} frames (an animation or a multi-page file); "
+                "graphvision reads one still image: save the frame you want as PNG "
+                "(e.g. imageio.v3.imwrite('frame.png', imageio.v3.imread(path, index=0))) "
+                "or run --batch over the frames saved as files"
+            )
+        cmyk = _cmyk_as_rgb(file)
+        data: np.ndarray = iio.imread(file) if cmyk is None else cmyk
+    except (PermissionError, _FramesError, _ColourError):
         raise
     except Exception as error:  # imageio raises many types for undecodable files
         raise ValueError(f"{file} is not a readable image ({type(error).__name__})") from None
     if data.ndim == 3 and data.shape[0] in (1,) and data.shape[2] not in (2, 3, 4):
         data = data[0]
-    return to_float_image(data, source=str(file))
+    return data
+
+
+def read_file(path: str) -> np.ndarray:
+    """An image file or ``.npy`` array as a float32 image: :func:`read_array`, then the policy.
+
+    Raises
+    ------
+    FileNotFoundError, PermissionError, IsADirectoryError
+        With the path.
+    ValueError
+        When the file is not an image, or the image is empty or has an
+        unsupported shape or dtype.
+    """
+    return to_float_image(read_array(path), source=str(path))
+
+
+class _FramesError(ValueError):
+    """A file with several frames where one image is expected."""
+
+
+class _ColourError(ValueError):
+    """A colour space that cannot be converted to RGB correctly."""
+
+
+def _cmyk_as_rgb(file: Path) -> np.ndarray | None:
+    """The RGB pixels of a CMYK image, or None for any other mode.
+
+    With an embedded ICC profile the pixels go through it to sRGB
+    (LittleCMS, via Pillow's ``ImageCms``); a profile that cannot build that
+    transform is refused by name. Without one, Pillow's device conversion
+    R = 255 - min(255, C + K) (likewise G, B) is the definition; Pillow
+    undoes the inverted CMYK of Adobe JPEGs when it reads them.
+
+    Raises
+    ------
+    ValueError
+        For a CMYK image whose embedded colour profile cannot be applied.
+    """
+    from PIL import Image as PILImage
+    from PIL import ImageCms
+
+    try:
+        with PILImage.open(file) as image:
+            if image.mode != "CMYK":
+                return None
+            profile = image.info.get("icc_profile")
+            if not profile:
+                return np.asarray(image.convert("RGB"))
+            try:
+                converted = ImageCms.profileToProfile(
+                    image,
+                    ImageCms.ImageCmsProfile(io.BytesIO(profile)),
+                    ImageCms.createProfile("sRGB"),
+                    outputMode="RGB",
+                )
+            except (ImageCms.PyCMSError, OSError) as error:
+                raise _ColourError(
+                    f"{file} is a CMYK image whose embedded colour profile cannot be applied "
+                    f"({error}); convert it to RGB with a colour-managed tool first"
+                ) from None
+            return np.asarray(converted)
+    except PILImage.UnidentifiedImageError:
+        return None
 
 
 @node("io.sample", version=1)

@@ -1,0 +1,315 @@
+"""Batch runs: one pipeline over many input files, one output folder per file.
+
+:func:`run_batch` runs the items one after another on one shared executor
+and cache; a bad file or a failed run is recorded and the batch goes on.
+Each file gets its own folder, named after its path below the pattern's
+fixed part (``photos/a/img.png`` and ``photos/b/img.png`` give
+``OUT/a/img`` and ``OUT/b/img``), so no two files ever share a folder
+(:func:`output_folders`). ``batch.csv`` lists every item: file, output
+folder, status, seconds, error message and the scalar outputs. A folder a
+previous batch into the same place listed, whose file is not in this batch,
+loses its graphvision files: nothing there is left looking current.
+"""
+
+from __future__ import annotations
+
+import csv
+import glob
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ._cache import Cache
+from ._compile import CompiledGraph
+from ._errors import GraphvisionError, InputError, OutputFolderError, RunError
+from ._executors import Executor, make_executor
+from ._graph import Graph
+from ._registry import Registry
+from ._report import check_output_folder, owned_files, remove_owned_files, write_run
+from ._run import RunHooks, RunResult, run
+
+__all__ = [
+    "SUMMARY",
+    "BatchItem",
+    "BatchResult",
+    "batch_files",
+    "output_folders",
+    "pattern_root",
+    "previous_folders",
+    "run_batch",
+    "write_summary",
+]
+
+SUMMARY = "batch.csv"
+
+
+@dataclass
+class BatchItem:
+    """One file of a batch: where its outputs went, how it went, its scalar outputs."""
+
+    file: Path
+    output_dir: Path
+    status: str = "ok"
+    seconds: float = 0.0
+    error: str = ""
+    scalars: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class BatchResult:
+    """Every item, and the summary table written to ``summary``."""
+
+    items: list[BatchItem]
+    summary: Path
+
+    @property
+    def failed(self) -> int:
+        return sum(item.status != "ok" for item in self.items)
+
+
+def batch_files(pattern: str, exclude: Path | None = None) -> list[Path]:
+    """The files a glob matches, sorted; ``**`` matches any depth of folders.
+
+    Files under ``exclude`` (the batch's output folder, when it lies inside
+    the searched folders) are left out, so a batch never reads its own outputs.
+    """
+    skipped = exclude.resolve() if exclude is not None else None
+    return sorted(
+        path
+        for path in map(Path, glob.glob(pattern, recursive=True))
+        if path.is_file() and (skipped is None or skipped not in path.resolve().parents)
+    )
+
+
+def pattern_root(pattern: str) -> Path:
+    """The folder before a glob's first wildcard (``photos`` for ``photos/**/*.png``)."""
+    fixed = []
+    for part in Path(pattern).parts:
+        if glob.has_magic(part):
+            break
+        fixed.append(part)
+    else:  # no wildcard: a single file, named by its own folder
+        fixed = fixed[:-1]
+    return Path(*fixed) if fixed else Path()
+
+
+def output_folders(files: Sequence[Path], root: Path, out_dir: Path) -> list[Path]:
+    """A distinct folder under ``out_dir`` for each file: its path below ``root`` without suffix.
+
+    Two files whose paths differ only by suffix (``img.png``, ``img.jpg``) keep
+    it (``img_png``, ``img_jpg``); any name still taken, or the summary's
+    name, gets ``-2``, ``-3``... so the folders are always distinct.
+    """
+    relative = [_below(f, root) for f in files]
+    plain = [r.with_suffix("") for r in relative]
+    counts: dict[Path, int] = {}
+    for name in plain:
+        counts[name] = counts.get(name, 0) + 1
+    taken = {Path(SUMMARY)}
+    folders = []
+    for rel, name in zip(relative, plain, strict=True):
+        if counts[name] > 1 and rel.suffix:
+            name = name.with_name(f"{name.name}_{rel.suffix[1:]}")
+        candidate, number = name, 1
+        while candidate in taken:
+            number += 1
+            candidate = name.with_name(f"{name.name}-{number}")
+        taken.add(candidate)
+        folders.append(out_dir / candidate)
+    return folders
+
+
+def _below(file: Path, root: Path) -> Path:
+    try:
+        return file.relative_to(root)
+    except ValueError:  # outside the root: keep what can be kept, without '..' or an anchor
+        return Path(*[p for p in file.parts if p not in ("..", file.anchor)])
+
+
+def run_batch(
+    graph: Graph | CompiledGraph,
+    files: str | Sequence[str | Path],
+    *,
+    input: str,
+    output_dir: str | Path,
+    registry: Registry | None = None,
+    inputs: dict[str, Any] | None = None,
+    outputs: Sequence[str] | None = None,
+    overrides: dict[str, Any] | None = None,
+    executor: str | Executor = "threads",
+    workers: int | None = None,
+    cache: Cache | None = None,
+    keep_going: bool = False,
+    hooks: Sequence[RunHooks] = (),
+    on_item: Callable[[int, int, BatchItem], None] | None = None,
+) -> BatchResult:
+    """Run ``graph`` once per file, giving the file to graph input ``input``.
+
+    Parameters
+    ----------
+    graph : Graph or CompiledGraph
+        The pipeline.
+    files : str or sequence of paths
+        A glob (``photos/**/*.jpg``; ``**`` recurses) or the files themselves.
+    input : str
+        The graph input each file is given to.
+    output_dir : str or Path
+        Where the item folders and ``batch.csv`` go.
+    registry, inputs, outputs, overrides, executor, workers, cache, keep_going, hooks
+        As for :func:`~graphvision.run`; ``inputs`` are the other graph inputs.
+    on_item : callable, optional
+        Called as ``on_item(number, total, item)`` after each item (1-based).
+
+    Returns
+    -------
+    BatchResult
+        Every item with its folder, status, error message and scalar outputs.
+
+    Raises
+    ------
+    InputError
+        When the glob matches no file.
+    OutputFolderError
+        When an item folder holds files graphvision did not write, or
+        ``batch.csv`` is not a graphvision summary (checked before anything
+        runs).
+    """
+    out_dir = Path(output_dir)
+    if isinstance(files, str):
+        paths, root = batch_files(files, exclude=out_dir), pattern_root(files)
+        if not paths:
+            raise InputError(f"batch input '{input}': no file matches '{files}'")
+    else:
+        paths = [Path(f) for f in files]
+        root = Path(*_common_parts([p.parent.parts for p in paths])) if paths else Path()
+    folders = output_folders(paths, root, out_dir)
+    names = list(outputs) if outputs is not None else list(graph.outputs)
+    for folder in folders:
+        check_output_folder(folder, names)
+    current = {folder.resolve() for folder in folders}
+    for folder in previous_folders(out_dir) - current:  # its file is no longer in the batch
+        remove_owned_files(folder, owned_files(folder))
+    pool = make_executor(executor, workers) if isinstance(executor, str) else executor
+    items: list[BatchItem] = []
+    try:
+        for number, (path, folder) in enumerate(zip(paths, folders, strict=True), start=1):
+            item = _run_item(
+                graph,
+                path,
+                folder,
+                run_options={
+                    "registry": registry,
+                    "inputs": {**(inputs or {}), input: str(path)},
+                    "outputs": outputs,
+                    "overrides": overrides,
+                    "executor": pool,
+                    "cache": cache,
+                    "keep_going": keep_going,
+                    "hooks": hooks,
+                },
+            )
+            items.append(item)
+            if on_item is not None:
+                on_item(number, len(paths), item)
+    finally:
+        if isinstance(executor, str):
+            pool.shutdown()
+    return BatchResult(items, write_summary(items, out_dir))
+
+
+def _common_parts(parts: list[tuple[str, ...]]) -> tuple[str, ...]:
+    common: tuple[str, ...] = parts[0] if parts else ()
+    for other in parts[1:]:
+        length = 0
+        while length < min(len(common), len(other)) and common[length] == other[length]:
+            length += 1
+        common = common[:length]
+    return common
+
+
+def _run_item(
+    graph: Graph | CompiledGraph, path: Path, folder: Path, run_options: dict[str, Any]
+) -> BatchItem:
+    """Run one file and write its folder; a failure is recorded in the item, not raised."""
+    item = BatchItem(path, folder)
+    began = time.perf_counter()
+    result: RunResult | None = None
+    try:
+        result = run(graph, **run_options)
+    except RunError as error:
+        item.status = "failed"
+        item.error = "; ".join(str(e).splitlines()[0] for e in error.failures.values())
+        result = getattr(error, "result", None)
+    except InputError as error:  # this file cannot be read; the others may
+        item.status, item.error = "failed", str(error)
+    item.seconds = time.perf_counter() - began
+    if result is None:  # nothing produced: what a previous run left there must not look current
+        remove_owned_files(folder, owned_files(folder))
+        return item
+    try:
+        write_run(result, folder)
+    except (GraphvisionError, OSError) as error:
+        item.status, item.error = "failed", f"writing {folder}: {error}"
+    item.scalars = {
+        key: value
+        for key, value in result.outputs.items()
+        if isinstance(value, int | float | str | bool)
+    }
+    return item
+
+
+def previous_folders(out_dir: Path) -> set[Path]:
+    """The item folders (resolved) a previous ``batch.csv`` lists, only those inside ``out_dir``.
+
+    Raises
+    ------
+    OutputFolderError
+        When ``out_dir`` holds a ``batch.csv`` that is not a graphvision
+        summary (the batch would overwrite it).
+    """
+    summary = out_dir / SUMMARY
+    if not summary.is_file():
+        return set()
+    try:
+        with summary.open(newline="") as handle:
+            reader = csv.DictReader(handle)
+            if (
+                not reader.fieldnames
+                or reader.fieldnames[0] != "file"
+                or ("status" not in reader.fieldnames)
+            ):
+                raise ValueError("not a batch summary")
+            listed = [row.get("output_dir") or "" for row in reader]
+    except (OSError, UnicodeDecodeError, ValueError, csv.Error):
+        raise OutputFolderError(
+            f"{summary} is not a graphvision batch summary; the batch would replace it: "
+            "move it, or choose another --output-dir"
+        ) from None
+    root = out_dir.resolve()
+    folders = {Path(folder).resolve() for folder in listed if folder}
+    return {folder for folder in folders if root in folder.parents and folder.is_dir()}
+
+
+def write_summary(items: Sequence[BatchItem], out_dir: Path) -> Path:
+    """``batch.csv``: file, output_dir, status, seconds, error, then every scalar output."""
+    rows = [
+        {
+            "file": str(item.file),
+            "output_dir": str(item.output_dir),
+            "status": item.status,
+            "seconds": round(item.seconds, 4),
+            "error": item.error,
+            **item.scalars,
+        }
+        for item in items
+    ]
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / SUMMARY
+    with path.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns)
+        writer.writeheader()
+        writer.writerows(rows)
+    return path

@@ -1,0 +1,149 @@
+"""Where a run came from: what :class:`~graphvision.RunRecord` needs to reproduce it.
+
+:func:`describe_run` fills a record with the pipeline file and its SHA-256,
+the git commit of the pipeline's folder, every used input (what was given,
+a file's SHA-256, its content key), pipeline parameters and overrides,
+package versions (Python, graphvision, numpy, scipy, each plugin: a
+distribution's version, or a local plugin file's SHA-256), the date, and each
+node's parameters and cache keys.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import platform
+import subprocess
+from collections.abc import Mapping
+from datetime import UTC, datetime
+from importlib import metadata
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ._compile import CompiledGraph
+from ._registry import Registry
+
+if TYPE_CHECKING:
+    from ._run import RunRecord
+
+__all__ = ["describe_run", "file_sha256", "git_state", "package_versions"]
+
+
+def file_sha256(path: Path) -> str:
+    """SHA-256 of a file's bytes, read in 1 MiB blocks."""
+    digest = hashlib.sha256()
+    with path.open("rb") as handle:
+        for block in iter(lambda: handle.read(2**20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _folder_sha256(folder: Path) -> str:
+    """SHA-256 over the names and bytes of the ``.py`` files under ``folder`` (a plugin package)."""
+    digest = hashlib.sha256()
+    for path in sorted(folder.rglob("*.py")):
+        digest.update(str(path.relative_to(folder)).encode() + b"\0")
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def git_state(file: Path) -> tuple[str, bool]:
+    """(commit of the repository holding ``file``, whether ``file`` differs from it).
+
+    Any failure (no git, not a repository) gives ``("", False)``.
+    """
+    folder = file.resolve().parent
+
+    def git(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            ["git", "-C", str(folder), *args], capture_output=True, text=True, timeout=10
+        )
+
+    try:
+        head = git("rev-parse", "HEAD")
+        if head.returncode != 0:
+            return "", False
+        changed = git("status", "--porcelain", "--", file.resolve().name)
+    except (OSError, subprocess.SubprocessError):
+        return "", False
+    return head.stdout.strip(), bool(changed.stdout.strip())
+
+
+@functools.cache
+def _distribution_of(module: str) -> str:
+    """``name version`` of the installed distribution that provides top-level ``module``."""
+    names = metadata.packages_distributions().get(module.partition(".")[0], [])
+    for name in names:
+        try:
+            return f"{name} {metadata.version(name)}"
+        except metadata.PackageNotFoundError:
+            continue
+    return ""
+
+
+@functools.cache
+def _version(distribution: str) -> str:
+    try:
+        return metadata.version(distribution)
+    except metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def package_versions(registry: Registry) -> dict[str, str]:
+    """Python, graphvision, numpy, scipy and every loaded plugin's version or file hash."""
+    versions = {
+        "python": platform.python_version(),
+        **{name: _version(name) for name in ("graphvision", "numpy", "scipy")},
+    }
+    for name, plugin in sorted(registry.plugins.items()):
+        origin = Path(plugin.origin)
+        if origin.is_file():
+            versions[f"plugin {name}"] = f"sha256 {file_sha256(origin)}"
+        elif origin.is_dir():
+            versions[f"plugin {name}"] = f"sha256 {_folder_sha256(origin)}"
+        else:
+            versions[f"plugin {name}"] = _distribution_of(plugin.origin) or "unknown"
+    return versions
+
+
+def _describe_input(given: Any, key: str) -> dict[str, str]:
+    """What was given for an input, a file's path and SHA-256 if it is one, its content key."""
+    if isinstance(given, str):
+        entry = {"given": given, "key": key}
+        path = Path(given)
+        if path.is_file():
+            entry |= {"path": str(path.resolve()), "sha256": file_sha256(path)}
+        return entry
+    shape = getattr(given, "shape", None)
+    dtype = getattr(given, "dtype", None)
+    described = f"{type(given).__name__} {shape} {dtype}" if shape is not None else repr(given)
+    return {"given": described[:200], "key": key}
+
+
+def describe_run(
+    record: RunRecord,
+    compiled: CompiledGraph,
+    registry: Registry,
+    given: Mapping[str, Any],
+    keys: Mapping[tuple[str, str], str],
+    overrides: Mapping[str, Any],
+) -> None:
+    """Fill ``record``'s provenance fields and each node's parameters and cache keys."""
+    record.date = datetime.now(UTC).isoformat(timespec="seconds")
+    source = Path(compiled.graph.source) if compiled.graph.source else None
+    if source is not None and source.is_file():
+        record.pipeline_file = str(source.resolve())
+        record.pipeline_sha256 = file_sha256(source)
+        record.git_commit, record.git_dirty = git_state(source)
+    record.inputs = {
+        name: _describe_input(value, keys.get((name, ""), "")) for name, value in given.items()
+    }
+    record.params = dict(compiled.graph.params)
+    record.overrides = dict(overrides)
+    record.versions = package_versions(registry)
+    for node in record.nodes:
+        step = compiled.steps[node.name]
+        node.params = dict(step.params)
+        node.keys = {
+            port: keys[(node.name, port)] for port in step.outputs if (node.name, port) in keys
+        }
