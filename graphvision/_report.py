@@ -29,6 +29,7 @@ import numpy as np
 
 from ._compile import CompiledGraph
 from ._errors import OutputFolderError
+from ._html import write_html_report
 from ._ports import PortType, _ScalarPort
 from ._run import RunRecord, RunResult
 
@@ -44,7 +45,7 @@ __all__ = [
     "write_run",
 ]
 
-RECORD, REPORT = "record.json", "report.md"
+RECORD, REPORT, REPORT_HTML = "record.json", "report.md", "report.html"
 STAGING = ".graphvision-writing-"  # prefix of the hidden folder a run's files are written to
 OUTPUT_SUFFIXES = (".png", ".npy", ".npz", ".json", ".csv", ".ply")  # the built-in writers'
 SMALL_ARRAY = 16  # arrays of at most this many elements are shown by value (a homography)
@@ -76,7 +77,7 @@ def owned_files(directory: Path) -> set[str]:
             "so which files there are a previous run's is unknown; choose another "
             "--output-dir or empty this one"
         ) from None
-    return names | {RECORD, REPORT}
+    return names | {RECORD, REPORT, REPORT_HTML}
 
 
 def check_output_folder(directory: Path, outputs: Iterable[str]) -> set[str]:
@@ -104,7 +105,7 @@ def check_output_folder(directory: Path, outputs: Iterable[str]) -> set[str]:
     if not directory.is_dir():
         return owned
     for path in sorted(directory.iterdir()):
-        ours = path.name in (RECORD, REPORT) or (
+        ours = path.name in (RECORD, REPORT, REPORT_HTML) or (
             path.stem in stems and path.suffix in OUTPUT_SUFFIXES
         )
         if ours and path.name not in owned:
@@ -128,7 +129,7 @@ def remove_owned_files(directory: Path, names: Iterable[str]) -> None:
 
 
 def write_run(result: RunResult, directory: Path) -> dict[str, list[str]]:
-    """Write a run's outputs, ``record.json`` and ``report.md``, replacing the previous run's.
+    """Write outputs, ``record.json``, ``report.md`` and ``report.html``, replacing the last run's.
 
     Returns output name -> file names. The record lists the files
     (``record.files``), which is how the next run knows what is its to remove.
@@ -147,7 +148,11 @@ def write_run(result: RunResult, directory: Path) -> dict[str, list[str]]:
         files = write_outputs(result.compiled, result.outputs, staging)
         result.record.files = files
         write_report(result.compiled, result.outputs, files, result.record, staging)
-        new = [name for names in files.values() for name in names] + [REPORT, RECORD]
+        failures = {name: str(error) for name, error in result.failures.items()}
+        write_html_report(
+            result.compiled, result.outputs, result.record, staging, failures=failures
+        )
+        new = [name for names in files.values() for name in names] + [REPORT_HTML, REPORT, RECORD]
         for name in new:
             if (directory / name).exists() and name not in owned:
                 _refuse(directory, name)

@@ -227,7 +227,14 @@ def test_a_rerun_removes_the_previous_runs_outputs_and_only_those(capsys, tmp_pa
     (out / "sub" / "median_on_salt_pepper.png").write_text("mine too")
     assert run_cli(capsys, "run", DEMO, "-d", out, "-o", "psnr_noisy_gaussian")[0] == 0
     left = {p.name for p in out.iterdir()}
-    assert left == {"psnr_noisy_gaussian.json", "record.json", "report.md", "notes.txt", "sub"}
+    assert left == {
+        "psnr_noisy_gaussian.json",
+        "record.json",
+        "report.md",
+        "report.html",
+        "notes.txt",
+        "sub",
+    }
     assert (out / "sub" / "median_on_salt_pepper.png").read_text() == "mine too"
     record = json.loads((out / "record.json").read_text())
     assert record["files"] == {"psnr_noisy_gaussian": ["psnr_noisy_gaussian.json"]}
