@@ -25,7 +25,7 @@ from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from typing import Any, Protocol
 
 from ._node import FunctionRef
-from ._ports import PortType
+from ._ports import PortType, freeze
 
 __all__ = [
     "EXECUTORS",
@@ -105,7 +105,10 @@ def call_node_encoded(
 ) -> tuple[Payload, float]:
     """:func:`call_node` for another process: inputs and outputs travel encoded."""
     func = ref.resolve()
-    values = {port: kind.decode(arrays, meta) for port, (kind, arrays, meta) in inputs.items()}
+    values = {  # read-only for good, as under threads
+        port: kind.decode({name: freeze(a) for name, a in arrays.items()}, meta)
+        for port, (kind, arrays, meta) in inputs.items()
+    }
     result, seconds = call_node(func, params, values)
     parts = dict(zip(outputs, result, strict=True)) if output_tuple else {"out": result}
     encoded: Payload = {}

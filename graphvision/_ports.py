@@ -74,9 +74,26 @@ Meta = dict[str, Any]
 
 
 def freeze(array: np.ndarray) -> np.ndarray:
-    """Mark ``array`` read-only so that no node can change a value it was given."""
-    array.flags.writeable = False
-    return array
+    """``array`` over an immutable buffer: read-only in a way no node can undo.
+
+    A flag is not enough: ``flags.writeable = True`` succeeds again on an
+    array that owns its memory (or on a view of a writable base). An array
+    over a ``bytes`` object cannot be made writable at all, so the value is
+    copied once into one, unless it already lies over immutable memory (a
+    value read from the disk cache does).
+    """
+    root: object = array
+    while isinstance(root, np.ndarray | memoryview):
+        if isinstance(root, memoryview):
+            root = root.obj
+        elif root.base is None:
+            break
+        else:
+            root = root.base
+    if isinstance(root, bytes):
+        return array
+    data = np.ascontiguousarray(array)
+    return np.frombuffer(data.tobytes(), dtype=data.dtype).reshape(data.shape)
 
 
 class PortType:

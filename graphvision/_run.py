@@ -201,7 +201,7 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
             raise InputError(f"input '{name}': cannot load '{value}': {error}") from error
     try:
         value = port_type.coerce(value, origin)
-        return _read_only_view(port_type, port_type.validate(value))
+        return _freeze(port_type, port_type.validate(value))
     except PortValueError as error:
         raise InputError(f"input '{name}': {error}") from None
 
@@ -212,16 +212,16 @@ def value_bytes(port_type: type[PortType], value: Any) -> int:
 
 
 def _freeze(port_type: type[PortType], value: Any) -> Any:
-    """Make a node's own output arrays read-only, in place."""
-    for array in port_type.encode(value)[0].values():
-        freeze(array)
-    return value
+    """The value over immutable copies of its arrays (see :func:`~graphvision._ports.freeze`).
 
-
-def _read_only_view(port_type: type[PortType], value: Any) -> Any:
-    """The value over read-only views of its arrays (the caller's arrays stay writable)."""
+    A node's inputs then cannot be changed by the node, whatever flags it
+    sets: a mutating node fails, naming itself, and nothing else changes.
+    The caller's own arrays (graph inputs given in Python) stay as they were.
+    """
+    if issubclass(port_type, _ScalarPort):
+        return value
     arrays, meta = port_type.encode(value)
-    return port_type.decode({name: freeze(a.view()) for name, a in arrays.items()}, meta)
+    return port_type.decode({name: freeze(a) for name, a in arrays.items()}, meta)
 
 
 class _Run:

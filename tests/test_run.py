@@ -116,6 +116,41 @@ def test_nodes_cannot_change_their_inputs(registry):
         gv.run(graph, registry, inputs={"image": np.ones((4, 4), np.float32)})
 
 
+@pytest.mark.parametrize("executor", ["threads", "processes"])
+def test_a_node_that_forces_its_input_writable_fails_alone(registry, executor, tmp_path):
+    """Setting flags on the value and its bases cannot make it writable: the node fails,
+    naming itself; the sibling branch, the cache and the caller's array are untouched."""
+    graph = gv.Graph("force")
+    gray = graph.add("gray", "toy.darken", image=graph.input("image", "GrayImage"))
+    graph.output("bad", graph.add("bad", "toy.force_mutate", image=gray))
+    graph.output("good", graph.add("good", "toy.darken", image=gray, params={"factor": 1.0}))
+    given = np.full((4, 4), 0.5, np.float32)
+    cache = gv.Cache(gv.MemoryStore(), gv.DiskStore(tmp_path))
+    with pytest.raises(gv.RunError) as caught:
+        gv.run(
+            graph,
+            registry,
+            inputs={"image": given},
+            cache=cache,
+            executor=executor,
+            keep_going=True,
+        )
+    assert list(caught.value.failures) == ["bad"]
+    assert "toy.force_mutate" in str(caught.value.failures["bad"])
+    result = caught.value.result
+    np.testing.assert_array_equal(result.outputs["good"], np.full((4, 4), 0.25, np.float32))
+    np.testing.assert_array_equal(given, np.full((4, 4), 0.5, np.float32))
+    again = gv.run(
+        graph,
+        registry,
+        inputs={"image": given},
+        cache=gv.Cache(None, gv.DiskStore(tmp_path)),
+        outputs=["good"],
+    )
+    np.testing.assert_array_equal(again.outputs["good"], np.full((4, 4), 0.25, np.float32))
+    assert statuses(again.record) == {"good": "cached"}
+
+
 def test_changing_one_parameter_recomputes_only_what_depends_on_it(registry, cache):
     graph = chain(registry)
     gv.run(graph, registry, cache=cache)
