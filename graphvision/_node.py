@@ -33,14 +33,11 @@ checked twice on a run's hot path.
 
 from __future__ import annotations
 
-import ast
 import functools
-import hashlib
 import importlib
 import inspect
 import re
 import sys
-import textwrap
 import types
 import typing
 from collections.abc import Callable
@@ -51,6 +48,7 @@ from typing import Any, TypeVar, Union, get_args, get_origin
 import pydantic
 
 from ._errors import ParameterError, PortValueError, RegistrationError, did_you_mean
+from ._fingerprint import code_fingerprint
 from ._ports import PortType
 from .types import port_of
 
@@ -244,8 +242,8 @@ class NodeSpec:
 
     @cached_property
     def source_hash(self) -> str:
-        """Hash of the function's code with comments and docstrings stripped."""
-        return source_fingerprint(self.func)
+        """Digest of the code the node runs, from the loaded code (see ``_fingerprint``)."""
+        return code_fingerprint(self.func)
 
     def params_schema(self) -> dict[str, Any]:
         return self.params_model.model_json_schema()
@@ -356,23 +354,6 @@ class NodeSpec:
             "cache": self.cache,
             "doc": inspect.cleandoc(self.doc),
         }
-
-
-def source_fingerprint(func: Callable) -> str:
-    """blake2b of the function's AST with docstrings removed (comments never reach the AST)."""
-    try:
-        text = textwrap.dedent(inspect.getsource(func))
-    except (OSError, TypeError):
-        return "no-source"
-    tree = ast.parse(text)
-    for item in ast.walk(tree):
-        if isinstance(item, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Module)):
-            body = item.body
-            first = body[0] if body else None
-            is_docstring = isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant)
-            if is_docstring and isinstance(first.value.value, str):
-                item.body = body[1:] or [ast.Pass()]
-    return hashlib.blake2b(ast.dump(tree).encode(), digest_size=16).hexdigest()
 
 
 def _port_type(annotation: Any) -> tuple[type[PortType] | None, bool]:

@@ -202,10 +202,6 @@ def test_editing_a_node_invalidates_its_entries(tmp_path, cache):
     plugin.write_text(source.format(1))
     first = gv.discover([plugin], entry_points=False)
     assert gv.run(graph, first, cache=cache).outputs["o"] == 2.0
-    import sys
-
-    for name in [n for n in sys.modules if n.startswith("graphvision_local_editable")]:
-        del sys.modules[name]
     plugin.write_text(source.format(5).replace("'''Doc.'''", "'''Edited doc.'''  # comment"))
     second = gv.discover([plugin], entry_points=False)
     result = gv.run(graph, second, cache=cache)
@@ -213,9 +209,8 @@ def test_editing_a_node_invalidates_its_entries(tmp_path, cache):
     assert statuses(result.record) == {"o": "computed"}
 
 
-def test_docstring_and_comment_edits_keep_entries(registry):
-    spec = registry.node("toy.add")
-    from graphvision._node import source_fingerprint
+def test_docstring_comment_and_position_edits_keep_the_fingerprint(registry):
+    from graphvision._fingerprint import code_fingerprint
 
     def add(a, b, *, offset=0.0):
         return a + b + offset
@@ -223,15 +218,87 @@ def test_docstring_and_comment_edits_keep_entries(registry):
     def add_documented(a, b, *, offset=0.0):
         """Documented."""
         # a comment
+
         return a + b + offset
 
     def add_changed(a, b, *, offset=0.0):
         return a + b - offset
 
-    assert source_fingerprint(add).startswith(source_fingerprint(add_documented)[:0])
-    assert len(spec.source_hash) == 32
-    body = source_fingerprint
-    assert body(add) != body(add_changed)
+    assert code_fingerprint(add) == code_fingerprint(add_documented)
+    assert code_fingerprint(add) != code_fingerprint(add_changed)
+    assert len(registry.node("toy.add").source_hash) == 32
+
+
+HELPERS = """
+from graphvision import Float, node
+
+SCALE = {scale}
+
+
+def helper(x):
+    return x * SCALE
+
+
+def other_helper(x):
+    return x - 1.0
+
+
+@node("helped.uses_helper")
+def uses_helper(x: Float) -> Float:
+    \"\"\"Calls the helper.
+
+    Parameters
+    ----------
+    x : the value
+    \"\"\"
+    return helper(x) + {offset}
+
+
+@node("helped.independent")
+def independent(x: Float) -> Float:
+    \"\"\"Calls another helper.
+
+    Parameters
+    ----------
+    x : the value
+    \"\"\"
+    return other_helper(x)
+"""
+
+
+@pytest.mark.parametrize(
+    ("edit", "changed"),
+    [
+        ({"scale": 3.0, "offset": 0.0}, {"helped.uses_helper"}),  # a constant a helper reads
+        ({"scale": 2.0, "offset": 1.0}, {"helped.uses_helper"}),  # the node itself
+        ({"scale": 2.0, "offset": 0.0}, set()),  # nothing
+    ],
+)
+def test_editing_a_helper_invalidates_its_callers_and_no_others(tmp_path, edit, changed):
+    """Edit a local plugin and discover() again in the same process: keys follow the code."""
+    plugin = tmp_path / "helped.py"
+    plugin.write_text(HELPERS.format(scale=2.0, offset=0.0))
+    before = gv.discover([plugin], entry_points=False)
+    plugin.write_text(HELPERS.format(**edit) + "\n# an edit elsewhere in the file\n")
+    after = gv.discover([plugin], entry_points=False)
+    differ = {
+        op
+        for op in ("helped.uses_helper", "helped.independent")
+        if before.node(op).source_hash != after.node(op).source_hash
+    }
+    assert differ == changed
+    graph = gv.Graph("h")
+    graph.output(
+        "o", graph.add("o", "helped.uses_helper", x=graph.input("x", "Float", default=1.0))
+    )
+    expected = 1.0 * edit["scale"] + edit["offset"]
+    assert gv.run(graph, after, cache=None).outputs["o"] == expected
+
+
+def test_an_installed_plugin_fingerprint_includes_its_distribution_version(registry):
+    from graphvision._fingerprint import _distribution_version
+
+    assert _distribution_version("graphvision_plugins").startswith("graphvision==")
 
 
 @pytest.mark.parametrize("executor", ["sync", "threads", "processes"])
