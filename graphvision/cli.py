@@ -317,11 +317,12 @@ def _byte_size(text: str) -> int:
     units = {"k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}
     text = text.strip().lower().removesuffix("ib").removesuffix("b")
     try:
-        if text and text[-1] in units:
-            return int(float(text[:-1]) * units[text[-1]])
-        return int(text)
+        size = int(float(text[:-1]) * units[text[-1]]) if text and text[-1] in units else int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a size: '{text}' (e.g. 500M, 2G)") from None
+    if size <= 0:
+        raise argparse.ArgumentTypeError(f"a size must be positive, got '{text}' (e.g. 500M, 2G)")
+    return size
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -195,6 +195,25 @@ def test_cache_commands(capsys, tmp_path):
     assert "entries:   0" in cli(capsys, "cache", "info", "--cache-dir", cache)[1]
 
 
+@pytest.mark.parametrize("command", [["run", DEMO], ["cache", "clear"], ["cache", "prune"]])
+def test_a_folder_of_user_files_is_never_used_as_a_cache(capsys, tmp_path, command):
+    thesis = tmp_path / "thesis"
+    (thesis / "chapter1").mkdir(parents=True)
+    write(thesis / "chapter1", "figure.png", "png")
+    write(thesis, "thesis.tex", "tex")
+    before = sorted(p.relative_to(thesis) for p in thesis.rglob("*"))
+    status, _, err = cli(capsys, *command, "--cache-dir", thesis)
+    assert status == 2
+    assert err.count("\n") == 1 and "is not a graphvision cache: it holds 'chapter1'" in err
+    assert sorted(p.relative_to(thesis) for p in thesis.rglob("*")) == before
+
+
+@pytest.mark.parametrize("size", ["0", "-1", "-2G"])
+def test_a_cache_size_must_be_positive(capsys, tmp_path, size):
+    status, _, err = cli(capsys, "run", DEMO, f"--cache-max-bytes={size}", "--cache-dir", tmp_path)
+    assert status == 2 and "a size must be positive" in err and err.count("\n") == 1
+
+
 def test_unwritable_cache_dir_warns_and_the_run_goes_on(capsys, tmp_path):
     blocker = write(tmp_path, "file", "x")
     status, _, err = cli(
