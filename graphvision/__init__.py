@@ -47,7 +47,7 @@ if TYPE_CHECKING:
         UnknownNameError,
     )
     from ._executors import SyncExecutor, make_executor
-    from ._graph import Graph, Ref
+    from ._graph import NAME_PATTERN, REF_PATTERN, Graph, Ref
     from ._node import NodeSpec, node, source
     from ._pipeline_file import dump_pipeline, load_pipeline, parse_pipeline, pipeline_json_schema
     from ._plugins import discover
@@ -142,6 +142,8 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "NAME_PATTERN",
+    "REF_PATTERN",
     "AnyImageT",
     "Array",
     "ArrayPort",

@@ -27,7 +27,7 @@ from ._graph import Graph, Ref
 from ._node import NodeSpec
 from ._ports import PortType
 from ._registry import Registry
-from ._scheduler import topological_order
+from ._scheduler import CycleError, topological_order
 
 __all__ = ["CompiledGraph", "Step", "compile_graph"]
 
@@ -221,20 +221,9 @@ class _Checker:
         }
         try:
             return topological_order(dependencies)
-        except ValueError:
-            reported: set[frozenset[str]] = set()
-            import networkx as nx  # only on the error path: keeps start-up fast
-
-            for cycle in nx.simple_cycles(self.graph.to_networkx()):
-                if frozenset(cycle) in reported:
-                    continue
-                reported.add(frozenset(cycle))
-                start = min(cycle)
-                at = cycle.index(start)
-                ordered = cycle[at:] + cycle[:at] + [start]
-                self.report(f"nodes.{start}", f"cycle: {' -> '.join(ordered)}")
-                if len(reported) >= 5:
-                    break
+        except CycleError as error:
+            for cycle in error.cycles:
+                self.report(f"nodes.{cycle[0]}", f"cycle: {' -> '.join(cycle)}")
             return None
 
     def run(self, provided: set[str] | None) -> CompiledGraph:

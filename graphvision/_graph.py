@@ -27,9 +27,13 @@ if TYPE_CHECKING:
     import networkx as nx
 
 
-__all__ = ["Graph", "InputDecl", "NodeDecl", "Ref"]
+__all__ = ["NAME_PATTERN", "REF_PATTERN", "Graph", "InputDecl", "NodeDecl", "Ref"]
 
-NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*$"
+"""Names of graph inputs and nodes: identifiers (the one place this rule is written)."""
+REF_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)?$"
+"""References: ``node`` or ``node.port``."""
+NAME = re.compile(NAME_PATTERN)
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,17 @@ import queue
 from collections.abc import Callable, Mapping, Set
 from concurrent.futures import Future
 
-__all__ = ["run_tasks", "topological_order"]
+__all__ = ["CycleError", "run_tasks", "topological_order"]
+
+
+class CycleError(ValueError):
+    """The dependencies contain cycles; ``cycles`` lists some, each as a closed path."""
+
+    def __init__(self, cycles: list[list[str]]) -> None:
+        self.cycles = cycles
+        super().__init__(
+            "dependencies contain a cycle: " + "; ".join(" -> ".join(c) for c in cycles)
+        )
 
 
 def topological_order(dependencies: Mapping[str, Set[str]]) -> list[str]:
@@ -61,8 +71,43 @@ def topological_order(dependencies: Mapping[str, Set[str]]) -> list[str]:
             if waiting[child] == 0:
                 heapq.heappush(ready, index[child])
     if len(order) != len(dependencies):
-        raise ValueError("dependencies contain a cycle")
+        raise CycleError(_cycles_left(dependencies, set(order)))
     return order
+
+
+def _cycles_left(
+    dependencies: Mapping[str, Set[str]], done: set[str], limit: int = 5
+) -> list[list[str]]:
+    """Cycles among the tasks Kahn's algorithm could not order (each starts at its least name).
+
+    Every task left waits on another task left, so following waits from any
+    of them must come back to a task already on the path: that stretch is a
+    cycle. Tasks on a found cycle are not started from again.
+    """
+    left = {
+        name: sorted(d for d in deps if d not in done)
+        for name, deps in dependencies.items()
+        if name not in done
+    }
+    cycles: list[list[str]] = []
+    used: set[str] = set()
+    for start in sorted(left):
+        if start in used or len(cycles) >= limit:
+            continue
+        path, position = [start], {start: 0}
+        while True:
+            step = left[path[-1]][0]
+            if step in position:
+                cycle = path[position[step] :]
+                break
+            position[step] = len(path)
+            path.append(step)
+        used.update(path)
+        first = cycle.index(min(cycle))
+        closed = cycle[first:] + cycle[:first] + [min(cycle)]
+        if closed not in cycles:
+            cycles.append(closed)
+    return cycles
 
 
 def run_tasks(

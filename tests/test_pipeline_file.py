@@ -101,3 +101,79 @@ def test_json_schema_accepts_the_pipelines_and_names_sections():
     assert set(schema["properties"]) >= {"version", "name", "inputs", "params", "nodes", "outputs"}
     assert "in" in schema["$defs"]["NodeModel"]["properties"]
     json.dumps(schema)
+
+
+def test_json_schema_states_the_name_and_reference_rules():
+    schema = gv.pipeline_json_schema()
+    for section in ("nodes", "inputs"):
+        assert list(schema["properties"][section]["patternProperties"]) == [gv.NAME_PATTERN]
+        assert schema["properties"][section]["additionalProperties"] is False
+    assert schema["properties"]["outputs"]["additionalProperties"]["pattern"] == gv.REF_PATTERN
+
+
+LAUGHS = """\
+name: lol
+params:
+  a: &a ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]
+  b: &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a]
+  c: &c [*b, *b, *b, *b, *b, *b, *b, *b, *b, *b]
+  d: &d [*c, *c, *c, *c, *c, *c, *c, *c, *c, *c]
+  e: &e [*d, *d, *d, *d, *d, *d, *d, *d, *d, *d]
+  f: &f [*e, *e, *e, *e, *e, *e, *e, *e, *e, *e]
+  g: &g [*f, *f, *f, *f, *f, *f, *f, *f, *f, *f]
+  h: &h [*g, *g, *g, *g, *g, *g, *g, *g, *g, *g]
+  i: &i [*h, *h, *h, *h, *h, *h, *h, *h, *h, *h]
+nodes:
+  n: {op: toy.const, params: {value: PARAM}}
+outputs: {o: n}
+"""
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        LAUGHS.replace("PARAM", "1"),  # inside params:
+        LAUGHS.replace("PARAM", "*i").replace("  i: &i", "  i: &i"),  # from a node parameter
+        "top: &t ["
+        + ", ".join(["x"] * 10)
+        + "]\n"
+        + "".join(
+            f"l{k}: &l{k} [" + ", ".join([f"*{'t' if k == 0 else f'l{k - 1}'}"] * 10) + "]\n"
+            for k in range(9)
+        )
+        + "name: x\nnodes: {}\noutputs: {}\n",  # at top level
+    ],
+    ids=["params", "node-parameter", "top-level"],
+)
+def test_a_billion_laughs_is_refused_at_once_naming_a_line(text):
+    with pytest.raises(
+        gv.PipelineError, match=r"yaml at <string>:\d+: the file expands to too many"
+    ):
+        gv.parse_pipeline(text)
+
+
+def test_a_recursive_alias_is_refused():
+    text = "name: r\nparams:\n  loop: &loop [1, *loop]\nnodes: {}\noutputs: {}\n"
+    with pytest.raises(gv.PipelineError, match=r"yaml at <string>:3: an alias refers to itself"):
+        gv.parse_pipeline(text)
+
+
+@pytest.mark.parametrize("depth", [100, 5000, 100_000])
+def test_deep_nesting_is_refused_without_a_recursion_error(depth):
+    text = "name: d\nparams:\n  deep: " + "[" * depth + "]" * depth + "\nnodes: {}\noutputs: {}\n"
+    with pytest.raises(gv.PipelineError, match=r"yaml at <string>:3: nested deeper than 64 levels"):
+        gv.parse_pipeline(text)
+
+
+def test_merge_keys_and_aliases_within_the_budget_work():
+    text = (
+        "name: m\nparams:\n  base: &base {value: 2, unused: 0}\n"
+        "nodes:\n  n: {op: toy.const, params: {<<: *base, value: 3}}\noutputs: {o: n}\n"
+    )
+    graph = gv.parse_pipeline(text)
+    assert graph.nodes["n"].params == {"value": 3, "unused": 0}
+
+
+def test_one_document_per_file():
+    with pytest.raises(gv.PipelineError, match=r"yaml at <string>:12: a pipeline file holds one"):
+        gv.parse_pipeline(GOOD + "---\nname: second\n")
