@@ -142,8 +142,6 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
-    "NAME_PATTERN",
-    "REF_PATTERN",
     "AnyImageT",
     "Array",
     "ArrayPort",
@@ -192,6 +190,7 @@ __all__ = [
     "Matches",
     "MatchesPort",
     "MemoryStore",
+    "NAME_PATTERN",
     "NodeExecutionError",
     "NodeRecord",
     "NodeSpec",
@@ -208,6 +207,7 @@ __all__ = [
     "PortType",
     "PortValueError",
     "Problem",
+    "REF_PATTERN",
     "RecordPort",
     "Ref",
     "RegistrationError",
