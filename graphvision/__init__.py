@@ -142,6 +142,8 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "NAME_PATTERN",
+    "REF_PATTERN",
     "AnyImageT",
     "Array",
     "ArrayPort",
@@ -190,7 +192,6 @@ __all__ = [
     "Matches",
     "MatchesPort",
     "MemoryStore",
-    "NAME_PATTERN",
     "NodeExecutionError",
     "NodeRecord",
     "NodeSpec",
@@ -207,7 +208,6 @@ __all__ = [
     "PortType",
     "PortValueError",
     "Problem",
-    "REF_PATTERN",
     "RecordPort",
     "Ref",
     "RegistrationError",

@@ -114,143 +114,43 @@ _MERGE = "tag:yaml.org,2002:merge"
 
 
 class _RefusedError(Exception):
-    """A file the reader will not expand: ``line`` and ``message`` say where and why."""
+    """A file the reader will not read on: ``line`` and ``message`` say where and why."""
 
     def __init__(self, line: int, message: str) -> None:
         super().__init__(message)
         self.line, self.message = line, message
 
 
-def _compose(text: str) -> tuple[yaml.Node | None, int]:
-    """The document's node tree (aliases shared, not copied) and its node count.
+class _Open:
+    """A mapping or sequence being read: its value, size so far, path, and pending key."""
 
-    Iterative, so nesting deeper than :data:`MAX_DEPTH` is refused at the
-    line where it happens instead of exhausting the interpreter's stack.
-    """
-    loader = _Loader(text)
-    anchors: dict[str, yaml.Node] = {}
-    stack: list[list[Any]] = []  # [collection node, pending mapping key]
-    root: yaml.Node | None = None
-    count = documents = 0
+    __slots__ = ("anchor", "key", "key_line", "merged", "path", "size", "value")
 
-    def attach(node: yaml.Node) -> None:
-        nonlocal root
-        if not stack:
-            root = node
-        elif isinstance(stack[-1][0], yaml.SequenceNode):
-            stack[-1][0].value.append(node)
-        elif stack[-1][1] is None:
-            stack[-1][1] = node
-        else:
-            stack[-1][0].value.append((stack[-1][1], node))
-            stack[-1][1] = None
-
-    try:
-        while not loader.check_event(yaml.StreamEndEvent):
-            event = loader.get_event()
-            line = event.start_mark.line + 1
-            if isinstance(event, yaml.DocumentStartEvent):
-                documents += 1
-                if documents > 1:
-                    raise _RefusedError(line, "a pipeline file holds one YAML document")
-            elif isinstance(event, yaml.AliasEvent):
-                if event.anchor not in anchors:
-                    raise _RefusedError(line, f"alias *{event.anchor} names no anchor before it")
-                attach(anchors[event.anchor])
-            elif isinstance(event, yaml.ScalarEvent):
-                tag = loader.resolve(yaml.ScalarNode, event.value, event.implicit)
-                node: yaml.Node = yaml.ScalarNode(
-                    tag, event.value, event.start_mark, event.end_mark, event.style
-                )
-                count += 1
-                if event.anchor:
-                    anchors[event.anchor] = node
-                attach(node)
-            elif isinstance(event, yaml.SequenceStartEvent | yaml.MappingStartEvent):
-                if len(stack) >= MAX_DEPTH:
-                    raise _RefusedError(line, f"nested deeper than {MAX_DEPTH} levels")
-                kind = (
-                    yaml.SequenceNode
-                    if isinstance(event, yaml.SequenceStartEvent)
-                    else yaml.MappingNode
-                )
-                tag = loader.resolve(kind, None, event.implicit)
-                node = kind(tag, [], event.start_mark, event.end_mark, event.flow_style)
-                count += 1
-                if event.anchor:
-                    anchors[event.anchor] = node
-                attach(node)
-                stack.append([node, None])
-            elif isinstance(event, yaml.SequenceEndEvent | yaml.MappingEndEvent):
-                stack.pop()
-    finally:
-        loader.dispose()
-    return root, count
+    def __init__(self, value: dict | list, path: list[str], anchor: str | None) -> None:
+        self.value, self.path, self.anchor = value, path, anchor
+        self.size = 1
+        self.key: Any = _NO_KEY
+        self.key_line = 0
+        self.merged: dict[Any, Any] = {}
 
 
-class _Reader:
-    """Python data from a node tree, counting every value and recording key lines."""
-
-    def __init__(self, budget: int) -> None:
-        self.budget = budget
-        self.lines: dict[str, int] = {}
-        self.problems: list[tuple[int, str, str]] = []
-        self.scalars = yaml.SafeLoader("")
-
-    def read(self, node: yaml.Node, path: list[str], depth: int = 0) -> Any:
-        self.budget -= 1
-        if self.budget < 0:
-            raise _RefusedError(
-                node.start_mark.line + 1,
-                "the file expands to too many values (aliases of aliases?); refused",
-            )
-        if depth > MAX_DEPTH:
-            raise _RefusedError(
-                node.start_mark.line + 1, "an alias refers to itself, or nesting is too deep"
-            )
-        if isinstance(node, yaml.ScalarNode):
-            try:
-                return self.scalars.construct_object(node)
-            except yaml.YAMLError as error:
-                raise _RefusedError(node.start_mark.line + 1, f"bad value: {error}") from None
-        if isinstance(node, yaml.SequenceNode):
-            items = []
-            for index, item in enumerate(node.value):
-                self.lines.setdefault(".".join([*path, str(index)]), item.start_mark.line + 1)
-                items.append(self.read(item, [*path, str(index)], depth + 1))
-            return items
-        mapping: dict[Any, Any] = {}
-        merged: dict[Any, Any] = {}
-        for key_node, value_node in node.value:
-            line = key_node.start_mark.line + 1
-            if key_node.tag == _MERGE:  # `<<: *defaults` (explicit keys win)
-                for source in (
-                    value_node.value if isinstance(value_node, yaml.SequenceNode) else [value_node]
-                ):
-                    value = self.read(source, path, depth + 1)
-                    if not isinstance(value, dict):
-                        raise _RefusedError(line, "a merge key '<<' must name mappings")
-                    merged = {**value, **merged}
-                continue
-            if not isinstance(key_node, yaml.ScalarNode):
-                raise _RefusedError(line, "mapping keys must be plain values, not collections")
-            key = self.read(key_node, path, depth + 1)
-            where = ".".join([*path, str(key)])
-            if key in mapping:
-                self.problems.append((line, where, f"duplicate key '{key}'"))
-            self.lines[where] = line
-            mapping[key] = self.read(value_node, [*path, str(key)], depth + 1)
-        return {**merged, **mapping}
+_NO_KEY = object()
+_MERGE_KEY = object()
 
 
 def _read_yaml(text: str, file: str) -> tuple[Any, dict[str, int], list[Problem]]:
-    """(data, key lines, duplicate-key problems), or PipelineError for unreadable YAML."""
+    """(data, line of every key by dotted path, duplicate-key problems) from one pass.
+
+    The YAML events are turned into Python values as they stream, with a
+    stack instead of recursion (nesting beyond :data:`MAX_DEPTH` is refused
+    at its line). An anchored value is kept with its size (how many values it
+    holds); an alias reuses the value, shared rather than copied, and adds its
+    size to the count of values the file expands to, which may not exceed
+    ``max(MIN_VALUE_BUDGET, 10 × values written)``: a billion laughs is
+    refused at the alias that crosses the bound, a recursive alias at once.
+    """
     try:
-        root, count = _compose(text)
-        if root is None:
-            return None, {}, []
-        reader = _Reader(max(MIN_VALUE_BUDGET, 10 * count))
-        data = reader.read(root, [])
+        return _stream(text, file)
     except _RefusedError as refused:
         raise PipelineError([Problem(refused.line, "yaml", refused.message, file)], file) from None
     except yaml.YAMLError as error:
@@ -260,8 +160,113 @@ def _read_yaml(text: str, file: str) -> tuple[Any, dict[str, int], list[Problem]
         raise PipelineError(
             [Problem(line, "yaml", f"malformed YAML: {reason}", file)], file
         ) from None
-    problems = [Problem(line, where, message, file) for line, where, message in reader.problems]
-    return data, reader.lines, problems
+
+
+def _stream(text: str, file: str) -> tuple[Any, dict[str, int], list[Problem]]:
+    loader = _Loader(text)
+    anchors: dict[str, tuple[Any, int]] = {}
+    open_anchors: set[str] = set()
+    stack: list[_Open] = []
+    lines: dict[str, int] = {}
+    problems: list[Problem] = []
+    root: Any = None
+    written = expanded = documents = 0
+
+    def attach(value: Any, size: int, line: int, is_scalar: bool) -> None:
+        nonlocal root, expanded
+        expanded += size
+        if expanded > max(MIN_VALUE_BUDGET, 10 * written):
+            raise _RefusedError(
+                line, "the file expands to too many values (aliases of aliases?); refused"
+            )
+        if not stack:
+            root = value
+            return
+        parent = stack[-1]
+        parent.size += size
+        if isinstance(parent.value, list):
+            lines.setdefault(".".join([*parent.path, str(len(parent.value))]), line)
+            parent.value.append(value)
+        elif parent.key is _NO_KEY:
+            if not is_scalar:
+                raise _RefusedError(line, "mapping keys must be plain values, not collections")
+            parent.key, parent.key_line = value, line
+        else:
+            key, parent.key = parent.key, _NO_KEY
+            if key is _MERGE_KEY:  # `<<: *defaults` (explicit keys win)
+                sources = value if isinstance(value, list) else [value]
+                if not all(isinstance(source, dict) for source in sources):
+                    raise _RefusedError(parent.key_line, "a merge key '<<' must name mappings")
+                for source in sources:
+                    parent.merged = {**source, **parent.merged}
+                return
+            where = ".".join([*parent.path, str(key)])
+            if key in parent.value:
+                problems.append(Problem(parent.key_line, where, f"duplicate key '{key}'", file))
+            lines[where] = parent.key_line
+            parent.value[key] = value
+
+    def child_path() -> list[str]:
+        if not stack:
+            return []
+        parent = stack[-1]
+        if isinstance(parent.value, list):
+            return [*parent.path, str(len(parent.value))]
+        return [*parent.path, str(parent.key)]
+
+    try:
+        while not loader.check_event(yaml.StreamEndEvent):
+            event = loader.get_event()
+            kind = type(event)
+            line = event.start_mark.line + 1
+            if kind is yaml.ScalarEvent:
+                written += 1
+                value = _scalar(loader, event)
+                if event.anchor:
+                    anchors[event.anchor] = (value, 1)
+                attach(value, 1, line, True)
+            elif kind is yaml.MappingStartEvent or kind is yaml.SequenceStartEvent:
+                written += 1
+                if len(stack) >= MAX_DEPTH:
+                    raise _RefusedError(line, f"nested deeper than {MAX_DEPTH} levels")
+                container: dict | list = {} if kind is yaml.MappingStartEvent else []
+                stack.append(_Open(container, child_path(), event.anchor))
+                if event.anchor:
+                    open_anchors.add(event.anchor)
+            elif kind is yaml.MappingEndEvent or kind is yaml.SequenceEndEvent:
+                done = stack.pop()
+                value = done.value
+                if done.merged and isinstance(value, dict):
+                    value = {**done.merged, **value}
+                if done.anchor:
+                    open_anchors.discard(done.anchor)
+                    anchors[done.anchor] = (value, done.size)
+                attach(value, done.size, line, False)
+            elif kind is yaml.AliasEvent:
+                if event.anchor in open_anchors:
+                    raise _RefusedError(line, f"alias *{event.anchor} refers to itself")
+                if event.anchor not in anchors:
+                    raise _RefusedError(line, f"alias *{event.anchor} names no anchor before it")
+                value, size = anchors[event.anchor]
+                attach(value, size, line, not isinstance(value, dict | list))
+            elif kind is yaml.DocumentStartEvent:
+                documents += 1
+                if documents > 1:
+                    raise _RefusedError(line, "a pipeline file holds one YAML document")
+    finally:
+        loader.dispose()
+    return root, lines, problems
+
+
+def _scalar(loader: Any, event: yaml.ScalarEvent) -> Any:
+    """The Python value of a scalar event, as the safe loader would construct it."""
+    tag = loader.resolve(yaml.ScalarNode, event.value, event.implicit)
+    if tag == "tag:yaml.org,2002:str":
+        return event.value
+    if tag == _MERGE:
+        return _MERGE_KEY
+    node = yaml.ScalarNode(tag, event.value, event.start_mark, event.end_mark, event.style)
+    return loader.construct_object(node)
 
 
 # -- structure ------------------------------------------------------------------------
