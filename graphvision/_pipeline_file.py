@@ -175,7 +175,7 @@ def _stream(text: str, file: str) -> tuple[Any, dict[str, int], list[Problem]]:
     def attach(value: Any, size: int, line: int, is_scalar: bool) -> None:
         nonlocal root, expanded
         expanded += size
-        if expanded > max(MIN_VALUE_BUDGET, 10 * written):
+        if expanded > MIN_VALUE_BUDGET and expanded > 10 * written:
             raise _RefusedError(
                 line, "the file expands to too many values (aliases of aliases?); refused"
             )
@@ -260,6 +260,8 @@ def _stream(text: str, file: str) -> tuple[Any, dict[str, int], list[Problem]]:
 
 def _scalar(loader: Any, event: yaml.ScalarEvent) -> Any:
     """The Python value of a scalar event, as the safe loader would construct it."""
+    if event.style and event.implicit[1]:  # quoted, no tag: a string as written
+        return event.value
     tag = loader.resolve(yaml.ScalarNode, event.value, event.implicit)
     if tag == "tag:yaml.org,2002:str":
         return event.value
