@@ -1,0 +1,48 @@
+"""Classical recognition and detection (seed: "Recognition & Detection", "Recognition
+using local features: Bag of words model"): labelled sample sets, PCA and dual PCA,
+1-nearest-neighbour, HOG, integral images and Haar-like features, AdaBoost and the
+Viola–Jones cascade, a linear SVM, sliding-window detection with non-maximum
+suppression, and the bag-of-words model. Trained models are port types.
+"""
+
+from ._classify import accuracy, predict
+from ._data import combine, lfw_faces, negative_patches, pixels, texture_patches
+from ._subspace import fit_pca, nearest_neighbour, pca, project, reconstruction_error, residual
+from ._types import (
+    BagsPort,
+    CascadePort,
+    ClassifierPort,
+    FeaturesPort,
+    LinearClassifierPort,
+    NearestClassifierPort,
+    SamplesPort,
+    StumpClassifierPort,
+    SubspacePort,
+    VocabularyPort,
+)
+
+__all__ = [
+    "BagsPort",
+    "CascadePort",
+    "ClassifierPort",
+    "FeaturesPort",
+    "LinearClassifierPort",
+    "NearestClassifierPort",
+    "SamplesPort",
+    "StumpClassifierPort",
+    "SubspacePort",
+    "VocabularyPort",
+    "accuracy",
+    "combine",
+    "fit_pca",
+    "lfw_faces",
+    "nearest_neighbour",
+    "negative_patches",
+    "pca",
+    "pixels",
+    "predict",
+    "project",
+    "reconstruction_error",
+    "residual",
+    "texture_patches",
+]
