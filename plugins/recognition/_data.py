@@ -11,7 +11,7 @@ from pydantic import Field
 from graphvision import node
 
 from .._checks import to_float_image
-from ._types import FeatureSet, Features, Samples, SampleSet
+from ._types import Features, FeatureSet, Samples, SampleSet
 
 __all__ = [
     "FACE",

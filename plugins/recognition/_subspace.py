@@ -13,8 +13,8 @@ from pydantic import Field
 from graphvision import Array, node
 
 from ._types import (
-    FeatureSet,
     Features,
+    FeatureSet,
     NearestClassifier,
     NearestModel,
     Subspace,

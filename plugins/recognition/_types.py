@@ -117,7 +117,8 @@ class SamplesPort(RecordPort):
     @classmethod
     def summary(cls, value: SampleSet) -> str:
         classes = np.unique(value.labels).tolist()
-        return f"Samples {len(value)} × {value.images.shape[1]}×{value.images.shape[2]}, classes {classes}"
+        side = "×".join(map(str, value.images.shape[1:]))
+        return f"Samples {len(value)} × {side}, classes {classes}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -250,7 +251,8 @@ class ClassifierModel:
 
 @dataclass(frozen=True, eq=False)
 class LinearModel(ClassifierModel):
-    """Linear scores ``features @ weights.T + bias``: one row for two classes, else one per class."""
+    """Linear scores ``features @ weights.T + bias``: one row for two classes, else one
+    row per class (one-vs-rest)."""
 
     weights: np.ndarray
     bias: np.ndarray
