@@ -7,7 +7,9 @@ suppression, and the bag-of-words model. Trained models are port types.
 
 from ._classify import accuracy, predict
 from ._data import combine, lfw_faces, negative_patches, pixels, texture_patches
+from ._hog import hog, hog_cells, hog_features, hog_picture
 from ._subspace import fit_pca, nearest_neighbour, pca, project, reconstruction_error, residual
+from ._svm import fit_linear_svm, linear_svm
 from ._types import (
     BagsPort,
     CascadePort,
@@ -34,8 +36,14 @@ __all__ = [
     "VocabularyPort",
     "accuracy",
     "combine",
+    "fit_linear_svm",
     "fit_pca",
+    "hog",
+    "hog_cells",
+    "hog_features",
+    "hog_picture",
     "lfw_faces",
+    "linear_svm",
     "nearest_neighbour",
     "negative_patches",
     "pca",
