@@ -5,8 +5,10 @@ Viola–Jones cascade, a linear SVM, sliding-window detection with non-maximum
 suppression, and the bag-of-words model. Trained models are port types.
 """
 
+from ._boost import adaboost, boost_stumps, cascade, cascade_table, train_cascade
 from ._classify import accuracy, predict
 from ._data import combine, lfw_faces, negative_patches, pixels, texture_patches
+from ._haar import haar, haar_feature_table, haar_values, integral_image, integral_image_node
 from ._hog import hog, hog_cells, hog_features, hog_picture
 from ._subspace import fit_pca, nearest_neighbour, pca, project, reconstruction_error, residual
 from ._svm import fit_linear_svm, linear_svm
@@ -35,13 +37,22 @@ __all__ = [
     "SubspacePort",
     "VocabularyPort",
     "accuracy",
+    "adaboost",
+    "boost_stumps",
+    "cascade",
+    "cascade_table",
     "combine",
     "fit_linear_svm",
     "fit_pca",
+    "haar",
+    "haar_feature_table",
+    "haar_values",
     "hog",
     "hog_cells",
     "hog_features",
     "hog_picture",
+    "integral_image",
+    "integral_image_node",
     "lfw_faces",
     "linear_svm",
     "nearest_neighbour",
@@ -53,4 +64,5 @@ __all__ = [
     "reconstruction_error",
     "residual",
     "texture_patches",
+    "train_cascade",
 ]
