@@ -7,7 +7,17 @@ suppression, and the bag-of-words model. Trained models are port types.
 
 from ._boost import adaboost, boost_stumps, cascade, cascade_table, train_cascade
 from ._classify import accuracy, predict
-from ._data import combine, lfw_faces, negative_patches, pixels, texture_patches
+from ._data import augment, combine, lfw_faces, negative_patches, pixels, texture_patches
+from ._detect import (
+    box_count,
+    box_iou,
+    detect,
+    draw_boxes,
+    iou_matrix,
+    mine_negatives,
+    nms,
+    non_max_suppression,
+)
 from ._haar import haar, haar_feature_table, haar_values, integral_image, integral_image_node
 from ._hog import hog, hog_cells, hog_features, hog_picture
 from ._subspace import fit_pca, nearest_neighbour, pca, project, reconstruction_error, residual
@@ -38,10 +48,15 @@ __all__ = [
     "VocabularyPort",
     "accuracy",
     "adaboost",
+    "augment",
     "boost_stumps",
+    "box_count",
+    "box_iou",
     "cascade",
     "cascade_table",
     "combine",
+    "detect",
+    "draw_boxes",
     "fit_linear_svm",
     "fit_pca",
     "haar",
@@ -53,10 +68,14 @@ __all__ = [
     "hog_picture",
     "integral_image",
     "integral_image_node",
+    "iou_matrix",
     "lfw_faces",
     "linear_svm",
+    "mine_negatives",
     "nearest_neighbour",
     "negative_patches",
+    "nms",
+    "non_max_suppression",
     "pca",
     "pixels",
     "predict",

@@ -16,8 +16,11 @@ from ._types import Features, FeatureSet, Samples, SampleSet
 __all__ = [
     "FACE",
     "NON_FACE",
+    "FaceFree",
     "Split",
+    "augment",
     "combine",
+    "face_free_image",
     "lfw_faces",
     "negative_patches",
     "pixels",
@@ -28,7 +31,22 @@ __all__ = [
 FACE = 1
 NON_FACE = 0
 Texture = Literal["brick", "grass", "gravel"]
-FaceFree = Literal["brick", "grass", "gravel", "coins", "page", "text", "moon", "checkerboard"]
+FaceFree = Literal[
+    "brick",
+    "checkerboard",
+    "chelsea",
+    "clock",
+    "coffee",
+    "coins",
+    "grass",
+    "gravel",
+    "hubble_deep_field",
+    "immunohistochemistry",
+    "moon",
+    "page",
+    "rocket",
+    "text",
+]
 
 
 class Split(NamedTuple):
@@ -132,6 +150,14 @@ def texture_patches(
     return Split(train, test)
 
 
+def face_free_image(name: str) -> np.ndarray:
+    """A face-free scikit-image sample as a gray float32 image (channel mean)."""
+    import skimage.data
+
+    image = to_float_image(getattr(skimage.data, name)(), source=f"sample '{name}'")
+    return image.mean(axis=2) if image.ndim == 3 else image
+
+
 @node("recognition.negative_patches", version=1)
 def negative_patches(
     *,
@@ -156,16 +182,13 @@ def negative_patches(
     -------
     negatives : Samples (count, size, size)
     """
-    import skimage.data
     from skimage.transform import resize
 
     rng = np.random.default_rng(seed)
+    loaded = {name: face_free_image(name) for name in images}
     patches = []
     for index in range(count):
-        name = images[index % len(images)]
-        image = to_float_image(getattr(skimage.data, name)(), source=f"sample '{name}'")
-        if image.ndim == 3:
-            image = image.mean(axis=2)
+        image = loaded[images[index % len(images)]]
         top = max(min_side, min(image.shape) // 3)
         side = int(rng.integers(min_side, top + 1))
         row = int(rng.integers(0, image.shape[0] - side + 1))
@@ -193,6 +216,63 @@ def combine(a: Samples, b: Samples) -> Samples:
             f"in 'a' and {b.images.shape[1:]} in 'b'"
         )
     return _frozen(np.concatenate([a.images, b.images]), np.concatenate([a.labels, b.labels]))
+
+
+@node("recognition.augment", version=1)
+def augment(
+    samples: Samples,
+    *,
+    copies: Annotated[int, Field(ge=0)] = 4,
+    shift: Annotated[float, Field(ge=0)] = 1.5,
+    scale: Annotated[float, Field(ge=0, lt=1)] = 0.08,
+    angle: Annotated[float, Field(ge=0, le=180)] = 8.0,
+    seed: Annotated[int, Field(ge=0)] = 0,
+) -> Samples:
+    """The samples, their mirror images, and ``copies`` jittered copies of each: a random
+    similarity about the centre (log-scale in ±``scale``, rotation in ±``angle`` degrees,
+    shift in ±``shift`` pixels; seeded), mirrored half of the time. A detector trained
+    on them tolerates windows that frame the object a little differently.
+
+    Parameters
+    ----------
+    samples : Samples (N, H, W)
+    copies : jittered copies per sample
+    shift : largest shift in pixels
+    scale : largest |log| of the scale factor
+    angle : largest rotation in degrees
+    seed : seed of the jitter
+
+    Returns
+    -------
+    samples : Samples ((copies + 2) · N, H, W), labels repeated
+    """
+    from skimage.transform import warp
+
+    rng = np.random.default_rng(seed)
+    images = samples.images
+    height, width = images.shape[1:]
+    centre = np.array([(width - 1) / 2, (height - 1) / 2])
+    out = [images, images[:, :, ::-1]]
+    for _ in range(copies):
+        jittered = np.empty_like(images)
+        for index, image in enumerate(images):
+            factor = np.exp(rng.uniform(-scale, scale))
+            theta = np.deg2rad(rng.uniform(-angle, angle))
+            offset = rng.uniform(-shift, shift, 2)
+            if rng.random() < 0.5:
+                image = image[:, ::-1]
+            # output (x, y) ← input R⁻¹ (x − c − t) / s + c: the inverse map warp expects
+            cos, sin = np.cos(theta) / factor, np.sin(theta) / factor
+            linear = np.array([[cos, sin], [-sin, cos]])
+            inverse = np.eye(3)
+            inverse[:2, :2] = linear
+            inverse[:2, 2] = centre - linear @ (centre + offset)
+            jittered[index] = warp(
+                np.array(image, np.float64), inverse, mode="edge", preserve_range=True
+            )
+        out.append(jittered)
+    labels = np.tile(samples.labels, copies + 2)
+    return _frozen(np.clip(np.concatenate(out), 0, 1), labels)
 
 
 def pixel_features(images: np.ndarray) -> np.ndarray:
