@@ -6,6 +6,7 @@ suppression, and the bag-of-words model. Trained models are port types.
 """
 
 from ._boost import adaboost, boost_stumps, cascade, cascade_table, train_cascade
+from ._bow import bag_of_words, dense_sift, fit_kmeans, kmeans, nearest_word
 from ._classify import accuracy, predict
 from ._data import augment, combine, lfw_faces, negative_patches, pixels, texture_patches
 from ._detect import (
@@ -49,14 +50,17 @@ __all__ = [
     "accuracy",
     "adaboost",
     "augment",
+    "bag_of_words",
     "boost_stumps",
     "box_count",
     "box_iou",
     "cascade",
     "cascade_table",
     "combine",
+    "dense_sift",
     "detect",
     "draw_boxes",
+    "fit_kmeans",
     "fit_linear_svm",
     "fit_pca",
     "haar",
@@ -69,10 +73,12 @@ __all__ = [
     "integral_image",
     "integral_image_node",
     "iou_matrix",
+    "kmeans",
     "lfw_faces",
     "linear_svm",
     "mine_negatives",
     "nearest_neighbour",
+    "nearest_word",
     "negative_patches",
     "nms",
     "non_max_suppression",

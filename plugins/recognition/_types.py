@@ -82,10 +82,10 @@ def _array(owner: str, name: str, value: Any, dtype: type, ndim: int) -> np.ndar
     return value
 
 
-def _same_length(owner: str, **columns: np.ndarray) -> None:
+def _same_length(what: str, **columns: np.ndarray) -> None:
     lengths = {name: len(column) for name, column in columns.items()}
     if len(set(lengths.values())) > 1:
-        raise PortValueError(f"{owner} columns must have equal lengths, got {lengths}")
+        raise PortValueError(f"{what} columns must have equal lengths, got {lengths}")
 
 
 @dataclass(frozen=True, eq=False)
