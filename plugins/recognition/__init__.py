@@ -8,7 +8,15 @@ suppression, and the bag-of-words model. Trained models are port types.
 from ._boost import adaboost, boost_stumps, cascade, cascade_table, train_cascade
 from ._bow import bag_of_words, dense_sift, fit_kmeans, kmeans, nearest_word
 from ._classify import accuracy, predict
-from ._data import augment, combine, lfw_faces, negative_patches, pixels, texture_patches
+from ._data import (
+    augment,
+    combine,
+    lfw_faces,
+    negative_patches,
+    pixel_features,
+    pixels,
+    texture_patches,
+)
 from ._detect import (
     box_count,
     box_iou,
@@ -19,7 +27,15 @@ from ._detect import (
     nms,
     non_max_suppression,
 )
-from ._haar import haar, haar_feature_table, haar_values, integral_image, integral_image_node
+from ._haar import (
+    HAAR_TYPES,
+    haar,
+    haar_feature_table,
+    haar_values,
+    integral_image,
+    integral_image_node,
+    sample_haar_features,
+)
 from ._hog import hog, hog_cells, hog_features, hog_picture
 from ._subspace import fit_pca, nearest_neighbour, pca, project, reconstruction_error, residual
 from ._svm import fit_linear_svm, linear_svm
@@ -37,6 +53,7 @@ from ._types import (
 )
 
 __all__ = [
+    "HAAR_TYPES",
     "BagsPort",
     "CascadePort",
     "ClassifierPort",
@@ -83,11 +100,13 @@ __all__ = [
     "nms",
     "non_max_suppression",
     "pca",
+    "pixel_features",
     "pixels",
     "predict",
     "project",
     "reconstruction_error",
     "residual",
+    "sample_haar_features",
     "texture_patches",
     "train_cascade",
 ]

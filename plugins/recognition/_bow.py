@@ -89,7 +89,9 @@ def nearest_word(points: np.ndarray, words: np.ndarray) -> np.ndarray:
 
 def fit_kmeans(points: np.ndarray, k: int, iterations: int, seed: int) -> np.ndarray:
     r"""k cluster centres minimising :math:`\sum_i \min_j \|x_i - c_j\|^2` (Lloyd's
-    algorithm from a k-means++ start, seeded): assign each point to its nearest centre,
+    algorithm from a greedy k-means++ start, seeded: each new centre is the best of
+    2 + ln k candidates drawn with probability ∝ D², the squared distance to the
+    nearest centre so far): assign each point to its nearest centre,
     move each centre to the mean of its points, until no assignment changes. A centre
     left without points moves to the point farthest from its own centre.
 
@@ -102,13 +104,18 @@ def fit_kmeans(points: np.ndarray, k: int, iterations: int, seed: int) -> np.nda
     centres = np.empty((k, points.shape[1]))
     centres[0] = points[rng.integers(len(points))]
     closest = _squared_distances(points, centres[:1])[:, 0]
+    trials = 2 + int(np.log(k))
     for j in range(1, k):
         total = closest.sum()
-        pick = (
-            rng.choice(len(points), p=closest / total) if total > 0 else rng.integers(len(points))
-        )
-        centres[j] = points[pick]
-        closest = np.minimum(closest, _squared_distances(points, centres[j : j + 1])[:, 0])
+        if total > 0:
+            candidates = rng.choice(len(points), trials, p=closest / total)
+        else:
+            candidates = rng.integers(len(points), size=trials)
+        # greedy k-means++: of a few candidates drawn ∝ D², keep the one leaving least
+        reach = np.minimum(closest[None, :], _squared_distances(points[candidates], points))
+        best = int(np.argmin(reach.sum(axis=1)))
+        centres[j] = points[candidates[best]]
+        closest = reach[best]
     assignment = np.full(len(points), -1)
     for _ in range(iterations):
         distances = _squared_distances(points, centres)
