@@ -222,7 +222,8 @@ def test_bag_of_words_histograms_count_the_nearest_words():
     )
     words = np.array([[0.0, 0.0], [5.0, 5.0]])
     histograms = rec.bag_of_words(bags, words)
-    np.testing.assert_allclose(histograms.features, [[2 / 3, 1 / 3], [0.5, 0.5], [0, 0]])
+    expected = np.array([[2 / 3, 1 / 3], [0.5, 0.5], [0.0, 0.0]])
+    np.testing.assert_allclose(histograms.features, expected)
     assert histograms.labels.tolist() == [3, 4, 5]
 
 
