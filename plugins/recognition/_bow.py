@@ -135,7 +135,7 @@ def fit_kmeans(points: np.ndarray, k: int, iterations: int, seed: int) -> np.nda
     return centres
 
 
-@node("recognition.kmeans", version=1)
+@node("recognition.kmeans", version=2)
 def kmeans(
     bags: Bags,
     *,
