@@ -275,24 +275,32 @@ def augment(
     return _frozen(np.clip(np.concatenate(out), 0, 1), labels)
 
 
-def pixel_features(images: np.ndarray) -> np.ndarray:
-    """Each image as one row of its pixels (row-major), float64."""
-    return images.reshape(len(images), -1).astype(np.float64)
+def pixel_features(images: np.ndarray, normalise: bool = False) -> np.ndarray:
+    """Each image as one row of its pixels (row-major), float64; with ``normalise`` each row
+    minus its mean and divided by its norm (rows without contrast stay zero)."""
+    rows = images.reshape(len(images), -1).astype(np.float64)
+    if not normalise:
+        return rows
+    rows = rows - rows.mean(axis=1, keepdims=True)
+    norms = np.linalg.norm(rows, axis=1, keepdims=True)
+    return np.divide(rows, norms, out=np.zeros_like(rows), where=norms > 1e-12)
 
 
 @node("recognition.pixels", version=1)
-def pixels(samples: Samples) -> Features:
+def pixels(samples: Samples, *, normalise: bool = False) -> Features:
     """Each image as the vector of its pixels (seed: "reshape training images into column
-    vectors").
+    vectors"), optionally normalised to zero mean and unit norm (then brightness and
+    contrast do not matter, as for detection by distance from a subspace).
 
     Parameters
     ----------
     samples : Samples (N, H, W)
+    normalise : subtract each vector's mean and divide by its norm
 
     Returns
     -------
     features : Features (N, H·W) with the samples' labels
     """
     window = list(samples.images.shape[1:])
-    recipe = json.dumps({"kind": "pixels", "window": window})
-    return FeatureSet(pixel_features(samples.images), samples.labels.copy(), recipe)
+    recipe = json.dumps({"kind": "pixels", "window": window, "normalise": normalise})
+    return FeatureSet(pixel_features(samples.images, normalise), samples.labels.copy(), recipe)

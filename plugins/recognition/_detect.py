@@ -21,15 +21,25 @@ from graphvision import (
     node,
 )
 
-from ._data import NON_FACE, FaceFree, face_free_image
+from ._data import NON_FACE, FaceFree, face_free_image, pixel_features
 from ._haar import haar_values, integral_image, sample_haar_features
 from ._hog import hog_blocks
-from ._types import Classifier, ClassifierModel, Samples, SampleSet, recipe_of
+from ._subspace import reconstruction_error
+from ._types import (
+    Classifier,
+    ClassifierModel,
+    Samples,
+    SampleSet,
+    Subspace,
+    SubspaceModel,
+    recipe_of,
+)
 
 __all__ = [
     "box_count",
     "box_iou",
     "detect",
+    "detect_subspace",
     "draw_boxes",
     "iou_matrix",
     "mine_negatives",
@@ -80,7 +90,8 @@ def _pixel_windows(image: np.ndarray, recipe: dict, step: int) -> Iterator[Windo
     rows, cols = np.meshgrid(np.arange(views.shape[0]), np.arange(views.shape[1]), indexing="ij")
     y0, x0 = rows.ravel() * step, cols.ravel() * step
     boxes = np.column_stack([x0, y0, x0 + width, y0 + height]).astype(np.float64)
-    yield Windows(views.reshape(len(boxes), -1).astype(np.float64), boxes)
+    rows = pixel_features(views.reshape(len(boxes), height, width), recipe.get("normalise", False))
+    yield Windows(rows, boxes)
 
 
 def _haar_windows(image: np.ndarray, recipe: dict, step: int) -> Iterator[Windows]:
@@ -179,19 +190,20 @@ def detect(
     return BoxSet(boxes, scores)
 
 
-def _window_of(classifier: ClassifierModel) -> tuple[int, int]:
+def _window_of(classifier: ClassifierModel | SubspaceModel) -> tuple[int, int]:
     recipe = recipe_of(classifier.recipe)
-    if len(classifier.classes) != 2 or "window" not in recipe:
+    classes = getattr(classifier, "classes", np.arange(2))  # a subspace has none
+    if len(classes) != 2 or "window" not in recipe:
         raise ValueError(
             "recognition.detect needs a two-class classifier trained on window features, "
-            f"got classes {classifier.classes.tolist()} and features {recipe or 'unknown'}"
+            f"got classes {classes.tolist()} and features {recipe or 'unknown'}"
         )
     return int(recipe["window"][0]), int(recipe["window"][1])
 
 
 def sliding_windows(
     image: np.ndarray,
-    classifier: ClassifierModel,
+    classifier: ClassifierModel | SubspaceModel,
     scale_step: float,
     min_scale: float,
     max_scale: float,
@@ -210,7 +222,7 @@ def sliding_windows(
     found_boxes, found_scores = [], []
     for scale, level in _pyramid(image, window, scale_step, min_scale, max_scale):
         for windows in window_features(level, recipe, step):
-            score = _decision(classifier, windows.features)
+            score = _score(classifier, windows.features)
             keep = score > threshold
             found_boxes.append(windows.boxes[keep] * scale)
             found_scores.append(score[keep])
@@ -281,10 +293,59 @@ def mine_negatives(
     return SampleSet(stack, np.full(len(stack), NON_FACE, np.int64))
 
 
-def _decision(classifier: ClassifierModel, features: np.ndarray) -> np.ndarray:
+def _score(classifier: ClassifierModel | SubspaceModel, features: np.ndarray) -> np.ndarray:
+    """The classifier's decision value, or minus the distance from the subspace."""
     if len(features) == 0:
         return np.zeros(0)
+    if isinstance(classifier, SubspaceModel):
+        return -reconstruction_error(features, classifier.mean, classifier.basis)
     return np.asarray(classifier.decision(features), np.float64)
+
+
+@node("recognition.detect_subspace", version=1)
+def detect_subspace(
+    image: GrayImage,
+    subspace: Subspace,
+    *,
+    scale_step: Annotated[float, Field(gt=1, le=4)] = 1.2,
+    min_scale: Annotated[float, Field(gt=0)] = 1.0,
+    max_scale: Annotated[float, Field(gt=0)] = 64.0,
+    step: Annotated[int, Field(ge=1)] = 2,
+    max_error: Annotated[float, Field(gt=0)] = 0.2,
+) -> Boxes:
+    r"""Detection by distance from a subspace: windows that the subspace reconstructs well.
+
+    Every window over positions and a scale pyramid (as ``recognition.detect``) is
+    turned into the subspace's features (its recipe: pixels, normalised or not) and
+    reconstructed, :math:`\hat x = U U^T (x - \mu) + \mu`; a window whose squared
+    reconstruction error :math:`\|x - \hat x\|^2` is below ``max_error`` becomes a box
+    scored by minus that error. Follow with ``recognition.nms``.
+
+    Parameters
+    ----------
+    image : (H, W) gray image
+    subspace : Subspace built on window pixels (``recognition.pixels`` → ``recognition.pca``)
+    scale_step, min_scale, max_scale, step : the sliding window (see ``recognition.detect``)
+    max_error : largest squared reconstruction error of a detection
+
+    Returns
+    -------
+    boxes : Boxes scored by −error
+
+    References
+    ----------
+    M. Turk and A. Pentland, "Eigenfaces for recognition", J. Cognitive Neuroscience
+    3(1), 1991.
+    """
+    if recipe_of(subspace.recipe).get("kind") != "pixels":
+        raise ValueError(
+            "recognition.detect_subspace needs a subspace of window pixels "
+            f"(recognition.pixels), got features {subspace.recipe}"
+        )
+    boxes, scores = sliding_windows(
+        image, subspace, scale_step, min_scale, max_scale, step, -max_error
+    )
+    return BoxSet(boxes, scores)
 
 
 def iou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -385,3 +385,24 @@ def test_model_ports_refuse_malformed_models():
     )
     with pytest.raises(ValueError, match="trained on 4 features, got 2"):
         stumps.predict(np.zeros((3, 2)))
+
+
+def test_detection_by_distance_from_a_subspace_finds_a_blob_at_its_place_and_scale():
+    """A subspace of Gaussian blobs (normalised pixels) finds one drawn at twice the size."""
+    yy, xx = np.mgrid[0:16, 0:16]
+    blobs = [
+        np.exp(-((xx - 7.5 - dx) ** 2 + (yy - 7.5 - dy) ** 2) / (2 * s**2))
+        for s in (2.5, 3.0, 3.5)
+        for dx in (-1, 0, 1)
+        for dy in (-1, 0, 1)
+    ]
+    train = rec.pixels(samples(blobs, np.zeros(len(blobs))), normalise=True)
+    subspace = rec.pca(train, components=6)
+    scene = np.random.default_rng(0).uniform(0, 0.3, (64, 96)).astype(np.float32)
+    y, x = np.mgrid[0:64, 0:96]
+    scene += 0.7 * np.exp(-((x - 60) ** 2 + (y - 30) ** 2) / (2 * 6.0**2)).astype(np.float32)
+    boxes = rec.nms(rec.detect_subspace(scene, subspace, scale_step=1.25, max_error=0.3))
+    truth = np.array([[44, 14, 76, 46]], np.float64)  # 32×32 around (60, 30): 2× the window
+    assert rec.iou_matrix(boxes.xyxy[:1], truth)[0, 0] > 0.6  # the best box is the blob
+    with pytest.raises(ValueError, match="needs a subspace of window pixels"):
+        rec.detect_subspace(scene, rec.pca(rec.hog(samples(blobs, np.zeros(27))), components=2))
