@@ -51,6 +51,7 @@ from ._types import (
     StumpClassifierPort,
     SubspacePort,
     VocabularyPort,
+    mosaic,
 )
 
 __all__ = [
@@ -96,6 +97,7 @@ __all__ = [
     "lfw_faces",
     "linear_svm",
     "mine_negatives",
+    "mosaic",
     "nearest_neighbour",
     "nearest_word",
     "negative_patches",

@@ -60,6 +60,7 @@ __all__ = [
     "SubspacePort",
     "Vocabulary",
     "VocabularyPort",
+    "mosaic",
     "recipe_of",
     "stump_votes",
 ]
@@ -69,6 +70,23 @@ def recipe_of(text: str) -> dict[str, Any]:
     """The feature recipe (a dict) stored as JSON text in sets and models."""
     recipe: dict[str, Any] = json.loads(text)
     return recipe
+
+
+def mosaic(images: np.ndarray, columns: int = 8) -> np.ndarray:
+    """Images (N, H, W) side by side in rows of ``columns``, one black pixel apart, each
+    stretched to [0, 1]: float32."""
+    count, height, width = images.shape
+    low = images.min(axis=(1, 2), keepdims=True)
+    span = images.max(axis=(1, 2), keepdims=True) - low
+    scaled = np.divide(images - low, span, out=np.zeros(images.shape), where=span > 0)
+    rows = -(-count // columns)
+    canvas = np.zeros((rows * (height + 1) - 1, min(count, columns) * (width + 1) - 1))
+    for index, image in enumerate(scaled):
+        r, c = divmod(index, columns)
+        canvas[
+            r * (height + 1) : r * (height + 1) + height, c * (width + 1) : c * (width + 1) + width
+        ] = image
+    return canvas.astype(np.float32)
 
 
 def _array(owner: str, name: str, value: Any, dtype: type, ndim: int) -> np.ndarray:
@@ -113,6 +131,11 @@ class SamplesPort(RecordPort):
         if images.size == 0 or images.min() < 0 or images.max() > 1:
             raise PortValueError("Samples 'images' must be a non-empty stack with values in [0, 1]")
         return value
+
+    @classmethod
+    def preview(cls, value: SampleSet) -> np.ndarray | None:
+        """The first 64 samples."""
+        return mosaic(value.images[:64])
 
     @classmethod
     def summary(cls, value: SampleSet) -> str:
@@ -215,6 +238,16 @@ class SubspacePort(RecordPort):
                 f"Subspace 'basis' must be {len(mean)}×K with K ≥ 1, got {basis.shape}"
             )
         return value
+
+    @classmethod
+    def preview(cls, value: SubspaceModel) -> np.ndarray | None:
+        """The mean and the first 15 basis vectors as images (eigenfaces), for pixel
+        subspaces."""
+        window = recipe_of(value.recipe).get("window")
+        if window is None or len(value.mean) != window[0] * window[1]:
+            return None
+        vectors = np.column_stack([value.mean, value.basis[:, :15]]).T
+        return mosaic(vectors.reshape(-1, window[0], window[1]))
 
     @classmethod
     def summary(cls, value: SubspaceModel) -> str:

@@ -406,3 +406,13 @@ def test_detection_by_distance_from_a_subspace_finds_a_blob_at_its_place_and_sca
     assert rec.iou_matrix(boxes.xyxy[:1], truth)[0, 0] > 0.6  # the best box is the blob
     with pytest.raises(ValueError, match="needs a subspace of window pixels"):
         rec.detect_subspace(scene, rec.pca(rec.hog(samples(blobs, np.zeros(27))), components=2))
+
+
+def test_previews_show_samples_and_eigenfaces(lfw):
+    picture = rec.SamplesPort.preview(lfw.test)
+    assert picture.shape == (7 * 26 - 1, 8 * 26 - 1) and picture.dtype == np.float32
+    np.testing.assert_allclose(picture[:25, :25], rec.mosaic(lfw.test.images[:1]))
+    subspace = rec.pca(rec.pixels(lfw.train), components=20)
+    faces = rec.SubspacePort.preview(subspace)
+    assert faces.shape == (2 * 26 - 1, 8 * 26 - 1) and 0 <= faces.min() < faces.max() <= 1
+    assert rec.SubspacePort.preview(rec.pca(rec.hog(lfw.train), components=3)) is None
