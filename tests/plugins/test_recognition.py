@@ -416,3 +416,28 @@ def test_previews_show_samples_and_eigenfaces(lfw):
     faces = rec.SubspacePort.preview(subspace)
     assert faces.shape == (2 * 26 - 1, 8 * 26 - 1) and 0 <= faces.min() < faces.max() <= 1
     assert rec.SubspacePort.preview(rec.pca(rec.hog(lfw.train), components=3)) is None
+
+
+def test_negative_patches_are_seeded_resized_crops():
+    negatives = rec.negative_patches(images=("brick", "text"), count=10, size=20, seed=4)
+    assert negatives.images.shape == (10, 20, 20) and (negatives.labels == 0).all()
+    again = rec.negative_patches(images=("brick", "text"), count=10, size=20, seed=4)
+    np.testing.assert_array_equal(negatives.images, again.images)
+
+
+def test_hard_negatives_are_the_windows_the_classifier_gets_wrong(lfw):
+    train = rec.combine(lfw.train, rec.negative_patches(images=("brick", "text"), count=100))
+    model = rec.linear_svm(rec.hog(train))
+    hard = rec.mine_negatives(model, images=("text", "page"), count=40, min_scale=2.0)
+    assert hard.images.shape == (40, 25, 25) and (hard.labels == 0).all()
+    easy = rec.negative_patches(images=("text", "page"), count=40, seed=1)
+    hard_scores = model.decision(rec.hog(hard).features)
+    assert np.median(hard_scores) > np.percentile(model.decision(rec.hog(easy).features), 90)
+    # retrained with them, the classifier accepts fewer windows of those images
+    retrained = rec.linear_svm(rec.hog(rec.combine(train, hard)))
+    page = rec._data.face_free_image("page")
+
+    def accepted(m):
+        return len(rec.detect(page, m, min_scale=2.0, max_scale=4.0))
+
+    assert accepted(retrained) < accepted(model)
