@@ -13,6 +13,7 @@ sys.path.insert(0, str(HERE))
 import bench_cache  # noqa: E402
 import bench_filters  # noqa: E402
 import bench_homography  # noqa: E402
+import bench_recognition  # noqa: E402
 import bench_scheduler  # noqa: E402
 import bench_segmentation  # noqa: E402
 
@@ -24,6 +25,7 @@ def main() -> None:
         ("Filters (engine issue)", bench_filters.main),
         ("Segmentation (segmentation issue)", bench_segmentation.main),
         ("Homography pipeline (features issue)", bench_homography.main),
+        ("Recognition (recognition issue)", bench_recognition.main),
     ]
     lines = [
         f"# graphvision benchmarks — {time.strftime('%Y-%m-%d %H:%M')}",

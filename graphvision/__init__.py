@@ -73,6 +73,8 @@ if TYPE_CHECKING:
         TextPort,
     )
     from ._records import (
+        BoxesPort,
+        BoxSet,
         CameraPort,
         KeypointSet,
         KeypointsPort,
@@ -88,6 +90,7 @@ if TYPE_CHECKING:
         Array,
         BinaryImage,
         Bool,
+        Boxes,
         Camera,
         ColorImage,
         Descriptors,
@@ -153,6 +156,9 @@ __all__ = [
     "BinaryImagePort",
     "Bool",
     "BoolPort",
+    "BoxSet",
+    "Boxes",
+    "BoxesPort",
     "Cache",
     "CacheWarning",
     "Camera",

@@ -588,7 +588,7 @@ class HomographyPort(ArrayPort):
 
 def builtin_port_types() -> list[type[PortType]]:
     """The port types the engine defines (plugins may register more)."""
-    from ._records import CameraPort, KeypointsPort, MatchesPort
+    from ._records import BoxesPort, CameraPort, KeypointsPort, MatchesPort
 
     return [
         ArrayPort,
@@ -606,6 +606,7 @@ def builtin_port_types() -> list[type[PortType]]:
         KeypointsPort,
         MatchesPort,
         CameraPort,
+        BoxesPort,
         FloatPort,
         IntPort,
         BoolPort,

@@ -1,4 +1,4 @@
-"""Port types whose values are small frozen dataclasses of arrays: keypoints, matches, cameras."""
+"""Port types whose values are frozen dataclasses of arrays: keypoints, matches, cameras, boxes."""
 
 from __future__ import annotations
 
@@ -11,6 +11,8 @@ from ._errors import PortValueError
 from ._ports import RecordPort
 
 __all__ = [
+    "BoxSet",
+    "BoxesPort",
     "CameraPort",
     "KeypointSet",
     "KeypointsPort",
@@ -186,3 +188,41 @@ class CameraPort(RecordPort):
     @classmethod
     def summary(cls, value: PinholeCamera) -> str:
         return f"Camera f=({value.K[0, 0]:.4g}, {value.K[1, 1]:.4g})"
+
+
+@dataclass(frozen=True, eq=False)
+class BoxSet:
+    """N axis-aligned boxes ``xyxy[k] = (x0, y0, x1, y1)`` (pixels, x0 < x1, y0 < y1)
+    with a detection ``score[k]`` each (larger is more confident)."""
+
+    xyxy: np.ndarray
+    score: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.xyxy)
+
+    def take(self, index: np.ndarray) -> BoxSet:
+        """The boxes at ``index`` (a boolean mask or integer indices)."""
+        return BoxSet(self.xyxy[index], self.score[index])
+
+
+class BoxesPort(RecordPort):
+    """A :class:`BoxSet`: ``xyxy`` float64 (N, 4) finite with x0 < x1 and y0 < y1, ``score``
+    float64 (N,); N may be 0."""
+
+    value_class = BoxSet
+
+    @classmethod
+    def validate(cls, value: Any) -> BoxSet:
+        value = super().validate(value)
+        count = len(value.xyxy) if isinstance(value.xyxy, np.ndarray) else -1
+        _column("xyxy", value.xyxy, count, np.float64, (4,))
+        _column("score", value.score, count, np.float64)
+        xyxy = value.xyxy
+        if not np.isfinite(xyxy).all() or (xyxy[:, 2:] <= xyxy[:, :2]).any():
+            raise PortValueError("boxes must be finite (x0, y0, x1, y1) with x0 < x1 and y0 < y1")
+        return value
+
+    @classmethod
+    def summary(cls, value: BoxSet) -> str:
+        return f"Boxes {len(value)}"

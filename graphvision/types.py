@@ -57,6 +57,8 @@ from ._ports import (
     TextPort,
 )
 from ._records import (
+    BoxesPort,
+    BoxSet,
     CameraPort,
     KeypointSet,
     KeypointsPort,
@@ -70,6 +72,7 @@ __all__ = [
     "Array",
     "BinaryImage",
     "Bool",
+    "Boxes",
     "Camera",
     "ColorImage",
     "Descriptors",
@@ -106,6 +109,7 @@ Homography = Annotated[NDArray[np.float64], HomographyPort]
 Keypoints = Annotated[KeypointSet, KeypointsPort]
 Matches = Annotated[MatchSet, MatchesPort]
 Camera = Annotated[PinholeCamera, CameraPort]
+Boxes = Annotated[BoxSet, BoxesPort]
 Float = Annotated[float, FloatPort]
 Int = Annotated[int, IntPort]
 Bool = Annotated[bool, BoolPort]

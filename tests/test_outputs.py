@@ -116,6 +116,10 @@ def values_of_every_builtin_type() -> dict[type[gv.PortType], list[object]]:
         gv.KeypointsPort: [gv.KeypointSet.empty(), keypoints],
         gv.MatchesPort: [gv.MatchSet(np.array([[0, 1]]), np.array([0.5]))],
         gv.CameraPort: [camera],
+        gv.BoxesPort: [
+            gv.BoxSet(np.zeros((0, 4)), np.zeros(0)),
+            gv.BoxSet(np.array([[1.0, 2.0, 5.0, 7.0]]), np.array([0.9])),
+        ],
         gv.FloatPort: [float("inf"), float("nan"), 0.25],
         gv.IntPort: [3],
         gv.BoolPort: [True],

@@ -1,0 +1,465 @@
+"""Sliding-window detection over a scale pyramid, non-maximum suppression, and drawings
+(seed: "use a sliding window, extract HOG and classify by linear SVM", "Issues with
+sliding window object detection")."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Annotated, NamedTuple
+
+import numpy as np
+from pydantic import Field
+
+from graphvision import (
+    Boxes,
+    BoxSet,
+    ColorImage,
+    Float,
+    GrayImage,
+    Image,
+    Int,
+    node,
+)
+
+from ._data import NON_FACE, FaceFree, face_free_image, pixel_features
+from ._haar import haar_values, integral_image, sample_haar_features
+from ._hog import hog_blocks
+from ._subspace import reconstruction_error
+from ._types import (
+    Classifier,
+    ClassifierModel,
+    Samples,
+    SampleSet,
+    Subspace,
+    SubspaceModel,
+    recipe_of,
+)
+
+__all__ = [
+    "box_count",
+    "box_iou",
+    "detect",
+    "detect_subspace",
+    "draw_boxes",
+    "iou_matrix",
+    "mine_negatives",
+    "nms",
+    "non_max_suppression",
+    "window_features",
+]
+
+
+class Windows(NamedTuple):
+    """Feature rows of windows at one scale and their boxes (x0, y0, x1, y1) in that scale."""
+
+    features: np.ndarray
+    boxes: np.ndarray
+
+
+def _hog_windows(image: np.ndarray, recipe: dict, step: int) -> Iterator[Windows]:
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    cell = tuple(recipe["pixels_per_cell"])
+    block = tuple(recipe["cells_per_block"])
+    window = recipe["window"]
+    cells = (window[0] // cell[0], window[1] // cell[1])
+    span = (cells[0] - block[0] + 1, cells[1] - block[1] + 1)  # blocks per window
+    for dy in range(0, cell[0], step):
+        for dx in range(0, cell[1], step):
+            part = image[dy:, dx:]
+            if part.shape[0] < window[0] or part.shape[1] < window[1]:
+                continue
+            blocks = hog_blocks(part, recipe["orientations"], cell, block)
+            views = sliding_window_view(blocks, span, axis=(0, 1))  # (R, C, b_r, b_c, n, sr, sc)
+            views = np.moveaxis(views, (-2, -1), (2, 3))  # (R, C, sr, sc, b_r, b_c, n)
+            rows, cols = np.meshgrid(
+                np.arange(views.shape[0]), np.arange(views.shape[1]), indexing="ij"
+            )
+            y0, x0 = dy + rows.ravel() * cell[0], dx + cols.ravel() * cell[1]
+            boxes = np.column_stack(
+                [x0, y0, x0 + cells[1] * cell[1], y0 + cells[0] * cell[0]]
+            ).astype(np.float64)
+            yield Windows(views.reshape(len(boxes), -1), boxes)
+
+
+def _pixel_windows(image: np.ndarray, recipe: dict, step: int) -> Iterator[Windows]:
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    height, width = recipe["window"]
+    views = sliding_window_view(image, (height, width))[::step, ::step]
+    rows, cols = np.meshgrid(np.arange(views.shape[0]), np.arange(views.shape[1]), indexing="ij")
+    y0, x0 = rows.ravel() * step, cols.ravel() * step
+    boxes = np.column_stack([x0, y0, x0 + width, y0 + height]).astype(np.float64)
+    rows = pixel_features(views.reshape(len(boxes), height, width), recipe.get("normalise", False))
+    yield Windows(rows, boxes)
+
+
+def _haar_windows(image: np.ndarray, recipe: dict, step: int) -> Iterator[Windows]:
+    height, width = recipe["window"]
+    table = sample_haar_features(
+        (height, width), recipe["count"], recipe["seed"], tuple(recipe["types"])
+    )
+    padded = integral_image(image)[None]
+    ys = np.arange(0, image.shape[0] - height + 1, step)
+    xs = np.arange(0, image.shape[1] - width + 1, step)
+    for y in ys:  # one row of windows at a time keeps the memory at (columns × features)
+        shifted = np.repeat(table[None], len(xs), axis=0)
+        shifted[:, :, 1] += y
+        shifted[:, :, 2] += xs[:, None]
+        values = haar_values(padded, shifted.reshape(-1, 5)).reshape(len(xs), len(table))
+        boxes = np.column_stack(
+            [xs, np.full(len(xs), y), xs + width, np.full(len(xs), y + height)]
+        ).astype(np.float64)
+        yield Windows(values, boxes)
+
+
+_WINDOWS = {"hog": _hog_windows, "pixels": _pixel_windows, "haar": _haar_windows}
+
+
+def window_features(image: np.ndarray, recipe: dict, step: int) -> Iterator[Windows]:
+    """The features of every window of ``image`` computed as ``recipe`` says."""
+    kind = recipe.get("kind")
+    if kind not in _WINDOWS or "projected" in recipe:
+        raise ValueError(
+            f"recognition.detect cannot compute '{kind}' features on windows "
+            f"(it can: {', '.join(sorted(_WINDOWS))}, not projected onto a subspace)"
+        )
+    return _WINDOWS[kind](image, recipe, step)
+
+
+def _pyramid(
+    image: np.ndarray,
+    window: tuple[int, int],
+    scale_step: float,
+    min_scale: float,
+    max_scale: float,
+) -> Iterator[tuple[float, np.ndarray]]:
+    from skimage.transform import rescale
+
+    scale = min_scale
+    while scale <= max_scale:
+        if image.shape[0] / scale < window[0] or image.shape[1] / scale < window[1]:
+            break
+        level = image if scale == 1 else rescale(image, 1 / scale, anti_aliasing=scale > 1)
+        yield scale, np.clip(level, 0, 1).astype(np.float32)
+        scale *= scale_step
+
+
+@node("recognition.detect", version=1)
+def detect(
+    image: GrayImage,
+    classifier: Classifier,
+    *,
+    scale_step: Annotated[float, Field(gt=1, le=4)] = 1.2,
+    min_scale: Annotated[float, Field(gt=0)] = 1.0,
+    max_scale: Annotated[float, Field(gt=0)] = 64.0,
+    step: Annotated[int, Field(ge=1)] = 3,
+    threshold: float = 0.0,
+) -> Boxes:
+    """Every window the classifier accepts, over positions and a pyramid of scales.
+
+    The image is shrunk by ``min_scale``, ``min_scale × scale_step``, ... up to
+    ``max_scale``; at each level the training window slides by ``step`` pixels and
+    the classifier's own features (its recipe: HOG, pixels or Haar-like) are computed
+    on every window (HOG once per level and offset, Haar-like from one integral
+    image). A window whose decision value exceeds ``threshold`` becomes a box in
+    input coordinates scored by that value. Follow with ``recognition.nms``.
+
+    Parameters
+    ----------
+    image : (H, W) gray image
+    classifier : two-class Classifier trained on window features (the larger label is
+        the object)
+    scale_step : ratio between pyramid levels
+    min_scale, max_scale : smallest and largest window scale, in multiples of the
+        training window
+    step : window step in pixels of a level (HOG uses offsets 0, step, ... within a cell)
+    threshold : least decision value of a detection
+
+    Returns
+    -------
+    boxes : Boxes (x0, y0, x1, y1, score)
+
+    References
+    ----------
+    N. Dalal and B. Triggs, CVPR 2005; P. Viola and M. Jones, IJCV 57(2), 2004.
+    """
+    boxes, scores = sliding_windows(
+        image, classifier, scale_step, min_scale, max_scale, step, threshold
+    )
+    return BoxSet(boxes, scores)
+
+
+def _window_of(classifier: ClassifierModel | SubspaceModel) -> tuple[int, int]:
+    recipe = recipe_of(classifier.recipe)
+    classes = getattr(classifier, "classes", np.arange(2))  # a subspace has none
+    if len(classes) != 2 or "window" not in recipe:
+        raise ValueError(
+            "recognition.detect needs a two-class classifier trained on window features, "
+            f"got classes {classes.tolist()} and features {recipe or 'unknown'}"
+        )
+    return int(recipe["window"][0]), int(recipe["window"][1])
+
+
+def sliding_windows(
+    image: np.ndarray,
+    classifier: ClassifierModel | SubspaceModel,
+    scale_step: float,
+    min_scale: float,
+    max_scale: float,
+    step: int,
+    threshold: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Boxes (N, 4) in input coordinates and decision values (N,) of the windows scoring
+    above ``threshold`` (see :func:`detect`)."""
+    recipe = recipe_of(classifier.recipe)
+    window = _window_of(classifier)
+    if image.shape[0] < window[0] * min_scale or image.shape[1] < window[1] * min_scale:
+        raise ValueError(
+            f"the detection window {window[0]}×{window[1]} (× min_scale {min_scale:g}) is "
+            f"larger than the image {image.shape[0]}×{image.shape[1]}"
+        )
+    found_boxes, found_scores = [], []
+    for scale, level in _pyramid(image, window, scale_step, min_scale, max_scale):
+        for windows in window_features(level, recipe, step):
+            score = _score(classifier, windows.features)
+            keep = score > threshold
+            found_boxes.append(windows.boxes[keep] * scale)
+            found_scores.append(score[keep])
+    if not found_boxes:
+        return np.zeros((0, 4)), np.zeros(0)
+    return np.concatenate(found_boxes), np.concatenate(found_scores).astype(np.float64)
+
+
+@node("recognition.mine_negatives", version=1)
+def mine_negatives(
+    classifier: Classifier,
+    *,
+    images: tuple[FaceFree, ...] = (
+        "brick",
+        "coffee",
+        "coins",
+        "grass",
+        "gravel",
+        "hubble_deep_field",
+        "immunohistochemistry",
+        "moon",
+        "page",
+        "rocket",
+        "text",
+    ),
+    count: Annotated[int, Field(ge=1)] = 400,
+    scale_step: Annotated[float, Field(gt=1, le=4)] = 1.25,
+    min_scale: Annotated[float, Field(gt=0)] = 1.0,
+    max_scale: Annotated[float, Field(gt=0)] = 16.0,
+    step: Annotated[int, Field(ge=1)] = 3,
+) -> Samples:
+    """Hard negatives (Dalal–Triggs): the windows of face-free images that the classifier
+    scores highest, cut out and resized to its window; retraining with them removes the
+    false positives a first classifier makes.
+
+    Windows are gathered per image (at most ``count`` / images each, after NMS at IoU
+    0.3 so that one false positive is not taken many times over), best first.
+
+    Parameters
+    ----------
+    classifier : two-class Classifier trained on window features
+    images : face-free sample images to search
+    count : number of negatives returned (fewer if fewer windows exist)
+    scale_step, min_scale, max_scale, step : the sliding window (see ``recognition.detect``)
+
+    Returns
+    -------
+    negatives : Samples (≤ count, window), label 0
+    """
+    from skimage.transform import resize
+
+    window = _window_of(classifier)
+    share = -(-count // len(images))
+    patches, scores = [], []
+    for name in images:
+        image = face_free_image(name)
+        boxes, score = sliding_windows(
+            image, classifier, scale_step, min_scale, max_scale, step, -np.inf
+        )
+        strongest = np.argsort(-score, kind="stable")[: 20 * share]
+        keep = strongest[non_max_suppression(boxes[strongest], score[strongest], 0.3)[:share]]
+        for (x0, y0, x1, y1), value in zip(boxes[keep], score[keep], strict=True):
+            crop = image[int(y0) : int(np.ceil(y1)), int(x0) : int(np.ceil(x1))]
+            patches.append(resize(crop, window, anti_aliasing=True, preserve_range=True))
+            scores.append(value)
+    best = np.argsort(-np.array(scores), kind="stable")[:count]
+    stack = np.clip(np.stack(patches)[best], 0, 1).astype(np.float32)
+    return SampleSet(stack, np.full(len(stack), NON_FACE, np.int64))
+
+
+def _score(classifier: ClassifierModel | SubspaceModel, features: np.ndarray) -> np.ndarray:
+    """The classifier's decision value, or minus the distance from the subspace."""
+    if len(features) == 0:
+        return np.zeros(0)
+    if isinstance(classifier, SubspaceModel):
+        return -reconstruction_error(features, classifier.mean, classifier.basis)
+    return np.asarray(classifier.decision(features), np.float64)
+
+
+@node("recognition.detect_subspace", version=1)
+def detect_subspace(
+    image: GrayImage,
+    subspace: Subspace,
+    *,
+    scale_step: Annotated[float, Field(gt=1, le=4)] = 1.2,
+    min_scale: Annotated[float, Field(gt=0)] = 1.0,
+    max_scale: Annotated[float, Field(gt=0)] = 64.0,
+    step: Annotated[int, Field(ge=1)] = 2,
+    max_error: Annotated[float, Field(gt=0)] = 0.2,
+) -> Boxes:
+    r"""Detection by distance from a subspace: windows that the subspace reconstructs well.
+
+    Every window over positions and a scale pyramid (as ``recognition.detect``) is
+    turned into the subspace's features (its recipe: pixels, normalised or not) and
+    reconstructed, :math:`\hat x = U U^T (x - \mu) + \mu`; a window whose squared
+    reconstruction error :math:`\|x - \hat x\|^2` is below ``max_error`` becomes a box
+    scored by minus that error. Follow with ``recognition.nms``.
+
+    Parameters
+    ----------
+    image : (H, W) gray image
+    subspace : Subspace built on window pixels (``recognition.pixels`` → ``recognition.pca``)
+    scale_step, min_scale, max_scale, step : the sliding window (see ``recognition.detect``)
+    max_error : largest squared reconstruction error of a detection
+
+    Returns
+    -------
+    boxes : Boxes scored by −error
+
+    References
+    ----------
+    M. Turk and A. Pentland, "Eigenfaces for recognition", J. Cognitive Neuroscience
+    3(1), 1991.
+    """
+    if recipe_of(subspace.recipe).get("kind") != "pixels":
+        raise ValueError(
+            "recognition.detect_subspace needs a subspace of window pixels "
+            f"(recognition.pixels), got features {subspace.recipe}"
+        )
+    boxes, scores = sliding_windows(
+        image, subspace, scale_step, min_scale, max_scale, step, -max_error
+    )
+    return BoxSet(boxes, scores)
+
+
+def iou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    r"""Intersection over union :math:`|A \cap B| / |A \cup B|` of every box of ``a`` (N, 4)
+    with every box of ``b`` (M, 4): (N, M)."""
+    low = np.maximum(a[:, None, :2], b[None, :, :2])
+    high = np.minimum(a[:, None, 2:], b[None, :, 2:])
+    inter = np.prod(np.clip(high - low, 0, None), axis=2)
+    area_a = np.prod(a[:, 2:] - a[:, :2], axis=1)
+    area_b = np.prod(b[:, 2:] - b[:, :2], axis=1)
+    return inter / (area_a[:, None] + area_b[None, :] - inter)
+
+
+def non_max_suppression(boxes: np.ndarray, scores: np.ndarray, iou: float) -> np.ndarray:
+    """Indices of the boxes kept by greedy NMS: the best remaining box is kept and every box
+    overlapping it by more than ``iou`` is dropped, until none remain (best first)."""
+    order = np.argsort(-scores, kind="stable")
+    keep = []
+    while len(order):
+        best = order[0]
+        keep.append(best)
+        overlap = iou_matrix(boxes[best : best + 1], boxes[order[1:]])[0]
+        order = order[1:][overlap <= iou]
+    return np.array(keep, np.int64)
+
+
+@node("recognition.nms", version=1)
+def nms(
+    boxes: Boxes,
+    *,
+    iou: Annotated[float, Field(ge=0, le=1)] = 0.3,
+    max_boxes: Annotated[int, Field(ge=0)] = 0,
+) -> Boxes:
+    """Non-maximum suppression: keep the best-scored box, drop the boxes that overlap it by
+    intersection over union above ``iou``, repeat.
+
+    Parameters
+    ----------
+    boxes : Boxes with scores
+    iou : overlap above which the weaker box is dropped
+    max_boxes : keep at most this many of the best (0: all)
+
+    Returns
+    -------
+    boxes : Boxes, best first
+    """
+    keep = non_max_suppression(boxes.xyxy, boxes.score, iou)
+    if max_boxes:
+        keep = keep[:max_boxes]
+    return boxes.take(keep)
+
+
+@node("recognition.box_count", version=1)
+def box_count(boxes: Boxes) -> Int:
+    """The number of boxes.
+
+    Parameters
+    ----------
+    boxes : Boxes
+
+    Returns
+    -------
+    count : int
+    """
+    return len(boxes)
+
+
+@node("recognition.box_iou", version=1)
+def box_iou(
+    boxes: Boxes, *, truth: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0)
+) -> Float:
+    """The best intersection over union of any box with a known box (x0, y0, x1, y1).
+
+    Parameters
+    ----------
+    boxes : Boxes
+    truth : the true box (x0, y0, x1, y1)
+
+    Returns
+    -------
+    iou : float in [0, 1] (0 when there is no box)
+    """
+    if not truth[0] < truth[2] or not truth[1] < truth[3]:
+        raise ValueError(f"truth must be (x0, y0, x1, y1) with x0 < x1 and y0 < y1, got {truth}")
+    if len(boxes) == 0:
+        return 0.0
+    return float(iou_matrix(boxes.xyxy, np.array([truth], np.float64)).max())
+
+
+@node("recognition.draw_boxes", version=1)
+def draw_boxes(image: Image, boxes: Boxes) -> ColorImage:
+    """Each box as a rectangle, the best-scored (first after NMS) in green, the others in red.
+
+    Parameters
+    ----------
+    image : gray or RGB image
+    boxes : Boxes
+
+    Returns
+    -------
+    image : (H, W, 3) float32
+    """
+    canvas = np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image.copy()
+    height, width = canvas.shape[:2]
+    best = int(np.argmax(boxes.score)) if len(boxes) else -1
+    for index, box in enumerate(np.round(boxes.xyxy).astype(int)):
+        colour = (0.1, 0.9, 0.1) if index == best else (0.95, 0.15, 0.1)
+        x0, y0 = max(box[0], 0), max(box[1], 0)
+        x1, y1 = min(box[2], width), min(box[3], height)
+        if x0 >= x1 or y0 >= y1:
+            continue
+        thick = 2
+        canvas[y0 : min(y0 + thick, y1), x0:x1] = colour
+        canvas[max(y1 - thick, y0) : y1, x0:x1] = colour
+        canvas[y0:y1, x0 : min(x0 + thick, x1)] = colour
+        canvas[y0:y1, max(x1 - thick, x0) : x1] = colour
+    return canvas.astype(np.float32)
