@@ -109,7 +109,7 @@ def _hash_arrays(hasher: Any, arrays: dict[str, np.ndarray]) -> None:
     for name in sorted(arrays):
         array = np.ascontiguousarray(arrays[name])
         hasher.update(f"{name}|{array.dtype.str}|{array.shape}|".encode())
-        hasher.update(memoryview(array).cast("B") if array.size else b"")
+        hasher.update(array.data.cast("B") if array.size else b"")
 
 
 def content_key(port_type: type[PortType], value: Any) -> str:
@@ -430,7 +430,7 @@ def encode_blob(entry: Encoded) -> Iterator[bytes | memoryview]:
     header = json.dumps(
         {"type": entry.type_name, "meta": entry.meta, "arrays": specs, "payload": offset}
     ).encode()
-    chunks = [memoryview(a).cast("B") for a in arrays.values() if a.size]
+    chunks = [a.data.cast("B") for a in arrays.values() if a.size]
     digest = xxhash.xxh3_128(header)
     for chunk in chunks:
         digest.update(chunk)

@@ -229,8 +229,8 @@ def detect_dog(
     table = np.vstack(found) if found else np.zeros((0, 5))
     if params.max_keypoints and len(table) > params.max_keypoints:
         table = table[np.argsort(-table[:, 4], kind="stable")[: params.max_keypoints]]
-    octave, layer, ox, oy, response = table.T
-    scale_to_input = pyramid.factor * 2.0**octave
+    octaves, layer, ox, oy, response = table.T
+    scale_to_input = pyramid.factor * 2.0**octaves
     keypoints = KeypointSet(
         np.column_stack([ox * scale_to_input, oy * scale_to_input]) + pyramid.shift,
         pyramid.layer_sigma(layer) * scale_to_input,

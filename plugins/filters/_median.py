@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import AfterValidator, Field
@@ -15,7 +15,12 @@ from ._boundary import Boundary
 __all__ = ["median"]
 
 
-_NUMPY_PAD = {"zero": "constant", "wrap": "wrap", "replicate": "edge", "mirror": "symmetric"}
+_NUMPY_PAD: dict[str, Literal["constant", "wrap", "edge", "symmetric"]] = {
+    "zero": "constant",
+    "wrap": "wrap",
+    "replicate": "edge",
+    "mirror": "symmetric",
+}
 _CHUNK_BYTES = 32 * 2**20
 
 
