@@ -14,7 +14,6 @@ problem, each with its YAML file and line:
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -23,15 +22,13 @@ import pydantic
 
 from ._cache import node_fingerprint
 from ._errors import PipelineError, Problem, UnknownNameError, did_you_mean
-from ._graph import Graph, Ref
+from ._graph import PARAM_REFERENCE, Graph, Ref
 from ._node import NodeSpec
 from ._ports import PortType
 from ._registry import Registry
 from ._scheduler import CycleError, topological_order
 
 __all__ = ["CompiledGraph", "Step", "compile_graph"]
-
-PARAM_REF = re.compile(r"\$\{params\.([A-Za-z_][A-Za-z0-9_]*)\}")
 
 
 @dataclass(frozen=True)
@@ -96,7 +93,7 @@ class _Checker:
 
     def substitute(self, value: Any, where: str, used: set[str]) -> Any:
         if isinstance(value, str):
-            names = PARAM_REF.findall(value)
+            names = PARAM_REFERENCE.findall(value)
             for name in names:
                 used.add(name)
                 if name not in self.graph.params:
@@ -106,10 +103,10 @@ class _Checker:
                         f"{did_you_mean(name, self.graph.params)}",
                     )
                     return value
-            whole = PARAM_REF.fullmatch(value)
+            whole = PARAM_REFERENCE.fullmatch(value)
             if whole:
                 return self.graph.params[whole.group(1)]
-            return PARAM_REF.sub(lambda m: str(self.graph.params[m.group(1)]), value)
+            return PARAM_REFERENCE.sub(lambda m: str(self.graph.params[m.group(1)]), value)
         if isinstance(value, list):
             return [self.substitute(v, f"{where}.{i}", used) for i, v in enumerate(value)]
         if isinstance(value, dict):
@@ -275,7 +272,7 @@ class _Checker:
             if name not in referenced:
                 self.report(f"inputs.{name}", f"unused input '{name}': no node or output reads it")
         for name in graph.params:
-            if name not in used_params:
+            if name not in used_params and name not in graph.overridden_params:
                 self.report(
                     f"params.{name}",
                     f"unused pipeline param '{name}': no node refers to ${{params." + name + "}",

@@ -34,6 +34,8 @@ NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*$"
 REF_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)?$"
 """References: ``node`` or ``node.port``."""
 NAME = re.compile(NAME_PATTERN)
+PARAM_REFERENCE = re.compile(r"\$\{params\.([A-Za-z_][A-Za-z0-9_]*)\}")
+"""``${params.NAME}`` in a node parameter: a pipeline param substituted when compiling."""
 
 
 @dataclass(frozen=True)
@@ -91,6 +93,8 @@ class Graph:
     plugins: list[str] = field(default_factory=list)
     # Where the graph came from, for error messages; not part of equality.
     source: str = field(default="", compare=False)
+    # Pipeline params whose ${params.NAME} references an override replaced: not "unused".
+    overridden_params: set[str] = field(default_factory=set, compare=False, repr=False)
     lines: dict[str, int] = field(default_factory=dict, compare=False, repr=False)
 
     # -- builder ------------------------------------------------------------------
@@ -166,6 +170,8 @@ class Graph:
             if target == "params":
                 graph.params[param] = value
             elif target in graph.nodes:
+                old = graph.nodes[target].params.get(param)
+                graph.overridden_params.update(PARAM_REFERENCE.findall(str(old)) if old else ())
                 graph.nodes[target].params[param] = value
             else:
                 raise KeyError(

@@ -28,7 +28,14 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StringConstr
 from ._errors import PipelineError, Problem, did_you_mean
 from ._graph import NAME_PATTERN, REF_PATTERN, Graph, InputDecl, NodeDecl, Ref
 
-__all__ = ["MAX_DEPTH", "dump_pipeline", "load_pipeline", "parse_pipeline", "pipeline_json_schema"]
+__all__ = [
+    "MAX_DEPTH",
+    "dump_pipeline",
+    "load_pipeline",
+    "parse_pipeline",
+    "parse_value",
+    "pipeline_json_schema",
+]
 
 MAX_DEPTH = 64
 """Deepest nesting of mappings and sequences a pipeline file may have."""
@@ -269,6 +276,20 @@ def _scalar(loader: Any, event: yaml.ScalarEvent) -> Any:
         return _MERGE_KEY
     node = yaml.ScalarNode(tag, event.value, event.start_mark, event.end_mark, event.style)
     return loader.construct_object(node)
+
+
+def parse_value(text: str, where: str = "command line") -> Any:
+    """One YAML value (``2``, ``true``, ``[1, 2]``, ``{a: 1}``), read with the same bounds.
+
+    Raises
+    ------
+    PipelineError
+        Naming what is wrong with the text.
+    """
+    data, _, problems = _read_yaml(text, where)
+    if problems:
+        raise PipelineError(problems, where)
+    return data
 
 
 # -- structure ------------------------------------------------------------------------

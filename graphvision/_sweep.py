@@ -30,7 +30,7 @@ from ._graph import Graph
 from ._registry import Registry
 from ._run import RunRecord, run
 
-__all__ = ["SweepResult", "sweep", "sweep_plot_svg"]
+__all__ = ["SweepResult", "sweep", "sweep_html", "sweep_plot_svg"]
 
 
 @dataclass
@@ -264,3 +264,27 @@ def _chart(
 
 def _line(x1: float, y1: float, x2: float, y2: float) -> str:
     return f'<line x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" y2="{y2:.1f}" stroke="#333"/>'
+
+
+def sweep_html(result: SweepResult, title: str, plots: Sequence[str] = ()) -> str:
+    """``sweep.html``: the sweep's table (failures in red) and a chart per plotted output."""
+    head = "".join(f"<th>{escape(column)}</th>" for column in result.columns)
+    rows = []
+    for row in result.rows:
+        cells = []
+        for column in result.columns:
+            value = row.get(column, "")
+            text = f"{value:.6g}" if isinstance(value, float) else str(value)
+            cells.append(f"<td>{escape(text)}</td>")
+        style = "" if row.get("status") == "ok" else ' class="failed"'
+        rows.append(f"<tr{style}>{''.join(cells)}</tr>")
+    charts = "".join(f"<h2>{escape(o)}</h2>{sweep_plot_svg(result, o)}" for o in plots)
+    return (
+        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        f"<title>{escape(title)}: sweep</title><style>"
+        "body{font-family:sans-serif;margin:2em} table{border-collapse:collapse}"
+        "td,th{border:1px solid #ddd;padding:.2em .6em;text-align:right}"
+        "tr.failed td{color:#b71c1c}</style></head>"
+        f"<body><h1>{escape(title)}: {len(result.rows)} combinations</h1>"
+        f"<table><tr>{head}</tr>{''.join(rows)}</table>{charts}</body></html>\n"
+    )

@@ -1,50 +1,51 @@
-"""The ``graphvision`` command line.
+"""The ``graphvision`` command line: argument parsing and printing, nothing else.
 
 ::
 
-    graphvision run PIPELINE [--input NAME=VALUE]... [--set NODE.PARAM=VALUE]...
-                             [--output-dir DIR] [--output NAME]... [--executor KIND]
-                             [--batch NAME=GLOB]
-                             [--no-cache | --cache-dir DIR] [--keep-going] [--record]
+    graphvision run PIPELINE [-i NAME=VALUE]... [-s NODE.PARAM=VALUE]... [-o NAME]...
+                             [-d DIR] [--batch NAME=GLOB] [--executor KIND] [--workers N]
+                             [--scheduler ADDRESS] [--no-cache | --cache-dir DIR]
+                             [--keep-going] [--record] [--[no-]progress]
+    graphvision sweep PIPELINE --grid NODE.PARAM=V1,V2,... [--grid ...] -d DIR [--plot OUTPUT]
     graphvision validate PIPELINE...
     graphvision nodes [--json]
     graphvision describe OP [--json]
     graphvision schema
-    graphvision graph PIPELINE [--format dot|mermaid]
-    graphvision cache info|prune|clear [--cache-dir DIR] [--max-bytes N]
+    graphvision graph PIPELINE [--format dot|mermaid|svg]
+    graphvision cache info|prune|clear [--cache-dir DIR] [--max-bytes SIZE]
 
-Exit status: 0 success, 1 a run failed, 2 an invalid pipeline or usage. User
-mistakes print a message, not a traceback (``--debug`` shows it).
+``--plugins PATH`` and ``--debug`` go anywhere on the line. Exit status: 0
+success, 1 a run failed (or the environment: a full disk, a closed pipe), 2
+an invalid pipeline or usage, 130 interrupted. Every mistake is one message,
+never a traceback (``--debug`` adds it). Every sub-command calls the Python
+API; heavy modules are imported by the command that needs them, so ``--help``
+is quick.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
+import os
 import sys
 import time
 import traceback
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import yaml
+from ._errors import GraphvisionError, did_you_mean
 
-from ._batch import BatchItem, run_batch
-from ._cache import Cache, DiskStore, MemoryStore, default_cache_dir
-from ._compile import compile_graph
-from ._errors import GraphvisionError, InputError, PipelineError, RunError
-from ._executors import EXECUTORS
-from ._pipeline_file import load_pipeline, pipeline_json_schema
-from ._plugins import discover
-from ._registry import Registry
-from ._report import check_output_folder, write_run
-from ._run import RunHooks, RunResult, run
+if TYPE_CHECKING:
+    from ._cache import Cache
+    from ._graph import Graph
+    from ._registry import Registry
 
-__all__ = ["main"]
+__all__ = ["entry", "main"]
 
-EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXECUTORS = ("threads", "sync", "processes", "dask")
+CACHE_DIR_HELP = "$GRAPHVISION_CACHE_DIR, else $XDG_CACHE_HOME/graphvision or ~/.cache/graphvision"
 
 
 class UsageError(GraphvisionError):
@@ -52,8 +53,11 @@ class UsageError(GraphvisionError):
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # exit 2 with our message style, no usage dump
+    def error(self, message: str) -> None:  # type: ignore[override]  # raises, as the base does
         raise UsageError(f"{self.prog}: {message}")
+
+
+# -- values given on the command line ---------------------------------------------------
 
 
 def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
@@ -66,27 +70,88 @@ def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
     return pairs
 
 
-class Progress(RunHooks):
-    """Prints one line per finished node to stderr."""
+def _yaml_value(text: str, where: str) -> Any:
+    """A command-line value read as YAML (``2``, ``true``, ``[1, 2]``), or a UsageError."""
+    from ._pipeline_file import parse_value
 
-    def __init__(self) -> None:
-        self.total, self.done = 0, 0
+    try:
+        return parse_value(text)
+    except GraphvisionError as error:
+        raise UsageError(f"{where}: {error}") from None
 
-    def run_started(self, *, pipeline: str, steps: list[str]) -> None:
-        self.total = len(steps)
-        print(f"running {pipeline}: {self.total} node(s) to compute", file=sys.stderr)
 
-    def node_finished(self, *, name: str, op: str, status: str, seconds: float) -> None:
-        if status == "cached":
-            return
-        self.done += 1
-        print(
-            f"  [{self.done}/{self.total}] {name} ({op}) {status} {seconds * 1e3:.0f} ms",
-            file=sys.stderr,
-        )
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: '{text}'") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def _byte_size(text: str) -> int:
+    units = {"k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}
+    text = text.strip().lower().removesuffix("ib").removesuffix("b")
+    try:
+        size = int(float(text[:-1]) * units[text[-1]]) if text and text[-1] in units else int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a size: '{text}' (e.g. 500M, 2G)") from None
+    if size <= 0:
+        raise argparse.ArgumentTypeError(f"a size must be positive, got '{text}' (e.g. 500M, 2G)")
+    return size
+
+
+def _check_overrides(
+    graph: Graph, registry: Registry, overrides: dict[str, Any], flag: str
+) -> None:
+    """Refuse, naming the command line, an override of a node or parameter that does not exist."""
+    for key, value in overrides.items():
+        target, _, param = key.partition(".")
+        shown = f"{flag} {key}={value!r}"
+        if not param:
+            raise UsageError(f"{shown}: expected NODE.PARAM or params.NAME")
+        if target == "params":
+            if param not in graph.params:
+                hint = did_you_mean(param, graph.params)
+                raise UsageError(f"{shown}: the pipeline has no param '{param}'{hint}")
+            continue
+        if target not in graph.nodes:
+            hint = did_you_mean(target, graph.nodes)
+            raise UsageError(f"{shown}: the pipeline has no node '{target}'{hint}")
+        spec = registry.nodes.get(graph.nodes[target].op)
+        if spec is not None and param not in spec.params_model.model_fields:
+            names = list(spec.params_model.model_fields)
+            hint = did_you_mean(param, names)
+            listing = ", ".join(names) or "none"
+            raise UsageError(
+                f"{shown}: {spec.id} has no parameter '{param}'{hint}; parameters: {listing}"
+            )
+
+
+def _output_dir(text: str | None) -> Path | None:
+    """The output folder, made now: a file or a folder that cannot be made is refused first."""
+    if text is None:
+        return None
+    folder = Path(text)
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"--output-dir {folder}: is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UsageError(f"--output-dir {folder}: cannot be made ({error.strerror})") from None
+    return folder
+
+
+# -- shared set-up ---------------------------------------------------------------------
 
 
 def _registry(args: argparse.Namespace, extra: Sequence[str] = ()) -> Registry:
+    from ._plugins import discover
+
+    for path in args.plugins:
+        if not Path(path).exists():
+            raise UsageError(f"--plugins {path}: no such file or folder")
     registry = discover([*args.plugins, *extra])
     for plugin in registry.failed_plugins():
         print(f"warning: plugin '{plugin.name}' failed to load: {plugin.error}", file=sys.stderr)
@@ -94,59 +159,84 @@ def _registry(args: argparse.Namespace, extra: Sequence[str] = ()) -> Registry:
 
 
 def _cache(args: argparse.Namespace) -> Cache | None:
+    from ._cache import Cache, DiskStore, MemoryStore, default_cache_dir
+
     if args.no_cache:
         return None
     disk = DiskStore.open(args.cache_dir or default_cache_dir(), args.cache_max_bytes)
     return Cache(MemoryStore(), disk)
 
 
-def _run_once(
-    graph: Any, registry: Registry, inputs: dict[str, Any], args: argparse.Namespace, **options: Any
-) -> tuple[int, RunResult]:
-    """One run; a failed run still returns what it produced (exit status 1)."""
+def _executor(args: argparse.Namespace) -> Any:
+    """The executor name, or a Dask executor (started here, so that it can be shut down)."""
+    if args.executor != "dask":
+        if args.scheduler:
+            raise UsageError("--scheduler goes with --executor dask")
+        return args.executor
+    from ._dask import DaskExecutor
+
+    return DaskExecutor(address=args.scheduler, workers=args.workers or 2)
+
+
+def _load(args: argparse.Namespace) -> tuple[Graph, Registry, dict[str, Any], dict[str, Any]]:
+    """The pipeline, its registry, the checked overrides (``--set``) and inputs (``--input``)."""
+    from ._pipeline_file import load_pipeline
+
+    graph = load_pipeline(args.pipeline)
+    registry = _registry(args, graph.plugins)
+    overrides = {
+        key: _yaml_value(value, f"--set {key}={value}")
+        for key, value in _pairs(args.set, "--set").items()
+    }
+    _check_overrides(graph, registry, overrides, "--set")
+    return graph, registry, overrides, dict(_pairs(args.input, "--input"))
+
+
+# -- commands ---------------------------------------------------------------------------
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from ._errors import RunError
+    from ._progress import RunProgress
+    from ._report import check_output_folder, write_run
+    from ._run import run
+
+    graph, registry, overrides, inputs = _load(args)
+    out_dir = _output_dir(args.output_dir)
+    progress = args.progress or (args.progress is None and sys.stderr.isatty())
+    if args.batch:
+        return _batch(graph, registry, inputs, overrides, args, progress)
+    if out_dir is not None:  # refuse before running, not after
+        check_output_folder(out_dir, args.output or graph.outputs)
+    executor = _executor(args)
+    status = EXIT_OK
     try:
-        return EXIT_OK, run(
+        result = run(
             graph,
             registry,
             inputs=inputs,
             outputs=args.output or None,
+            overrides=overrides,
+            executor=executor,
+            workers=args.workers,
+            cache=_cache(args),
             keep_going=args.keep_going,
-            **options,
+            hooks=[RunProgress()] if progress else [],
         )
     except RunError as error:
         print(f"error: run failed\n{error}", file=sys.stderr)
         if args.debug:
             for failure in error.failures.values():
                 traceback.print_exception(failure.__cause__ or failure, file=sys.stderr)
-        return EXIT_FAILED, error.result  # type: ignore[attr-defined]
-
-
-def _write(result: RunResult, out_dir: Path) -> dict[str, list[str]]:
-    return write_run(result, out_dir)
-
-
-def cmd_run(args: argparse.Namespace) -> int:
-    graph = load_pipeline(args.pipeline)
-    registry = _registry(args, graph.plugins)
-    overrides: dict[str, Any] = {k: yaml.safe_load(v) for k, v in _pairs(args.set, "--set").items()}
-    inputs: dict[str, Any] = dict(_pairs(args.input, "--input"))
-    out_dir = Path(args.output_dir) if args.output_dir else None
-    progress = args.progress or (args.progress is None and sys.stderr.isatty())
-    options = {
-        "overrides": overrides,
-        "workers": args.workers,
-        "cache": _cache(args),
-        "hooks": [Progress()] if progress and not args.batch else [],
-    }
-    if args.batch:
-        return _batch(graph, registry, inputs, args, options)
-    if out_dir is not None:  # refuse before running, not after
-        check_output_folder(out_dir, args.output or graph.outputs)
-    status, result = _run_once(graph, registry, inputs, args, executor=args.executor, **options)
+        status, result = EXIT_FAILED, error.result  # type: ignore[attr-defined]
+    finally:
+        if not isinstance(executor, str):
+            executor.shutdown()
     if out_dir is not None:
-        files = _write(result, out_dir)
+        files = write_run(result, out_dir)
         print(
-            f"wrote {len(files)} output(s), record.json and {out_dir / 'report.md'}",
+            f"wrote {len(files)} output(s), record.json, {out_dir / 'report.md'} "
+            f"and {out_dir / 'report.html'}",
             file=sys.stderr,
         )
     else:
@@ -158,28 +248,33 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def _batch(
-    graph: Any,
+    graph: Graph,
     registry: Registry,
     inputs: dict[str, Any],
+    overrides: dict[str, Any],
     args: argparse.Namespace,
-    options: dict[str, Any],
+    progress: bool,
 ) -> int:
-    """``--batch NAME=GLOB``: :func:`~graphvision.run_batch` with a line per file on stderr."""
+    """``--batch NAME=GLOB``: :func:`~graphvision.run_batch`, a line (or a bar) per file."""
+    from ._batch import BatchItem, run_batch
+    from ._errors import InputError
+    from ._progress import FileProgress
+
     if len(args.batch) > 1:
         raise UsageError("--batch maps one input; give it once")
     name, pattern = next(iter(_pairs(args.batch, "--batch").items()))
     if not args.output_dir:
         raise UsageError("--batch needs --output-dir (one folder per input file)")
+    shown: list[FileProgress] = []
 
     def report(number: int, total: int, item: BatchItem) -> None:
+        if not shown:
+            shown.append(FileProgress(total, bar=None if progress else False))
         if item.error:
             print(f"error: {item.file}: {item.error}", file=sys.stderr)
-        print(
-            f"  [{number}/{total}] {item.file}: {item.status} ({item.seconds:.2f} s) "
-            f"-> {item.output_dir}",
-            file=sys.stderr,
-        )
+        shown[0].finished(f"{item.file} -> {item.output_dir}", not item.error, item.seconds)
 
+    executor = _executor(args)
     try:
         batch = run_batch(
             graph,
@@ -189,13 +284,20 @@ def _batch(
             registry=registry,
             inputs=inputs,
             outputs=args.output or None,
-            executor=args.executor,
+            overrides=overrides,
+            executor=executor,
+            workers=args.workers,
+            cache=_cache(args),
             keep_going=args.keep_going,
             on_item=report,
-            **options,
         )
     except InputError as error:
         raise UsageError(f"--batch {name}={pattern}: {error}") from None
+    finally:
+        for bar in shown:
+            bar.close()
+        if not isinstance(executor, str):
+            executor.shutdown()
     total = len(batch.items)
     print(
         f"{total - batch.failed} of {total} succeeded; summary in {batch.summary}", file=sys.stderr
@@ -203,7 +305,59 @@ def _batch(
     return EXIT_FAILED if batch.failed else EXIT_OK
 
 
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from ._sweep import sweep, sweep_html, sweep_plot_svg
+
+    graph, registry, overrides, inputs = _load(args)
+    grid = {
+        key: _yaml_value(f"[{values}]", f"--grid {key}={values}")
+        for key, values in _pairs(args.grid, "--grid").items()
+    }
+    if not grid:
+        raise UsageError("sweep needs at least one --grid NODE.PARAM=V1,V2,...")
+    _check_overrides(graph, registry, grid, "--grid")
+    out_dir = _output_dir(args.output_dir)
+    assert out_dir is not None  # the option is required
+    if overrides:
+        graph = graph.with_overrides(overrides)
+    executor = _executor(args)
+    try:
+        result = sweep(
+            graph,
+            grid,
+            registry,
+            inputs=inputs,
+            cache=_cache(args),
+            executor=executor,
+            workers=args.workers,
+            keep_going=args.keep_going,
+        )
+    finally:
+        if not isinstance(executor, str):
+            executor.shutdown()
+    written = [result.write_csv(out_dir / "sweep.csv")]
+    plots = [args.plot] if args.plot else []
+    for output in plots:
+        path = out_dir / f"sweep_{output}.svg"
+        path.write_text(sweep_plot_svg(result, output), encoding="utf-8")
+        written.append(path)
+    page = out_dir / "sweep.html"
+    page.write_text(sweep_html(result, graph.name, plots), encoding="utf-8")
+    written.append(page)
+    failed = sum(row["status"] != "ok" for row in result.rows)
+    print(
+        f"{len(result.rows) - failed} of {len(result.rows)} combinations succeeded; wrote "
+        + ", ".join(str(p) for p in written),
+        file=sys.stderr,
+    )
+    return EXIT_FAILED if failed else EXIT_OK
+
+
 def cmd_validate(args: argparse.Namespace) -> int:
+    from ._compile import compile_graph
+    from ._errors import PipelineError
+    from ._pipeline_file import load_pipeline
+
     status = EXIT_OK
     for path in args.pipelines:
         try:
@@ -216,7 +370,17 @@ def cmd_validate(args: argparse.Namespace) -> int:
     return status
 
 
+def plain_text(text: str) -> str:
+    """reStructuredText roles and literals as plain text (``:math:`x``` -> ``x``)."""
+    import re
+
+    text = re.sub(r":[a-z]+:`~?([^`]+)`", lambda m: m.group(1).rsplit(".", 1)[-1], text)
+    return text.replace("``", "")
+
+
 def cmd_nodes(args: argparse.Namespace) -> int:
+    import json
+
     registry = _registry(args)
     if args.json:
         print(
@@ -229,11 +393,13 @@ def cmd_nodes(args: argparse.Namespace) -> int:
         print(f"{family}")
         width = max(len(s.id) for s in specs)
         for spec in specs:
-            print(f"  {spec.id.ljust(width)}  {spec.summary}")
+            print(f"  {spec.id.ljust(width)}  {plain_text(spec.summary)}")
     return EXIT_OK
 
 
 def cmd_describe(args: argparse.Namespace) -> int:
+    import json
+
     spec = _registry(args).node(args.op)
     info = spec.describe()
     if args.json:
@@ -253,51 +419,33 @@ def cmd_describe(args: argparse.Namespace) -> int:
         print(f"  {name}: {json.dumps(shown)}")
     if not props:
         print("  none")
-    print(f"\n{info['doc']}")
+    print(f"\n{plain_text(info['doc'])}")
     return EXIT_OK
 
 
 def cmd_schema(args: argparse.Namespace) -> int:
+    import json
+
+    from ._pipeline_file import pipeline_json_schema
+
     print(json.dumps(pipeline_json_schema(), indent=2))
     return EXIT_OK
 
 
 def cmd_graph(args: argparse.Namespace) -> int:
+    from ._compile import compile_graph
+    from ._pipeline_file import load_pipeline
+    from ._render import render
+
     graph = load_pipeline(args.pipeline)
     compile_graph(graph, _registry(args, graph.plugins))
-    lines = ["digraph pipeline {", "  rankdir=LR;"] if args.format == "dot" else ["flowchart LR"]
-    for name, decl in graph.inputs.items():
-        lines.append(
-            f'  {name} [shape=ellipse, label="{name}\\n{decl.type}"];'
-            if args.format == "dot"
-            else f"  {name}([{name}: {decl.type}])"
-        )
-    for name, decl in graph.nodes.items():
-        lines.append(
-            f'  {name} [shape=box, label="{name}\\n{decl.op}"];'
-            if args.format == "dot"
-            else f'  {name}["{name}<br/>{decl.op}"]'
-        )
-        for port, ref in decl.inputs.items():
-            label = f"{ref.port or ''}→{port}"
-            lines.append(
-                f'  {ref.node} -> {name} [label="{label}"];'
-                if args.format == "dot"
-                else f"  {ref.node} -->|{label}| {name}"
-            )
-    for name, ref in graph.outputs.items():
-        lines.append(
-            f'  out_{name} [shape=note, label="{name}"];\n  {ref.node} -> out_{name};'
-            if args.format == "dot"
-            else f"  {ref.node} --> out_{name}[/{name}/]"
-        )
-    if args.format == "dot":
-        lines.append("}")
-    print("\n".join(lines))
+    print(render(graph, args.format))
     return EXIT_OK
 
 
 def cmd_cache(args: argparse.Namespace) -> int:
+    from ._cache import DiskStore, default_cache_dir
+
     store = DiskStore(args.cache_dir or default_cache_dir(), args.cache_max_bytes)
     if args.action == "info":
         info = store.info()
@@ -313,33 +461,33 @@ def cmd_cache(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _byte_size(text: str) -> int:
-    units = {"k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}
-    text = text.strip().lower().removesuffix("ib").removesuffix("b")
-    try:
-        size = int(float(text[:-1]) * units[text[-1]]) if text and text[-1] in units else int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a size: '{text}' (e.g. 500M, 2G)") from None
-    if size <= 0:
-        raise argparse.ArgumentTypeError(f"a size must be positive, got '{text}' (e.g. 500M, 2G)")
-    return size
+# -- the parser -------------------------------------------------------------------------
 
 
-def build_parser() -> argparse.ArgumentParser:
-    common = _Parser(add_help=False)
-    common.add_argument(
+def _global_options(parser: argparse.ArgumentParser, top: bool) -> None:
+    """``--plugins`` and ``--debug``, accepted before and after the sub-command.
+
+    The sub-commands' copies default to SUPPRESS, so that a value given before
+    the sub-command is not reset by the sub-command's default.
+    """
+    parser.add_argument(
         "--plugins",
         action="append",
-        default=[],
+        default=[] if top else argparse.SUPPRESS,
         metavar="PATH",
         help="load a local plugin file or folder (repeatable)",
     )
-    common.add_argument("--debug", action="store_true", help="show Python tracebacks")
-    cache_opts = _Parser(add_help=False)
-    cache_opts.add_argument(
-        "--cache-dir", metavar="DIR", help=f"disk cache folder (default {default_cache_dir()})"
+    parser.add_argument(
+        "--debug",
+        action="store_true",
+        default=False if top else argparse.SUPPRESS,
+        help="show Python tracebacks",
     )
-    cache_opts.add_argument(
+
+
+def _cache_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--cache-dir", metavar="DIR", help=f"disk cache folder ({CACHE_DIR_HELP})")
+    parser.add_argument(
         "--cache-max-bytes",
         type=_byte_size,
         default=4 * 2**30,
@@ -347,14 +495,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="disk cache bound, e.g. 500M, 4G (default 4G)",
     )
 
-    parser = _Parser(
-        prog="graphvision", description="Run classical computer-vision pipelines.", parents=[common]
-    )
-    commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    p = commands.add_parser("run", parents=[common, cache_opts], help="run a pipeline")
-    p.add_argument("pipeline")
-    p.add_argument(
+def _run_options(parser: argparse.ArgumentParser) -> None:
+    """Options shared by ``run`` and ``sweep``."""
+    parser.add_argument("pipeline", help="the pipeline file (YAML)")
+    parser.add_argument(
         "--input",
         "-i",
         action="append",
@@ -362,14 +507,55 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="graph input: a path, sample:NAME, or a literal",
     )
-    p.add_argument(
+    parser.add_argument(
         "--set",
         "-s",
         action="append",
         default=[],
         metavar="NODE.PARAM=VALUE",
-        help="override a node parameter (params.NAME for a pipeline param)",
+        help="override a node parameter (params.NAME for a pipeline param); VALUE is YAML",
     )
+    parser.add_argument(
+        "--executor",
+        choices=EXECUTORS,
+        default="threads",
+        help="where nodes run: threads (default), sync, processes, or dask",
+    )
+    parser.add_argument(
+        "--workers",
+        type=_positive_int,
+        default=None,
+        metavar="N",
+        help="threads or processes (default: the number of cores); dask: local workers (2)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="with --executor dask: an existing scheduler, tcp://HOST:PORT "
+        "(default $GRAPHVISION_DASK_SCHEDULER, else a local cluster)",
+    )
+    parser.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
+    parser.add_argument(
+        "--keep-going",
+        action="store_true",
+        help="after a node fails, finish every branch that does not depend on it",
+    )
+    _cache_options(parser)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="graphvision", description="Run classical computer-vision pipelines.")
+    parser.add_argument("--version", action="version", version=f"graphvision {_version()}")
+    _global_options(parser, top=True)
+    commands = parser.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
+
+    def command(name: str, help: str) -> argparse.ArgumentParser:
+        sub = commands.add_parser(name, help=help, description=help)
+        _global_options(sub, top=False)
+        return sub
+
+    p = command("run", "run a pipeline (once, or once per file with --batch)")
+    _run_options(p)
     p.add_argument(
         "--output",
         "-o",
@@ -377,56 +563,64 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME",
         help="produce only this output (repeatable); only what it needs runs",
     )
-    p.add_argument("--output-dir", "-d", metavar="DIR", help="write outputs, record and report")
+    p.add_argument(
+        "--output-dir", "-d", metavar="DIR", help="write outputs, record, report.md, report.html"
+    )
     p.add_argument(
         "--batch",
         action="append",
         default=[],
         metavar="NAME=GLOB",
-        help="run once per file matching GLOB (given to input NAME); needs -d",
-    )
-    p.add_argument("--executor", choices=EXECUTORS, default="threads")
-    p.add_argument("--workers", type=int, default=None)
-    p.add_argument("--no-cache", action="store_true", help="neither read nor write the disk cache")
-    p.add_argument(
-        "--keep-going",
-        action="store_true",
-        help="after a node fails, finish every branch that does not depend on it",
+        help="run once per file matching GLOB (given to input NAME; ** recurses); needs -d",
     )
     p.add_argument("--record", action="store_true", help="print the run record")
     p.add_argument(
         "--progress",
         action=argparse.BooleanOptionalAction,
         default=None,
-        help="print progress (default: when stderr is a terminal)",
+        help="show progress (default: when stderr is a terminal)",
     )
     p.set_defaults(func=cmd_run)
 
-    p = commands.add_parser("validate", parents=[common], help="check pipelines without running")
-    p.add_argument("pipelines", nargs="+")
+    p = command("sweep", "run every combination of parameter values; sweep.csv, plots, page")
+    _run_options(p)
+    p.add_argument(
+        "--grid",
+        action="append",
+        default=[],
+        metavar="NODE.PARAM=V1,V2,...",
+        help="values to try for one parameter (repeatable; every combination runs)",
+    )
+    p.add_argument("--output-dir", "-d", metavar="DIR", required=True, help="where to write")
+    p.add_argument("--plot", metavar="OUTPUT", help="plot this scalar output against each param")
+    p.set_defaults(func=cmd_sweep)
+
+    p = command("validate", "check pipelines without running them")
+    p.add_argument("pipelines", nargs="+", metavar="PIPELINE", help="pipeline files")
     p.set_defaults(func=cmd_validate)
 
-    p = commands.add_parser("nodes", parents=[common], help="list nodes by family")
-    p.add_argument("--json", action="store_true")
+    p = command("nodes", "list the nodes by family")
+    p.add_argument("--json", action="store_true", help="every node's description as JSON")
     p.set_defaults(func=cmd_nodes)
 
-    p = commands.add_parser("describe", parents=[common], help="show a node's ports and params")
-    p.add_argument("op")
-    p.add_argument("--json", action="store_true")
+    p = command("describe", "show a node's ports, parameters and documentation")
+    p.add_argument("op", help="the node id, family.name")
+    p.add_argument("--json", action="store_true", help="the description as JSON")
     p.set_defaults(func=cmd_describe)
 
-    p = commands.add_parser("schema", parents=[common], help="print the pipeline JSON Schema")
+    p = command("schema", "print the JSON Schema of pipeline files")
     p.set_defaults(func=cmd_schema)
 
-    p = commands.add_parser("graph", parents=[common], help="render a pipeline as DOT or Mermaid")
-    p.add_argument("pipeline")
-    p.add_argument("--format", choices=("dot", "mermaid"), default="dot")
+    p = command("graph", "draw a pipeline as SVG, DOT or Mermaid")
+    p.add_argument("pipeline", help="the pipeline file (YAML)")
+    p.add_argument(
+        "--format", choices=("svg", "dot", "mermaid"), default="dot", help="the drawing's format"
+    )
     p.set_defaults(func=cmd_graph)
 
-    p = commands.add_parser(
-        "cache", parents=[common, cache_opts], help="inspect or empty the cache"
-    )
-    p.add_argument("action", choices=("info", "prune", "clear"))
+    p = command("cache", "inspect, prune or empty the disk cache")
+    p.add_argument("action", choices=("info", "prune", "clear"), help="what to do")
+    _cache_options(p)
     p.add_argument(
         "--max-bytes",
         type=_byte_size,
@@ -436,6 +630,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_cache)
     return parser
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("graphvision")
+    except PackageNotFoundError:  # pragma: no cover - run from a source tree
+        return "unknown"
+
+
+# -- main -------------------------------------------------------------------------------
 
 
 def _show_warning(
@@ -450,27 +656,88 @@ def _show_warning(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``graphvision`` command; returns the exit status."""
+    """Run the command line on ``argv``; return the exit status (never raises for a mistake).
+
+    The one place errors become messages: a graphvision error is a usage
+    problem (2), a failed run or a problem of the environment (a full disk,
+    no permission, a closed pipe) a failure (1), Ctrl-C 130.
+    """
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     warnings.showwarning = _show_warning
     began = time.perf_counter()
     try:
-        args = build_parser().parse_args(argv)
-        status = args.func(args)
-    except RunError as error:  # raised outside cmd_run's handling
-        print(f"error: {error}", file=sys.stderr)
-        status = EXIT_FAILED
-    except GraphvisionError as error:
-        if debug:
-            traceback.print_exc()
-        print(f"error: {error}", file=sys.stderr)
-        status = EXIT_USAGE
+        parser = build_parser()
+        if not argv:
+            parser.print_usage(sys.stderr)
+            print(
+                "commands: " + ", ".join(_commands(parser)) + "; --help for more", file=sys.stderr
+            )
+            return EXIT_USAGE
+        args = parser.parse_args(argv)
+        if args.command is None:
+            raise UsageError("give a command: " + ", ".join(_commands(parser)))
+        return int(args.func(args))
     except KeyboardInterrupt:
         print(f"interrupted after {time.perf_counter() - began:.1f} s", file=sys.stderr)
-        status = 130
-    return status
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:  # `graphvision nodes | head -1`: the reader has what it wanted
+        _silence_stdout()
+        return EXIT_OK
+    except Exception as error:
+        if debug:
+            traceback.print_exc()
+        return _report_error(error)
+
+
+def _report_error(error: Exception) -> int:
+    from ._errors import RunError
+
+    if isinstance(error, RunError):
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_FAILED
+    if isinstance(error, GraphvisionError):
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    if isinstance(error, OSError):  # the environment: disk full, permissions, a vanished file
+        where = f": {error.filename}" if error.filename else ""
+        print(f"error: {error.strerror or error}{where}", file=sys.stderr)
+        return EXIT_FAILED
+    print(
+        f"error: internal error ({type(error).__name__}: {error}); please report it, "
+        "with the output of --debug",
+        file=sys.stderr,
+    )
+    return EXIT_FAILED
+
+
+def _commands(parser: argparse.ArgumentParser) -> list[str]:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return list(action.choices)
+    return []
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that the interpreter's final flush does not fail again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+
+
+def entry() -> None:
+    """The ``graphvision`` console script: :func:`main`, then exit at once with its status.
+
+    On Ctrl-C the process exits without waiting for worker threads to finish
+    the node they run (cache entries and outputs are written atomically, so
+    nothing is left half-written; worker processes see their parent go and exit).
+    """
+    status = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if status == EXIT_INTERRUPTED:
+        os._exit(status)
+    sys.exit(status)
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()

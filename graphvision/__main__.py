@@ -1,0 +1,5 @@
+"""``python -m graphvision``: the command line."""
+
+from .cli import entry
+
+entry()
