@@ -72,12 +72,14 @@ def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
 
 def _yaml_value(text: str, where: str) -> Any:
     """A command-line value read as YAML (``2``, ``true``, ``[1, 2]``), or a UsageError."""
+    from ._errors import PipelineError
     from ._pipeline_file import parse_value
 
     try:
         return parse_value(text)
-    except GraphvisionError as error:
-        raise UsageError(f"{where}: {error}") from None
+    except PipelineError as error:
+        reasons = "; ".join(problem.message for problem in error.problems)
+        raise UsageError(f"{where}: {reasons}") from None
 
 
 def _positive_int(text: str) -> int:
@@ -674,7 +676,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "commands: " + ", ".join(_commands(parser)) + "; --help for more", file=sys.stderr
             )
             return EXIT_USAGE
-        args = parser.parse_args(argv)
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as done:  # --help, --version
+            return int(done.code or 0)
         if args.command is None:
             raise UsageError("give a command: " + ", ".join(_commands(parser)))
         return int(args.func(args))

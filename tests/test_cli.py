@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import re
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -259,3 +262,107 @@ def test_batch_usage_errors(capsys, tmp_path):
     assert status == 2 and "no file matches" in err
     status, _, err = cli(capsys, "run", DEMO, "--batch", f"image={tmp_path}/*.png")
     assert status == 2 and "--batch needs --output-dir" in err
+
+
+# -- the command line as a Unix tool (issue 7, items 7-12) -----------------------------
+
+PSNR_OUT = "psnr_noisy_gaussian"
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["-s", "gauss_on_gauss.sigma=[1,"], r"--set gauss_on_gauss.sigma=\[1,: .*malformed YAML"),
+        (["--workers", "0"], r"--workers: must be at least 1, got 0"),
+        (["--workers=-2"], r"--workers: must be at least 1, got -2"),
+        (
+            ["-s", "gauss_on_gaus.sigma=2"],
+            r"no node 'gauss_on_gaus' \(did you mean 'gauss_on_gauss'",
+        ),
+        (
+            ["-s", "gauss_on_gauss.sgma=2"],
+            r"filters.gaussian has no parameter 'sgma' \(did you mean",
+        ),
+        (["-s", "params.sed=2"], r"--set params.sed=2: the pipeline has no param 'sed' \(did you"),
+    ],
+)
+def test_malformed_command_line_values_are_refused_before_running(capsys, tmp_path, extra, message):
+    status, _, err = cli(capsys, "run", DEMO, "-d", tmp_path / "out", "--no-cache", *extra)
+    assert status == 2 and err.count("\n") == 1
+    assert re.search(message, err), err
+    assert not (tmp_path / "out" / "record.json").exists()
+
+
+def test_output_dir_that_is_a_file_or_cannot_be_made(capsys, tmp_path):
+    blocker = write(tmp_path, "blocker", "x")
+    status, _, err = cli(capsys, "run", DEMO, "-d", blocker, "--no-cache")
+    assert status == 2 and "is a file, not a folder" in err
+    status, _, err = cli(capsys, "run", DEMO, "-d", blocker / "sub", "--no-cache")
+    assert status == 2 and "cannot be made" in err
+
+
+def test_a_param_set_from_pipeline_params_can_be_overridden(capsys):
+    status, _, err = cli(
+        capsys, "run", DEMO, "--no-cache", "-o", PSNR_OUT, "-s", "noisy_gauss.seed=3"
+    )
+    assert status == 0, err
+
+
+@pytest.mark.parametrize("where", ["before", "after"])
+def test_global_options_go_before_or_after_the_command(capsys, where):
+    args = (
+        ["--plugins", str(TOY), "nodes"] if where == "before" else ["nodes", "--plugins", str(TOY)]
+    )
+    status, out, _ = cli(capsys, *args)
+    assert status == 0 and "toy.add" in out
+
+
+def test_a_plugins_path_that_does_not_exist_is_a_usage_error(capsys, tmp_path):
+    status, _, err = cli(capsys, "nodes", "--plugins", tmp_path / "nope.py")
+    assert status == 2 and "no such file or folder" in err
+
+
+def test_environment_errors_are_one_line_exit_1(capsys, tmp_path, monkeypatch):
+    import errno
+
+    import graphvision._report as report
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "out" / "x.png"))
+
+    monkeypatch.setattr(report, "write_run", full)
+    status, _, err = cli(capsys, "run", DEMO, "--no-cache", "-o", PSNR_OUT, "-d", tmp_path / "out")
+    assert status == 1
+    assert err.strip().endswith(f"error: No space left on device: {tmp_path / 'out' / 'x.png'}")
+
+
+def test_a_closed_pipe_ends_quietly():
+    command = f"{sys.executable} -m graphvision nodes | head -1"
+    done = subprocess.run(command, shell=True, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and done.stdout.strip()
+    assert "Traceback" not in done.stderr and "BrokenPipe" not in done.stderr
+
+
+def test_version_bare_usage_and_python_m(capsys):
+    assert cli(capsys, "--version")[0] == 0
+    status, _, err = cli(capsys)
+    assert status == 2 and err.startswith("usage: graphvision") and "commands: run, sweep" in err
+    done = subprocess.run(
+        [sys.executable, "-m", "graphvision", "--version"], capture_output=True, text=True
+    )
+    assert done.returncode == 0 and done.stdout.startswith("graphvision ")
+
+
+def test_every_option_has_help_and_node_summaries_are_plain_text(capsys):
+    import argparse
+
+    from graphvision.cli import build_parser
+
+    parser = build_parser()
+    subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for name, sub in [("graphvision", parser), *subparsers.choices.items()]:
+        for action in sub._actions:
+            if not isinstance(action, argparse._HelpAction | argparse._SubParsersAction):
+                assert action.help, f"{name} {action.dest} has no help"
+    status, out, _ = cli(capsys, "nodes")
+    assert status == 0 and "``" not in out and ":math:" not in out and ":func:" not in out
