@@ -114,7 +114,7 @@ class DaskExecutor:
         task.add_done_callback(transfer)
         return future
 
-    def shutdown(self, wait: bool = True) -> None:
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         """Close the client and the local cluster this executor started (not a given client)."""
         if self._owns_client:
             self.client.close()

@@ -19,9 +19,12 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
+import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
 from ._node import FunctionRef
@@ -31,12 +34,13 @@ __all__ = [
     "EXECUTORS",
     "Executor",
     "SyncExecutor",
+    "WorkerDiedError",
     "call_node",
     "call_node_encoded",
     "make_executor",
 ]
 
-EXECUTORS: tuple[str, ...] = ("sync", "threads", "processes")
+EXECUTORS: tuple[str, ...] = ("sync", "threads", "processes", "dask")
 
 
 class Executor(Protocol):
@@ -44,7 +48,7 @@ class Executor(Protocol):
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future: ...
 
-    def shutdown(self, wait: bool = True) -> None: ...
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None: ...
 
 
 class SyncExecutor:
@@ -60,7 +64,7 @@ class SyncExecutor:
             future.set_exception(error)
         return future
 
-    def shutdown(self, wait: bool = True) -> None:
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         return None
 
 
@@ -68,19 +72,124 @@ class _Threads(ThreadPoolExecutor):
     encodes_values = False
 
 
-class _Processes(ProcessPoolExecutor):
+class WorkerDiedError(RuntimeError):
+    """The worker process running a node died (killed, out of memory), also on the retry."""
+
+
+class _Processes:
+    """A spawn process pool that survives a dying worker.
+
+    When a worker dies, ``concurrent.futures`` breaks the whole pool and fails
+    every node running in it. Here the pool is replaced and each node whose
+    future broke runs again, once, in a worker of its own: a node that kills
+    its worker again fails (it is the culprit), the others complete. Workers ignore Ctrl-C (the
+    parent handles it) and exit when their parent process is gone, even after
+    ``kill -9``.
+    """
+
     encodes_values = True
+
+    def __init__(self, workers: int) -> None:
+        self._workers = workers
+        self._lock = threading.Lock()
+        self._pool = self._new_pool()
+
+    def _new_pool(self, workers: int = 0) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(
+            max_workers=workers or self._workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_worker_setup,
+            initargs=(os.getpid(),),
+        )
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
+        outer: Future = Future()
+        outer.set_running_or_notify_cancel()
+        pool = self._pool
+        try:
+            inner = pool.submit(fn, *args)
+        except BrokenProcessPool:
+            pool = self._replace(pool)
+            inner = pool.submit(fn, *args)
+
+        def settle(done: Future) -> None:
+            if isinstance(done.exception(), BrokenProcessPool):
+                self._replace(pool)
+                self._retry_alone(outer, fn, args)
+            else:
+                _copy(done, outer)
+
+        inner.add_done_callback(settle)
+        return outer
+
+    def _retry_alone(self, outer: Future, fn: Callable[..., Any], args: tuple) -> None:
+        """Run a node whose pool broke again, in a worker of its own.
+
+        The pool breaks for every node it was running when one worker died, so
+        the retry is isolated: a node that kills its worker again is the one
+        at fault and fails; the others complete.
+        """
+        alone = self._new_pool(workers=1)
+        retry = alone.submit(fn, *args)
+
+        def settle(done: Future) -> None:
+            alone.shutdown(wait=False)
+            if isinstance(done.exception(), BrokenProcessPool):
+                outer.set_exception(
+                    WorkerDiedError(
+                        "the worker process running this node died (killed, or out of "
+                        "memory), and again when retried alone"
+                    )
+                )
+            else:
+                _copy(done, outer)
+
+        retry.add_done_callback(settle)
+
+    def _replace(self, broken: ProcessPoolExecutor) -> ProcessPoolExecutor:
+        with self._lock:
+            if self._pool is broken:
+                broken.shutdown(wait=False, cancel_futures=True)
+                self._pool = self._new_pool()
+            return self._pool
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        self._pool.shutdown(wait=wait, cancel_futures=cancel_futures)
+
+
+def _copy(source: Future, target: Future) -> None:
+    error = source.exception()
+    if error is not None:
+        target.set_exception(error)
+    else:
+        target.set_result(source.result())
+
+
+def _worker_setup(parent: int) -> None:
+    """In each worker: leave Ctrl-C to the parent, and exit when the parent is gone."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(0)
+
+    threading.Thread(target=watch, daemon=True, name="graphvision-parent-watch").start()
 
 
 def make_executor(name: str = "threads", workers: int | None = None) -> Executor:
-    """An executor by name: ``sync``, ``threads`` or ``processes``."""
+    """An executor by name: ``sync``, ``threads``, ``processes`` or ``dask`` (a local cluster)."""
+    if name == "dask":
+        from ._dask import DaskExecutor
+
+        return DaskExecutor(workers=workers or 2)
     workers = workers or os.cpu_count() or 1
     if name == "sync":
         return SyncExecutor()
     if name == "threads":
         return _Threads(max_workers=workers, thread_name_prefix="graphvision")
     if name == "processes":
-        return _Processes(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+        return _Processes(workers)
     raise ValueError(f"unknown executor '{name}'; choose one of {', '.join(EXECUTORS)}")
 
 

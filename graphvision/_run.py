@@ -312,6 +312,16 @@ class _Run:
             hook.node_started(name=name, op=step.spec.id)
         self.started[name] = time.perf_counter()
         if getattr(executor, "encodes_values", False):
+            if step.spec.ref.module == "__main__" and not step.spec.ref.path:
+                refused: Future = Future()
+                refused.set_exception(
+                    RuntimeError(
+                        "the node is defined in __main__ (a script or a notebook), which "
+                        "worker processes cannot import: put it in a module file and load "
+                        "that with gv.discover([path]) or --plugins PATH, or use threads"
+                    )
+                )
+                return refused
             payload = {}
             for port, value in inputs.items():
                 kind = step.spec.inputs[port].type
@@ -500,6 +510,11 @@ def run(
             dependencies, state.start, state.finish, keep_going=keep_going, start_inline=inline
         )
         failed = bool(state.failures)
+    except BaseException:  # Ctrl-C, or a bug: do not wait for the nodes still running
+        if own_executor:
+            pool.shutdown(wait=False, cancel_futures=True)
+            own_executor = False
+        raise
     finally:
         if own_executor:
             pool.shutdown(wait=True)
