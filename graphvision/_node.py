@@ -380,6 +380,20 @@ def _port_type(annotation: Any) -> tuple[type[PortType] | None, bool]:
     return port_of(annotation), False
 
 
+def type_label(annotation: Any) -> str:
+    """An annotation as a reader writes it: ``numpy.ndarray``, ``float``, ``list[int]``."""
+    if annotation is inspect.Parameter.empty:
+        return "no annotation"
+    if isinstance(annotation, type) and not get_args(annotation):
+        module = annotation.__module__
+        return (
+            annotation.__qualname__
+            if module == "builtins"
+            else f"{module}.{annotation.__qualname__}"
+        )
+    return str(annotation).replace("typing.", "")
+
+
 def _typevar_port(annotation: TypeVar) -> type[PortType]:
     """The port type of an output TypeVar, which an input's annotation has already checked."""
     port, _ = _port_type(annotation)
@@ -414,7 +428,9 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
     """
     func = unchecked(func)
     mark: _NodeMark = func.__graphvision_node__  # type: ignore[attr-defined]
-    where = f"plugin '{plugin}', function {func.__module__}.{func.__qualname__}"
+    code = getattr(func, "__code__", None)
+    place = f" at {code.co_filename}:{code.co_firstlineno}" if code else ""
+    where = f"plugin '{plugin}', function {func.__qualname__}{place}"
 
     def reject(reason: str) -> RegistrationError:
         return RegistrationError(f"{where} (node '{mark.id}'): {reason}")
@@ -443,7 +459,7 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
             if port is None:
                 raise reject(
                     f"input '{name}' must be annotated with a port type "
-                    f"(e.g. Image), got {annotation!r}; parameters go after '*'"
+                    f"(e.g. Image), got {type_label(annotation)}; parameters go after '*'"
                 )
             if optional and parameter.default is not None:
                 raise reject(f"optional input '{name}' must default to None")
@@ -489,7 +505,7 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
     else:
         raise reject(
             "the return annotation must be a port type or a NamedTuple of port types, "
-            f"got {returned!r}"
+            f"got {type_label(returned)}"
         )
 
     try:

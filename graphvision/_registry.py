@@ -16,7 +16,7 @@ import inspect
 import types
 from dataclasses import dataclass, field
 
-from ._errors import DuplicateNodeError, UnknownNameError, did_you_mean
+from ._errors import DuplicateNodeError, RegistrationError, UnknownNameError, did_you_mean
 from ._node import NodeSpec, SourceSpec, build_spec
 from ._ports import PortType, builtin_port_types
 
@@ -56,7 +56,20 @@ class Registry:
             nothing of the plugin is registered.
         """
         members = [getattr(module, n) for n in getattr(module, "__all__", dir(module))]
-        specs = [build_spec(m, name) for m in members if hasattr(m, "__graphvision_node__")]
+        specs, rejected = [], []
+        for member in members:
+            if hasattr(member, "__graphvision_node__"):
+                try:
+                    specs.append(build_spec(member, name))
+                except RegistrationError as error:
+                    rejected.append(str(error))
+        if len(rejected) == 1:
+            raise RegistrationError(rejected[0])
+        if rejected:  # every bad node at once, not one per attempt
+            listing = "\n".join(f"  - {reason}" for reason in rejected)
+            raise RegistrationError(
+                f"{len(rejected)} nodes of plugin '{name}' are rejected:\n{listing}"
+            )
         sources = [
             SourceSpec(m.__graphvision_source__.scheme, m, name)
             for m in members
