@@ -47,6 +47,7 @@ def ransac(
     refit: Callable[[np.ndarray], Any] | None = None,
     confidence: float = 0.99,
     max_iterations: int = 10_000,
+    max_refits: int = 10,
     seed: int = 0,
 ) -> RansacResult:
     r"""RANSAC over ``count`` data items.
@@ -59,7 +60,14 @@ def ransac(
     4. after each improvement, lower the number of samples to
        :func:`ransac_iterations` for the observed outlier ratio (``confidence`` p);
     5. ``refit(inlier_indices)`` the best model on all its inliers (least
-       squares), and take the inliers of the refit model.
+       squares), take the inliers of the refit model, and repeat until the
+       inlier set stops changing (at most ``max_refits`` times): the notes'
+       "improve RANSAC by applying least squares to the inliers". The refit
+       is kept even when it has fewer inliers than the minimal-sample model
+       (its inliers are the ones that fit best, not the most that a sample
+       through two noisy points happened to cross); the minimal-sample model
+       is kept only when a refit is degenerate (None, or fewer inliers than
+       a sample).
 
     Parameters
     ----------
@@ -68,6 +76,8 @@ def ransac(
     threshold : float
     confidence : float
     max_iterations : int
+    max_refits : int
+        Bound on the refit–re-collect rounds (they usually converge in 2–3).
     seed : int
         Seed of the sampler: the result is a pure function of the inputs.
 
@@ -97,9 +107,31 @@ def ransac(
             best_model, best_inliers, best_count = model, inliers, found
             needed = ransac_iterations(1.0 - found / count, sample_size, confidence)
     if best_model is not None and refit is not None and best_count >= sample_size:
-        refined = refit(np.flatnonzero(best_inliers))
-        if refined is not None:
-            refined_inliers = residuals(refined) < threshold
-            if refined_inliers.sum() >= best_count:
-                best_model, best_inliers = refined, refined_inliers
+        best_model, best_inliers = _refit_to_convergence(
+            best_model, best_inliers, refit, residuals, threshold, sample_size, max_refits
+        )
     return RansacResult(best_model, best_inliers, drawn)
+
+
+def _refit_to_convergence(
+    model: Any,
+    inliers: np.ndarray,
+    refit: Callable[[np.ndarray], Any],
+    residuals: Callable[[Any], np.ndarray],
+    threshold: float,
+    sample_size: int,
+    max_refits: int,
+) -> tuple[Any, np.ndarray]:
+    """Least squares on the inliers, new inliers, again, until the inlier set is stable."""
+    for _ in range(max_refits):
+        refined = refit(np.flatnonzero(inliers))
+        if refined is None:
+            break  # degenerate refit: keep the last good model
+        refined_inliers = residuals(refined) < threshold
+        if refined_inliers.sum() < sample_size:
+            break
+        stable = np.array_equal(refined_inliers, inliers)
+        model, inliers = refined, refined_inliers
+        if stable:
+            break
+    return model, inliers

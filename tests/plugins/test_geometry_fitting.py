@@ -166,3 +166,34 @@ def test_gauss_newton_refinement_lowers_the_error():
         * np.sign(refined[0] * fitting.fit_line_total(sample.points)[0]),
         atol=1e-6,
     )
+
+
+def test_ransac_keeps_the_refit_even_with_one_inlier_fewer():
+    """The case the old rule got wrong: a sample-line through two noisy points crosses one
+    outlier more than the least-squares line does. The refit must win: its error against
+    the true line is far smaller, though it has one inlier fewer."""
+    rng = np.random.default_rng(3)
+    x = np.linspace(0, 100, 101)
+    points = np.column_stack([x, 0.5 * x + 2 + rng.normal(0, 0.1, x.size)])
+    points = np.vstack([points, [[50.0, 0.5 * 50 + 2 + 1.25]]])  # 1.25 above the true line
+    truth = np.array([-0.5, 1.0, -2.0]) / np.hypot(0.5, 1.0)  # a x + b y + c = 0, (a, b) unit
+
+    tilted = truth - [0.0, 0.0, 0.5]  # parallel, 0.5 px towards the outlier
+
+    def distances(line):
+        return np.abs(points @ line[:2] + line[2])
+
+    def total_least_squares(index):
+        chosen = points[index]
+        centre = chosen.mean(axis=0)
+        normal = np.linalg.svd(chosen - centre)[2][-1]
+        return np.array([*normal, -normal @ centre])
+
+    found = fitting.ransac(
+        len(points), 2, lambda sample: tilted, distances, 1.0, refit=total_least_squares
+    )
+    assert distances(tilted).__lt__(1.0).sum() == 102  # the sample model crosses the outlier
+    assert found.inliers.sum() == 101 and not found.inliers[-1]
+    error = np.abs(np.array([[0.0, 2.0], [100.0, 52.0]]) @ found.model[:2] + found.model[2])
+    assert error.max() < 0.1  # within 0.1 px of the true line at both ends (the sample: 0.5)
+    assert np.allclose(np.sign(found.model[1]) * found.model, np.sign(truth[1]) * truth, atol=0.01)
