@@ -6,16 +6,20 @@ Algorithms never live here; other families' tests and pipelines use these
 nodes as their ground truth.
 """
 
+from ._boards import board_object_points, board_views, render_board
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
 from ._warps import random_homography, random_warp, two_views
 
 __all__ = [
+    "board_object_points",
+    "board_views",
     "gaussian_noise",
     "impulse_noise",
     "line_points",
     "random_homography",
     "random_warp",
+    "render_board",
     "salt_and_pepper",
     "two_views",
 ]
