@@ -145,8 +145,8 @@ def refine_corners(
     smooth = ndimage.gaussian_filter(image.astype(np.float64), 0.7)
     gy, gx = np.gradient(smooth)
     offsets = np.arange(-window, window + 1, dtype=np.float64)
-    oy, ox = np.meshgrid(offsets, offsets, indexing="ij")
-    ox, oy = ox.ravel(), oy.ravel()
+    grid_y, grid_x = np.meshgrid(offsets, offsets, indexing="ij")
+    ox, oy = grid_x.ravel(), grid_y.ravel()
     weight = np.exp(-(ox**2 + oy**2) / (2 * (window / 2) ** 2))
     weight[(ox == 0) & (oy == 0)] = 0.0  # the centre's gradient carries no position
     q = corners.astype(np.float64).copy()

@@ -255,7 +255,7 @@ def undistort_image(image: ImageT, camera: Camera) -> ImageT:
     """
     check_intrinsics(camera)
     source = distort_pixels(_pixel_grid(image.shape), camera.K, camera.distortion)
-    return remap(image, source.reshape(image.shape[:2] + (2,)))
+    return remap(image, source.reshape((*image.shape[:2], 2)))
 
 
 @node("camera.distort_image", version=1)
@@ -279,4 +279,4 @@ def distort_image(image: ImageT, camera: Camera) -> ImageT:
     """
     check_intrinsics(camera)
     source = undistort_pixels(_pixel_grid(image.shape), camera.K, camera.distortion)
-    return remap(image, source.reshape(image.shape[:2] + (2,)))
+    return remap(image, source.reshape((*image.shape[:2], 2)))

@@ -26,7 +26,7 @@ _DARK, _LIGHT, _BACKGROUND = 0.1, 0.9, 0.45
 
 
 def board_object_points(columns: int, rows: int, square: float) -> np.ndarray:
-    """The inner corners ``(i·square, j·square, 0)``, row by row (i fastest): ``rows·columns × 3``."""
+    """The inner corners ``(i·square, j·square, 0)``, row by row, i fastest."""
     j, i = np.mgrid[0:rows, 0:columns]
     return np.column_stack([i.ravel() * square, j.ravel() * square, np.zeros(i.size)])
 
@@ -57,7 +57,7 @@ def render_board(
     rays: np.ndarray, R: np.ndarray, C: np.ndarray, columns: int, rows: int, square: float
 ) -> np.ndarray:
     """Render one view: ``rays`` from :func:`_pixel_rays`, pose ``R``, ``C``; float64 H×W."""
-    directions = np.concatenate([rays, np.ones(rays.shape[:2] + (1,))], axis=2) @ R  # Rᵀ d
+    directions = np.concatenate([rays, np.ones((*rays.shape[:2], 1))], axis=2) @ R  # Rᵀ d
     with np.errstate(divide="ignore", invalid="ignore"):
         depth = -C[2] / directions[..., 2]
     hits = C[:2] + depth[..., None] * directions[..., :2]
@@ -92,7 +92,7 @@ def render_board(
 def random_board_pose(
     rng: np.random.Generator, columns: int, rows: int, square: float, distance: float, tilt: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """A camera pose looking at the board centre from ``distance``, tilted up to ``tilt`` degrees."""
+    """A camera pose looking at the board centre from ``distance``, tilted ≤ ``tilt``°."""
     centre = np.array([(columns - 1) / 2, (rows - 1) / 2, 0.0]) * square
     theta = np.deg2rad(rng.uniform(0.3, 1.0) * tilt)
     phi = rng.uniform(0, 2 * np.pi)
@@ -198,7 +198,9 @@ def board_views(
         * square
     )
     distance = (columns + 3) * square * focal / (fill * width)
-    images, corners, poses = [], [], []
+    images: list[np.ndarray] = []
+    corners: list[np.ndarray] = []
+    poses: list[tuple[np.ndarray, np.ndarray]] = []
     while len(images) < views:
         R, C = random_board_pose(rng, columns, rows, square, distance, tilt)
         edge = project_points(outline, K, R, C, distortion)
