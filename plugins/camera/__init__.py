@@ -14,6 +14,7 @@ from ._calibrate import (
     zhang_intrinsics,
 )
 from ._corners import board_corners, find_board, refine_corners, saddle_candidates
+from ._draw import draw_board, intrinsics, roundtrip_residual
 from ._model import (
     decompose,
     distort_image,
@@ -49,8 +50,10 @@ __all__ = [
     "distort_pixels",
     "distort_points",
     "dlt_projection",
+    "draw_board",
     "find_board",
     "focal_error",
+    "intrinsics",
     "look_at",
     "normalise_pixels",
     "pinhole",
@@ -60,6 +63,7 @@ __all__ = [
     "projection_matrix",
     "refine_corners",
     "rotation_from_vector",
+    "roundtrip_residual",
     "saddle_candidates",
     "undistort_image",
     "undistort_normalised",
