@@ -111,8 +111,9 @@ def undistort_normalised(
     Raises
     ------
     ValueError
-        When some point has not converged after ``max_iterations`` (the model is
-        not invertible there, e.g. beyond the fold of a strong barrel distortion).
+        When some point has not converged after ``max_iterations``, or converged
+        beyond the fold of the model (radial factor or Jacobian determinant
+        ≤ 0: a strong barrel distortion maps no point inside the fold there).
     """
     target = np.asarray(xy, dtype=np.float64)
     if not np.any(distortion):
@@ -123,11 +124,17 @@ def undistort_normalised(
         error = np.abs(residual).max(axis=1)
         active = error > tolerance
         if not active.any():
-            return estimate
+            break
         jac = _distortion_jacobian(estimate[active], distortion)
         estimate[active] -= np.linalg.solve(jac, residual[active][:, :, None])[:, :, 0]
     residual = np.abs(distort_normalised(estimate, distortion) - target).max(axis=1)
-    bad = ~(residual <= tolerance * 10)
+    # a root beyond the fold of the model is not the preimage: there the radial
+    # factor turns negative (the point crosses the centre) or the Jacobian degenerates
+    k1, k2, _, _, k3 = distortion
+    r2 = (estimate**2).sum(axis=1)
+    radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    folded = (radial <= 0) | (np.linalg.det(_distortion_jacobian(estimate, distortion)) <= 0)
+    bad = ~(residual <= tolerance * 10) | folded
     if bad.any():
         worst = int(np.nanargmax(np.where(np.isfinite(residual), residual, np.inf)))
         raise ValueError(
