@@ -38,6 +38,13 @@ from ._projection import (
     undistort_pixels,
     vector_from_rotation,
 )
+from ._vanishing import (
+    draw_vanishing,
+    horizon,
+    vanishing_error,
+    vanishing_point,
+    vanishing_points,
+)
 
 __all__ = [
     "board_corners",
@@ -51,8 +58,10 @@ __all__ = [
     "distort_points",
     "dlt_projection",
     "draw_board",
+    "draw_vanishing",
     "find_board",
     "focal_error",
+    "horizon",
     "intrinsics",
     "look_at",
     "normalise_pixels",
@@ -69,6 +78,9 @@ __all__ = [
     "undistort_normalised",
     "undistort_pixels",
     "undistort_points",
+    "vanishing_error",
+    "vanishing_point",
+    "vanishing_points",
     "vector_from_rotation",
     "zhang_intrinsics",
 ]

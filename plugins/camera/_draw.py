@@ -12,10 +12,11 @@ from graphvision import Array, Camera, ColorImage, Float, FloatImage, Image, nod
 from ._model import check_intrinsics
 from ._projection import distort_pixels, undistort_pixels
 
-__all__ = ["draw_board", "intrinsics", "roundtrip_residual"]
+__all__ = ["draw_board", "draw_segment", "intrinsics", "roundtrip_residual"]
 
 
-def _segment(canvas: np.ndarray, p: np.ndarray, q: np.ndarray, colour: np.ndarray) -> None:
+def draw_segment(canvas: np.ndarray, p: np.ndarray, q: np.ndarray, colour: np.ndarray) -> None:
+    """Draw the segment p–q on an RGB canvas in place, clipped to the canvas."""
     from skimage.draw import line
 
     rr, cc = line(int(round(p[1])), int(round(p[0])), int(round(q[1])), int(round(q[0])))
@@ -59,7 +60,7 @@ def draw_board(
     t = np.linspace(0, 1, len(xy))[:, None]
     colours = (1 - t) * np.array([0.95, 0.1, 0.1]) + t * np.array([0.1, 0.3, 0.95])
     for k in range(len(xy) - 1):
-        _segment(canvas, xy[k], xy[k + 1], colours[k])
+        draw_segment(canvas, xy[k], xy[k + 1], colours[k])
     for (x, y), colour in zip(xy, colours, strict=True):
         rr, cc = circle_perimeter(int(round(y)), int(round(x)), 4, shape=canvas.shape[:2])
         canvas[rr, cc] = colour

@@ -9,6 +9,7 @@ nodes as their ground truth.
 from ._boards import board_object_points, board_views, render_board
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
+from ._plane_lines import plane_lines
 from ._warps import random_homography, random_warp, two_views
 
 __all__ = [
@@ -17,6 +18,7 @@ __all__ = [
     "gaussian_noise",
     "impulse_noise",
     "line_points",
+    "plane_lines",
     "random_homography",
     "random_warp",
     "render_board",

@@ -19,8 +19,9 @@ from graphvision_plugins.camera import (
     undistort_image,
     undistort_pixels,
     undistort_points,
+    vanishing_points,
 )
-from graphvision_plugins.synthetic import board_views
+from graphvision_plugins.synthetic import board_views, plane_lines
 
 from ..conftest import PIPELINES
 
@@ -203,3 +204,31 @@ def test_undistort_pipeline_residual_is_only_resampling():
     # inverse (e.g. 5 fixed-point iterations) leaves a misalignment of whole pixels
     assert out["residual_rms"] < 0.05
     assert out["undistorted"].shape == (512, 512)
+
+
+def test_vanishing_point_of_noise_free_segments_is_exact():
+    scene = plane_lines(noise=0.0, seed=4)
+    found = vanishing_points(scene.segments, scene.family)
+    for estimated, truth in zip(found, scene.vanishing_points, strict=True):
+        assert abs(abs(estimated @ truth) - 1) < 1e-12  # the same homogeneous point
+
+
+def test_vanishing_pipeline_within_half_a_degree_of_the_true_directions():
+    out = gv.run(gv.load_pipeline(PIPELINES / "vanishing.yaml")).outputs
+    assert out["vanishing_point_error_degrees"] < 0.5
+    assert out["horizon_error_degrees"] < 0.5
+    # the horizon passes through both true vanishing points
+    assert (
+        np.abs(out["true_vanishing_points"] @ out["horizon"]).max()
+        < 1e-3 * np.abs(out["horizon"]).sum()
+    )
+    assert out["drawing"].shape == (480, 640, 3)
+
+
+def test_vanishing_points_refuse_a_family_of_one_segment_and_a_point_segment():
+    segments = np.array([[0.0, 0, 10, 10], [0, 10, 10, 20], [0, 0, 10, 0]])
+    with pytest.raises(ValueError, match="family 1 has 1 segment"):
+        vanishing_points.__wrapped__(segments, np.array([0, 0, 1]))
+    segments[2] = [5, 5, 5, 5]
+    with pytest.raises(ValueError, match="coincident end points"):
+        vanishing_points.__wrapped__(segments, np.array([0, 0, 0]))
