@@ -13,7 +13,7 @@ from ._calibrate import (
     focal_error,
     zhang_intrinsics,
 )
-from ._corners import board_corners, find_board, refine_corners, saddle_candidates
+from ._corners import board_corners, find_board, grid_spacing, refine_corners, saddle_candidates
 from ._draw import draw_board, intrinsics, roundtrip_residual
 from ._model import (
     decompose,
@@ -61,6 +61,7 @@ __all__ = [
     "draw_vanishing",
     "find_board",
     "focal_error",
+    "grid_spacing",
     "horizon",
     "intrinsics",
     "look_at",

@@ -16,7 +16,8 @@ r"""Checkerboard inner corners: saddle detection, grid labelling, sub-pixel refi
    gradient :math:`g_p` is orthogonal to :math:`p - q` (p lies on an edge
    through q, or in a flat region where :math:`g_p = 0`), so q solves
    :math:`\sum_p w_p g_p g_p^T\, q = \sum_p w_p g_p g_p^T\, p` (Förstner),
-   iterated with the window re-centred at q, gradients interpolated.
+   iterated with the window re-centred at q, gradients interpolated. The
+   window scales with the board: 0.45 of the distance to the nearest corner.
 
 References
 ----------
@@ -40,7 +41,14 @@ from graphvision import Array, node
 
 from ..geometry import apply_homography, estimate_homography
 
-__all__ = ["BoardCorners", "board_corners", "find_board", "refine_corners", "saddle_candidates"]
+__all__ = [
+    "BoardCorners",
+    "board_corners",
+    "find_board",
+    "grid_spacing",
+    "refine_corners",
+    "saddle_candidates",
+]
 
 
 def saddle_candidates(image: np.ndarray, count: int, sigma: float) -> np.ndarray:
@@ -101,7 +109,7 @@ def _cell_mean(image: np.ndarray, corners: np.ndarray, columns: int, a: int, b: 
 
 
 def find_board(
-    image: np.ndarray, columns: int, rows: int, sigma: float = 2.0, window: int = 5
+    image: np.ndarray, columns: int, rows: int, sigma: float = 2.0, max_window: int = 15
 ) -> np.ndarray | None:
     """The ``rows·columns`` inner corners in fixed order (module docstring), or None."""
     count = columns * rows
@@ -135,20 +143,42 @@ def find_board(
         for c in accepted
     ]
     best = accepted[int(np.argmin(darkness))]
-    return refine_corners(image, best, window)
+    # the window grows with the squares (0.45 of the spacing), within [3, max_window]
+    radius = np.clip(0.45 * grid_spacing(best, columns, rows), 3.0, max_window)
+    return refine_corners(image, best, radius)
+
+
+def grid_spacing(corners: np.ndarray, columns: int, rows: int) -> np.ndarray:
+    """Distance from each corner of a labelled grid to its nearest grid neighbour."""
+    grid = corners.reshape(rows, columns, 2)
+    nearest = np.full((rows, columns), np.inf)
+    across = np.linalg.norm(np.diff(grid, axis=1), axis=2)
+    down = np.linalg.norm(np.diff(grid, axis=0), axis=2)
+    nearest[:, :-1] = np.minimum(nearest[:, :-1], across)
+    nearest[:, 1:] = np.minimum(nearest[:, 1:], across)
+    nearest[:-1] = np.minimum(nearest[:-1], down)
+    nearest[1:] = np.minimum(nearest[1:], down)
+    return nearest.ravel()
 
 
 def refine_corners(
-    image: np.ndarray, corners: np.ndarray, window: int, iterations: int = 20
+    image: np.ndarray, corners: np.ndarray, radius: np.ndarray, iterations: int = 20
 ) -> np.ndarray:
-    """Förstner's sub-pixel corner (module docstring), all corners at once."""
-    smooth = ndimage.gaussian_filter(image.astype(np.float64), 0.7)
+    """Förstner's sub-pixel corner (module docstring), all corners at once.
+
+    Corner i uses a square window of half size ``radius[i]`` with Gaussian
+    weights of σ = ``radius[i]``, on the gradient of the image smoothed by σ = 1.
+    """
+    smooth = ndimage.gaussian_filter(image.astype(np.float64), 1.0)
     gy, gx = np.gradient(smooth)
-    offsets = np.arange(-window, window + 1, dtype=np.float64)
+    half = int(np.ceil(radius.max()))
+    offsets = np.arange(-half, half + 1, dtype=np.float64)
     grid_y, grid_x = np.meshgrid(offsets, offsets, indexing="ij")
     ox, oy = grid_x.ravel(), grid_y.ravel()
-    weight = np.exp(-(ox**2 + oy**2) / (2 * (window / 2) ** 2))
-    weight[(ox == 0) & (oy == 0)] = 0.0  # the centre's gradient carries no position
+    r = radius[:, None]
+    inside = (np.abs(ox) <= r) & (np.abs(oy) <= r)
+    weight = np.exp(-(ox**2 + oy**2) / (2 * r**2)) * inside
+    weight[:, (ox == 0) & (oy == 0)] = 0.0  # the centre's gradient carries no position
     q = corners.astype(np.float64).copy()
     for _ in range(iterations):
         px = q[:, :1] + ox  # N×P sample positions
@@ -184,7 +214,7 @@ def board_corners(
     columns: Annotated[int, Field(ge=2, le=40)] = 9,
     rows: Annotated[int, Field(ge=2, le=40)] = 6,
     sigma: Annotated[float, Field(gt=0)] = 2.0,
-    window: Annotated[int, Field(ge=2, le=20)] = 5,
+    max_window: Annotated[int, Field(ge=3, le=50)] = 15,
 ) -> BoardCorners:
     """Inner corners of a checkerboard in each view, sub-pixel, in a fixed order.
 
@@ -202,8 +232,9 @@ def board_corners(
         Inner corners along the board's x and y.
     sigma : float
         Scale of the saddle detector, pixels (about a sixth of a square).
-    window : int
-        Half size of the refinement window, pixels.
+    max_window : int
+        Largest half size of the refinement window, pixels (each corner's
+        window is 0.45 of its distance to the nearest corner, at least 3).
 
     Returns
     -------
@@ -215,7 +246,7 @@ def board_corners(
         raise ValueError(f"views must be H×W or N×H×W gray images, got shape {views.shape}")
     corners = np.full((len(stack), columns * rows, 2), np.nan)
     for k, image in enumerate(stack):
-        found = find_board(np.asarray(image, np.float64), columns, rows, sigma, window)
+        found = find_board(np.asarray(image, np.float64), columns, rows, sigma, max_window)
         if found is not None:
             corners[k] = found
     return BoardCorners(corners, np.isfinite(corners).all(axis=(1, 2)))
