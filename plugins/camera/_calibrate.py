@@ -28,8 +28,6 @@ from typing import Annotated, NamedTuple
 
 import numpy as np
 from pydantic import Field
-from scipy.optimize import least_squares
-from scipy.sparse import lil_matrix
 
 from graphvision import Array, Camera, Float, PinholeCamera, Points2D, Points3D, node
 
@@ -133,6 +131,8 @@ def calibrate_dlt(
     if len(world) < 6:
         raise ValueError(f"the DLT needs at least 6 correspondences, got {len(world)}")
     check_non_coplanar(world)
+    from scipy.optimize import least_squares
+
     K, R, C = decompose_projection(dlt_projection(world, image))
     params = np.concatenate(
         [[K[0, 0], K[1, 1], K[0, 1], K[0, 2], K[1, 2]], vector_from_rotation(R), C]
@@ -248,6 +248,9 @@ def calibrate_board(
         )
     if np.abs(object_points[:, 2]).max() > 1e-9:
         raise ValueError("object_points must lie on the board plane Z = 0")
+    from scipy.optimize import least_squares
+    from scipy.sparse import lil_matrix
+
     usable = np.isfinite(corners).all(axis=(1, 2))
     missing = np.flatnonzero(~usable).tolist()
     if usable.sum() < min_views:

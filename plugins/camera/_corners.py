@@ -34,8 +34,6 @@ from typing import Annotated, NamedTuple
 
 import numpy as np
 from pydantic import Field
-from scipy import ndimage
-from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from graphvision import Array, node
 
@@ -53,6 +51,8 @@ __all__ = [
 
 def saddle_candidates(image: np.ndarray, count: int, sigma: float) -> np.ndarray:
     """The ``count`` strongest local maxima of :math:`-\\det H` (at scale ``sigma``), ``N×2``."""
+    from scipy import ndimage
+
     smooth = ndimage.gaussian_filter(image.astype(np.float64), sigma)
     iy, ix = np.gradient(smooth)
     iyy, iyx = np.gradient(iy)
@@ -70,6 +70,8 @@ def saddle_candidates(image: np.ndarray, count: int, sigma: float) -> np.ndarray
 
 def _largest_quadrilateral(points: np.ndarray) -> np.ndarray:
     """The 4 hull vertices enclosing the largest area, in hull (counter-clockwise) order."""
+    from scipy.spatial import ConvexHull
+
     hull = points[ConvexHull(points).vertices]
     best, best_area = hull[:4], -1.0
     for quad in combinations(range(len(hull)), 4):
@@ -85,6 +87,8 @@ def _label(
     candidates: np.ndarray, grid: np.ndarray, quad: np.ndarray, extremes: np.ndarray
 ) -> np.ndarray | None:
     """Candidates in grid order for one quad-to-grid correspondence, or None."""
+    from scipy.spatial import cKDTree
+
     tree = cKDTree(candidates)
     h = estimate_homography(extremes, quad)
     for _ in range(3):
@@ -103,6 +107,8 @@ def _label(
 
 def _cell_mean(image: np.ndarray, corners: np.ndarray, columns: int, a: int, b: int) -> float:
     """Mean intensity at the centre of the cell between corners (a, b) and (a+1, b+1)."""
+    from scipy import ndimage
+
     idx = [b * columns + a, b * columns + a + 1, (b + 1) * columns + a, (b + 1) * columns + a + 1]
     x, y = corners[idx].mean(axis=0)
     return float(ndimage.map_coordinates(image, [[y], [x]], order=1)[0])
@@ -112,6 +118,9 @@ def find_board(
     image: np.ndarray, columns: int, rows: int, sigma: float = 2.0, max_window: int = 15
 ) -> np.ndarray | None:
     """The ``rows·columns`` inner corners in fixed order (module docstring), or None."""
+    from scipy import ndimage
+    from scipy.spatial import QhullError
+
     count = columns * rows
     candidates = saddle_candidates(image, count, sigma)
     if len(candidates) < count:
@@ -169,6 +178,8 @@ def refine_corners(
     Corner i uses a square window of half size ``radius[i]`` with Gaussian
     weights of σ = ``radius[i]``, on the gradient of the image smoothed by σ = 1.
     """
+    from scipy import ndimage
+
     smooth = ndimage.gaussian_filter(image.astype(np.float64), 1.0)
     gy, gx = np.gradient(smooth)
     half = int(np.ceil(radius.max()))

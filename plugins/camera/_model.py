@@ -6,7 +6,6 @@ from typing import Annotated
 
 import numpy as np
 from pydantic import Field
-from scipy import ndimage
 
 from graphvision import Array, Camera, ImageT, PinholeCamera, Points2D, Points3D, node
 
@@ -220,6 +219,8 @@ def undistort_points(camera: Camera, points: Points2D) -> Points2D:
 
 def remap(image: np.ndarray, source: np.ndarray) -> np.ndarray:
     """Sample ``image`` bilinearly at ``source`` (H×W×2, (x, y)); outside is 0."""
+    from scipy import ndimage
+
     coords = [source[..., 1], source[..., 0]]
     if image.ndim == 2:
         out = ndimage.map_coordinates(image, coords, order=1, mode="constant", cval=0.0)

@@ -23,7 +23,6 @@ References
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 
 __all__ = [
     "decompose_projection",
@@ -203,6 +202,8 @@ def decompose_projection(P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
     ValueError
         When M is singular (P is not a finite camera).
     """
+    import scipy.linalg
+
     P = np.asarray(P, dtype=np.float64)
     M = P[:, :3]
     det = np.linalg.det(M)

@@ -27,7 +27,6 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from scipy import ndimage
 
 from graphvision import ColorImage, GrayImage, node
 
@@ -72,6 +71,8 @@ def bayer_masks(shape: tuple[int, int], pattern: str) -> np.ndarray:
 
 def _convolve(image: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     # 'mirror' reflects about the edge pixel, so the 2×2 colour pattern continues
+    from scipy import ndimage
+
     return ndimage.convolve(image, kernel, mode="mirror")
 
 

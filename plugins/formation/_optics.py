@@ -29,7 +29,6 @@ from typing import Annotated, NamedTuple
 
 import numpy as np
 from pydantic import Field
-from scipy import ndimage
 
 from graphvision import Float, FloatImage, ImageT, node
 
@@ -180,6 +179,8 @@ def defocus(
     radius = 0.5 * circle_of_confusion(depth, focal_length, f_number, focus) / pixel_pitch
     steps = np.linspace(0.0, float(radius.max()), levels)
     position = np.interp(radius, steps, np.arange(levels)) if steps[-1] > 0 else radius * 0
+    from scipy import ndimage
+
     out = np.zeros(image.shape, np.float64)
     for level, r in enumerate(steps):
         weight = np.clip(1 - np.abs(position - level), 0, 1)

@@ -14,7 +14,6 @@ from typing import Annotated, NamedTuple
 
 import numpy as np
 from pydantic import Field
-from scipy import ndimage
 
 from graphvision import Array, Camera, PinholeCamera, Points3D, node
 
@@ -178,6 +177,8 @@ def board_views(
     object_points : (rows·columns, 3) the corners on the board, Z = 0
     camera : the rendering camera (its pose is the first view's)
     """
+    from scipy import ndimage
+
     rng = np.random.default_rng(seed)
     K = np.array(
         [
