@@ -254,9 +254,10 @@ def calibrate_board(
     usable = np.isfinite(corners).all(axis=(1, 2))
     missing = np.flatnonzero(~usable).tolist()
     if usable.sum() < min_views:
+        reason = f"; no board found in views {missing}" if missing else ""
         raise ValueError(
-            f"only {int(usable.sum())} of {len(corners)} views have a board, need {min_views}; "
-            f"no board found in views {missing}"
+            f"only {int(usable.sum())} of {len(corners)} views have a board, need "
+            f"{min_views}{reason}"
         )
     views = np.flatnonzero(usable)
     image_points = corners[views]

@@ -232,3 +232,11 @@ def test_vanishing_points_refuse_a_family_of_one_segment_and_a_point_segment():
     segments[2] = [5, 5, 5, 5]
     with pytest.raises(ValueError, match="coincident end points"):
         vanishing_points.__wrapped__(segments, np.array([0, 0, 0]))
+
+
+def test_too_few_views_in_a_pipeline_fail_naming_the_node():
+    graph = gv.load_pipeline(PIPELINES / "calibrate.yaml")
+    with pytest.raises(gv.RunError) as failure:
+        gv.run(graph, overrides={"boards.views": 2}, outputs=["K"])
+    message = str(failure.value.failures)
+    assert "calib" in message and "only 2 of 2 views have a board, need 3" in message
