@@ -6,7 +6,7 @@ Algorithms never live here; other families' tests and pipelines use these
 nodes as their ground truth.
 """
 
-from ._boards import board_object_points, board_views, render_board
+from ._boards import board_object_points, board_views, plane_view, render_board
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
 from ._plane_lines import plane_lines
@@ -19,6 +19,7 @@ __all__ = [
     "impulse_noise",
     "line_points",
     "plane_lines",
+    "plane_view",
     "random_homography",
     "random_warp",
     "render_board",

@@ -15,11 +15,11 @@ from typing import Annotated, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import Array, Camera, PinholeCamera, Points3D, node
+from graphvision import Array, Camera, ImageT, PinholeCamera, Points3D, node
 
 from ..camera import look_at, project_points, undistort_normalised
 
-__all__ = ["board_object_points", "board_views", "render_board"]
+__all__ = ["board_object_points", "board_views", "plane_view", "render_board"]
 
 _DARK, _LIGHT, _BACKGROUND = 0.1, 0.9, 0.45
 
@@ -224,3 +224,62 @@ def board_views(
         K, R=poses[0][0], C=poses[0][1], distortion=distortion, size=np.array([width, height])
     )
     return BoardViews(np.stack(images), np.stack(corners), objects, camera)
+
+
+@node("synthetic.plane_view", version=1)
+def plane_view(
+    texture: ImageT,
+    camera: Camera,
+    *,
+    scale: Annotated[float, Field(gt=0)] = 1.0,
+    background: Annotated[float, Field(ge=0, le=1)] = 0.0,
+) -> ImageT:
+    """A textured plane photographed by a known camera (with its lens distortion).
+
+    The texture lies on the world plane Z = 0, pixel (column, row) at
+    ``(scale·column, scale·row, 0)``. Each image pixel's ray (undistorted by
+    Newton's method) meets the plane; the texture is sampled there
+    bilinearly. Points off the texture, or rays that miss the plane, show
+    ``background``.
+
+    Parameters
+    ----------
+    texture : Image
+        The picture on the plane.
+    camera : Camera
+        The camera (K, R, C̃, distortion, size: the output is size[1] × size[0]).
+    scale : float
+        World units per texture pixel.
+    background : float
+        Intensity where the plane or the texture is not seen.
+
+    Raises
+    ------
+    ValueError
+        When the camera has no image size.
+    """
+    from scipy import ndimage
+
+    width, height = (int(v) for v in camera.size)
+    if width < 1 or height < 1:
+        raise ValueError(
+            f"camera size must be positive (width, height), got {camera.size.tolist()}"
+        )
+    rays = _pixel_rays(camera, width, height)
+    directions = np.concatenate([rays, np.ones((*rays.shape[:2], 1))], axis=2) @ camera.R
+    with np.errstate(divide="ignore", invalid="ignore"):
+        depth = -camera.C[2] / directions[..., 2]
+    hits = (camera.C[:2] + depth[..., None] * directions[..., :2]) / scale
+    seen = np.isfinite(hits).all(axis=2) & (depth > 0)
+    hits = np.where(seen[..., None], hits, -1e6)
+    rows, cols = texture.shape[:2]
+    seen &= (hits[..., 0] >= 0) & (hits[..., 0] <= cols - 1)
+    seen &= (hits[..., 1] >= 0) & (hits[..., 1] <= rows - 1)
+    coords = [hits[..., 1], hits[..., 0]]
+    channels = [texture] if texture.ndim == 2 else [texture[..., c] for c in range(3)]
+    sampled = [
+        np.where(seen, ndimage.map_coordinates(ch, coords, order=1, mode="nearest"), background)
+        for ch in channels
+    ]
+    out = sampled[0] if texture.ndim == 2 else np.stack(sampled, axis=-1)
+    return np.clip(out, 0, 1).astype(np.float32)

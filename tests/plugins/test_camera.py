@@ -21,7 +21,7 @@ from graphvision_plugins.camera import (
     undistort_points,
     vanishing_points,
 )
-from graphvision_plugins.synthetic import board_views, plane_lines
+from graphvision_plugins.synthetic import board_views, plane_lines, plane_view
 
 from ..conftest import PIPELINES
 
@@ -240,3 +240,24 @@ def test_too_few_views_in_a_pipeline_fail_naming_the_node():
         gv.run(graph, overrides={"boards.views": 2}, outputs=["K"])
     message = str(failure.value.failures)
     assert "calib" in message and "only 2 of 2 views have a board, need 3" in message
+
+
+def test_plane_view_through_a_fronto_parallel_camera_is_the_texture():
+    texture = np.random.default_rng(5).uniform(0, 1, (48, 64)).astype(np.float32)
+    # K maps the plane Z = 0 seen from distance 100 with f = 100: one pixel per unit
+    camera = pinhole(
+        fx=100, fy=100, cx=31.5, cy=23.5, centre=(31.5, 23.5, -100), width=64, height=48
+    )
+    np.testing.assert_allclose(plane_view(texture, camera), texture, atol=1e-5)
+
+
+def test_undistorting_a_distorted_plane_view_gives_the_pinhole_view():
+    y, x = np.mgrid[0:120, 0:160] / 160.0
+    texture = (0.5 + 0.4 * np.sin(9 * x) * np.cos(7 * y)).astype(np.float32)
+    pose = {"rotation": (0.2, -0.1, 0.05), "centre": (80, 60, -150), "width": 160, "height": 120}
+    # scale 2: the texture spans 320 × 240 units, beyond what the camera sees
+    ideal = plane_view(texture, pinhole(fx=150, fy=150, cx=79.5, cy=59.5, **pose), scale=2)
+    lens = pinhole(fx=150, fy=150, cx=79.5, cy=59.5, k1=-0.2, k2=0.05, **pose)
+    restored = undistort_image(plane_view(texture, lens, scale=2), lens)
+    inner = (slice(25, 95), slice(30, 130))
+    assert np.abs(restored[inner] - ideal[inner]).max() < 0.02
