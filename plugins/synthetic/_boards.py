@@ -265,7 +265,7 @@ def plane_view(
         raise ValueError(
             f"camera size must be positive (width, height), got {camera.size.tolist()}"
         )
-    rays = _pixel_rays(camera, width, height)
+    rays: np.ndarray = _pixel_rays(camera, width, height)
     directions = np.concatenate([rays, np.ones((*rays.shape[:2], 1))], axis=2) @ camera.R
     with np.errstate(divide="ignore", invalid="ignore"):
         depth = -camera.C[2] / directions[..., 2]
