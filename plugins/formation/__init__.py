@@ -11,7 +11,13 @@ from ._optics import (
     field_of_view,
     focus_distance,
 )
-from ._vignetting import correct_vignetting, estimate_vignetting, vignette, vignetting_field
+from ._vignetting import (
+    correct_vignetting,
+    draw_vignetting,
+    estimate_vignetting,
+    vignette,
+    vignetting_field,
+)
 
 __all__ = [
     "bayer_masks",
@@ -20,6 +26,7 @@ __all__ = [
     "defocus",
     "demosaic",
     "depth_of_field",
+    "draw_vignetting",
     "estimate_vignetting",
     "field_of_view",
     "focus_distance",

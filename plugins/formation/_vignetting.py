@@ -25,9 +25,15 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field
 
-from graphvision import Array, GrayImage, ImageT, node
+from graphvision import Array, ColorImage, GrayImage, ImageT, node
 
-__all__ = ["correct_vignetting", "estimate_vignetting", "vignette", "vignetting_field"]
+__all__ = [
+    "correct_vignetting",
+    "draw_vignetting",
+    "estimate_vignetting",
+    "vignette",
+    "vignetting_field",
+]
 
 
 def _radius(shape: tuple[int, ...], normalised: bool) -> np.ndarray:
@@ -124,3 +130,33 @@ def correct_vignetting(image: ImageT, coefficients: Array) -> ImageT:
         raise ValueError(f"the vignetting polynomial reaches {field.min():.3g} ≤ 0 in the image")
     shaped = field[..., None] if image.ndim == 3 else field
     return np.clip(image / shaped, 0, 1).astype(np.float32)
+
+
+@node("formation.draw_vignetting", version=1)
+def draw_vignetting(
+    flat: GrayImage,
+    coefficients: Array,
+    *,
+    contours: Annotated[int, Field(ge=1, le=20)] = 5,
+) -> ColorImage:
+    """The flat field with iso-lines of the fitted V drawn over it (0.95, 0.9, … of the centre).
+
+    Parameters
+    ----------
+    flat : GrayImage
+        The flat-field image the coefficients were fitted to.
+    coefficients : Array
+        ``(a1, a2, a3)`` from ``formation.estimate_vignetting``.
+    contours : int
+        Number of iso-lines, 5 % apart.
+    """
+    if coefficients.shape != (3,):
+        raise ValueError(f"coefficients must be (a1, a2, a3), got shape {coefficients.shape}")
+    field = vignetting_field(flat.shape, "polynomial", 1.0, coefficients)
+    canvas = np.repeat(flat[..., None], 3, axis=2).astype(np.float32)
+    step = np.gradient(field)
+    width = np.hypot(*step)  # draw a band about one pixel wide around each level
+    for k in range(1, contours + 1):
+        band = np.abs(field - (1 - 0.05 * k)) < 0.5 * width + 1e-12
+        canvas[band] = (1.0, 0.55, 0.0)
+    return canvas

@@ -11,6 +11,7 @@ from graphvision_plugins.formation import (
     defocus,
     demosaic,
     depth_of_field,
+    draw_vignetting,
     estimate_vignetting,
     field_of_view,
     focus_distance,
@@ -73,6 +74,11 @@ def test_vignetting_is_estimated_from_a_flat_field_and_corrected():
     np.testing.assert_allclose(coefficients, [-0.4, 0.1, -0.05], atol=0.03)
     restored = correct_vignetting(dark, coefficients)
     assert np.abs(restored - flat).max() < 0.01
+    drawing = draw_vignetting(noisy, coefficients)
+    assert (
+        drawing.shape == (60, 80, 3) and (drawing[30, 40] == noisy[30, 40]).all()
+    )  # centre: V = 1
+    assert (drawing[..., 2] == 0).sum() > 50  # the orange iso-lines
     natural = vignette(flat, model="cos4", focal=40.0)
     corner = (1 + (np.hypot(39.5, 29.5) / 40.0) ** 2) ** -2  # cos⁴ θ at the corner
     assert natural[0, 0] == pytest.approx(0.8 * corner, rel=1e-5)
