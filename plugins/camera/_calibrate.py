@@ -34,6 +34,7 @@ from graphvision import Array, Camera, Float, PinholeCamera, Points2D, Points3D,
 from ..geometry import estimate_homography, normalising_transform
 from ._projection import (
     decompose_projection,
+    distort_normalised,
     project_points,
     rotation_from_vector,
     vector_from_rotation,
@@ -193,6 +194,32 @@ def _pose_from_homography(K: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.
     return R, t
 
 
+def _rotations(rvecs: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula for ``V×3`` axis-angle vectors at once: ``V×3×3``."""
+    theta = np.linalg.norm(rvecs, axis=1)
+    safe = np.where(theta > 1e-12, theta, 1.0)
+    k = rvecs / safe[:, None]
+    kx = np.zeros((len(rvecs), 3, 3))
+    kx[:, 0, 1], kx[:, 0, 2], kx[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    kx[:, 1, 0], kx[:, 2, 0], kx[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    sin = np.where(theta > 1e-12, np.sin(theta), theta)[:, None, None]
+    cos = np.where(theta > 1e-12, 1 - np.cos(theta), 0.0)[:, None, None]
+    return np.eye(3) + sin * kx + cos * kx @ kx
+
+
+def _project_views(
+    points: np.ndarray, K: np.ndarray, dist: np.ndarray, rvecs: np.ndarray, tvecs: np.ndarray
+) -> np.ndarray:
+    """Project ``N×3`` points into V views (pose R(rvec), t): ``V×N×2`` pixels."""
+    cam = np.einsum("vij,nj->vni", _rotations(rvecs), points) + tvecs[:, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xy = cam[..., :2] / np.where(cam[..., 2:] > 0, cam[..., 2:], np.nan)
+    xy = distort_normalised(xy.reshape(-1, 2), dist).reshape(xy.shape)
+    u = K[0, 0] * xy[..., 0] + K[0, 1] * xy[..., 1] + K[0, 2]
+    v = K[1, 1] * xy[..., 1] + K[1, 2]
+    return np.stack([u, v], axis=-1)
+
+
 class BoardCalibration(NamedTuple):
     camera: Camera
     reprojection_rms: Float
@@ -249,7 +276,6 @@ def calibrate_board(
     if np.abs(object_points[:, 2]).max() > 1e-9:
         raise ValueError("object_points must lie on the board plane Z = 0")
     from scipy.optimize import least_squares
-    from scipy.sparse import lil_matrix
 
     usable = np.isfinite(corners).all(axis=(1, 2))
     missing = np.flatnonzero(~usable).tolist()
@@ -286,26 +312,14 @@ def calibrate_board(
 
     def residual(p: np.ndarray) -> np.ndarray:
         K, dist = unpack(p)
-        out = np.empty((n_views, len(object_points), 2))
-        for k in range(n_views):
-            base = 4 + n_dist + 6 * k
-            R = rotation_from_vector(p[base : base + 3])
-            t = p[base + 3 : base + 6]
-            out[k] = project_points(object_points, K, R, -R.T @ t, dist) - image_points[k]
-        return np.nan_to_num(out, nan=1e6).ravel()
+        poses = p[4 + n_dist :].reshape(n_views, 6)
+        projected = _project_views(object_points, K, dist, poses[:, :3], poses[:, 3:])
+        return np.nan_to_num(projected - image_points, nan=1e6).ravel()
 
     start = [K[0, 0], K[1, 1], K[0, 2], K[1, 2], *np.zeros(n_dist)]
     for R, t in poses:
         start += [*vector_from_rotation(R), *t]
-    sparsity = lil_matrix((n_views * len(object_points) * 2, len(start)), dtype=int)
-    sparsity[:, : 4 + n_dist] = 1
-    per_view = len(object_points) * 2
-    for k in range(n_views):
-        base = 4 + n_dist + 6 * k
-        sparsity[k * per_view : (k + 1) * per_view, base : base + 6] = 1
-    fit = least_squares(
-        residual, np.array(start), jac_sparsity=sparsity, x_scale="jac", method="trf"
-    )
+    fit = least_squares(residual, np.array(start), x_scale="jac", method="lm")
     K, dist = unpack(fit.x)
     R0 = rotation_from_vector(fit.x[4 + n_dist : 7 + n_dist])
     t0 = fit.x[7 + n_dist : 10 + n_dist]
