@@ -55,8 +55,8 @@ def _corner_rows(cv2, boards) -> tuple[list[str], np.ndarray, np.ndarray]:
     t_ours = best(lambda: camera.board_corners(boards.views), 3)
     t_cv = best(lambda: _opencv_corners(cv2, boards.views, boards.corners), 3)
     rows = [
-        "| corners (10 views) | found | mean error px | max error px | time ratio |",
-        "| --- | --- | --- | --- | --- |",
+        "| corners (10 views) | found | mean error px | max error px | ms | time ratio |",
+        "| --- | --- | --- | --- | --- | --- |",
     ]
     for name, corners, seconds in (
         ("camera.board_corners", ours, t_ours),
@@ -66,7 +66,7 @@ def _corner_rows(cv2, boards) -> tuple[list[str], np.ndarray, np.ndarray]:
         error = np.linalg.norm(corners[found] - boards.corners[found], axis=2)
         rows.append(
             f"| {name} | {found.sum()}/10 | {error.mean():.4f} | {error.max():.3f} | "
-            f"{seconds / t_cv:.2f} |"
+            f"{seconds * 1e3:.0f} | {seconds / t_cv:.2f} |"
         )
     return rows, ours, theirs
 
@@ -74,8 +74,8 @@ def _corner_rows(cv2, boards) -> tuple[list[str], np.ndarray, np.ndarray]:
 def _calibration_rows(cv2, boards, corner_sets: dict[str, np.ndarray]) -> list[str]:
     truth = boards.camera
     rows = [
-        "| calibration | corners | focal error % | k1 error | RMS px | time ratio |",
-        "| --- | --- | --- | --- | --- | --- |",
+        "| calibration | corners | focal error % | k1 error | RMS px | ms | time ratio |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
     ]
     flags = cv2.CALIB_ZERO_TANGENT_DIST | cv2.CALIB_FIX_K3
     objects = boards.object_points.astype(np.float32)
@@ -103,7 +103,7 @@ def _calibration_rows(cv2, boards, corner_sets: dict[str, np.ndarray]) -> list[s
             focal = 100 * max(abs(k[0, 0] / truth.K[0, 0] - 1), abs(k[1, 1] / truth.K[1, 1] - 1))
             rows.append(
                 f"| {name} | {source} | {focal:.3f} | {abs(k1 + 0.1):.4f} | {r:.3f} | "
-                f"{seconds / t_cv:.2f} |"
+                f"{seconds * 1e3:.0f} | {seconds / t_cv:.2f} |"
             )
     return rows
 

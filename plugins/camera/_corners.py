@@ -37,7 +37,7 @@ from pydantic import Field
 
 from graphvision import Array, node
 
-from ..geometry import apply_homography, estimate_homography
+from ..geometry import apply_homography, normalising_transform
 
 __all__ = [
     "BoardCorners",
@@ -83,6 +83,29 @@ def _largest_quadrilateral(points: np.ndarray) -> np.ndarray:
     return best
 
 
+def _grid_homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
+    """Normalised DLT for the grid labelling, solved by the 9×9 normal equations.
+
+    The same estimate as :func:`~graphvision_plugins.geometry.estimate_homography`
+    (the smallest eigenvector of :math:`A^T A` is the smallest right singular
+    vector of A) without the full SVD of the 2N×9 system, which this loop
+    runs dozens of times per view.
+    """
+    t_src, t_dst = normalising_transform(src), normalising_transform(dst)
+    a = apply_homography(t_src, src)
+    b = apply_homography(t_dst, dst)
+    xs = np.column_stack([a, np.ones(len(a))])
+    zeros = np.zeros((len(a), 3))
+    rows = np.vstack(
+        [np.hstack([-xs, zeros, b[:, :1] * xs]), np.hstack([zeros, -xs, b[:, 1:] * xs])]
+    )
+    values, vectors = np.linalg.eigh(rows.T @ rows)
+    if values[1] < 1e-12 * values[-1]:
+        return None
+    h = np.linalg.inv(t_dst) @ vectors[:, 0].reshape(3, 3) @ t_src
+    return h / h[2, 2] if abs(h[2, 2]) > 1e-15 else None
+
+
 def _label(
     candidates: np.ndarray, grid: np.ndarray, quad: np.ndarray, extremes: np.ndarray
 ) -> np.ndarray | None:
@@ -90,7 +113,7 @@ def _label(
     from scipy.spatial import cKDTree
 
     tree = cKDTree(candidates)
-    h = estimate_homography(extremes, quad)
+    h = _grid_homography(extremes, quad)
     for _ in range(3):
         if h is None:
             return None
@@ -101,7 +124,7 @@ def _label(
         spacing = np.median(np.linalg.norm(np.diff(predicted, axis=0), axis=1))
         if len(set(index.tolist())) != len(grid) or distance.max() > 0.35 * spacing:
             return None
-        h = estimate_homography(grid, candidates[index])
+        h = _grid_homography(grid, candidates[index])
     return candidates[index]
 
 
