@@ -261,3 +261,13 @@ def test_undistorting_a_distorted_plane_view_gives_the_pinhole_view():
     restored = undistort_image(plane_view(texture, lens, scale=2), lens)
     inner = (slice(25, 95), slice(30, 130))
     assert np.abs(restored[inner] - ideal[inner]).max() < 0.02
+
+
+def test_negative_focal_camera_and_singular_p_are_refused():
+    mirrored = gv.PinholeCamera(np.diag([-500.0, 500.0, 1.0]))
+    with pytest.raises(ValueError, match="focal lengths must be positive, got fx = -500"):
+        project.__wrapped__(mirrored, np.array([[0.0, 0, 5]]))
+    with pytest.raises(ValueError, match="singular: P is not a finite camera"):
+        decompose.__wrapped__(np.hstack([np.ones((3, 3)), np.ones((3, 1))]))
+    with pytest.raises(ValueError, match="must be a finite 3×4 matrix"):
+        decompose.__wrapped__(np.eye(3))
