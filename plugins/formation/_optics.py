@@ -146,9 +146,9 @@ def defocus(
     """Blur each pixel by the circle of confusion of its depth (thin lens, module docstring).
 
     The blur radii are quantised to ``levels`` values; the image is filtered
-    once per level with an anti-aliased disc and each pixel takes the result
-    at its level (linear between the two nearest levels). Occlusion at depth
-    edges is not modelled.
+    once per level with an anti-aliased disc (FFT convolution, borders
+    mirrored) and each pixel takes the result at its level (linear between
+    the two nearest levels). Occlusion at depth edges is not modelled.
 
     Parameters
     ----------
@@ -172,6 +172,8 @@ def defocus(
     ValueError
         When ``depth`` has another size than the image or is not > focal_length.
     """
+    from scipy import fft
+
     if depth.shape != image.shape[:2]:
         raise ValueError(f"depth must be {image.shape[:2]} like the image, got {depth.shape}")
     if not (depth > focal_length).all():
@@ -179,19 +181,27 @@ def defocus(
     radius = 0.5 * circle_of_confusion(depth, focal_length, f_number, focus) / pixel_pitch
     steps = np.linspace(0.0, float(radius.max()), levels)
     position = np.interp(radius, steps, np.arange(levels)) if steps[-1] > 0 else radius * 0
-    from scipy import ndimage
-
-    out = np.zeros(image.shape, np.float64)
+    pad = int(np.ceil(steps[-1])) + 1
+    layers = image[..., None] if image.ndim == 2 else image
+    padded = np.pad(layers.astype(np.float64), ((pad, pad), (pad, pad), (0, 0)), mode="symmetric")
+    shape = padded.shape[:2]
+    spectrum = fft.rfft2(padded, axes=(0, 1))  # once; each level multiplies by its disc
+    rows, cols = layers.shape[:2]
+    out = np.zeros(layers.shape, np.float64)
     for level, r in enumerate(steps):
         weight = np.clip(1 - np.abs(position - level), 0, 1)
         if not weight.any():
             continue
-        kernel = _disc(r) if r > 0.5 else np.ones((1, 1))
-        if image.ndim == 3:
-            blurred = np.stack(
-                [ndimage.convolve(image[..., c], kernel, mode="mirror") for c in range(3)], -1
-            )
-            out += weight[..., None] * blurred
+        if r > 0.5:
+            disc = _disc(r)
+            half = disc.shape[0] // 2
+            kernel = np.zeros(shape)
+            kernel[: disc.shape[0], : disc.shape[1]] = disc
+            kernel = np.roll(kernel, (-half, -half), axis=(0, 1))  # centred at (0, 0)
+            response = fft.rfft2(kernel)[..., None] * spectrum
+            blurred = fft.irfft2(response, s=shape, axes=(0, 1))[pad : pad + rows, pad : pad + cols]
         else:
-            out += weight * ndimage.convolve(image.astype(np.float64), kernel, mode="mirror")
+            blurred = layers
+        out += weight[..., None] * blurred
+    out = out[..., 0] if image.ndim == 2 else out
     return np.clip(out, 0, 1).astype(np.float32)

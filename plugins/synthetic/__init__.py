@@ -7,6 +7,7 @@ nodes as their ground truth.
 """
 
 from ._boards import board_object_points, board_views, plane_view, render_board
+from ._depth import depth_plane
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
 from ._plane_lines import plane_lines
@@ -15,6 +16,7 @@ from ._warps import random_homography, random_warp, two_views
 __all__ = [
     "board_object_points",
     "board_views",
+    "depth_plane",
     "gaussian_noise",
     "impulse_noise",
     "line_points",

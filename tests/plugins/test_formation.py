@@ -7,6 +7,7 @@ import pytest
 
 import graphvision as gv
 from graphvision_plugins.formation import (
+    circle_of_confusion,
     correct_vignetting,
     defocus,
     demosaic,
@@ -120,3 +121,27 @@ def test_gradient_corrected_beats_bilinear_by_2_db(sample):
     out = result.outputs
     assert out["psnr_gradient_corrected"] >= out["psnr_bilinear"] + 2.0
     assert out["psnr_bilinear"] > 25
+
+
+def test_defocus_at_one_depth_is_the_disc_of_its_circle_of_confusion():
+    from scipy import ndimage
+
+    from graphvision_plugins.formation._optics import _disc
+
+    image = np.random.default_rng(2).uniform(0, 1, (50, 70)).astype(np.float32)
+    depth = np.full(image.shape, 4000.0, np.float32)
+    out = defocus(image, depth, focal_length=50, f_number=1.8, focus=2000, pixel_pitch=0.02)
+    radius = 0.5 * float(circle_of_confusion(np.array(4000.0), 50, 1.8, 2000)) / 0.02
+    assert radius == pytest.approx(0.5 * (50 / 1.8) * 50 / 1950 * 0.5 / 0.02)  # 8.9 px
+    # the direct convolution with the same anti-aliased disc, borders mirrored alike
+    expected = ndimage.convolve(image.astype(np.float64), _disc(radius), mode="reflect")
+    np.testing.assert_allclose(out, expected, atol=1e-5)
+
+
+def test_defocus_pipeline_is_sharpest_at_the_focus_distance():
+    out = gv.run(gv.load_pipeline(PIPELINES / "defocus.yaml")).outputs
+    assert out["near_limit"] < 2000 < out["far_limit"]
+    gradient = np.abs(np.diff(out["defocused"].mean(axis=2), axis=1))
+    band = np.abs(out["depth"][:, 0] - 2000)  # distance of each row from the focus plane
+    sharp = gradient[band < 150].mean()
+    assert sharp > 1.8 * gradient[band > 1500].mean()
