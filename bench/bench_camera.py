@@ -1,6 +1,6 @@
 """Cameras and image formation against OpenCV, on data with known truth, in one run.
 
-* **Corners**: the 10 views of ``pipelines/calibrate.yaml`` (9×6 board,
+* **Corners**: the 10 views of ``pipelines/calibrate.yaml`` (9×6 board, fill 0.8,
   k1 = −0.1, blur 0.7 px, noise 0.02); ``camera.board_corners`` against
   ``cv2.findChessboardCorners`` + ``cv2.cornerSubPix`` (11×11 window,
   30 iterations / 0.001) on the same images (uint8), each compared with the
@@ -196,7 +196,7 @@ def main() -> list[str]:
         import cv2
     except ImportError:
         return ["OpenCV is not installed (`pip install -e .[bench]`): camera benchmark skipped"]
-    boards = synthetic.board_views(views=10, k1=-0.1, blur=0.7, noise=0.02, seed=0)
+    boards = synthetic.board_views(views=10, k1=-0.1, fill=0.8, blur=0.7, noise=0.02, seed=0)
     rows, ours, theirs = _corner_rows(cv2, boards)
     corner_sets = {"ours": ours, "OpenCV's": theirs, "true + 0.2 px noise": _noisy(boards)}
     for section in (
