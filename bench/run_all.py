@@ -11,6 +11,7 @@ HERE = Path(__file__).parent
 sys.path.insert(0, str(HERE))
 
 import bench_cache  # noqa: E402
+import bench_camera  # noqa: E402
 import bench_filters  # noqa: E402
 import bench_homography  # noqa: E402
 import bench_recognition  # noqa: E402
@@ -26,6 +27,7 @@ def main() -> None:
         ("Segmentation (segmentation issue)", bench_segmentation.main),
         ("Homography pipeline (features issue)", bench_homography.main),
         ("Recognition (recognition issue)", bench_recognition.main),
+        ("Cameras and image formation (camera issue)", bench_camera.main),
     ]
     lines = [
         f"# graphvision benchmarks — {time.strftime('%Y-%m-%d %H:%M')}",

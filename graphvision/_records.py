@@ -163,7 +163,10 @@ class PinholeCamera:
 
 class CameraPort(RecordPort):
     """A :class:`PinholeCamera`: finite float64 K (upper triangular, K[2, 2] = 1), R a
-    rotation, C (3,), distortion (5,), size (2,) int64."""
+    rotation, C (3,), distortion (5,), size (2,) int64.
+
+    Degrees of freedom: P = K[R | −RC̃] has 11 (a 3×4 matrix up to scale): 5 in K
+    (fx, fy, skew, cx, cy), 3 in R, 3 in C̃; the lens adds 5 (k1, k2, p1, p2, k3)."""
 
     value_class = PinholeCamera
 

@@ -6,16 +6,25 @@ Algorithms never live here; other families' tests and pipelines use these
 nodes as their ground truth.
 """
 
+from ._boards import board_object_points, board_views, plane_view, render_board
+from ._depth import depth_plane
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
+from ._plane_lines import plane_lines
 from ._warps import random_homography, random_warp, two_views
 
 __all__ = [
+    "board_object_points",
+    "board_views",
+    "depth_plane",
     "gaussian_noise",
     "impulse_noise",
     "line_points",
+    "plane_lines",
+    "plane_view",
     "random_homography",
     "random_warp",
+    "render_board",
     "salt_and_pepper",
     "two_views",
 ]

@@ -1,0 +1,343 @@
+r"""Calibration: normalised DLT from 3-D–2-D correspondences, and Zhang's planar method.
+
+**DLT.** Each correspondence :math:`X_i \leftrightarrow x_i = (x, y, w)` gives two
+rows of :math:`A p = 0` (p the 12 entries of P, row by row):
+
+.. math::
+
+    \begin{pmatrix} 0^T & -w X_i^T & y X_i^T \\ w X_i^T & 0^T & -x X_i^T \end{pmatrix} p = 0,
+
+solved by SVD after Hartley's normalisation of both point sets, then refined
+by minimising the reprojection error over K (5), R (3) and C̃ (3).
+
+**Zhang.** A view of the plane Z = 0 is a homography :math:`H = \lambda K [r_1\, r_2\, t]`;
+:math:`r_1 \perp r_2` and :math:`|r_1| = |r_2|` give two linear constraints on
+:math:`B = K^{-T} K^{-1}`: :math:`h_1^T B h_2 = 0`, :math:`h_1^T B h_1 = h_2^T B h_2`.
+B from ≥ 3 views (SVD), K from B in closed form, each view's R, t from
+:math:`K^{-1} H`; then all parameters with radial distortion refined jointly.
+
+References
+----------
+.. [1] Hartley & Zisserman, *Multiple View Geometry*, 2nd ed., 2004, §7.1 (algorithm 7.1).
+.. [2] Z. Zhang, "A flexible new technique for camera calibration", IEEE TPAMI 22(11), 2000.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, NamedTuple
+
+import numpy as np
+from pydantic import Field
+
+from graphvision import Array, Camera, Float, PinholeCamera, Points2D, Points3D, node
+
+from ..geometry import estimate_homography, normalising_transform
+from ._projection import (
+    decompose_projection,
+    distort_normalised,
+    project_points,
+    rotation_from_vector,
+    vector_from_rotation,
+)
+
+__all__ = [
+    "calibrate_board",
+    "calibrate_dlt",
+    "dlt_projection",
+    "focal_error",
+    "zhang_intrinsics",
+]
+
+
+def _normalising_transform_3d(points: np.ndarray) -> np.ndarray:
+    centre = points.mean(axis=0)
+    spread = np.sqrt(((points - centre) ** 2).sum(axis=1).mean())
+    scale = np.sqrt(3.0) / spread
+    U = np.diag([scale, scale, scale, 1.0])
+    U[:3, 3] = -scale * centre
+    return U
+
+
+def check_non_coplanar(points: np.ndarray) -> None:
+    """Raise ValueError when the 3-D points lie on a plane (or a line)."""
+    centred = points - points.mean(axis=0)
+    singular = np.linalg.svd(centred, compute_uv=False)
+    if singular[2] <= 1e-6 * singular[0]:
+        raise ValueError(
+            "the 3-D points are coplanar: a plane only fixes the homography of that plane, "
+            "P stays undetermined (a 3-parameter family fits exactly); use points in at least "
+            "two planes, or planar calibration (camera.calibrate_board)"
+        )
+
+
+def dlt_projection(world: np.ndarray, image: np.ndarray) -> np.ndarray:
+    """Normalised DLT (module docstring): P with :math:`\\|P\\|_F = 1` from ≥ 6 correspondences."""
+    T = normalising_transform(image)
+    U = _normalising_transform_3d(world)
+    X = np.column_stack([world, np.ones(len(world))]) @ U.T
+    x = image @ T[:2, :2].T + T[:2, 2]
+    rows = np.zeros((2 * len(X), 12))
+    rows[0::2, 4:8] = -X
+    rows[0::2, 8:] = x[:, 1:2] * X
+    rows[1::2, 0:4] = X
+    rows[1::2, 8:] = -x[:, 0:1] * X
+    _, _, vt = np.linalg.svd(rows)
+    P = np.linalg.inv(T) @ vt[-1].reshape(3, 4) @ U
+    return P / np.linalg.norm(P)
+
+
+class DltCalibration(NamedTuple):
+    camera: Camera
+    reprojection_rms: Float
+
+
+def _rms(residual: np.ndarray) -> float:
+    return float(np.sqrt((residual.reshape(-1, 2) ** 2).sum(axis=1).mean()))
+
+
+@node("camera.calibrate_dlt", version=1)
+def calibrate_dlt(
+    world: Points3D,
+    image: Points2D,
+    *,
+    refine: bool = True,
+) -> DltCalibration:
+    """Camera (K, R, C̃) from ≥ 6 non-coplanar 3-D points and their images (module docstring).
+
+    Normalised DLT, RQ decomposition, then (with ``refine``) Levenberg-Marquardt
+    on the reprojection error over the 11 parameters (fx, fy, skew, cx, cy,
+    rotation vector, centre). Distortion is not modelled (zero).
+
+    Parameters
+    ----------
+    world : Points3D
+        Points of the calibration object, N×3, not all on one plane.
+    image : Points2D
+        Their measured pixel positions, N×2, in the same order.
+    refine : bool
+        Minimise the geometric (reprojection) error after the algebraic DLT.
+
+    Returns
+    -------
+    camera : the calibrated camera
+    reprojection_rms : RMS distance between measured and reprojected points, pixels
+
+    Raises
+    ------
+    ValueError
+        With fewer than 6 correspondences, unequal counts, or coplanar points.
+    """
+    if len(world) != len(image):
+        raise ValueError(f"world has {len(world)} points but image has {len(image)}")
+    if len(world) < 6:
+        raise ValueError(f"the DLT needs at least 6 correspondences, got {len(world)}")
+    check_non_coplanar(world)
+    from scipy.optimize import least_squares
+
+    K, R, C = decompose_projection(dlt_projection(world, image))
+    params = np.concatenate(
+        [[K[0, 0], K[1, 1], K[0, 1], K[0, 2], K[1, 2]], vector_from_rotation(R), C]
+    )
+
+    def unpack(p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        K = np.array([[p[0], p[2], p[3]], [0, p[1], p[4]], [0, 0, 1.0]])
+        return K, rotation_from_vector(p[5:8]), p[8:11]
+
+    def residual(p: np.ndarray) -> np.ndarray:
+        return (project_points(world, *unpack(p)) - image).ravel()
+
+    if refine:
+        params = least_squares(residual, params, method="lm", x_scale="jac").x
+    K, R, C = unpack(params)
+    rms = _rms(np.nan_to_num(residual(params), nan=np.inf))
+    return DltCalibration(PinholeCamera(K, R, C), rms)
+
+
+def _v(h: np.ndarray, i: int, j: int) -> np.ndarray:
+    a, b = h[:, i], h[:, j]
+    return np.array(
+        [a[0] * b[0], a[0] * b[1] + a[1] * b[0], a[1] * b[1],
+         a[2] * b[0] + a[0] * b[2], a[2] * b[1] + a[1] * b[2], a[2] * b[2]]
+    )  # fmt: skip
+
+
+def zhang_intrinsics(homographies: list[np.ndarray]) -> np.ndarray:
+    """K in closed form from ≥ 3 plane-to-image homographies, zero skew (module docstring)."""
+    rows = []
+    for h in homographies:
+        rows += [_v(h, 0, 1), _v(h, 0, 0) - _v(h, 1, 1)]
+    rows.append(np.array([0, 1.0, 0, 0, 0, 0]))  # zero skew: B12 = 0
+    _, _, vt = np.linalg.svd(np.array(rows))
+    b11, b12, b22, b13, b23, b33 = vt[-1] if vt[-1][0] > 0 else -vt[-1]
+    v0 = (b12 * b13 - b11 * b23) / (b11 * b22 - b12**2)
+    lam = b33 - (b13**2 + v0 * (b12 * b13 - b11 * b23)) / b11
+    if lam / b11 <= 0 or b11 * b22 - b12**2 <= 0:
+        raise ValueError("the views do not determine K (B is not positive definite)")
+    alpha = np.sqrt(lam / b11)
+    beta = np.sqrt(lam * b11 / (b11 * b22 - b12**2))
+    gamma = -b12 * alpha**2 * beta / lam
+    u0 = gamma * v0 / beta - b13 * alpha**2 / lam
+    return np.array([[alpha, gamma, u0], [0, beta, v0], [0, 0, 1.0]])
+
+
+def _pose_from_homography(K: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """R, t of a plane view: :math:`[r_1\\, r_2\\, t] = \\lambda K^{-1} H`, R orthonormalised."""
+    m = np.linalg.solve(K, h)
+    lam = 1.0 / np.linalg.norm(m[:, 0])
+    if m[2, 2] * lam < 0:  # the board must be in front of the camera
+        lam = -lam
+    r1, r2, t = lam * m[:, 0], lam * m[:, 1], lam * m[:, 2]
+    u, _, vt = np.linalg.svd(np.column_stack([r1, r2, np.cross(r1, r2)]))
+    R = u @ vt
+    if np.linalg.det(R) < 0:
+        R = u @ np.diag([1, 1, -1.0]) @ vt
+    return R, t
+
+
+def _rotations(rvecs: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula for ``V×3`` axis-angle vectors at once: ``V×3×3``."""
+    theta = np.linalg.norm(rvecs, axis=1)
+    safe = np.where(theta > 1e-12, theta, 1.0)
+    k = rvecs / safe[:, None]
+    kx = np.zeros((len(rvecs), 3, 3))
+    kx[:, 0, 1], kx[:, 0, 2], kx[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    kx[:, 1, 0], kx[:, 2, 0], kx[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    sin = np.where(theta > 1e-12, np.sin(theta), theta)[:, None, None]
+    cos = np.where(theta > 1e-12, 1 - np.cos(theta), 0.0)[:, None, None]
+    return np.eye(3) + sin * kx + cos * kx @ kx
+
+
+def _project_views(
+    points: np.ndarray, K: np.ndarray, dist: np.ndarray, rvecs: np.ndarray, tvecs: np.ndarray
+) -> np.ndarray:
+    """Project ``N×3`` points into V views (pose R(rvec), t): ``V×N×2`` pixels."""
+    cam = np.einsum("vij,nj->vni", _rotations(rvecs), points) + tvecs[:, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xy = cam[..., :2] / np.where(cam[..., 2:] > 0, cam[..., 2:], np.nan)
+    xy = distort_normalised(xy.reshape(-1, 2), dist).reshape(xy.shape)
+    u = K[0, 0] * xy[..., 0] + K[0, 1] * xy[..., 1] + K[0, 2]
+    v = K[1, 1] * xy[..., 1] + K[1, 2]
+    return np.stack([u, v], axis=-1)
+
+
+class BoardCalibration(NamedTuple):
+    camera: Camera
+    reprojection_rms: Float
+    views_used: Array
+
+
+@node("camera.calibrate_board", version=1)
+def calibrate_board(
+    corners: Array,
+    object_points: Points3D,
+    *,
+    radial: Annotated[int, Field(ge=0, le=3)] = 2,
+    tangential: bool = False,
+    min_views: Annotated[int, Field(ge=3)] = 3,
+) -> BoardCalibration:
+    """Zhang's planar calibration from several views of a board (module docstring).
+
+    Per view the board-to-image homography (normalised DLT), K in closed
+    form (zero skew), each view's pose; then Levenberg-Marquardt over fx, fy,
+    cx, cy, ``radial`` coefficients k1.., optional p1, p2 and every pose,
+    on the reprojection error of all corners.
+
+    Parameters
+    ----------
+    corners : Array
+        Detected corners N×M×2 (``camera.board_corners``); a view with NaN
+        (board not found) is reported and skipped.
+    object_points : Points3D
+        The M corners on the board, Z = 0, in the same order.
+    radial : int
+        Number of radial coefficients estimated (0 to 3: k1, k2, k3).
+    tangential : bool
+        Also estimate the tangential coefficients p1, p2.
+    min_views : int
+        Fewest usable views accepted (at least 3).
+
+    Returns
+    -------
+    camera : K and distortion, posed as the first usable view
+    reprojection_rms : RMS reprojection error over all corners, pixels
+    views_used : indices of the views used
+
+    Raises
+    ------
+    ValueError
+        When the shapes disagree, the points are not on Z = 0, or fewer than
+        ``min_views`` views have a board (naming the views without one).
+    """
+    if corners.ndim != 3 or corners.shape[1:] != (len(object_points), 2):
+        raise ValueError(
+            f"corners must be N×{len(object_points)}×2 (one row per object point), "
+            f"got shape {corners.shape}"
+        )
+    if np.abs(object_points[:, 2]).max() > 1e-9:
+        raise ValueError("object_points must lie on the board plane Z = 0")
+    from scipy.optimize import least_squares
+
+    usable = np.isfinite(corners).all(axis=(1, 2))
+    missing = np.flatnonzero(~usable).tolist()
+    if usable.sum() < min_views:
+        reason = f"; no board found in views {missing}" if missing else ""
+        raise ValueError(
+            f"only {int(usable.sum())} of {len(corners)} views have a board, need "
+            f"{min_views}{reason}"
+        )
+    views = np.flatnonzero(usable)
+    image_points = corners[views]
+    plane = object_points[:, :2]
+    homographies = []
+    T = normalising_transform(image_points.reshape(-1, 2))
+    for pts in image_points:
+        h = estimate_homography(plane, pts)
+        if h is None:
+            raise ValueError("a view's corners are degenerate (collinear)")
+        homographies.append(h)
+    K = np.linalg.inv(T) @ zhang_intrinsics([T @ h for h in homographies])
+    K /= K[2, 2]
+    poses = [_pose_from_homography(K, h) for h in homographies]
+    n_dist = radial + (2 if tangential else 0)
+    n_views = len(views)
+
+    def unpack(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        K = np.array([[p[0], 0, p[2]], [0, p[1], p[3]], [0, 0, 1.0]])
+        dist = np.zeros(5)
+        radial_slots = [0, 1, 4][:radial]
+        dist[radial_slots] = p[4 : 4 + radial]
+        if tangential:
+            dist[2:4] = p[4 + radial : 6 + radial]
+        return K, dist
+
+    def residual(p: np.ndarray) -> np.ndarray:
+        K, dist = unpack(p)
+        poses = p[4 + n_dist :].reshape(n_views, 6)
+        projected = _project_views(object_points, K, dist, poses[:, :3], poses[:, 3:])
+        return np.nan_to_num(projected - image_points, nan=1e6).ravel()
+
+    start = [K[0, 0], K[1, 1], K[0, 2], K[1, 2], *np.zeros(n_dist)]
+    for R, t in poses:
+        start += [*vector_from_rotation(R), *t]
+    fit = least_squares(residual, np.array(start), x_scale="jac", method="lm")
+    K, dist = unpack(fit.x)
+    R0 = rotation_from_vector(fit.x[4 + n_dist : 7 + n_dist])
+    t0 = fit.x[7 + n_dist : 10 + n_dist]
+    camera = PinholeCamera(K, R0, -R0.T @ t0, dist, np.zeros(2, np.int64))
+    return BoardCalibration(camera, _rms(residual(fit.x)), views.astype(np.int64))
+
+
+@node("camera.focal_error", version=1)
+def focal_error(estimated: Camera, truth: Camera) -> Float:
+    """Largest relative error of fx and fy against the truth, in percent.
+
+    Parameters
+    ----------
+    estimated : Camera
+        The calibrated camera.
+    truth : Camera
+        The camera the data came from.
+    """
+    f_est = np.array([estimated.K[0, 0], estimated.K[1, 1]])
+    f_true = np.array([truth.K[0, 0], truth.K[1, 1]])
+    return float(100 * np.abs(f_est / f_true - 1).max())

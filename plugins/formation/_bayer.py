@@ -1,0 +1,156 @@
+r"""Bayer colour filter arrays: mosaicking and demosaicking.
+
+A Bayer sensor records one colour per pixel in a 2×2 tile with two greens on a
+diagonal (seed: "Color perception", the eye's cones and the camera's CFA).
+The four tiles are named by their first row then second row: ``RGGB`` has red
+at (0, 0), greens at (0, 1) and (1, 0), blue at (1, 1).
+
+**Bilinear.** Each missing value is the mean of its nearest neighbours of that
+colour: green from the 4-neighbours (kernel ``[[0,1,0],[1,4,1],[0,1,0]]/4`` on
+the green samples), red and blue from 2 or 4 neighbours (kernel
+``[[1,2,1],[2,4,2],[1,2,1]]/4`` on their samples).
+
+**Gradient-corrected (Malvar, He, Cutler).** The bilinear estimate is corrected
+by the Laplacian of the colour that *is* sampled at the pixel, weighted
+(α = 1/2, β = 5/8, γ = 3/4), which gives four fixed 5×5 kernels; e.g. green at a
+red pixel is :math:`\hat g = g_{bilinear} + \alpha\, \Delta_R`.
+
+References
+----------
+.. [1] B. E. Bayer, "Color imaging array", US patent 3,971,065, 1976.
+.. [2] H. S. Malvar, L. He, R. Cutler, "High-quality linear interpolation for demosaicing
+   of Bayer-patterned color images", IEEE ICASSP 2004.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+
+from graphvision import ColorImage, GrayImage, node
+
+__all__ = ["bayer_masks", "demosaic", "mosaic"]
+
+Pattern = Literal["RGGB", "BGGR", "GRBG", "GBRG"]
+
+_G_AT_RB = (
+    np.array(
+        [[0, 0, -1, 0, 0], [0, 0, 2, 0, 0], [-1, 2, 4, 2, -1], [0, 0, 2, 0, 0], [0, 0, -1, 0, 0]]
+    )
+    / 8.0
+)
+# red (blue) at a green pixel whose row holds red (blue) samples
+_RB_AT_G_ROW = (
+    np.array(
+        [
+            [0, 0, 0.5, 0, 0],
+            [0, -1, 0, -1, 0],
+            [-1, 4, 5, 4, -1],
+            [0, -1, 0, -1, 0],
+            [0, 0, 0.5, 0, 0],
+        ]
+    )
+    / 8.0
+)
+_RB_AT_G_COLUMN = _RB_AT_G_ROW.T
+_RB_AT_BR = np.array(
+    [[0, 0, -1.5, 0, 0], [0, 2, 0, 2, 0], [-1.5, 0, 6, 0, -1.5], [0, 2, 0, 2, 0],
+     [0, 0, -1.5, 0, 0]]
+) / 8.0  # fmt: skip
+
+
+def bayer_masks(shape: tuple[int, int], pattern: str) -> np.ndarray:
+    """Boolean masks ``3×H×W``: where the sensor samples red, green and blue."""
+    masks = np.zeros((3, *shape), bool)
+    for index, letter in enumerate(pattern):
+        dy, dx = divmod(index, 2)
+        masks["RGB".index(letter), dy::2, dx::2] = True
+    return masks
+
+
+def _convolve(image: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """Correlate with a small sparse kernel as a sum of shifted views, one per non-zero tap.
+
+    The image is padded by reflection about its edge pixel (``numpy.pad``'s
+    ``reflect``), so the 2×2 colour pattern continues past the border. The
+    kernels here are symmetric, so correlation equals convolution.
+    """
+    half = kernel.shape[0] // 2
+    padded = np.pad(image, half, mode="reflect")
+    rows, cols = image.shape
+    out = np.zeros_like(image)
+    for dy, dx in zip(*np.nonzero(kernel), strict=True):
+        out += kernel[dy, dx] * padded[dy : dy + rows, dx : dx + cols]
+    return out
+
+
+@node("formation.mosaic", version=1)
+def mosaic(image: ColorImage, *, pattern: Pattern = "RGGB") -> GrayImage:
+    """What a Bayer sensor records of an RGB scene: one colour sample per pixel.
+
+    Parameters
+    ----------
+    image : ColorImage
+        The scene, RGB.
+    pattern : {"RGGB", "BGGR", "GRBG", "GBRG"}
+        The 2×2 tile, first row then second row.
+    """
+    masks = bayer_masks(image.shape[:2], pattern)
+    return (np.moveaxis(image, 2, 0) * masks).sum(axis=0).astype(np.float32)
+
+
+@node("formation.demosaic", version=1)
+def demosaic(
+    raw: GrayImage,
+    *,
+    pattern: Pattern = "RGGB",
+    method: Literal["bilinear", "malvar"] = "malvar",
+) -> ColorImage:
+    """An RGB image from a Bayer mosaic, by bilinear or gradient-corrected interpolation.
+
+    Parameters
+    ----------
+    raw : GrayImage
+        The sensor's samples (``formation.mosaic``), one colour per pixel.
+    pattern : {"RGGB", "BGGR", "GRBG", "GBRG"}
+        The 2×2 tile the mosaic was taken with.
+    method : {"bilinear", "malvar"}
+        Bilinear interpolation per channel, or Malvar-He-Cutler's
+        gradient-corrected linear filters (module docstring).
+
+    Raises
+    ------
+    ValueError
+        For a mosaic smaller than 5×5.
+    """
+    if min(raw.shape) < 5:
+        raise ValueError(f"raw must be at least 5×5 to demosaic, got {raw.shape}")
+    data = raw.astype(np.float32)
+    red, green, blue = bayer_masks(raw.shape, pattern)
+    if method == "bilinear":
+        cross = np.array([[0, 1, 0], [1, 4, 1], [0, 1, 0]]) / 4.0
+        box = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]]) / 4.0
+        out = np.stack(
+            [
+                _convolve(data * red, box),
+                _convolve(data * green, cross),
+                _convolve(data * blue, box),
+            ],
+            axis=-1,
+        )
+        return np.clip(out, 0, 1).astype(np.float32)
+    green_at_rb = _convolve(data, _G_AT_RB)
+    at_g_row = _convolve(data, _RB_AT_G_ROW)
+    at_g_column = _convolve(data, _RB_AT_G_COLUMN)
+    at_opposite = _convolve(data, _RB_AT_BR)
+    rows_with_red = np.broadcast_to(red.any(axis=1, keepdims=True), raw.shape)
+    out = np.empty((*raw.shape, 3))
+    out[..., 1] = np.where(green, data, green_at_rb)
+    for channel, own, other, own_rows in (
+        (0, red, blue, rows_with_red),
+        (2, blue, red, ~rows_with_red),
+    ):
+        at_green = np.where(own_rows, at_g_row, at_g_column)
+        out[..., channel] = np.where(own, data, np.where(other, at_opposite, at_green))
+    return np.clip(out, 0, 1).astype(np.float32)
