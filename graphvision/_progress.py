@@ -92,6 +92,8 @@ class RunProgress(RunHooks):
             self.running[name] = (op, time.monotonic())
 
     def node_finished(self, *, name: str, op: str, status: str, seconds: float) -> None:
+        if status == "cached":  # loaded before the run started: not one of the nodes to compute
+            return
         with self._lock:
             self.running.pop(name, None)
             self._announced.pop(name, None)

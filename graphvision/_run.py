@@ -62,7 +62,8 @@ _INLINE = SyncExecutor()
 
 @dataclass
 class NodeRecord:
-    """What happened to one node: ``computed``, ``cached`` (loaded), ``failed`` or ``skipped``.
+    """What happened to one node: ``computed``, ``cached`` (loaded), ``failed``, ``skipped``
+    (downstream of a failure) or ``pending`` (the run stopped before it ran).
 
     ``params`` are the validated parameters it ran with and ``keys`` the cache
     key of each output port; ``output_bytes`` counts loaded outputs too.
@@ -291,8 +292,14 @@ class _Run:
                     node.output_bytes += value_bytes(step.outputs[port], value)
                     continue
             compute.add(name)
-            self.nodes[name] = NodeRecord(name, step.spec.id, "skipped")
+            self.nodes[name] = NodeRecord(name, step.spec.id, "pending")
             stack.extend(step.inputs.values())
+        for node in self.nodes.values():
+            if node.status == "cached":
+                for hook in self.hooks:
+                    hook.node_finished(
+                        name=node.name, op=node.op, status="cached", seconds=node.seconds
+                    )
         return [name for name in steps if name in compute]
 
     # -- execution --------------------------------------------------------------------
@@ -439,6 +446,8 @@ def run(
         the outputs that were produced and the record.
     """
     inputs = dict(inputs or {})
+    if isinstance(graph, CompiledGraph) and overrides:
+        graph = graph.graph  # overrides change parameters: compile again
     if isinstance(graph, Graph):
         if registry is None:
             from ._plugins import discover
@@ -506,9 +515,11 @@ def run(
         }
         state.track_consumers(compute, [compiled.outputs[o] for o in wanted_names])
         inline = None if getattr(pool, "encodes_values", False) else state.start_inline
-        run_tasks(
+        skipped = run_tasks(
             dependencies, state.start, state.finish, keep_going=keep_going, start_inline=inline
         )
+        for name in skipped:  # downstream of a failure
+            state.nodes[name].status = "skipped"
         failed = bool(state.failures)
     except BaseException:  # Ctrl-C, or a bug: do not wait for the nodes still running
         if own_executor:

@@ -347,3 +347,36 @@ def test_hooks_see_the_run_and_the_finish_even_on_failure(registry):
         gv.run(failing_graph(), registry, hooks=[failing], executor="sync")
     assert ("node", "bad", "failed") in failing.events
     assert failing.events[-1] == ("end", True)
+
+
+def test_overrides_apply_to_a_compiled_graph_too(registry):
+    compiled = gv.compile_graph(chain(registry), registry)
+    result = gv.run(compiled, registry, overrides={"b.offset": 2.0})
+    assert result.outputs == {"b": 6.0, "c": 12.0}
+
+
+def test_hooks_hear_of_cache_hits(registry, cache):
+    heard: list[tuple[str, str]] = []
+
+    class Listen(gv.RunHooks):
+        def node_finished(self, *, name, op, status, seconds):
+            heard.append((name, status))
+
+    gv.run(chain(registry), registry, cache=cache)
+    gv.run(chain(registry), registry, cache=cache, overrides={"c.offset": 3.0}, hooks=[Listen()])
+    assert sorted(heard) == [("b", "cached"), ("c", "computed")]
+
+
+def test_only_nodes_downstream_of_a_failure_are_called_skipped(registry):
+    graph = gv.Graph("fails")
+    x = graph.input("x", "Float", default=1.0)
+    bad = graph.add("bad", "toy.fail", x=x)
+    graph.output("after", graph.add("after", "toy.add", a=bad, b=bad))
+    graph.output("other", graph.add("other", "toy.add", a=x, b=x))
+    with pytest.raises(gv.RunError) as caught:
+        gv.run(graph, registry, keep_going=True, executor="sync")
+    assert statuses(caught.value.record) == {
+        "bad": "failed",
+        "after": "skipped",
+        "other": "computed",
+    }
