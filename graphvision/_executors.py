@@ -37,6 +37,7 @@ __all__ = [
     "WorkerDiedError",
     "call_node",
     "call_node_encoded",
+    "encodes_values",
     "make_executor",
 ]
 
@@ -44,7 +45,15 @@ EXECUTORS: tuple[str, ...] = ("sync", "threads", "processes", "dask")
 
 
 class Executor(Protocol):
-    """The one method the scheduler needs (plus shutdown)."""
+    """What the run needs of an executor: ``submit``, ``shutdown``, and its transport.
+
+    ``encodes_values`` is the transport: True when nodes run in other
+    processes, so that a node travels as a :class:`FunctionRef` and values in
+    their port type's array encoding (:func:`call_node_encoded`); False when
+    they run in this process and get the values themselves (:func:`call_node`).
+    """
+
+    encodes_values: bool
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future: ...
 
@@ -175,6 +184,12 @@ def _worker_setup(parent: int) -> None:
         os._exit(0)
 
     threading.Thread(target=watch, daemon=True, name="graphvision-parent-watch").start()
+
+
+def encodes_values(executor: Any) -> bool:
+    """The executor's transport (see :class:`Executor`); a plain ``concurrent.futures``
+    thread pool, which does not declare one, runs in this process."""
+    return bool(getattr(executor, "encodes_values", False))
 
 
 def make_executor(name: str = "threads", workers: int | None = None) -> Executor:

@@ -40,7 +40,14 @@ from ._errors import (
     UnknownNameError,
     did_you_mean,
 )
-from ._executors import Executor, SyncExecutor, call_node, call_node_encoded, make_executor
+from ._executors import (
+    Executor,
+    SyncExecutor,
+    call_node,
+    call_node_encoded,
+    encodes_values,
+    make_executor,
+)
 from ._graph import Graph
 from ._ports import PortType, TextPort, _ScalarPort, freeze
 from ._provenance import describe_run
@@ -318,7 +325,7 @@ class _Run:
         for hook in self.hooks:
             hook.node_started(name=name, op=step.spec.id)
         self.started[name] = time.perf_counter()
-        if getattr(executor, "encodes_values", False):
+        if encodes_values(executor):
             if step.spec.ref.module == "__main__" and not step.spec.ref.path:
                 refused: Future = Future()
                 refused.set_exception(
@@ -373,7 +380,7 @@ class _Run:
         return True
 
     def accept(self, step: Step, result: Any) -> dict[str, Any]:
-        if getattr(self.executor, "encodes_values", False):
+        if encodes_values(self.executor):
             return {
                 port: _freeze(kind, kind.decode(arrays, meta))
                 for port, (kind, arrays, meta) in result.items()
@@ -514,7 +521,7 @@ def run(
             for name in compute
         }
         state.track_consumers(compute, [compiled.outputs[o] for o in wanted_names])
-        inline = None if getattr(pool, "encodes_values", False) else state.start_inline
+        inline = None if encodes_values(pool) else state.start_inline
         skipped = run_tasks(
             dependencies, state.start, state.finish, keep_going=keep_going, start_inline=inline
         )
