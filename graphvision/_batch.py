@@ -216,7 +216,11 @@ def run_batch(
     finally:
         if isinstance(executor, str):
             pool.shutdown()
-    return BatchResult(items, write_summary(items, out_dir))
+    summary = write_summary(items, out_dir)
+    from ._html import batch_page
+
+    (out_dir / "batch.html").write_text(batch_page(items, out_dir), encoding="utf-8")
+    return BatchResult(items, summary)
 
 
 def _common_parts(parts: list[tuple[str, ...]]) -> tuple[str, ...]:

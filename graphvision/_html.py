@@ -14,7 +14,7 @@ from __future__ import annotations
 import base64
 import dataclasses
 import json
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from html import escape
 from pathlib import Path
 from typing import Any
@@ -25,7 +25,7 @@ from ._compile import CompiledGraph
 from ._ports import PortType, TablePort, _ScalarPort
 from ._run import RunRecord
 
-__all__ = ["html_report", "picture_html", "value_html", "write_html_report"]
+__all__ = ["batch_page", "html_report", "picture_html", "value_html", "write_html_report"]
 
 _TABLE_ROWS = 50
 _STYLE = """
@@ -199,3 +199,47 @@ def write_html_report(
     path = directory / "report.html"
     path.write_text(html_report(compiled, outputs, record, **options), encoding="utf-8")
     return path
+
+
+def batch_page(items: Sequence[Any], out_dir: Path) -> str:
+    """``batch.html``: one card per file, with its first picture, status, time and error.
+
+    Pictures are linked from the item folders (a batch of thousands stays a
+    small page); each card links to that item's own ``report.html``.
+    """
+    cards = []
+    for item in items:
+        folder = Path(item.output_dir)
+        pictures = sorted(folder.glob("*.png")) if folder.is_dir() else []
+        link = _relative(folder / "report.html", out_dir)
+        image = (
+            f'<img loading="lazy" alt="{escape(pictures[0].name)}" '
+            f'src="{escape(_relative(pictures[0], out_dir))}">'
+            if pictures
+            else '<div class="none">no picture</div>'
+        )
+        error = f'<div class="failed">{escape(item.error)}</div>' if item.error else ""
+        cards.append(
+            f'<a class="card {escape(item.status)}" href="{escape(link)}">{image}'
+            f"<div>{escape(Path(item.file).name)}</div>"
+            f"<small>{escape(item.status)}, {item.seconds:.2f} s</small>{error}</a>"
+        )
+    failed = sum(item.status != "ok" for item in items)
+    style = (
+        "body{font-family:sans-serif;margin:2em} .grid{display:flex;flex-wrap:wrap;gap:1em}"
+        ".card{width:180px;color:inherit;text-decoration:none;border:1px solid #ddd;"
+        "padding:.4em} .card img{width:100%} .card.failed{border-color:#b71c1c}"
+        ".failed{color:#b71c1c;font-size:.8em} .none{height:120px;background:#eee}"
+    )
+    return (
+        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        f"<title>batch: {len(items)} files</title><style>{style}</style></head><body>"
+        f"<h1>{len(items) - failed} of {len(items)} files succeeded</h1>"
+        f'<div class="grid">{"".join(cards)}</div></body></html>\n'
+    )
+
+
+def _relative(path: Path, start: Path) -> str:
+    import os
+
+    return Path(os.path.relpath(path, start)).as_posix()

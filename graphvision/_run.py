@@ -160,6 +160,13 @@ class RunResult:
     compiled: CompiledGraph
     failures: dict[str, GraphvisionError] = field(default_factory=dict)
 
+    def _repr_html_(self) -> str:
+        """The report's page, shown by Jupyter when a result is the value of a cell."""
+        from ._html import html_report
+
+        failures = {name: str(error) for name, error in self.failures.items()}
+        return html_report(self.compiled, self.outputs, self.record, failures=failures)
+
 
 class RunHooks:
     """Observe a run. Override what you need; every argument is keyword-only.

@@ -125,3 +125,28 @@ def test_a_real_browser_loads_the_report_without_errors(coins_report: Path, tmp_
     assert found, "the page's load handler did not run"
     check = json.loads(html.unescape(found.group(1)))
     assert check == {"images": 2, "broken": 0, "errors": []}
+
+
+def test_a_run_result_shows_as_its_report_in_a_notebook():
+    result = gv.run(gv.load_pipeline(PIPELINES / "line_fit.yaml"), cache=None)
+    page = _Page()
+    page.feed(result._repr_html_())
+    assert page.headings[: len(result.compiled.outputs)] == list(result.compiled.outputs)
+    assert len(page.images) == 1  # the points, drawn
+
+
+def test_batch_page_has_a_card_per_file_linking_its_report(tmp_path):
+    import imageio.v3 as iio
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for index in range(3):
+        iio.imwrite(folder / f"img{index}.png", np.full((16, 16), 40 * index, np.uint8))
+    (folder / "img3.png").write_text("not an image")
+    graph = gv.load_pipeline(PIPELINES / "denoise.yaml")
+    batch = gv.run_batch(graph, str(folder / "*.png"), input="image", output_dir=tmp_path / "out")
+    text = (tmp_path / "out" / "batch.html").read_text()
+    assert "3 of 4 files succeeded" in text
+    assert text.count('class="card ') == 4 and text.count('href="img0/report.html"') == 1
+    assert 'src="img0/' in text and "not an image" not in text.split("img3.png")[0]
+    assert batch.failed == 1
