@@ -401,6 +401,16 @@ class _Run:
                 raise PortValueError(f"node returned an invalid output '{port}': {error}") from None
         return outputs
 
+    def result(self, wanted: list[str]) -> RunResult:
+        """The outputs produced (with their summaries in the record) as a :class:`RunResult`."""
+        produced = {}
+        for name in wanted:
+            source = self.compiled.outputs[name]
+            if source in self.values:
+                produced[name] = self.values[source]
+                self.record.outputs[name] = self.compiled.output_type(name).summary(produced[name])
+        return RunResult(produced, self.record, self.compiled, self.failures)
+
     def wrap(self, step: Step, error: Exception) -> NodeExecutionError:
         summary = {}
         for port, source in step.inputs.items():
@@ -460,27 +470,56 @@ def run(
         the outputs that were produced and the record.
     """
     inputs = dict(inputs or {})
-    if isinstance(graph, CompiledGraph) and overrides:
+    compiled, registry = _compiled(graph, registry, inputs, overrides or {})
+    wanted = _wanted_outputs(compiled, outputs, inputs)
+    needed = compiled.needed_for(wanted)
+    given = _given_inputs(compiled, needed, wanted, inputs)
+    values = {
+        name: resolve_input(name, compiled.input_types[name], value, registry)
+        for name, value in given.items()
+    }
+    state = _execute(compiled, values, needed, wanted, cache, executor, workers, keep_going, hooks)
+    describe_run(state.record, compiled, registry, given, state.keys, overrides or {})
+    result = state.result(wanted)
+    if state.failures:
+        failure = RunError(state.failures, state.record)
+        failure.result = result  # type: ignore[attr-defined]  # read by callers as error.result
+        raise failure
+    return result
+
+
+def _compiled(
+    graph: Graph | CompiledGraph,
+    registry: Registry | None,
+    inputs: dict[str, Any],
+    overrides: dict[str, Any],
+) -> tuple[CompiledGraph, Registry]:
+    """The graph, overrides applied, compiled (step 1); the registry it was checked against."""
+    if isinstance(graph, CompiledGraph):
+        if not overrides:
+            return graph, registry or _discover(graph.graph.plugins)
         graph = graph.graph  # overrides change parameters: compile again
-    if isinstance(graph, Graph):
-        if registry is None:
-            from ._plugins import discover
+    registry = registry or _discover(graph.plugins)
+    if overrides:
+        try:
+            graph = graph.with_overrides(overrides)
+        except KeyError as error:
+            raise UnknownNameError(str(error.args[0])) from None
+    return compile_graph(graph, registry, provided=set(inputs)), registry
 
-            registry = discover(graph.plugins)
-        if overrides:
-            try:
-                graph = graph.with_overrides(overrides)
-            except KeyError as error:
-                raise UnknownNameError(str(error.args[0])) from None
-        compiled = compile_graph(graph, registry, provided=set(inputs))
-    else:
-        compiled = graph
-        if registry is None:
-            from ._plugins import discover
 
-            registry = discover(compiled.graph.plugins)
-    wanted_names = list(outputs) if outputs is not None else list(compiled.outputs)
-    for name in wanted_names:
+def _discover(paths: list[str]) -> Registry:
+    from ._plugins import discover
+
+    return discover(paths)
+
+
+def _wanted_outputs(
+    compiled: CompiledGraph, outputs: Sequence[str] | None, inputs: dict[str, Any]
+) -> list[str]:
+    """The outputs asked for, after checking every output and input name given."""
+    wanted = list(outputs) if outputs is not None else list(compiled.outputs)
+    for name in wanted:
         if name not in compiled.outputs:
             raise UnknownNameError(
                 f"unknown output '{name}'{did_you_mean(name, compiled.outputs)}"
@@ -492,72 +531,74 @@ def run(
                 f"unknown input '{name}'{did_you_mean(name, compiled.input_types)}; "
                 f"inputs: {', '.join(compiled.input_types) or 'none'}"
             )
+    return wanted
 
-    needed = compiled.needed_for(wanted_names)
-    used_inputs = {
-        src for n in needed for src, port in compiled.steps[n].inputs.values() if not port
-    }
-    used_inputs |= {
-        compiled.outputs[o][0]
-        for o in wanted_names
-        if compiled.outputs[o][0] in compiled.input_types
-    }
-    values, given = {}, {}
-    for name in compiled.input_types:
-        if name in used_inputs:
-            given[name] = inputs.get(name, compiled.graph.inputs[name].default)
-            values[name] = resolve_input(name, compiled.input_types[name], given[name], registry)
 
-    own_executor = isinstance(executor, str)
+def _given_inputs(
+    compiled: CompiledGraph, needed: Iterable[str], wanted: list[str], inputs: dict[str, Any]
+) -> dict[str, Any]:
+    """What is given for each graph input the wanted outputs read (step 2): value or default."""
+    used = {src for n in needed for src, port in compiled.steps[n].inputs.values() if not port}
+    used |= {
+        compiled.outputs[o][0] for o in wanted if compiled.outputs[o][0] in compiled.input_types
+    }
+    return {
+        name: inputs.get(name, compiled.graph.inputs[name].default)
+        for name in compiled.input_types
+        if name in used
+    }
+
+
+def _execute(
+    compiled: CompiledGraph,
+    values: dict[str, Any],
+    needed: list[str],
+    wanted: list[str],
+    cache: Cache | None,
+    executor: str | Executor,
+    workers: int | None,
+    keep_going: bool,
+    hooks: Sequence[RunHooks],
+) -> _Run:
+    """Steps 4 to 6: key, plan, schedule; the run's state, with its record, whatever happens.
+
+    An executor made here is shut down here: after the run, or at once
+    (without waiting for running nodes) when the run is interrupted.
+    """
+    own = isinstance(executor, str)
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
-    record = RunRecord(
-        compiled.graph.name, executor if isinstance(executor, str) else type(executor).__name__
-    )
-    state = _Run(compiled, cache, pool, hooks, record)
-    began = time.perf_counter()
-    failed = True
+    name = executor if isinstance(executor, str) else type(executor).__name__
+    state = _Run(compiled, cache, pool, hooks, RunRecord(compiled.graph.name, name))
+    began, failed = time.perf_counter(), True
     try:
         state.key_inputs(values)
         state.key_steps(needed)
-        compute = state.plan(compiled.outputs[o] for o in wanted_names)
+        compute = state.plan(compiled.outputs[o] for o in wanted)
         for hook in hooks:
             hook.run_started(pipeline=compiled.graph.name, steps=compute)
         computed = set(compute)
         dependencies = {
-            name: {src for src, _ in compiled.steps[name].inputs.values() if src in computed}
-            for name in compute
+            step: {src for src, _ in compiled.steps[step].inputs.values() if src in computed}
+            for step in compute
         }
-        state.track_consumers(compute, [compiled.outputs[o] for o in wanted_names])
+        state.track_consumers(compute, [compiled.outputs[o] for o in wanted])
         inline = None if encodes_values(pool) else state.start_inline
         skipped = run_tasks(
             dependencies, state.start, state.finish, keep_going=keep_going, start_inline=inline
         )
-        for name in skipped:  # downstream of a failure
-            state.nodes[name].status = "skipped"
+        for step in skipped:  # downstream of a failure
+            state.nodes[step].status = "skipped"
         failed = bool(state.failures)
     except BaseException:  # Ctrl-C, or a bug: do not wait for the nodes still running
-        if own_executor:
+        if own:
             pool.shutdown(wait=False, cancel_futures=True)
-            own_executor = False
+            own = False
         raise
     finally:
-        if own_executor:
+        if own:
             pool.shutdown(wait=True)
-        record.seconds = time.perf_counter() - began
-        record.nodes = [state.nodes[n] for n in compiled.steps if n in state.nodes]
+        state.record.seconds = time.perf_counter() - began
+        state.record.nodes = [state.nodes[n] for n in compiled.steps if n in state.nodes]
         for hook in hooks:
-            hook.run_finished(record=record, failed=failed)
-    describe_run(record, compiled, registry, given, state.keys, overrides or {})
-
-    produced = {}
-    for name in wanted_names:
-        source = compiled.outputs[name]
-        if source in state.values:
-            produced[name] = state.values[source]
-            record.outputs[name] = compiled.output_type(name).summary(produced[name])
-    result = RunResult(produced, record, compiled, state.failures)
-    if state.failures:
-        failure = RunError(state.failures, record)
-        failure.result = result  # type: ignore[attr-defined]  # read by callers as error.result
-        raise failure
-    return result
+            hook.run_finished(record=state.record, failed=failed)
+    return state
