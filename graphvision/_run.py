@@ -222,7 +222,9 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
 
 
 def value_bytes(port_type: type[PortType], value: Any) -> int:
-    """Bytes of a value's arrays (what a run record counts per node)."""
+    """Bytes of a value's arrays (what a run record counts per node; a scalar has none)."""
+    if issubclass(port_type, _ScalarPort):
+        return 0
     return sum(a.nbytes for a in port_type.encode(value)[0].values())
 
 
@@ -251,6 +253,7 @@ class _Run:
         record: RunRecord,
     ) -> None:
         self.compiled, self.cache, self.executor = compiled, cache, executor
+        self.encoded = encodes_values(executor)  # the transport, read once
         self.hooks, self.record = hooks, record
         self.values: dict[tuple[str, str], Any] = {}
         self.keys: dict[tuple[str, str], str] = {}
@@ -332,7 +335,7 @@ class _Run:
         for hook in self.hooks:
             hook.node_started(name=name, op=step.spec.id)
         self.started[name] = time.perf_counter()
-        if encodes_values(executor):
+        if self.encoded and executor is not _INLINE:
             if step.spec.ref.module == "__main__" and not step.spec.ref.path:
                 refused: Future = Future()
                 refused.set_exception(
@@ -387,7 +390,7 @@ class _Run:
         return True
 
     def accept(self, step: Step, result: Any) -> dict[str, Any]:
-        if encodes_values(self.executor):
+        if self.encoded:
             return {
                 port: _freeze(kind, kind.decode(arrays, meta))
                 for port, (kind, arrays, meta) in result.items()
