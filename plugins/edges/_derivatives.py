@@ -1,4 +1,4 @@
-"""Image derivatives: finite differences, Sobel, Prewitt and derivatives of a Gaussian.
+r"""Image derivatives: finite differences, Sobel, Prewitt and derivatives of a Gaussian.
 
 Every kernel is scaled so that a unit ramp ``I(x, y) = x`` gives a derivative
 of exactly 1, whatever its kind: magnitudes of different kinds compare

@@ -121,9 +121,7 @@ def hough_circles(
     import scipy.ndimage as ndi
 
     if min_radius > max_radius:
-        raise ValueError(
-            f"min_radius ({min_radius}) must not exceed max_radius ({max_radius})"
-        )
+        raise ValueError(f"min_radius ({min_radius}) must not exceed max_radius ({max_radius})")
     if image.shape != edges.shape:
         raise ValueError(
             f"edges and image must have the same size, got {edges.shape} and {image.shape}"
@@ -141,7 +139,10 @@ def hough_circles(
     peaks = peaks[best[peaks[:, 0], peaks[:, 1]] >= threshold]
     height, width = best.shape
     peaks = peaks[
-        (peaks[:, 0] > 0) & (peaks[:, 0] < height - 1) & (peaks[:, 1] > 0) & (peaks[:, 1] < width - 1)
+        (peaks[:, 0] > 0)
+        & (peaks[:, 0] < height - 1)
+        & (peaks[:, 1] > 0)
+        & (peaks[:, 1] < width - 1)
     ]
     centre_scores = best[peaks[:, 0], peaks[:, 1]]
     kept = peaks[suppress_close(peaks.astype(np.float64), centre_scores, distance, max_circles)]

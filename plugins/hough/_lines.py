@@ -63,9 +63,7 @@ def line_accumulator(
 
 def _wrap_theta(accumulator: np.ndarray, pad: int) -> np.ndarray:
     """Extend θ by ``pad`` bins each way: θ + π is the line of θ with ρ negated."""
-    return np.concatenate(
-        [accumulator[-pad:, ::-1], accumulator, accumulator[:pad, ::-1]], axis=0
-    )
+    return np.concatenate([accumulator[-pad:, ::-1], accumulator, accumulator[:pad, ::-1]], axis=0)
 
 
 class HoughLines(NamedTuple):

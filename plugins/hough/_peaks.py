@@ -58,9 +58,7 @@ def quadratic_peak_2d(array: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> 
     fallback_u = parabolic_offset(array[rows - 1, cols], centre, array[rows + 1, cols])
     fallback_v = parabolic_offset(array[rows, cols - 1], centre, array[rows, cols + 1])
     good = maximum & (np.abs(du) <= 1) & (np.abs(dv) <= 1)
-    offsets = np.column_stack(
-        [np.where(good, du, fallback_u), np.where(good, dv, fallback_v)]
-    )
+    offsets = np.column_stack([np.where(good, du, fallback_u), np.where(good, dv, fallback_v)])
     return np.clip(offsets, -0.5, 0.5)
 
 
