@@ -22,7 +22,7 @@ Polarity = Literal["both", "bright", "dark"]
 def circle_accumulator(
     edges: np.ndarray, image: np.ndarray, radii: np.ndarray, sigma: float, polarity: str
 ) -> np.ndarray:
-    r"""Votes ``(len(radii), H, W)``: each edge point votes at :math:`p \pm r\,\nabla I/\|\nabla I\|`.
+    r"""Votes ``(len(radii), H, W)``: each edge point votes at :math:`p \pm r u`, u its gradient.
 
     A bright disc's gradient points inwards, so ``bright`` votes at
     :math:`p + r u`, ``dark`` at :math:`p - r u`, ``both`` at both.
