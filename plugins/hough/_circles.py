@@ -49,7 +49,7 @@ def circle_accumulator(
 
 class HoughCircles(NamedTuple):
     circles: Circles
-    count: Int
+    count: Int  # type: ignore[assignment]  # the port is named count in pipelines; hides tuple.count
     accumulator: FloatImage
 
 

@@ -68,7 +68,7 @@ def _wrap_theta(accumulator: np.ndarray, pad: int) -> np.ndarray:
 
 class HoughLines(NamedTuple):
     lines: Lines
-    count: Int
+    count: Int  # type: ignore[assignment]  # the port is named count in pipelines; hides tuple.count
     accumulator: FloatImage
 
 

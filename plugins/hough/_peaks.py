@@ -41,8 +41,8 @@ def quadratic_peak_2d(array: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> 
     Peaks must not touch the array's border. Offsets are clipped to ±½ and
     fall back to the 1-D parabolas where the fit is not a maximum.
     """
-    u, v = np.meshgrid([-1.0, 0.0, 1.0], [-1.0, 0.0, 1.0], indexing="ij")
-    u, v = u.ravel(), v.ravel()
+    u = np.repeat([-1.0, 0.0, 1.0], 3)  # row offsets, in the order of the patches below
+    v = np.tile([-1.0, 0.0, 1.0], 3)
     design = np.column_stack([np.ones(9), u, v, u * u, v * v, u * v])
     solve = np.linalg.pinv(design)  # (6, 9)
     patches = np.stack(
