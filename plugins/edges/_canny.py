@@ -14,43 +14,21 @@ from ._derivatives import EdgeBoundary, gradient_images
 __all__ = ["Canny", "canny", "canny_edges", "hysteresis", "non_maximum_suppression"]
 
 
-def _bilinear(padded: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Sample ``padded`` (padded by one pixel) at image coordinates ``(x, y)``, bilinearly."""
-    x = x + 1.0
-    y = y + 1.0
-    x0 = np.clip(np.floor(x).astype(np.intp), 0, padded.shape[1] - 2)
-    y0 = np.clip(np.floor(y).astype(np.intp), 0, padded.shape[0] - 2)
-    fx = x - x0
-    fy = y - y0
-    top = padded[y0, x0] * (1 - fx) + padded[y0, x0 + 1] * fx
-    bottom = padded[y0 + 1, x0] * (1 - fx) + padded[y0 + 1, x0 + 1] * fx
-    return top * (1 - fy) + bottom * fy
-
-
 def non_maximum_suppression(
-    dx: np.ndarray, dy: np.ndarray, magnitude: np.ndarray, candidates: np.ndarray
+    dx: np.ndarray, dy: np.ndarray, magnitude: np.ndarray, low: float
 ) -> np.ndarray:
-    r"""Keep the candidates whose magnitude is a maximum along their gradient direction.
+    r"""Pixels of magnitude at least ``low`` (and above 0) that are a maximum along the gradient.
 
     The two neighbours are the points :math:`p \pm u` with
     :math:`u = \nabla I / \|\nabla I\|_\infty` (on the 3×3 square around the
     pixel), their magnitudes interpolated linearly between the two pixels
-    they fall between. A pixel survives when it is at least both of them
-    (both pixels of an exact tie survive).
+    they fall between (the image edge replicated). A pixel survives when it
+    is at least both of them (both pixels of an exact tie survive). One
+    compiled pass (:mod:`._kernels`).
     """
-    rows, cols = np.nonzero(candidates)
-    gx = dx[rows, cols].astype(np.float64)
-    gy = dy[rows, cols].astype(np.float64)
-    scale = np.maximum(np.abs(gx), np.abs(gy))
-    ux, uy = gx / scale, gy / scale
-    padded = np.pad(magnitude.astype(np.float64), 1, mode="edge")
-    m = padded[rows + 1, cols + 1]
-    ahead = _bilinear(padded, cols + ux, rows + uy)
-    behind = _bilinear(padded, cols - ux, rows - uy)
-    keep = (m >= ahead) & (m >= behind)
-    thin = np.zeros(magnitude.shape, dtype=bool)
-    thin[rows[keep], cols[keep]] = True
-    return thin
+    from ._kernels import suppress_non_maxima
+
+    return suppress_non_maxima(dx, dy, magnitude, np.float32(low))
 
 
 def hysteresis(weak: np.ndarray, strong: np.ndarray) -> np.ndarray:
@@ -83,8 +61,7 @@ def canny_edges(
     if thresholds == "quantile":
         low, high = (float(q) for q in np.quantile(magnitude, [low, high]))
     # a zero gradient is never an edge, whatever the thresholds (constant images have none)
-    weak = magnitude >= max(low, np.finfo(np.float32).tiny)
-    thin = non_maximum_suppression(dx, dy, magnitude, weak)
+    thin = non_maximum_suppression(dx, dy, magnitude, low)
     return hysteresis(thin, thin & (magnitude >= high)), magnitude
 
 
@@ -96,7 +73,7 @@ class Canny(NamedTuple):
 Threshold = Annotated[float, Field(ge=0, description="Absolute magnitude or quantile in [0, 1].")]
 
 
-@node("edges.canny", version=1)
+@node("edges.canny", version=2)
 def canny(
     image: GrayImage,
     *,
