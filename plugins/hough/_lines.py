@@ -39,7 +39,7 @@ def line_accumulator(
     step = math.pi / theta_bins
     weights = np.ones(len(x))
     if image is None:
-        theta_index = np.broadcast_to(np.arange(theta_bins), (len(x), theta_bins))
+        first, width = np.zeros(len(x), dtype=np.intp), theta_bins
     else:
         dx, dy = gradient_images(image, "gaussian", sigma)
         gx, gy = dx[rows, cols].astype(np.float64), dy[rows, cols].astype(np.float64)
@@ -47,18 +47,13 @@ def line_accumulator(
             weights = np.hypot(gx, gy)
         centre = np.round(np.mod(np.arctan2(gy, gx), math.pi) / step).astype(np.intp)
         half = min(int(round(math.radians(orientation_window) / step)), theta_bins // 2)
-        offsets = np.arange(-half, half + 1) if 2 * half + 1 < theta_bins else np.arange(theta_bins)
-        theta_index = np.mod(centre[:, None] + offsets[None, :], theta_bins)
-    angles = theta_index * step
-    position = (x[:, None] * np.cos(angles) + y[:, None] * np.sin(angles) - rho0) / rho_step
-    lower = np.floor(position).astype(np.intp)
-    frac = position - lower
-    flat = theta_index * n_rho + lower
-    vote = np.broadcast_to(weights[:, None], flat.shape)
-    size = theta_bins * n_rho
-    accumulator = np.bincount(flat.ravel(), (vote * (1 - frac)).ravel(), minlength=size)
-    accumulator += np.bincount((flat + 1).ravel(), (vote * frac).ravel(), minlength=size)
-    return accumulator[:size].reshape(theta_bins, n_rho)
+        width = min(2 * half + 1, theta_bins)
+        first = np.mod(centre - half, theta_bins) if width < theta_bins else np.zeros_like(centre)
+    from ._kernels import vote_lines
+
+    table = np.arange(theta_bins) * step
+    cos, sin = np.cos(table) / rho_step, np.sin(table) / rho_step
+    return vote_lines(x, y, weights, first, width, cos, sin, rho0 / rho_step, n_rho)
 
 
 def _wrap_theta(accumulator: np.ndarray, pad: int) -> np.ndarray:
