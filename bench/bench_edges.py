@@ -65,9 +65,7 @@ def canny_rows(cv2) -> list[str]:
     reference = skimage.feature.canny(
         image, sigma=1.0, low_threshold=0.8, high_threshold=0.9, use_quantiles=True
     )
-    t_ours = best(
-        lambda: edges.canny(image, sigma=sigma, low=0.8, high=0.9, thresholds="quantile")
-    )
+    t_ours = best(lambda: edges.canny(image, sigma=sigma, low=0.8, high=0.9, thresholds="quantile"))
     t_sk = best(
         lambda: skimage.feature.canny(
             image, sigma=1.0, low_threshold=0.8, high_threshold=0.9, use_quantiles=True
@@ -190,7 +188,8 @@ def circles_rows(cv2) -> list[str]:
     rows = [
         "| Hough circles on coins | ms | ratio | coins (of 24) | false | mean radius error px |",
         "| --- | ---: | ---: | ---: | ---: | ---: |",
-        f"| graphvision | {t_ours * 1e3:.1f} | 1 | {score_circles(ours.circles, centroids, radius)} |",
+        f"| graphvision | {t_ours * 1e3:.1f} | 1 "
+        f"| {score_circles(ours.circles, centroids, radius)} |",
     ]
     radii = np.arange(15, 36)
 
@@ -227,7 +226,7 @@ def circles_rows(cv2) -> list[str]:
 
 def main() -> list[str]:
     cv2 = _cv2()
-    rows = canny_rows(cv2) + [""] + lines_rows(cv2) + [""] + circles_rows(cv2)
+    rows = [*canny_rows(cv2), "", *lines_rows(cv2), "", *circles_rows(cv2)]
     if cv2 is None:
         rows.append("\nOpenCV is not installed (pip install -e '.[bench]'): its rows are missing.")
     return rows
