@@ -25,7 +25,7 @@ def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho):
             position = x[i] * cos[t] + y[i] * sin[t] - rho0
             lower = int(np.floor(position))
             frac = position - lower
-            if 0 <= lower and lower + 1 < n_rho:
+            if lower >= 0 and lower + 1 < n_rho:
                 accumulator[t, lower] += weights[i] * (1.0 - frac)
                 accumulator[t, lower + 1] += weights[i] * frac
     return accumulator
