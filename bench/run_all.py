@@ -12,6 +12,7 @@ sys.path.insert(0, str(HERE))
 
 import bench_cache  # noqa: E402
 import bench_camera  # noqa: E402
+import bench_colour_template  # noqa: E402
 import bench_edges  # noqa: E402
 import bench_filters  # noqa: E402
 import bench_homography  # noqa: E402
@@ -30,6 +31,7 @@ def main() -> None:
         ("Recognition (recognition issue)", bench_recognition.main),
         ("Cameras and image formation (camera issue)", bench_camera.main),
         ("Edges and Hough (issue 10)", bench_edges.main),
+        ("Colour, templates, FFT, pyramids (issue 10)", bench_colour_template.main),
     ]
     lines = [
         f"# graphvision benchmarks — {time.strftime('%Y-%m-%d %H:%M')}",

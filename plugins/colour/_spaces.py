@@ -78,8 +78,19 @@ def _lab_to_rgb(lab: np.ndarray) -> np.ndarray:
     return np.where(linear > 0.0031308, 1.055 * linear ** (1 / 2.4) - 0.055, 12.92 * linear)
 
 
+def _linear(image: np.ndarray, matrix: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """``matrix @ pixel + offset`` for every pixel, channel plane by plane, in the input's float."""
+    out = np.empty_like(image)
+    for row in range(3):
+        plane = out[..., row]
+        plane[...] = offset[row]
+        for col in range(3):
+            plane += image.dtype.type(matrix[row, col]) * image[..., col]
+    return out
+
+
 def _rgb_to_ycbcr(rgb: np.ndarray) -> np.ndarray:
-    return rgb @ YCBCR_FROM_RGB.T + YCBCR_OFFSET
+    return _linear(rgb, YCBCR_FROM_RGB, YCBCR_OFFSET)
 
 
 def _ycbcr_to_rgb(ycbcr: np.ndarray) -> np.ndarray:
@@ -91,7 +102,9 @@ _BACKWARD = {"hsv": _hsv_to_rgb, "lab": _lab_to_rgb, "ycbcr": _ycbcr_to_rgb}
 
 
 def rgb_to(rgb: np.ndarray, space: str) -> np.ndarray:
-    """RGB in [0, 1] to ``space``, computed in float64."""
+    """RGB in [0, 1] to ``space``, computed in float64 (YCbCr, linear, in the input's float)."""
+    if space == "ycbcr" and np.asarray(rgb).dtype == np.float32:
+        return _rgb_to_ycbcr(rgb).astype(np.float32)
     return _FORWARD[space](np.asarray(rgb, dtype=np.float64))
 
 

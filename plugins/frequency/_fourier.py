@@ -81,9 +81,15 @@ def fft_convolve_array(image: np.ndarray, kernel: np.ndarray, boundary: str) -> 
         padded = data
     else:
         padded = np.pad(data, ((ch, kh - 1 - ch), (cw, kw - 1 - cw)), mode=_PAD[boundary])
-    shape = (padded.shape[0] + kh - 1, padded.shape[1] + kw - 1)
-    full = np.fft.irfft2(np.fft.rfft2(padded, shape) * np.fft.rfft2(kernel, shape), shape)
-    # full[n] = Σ_u K[u] P[n - u]: the output pixel i reads full[i + k - 1] (the valid part)
+    import scipy.fft
+
+    shape = tuple(
+        scipy.fft.next_fast_len(n + k - 1, real=True)
+        for n, k in zip(padded.shape, kernel.shape, strict=True)
+    )
+    full = scipy.fft.irfft2(scipy.fft.rfft2(padded, shape) * scipy.fft.rfft2(kernel, shape), shape)
+    # full[n] = Σ_u K[u] P[n - u] (no wrap-around: the transform is at least P + K - 1 long);
+    # the output pixel i reads full[i + k - 1], the valid part
     return full[kh - 1 : padded.shape[0], kw - 1 : padded.shape[1]]
 
 
