@@ -187,7 +187,9 @@ def gradient(
     sigma: Sigma = 1.0,
     boundary: EdgeBoundary = "mirror",
 ) -> Gradient:
-    r"""Gradient :math:`\nabla I = (\partial_x I, \partial_y I)`, its magnitude and orientation.
+    r"""Gradient of the image, its magnitude and orientation.
+
+    .. math:: \nabla I = (\partial_x I, \partial_y I)
 
     .. math:: m = \sqrt{(\partial_x I)^2 + (\partial_y I)^2}, \qquad
               \theta = \operatorname{atan2}(\partial_y I, \partial_x I) \in (-\pi, \pi]

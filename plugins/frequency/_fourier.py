@@ -37,7 +37,9 @@ class Spectrum(NamedTuple):
 
 @node("frequency.spectrum", version=1)
 def spectrum(image: GrayImage) -> Spectrum:
-    r"""The image's 2-D DFT :math:`F(u, v) = \sum_{x, y} I(x, y)\, e^{-2\pi i (ux/W + vy/H)}`.
+    r"""The image's 2-D discrete Fourier transform: magnitude, phase and log spectrum.
+
+    .. math:: F(u, v) = \sum_{x, y} I(x, y)\, e^{-2\pi i (ux/W + vy/H)}
 
     A signal is a sum of sines and cosines of various frequencies; the
     magnitude says how much of each, the phase where. Shifted so that zero
@@ -95,8 +97,9 @@ def fft_convolve_array(image: np.ndarray, kernel: np.ndarray, boundary: str) -> 
 
 @node("frequency.fft_convolve", version=1)
 def fft_convolve(image: FloatImage, kernel: Kernel, *, boundary: Boundary = "mirror") -> FloatImage:
-    r"""Convolution computed as a product of spectra: :math:`\mathcal F(f * g) = \mathcal F(f)
-    \odot \mathcal F(g)`.
+    r"""Convolution computed as a product of spectra (the convolution theorem).
+
+    .. math:: \mathcal F(f * g) = \mathcal F(f) \odot \mathcal F(g)
 
     Equal to ``filters.convolve`` for every boundary (the image is padded as
     the spatial filter would see it, so the circular convolution of the DFT

@@ -28,7 +28,9 @@ def _plot(canvas: np.ndarray, x: np.ndarray, y: np.ndarray, colour: tuple) -> No
 
 @node("hough.draw_lines", version=1)
 def draw_lines(image: Image, lines: Lines) -> ColorImage:
-    r"""Each line :math:`x\cos\theta + y\sin\theta = \rho` in red across the whole image.
+    r"""Each line in red across the whole image.
+
+    A line is :math:`x\cos\theta + y\sin\theta = \rho`.
 
     Parameters
     ----------

@@ -82,7 +82,9 @@ def hough_lines(
     min_distance: Annotated[int, Field(ge=1, le=1000)] = 5,
     max_lines: Annotated[int, Field(ge=1)] = 100,
 ) -> HoughLines:
-    r"""Lines by voting in :math:`(\rho, \theta)`: :math:`x\cos\theta + y\sin\theta = \rho`.
+    r"""Lines by voting in (ρ, θ), with the course's improvements.
+
+    A line is :math:`x\cos\theta + y\sin\theta = \rho`.
 
     Each edge point votes for the lines through it: for every :math:`\theta`
     bin, :math:`H[\rho(\theta), \theta] \mathrel{+}= 1`, the vote split

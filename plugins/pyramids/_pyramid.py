@@ -90,8 +90,10 @@ def gaussian_pyramid(image: Image, *, levels: Levels = 4, sigma: Sigma = 1.0) ->
 
 @node("pyramids.naive", version=1)
 def naive_pyramid(image: Image, *, levels: Levels = 4) -> Pyramid:
-    """Subsampling without smoothing: every second row and column, so frequencies above the
-    new Nyquist limit fold back as aliasing (shown beside ``pyramids.gaussian``).
+    """Subsampling without smoothing: every second row and column.
+
+    Frequencies above the new Nyquist limit fold back as aliasing (shown
+    beside ``pyramids.gaussian``).
 
     Parameters
     ----------
@@ -147,7 +149,9 @@ def laplacian_pyramid(image: Image, *, levels: Levels = 4, sigma: Sigma = 1.0) -
 
 @node("pyramids.reconstruct", version=1)
 def reconstruct(pyramid: Pyramid) -> Image:
-    r"""Collapse a Laplacian pyramid: :math:`G_i = L_i + \operatorname{expand}(G_{i+1})`.
+    r"""Collapse a Laplacian pyramid back into the image.
+
+    .. math:: G_i = L_i + \operatorname{expand}(G_{i+1})
 
     Parameters
     ----------
@@ -189,8 +193,9 @@ def pyramid_level(pyramid: Pyramid, *, index: Annotated[int, Field(ge=0)] = 1) -
 
 @node("pyramids.mosaic", version=1)
 def mosaic(pyramid: Pyramid) -> ColorImage:
-    """All levels side by side on one canvas, finest on the left; band-pass levels are shown
-    as 0.5 + level (clipped), so zero is mid-gray.
+    """All levels side by side on one canvas, finest on the left.
+
+    Band-pass levels are shown as 0.5 + level (clipped), so zero is mid-gray.
 
     Parameters
     ----------
@@ -217,7 +222,9 @@ def mosaic(pyramid: Pyramid) -> ColorImage:
 
 @node("pyramids.zone_plate", version=1)
 def zone_plate(*, size: Annotated[int, Field(ge=8, le=4096)] = 256) -> GrayImage:
-    r"""A zone plate (chirp): :math:`I = \tfrac12 + \tfrac12\cos(\pi r^2 / N)`, N = ``size``.
+    r"""A zone plate (chirp) whose local frequency grows to the Nyquist limit.
+
+    .. math:: I = \tfrac12 + \tfrac12\cos(\pi r^2 / N), \quad N = \text{size}
 
     The local frequency :math:`r / N` cycles per pixel grows linearly from
     the centre to the Nyquist limit ½ at the middle of each side, so every

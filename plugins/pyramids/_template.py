@@ -112,8 +112,10 @@ def find_peaks(
     min_distance: Annotated[int, Field(ge=1)] = 5,
     max_peaks: Annotated[int, Field(ge=1)] = 10,
 ) -> Peaks:
-    """Peaks of a response map: local maxima above ``threshold``, at least ``min_distance``
-    apart (strongest first), refined to a fraction of a pixel by a quadratic through the 3×3.
+    """Peaks of a response map, strongest first, refined to a fraction of a pixel.
+
+    Local maxima above ``threshold``, at least ``min_distance`` apart,
+    refined by a quadratic through the 3×3 around each.
 
     Parameters
     ----------
