@@ -8,7 +8,7 @@ from typing import Annotated, Literal, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import Array, Float, FloatImage, GrayImage, Points2D, node
+from graphvision import Array, ColorImage, Float, FloatImage, GrayImage, Image, Points2D, node
 
 from ..hough import local_maxima, quadratic_peak_2d, suppress_close
 
@@ -18,6 +18,7 @@ __all__ = [
     "Peaks",
     "SampledTemplate",
     "correlation_map",
+    "draw_match",
     "find_peaks",
     "match_error",
     "match_multiscale",
@@ -310,3 +311,43 @@ def match_error(
     """
     distance = float(np.linalg.norm(location[0] - true_location[0]))
     return MatchError(distance, abs(scale / true_scale - 1.0))
+
+
+@node("pyramids.draw_match", version=1)
+def draw_match(
+    image: Image, location: Points2D, template: GrayImage, scale: Float | None = None
+) -> ColorImage:
+    """A green box of the template's size (times ``scale``) centred on each location found.
+
+    Parameters
+    ----------
+    image : Image
+        The image searched (gray is drawn in colour).
+    location : Points2D
+        Centres of the matches (e.g. ``pyramids.match_multiscale``'s location).
+    template : GrayImage
+        The template, for the box's size.
+    scale : float, optional
+        The template's scale in the image (1 when not connected).
+
+    Returns
+    -------
+    drawing : (H, W, 3) float32 ndarray
+    """
+    canvas = np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image.copy()
+    factor = 1.0 if scale is None else float(scale)
+    half_h = (template.shape[0] * factor - 1) / 2
+    half_w = (template.shape[1] * factor - 1) / 2
+    rows, cols = canvas.shape[:2]
+    for x, y in location:
+        top, bottom = round(y - half_h), round(y + half_h)
+        left, right = round(x - half_w), round(x + half_w)
+        span_x = np.arange(max(left, 0), min(right, cols - 1) + 1)
+        span_y = np.arange(max(top, 0), min(bottom, rows - 1) + 1)
+        for row in (top, bottom):
+            if 0 <= row < rows:
+                canvas[row, span_x] = (0.1, 0.95, 0.1)
+        for col in (left, right):
+            if 0 <= col < cols:
+                canvas[span_y, col] = (0.1, 0.95, 0.1)
+    return canvas.astype(np.float32)

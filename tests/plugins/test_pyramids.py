@@ -106,6 +106,9 @@ def test_pipelines_pyramid_and_template():
     assert smooth < 0.01 * naive
     found = gv.run(gv.load_pipeline(PIPELINES / "template.yaml")).outputs
     assert found["location_error"] < 1.0 and found["scale_error"] < 0.02
+    drawing = found["drawing"]
+    # the patch was cut at x = 180..243, y = 60..123: the box's sides fall on its columns
+    np.testing.assert_allclose(drawing[91, [180, 243]], [[0.1, 0.95, 0.1]] * 2, rtol=1e-6)
 
 
 def test_bad_input_is_refused_naming_it():
