@@ -9,7 +9,7 @@ along the gradient, and drawings of both. Results travel as the ``Lines`` and
 
 from ._circles import HoughCircles, circle_accumulator, hough_circles
 from ._draw import draw_circles, draw_lines
-from ._generalized import GeneralizedHough, build_r_table, generalized_hough
+from ._generalized import GeneralizedHough, build_r_table, draw_instances, generalized_hough
 from ._lines import HoughLines, hough_lines, line_accumulator
 from ._peaks import local_maxima, parabolic_offset, quadratic_peak_2d, suppress_close
 from ._ports import Circles, CirclesPort, Lines, LinesPort
@@ -25,6 +25,7 @@ __all__ = [
     "build_r_table",
     "circle_accumulator",
     "draw_circles",
+    "draw_instances",
     "draw_lines",
     "generalized_hough",
     "hough_circles",

@@ -8,12 +8,22 @@ from typing import Annotated, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import Array, BinaryImage, FloatImage, GrayImage, Int, Points2D, node
+from graphvision import (
+    Array,
+    BinaryImage,
+    ColorImage,
+    FloatImage,
+    GrayImage,
+    Image,
+    Int,
+    Points2D,
+    node,
+)
 
 from ..edges import gradient_images
 from ._peaks import local_maxima, quadratic_peak_2d, suppress_close
 
-__all__ = ["GeneralizedHough", "build_r_table", "generalized_hough"]
+__all__ = ["GeneralizedHough", "build_r_table", "draw_instances", "generalized_hough"]
 
 
 def _oriented_points(
@@ -186,3 +196,59 @@ def generalized_hough(
         len(kept),
         best.astype(np.float32),
     )
+
+
+@node("hough.draw_instances", version=1)
+def draw_instances(
+    image: Image,
+    locations: Points2D,
+    model_edges: BinaryImage,
+    model_image: GrayImage,
+    angles: Array | None = None,
+    scales: Array | None = None,
+    *,
+    sigma: Annotated[float, Field(gt=0, le=50)] = 1.0,
+) -> ColorImage:
+    """The model's edge points in green where ``hough.generalized`` found it, reference in red.
+
+    Parameters
+    ----------
+    image : Image
+        The scene (gray is drawn in colour).
+    locations : Points2D
+        Reference points found (``hough.generalized``'s locations).
+    model_edges : BinaryImage
+        The model's edge points, as given to ``hough.generalized``.
+    model_image : GrayImage
+        The model picture, as given to ``hough.generalized``.
+    angles : Array, optional
+        Rotation of each instance in degrees (0 when not connected).
+    scales : Array, optional
+        Scale of each instance (1 when not connected).
+    sigma : float
+        The gradient scale used by ``hough.generalized`` (it picks the same points).
+
+    Returns
+    -------
+    drawing : (H, W, 3) float32 ndarray
+    """
+    canvas = np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image.copy()
+    points, _ = _oriented_points(model_edges, model_image, sigma)
+    offsets = points - points.mean(axis=0) if len(points) else points
+    rows, cols = canvas.shape[:2]
+    for index, (x, y) in enumerate(locations):
+        alpha = math.radians(float(angles[index])) if angles is not None else 0.0
+        scale = float(scales[index]) if scales is not None else 1.0
+        turn = np.array([[math.cos(alpha), -math.sin(alpha)], [math.sin(alpha), math.cos(alpha)]])
+        placed = np.rint(scale * offsets @ turn.T + (x, y)).astype(np.intp)
+        inside = (
+            (placed[:, 0] >= 0)
+            & (placed[:, 0] < cols)
+            & (placed[:, 1] >= 0)
+            & (placed[:, 1] < rows)
+        )
+        canvas[placed[inside, 1], placed[inside, 0]] = (0.1, 0.95, 0.1)
+        cx, cy = round(x), round(y)
+        if 0 <= cy < rows and 0 <= cx < cols:
+            canvas[cy, cx] = (0.95, 0.15, 0.1)
+    return canvas.astype(np.float32)

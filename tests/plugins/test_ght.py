@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+import scipy.ndimage as ndi
 import skimage.draw
 
 from graphvision_plugins import edges, hough
@@ -57,6 +58,14 @@ def test_shape_found_within_one_pixel(angle, seed):
     assert found.count == 1
     assert np.linalg.norm(found.locations[0] - truth) <= 1.0
     assert found.angles[0] == angle
+    drawing = hough.draw_instances(
+        scene, found.locations, model_edges, model, found.angles, found.scales
+    )
+    # the model's edge points land on (within 2 px of) the scene's edges of the shape
+    green = (drawing[..., 1] > 0.9) & (drawing[..., 0] < 0.2)
+    scene_edges = edges.canny(scene, sigma=1.0).edges
+    near = ndi.binary_dilation(scene_edges, np.ones((5, 5), bool))  # within 2 px
+    assert green.sum() > 50 and (green & near).sum() >= 0.9 * green.sum()
 
 
 def test_empty_model_is_refused():
