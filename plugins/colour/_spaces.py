@@ -61,11 +61,18 @@ def _hsv_to_rgb(hsv: np.ndarray) -> np.ndarray:
 
 
 def _rgb_to_lab(rgb: np.ndarray) -> np.ndarray:
-    linear = np.where(rgb > 0.04045, ((rgb + 0.055) / 1.055) ** 2.4, rgb / 12.92)
-    xyz = (linear @ XYZ_FROM_RGB.T) / D65_WHITE
-    f = np.where(xyz > LAB_EPSILON, np.cbrt(xyz), LAB_SLOPE * xyz + 16.0 / 116.0)
-    fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
-    return np.stack([116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)], axis=-1)
+    linear = rgb / 12.92
+    curved = rgb > 0.04045
+    linear[curved] = ((rgb[curved] + 0.055) / 1.055) ** 2.4
+    xyz = _linear(linear, XYZ_FROM_RGB / D65_WHITE[:, None], np.zeros(3))
+    f = LAB_SLOPE * xyz + 16.0 / 116.0
+    above = xyz > LAB_EPSILON
+    f[above] = np.cbrt(xyz[above])
+    lab = np.empty_like(f)
+    lab[..., 0] = 116.0 * f[..., 1] - 16.0
+    lab[..., 1] = 500.0 * (f[..., 0] - f[..., 1])
+    lab[..., 2] = 200.0 * (f[..., 1] - f[..., 2])
+    return lab
 
 
 def _lab_to_rgb(lab: np.ndarray) -> np.ndarray:
