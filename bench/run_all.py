@@ -12,6 +12,8 @@ sys.path.insert(0, str(HERE))
 
 import bench_cache  # noqa: E402
 import bench_camera  # noqa: E402
+import bench_colour_template  # noqa: E402
+import bench_edges  # noqa: E402
 import bench_filters  # noqa: E402
 import bench_homography  # noqa: E402
 import bench_recognition  # noqa: E402
@@ -28,6 +30,8 @@ def main() -> None:
         ("Homography pipeline (features issue)", bench_homography.main),
         ("Recognition (recognition issue)", bench_recognition.main),
         ("Cameras and image formation (camera issue)", bench_camera.main),
+        ("Edges and Hough (issue 10)", bench_edges.main),
+        ("Colour, templates, FFT, pyramids (issue 10)", bench_colour_template.main),
     ]
     lines = [
         f"# graphvision benchmarks — {time.strftime('%Y-%m-%d %H:%M')}",

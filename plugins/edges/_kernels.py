@@ -1,0 +1,57 @@
+"""numba kernel of non-maximum suppression (imported on first use: numba loads slowly).
+
+One compiled pass over the pixels: the gradient direction picks, for each
+pixel above the low threshold, the two points one step ahead and behind on
+the 3×3 square around it, whose magnitudes are interpolated linearly between
+the two pixels each falls between. No full-size temporaries besides the
+output mask.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+__all__ = ["suppress_non_maxima"]
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _sample(magnitude, y, x, fy, fx):
+    """Magnitude at ``(y + fy, x + fx)`` for |fx|, |fy| <= 1, one of them ±1, edge-replicated."""
+    height, width = magnitude.shape
+    y0 = int(np.floor(fy))
+    x0 = int(np.floor(fx))
+    wy = fy - y0
+    wx = fx - x0
+    total = 0.0
+    for dy, ky in ((y0, 1.0 - wy), (y0 + 1, wy)):
+        if ky == 0.0:
+            continue
+        row = min(max(y + dy, 0), height - 1)
+        for dx, kx in ((x0, 1.0 - wx), (x0 + 1, wx)):
+            if kx == 0.0:
+                continue
+            col = min(max(x + dx, 0), width - 1)
+            total += ky * kx * magnitude[row, col]
+    return total
+
+
+@numba.njit(cache=True, nogil=True)
+def suppress_non_maxima(dx, dy, magnitude, low):
+    """Mask of pixels with ``magnitude >= low`` (and > 0) that are at least both neighbours
+    along the gradient direction."""
+    height, width = magnitude.shape
+    keep = np.zeros((height, width), dtype=np.bool_)
+    for y in range(height):
+        for x in range(width):
+            m = magnitude[y, x]
+            if m < low or m <= 0.0:
+                continue
+            gx = float(dx[y, x])
+            gy = float(dy[y, x])
+            scale = max(abs(gx), abs(gy))
+            ux = gx / scale
+            uy = gy / scale
+            if m >= _sample(magnitude, y, x, uy, ux) and m >= _sample(magnitude, y, x, -uy, -ux):
+                keep[y, x] = True
+    return keep

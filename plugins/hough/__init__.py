@@ -1,0 +1,38 @@
+"""The Hough transform (seed: "Edge detection by parametric models").
+
+Lines in (ρ, θ) with the course's improvements (votes near the gradient
+orientation, weighted by magnitude, spread by a Gaussian, peaks by
+non-maximum suppression), circles of a known radius or a radius range voting
+along the gradient, and drawings of both. Results travel as the ``Lines`` and
+``Circles`` port types.
+"""
+
+from ._circles import HoughCircles, circle_accumulator, hough_circles
+from ._draw import draw_circles, draw_lines
+from ._generalized import GeneralizedHough, build_r_table, draw_instances, generalized_hough
+from ._lines import HoughLines, hough_lines, line_accumulator
+from ._peaks import local_maxima, parabolic_offset, quadratic_peak_2d, suppress_close
+from ._ports import Circles, CirclesPort, Lines, LinesPort
+
+__all__ = [
+    "Circles",
+    "CirclesPort",
+    "GeneralizedHough",
+    "HoughCircles",
+    "HoughLines",
+    "Lines",
+    "LinesPort",
+    "build_r_table",
+    "circle_accumulator",
+    "draw_circles",
+    "draw_instances",
+    "draw_lines",
+    "generalized_hough",
+    "hough_circles",
+    "hough_lines",
+    "line_accumulator",
+    "local_maxima",
+    "parabolic_offset",
+    "quadratic_peak_2d",
+    "suppress_close",
+]

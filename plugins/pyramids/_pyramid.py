@@ -1,0 +1,245 @@
+"""Gaussian and Laplacian pyramids, naive subsampling beside them, and reconstruction."""
+
+from __future__ import annotations
+
+import itertools
+from typing import Annotated
+
+import numpy as np
+from pydantic import Field
+
+from graphvision import ColorImage, FloatImage, GrayImage, Image, node
+
+from ._ports import ImagePyramid, Pyramid
+
+__all__ = [
+    "blur",
+    "expand",
+    "gaussian_levels",
+    "gaussian_pyramid",
+    "laplacian_pyramid",
+    "mosaic",
+    "naive_pyramid",
+    "pyramid_level",
+    "reconstruct",
+    "zone_plate",
+]
+
+Levels = Annotated[int, Field(ge=1, le=16, description="Number of levels, the image included.")]
+Sigma = Annotated[float, Field(gt=0, le=10, description="Gaussian σ before each halving.")]
+
+
+def blur(image: np.ndarray, sigma: float) -> np.ndarray:
+    """Gaussian smoothing of each channel (mirror boundary), truncated at 3σ, in float32."""
+    import scipy.ndimage as ndi
+
+    sigmas = (sigma, sigma, 0.0) if image.ndim == 3 else (sigma, sigma)
+    return ndi.gaussian_filter(image, sigmas, mode="mirror", truncate=3.0, output=np.float32)
+
+
+def expand(coarse: np.ndarray, shape: tuple[int, ...], sigma: float) -> np.ndarray:
+    """Up-sample ``coarse`` to ``shape``: samples at even pixels, zeros between, blurred and
+    multiplied by 4 so the mean is kept (Burt and Adelson's EXPAND)."""
+    fine = np.zeros(shape, dtype=np.float32)
+    fine[::2, ::2] = coarse
+    return blur(fine, sigma) * np.float32(4.0)
+
+
+def gaussian_levels(image: np.ndarray, levels: int, sigma: float) -> list[np.ndarray]:
+    result = [image.astype(np.float32)]
+    for _ in range(levels - 1):
+        if min(result[-1].shape[:2]) < 2:
+            break
+        result.append(np.ascontiguousarray(blur(result[-1], sigma)[::2, ::2]))
+    return result
+
+
+@node("pyramids.gaussian", version=1)
+def gaussian_pyramid(image: Image, *, levels: Levels = 4, sigma: Sigma = 1.0) -> Pyramid:
+    r"""Gaussian pyramid: blur, then keep every second row and column, ``levels - 1`` times.
+
+    Subsampling by 2 halves the sampling frequency, so only frequencies
+    below a quarter cycle per pixel of the finer level can be represented
+    (Nyquist: sample at least twice the highest frequency). The Gaussian,
+    a low-pass filter with compact support in both domains, removes what
+    cannot be represented first: its transfer function
+    :math:`e^{-2\pi^2\sigma^2 f^2}` is 0.29 at :math:`f = 1/4` for
+    :math:`\sigma = 1` and falls to 0.007 at :math:`f = 1/2`, where naive
+    subsampling folds the full amplitude back as aliasing.
+
+    Parameters
+    ----------
+    image : Image
+        Gray or colour, in [0, 1].
+    levels : int
+        Number of levels, the image itself included (stops early at 1 pixel).
+    sigma : float
+        Standard deviation of the Gaussian applied before each halving.
+
+    Returns
+    -------
+    pyramid : Pyramid, finest first
+
+    References
+    ----------
+    .. [1] P. J. Burt, E. H. Adelson, "The Laplacian pyramid as a compact image
+       code", IEEE Trans. Communications 31(4), 1983.
+    """
+    return ImagePyramid(tuple(gaussian_levels(image, levels, sigma)), "gaussian")
+
+
+@node("pyramids.naive", version=1)
+def naive_pyramid(image: Image, *, levels: Levels = 4) -> Pyramid:
+    """Subsampling without smoothing: every second row and column.
+
+    Frequencies above the new Nyquist limit fold back as aliasing (shown
+    beside ``pyramids.gaussian``).
+
+    Parameters
+    ----------
+    image : Image
+        Gray or colour, in [0, 1].
+    levels : int
+        Number of levels, the image itself included.
+
+    Returns
+    -------
+    pyramid : Pyramid, finest first
+    """
+    result = [image.astype(np.float32)]
+    for _ in range(levels - 1):
+        if min(result[-1].shape[:2]) < 2:
+            break
+        result.append(np.ascontiguousarray(result[-1][::2, ::2]))
+    return ImagePyramid(tuple(result), "naive")
+
+
+@node("pyramids.laplacian", version=1)
+def laplacian_pyramid(image: Image, *, levels: Levels = 4, sigma: Sigma = 1.0) -> Pyramid:
+    r"""Laplacian pyramid: the band each Gaussian level adds to the next coarser one.
+
+    .. math:: L_i = G_i - \operatorname{expand}(G_{i+1}), \qquad L_{n-1} = G_{n-1}
+
+    so that :math:`G_i = L_i + \operatorname{expand}(G_{i+1})` rebuilds the
+    image exactly (``pyramids.reconstruct``), whatever ``expand`` does.
+
+    Parameters
+    ----------
+    image : Image
+        Gray or colour, in [0, 1].
+    levels : int
+        Number of levels, the coarsest Gaussian level included.
+    sigma : float
+        Standard deviation of the Gaussian of REDUCE and EXPAND.
+
+    Returns
+    -------
+    pyramid : Pyramid, band-pass levels finest first, then the coarsest Gaussian level
+
+    References
+    ----------
+    .. [1] Burt & Adelson (1983).
+    """
+    gaussian = gaussian_levels(image, levels, sigma)
+    bands = [
+        fine - expand(coarse, fine.shape, sigma) for fine, coarse in itertools.pairwise(gaussian)
+    ]
+    return ImagePyramid((*bands, gaussian[-1]), f"laplacian:{sigma!r}")
+
+
+@node("pyramids.reconstruct", version=1)
+def reconstruct(pyramid: Pyramid) -> Image:
+    r"""Collapse a Laplacian pyramid back into the image.
+
+    .. math:: G_i = L_i + \operatorname{expand}(G_{i+1})
+
+    Parameters
+    ----------
+    pyramid : Pyramid
+        A pyramid made by ``pyramids.laplacian``.
+
+    Returns
+    -------
+    image : Image, clipped to [0, 1] (float32 rounding only)
+    """
+    if not pyramid.kind.startswith("laplacian:"):
+        raise ValueError(f"pyramid must be a Laplacian pyramid to reconstruct, got {pyramid.kind}")
+    sigma = float(pyramid.kind.split(":", 1)[1])
+    image = pyramid.levels[-1]
+    for band in reversed(pyramid.levels[:-1]):
+        image = band + expand(image, band.shape, sigma)
+    return np.clip(image, 0.0, 1.0).astype(np.float32)
+
+
+@node("pyramids.level", version=1)
+def pyramid_level(pyramid: Pyramid, *, index: Annotated[int, Field(ge=0)] = 1) -> FloatImage:
+    """One level of a pyramid (0 is the finest).
+
+    Parameters
+    ----------
+    pyramid : Pyramid
+        Any pyramid.
+    index : int
+        Which level.
+
+    Returns
+    -------
+    level : float32 ndarray
+    """
+    if index >= len(pyramid.levels):
+        raise ValueError(f"index {index} is past the pyramid's {len(pyramid.levels)} levels")
+    return pyramid.levels[index]
+
+
+@node("pyramids.mosaic", version=1)
+def mosaic(pyramid: Pyramid) -> ColorImage:
+    """All levels side by side on one canvas, finest on the left.
+
+    Band-pass levels are shown as 0.5 + level (clipped), so zero is mid-gray.
+
+    Parameters
+    ----------
+    pyramid : Pyramid
+        Any pyramid.
+
+    Returns
+    -------
+    drawing : (H, W_total, 3) float32 ndarray
+    """
+    band = pyramid.kind.startswith("laplacian")
+    height = pyramid.levels[0].shape[0]
+    width = sum(level.shape[1] for level in pyramid.levels)
+    canvas = np.zeros((height, width, 3), dtype=np.float32)
+    left = 0
+    for index, level in enumerate(pyramid.levels):
+        shown = level + 0.5 if band and index < len(pyramid.levels) - 1 else level
+        rgb = shown if shown.ndim == 3 else np.repeat(shown[..., None], 3, axis=2)
+        rows, cols = level.shape[:2]
+        canvas[:rows, left : left + cols] = np.clip(rgb, 0.0, 1.0)
+        left += cols
+    return canvas
+
+
+@node("pyramids.zone_plate", version=1)
+def zone_plate(*, size: Annotated[int, Field(ge=8, le=4096)] = 256) -> GrayImage:
+    r"""A zone plate (chirp) whose local frequency grows to the Nyquist limit.
+
+    .. math:: I = \tfrac12 + \tfrac12\cos(\pi r^2 / N), \quad N = \text{size}
+
+    The local frequency :math:`r / N` cycles per pixel grows linearly from
+    the centre to the Nyquist limit ½ at the middle of each side, so every
+    frequency is present once, at a known place: aliasing after subsampling
+    shows as rings where there should be none.
+
+    Parameters
+    ----------
+    size : int
+        Side of the square image.
+
+    Returns
+    -------
+    image : (size, size) float32 ndarray
+    """
+    centre = (size - 1) / 2
+    y, x = np.mgrid[0:size, 0:size].astype(np.float64) - centre
+    return (0.5 + 0.5 * np.cos(np.pi * (x * x + y * y) / size)).astype(np.float32)
