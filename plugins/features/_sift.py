@@ -16,6 +16,12 @@ from pydantic import Field
 
 from graphvision import Descriptors, GrayImage, Keypoints, KeypointSet, node
 
+# Lowe's parameters, defined once for every SIFT node (defaults as in the paper and OpenCV).
+Intervals = Annotated[int, Field(ge=1, le=8, description="Scales per octave, s.")]
+BaseSigma = Annotated[float, Field(gt=0, description="Blur of each octave's first scale.")]
+Contrast = Annotated[float, Field(ge=0, description="Least |D| at a refined extremum.")]
+EdgeRatio = Annotated[float, Field(gt=1, description="Largest ratio of principal curvatures.")]
+
 __all__ = [
     "SiftParams",
     "assign_orientations",
@@ -369,10 +375,10 @@ class SiftFeatures(NamedTuple):
 def sift(
     image: GrayImage,
     *,
-    intervals: Annotated[int, Field(ge=1, le=8)] = 3,
-    sigma: Annotated[float, Field(gt=0)] = 1.6,
-    contrast_threshold: Annotated[float, Field(ge=0)] = 0.04,
-    edge_ratio: Annotated[float, Field(gt=1)] = 10.0,
+    intervals: Intervals = 3,
+    sigma: BaseSigma = 1.6,
+    contrast_threshold: Contrast = 0.04,
+    edge_ratio: EdgeRatio = 10.0,
     upsample: bool = True,
     max_keypoints: Annotated[int, Field(ge=0)] = 0,
 ) -> SiftFeatures:
@@ -426,10 +432,10 @@ def sift(
 def dog(
     image: GrayImage,
     *,
-    intervals: Annotated[int, Field(ge=1, le=8)] = 3,
-    sigma: Annotated[float, Field(gt=0)] = 1.6,
-    contrast_threshold: Annotated[float, Field(ge=0)] = 0.04,
-    edge_ratio: Annotated[float, Field(gt=1)] = 10.0,
+    intervals: Intervals = 3,
+    sigma: BaseSigma = 1.6,
+    contrast_threshold: Contrast = 0.04,
+    edge_ratio: EdgeRatio = 10.0,
     upsample: bool = True,
 ) -> Keypoints:
     r"""Lowe's DoG keypoints with orientations (the detector half of ``features.sift``).
@@ -475,8 +481,8 @@ def describe_sift(
     image: GrayImage,
     keypoints: Keypoints,
     *,
-    intervals: Annotated[int, Field(ge=1, le=8)] = 3,
-    sigma: Annotated[float, Field(gt=0)] = 1.6,
+    intervals: Intervals = 3,
+    sigma: BaseSigma = 1.6,
     upsample: bool = True,
 ) -> Descriptors:
     """SIFT descriptors of given keypoints (any detector), at their scales and orientations.
