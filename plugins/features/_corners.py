@@ -44,14 +44,15 @@ def _peaks(
 
 def harris_response(image: np.ndarray, sigma_d: float, sigma_i: float, alpha: float) -> np.ndarray:
     r""":math:`R = \det M - \alpha\,\mathrm{tr}^2 M`, M the weighted gradient covariance."""
-    import scipy.ndimage as ndi
+    from .._separable import correlate_separable, gaussian_taps, smooth_gaussian
 
     data = image.astype(np.float32)
-    ix = ndi.gaussian_filter(data, sigma_d, order=(0, 1), truncate=3.0)
-    iy = ndi.gaussian_filter(data, sigma_d, order=(1, 0), truncate=3.0)
-    sxx = ndi.gaussian_filter(ix * ix, sigma_i, truncate=3.0)
-    syy = ndi.gaussian_filter(iy * iy, sigma_i, truncate=3.0)
-    sxy = ndi.gaussian_filter(ix * iy, sigma_i, truncate=3.0)
+    smooth, slope = gaussian_taps(sigma_d, 3.0), gaussian_taps(sigma_d, 3.0, order=1)
+    ix = correlate_separable(data, smooth, slope)
+    iy = correlate_separable(data, slope, smooth)
+    sxx = smooth_gaussian(ix * ix, sigma_i, truncate=3.0)
+    syy = smooth_gaussian(iy * iy, sigma_i, truncate=3.0)
+    sxy = smooth_gaussian(ix * iy, sigma_i, truncate=3.0)
     trace = sxx + syy
     return (sxx * syy - sxy * sxy - np.float32(alpha) * trace * trace).astype(np.float64)
 

@@ -16,6 +16,8 @@ from pydantic import Field
 
 from graphvision import Descriptors, GrayImage, Keypoints, KeypointSet, node
 
+from .._separable import smooth_gaussian
+
 # Lowe's parameters, defined once for every SIFT node (defaults as in the paper and OpenCV).
 Intervals = Annotated[int, Field(ge=1, le=8, description="Scales per octave, s.")]
 BaseSigma = Annotated[float, Field(gt=0, description="Blur of each octave's first scale.")]
@@ -75,7 +77,7 @@ def _pyramid(image: np.ndarray, params: SiftParams) -> _Pyramid:
         # pixel centres: up-sampled pixel j sits at input coordinate j / 2 - 1/4
         base = ndi.zoom(base, 2, order=1, grid_mode=True, mode="nearest")
         assumed, factor, shift = 1.0, 0.5, -0.25
-    base = ndi.gaussian_filter(base, math.sqrt(max(params.sigma**2 - assumed**2, 0.01)))
+    base = smooth_gaussian(base, math.sqrt(max(params.sigma**2 - assumed**2, 0.01)))
     s = params.intervals
     octaves = max(1, int(math.log2(min(base.shape))) - 3)
     totals = [params.sigma * 2.0 ** (i / s) for i in range(s + 3)]
@@ -85,7 +87,7 @@ def _pyramid(image: np.ndarray, params: SiftParams) -> _Pyramid:
         stack = np.empty((s + 3, *base.shape), np.float32)
         stack[0] = base
         for i, step in enumerate(steps, start=1):
-            ndi.gaussian_filter(stack[i - 1], step, output=stack[i], truncate=3.0)
+            stack[i] = smooth_gaussian(stack[i - 1], step, truncate=3.0)
         gaussians.append(stack)
         dogs.append(np.diff(stack, axis=0))
         base = stack[s][::2, ::2]

@@ -1,0 +1,45 @@
+"""The compiled separable core equals scipy.ndimage for every boundary, order and shape."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.ndimage as ndi
+
+from graphvision_plugins._separable import correlate_separable, gaussian_taps, smooth_gaussian
+
+RNG = np.random.default_rng(11)
+
+
+@pytest.mark.parametrize("mode", ["reflect", "mirror", "nearest", "wrap", "constant"])
+@pytest.mark.parametrize("shape", [(37, 53), (20, 31, 3), (5, 200)])
+@pytest.mark.parametrize("sigma", [0.7, 2.0, 5.0])
+def test_gaussian_equals_scipy_within_1e6(mode, shape, sigma):
+    image = RNG.random(shape, dtype=np.float32)
+    sigmas = (sigma, sigma, 0) if len(shape) == 3 else sigma
+    expected = ndi.gaussian_filter(image, sigmas, mode=mode, truncate=3.0)
+    np.testing.assert_allclose(smooth_gaussian(image, sigma, mode, 3.0), expected, atol=1e-6)
+
+
+@pytest.mark.parametrize("order", [(0, 1), (1, 0)])
+def test_derivative_of_gaussian_equals_scipy(order):
+    image = RNG.random((48, 40), dtype=np.float32)
+    expected = ndi.gaussian_filter(image, 1.5, order=order, truncate=3.0)
+    taps = [gaussian_taps(1.5, 3.0, o) for o in order]
+    np.testing.assert_allclose(correlate_separable(image, *taps), expected, atol=1e-6)
+
+
+def test_unequal_row_and_column_taps_match_two_correlate1d_calls():
+    image = RNG.random((30, 30), dtype=np.float32)
+    column, row = np.array([1.0, 2.0, 1.0]) / 4, np.array([-1.0, 0.0, 1.0, 0.5, 0.25])
+    expected = ndi.correlate1d(
+        ndi.correlate1d(image, column, axis=0, mode="nearest"), row, axis=1, mode="nearest"
+    )
+    np.testing.assert_allclose(
+        correlate_separable(image, column, row, "nearest"), expected, atol=1e-6
+    )
+
+
+def test_only_orders_0_and_1():
+    with pytest.raises(ValueError, match="order must be 0 or 1"):
+        gaussian_taps(1.0, order=2)
