@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["code_fingerprint"]
+__all__ = ["code_fingerprint", "top_level_distributions"]
 
 _MEMO: weakref.WeakKeyDictionary[Callable[..., Any], str] = weakref.WeakKeyDictionary()
 _SCALARS = (int, float, complex, str, bytes, bool, type(None))
@@ -69,11 +69,19 @@ def _in_project(obj: Any, project: str) -> bool:
 
 
 @cache
+def top_level_distributions() -> dict[str, list[str]]:
+    """Top-level package -> distributions providing it, read once per process (it is slow)."""
+    from importlib.metadata import packages_distributions
+
+    return dict(packages_distributions())
+
+
+@cache
 def _distribution_version(project: str) -> str:
     """``name==version`` of the installed distribution providing ``project``, or ''."""
-    from importlib.metadata import packages_distributions, version
+    from importlib.metadata import version
 
-    names = packages_distributions().get(project, [])
+    names = top_level_distributions().get(project, [])
     return ";".join(f"{name}=={version(name)}" for name in sorted(set(names)))
 
 

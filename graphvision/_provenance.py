@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ._compile import CompiledGraph
+from ._fingerprint import top_level_distributions
 from ._registry import Registry
 
 if TYPE_CHECKING:
@@ -72,7 +73,7 @@ def git_state(file: Path) -> tuple[str, bool]:
 @functools.cache
 def _distribution_of(module: str) -> str:
     """``name version`` of the installed distribution that provides top-level ``module``."""
-    names = metadata.packages_distributions().get(module.partition(".")[0], [])
+    names = top_level_distributions().get(module.partition(".")[0], [])
     for name in names:
         try:
             return f"{name} {metadata.version(name)}"
