@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	$(BIN)/graphvision run pipelines/homography.yaml --output-dir out/homography --record
-	@echo "results and report in out/homography (open out/homography/report.md)"
+	@echo "results and report in out/homography (open out/homography/report.html in a browser)"
 
 test: $(STAMP)
 	$(BIN)/python -m pytest
