@@ -150,7 +150,12 @@ def write_run(result: RunResult, directory: Path) -> dict[str, list[str]]:
         write_report(result.compiled, result.outputs, files, result.record, staging)
         failures = {name: str(error) for name, error in result.failures.items()}
         write_html_report(
-            result.compiled, result.outputs, result.record, staging, failures=failures
+            result.compiled,
+            result.outputs,
+            result.record,
+            staging,
+            failures=failures,
+            intermediates=result.intermediates,
         )
         new = [name for names in files.values() for name in names] + [REPORT_HTML, REPORT, RECORD]
         for name in new:

@@ -159,6 +159,9 @@ class RunResult:
     record: RunRecord
     compiled: CompiledGraph
     failures: dict[str, GraphvisionError] = field(default_factory=dict)
+    intermediates: dict[str, tuple[type[PortType], Any]] = field(default_factory=dict)
+    """With ``keep_intermediates=True``: every node output that is not a graph output, by
+    ``node`` or ``node.port``, with its port type."""
 
     def _repr_html_(self) -> str:
         """The report's page, shown by Jupyter when a result is the value of a cell."""
@@ -262,6 +265,7 @@ class _Run:
         self.started: dict[str, float] = {}
         self.consumers: dict[tuple[str, str], int] = {}
         self.pinned: set[tuple[str, str]] = set()
+        self.keep_intermediates = False
 
     def track_consumers(self, compute: list[str], pinned: list[tuple[str, str]]) -> None:
         """Count readers of each value so intermediates are dropped after their last one."""
@@ -412,7 +416,17 @@ class _Run:
             if source in self.values:
                 produced[name] = self.values[source]
                 self.record.outputs[name] = self.compiled.output_type(name).summary(produced[name])
-        return RunResult(produced, self.record, self.compiled, self.failures)
+        kept = {
+            (f"{name}.{port}" if len(self.compiled.steps[name].outputs) > 1 else name): (
+                self.compiled.steps[name].outputs[port],
+                value,
+            )
+            for (name, port), value in self.values.items()
+            if self.keep_intermediates
+            and name in self.compiled.steps
+            and (name, port) not in self.compiled.outputs.values()
+        }
+        return RunResult(produced, self.record, self.compiled, self.failures, kept)
 
     def wrap(self, step: Step, error: Exception) -> NodeExecutionError:
         summary = {}
@@ -438,6 +452,7 @@ def run(
     cache: Cache | None = None,
     keep_going: bool = False,
     hooks: Sequence[RunHooks] = (),
+    keep_intermediates: bool = False,
 ) -> RunResult:
     """Run a pipeline and return its outputs and run record.
 
@@ -461,6 +476,9 @@ def run(
         After a failure, still run every branch that does not depend on it.
     hooks : sequence of RunHooks
         Observers of the run.
+    keep_intermediates : bool
+        Keep every node output of the run in ``result.intermediates`` (instead
+        of dropping each after its last reader), e.g. to look at them in the report.
 
     Raises
     ------
@@ -481,7 +499,18 @@ def run(
         name: resolve_input(name, compiled.input_types[name], value, registry)
         for name, value in given.items()
     }
-    state = _execute(compiled, values, needed, wanted, cache, executor, workers, keep_going, hooks)
+    state = _execute(
+        compiled,
+        values,
+        needed,
+        wanted,
+        cache,
+        executor,
+        workers,
+        keep_going,
+        hooks,
+        keep_intermediates,
+    )
     describe_run(state.record, compiled, registry, given, state.keys, overrides or {})
     result = state.result(wanted)
     if state.failures:
@@ -562,6 +591,7 @@ def _execute(
     workers: int | None,
     keep_going: bool,
     hooks: Sequence[RunHooks],
+    keep_intermediates: bool = False,
 ) -> _Run:
     """Steps 4 to 6: key, plan, schedule; the run's state, with its record, whatever happens.
 
@@ -584,7 +614,11 @@ def _execute(
             step: {src for src, _ in compiled.steps[step].inputs.values() if src in computed}
             for step in compute
         }
-        state.track_consumers(compute, [compiled.outputs[o] for o in wanted])
+        pinned = [compiled.outputs[o] for o in wanted]
+        state.keep_intermediates = keep_intermediates
+        if keep_intermediates:
+            pinned += [(step, port) for step in compute for port in compiled.steps[step].outputs]
+        state.track_consumers(compute, pinned)
         inline = None if encodes_values(pool) else state.start_inline
         skipped = run_tasks(
             dependencies, state.start, state.finish, keep_going=keep_going, start_inline=inline

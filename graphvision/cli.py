@@ -224,6 +224,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             cache=_cache(args),
             keep_going=args.keep_going,
             hooks=[RunProgress()] if progress else [],
+            keep_intermediates=args.keep_intermediates,
         )
     except RunError as error:
         print(f"error: run failed\n{error}", file=sys.stderr)
@@ -576,6 +577,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="run once per file matching GLOB (given to input NAME; ** recurses); needs -d",
     )
     p.add_argument("--record", action="store_true", help="print the run record")
+    p.add_argument(
+        "--keep-intermediates",
+        action="store_true",
+        help="with -d: keep every intermediate value and show its picture in report.html",
+    )
     p.add_argument(
         "--progress",
         action=argparse.BooleanOptionalAction,

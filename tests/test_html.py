@@ -150,3 +150,25 @@ def test_batch_page_has_a_card_per_file_linking_its_report(tmp_path):
     assert text.count('class="card ') == 4 and text.count('href="img0/report.html"') == 1
     assert 'src="img0/' in text and "not an image" not in text.split("img3.png")[0]
     assert batch.failed == 1
+
+
+def test_keep_intermediates_adds_their_pictures_to_the_report(tmp_path):
+    from graphvision.cli import main
+
+    status = main(
+        [
+            "run",
+            str(PIPELINES / "coins.yaml"),
+            "--no-cache",
+            "-d",
+            str(tmp_path),
+            "--keep-intermediates",
+        ]
+    )
+    assert status == 0
+    page = _Page()
+    page.feed((tmp_path / "report.html").read_text())
+    assert "Intermediate values" in (tmp_path / "report.html").read_text()
+    for name in ("gray", "binary", "closed", "filled", "opened"):
+        assert name in page.headings
+    assert len(page.images) > 2
