@@ -13,12 +13,14 @@ sys.path.insert(0, str(HERE))
 import bench_cache  # noqa: E402
 import bench_camera  # noqa: E402
 import bench_colour_template  # noqa: E402
+import bench_dask  # noqa: E402
 import bench_edges  # noqa: E402
 import bench_filters  # noqa: E402
 import bench_homography  # noqa: E402
 import bench_recognition  # noqa: E402
 import bench_scheduler  # noqa: E402
 import bench_segmentation  # noqa: E402
+import bench_sweep  # noqa: E402
 
 
 def main() -> None:
@@ -32,6 +34,8 @@ def main() -> None:
         ("Cameras and image formation (camera issue)", bench_camera.main),
         ("Edges and Hough (issue 10)", bench_edges.main),
         ("Colour, templates, FFT, pyramids (issue 10)", bench_colour_template.main),
+        ("Sweep sharing (issue 15)", bench_sweep.main),
+        ("Dask executor overhead (issue 15)", bench_dask.main),
     ]
     lines = [
         f"# graphvision benchmarks — {time.strftime('%Y-%m-%d %H:%M')}",

@@ -1,0 +1,69 @@
+"""The Dask executor's cost per task against raw ``dask.distributed`` on the same graph.
+
+A chain of trivial nodes (``x + 1``) on a 2-worker ``LocalCluster``: raw Dask
+submits each task with its predecessor's future; graphvision runs the same
+chain as a pipeline with :class:`~graphvision.DaskExecutor` on the same
+client (each node a task, values in array encoding, results validated and
+kept by the client). Aim (issue 15): within 1.2× of raw Dask per task.
+
+Run: ``python bench/bench_dask.py`` (``make bench`` runs every benchmark).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from bench_scheduler import chain_graph, inc
+
+import graphvision as gv
+
+HERE = Path(__file__).parent
+NODES = 200
+
+
+def main() -> list[str]:
+    try:
+        import distributed
+    except ImportError:
+        return ["(Dask not installed: pip install 'graphvision[dask]')"]
+    registry = gv.discover([HERE / "trivial_nodes.py"])
+    compiled = gv.compile_graph(chain_graph(NODES), registry)
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        executor = gv.DaskExecutor(client)
+
+        def raw() -> None:
+            future = client.submit(inc, 0.0, pure=False)
+            for _ in range(NODES - 1):
+                future = client.submit(inc, future, pure=False)
+            assert future.result() == float(NODES)
+
+        def ours() -> None:
+            result = gv.run(compiled, registry, executor=executor, cache=None)
+            assert next(iter(result.outputs.values())) == float(NODES)
+
+        timings = {}
+        for name, func in (("raw", raw), ("graphvision", ours)):
+            func()
+            runs = []
+            for _ in range(3):
+                began = time.perf_counter()
+                func()
+                runs.append(time.perf_counter() - began)
+            timings[name] = min(runs) / NODES
+    return [
+        "| chain of trivial tasks, LocalCluster(2 workers) | ms per task |",
+        "| --- | ---: |",
+        f"| raw `dask.distributed` (`client.submit` chain) | {timings['raw'] * 1e3:.2f} |",
+        f"| graphvision `DaskExecutor` | {timings['graphvision'] * 1e3:.2f} |",
+        f"| graphvision / raw | {timings['graphvision'] / timings['raw']:.2f}× |",
+    ]
+
+
+if __name__ == "__main__":
+    print("\n".join(main()))
