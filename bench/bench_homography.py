@@ -54,6 +54,11 @@ class Tally:
         )
 
 
+def size(image: np.ndarray) -> dict[str, int]:
+    """The image's size, for corner errors measured at the real geometry."""
+    return {"width": image.shape[1], "height": image.shape[0]}
+
+
 def timed(func):
     began = time.perf_counter()
     value = func()
@@ -65,7 +70,10 @@ def ours(image, warped, tally: Tally, truth):
     found, tm = timed(lambda: matching.match(a.descriptors, b.descriptors, ratio=0.8))
     try:
         fit, tf = timed(lambda: geometry.homography_ransac(a.keypoints, b.keypoints, found))
-        error, inliers = geometry.corner_error(fit.homography, truth), len(fit.inliers)
+        error, inliers = (
+            geometry.corner_error(fit.homography, truth, **size(image)),
+            len(fit.inliers),
+        )
     except ValueError:
         error, inliers, tf = np.inf, 0, 0.0
     tally.errors.append(error)
@@ -92,7 +100,7 @@ def opencv(cv2, image, warped, tally: Tally, truth):
     src = np.float32([ka[m.queryIdx].pt for m in good])
     dst = np.float32([kb[m.trainIdx].pt for m in good])
     (h, mask), tf = timed(lambda: cv2.findHomography(src, dst, cv2.RANSAC, 3.0))
-    error = geometry.corner_error(h, truth) if h is not None else np.inf
+    error = geometry.corner_error(h, truth, **size(image)) if h is not None else np.inf
     tally.errors.append(error)
     tally.keypoints.append((len(ka) + len(kb)) / 2)
     tally.inliers.append(int(mask.sum()) if mask is not None else 0)
@@ -127,7 +135,9 @@ def scikit(image, warped, tally: Tally, truth):
             rng=0,
         )
     )
-    error = geometry.corner_error(model.params, truth) if model is not None else np.inf
+    error = (
+        geometry.corner_error(model.params, truth, **size(image)) if model is not None else np.inf
+    )
     tally.errors.append(error)
     tally.keypoints.append((len(a.keypoints) + len(b.keypoints)) / 2)
     tally.inliers.append(int(inliers.sum()) if inliers is not None else 0)
