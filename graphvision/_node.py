@@ -78,6 +78,7 @@ class _NodeMark:
 @dataclass(frozen=True)
 class _SourceMark:
     scheme: str
+    key: Callable[[str], str] | None = None
 
 
 def node(
@@ -126,14 +127,20 @@ def unchecked(func: Callable) -> Callable:
     return func
 
 
-def source(scheme: str) -> Callable[[Callable], Callable]:
+def source(
+    scheme: str, *, key: Callable[[str], str] | None = None
+) -> Callable[[Callable], Callable]:
     """Mark ``func(reference: str)`` as the loader of graph-input values ``scheme:reference``.
 
-    The scheme ``file`` is used for values without a scheme (paths).
+    The scheme ``file`` is used for values without a scheme (paths). ``key``,
+    for a source whose values are fixed by the reference (data shipped with a
+    library), gives the text that identifies the value without loading it
+    (e.g. name and library version): the cache keys the input by that text,
+    and a fully cached run never loads the value.
     """
 
     def mark(func: Callable) -> Callable:
-        func.__graphvision_source__ = _SourceMark(scheme)  # type: ignore[attr-defined]
+        func.__graphvision_source__ = _SourceMark(scheme, key)  # type: ignore[attr-defined]
         return func
 
     return mark
@@ -212,6 +219,7 @@ class SourceSpec:
     scheme: str
     func: Callable[[str], Any]
     plugin: str
+    key: Callable[[str], str] | None = None
 
 
 @dataclass(frozen=True, eq=False)

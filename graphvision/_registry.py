@@ -71,7 +71,7 @@ class Registry:
                 f"{len(rejected)} nodes of plugin '{name}' are rejected:\n{listing}"
             )
         sources = [
-            SourceSpec(m.__graphvision_source__.scheme, m, name)
+            SourceSpec(m.__graphvision_source__.scheme, m, name, m.__graphvision_source__.key)
             for m in members
             if hasattr(m, "__graphvision_source__")
         ]

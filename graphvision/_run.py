@@ -19,11 +19,13 @@ Hooks (:class:`RunHooks`) observe it; the run record is always produced.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import time
 from collections.abc import Iterable, Sequence
 from concurrent.futures import Future
 from dataclasses import asdict, dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -266,6 +268,7 @@ class _Run:
         self.consumers: dict[tuple[str, str], int] = {}
         self.pinned: set[tuple[str, str]] = set()
         self.keep_intermediates = False
+        self.deferred: dict[str, Any] = {}
 
     def track_consumers(self, compute: list[str], pinned: list[tuple[str, str]]) -> None:
         """Count readers of each value so intermediates are dropped after their last one."""
@@ -280,10 +283,23 @@ class _Run:
             if self.consumers[source] == 0 and source not in self.pinned:
                 self.values.pop(source, None)
 
-    def key_inputs(self, values: dict[str, Any]) -> None:
+    def key_inputs(self, values: dict[str, Any], reference_keys: dict[str, str]) -> None:
+        """Key each graph input by content, or by reference (its value then loads later)."""
         for name, value in values.items():
+            if name in reference_keys:
+                self.keys[(name, "")] = reference_keys[name]
+                self.deferred[name] = value  # a loader
+                continue
             self.values[(name, "")] = value
             self.keys[(name, "")] = content_key(self.compiled.input_types[name], value)
+
+    def load_inputs(self, compute: list[str], wanted: list[tuple[str, str]]) -> None:
+        """Load the inputs keyed by reference that a node to compute (or an output) reads."""
+        steps = self.compiled.steps
+        read = {src for step in compute for src, port in steps[step].inputs.values() if not port}
+        read |= {name for name, port in wanted if not port}
+        for name in sorted(read & self.deferred.keys()):
+            self.values[(name, "")] = self.deferred.pop(name)()
 
     def key_steps(self, names: list[str]) -> None:
         for name in names:
@@ -300,8 +316,8 @@ class _Run:
         while stack:
             source = stack.pop()
             name, port = source
-            if source in self.values or name in compute:
-                continue
+            if source in self.values or name in compute or name in self.deferred:
+                continue  # a value, a step already planned, or an input loaded on demand
             step = steps[name]
             if step.spec.cache and self.cache is not None:
                 began = time.perf_counter()
@@ -495,8 +511,11 @@ def run(
     wanted = _wanted_outputs(compiled, outputs, inputs)
     needed = compiled.needed_for(wanted)
     given = _given_inputs(compiled, needed, wanted, inputs)
+    reference_keys = _referenced_inputs(compiled, given, registry)
     values = {
-        name: resolve_input(name, compiled.input_types[name], value, registry)
+        name: partial(resolve_input, name, compiled.input_types[name], value, registry)
+        if name in reference_keys
+        else resolve_input(name, compiled.input_types[name], value, registry)
         for name, value in given.items()
     }
     state = _execute(
@@ -510,6 +529,7 @@ def run(
         keep_going,
         hooks,
         keep_intermediates,
+        reference_keys,
     )
     describe_run(state.record, compiled, registry, given, state.keys, overrides or {})
     result = state.result(wanted)
@@ -581,6 +601,32 @@ def _given_inputs(
     }
 
 
+def _referenced_inputs(
+    compiled: CompiledGraph, given: dict[str, Any], registry: Registry
+) -> dict[str, str]:
+    """Input name -> key, for inputs given as a reference whose source keys it without loading.
+
+    ``sample:astronaut`` is fixed by its name and scikit-image's version: the
+    run keys it by that and loads it only if a node that reads it must run.
+    """
+    keys = {}
+    for name, value in given.items():
+        if not isinstance(value, str) or issubclass(compiled.input_types[name], TextPort):
+            continue
+        scheme, sep, rest = value.partition(":")
+        spec = registry.sources.get(scheme) if sep else None
+        if spec is None or spec.key is None:
+            continue
+        try:
+            text = spec.key(rest)
+        except Exception:  # loading reports the problem, with its message
+            continue
+        kind = compiled.input_types[name].type_name()
+        digest = hashlib.blake2b(f"{kind}|{text}".encode(), digest_size=16).hexdigest()
+        keys[name] = "r" + digest
+    return keys
+
+
 def _execute(
     compiled: CompiledGraph,
     values: dict[str, Any],
@@ -592,6 +638,7 @@ def _execute(
     keep_going: bool,
     hooks: Sequence[RunHooks],
     keep_intermediates: bool = False,
+    reference_keys: dict[str, str] | None = None,
 ) -> _Run:
     """Steps 4 to 6: key, plan, schedule; the run's state, with its record, whatever happens.
 
@@ -604,9 +651,10 @@ def _execute(
     state = _Run(compiled, cache, pool, hooks, RunRecord(compiled.graph.name, name))
     began, failed = time.perf_counter(), True
     try:
-        state.key_inputs(values)
+        state.key_inputs(values, reference_keys or {})
         state.key_steps(needed)
         compute = state.plan(compiled.outputs[o] for o in wanted)
+        state.load_inputs(compute, [compiled.outputs[o] for o in wanted])
         for hook in hooks:
             hook.run_started(pipeline=compiled.graph.name, steps=compute)
         computed = set(compute)

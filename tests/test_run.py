@@ -380,3 +380,23 @@ def test_only_nodes_downstream_of_a_failure_are_called_skipped(registry):
         "after": "skipped",
         "other": "computed",
     }
+
+
+def test_a_fully_cached_run_does_not_load_a_sample_input(tmp_path):
+    """sample:NAME is keyed by its name and scikit-image's version: a warm run never loads it."""
+    import subprocess
+    import sys
+
+    script = (
+        "import sys, graphvision as gv\n"
+        f"cache = gv.Cache(None, gv.DiskStore({str(tmp_path)!r}))\n"
+        "g = gv.Graph('s')\n"
+        "image = g.input('image', 'Image', default='sample:camera')\n"
+        "g.output('gray', g.add('gray', 'color.to_gray', image=image))\n"
+        "result = gv.run(g, cache=cache)\n"
+        "print(result.record.count('cached'), 'skimage.data' in sys.modules)\n"
+    )
+    first = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    second = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert first.stdout.split() == ["0", "True"], first.stderr
+    assert second.stdout.split() == ["1", "False"], second.stderr

@@ -34,7 +34,25 @@ SampleName = Literal[
 SAMPLES: tuple[str, ...] = get_args(SampleName)
 
 
-@source("sample")
+def sample_key(name: str) -> str:
+    """What fixes a sample's pixels without loading it: its name and scikit-image's version."""
+    from importlib.metadata import version
+
+    check_sample_name(name)
+    return f"skimage.data.{name} scikit-image=={version('scikit-image')}"
+
+
+def check_sample_name(name: str) -> None:
+    """Refuse a name that is not one of :data:`SAMPLES`, suggesting the closest."""
+    if name not in SAMPLES:
+        import difflib
+
+        close = difflib.get_close_matches(name, SAMPLES, n=1)
+        hint = f" (did you mean '{close[0]}'?)" if close else ""
+        raise ValueError(f"unknown sample image '{name}'{hint}; samples: {', '.join(SAMPLES)}")
+
+
+@source("sample", key=sample_key)
 def sample_array(name: str) -> np.ndarray:
     """``skimage.data.<name>()`` as shipped (uint8 or bool); the input's port applies the policy.
 
@@ -43,12 +61,7 @@ def sample_array(name: str) -> np.ndarray:
     ValueError
         For a name that is not one of :data:`SAMPLES`, with the list.
     """
-    if name not in SAMPLES:
-        import difflib
-
-        close = difflib.get_close_matches(name, SAMPLES, n=1)
-        hint = f" (did you mean '{close[0]}'?)" if close else ""
-        raise ValueError(f"unknown sample image '{name}'{hint}; samples: {', '.join(SAMPLES)}")
+    check_sample_name(name)
     import skimage.data
 
     data: np.ndarray = getattr(skimage.data, name)()
