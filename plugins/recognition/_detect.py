@@ -48,6 +48,12 @@ __all__ = [
     "window_features",
 ]
 
+HARD_NEGATIVE_SOURCES: tuple[FaceFree, ...] = (
+    "brick", "coffee", "coins", "grass", "gravel", "hubble_deep_field",
+    "immunohistochemistry", "moon", "page", "rocket", "text",
+)  # fmt: skip
+"""Face-free built-in images searched for hard negatives (no person in any of them)."""
+
 
 class Windows(NamedTuple):
     """Feature rows of windows at one scale and their boxes (x0, y0, x1, y1) in that scale."""
@@ -235,19 +241,7 @@ def sliding_windows(
 def mine_negatives(
     classifier: Classifier,
     *,
-    images: tuple[FaceFree, ...] = (
-        "brick",
-        "coffee",
-        "coins",
-        "grass",
-        "gravel",
-        "hubble_deep_field",
-        "immunohistochemistry",
-        "moon",
-        "page",
-        "rocket",
-        "text",
-    ),
+    images: tuple[FaceFree, ...] = HARD_NEGATIVE_SOURCES,
     count: Annotated[int, Field(ge=1)] = 400,
     scale_step: Annotated[float, Field(gt=1, le=4)] = 1.25,
     min_scale: Annotated[float, Field(gt=0)] = 1.0,
