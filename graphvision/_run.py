@@ -1,4 +1,4 @@
-"""Running a graph: inputs, keys, cache plan, execution, record.
+r"""Running a graph: inputs, keys, cache plan, execution, record.
 
 :func:`run` does, in order:
 
@@ -15,6 +15,22 @@
    releasing each intermediate value once its last consumer has run.
 
 Hooks (:class:`RunHooks`) observe it; the run record is always produced.
+
+Each node of the run moves through these states (``NodeRecord.status``)::
+
+    (planned) --cache hit--> cached
+        |
+        +--> pending --started by the scheduler--> running --> computed
+                |                                        \--> failed
+                +--an upstream node failed--> skipped
+                +--the run was interrupted--> pending (stays)
+
+(``running`` is known to the scheduler and the hooks, not written in the
+record.) The state lives in one dataclass, ``_Run``; ``plan`` decides cached
+or pending from the keys and the cache, ``start`` hands a pending node to the executor
+(encoded values for other processes, the values themselves in this one),
+``finish`` validates, freezes, stores and releases, and the scheduler
+(:func:`~graphvision._scheduler.run_tasks`) only orders them.
 """
 
 from __future__ import annotations
@@ -246,29 +262,34 @@ def _freeze(port_type: type[PortType], value: Any) -> Any:
     return port_type.decode({name: freeze(a) for name, a in arrays.items()}, meta)
 
 
+@dataclass(eq=False)
 class _Run:
-    """The state of one run (see the module docstring for the steps)."""
+    """The whole state of one run, in one place (see the module docstring for its machine).
 
-    def __init__(
-        self,
-        compiled: CompiledGraph,
-        cache: Cache | None,
-        executor: Executor,
-        hooks: Sequence[RunHooks],
-        record: RunRecord,
-    ) -> None:
-        self.compiled, self.cache, self.executor = compiled, cache, executor
-        self.encoded = encodes_values(executor)  # the transport, read once
-        self.hooks, self.record = hooks, record
-        self.values: dict[tuple[str, str], Any] = {}
-        self.keys: dict[tuple[str, str], str] = {}
-        self.nodes: dict[str, NodeRecord] = {}
-        self.failures: dict[str, GraphvisionError] = {}
-        self.started: dict[str, float] = {}
-        self.consumers: dict[tuple[str, str], int] = {}
-        self.pinned: set[tuple[str, str]] = set()
-        self.keep_intermediates = False
-        self.deferred: dict[str, Any] = {}
+    ``values`` holds graph inputs and node outputs by ``(node, port)`` (port
+    ``""`` for a graph input) until their last reader has run; ``keys`` their
+    cache keys; ``nodes`` what happened to each node; ``deferred`` the loaders
+    of inputs keyed by reference, not loaded yet; ``consumers`` how many nodes
+    still read each value; ``pinned`` the values kept to the end (outputs).
+    """
+
+    compiled: CompiledGraph
+    cache: Cache | None
+    executor: Executor
+    hooks: Sequence[RunHooks]
+    record: RunRecord
+    values: dict[tuple[str, str], Any] = field(default_factory=dict)
+    keys: dict[tuple[str, str], str] = field(default_factory=dict)
+    nodes: dict[str, NodeRecord] = field(default_factory=dict)
+    failures: dict[str, GraphvisionError] = field(default_factory=dict)
+    started: dict[str, float] = field(default_factory=dict)
+    consumers: dict[tuple[str, str], int] = field(default_factory=dict)
+    pinned: set[tuple[str, str]] = field(default_factory=set)
+    deferred: dict[str, Any] = field(default_factory=dict)
+    keep_intermediates: bool = False
+
+    def __post_init__(self) -> None:
+        self.encoded = encodes_values(self.executor)  # the transport, read once
 
     def track_consumers(self, compute: list[str], pinned: list[tuple[str, str]]) -> None:
         """Count readers of each value so intermediates are dropped after their last one."""
