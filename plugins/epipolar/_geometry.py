@@ -1,0 +1,174 @@
+r"""Two-view geometry as plain functions: F by the normalised 8-point algorithm, E, pose,
+triangulation, Sampson distances.
+
+For corresponding pixels :math:`x_a \leftrightarrow x_b` (homogeneous) the
+fundamental matrix satisfies :math:`x_b^T F x_a = 0`; with calibrations
+:math:`K_a, K_b` the essential matrix is :math:`E = K_b^T F K_a =
+[t]_\times R`, where camera b is :math:`[R \mid t]` when camera a is
+:math:`[I \mid 0]`.
+
+References
+----------
+.. [1] R. I. Hartley, "In defense of the eight-point algorithm", IEEE PAMI
+   19(6), 1997.
+.. [2] R. Hartley, A. Zisserman, *Multiple View Geometry*, 2nd ed., 2004,
+   §9.6 (E), §11.1–11.4 (8-point, Sampson), §12.2 (linear triangulation).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "eight_point",
+    "essential_from_fundamental",
+    "poses_from_essential",
+    "sampson_distance",
+    "triangulate_linear",
+]
+
+
+def _normalising(points: np.ndarray) -> np.ndarray:
+    """Similarity moving the centroid to 0 and the mean distance to √2 (Hartley)."""
+    centre = points.mean(axis=0)
+    scale = np.sqrt(2.0) / max(float(np.linalg.norm(points - centre, axis=1).mean()), 1e-12)
+    return np.array([[scale, 0, -scale * centre[0]], [0, scale, -scale * centre[1]], [0, 0, 1.0]])
+
+
+def eight_point(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    r"""F from at least 8 correspondences: normalise, solve :math:`A f = 0` by SVD,
+    force rank 2 (zero the smallest singular value), undo the normalisation.
+
+    Returns None when the points are degenerate (the null space is not one-dimensional).
+    """
+    ta, tb = _normalising(a), _normalising(b)
+    ha = np.column_stack([a, np.ones(len(a))]) @ ta.T
+    hb = np.column_stack([b, np.ones(len(b))]) @ tb.T
+    design = np.einsum("ni,nj->nij", hb, ha).reshape(len(a), 9)
+    _, singular, vt = np.linalg.svd(design)
+    if len(a) >= 9 and singular[-2] < 1e-9 * singular[0]:
+        return None
+    f = vt[-1].reshape(3, 3)
+    u, s, vt2 = np.linalg.svd(f)
+    f = u @ np.diag([s[0], s[1], 0.0]) @ vt2
+    F = tb.T @ f @ ta
+    norm = np.linalg.norm(F)
+    return F / norm if norm > 0 else None
+
+
+def refine_fundamental(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    r"""F minimising the Sampson distances of ``a, b`` (Levenberg-Marquardt), rank 2 kept.
+
+    F is parametrised by its SVD, :math:`F = U \operatorname{diag}(1, s, 0) V^T`
+    with U, V updated by small rotations (7 parameters: F's degrees of
+    freedom), so every iterate has rank 2.
+    """
+    from scipy.optimize import least_squares
+
+    u0, s0, vt0 = np.linalg.svd(F)
+    ratio = s0[1] / s0[0]
+
+    def rotation(w: np.ndarray) -> np.ndarray:
+        theta = float(np.linalg.norm(w))
+        if theta < 1e-15:
+            return np.eye(3)
+        k = w / theta
+        kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        return np.eye(3) + np.sin(theta) * kx + (1 - np.cos(theta)) * kx @ kx
+
+    def compose(x: np.ndarray) -> np.ndarray:
+        u = rotation(x[:3]) @ u0
+        vt = vt0 @ rotation(x[3:6]).T
+        return u @ np.diag([1.0, x[6], 0.0]) @ vt
+
+    def residuals(x: np.ndarray) -> np.ndarray:
+        return sampson_distance(compose(x), a, b)
+
+    x0 = np.concatenate([np.zeros(6), [ratio]])
+    refined = compose(least_squares(residuals, x0, method="lm").x)
+    return refined / np.linalg.norm(refined)
+
+
+def refine_pose(
+    R: np.ndarray, t: np.ndarray, Ka: np.ndarray, Kb: np.ndarray, a: np.ndarray, b: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""(R, t) minimising the Sampson distances of ``a, b`` under
+    :math:`F = K_b^{-T} [t]_\times R K_a^{-1}` over the pose's 5 degrees of
+    freedom (a rotation increment and the direction of t), Levenberg-Marquardt."""
+    from scipy.optimize import least_squares
+
+    ka_inv, kb_inv = np.linalg.inv(Ka), np.linalg.inv(Kb)
+    t = t / np.linalg.norm(t)
+    helper = np.eye(3)[np.argmin(np.abs(t))]
+    e1 = np.cross(t, helper)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(t, e1)
+
+    def rotation(w: np.ndarray) -> np.ndarray:
+        theta = float(np.linalg.norm(w))
+        if theta < 1e-15:
+            return np.eye(3)
+        k = w / theta
+        kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        return np.eye(3) + np.sin(theta) * kx + (1 - np.cos(theta)) * kx @ kx
+
+    def pose(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        direction = t + x[3] * e1 + x[4] * e2
+        return rotation(x[:3]) @ R, direction / np.linalg.norm(direction)
+
+    def residuals(x: np.ndarray) -> np.ndarray:
+        Rx, tx = pose(x)
+        cross = np.array([[0, -tx[2], tx[1]], [tx[2], 0, -tx[0]], [-tx[1], tx[0], 0]])
+        return sampson_distance(kb_inv.T @ cross @ Rx @ ka_inv, a, b)
+
+    return pose(least_squares(residuals, np.zeros(5), method="lm").x)
+
+
+def sampson_distance(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    r"""First-order geometric error in pixels: :math:`\sqrt{(x_b^T F x_a)^2 /
+    ((F x_a)_1^2 + (F x_a)_2^2 + (F^T x_b)_1^2 + (F^T x_b)_2^2)}`."""
+    ha = np.column_stack([a, np.ones(len(a))])
+    hb = np.column_stack([b, np.ones(len(b))])
+    fa = ha @ F.T
+    fb = hb @ F
+    algebraic = np.einsum("ni,ni->n", hb, fa)
+    denominator = fa[:, 0] ** 2 + fa[:, 1] ** 2 + fb[:, 0] ** 2 + fb[:, 1] ** 2
+    return np.sqrt(algebraic**2 / np.maximum(denominator, 1e-300))
+
+
+def essential_from_fundamental(F: np.ndarray, Ka: np.ndarray, Kb: np.ndarray) -> np.ndarray:
+    """:math:`E = K_b^T F K_a` with its singular values forced to (1, 1, 0)."""
+    u, _, vt = np.linalg.svd(Kb.T @ F @ Ka)
+    return u @ np.diag([1.0, 1.0, 0.0]) @ vt
+
+
+def poses_from_essential(E: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    r"""The four :math:`(R, t)` of :math:`E = U \operatorname{diag}(1,1,0) V^T`:
+    :math:`R = U W V^T` or :math:`U W^T V^T`, :math:`t = \pm u_3`."""
+    u, _, vt = np.linalg.svd(E)
+    if np.linalg.det(u) < 0:
+        u = -u
+    if np.linalg.det(vt) < 0:
+        vt = -vt
+    w = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    rotations = [u @ w @ vt, u @ w.T @ vt]
+    return [(R, s * u[:, 2]) for R in rotations for s in (1.0, -1.0)]
+
+
+def triangulate_linear(Pa: np.ndarray, Pb: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    r"""Points ``N×3`` by the DLT: the null vector of
+    :math:`[x P^3 - P^1;\ y P^3 - P^2]` for both views (each row normalised)."""
+    rows = np.stack(
+        [
+            a[:, :1] * Pa[2] - Pa[0],
+            a[:, 1:2] * Pa[2] - Pa[1],
+            b[:, :1] * Pb[2] - Pb[0],
+            b[:, 1:2] * Pb[2] - Pb[1],
+        ],
+        axis=1,
+    )
+    rows /= np.linalg.norm(rows, axis=2, keepdims=True)
+    _, _, vt = np.linalg.svd(rows)
+    homogeneous = vt[:, -1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return homogeneous[:, :3] / homogeneous[:, 3:]
