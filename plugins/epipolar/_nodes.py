@@ -8,7 +8,18 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
-from graphvision import ArrayPort, Camera, Float, Int, PinholeCamera, Points2D, Points3D, node
+from graphvision import (
+    ArrayPort,
+    Camera,
+    Float,
+    Int,
+    Keypoints,
+    Matches,
+    PinholeCamera,
+    Points2D,
+    Points3D,
+    node,
+)
 from graphvision._ports import PortValueError
 
 from ..fitting import ransac
@@ -27,6 +38,8 @@ __all__ = [
     "FundamentalPort",
     "essential",
     "fundamental",
+    "matched_points",
+    "mean_abs_dy",
     "pose_error",
     "relative_pose",
     "reprojection_rms",
@@ -70,6 +83,8 @@ class FundamentalFit(NamedTuple):
     F: Fundamental
     inlier_count: Int
     sampson_rms: Float
+    inliers_a: Points2D
+    inliers_b: Points2D
 
 
 @node("epipolar.fundamental", version=1)
@@ -109,6 +124,7 @@ def fundamental(
     F : (3, 3) float64, unit Frobenius norm
     inlier_count : int
     sampson_rms : float, pixels over the inliers
+    inliers_a, inliers_b : the inlier correspondences
     """
     _pairs(a, b, 8, "the fundamental matrix")
     found = ransac(
@@ -127,7 +143,7 @@ def fundamental(
     inliers = found.inliers
     F = refine_fundamental(found.model, a[inliers], b[inliers])
     rms = float(np.sqrt(np.mean(sampson_distance(F, a[inliers], b[inliers]) ** 2)))
-    return FundamentalFit(F, int(inliers.sum()), rms)
+    return FundamentalFit(F, int(inliers.sum()), rms, a[inliers], b[inliers])
 
 
 @node("epipolar.essential", version=1)
@@ -142,6 +158,42 @@ def essential(F: Fundamental, camera_a: Camera, camera_b: Camera) -> Essential:
         Their calibrations (only K is used).
     """
     return essential_from_fundamental(F, camera_a.K, camera_b.K)
+
+
+class MatchedPoints(NamedTuple):
+    a: Points2D
+    b: Points2D
+
+
+@node("epipolar.matched_points", version=1)
+def matched_points(
+    keypoints_a: Keypoints, keypoints_b: Keypoints, matches: Matches
+) -> MatchedPoints:
+    """The positions of matched keypoints, row by row: the correspondences two-view nodes take.
+
+    Parameters
+    ----------
+    keypoints_a, keypoints_b : Keypoints
+        Keypoints of the two images.
+    matches : Matches
+        Pairs (index in ``keypoints_a``, index in ``keypoints_b``).
+    """
+    return MatchedPoints(
+        keypoints_a.xy[matches.pairs[:, 0]].copy(), keypoints_b.xy[matches.pairs[:, 1]].copy()
+    )
+
+
+@node("epipolar.mean_abs_dy", version=1)
+def mean_abs_dy(a: Points2D, b: Points2D) -> Float:
+    """Mean |y_a − y_b| of correspondences, pixels: 0 for true matches of a rectified pair.
+
+    Parameters
+    ----------
+    a, b : Points2D
+        Corresponding pixels.
+    """
+    _pairs(a, b, 1, "mean |dy|")
+    return float(np.mean(np.abs(a[:, 1] - b[:, 1])))
 
 
 class RelativePose(NamedTuple):

@@ -27,6 +27,8 @@ SampleName = Literal[
     "gravel",
     "horse",
     "moon",
+    "motorcycle_left",
+    "motorcycle_right",
     "page",
     "rocket",
     "text",
@@ -64,6 +66,9 @@ def sample_array(name: str) -> np.ndarray:
     check_sample_name(name)
     import skimage.data
 
+    if name.startswith("motorcycle_"):  # the rectified Middlebury pair scikit-image ships
+        left, right, _ = skimage.data.stereo_motorcycle()
+        return left if name.endswith("left") else right
     data: np.ndarray = getattr(skimage.data, name)()
     return data
 
