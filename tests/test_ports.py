@@ -103,6 +103,9 @@ def test_points3d_checks_and_ply(tmp_path):
         gv.Points3DPort.validate(np.zeros((2, 2)))
     with pytest.raises(gv.PortValueError, match="finite"):
         gv.Points3DPort.validate(np.full((1, 3), np.nan))
-    (path,) = gv.Points3DPort.write(np.array([[1.0, 2.0, 3.5]]), tmp_path / "cloud")
-    lines = path.read_text().splitlines()
-    assert lines[2] == "element vertex 1" and lines[-1] == "1.0 2.0 3.5"
+    cloud = np.array([[1.0, 2.0, 3.5], [-4.0, 0.25, 1e-3]])
+    (path,) = gv.Points3DPort.write(cloud, tmp_path / "cloud")
+    header, body = path.read_bytes().split(b"end_header\n")
+    lines = header.decode("ascii").splitlines()
+    assert lines[:3] == ["ply", "format binary_little_endian 1.0", "element vertex 2"]
+    np.testing.assert_array_equal(np.frombuffer(body, "<f8").reshape(-1, 3), cloud)

@@ -27,6 +27,7 @@ SampleName = Literal[
     "gravel",
     "horse",
     "moon",
+    "motorcycle_disparity",
     "motorcycle_left",
     "motorcycle_right",
     "page",
@@ -58,6 +59,10 @@ def check_sample_name(name: str) -> None:
 def sample_array(name: str) -> np.ndarray:
     """``skimage.data.<name>()`` as shipped (uint8 or bool); the input's port applies the policy.
 
+    ``motorcycle_left``, ``motorcycle_right`` and ``motorcycle_disparity`` are
+    the parts of ``stereo_motorcycle()``: the rectified Middlebury 2014 pair
+    and its ground-truth disparity (float32, NaN where unknown).
+
     Raises
     ------
     ValueError
@@ -67,7 +72,9 @@ def sample_array(name: str) -> np.ndarray:
     import skimage.data
 
     if name.startswith("motorcycle_"):  # the rectified Middlebury pair scikit-image ships
-        left, right, _ = skimage.data.stereo_motorcycle()
+        left, right, disparity = skimage.data.stereo_motorcycle()
+        if name.endswith("disparity"):  # ground truth, float32, inf where unknown -> NaN
+            return np.where(np.isfinite(disparity), disparity, np.nan).astype(np.float32)
         return left if name.endswith("left") else right
     data: np.ndarray = getattr(skimage.data, name)()
     return data

@@ -11,6 +11,7 @@ from ._depth import depth_plane
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
 from ._plane_lines import plane_lines
+from ._stereo_pair import stereo_pair
 from ._two_view import two_view_scene
 from ._warps import random_homography, random_warp, two_views
 
@@ -27,6 +28,7 @@ __all__ = [
     "random_warp",
     "render_board",
     "salt_and_pepper",
+    "stereo_pair",
     "two_view_scene",
     "two_views",
 ]
