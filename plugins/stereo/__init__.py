@@ -1,6 +1,6 @@
 """Stereo (notes: "Stereo geometry and scene reconstruction", "Active stereo"): disparity
 by block matching and semi-global matching, depth and 3-D points, evaluation against
-ground truth, drawings.
+ground truth, rectification (calibrated and uncalibrated), drawings.
 """
 
 from ._cost import cost_volume
@@ -9,6 +9,13 @@ from ._disparity import block_match, left_right_check, sgm
 from ._draw import colour_map, draw_disparity, draw_point_cloud
 from ._evaluate import depth_rmse, disparity_error
 from ._ports import Depth, DepthPort, Disparity, DisparityPort, Frames, FramesPort
+from ._rectify import (
+    hartley_homographies,
+    rectification_dy,
+    rectify_calibrated,
+    rectify_pair,
+    rectify_uncalibrated,
+)
 
 __all__ = [
     "Depth",
@@ -26,6 +33,11 @@ __all__ = [
     "disparity_error",
     "draw_disparity",
     "draw_point_cloud",
+    "hartley_homographies",
     "left_right_check",
+    "rectification_dy",
+    "rectify_calibrated",
+    "rectify_pair",
+    "rectify_uncalibrated",
     "sgm",
 ]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-from graphvision_plugins import camera, stereo, synthetic
+from graphvision_plugins import camera, epipolar, geometry, stereo, synthetic
 
 PIPELINE = Path(__file__).parents[2] / "pipelines" / "stereo.yaml"
 
@@ -134,3 +134,56 @@ def test_bad_stereo_input_is_refused_by_name(pair):
         stereo.disparity_error(np.zeros((1, 2), np.float32), np.zeros((1, 1), np.float32))
     with pytest.raises(gv.PortValueError, match="no infinities"):
         stereo.depth_from_disparity(np.full((2, 2), np.inf, np.float32))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_calibrated_rectification_aligns_rows_exactly_and_keeps_depth(seed):
+    scene = synthetic.two_view_scene(noise=0.0, seed=seed)
+    rectified = stereo.rectify_calibrated(scene.camera_a, scene.camera_b)
+    assert stereo.rectification_dy(scene.a, scene.b, rectified.H_a, rectified.H_b) < 1e-9
+    # the rectified cameras see the points at x_a − x_b = f·b / Z (Z in the rectified frame)
+    left = geometry.apply_homography(rectified.H_a, scene.a)
+    right = geometry.apply_homography(rectified.H_b, scene.b)
+    depth = (scene.points - scene.camera_a.C) @ rectified.camera_a.R[2]
+    focal = rectified.camera_a.K[0, 0]
+    np.testing.assert_allclose(left[:, 0] - right[:, 0], focal * rectified.baseline / depth)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_uncalibrated_rectification_from_a_noisy_F_aligns_true_matches(seed):
+    """Issue 12: after rectification the true matches' |dy| <= 0.5 px."""
+    noisy = synthetic.two_view_scene(noise=0.5, seed=seed)
+    clean = synthetic.two_view_scene(noise=0.0, seed=seed)
+    F = epipolar.fundamental(noisy.a, noisy.b).F
+    image = np.zeros((480, 640), np.float32)
+    H = stereo.rectify_uncalibrated(F, noisy.a, noisy.b, image)
+    assert stereo.rectification_dy(clean.a, clean.b, H.H_a, H.H_b) <= 0.5
+    exact = stereo.rectify_uncalibrated(
+        epipolar.fundamental(clean.a, clean.b).F, clean.a, clean.b, image
+    )
+    assert stereo.rectification_dy(clean.a, clean.b, exact.H_a, exact.H_b) < 1e-6
+    # the left image's centre stays in place and the picture is not turned upside down
+    corners = geometry.apply_homography(H.H_a, np.array([[0.0, 0.0], [639.0, 479.0]]))
+    assert corners[1, 1] > corners[0, 1] and corners[1, 0] > corners[0, 0]
+
+
+def test_rectify_pair_warps_both_images_by_their_homographies():
+    image = synthetic.stereo_pair(width=64, height=48).left
+    shift = np.array([[1.0, 0, 3], [0, 1, 2], [0, 0, 1]])
+    moved = stereo.rectify_pair(image, image, np.eye(3), shift)
+    np.testing.assert_allclose(moved.left, image, atol=1e-6)
+    np.testing.assert_allclose(moved.right[2:, 3:], image[:-2, :-3], atol=1e-6)
+    assert (moved.right[:2] == 0).all()
+
+
+def test_bad_rectification_input_is_refused_by_name():
+    scene = synthetic.two_view_scene(noise=0.0, seed=0)
+    with pytest.raises(ValueError, match="same centre: a zero baseline"):
+        stereo.rectify_calibrated(scene.camera_a, scene.camera_a)
+    forward = camera.pinhole(centre=(0.0, 0.0, 1.0))
+    with pytest.raises(ValueError, match="along the left camera's optical axis"):
+        stereo.rectify_calibrated(camera.pinhole(), forward)
+    with pytest.raises(ValueError, match="at least 8 matched pairs, got 5 and 5"):
+        stereo.rectify_uncalibrated(
+            np.eye(3), scene.a[:5], scene.b[:5], np.zeros((4, 4), np.float32)
+        )
