@@ -1,6 +1,6 @@
 """Stereo (notes: "Stereo geometry and scene reconstruction", "Active stereo"): disparity
 by block matching and semi-global matching, depth and 3-D points, evaluation against
-ground truth, rectification (calibrated and uncalibrated), drawings.
+ground truth, rectification (calibrated and uncalibrated), structured light, drawings.
 """
 
 from ._cost import cost_volume
@@ -16,6 +16,7 @@ from ._rectify import (
     rectify_pair,
     rectify_uncalibrated,
 )
+from ._structured import Stripes, StripesPort, decode_gray_code, depth_from_stripes
 
 __all__ = [
     "Depth",
@@ -24,10 +25,14 @@ __all__ = [
     "DisparityPort",
     "Frames",
     "FramesPort",
+    "Stripes",
+    "StripesPort",
     "block_match",
     "colour_map",
     "cost_volume",
+    "decode_gray_code",
     "depth_from_disparity",
+    "depth_from_stripes",
     "depth_points",
     "depth_rmse",
     "disparity_error",

@@ -12,6 +12,7 @@ from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
 from ._plane_lines import plane_lines
 from ._stereo_pair import stereo_pair
+from ._structured_light import gray_code_stripes, structured_light_scene
 from ._two_view import two_view_scene
 from ._warps import random_homography, random_warp, two_views
 
@@ -20,6 +21,7 @@ __all__ = [
     "board_views",
     "depth_plane",
     "gaussian_noise",
+    "gray_code_stripes",
     "impulse_noise",
     "line_points",
     "plane_lines",
@@ -29,6 +31,7 @@ __all__ = [
     "render_board",
     "salt_and_pepper",
     "stereo_pair",
+    "structured_light_scene",
     "two_view_scene",
     "two_views",
 ]

@@ -187,3 +187,58 @@ def test_bad_rectification_input_is_refused_by_name():
         stereo.rectify_uncalibrated(
             np.eye(3), scene.a[:5], scene.b[:5], np.zeros((4, 4), np.float32)
         )
+
+
+def _quantisation_rmse(scene, bits):
+    """RMSE of depth when the projector column is known only to its stripe: for this rig
+    (same orientation, projector b along x), Z = b / (x_n − (u − c)/f), so |∂Z/∂u| = Z²/(b f)
+    and a column error uniform over a stripe of w = W / 2^bits columns has σ = w / √12."""
+    baseline = scene.projector.C[0] - scene.camera.C[0]
+    focal = scene.projector.K[0, 0]
+    stripe = scene.projector.size[0] / 2**bits
+    return stripe / np.sqrt(12) * np.sqrt(np.mean(scene.depth**4)) / (baseline * focal)
+
+
+@pytest.mark.parametrize("bits", [6, 8, 10])
+def test_structured_light_depth_is_within_the_quantisation_of_the_pattern_count(bits):
+    scene = synthetic.structured_light_scene(bits=bits, width=160, height=120, seed=1)
+    stripes = stereo.decode_gray_code(scene.frames)
+    depth = stereo.depth_from_stripes(stripes, scene.camera, scene.projector, bits=bits)
+    predicted = _quantisation_rmse(scene, bits)
+    assert 0.8 * predicted <= stereo.depth_rmse(depth, scene.depth) <= 1.2 * predicted
+    assert 0.7 < np.isfinite(depth).mean() < 0.95  # the sphere's shadow on the wall is undecoded
+
+
+def test_gray_code_decodes_every_stripe_exactly():
+    bits, width = 5, 64
+    columns = np.arange(width)[None, :].repeat(3, axis=0)
+    planes = synthetic.gray_code_stripes(columns, bits, width)
+    codes = planes.reshape(bits, -1).T @ (1 << np.arange(bits - 1, -1, -1))
+    assert np.all(np.abs(np.diff(codes.reshape(3, width)[0][:: width // 2**bits])) > 0)
+    frames = np.empty((2 * bits, 3, width), np.float32)
+    frames[0::2] = planes * 0.8 + 0.1
+    frames[1::2] = (~planes) * 0.8 + 0.1
+    stripes = stereo.decode_gray_code(frames)
+    np.testing.assert_array_equal(stripes, columns // (width // 2**bits))
+    frames[:, 1, 5] = 0.3  # no contrast: a shadow
+    assert np.isnan(stereo.decode_gray_code(frames)[1, 5])
+
+
+def test_structured_light_pipeline_meets_its_truth():
+    graph = gv.load_pipeline(PIPELINE.with_name("structured_light.yaml"))
+    outputs = gv.run(graph, cache=None).outputs
+    scene = synthetic.structured_light_scene(bits=8, noise=0.01, seed=0)
+    predicted = _quantisation_rmse(scene, 8)
+    assert 0.8 * predicted <= outputs["depth_rmse"] <= 1.2 * predicted
+
+
+def test_bad_structured_light_input_is_refused_by_name():
+    scene = synthetic.structured_light_scene(bits=4, width=32, height=24)
+    with pytest.raises(ValueError, match=r"pairs of frames .* got 7 frames"):
+        stereo.decode_gray_code(scene.frames[:7])
+    stripes = stereo.decode_gray_code(scene.frames)
+    with pytest.raises(ValueError, match="does not fit in 2 bits"):
+        stereo.depth_from_stripes(stripes, scene.camera, scene.projector, bits=2)
+    dark = np.full((8, 24, 32), 0.1, np.float32)
+    with pytest.raises(ValueError, match="no pixel was decoded"):
+        stereo.depth_from_stripes(stereo.decode_gray_code(dark), scene.camera, scene.projector)
