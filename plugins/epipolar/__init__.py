@@ -1,5 +1,6 @@
 """Two views (notes: "Multiple-view geometry", "Stereo geometry and scene reconstruction"):
-the fundamental and essential matrices, relative pose, triangulation.
+the fundamental and essential matrices, relative pose, triangulation (linear and
+non-linear), epipolar lines and epipoles with a drawing.
 """
 
 from ._geometry import (
@@ -8,7 +9,9 @@ from ._geometry import (
     poses_from_essential,
     sampson_distance,
     triangulate_linear,
+    triangulate_nonlinear,
 )
+from ._lines import draw_epipolar, epipolar_lines, epipoles, lines_from_coefficients
 from ._nodes import (
     EssentialPort,
     FundamentalPort,
@@ -18,6 +21,7 @@ from ._nodes import (
     mean_abs_dy,
     pose_error,
     relative_pose,
+    reprojection_errors,
     reprojection_rms,
     triangulate,
 )
@@ -25,17 +29,23 @@ from ._nodes import (
 __all__ = [
     "EssentialPort",
     "FundamentalPort",
+    "draw_epipolar",
     "eight_point",
+    "epipolar_lines",
+    "epipoles",
     "essential",
     "essential_from_fundamental",
     "fundamental",
+    "lines_from_coefficients",
     "matched_points",
     "mean_abs_dy",
     "pose_error",
     "poses_from_essential",
     "relative_pose",
+    "reprojection_errors",
     "reprojection_rms",
     "sampson_distance",
     "triangulate",
     "triangulate_linear",
+    "triangulate_nonlinear",
 ]

@@ -12,7 +12,8 @@ References
 .. [1] R. I. Hartley, "In defense of the eight-point algorithm", IEEE PAMI
    19(6), 1997.
 .. [2] R. Hartley, A. Zisserman, *Multiple View Geometry*, 2nd ed., 2004,
-   §9.6 (E), §11.1–11.4 (8-point, Sampson), §12.2 (linear triangulation).
+   §9.6 (E), §11.1–11.4 (8-point, Sampson), §12.2 (linear triangulation), §12.3
+   (minimising the reprojection error).
 """
 
 from __future__ import annotations
@@ -23,8 +24,10 @@ __all__ = [
     "eight_point",
     "essential_from_fundamental",
     "poses_from_essential",
+    "reprojection_residuals",
     "sampson_distance",
     "triangulate_linear",
+    "triangulate_nonlinear",
 ]
 
 
@@ -172,3 +175,69 @@ def triangulate_linear(Pa: np.ndarray, Pb: np.ndarray, a: np.ndarray, b: np.ndar
     homogeneous = vt[:, -1]
     with np.errstate(divide="ignore", invalid="ignore"):
         return homogeneous[:, :3] / homogeneous[:, 3:]
+
+
+def reprojection_residuals(
+    cameras: tuple[np.ndarray, ...], observed: tuple[np.ndarray, ...], points: np.ndarray
+) -> np.ndarray:
+    """Residuals ``N×(2·views)``: projection of each point minus its observed pixel, per view."""
+    homogeneous = np.column_stack([points, np.ones(len(points))])
+    parts = []
+    for P, seen in zip(cameras, observed, strict=True):
+        projected = homogeneous @ P.T
+        parts.append(projected[:, :2] / projected[:, 2:] - seen)
+    return np.concatenate(parts, axis=1)
+
+
+def triangulate_nonlinear(
+    Pa: np.ndarray,
+    Pb: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    start: np.ndarray,
+    iterations: int = 20,
+) -> np.ndarray:
+    r"""Points minimising the reprojection error in both views, from ``start`` (the DLT).
+
+    .. math:: \min_X \sum_{v \in \{a, b\}} \lVert \pi(P_v X) - x_v \rVert^2
+
+    solved for all points at once by Levenberg-Marquardt (a damping per
+    point: a step is kept only where it lowers that point's error). The
+    Jacobian of :math:`u = p_1 \cdot X / p_3 \cdot X` is
+    :math:`(p_{1,:3} - u\, p_{3,:3}) / (p_3 \cdot X)`.
+    """
+    cameras, observed = (Pa, Pb), (a, b)
+    points = start.copy()
+    residual = reprojection_residuals(cameras, observed, points)
+    cost = np.sum(residual**2, axis=1)
+    damping = np.full(len(points), 1e-3)
+    for _ in range(iterations):
+        homogeneous = np.column_stack([points, np.ones(len(points))])
+        rows = []
+        for P in cameras:
+            projected = homogeneous @ P.T
+            w = projected[:, 2:]
+            for k in (0, 1):
+                rows.append((P[k, :3] - (projected[:, k : k + 1] / w) * P[2, :3]) / w)
+        jacobian = np.stack(rows, axis=1)  # N × 4 × 3
+        normal = np.einsum("nri,nrj->nij", jacobian, jacobian)
+        gradient = np.einsum("nri,nr->ni", jacobian, residual)
+        scaled = (
+            normal
+            + damping[:, None, None]
+            * np.eye(3)
+            * np.trace(normal, axis1=1, axis2=2)[:, None, None]
+            / 3
+        )
+        step = np.linalg.solve(scaled, -gradient[..., None])[..., 0]
+        trial = points + step
+        trial_residual = reprojection_residuals(cameras, observed, trial)
+        trial_cost = np.sum(trial_residual**2, axis=1)
+        better = np.isfinite(trial_cost) & (trial_cost < cost)
+        points[better] = trial[better]
+        residual[better] = trial_residual[better]
+        cost[better] = trial_cost[better]
+        damping = np.where(better, damping / 10, damping * 10)
+        if not np.any(np.abs(step[better]) > 1e-12 * (1 + np.abs(points[better]))):
+            break
+    return points

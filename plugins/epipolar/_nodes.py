@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any, ClassVar, NamedTuple
+from typing import Annotated, Any, ClassVar, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
 from graphvision import (
+    Array,
     ArrayPort,
     Camera,
     Float,
@@ -29,8 +30,10 @@ from ._geometry import (
     poses_from_essential,
     refine_fundamental,
     refine_pose,
+    reprojection_residuals,
     sampson_distance,
     triangulate_linear,
+    triangulate_nonlinear,
 )
 
 __all__ = [
@@ -42,6 +45,7 @@ __all__ = [
     "mean_abs_dy",
     "pose_error",
     "relative_pose",
+    "reprojection_errors",
     "reprojection_rms",
     "triangulate",
 ]
@@ -262,9 +266,23 @@ def relative_pose(
     return RelativePose(reference, moved)
 
 
-@node("epipolar.triangulate", version=1)
-def triangulate(a: Points2D, b: Points2D, camera_a: Camera, camera_b: Camera) -> Points3D:
-    r"""3-D points from two views by the linear (DLT) method, :math:`x \times P X = 0` in each.
+@node("epipolar.triangulate", version=2)
+def triangulate(
+    a: Points2D,
+    b: Points2D,
+    camera_a: Camera,
+    camera_b: Camera,
+    *,
+    method: Literal["nonlinear", "linear"] = "nonlinear",
+) -> Points3D:
+    r"""3-D points from two views: linear (DLT), then by default refined to the least
+    reprojection error.
+
+    The linear method takes the null vector of :math:`x \times P X = 0` in
+    both views (an algebraic error); ``nonlinear`` then minimises the
+    geometric error :math:`\sum_v \lVert \pi(P_v X) - x_v \rVert^2` per point
+    by Levenberg-Marquardt, the maximum-likelihood estimate under Gaussian
+    pixel noise.
 
     Parameters
     ----------
@@ -272,9 +290,52 @@ def triangulate(a: Points2D, b: Points2D, camera_a: Camera, camera_b: Camera) ->
         Corresponding pixels.
     camera_a, camera_b : Camera
         The two cameras (P = K[R | −RC̃]).
+    method : {"nonlinear", "linear"}
+        Refine the DLT's points, or keep them.
+
+    Returns
+    -------
+    Points3D
+        One point per correspondence; a pair whose rays are parallel (a point
+        at infinity) is refused.
     """
     _pairs(a, b, 1, "triangulation")
-    return triangulate_linear(camera_a.P, camera_b.P, a, b)
+    if np.linalg.norm(camera_a.C - camera_b.C) < 1e-12:
+        raise ValueError(
+            "the two cameras have the same centre: a zero baseline triangulates nothing"
+        )
+    points = triangulate_linear(camera_a.P, camera_b.P, a, b)
+    if not np.isfinite(points).all():
+        bad = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
+        raise ValueError(
+            f"correspondence {bad} triangulates to a point at infinity (parallel rays: "
+            "a zero baseline or a mismatch)"
+        )
+    if method == "nonlinear":
+        points = triangulate_nonlinear(camera_a.P, camera_b.P, a, b, points)
+    return points
+
+
+@node("epipolar.reprojection_errors", version=1)
+def reprojection_errors(
+    points: Points3D, a: Points2D, b: Points2D, camera_a: Camera, camera_b: Camera
+) -> Array:
+    r"""Reprojection error of each point, pixels: :math:`\sqrt{(e_a^2 + e_b^2) / 2}` with
+    :math:`e_v` its distance to the observed pixel in view v.
+
+    Parameters
+    ----------
+    points : Points3D
+        Triangulated points.
+    a, b : Points2D
+        The observed pixels.
+    camera_a, camera_b : Camera
+        The cameras that observed them.
+    """
+    _pairs(a, b, 0, "reprojection")
+    residual = reprojection_residuals((camera_a.P, camera_b.P), (a, b), points)
+    errors: np.ndarray = np.sqrt(np.sum(residual**2, axis=1) / 2)
+    return errors
 
 
 @node("epipolar.reprojection_rms", version=1)

@@ -106,5 +106,9 @@ def draw_point_cloud(
     inside = (rows >= 0) & (rows < size) & (cols >= 0) & (cols < size)
     order = np.argsort(-seen[inside, 2])  # far first, so the nearest is written last
     colours = colour_map(-points[inside, 2])[order]  # near red, far blue, as disparity
-    canvas[rows[inside][order], cols[inside][order]] = colours
+    rows, cols = rows[inside][order], cols[inside][order]
+    radius = 2 if len(rows) < 5_000 else 1 if len(rows) < 50_000 else 0  # sparse clouds: dots
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            canvas[np.clip(rows + dy, 0, size - 1), np.clip(cols + dx, 0, size - 1)] = colours
     return canvas
