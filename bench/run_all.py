@@ -20,6 +20,7 @@ import bench_homography  # noqa: E402
 import bench_recognition  # noqa: E402
 import bench_scheduler  # noqa: E402
 import bench_segmentation  # noqa: E402
+import bench_stereo  # noqa: E402
 import bench_sweep  # noqa: E402
 
 
@@ -34,6 +35,7 @@ def main() -> None:
         ("Cameras and image formation (camera issue)", bench_camera.main),
         ("Edges and Hough (issue 10)", bench_edges.main),
         ("Colour, templates, FFT, pyramids (issue 10)", bench_colour_template.main),
+        ("Two views and stereo (issue 12)", bench_stereo.main),
         ("Sweep sharing (issue 15)", bench_sweep.main),
         ("Dask executor overhead (issue 15)", bench_dask.main),
     ]

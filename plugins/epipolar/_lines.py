@@ -30,8 +30,10 @@ def lines_from_coefficients(coefficients: np.ndarray) -> np.ndarray:
 
 @node("epipolar.epipolar_lines", version=1)
 def epipolar_lines(F: Fundamental, points: Points2D, *, of_view: Literal["a", "b"] = "a") -> Lines:
-    r"""The epipolar line in the other view of each point: :math:`l_b = F x_a`, :math:`l_a =
-    F^T x_b` (with :math:`x_b^T F x_a = 0`, the match of :math:`x_a` lies on :math:`l_b`).
+    r"""The epipolar line in the other view of each point.
+
+    :math:`l_b = F x_a` and :math:`l_a = F^T x_b`: with :math:`x_b^T F x_a = 0`,
+    the match of :math:`x_a` lies on :math:`l_b`.
 
     Parameters
     ----------
@@ -65,8 +67,10 @@ class Epipoles(NamedTuple):
 
 @node("epipolar.epipoles", version=1)
 def epipoles(F: Fundamental) -> Epipoles:
-    r"""The epipoles, :math:`F e_a = 0` and :math:`F^T e_b = 0`: where each view sees the
-    other camera's centre, and where all its epipolar lines meet.
+    r"""The epipoles: where each view sees the other camera's centre and all its epipolar
+    lines meet.
+
+    :math:`F e_a = 0` and :math:`F^T e_b = 0`.
 
     Parameters
     ----------

@@ -320,8 +320,10 @@ def triangulate(
 def reprojection_errors(
     points: Points3D, a: Points2D, b: Points2D, camera_a: Camera, camera_b: Camera
 ) -> Array:
-    r"""Reprojection error of each point, pixels: :math:`\sqrt{(e_a^2 + e_b^2) / 2}` with
-    :math:`e_v` its distance to the observed pixel in view v.
+    r"""Reprojection error of each point, in pixels.
+
+    :math:`\sqrt{(e_a^2 + e_b^2) / 2}` with :math:`e_v` its distance to the
+    observed pixel in view v.
 
     Parameters
     ----------

@@ -12,7 +12,6 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from scipy import ndimage
 
 __all__ = ["Cost", "cost_volume", "maximum_cost"]
 
@@ -44,6 +43,8 @@ def _shifted(right: np.ndarray, d: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _box_mean(values: np.ndarray, window: int) -> np.ndarray:
     """Mean over a ``window × window`` block per slice, edges repeated (``nearest``)."""
+    from scipy import ndimage
+
     size = (window, window) + (1,) * (values.ndim - 2)
     out: np.ndarray = ndimage.uniform_filter(values, size=size, mode="nearest")
     return out

@@ -58,7 +58,8 @@ def depth_from_disparity(
 def depth_points(
     depth: Depth, camera: Camera, *, step: Annotated[int, Field(ge=1)] = 1
 ) -> Points3D:
-    r"""The 3-D point of every valid pixel, in the camera's coordinates:
+    r"""The 3-D point of every valid pixel, in the camera's coordinates.
+
     :math:`(X, Y, Z) = Z\, K^{-1} (x, y, 1)^T`.
 
     Parameters

@@ -67,7 +67,7 @@ def _select(
     return disparity
 
 
-@node("stereo.block_match", version=1)
+@node("stereo.block_match", version=2)
 def block_match(
     left: GrayImage,
     right: GrayImage,
@@ -75,8 +75,8 @@ def block_match(
     min_disparity: int = 0,
     num_disparities: Annotated[int, Field(ge=1)] = 64,
     window: Window = 9,
-    cost: Cost = "sad",
-    uniqueness: Annotated[float, Field(ge=0)] = 0.1,
+    cost: Cost = "zncc",
+    uniqueness: Annotated[float, Field(ge=0)] = 0.2,
     subpixel: bool = True,
     lr_tolerance: Annotated[float, Field(ge=0)] | None = 1.0,
 ) -> Disparity:
@@ -106,8 +106,9 @@ def block_match(
         How many disparities are searched.
     window : int
         Side W of the block (odd).
-    cost : {"sad", "ssd", "zncc", "census"}
-        Block dissimilarity (see :func:`cost_volume`).
+    cost : {"zncc", "sad", "ssd", "census"}
+        Block dissimilarity (see :func:`cost_volume`); zero-mean NCC ignores a
+        gain and bias between the cameras (the default).
     uniqueness : float
         Margin by which the winner must beat every non-neighbouring disparity.
     subpixel : bool

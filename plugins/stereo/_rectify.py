@@ -221,7 +221,9 @@ def rectify_pair(left: ImageT, right: ImageT, H_a: Homography, H_b: Homography) 
 
 @node("stereo.rectification_dy", version=1)
 def rectification_dy(a: Points2D, b: Points2D, H_a: Homography, H_b: Homography) -> Float:
-    r"""Mean :math:`|y_a - y_b|` of matches after rectification (0 for a perfect one).
+    r"""Mean vertical distance of matches after rectification (0 for a perfect one).
+
+    :math:`\frac{1}{N} \sum_i |(H_a x_{a,i})_y - (H_b x_{b,i})_y|`.
 
     Parameters
     ----------

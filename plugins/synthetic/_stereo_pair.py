@@ -6,7 +6,6 @@ from typing import Annotated, NamedTuple
 
 import numpy as np
 from pydantic import Field
-from scipy import ndimage
 
 from graphvision import BinaryImage, GrayImage, node
 
@@ -24,6 +23,8 @@ class StereoPair(NamedTuple):
 
 def _texture(rng: np.random.Generator, rows: int, cols: int) -> np.ndarray:
     """Band-limited noise in [0.1, 0.9] (smooth enough to sample between pixels)."""
+    from scipy import ndimage
+
     noise = ndimage.gaussian_filter(rng.random((rows, cols)), 1.2)
     noise -= noise.min()
     return 0.1 + 0.8 * noise / max(float(noise.max()), 1e-12)
@@ -74,6 +75,8 @@ def stereo_pair(
         Left pixels whose match is seen in the right image (not occluded by
         the square, not outside the image).
     """
+    from scipy import ndimage
+
     rng = np.random.default_rng(seed)
     margin = int(np.ceil(max(background + slope * height, foreground))) + 4
     back = _texture(rng, height, width + margin)

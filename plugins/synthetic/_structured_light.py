@@ -6,7 +6,6 @@ from typing import Annotated, NamedTuple
 
 import numpy as np
 from pydantic import Field
-from scipy import ndimage
 
 from graphvision import Camera, PinholeCamera, node
 
@@ -89,6 +88,8 @@ def structured_light_scene(
         The true depth of every camera pixel.
     camera, projector : Camera
     """
+    from scipy import ndimage
+
     rng = np.random.default_rng(seed)
     focal = float(width)
     K = np.array([[focal, 0, (width - 1) / 2], [0, focal, (height - 1) / 2], [0, 0, 1.0]])

@@ -54,6 +54,11 @@ def test_samples_follow_the_dtype_policy():
     assert io.read_sample("astronaut").shape == (512, 512, 3)
     assert io.read_sample("horse").dtype == np.float32  # bool sample
     for name in io.SAMPLES:  # every advertised sample loads offline
+        if name == "motorcycle_disparity":  # ground truth, not an image: NaN where unknown
+            truth = io.sample_array(name)
+            assert truth.dtype == np.float32 and truth.shape == (500, 741)
+            assert np.isnan(truth).any() and np.nanmin(truth) > 0
+            continue
         assert io.read_sample(name).ndim in (2, 3)
 
 

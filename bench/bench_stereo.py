@@ -1,0 +1,224 @@
+"""Two views and stereo against OpenCV, on data with known truth, in one run.
+
+* **Dense stereo**: the Middlebury 2014 Motorcycle pair scikit-image ships
+  (500×741, ground truth 7–60 px): ``stereo.sgm`` (census 7×7, 8 paths) and
+  ``stereo.block_match`` (zero-mean NCC 9×9) against ``cv2.StereoSGBM`` (block 5,
+  P1 = 8·25, P2 = 32·25, disp12MaxDiff 1, uniqueness 10, speckle 100/2; the
+  default 5-direction mode and the full 8-direction ``MODE_HH``) and
+  ``cv2.StereoBM`` (block 15): bad2 over ground-truth pixels, over pixels valid
+  in both, density, time.
+* **Essential matrix and pose**: ``pipelines/two_view.yaml``'s scenes (K =
+  800/800/320/240, 0.5 px noise, seeds 0–9): graphvision's chain against
+  ``cv2.findEssentialMat`` (RANSAC 1 px, LMEDS, USAC_MAGSAC) + ``cv2.recoverPose``;
+  mean rotation and translation-direction errors.
+* **Fundamental matrix**: the SIFT matches of ``pipelines/fundamental.yaml``;
+  ``epipolar.fundamental`` (threshold 0.75) against ``cv2.findFundamentalMat``
+  (FM_RANSAC 0.75 px, USAC_MAGSAC): inlier mean |dy| (0 for true matches of
+  this rectified pair) and Sampson RMS over the inliers.
+* **Triangulation**: 20 000 points of a two-view scene with 0.5 px noise:
+  ``epipolar.triangulate`` (linear, non-linear) against ``cv2.triangulatePoints``.
+* **Rectification**: Hartley's method (``stereo.rectify_uncalibrated``) against
+  ``cv2.stereoRectifyUncalibrated`` from the same F (fitted on 0.5 px noise):
+  mean |dy| of the noise-free matches after rectification.
+
+Times are best of 3 in the same run (OpenCV with its default threads; numba
+with 2). Run: ``python bench/bench_stereo.py``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from timing import best
+
+import graphvision as gv
+from graphvision_plugins import color, epipolar, stereo, synthetic
+from graphvision_plugins.io import read_sample, sample_array
+
+PIPELINES = __import__("pathlib").Path(__file__).parents[1] / "pipelines"
+
+
+def _opencv_disparity(matcher, left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    raw = matcher.compute(left, right).astype(np.float32) / 16.0
+    return np.where(raw >= 0, raw, np.nan).astype(np.float32)
+
+
+def _dense_rows(cv2) -> list[str]:
+    left = color.to_gray(read_sample("motorcycle_left"))
+    right = color.to_gray(read_sample("motorcycle_right"))
+    truth = sample_array("motorcycle_disparity")
+    left8, right8 = (np.round(im * 255).astype(np.uint8) for im in (left, right))
+
+    def sgbm(mode: int):
+        return cv2.StereoSGBM_create(
+            minDisparity=0,
+            numDisparities=64,
+            blockSize=5,
+            P1=8 * 25,
+            P2=32 * 25,
+            disp12MaxDiff=1,
+            uniquenessRatio=10,
+            speckleWindowSize=100,
+            speckleRange=2,
+            mode=mode,
+        )
+
+    bm = cv2.StereoBM_create(numDisparities=64, blockSize=15)
+    methods = {
+        "graphvision sgm (census 7, 8 paths)": lambda: stereo.sgm(left, right, num_disparities=64),
+        "graphvision block_match (ZNCC 9)": lambda: stereo.block_match(
+            left, right, num_disparities=64
+        ),
+        "OpenCV StereoSGBM (5 directions)": lambda: _opencv_disparity(
+            sgbm(cv2.STEREO_SGBM_MODE_SGBM), left8, right8
+        ),
+        "OpenCV StereoSGBM MODE_HH (8)": lambda: _opencv_disparity(
+            sgbm(cv2.STEREO_SGBM_MODE_HH), left8, right8
+        ),
+        "OpenCV StereoBM (15)": lambda: _opencv_disparity(bm, left8, right8),
+    }
+    rows = [
+        "| Motorcycle 500×741 | bad2 % (all GT) | bad2 % (valid both) | density % | ms |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    times = {}
+    for name, run in methods.items():
+        error = stereo.disparity_error(run(), truth)
+        times[name] = best(run, 3)
+        rows.append(
+            f"| {name} | {error.bad:.1f} | {error.bad_valid:.2f} | {error.density:.1f} | "
+            f"{1000 * times[name]:.0f} |"
+        )
+    ratio = times["graphvision sgm (census 7, 8 paths)"] / times["OpenCV StereoSGBM MODE_HH (8)"]
+    rows.append(f"\nsgm / StereoSGBM MODE_HH time ratio: {ratio:.1f}×")
+    return rows
+
+
+def _pose_rows(cv2) -> list[str]:
+    graph = gv.load_pipeline(PIPELINES / "two_view.yaml")
+    ours, theirs = [], {"RANSAC": [], "LMEDS": [], "USAC_MAGSAC": []}
+    t_ours = t_cv = 0.0
+    for seed in range(10):
+        began = time.perf_counter()
+        outputs = gv.run(graph, overrides={"params.seed": seed}, cache=None).outputs
+        t_ours += time.perf_counter() - began
+        ours.append((outputs["rotation_error_deg"], outputs["translation_error_deg"]))
+        scene = synthetic.two_view_scene(count=200, noise=0.5, seed=seed)
+        K = scene.camera_a.K
+        for name in theirs:
+            began = time.perf_counter()
+            E, mask = cv2.findEssentialMat(
+                scene.a, scene.b, K, method=getattr(cv2, name), prob=0.999, threshold=1.0
+            )
+            _, R, t, _ = cv2.recoverPose(E[:3], scene.a, scene.b, K, mask=mask)
+            if name == "RANSAC":
+                t_cv += time.perf_counter() - began
+            moved = gv.PinholeCamera(K, R, (-R.T @ t).ravel())
+            error = epipolar.pose_error(moved, scene.camera_a, scene.camera_b)
+            theirs[name].append((error.rotation_error_deg, error.translation_error_deg))
+    rows = [
+        "| E and pose, 10 seeds | mean rotation error ° | mean translation error ° |",
+        "| --- | --- | --- |",
+        f"| graphvision (F RANSAC + refit + LM, E, pose refined) | {np.mean(ours, 0)[0]:.3f} | "
+        f"{np.mean(ours, 0)[1]:.3f} |",
+    ]
+    for name, errors in theirs.items():
+        mean = np.mean(errors, axis=0)
+        rows.append(f"| OpenCV findEssentialMat {name} | {mean[0]:.3f} | {mean[1]:.3f} |")
+    rows.append(
+        f"\ntime per scene: graphvision {1000 * t_ours / 10:.1f} ms (whole pipeline), "
+        f"OpenCV RANSAC {1000 * t_cv / 10:.1f} ms"
+    )
+    return rows
+
+
+def _fundamental_rows(cv2) -> list[str]:
+    result = gv.run(gv.load_pipeline(PIPELINES / "fundamental.yaml"), keep_intermediates=True)
+    outputs = result.outputs
+    a, b = result.intermediates["pairs.a"][1], result.intermediates["pairs.b"][1]
+    rows = [
+        "| F on Motorcycle (SIFT matches) | inliers | inlier mean \\|dy\\| px | Sampson RMS px |",
+        "| --- | --- | --- | --- |",
+        f"| graphvision epipolar.fundamental | {outputs['inliers']} | "
+        f"{outputs['mean_abs_dy']:.3f} | {outputs['sampson_rms']:.3f} |",
+    ]
+    for name in ("FM_RANSAC", "USAC_MAGSAC"):
+        F, mask = cv2.findFundamentalMat(a, b, getattr(cv2, name), 0.75, 0.999)
+        keep = mask.ravel().astype(bool)
+        F = F[:3] / np.linalg.norm(F[:3])
+        rms = np.sqrt(np.mean(epipolar.sampson_distance(F, a[keep], b[keep]) ** 2))
+        dy = np.mean(np.abs(a[keep, 1] - b[keep, 1]))
+        rows.append(f"| OpenCV {name} | {keep.sum()} | {dy:.3f} | {rms:.3f} |")
+    return rows
+
+
+def _triangulation_rows(cv2) -> list[str]:
+    scene = synthetic.two_view_scene(count=30_000, noise=0.5, seed=0)
+    cams = (scene.camera_a, scene.camera_b)
+    results = {
+        "graphvision linear": lambda: epipolar.triangulate(
+            scene.a, scene.b, *cams, method="linear"
+        ),
+        "graphvision non-linear": lambda: epipolar.triangulate(scene.a, scene.b, *cams),
+        "OpenCV triangulatePoints": lambda: (lambda h: (h[:3] / h[3]).T)(
+            cv2.triangulatePoints(cams[0].P, cams[1].P, scene.a.T, scene.b.T)
+        ),
+    }
+    rows = [
+        f"| triangulation ({len(scene.a)} points, 0.5 px) | mean reprojection error px | "
+        "mean 3-D error | ms |",
+        "| --- | --- | --- | --- |",
+    ]
+    for name, run in results.items():
+        points = run()
+        errors = epipolar.reprojection_errors(points, scene.a, scene.b, *cams)
+        gap = np.mean(np.linalg.norm(points - scene.points, axis=1))
+        rows.append(f"| {name} | {errors.mean():.4f} | {gap:.4f} | {1000 * best(run, 3):.1f} |")
+    return rows
+
+
+def _rectification_rows(cv2) -> list[str]:
+    rows = [
+        "| rectification (F from 0.5 px noise) | seed | graphvision mean \\|dy\\| | "
+        "OpenCV stereoRectifyUncalibrated mean \\|dy\\| |",
+        "| --- | --- | --- | --- |",
+    ]
+    image = np.zeros((480, 640), np.float32)
+    for seed in range(3):
+        noisy = synthetic.two_view_scene(noise=0.5, seed=seed)
+        clean = synthetic.two_view_scene(noise=0.0, seed=seed)
+        F = epipolar.fundamental(noisy.a, noisy.b).F
+        ours = stereo.rectify_uncalibrated(F, noisy.a, noisy.b, image)
+        ok, H1, H2 = cv2.stereoRectifyUncalibrated(noisy.a, noisy.b, F, (640, 480))
+        theirs = stereo.rectification_dy(clean.a, clean.b, H1, H2) if ok else float("nan")
+        mine = stereo.rectification_dy(clean.a, clean.b, ours.H_a, ours.H_b)
+        rows.append(f"| | {seed} | {mine:.3f} | {theirs:.3f} |")
+    return rows
+
+
+def _structured_light_rows() -> list[str]:
+    rows = ["| structured light, bits | depth RMSE m | valid % |", "| --- | --- | --- |"]
+    for bits in (4, 6, 8, 10):
+        scene = synthetic.structured_light_scene(bits=bits)
+        depth = stereo.depth_from_stripes(
+            stereo.decode_gray_code(scene.frames), scene.camera, scene.projector, bits=bits
+        )
+        rmse = stereo.depth_rmse(depth, scene.depth)
+        rows.append(f"| {bits} | {rmse:.4f} | {100 * np.isfinite(depth).mean():.1f} |")
+    return rows
+
+
+def main() -> list[str]:
+    try:
+        import cv2
+    except ImportError:
+        return ["OpenCV is not installed (`pip install -e .[bench]`): stereo benchmark skipped"]
+    rows = _dense_rows(cv2)
+    for part in (_pose_rows, _fundamental_rows, _triangulation_rows, _rectification_rows):
+        rows += ["", *part(cv2)]
+    return [*rows, "", *_structured_light_rows()]
+
+
+if __name__ == "__main__":
+    print("\n".join(main()))
