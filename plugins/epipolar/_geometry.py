@@ -42,14 +42,16 @@ def eight_point(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
     r"""F from at least 8 correspondences: normalise, solve :math:`A f = 0` by SVD,
     force rank 2 (zero the smallest singular value), undo the normalisation.
 
-    Returns None when the points are degenerate (the null space is not one-dimensional).
+    Returns None when the points are degenerate: the null space of the 8 or more
+    rows is not one-dimensional (fewer than 8 independent constraints, e.g. points
+    on a line, or a noise-free plane whose null space is three-dimensional).
     """
     ta, tb = _normalising(a), _normalising(b)
     ha = np.column_stack([a, np.ones(len(a))]) @ ta.T
     hb = np.column_stack([b, np.ones(len(b))]) @ tb.T
     design = np.einsum("ni,nj->nij", hb, ha).reshape(len(a), 9)
     _, singular, vt = np.linalg.svd(design)
-    if len(a) >= 9 and singular[-2] < 1e-9 * singular[0]:
+    if singular[7] < 1e-9 * singular[0]:
         return None
     f = vt[-1].reshape(3, 3)
     u, s, vt2 = np.linalg.svd(f)

@@ -24,6 +24,7 @@ from graphvision import (
 from graphvision._ports import PortValueError
 
 from ..fitting import ransac
+from ..geometry import estimate_homography, transfer_error
 from ._geometry import (
     eight_point,
     essential_from_fundamental,
@@ -81,6 +82,28 @@ def _pairs(a: np.ndarray, b: np.ndarray, least: int, what: str) -> None:
         raise ValueError(f"{what}: {len(a)} points in view a but {len(b)} in view b")
     if len(a) < least:
         raise ValueError(f"{what} needs at least {least} correspondences, got {len(a)}")
+
+
+def _refuse_a_homography(a: np.ndarray, b: np.ndarray, threshold: float, seed: int) -> None:
+    """Refuse correspondences that one homography explains: a plane, or a camera turning
+    about its centre, leaves F undetermined (a family of solutions: H^{-T}[v]_x), so any F
+    RANSAC returns is arbitrary (the test of DEGENSAC and model selection in SLAM)."""
+    planar = ransac(
+        len(a),
+        4,
+        lambda s: estimate_homography(a[s], b[s]),
+        lambda H: transfer_error(H, a, b),
+        2.0 * threshold,
+        refit=lambda i: estimate_homography(a[i], b[i]),
+        seed=seed,
+    )
+    share = float(planar.inliers.mean()) if planar.model is not None else 0.0
+    if share >= 0.9:
+        raise ValueError(
+            f"{100 * share:.0f} % of the correspondences fit one homography: the scene is a "
+            "plane or the camera only turned, so F is not determined (use "
+            "geometry.homography_ransac)"
+        )
 
 
 class FundamentalFit(NamedTuple):
@@ -143,8 +166,12 @@ def fundamental(
         seed=seed,
     )
     if found.model is None:
-        raise ValueError("no fundamental matrix: every sample of 8 correspondences was degenerate")
+        raise ValueError(
+            "no fundamental matrix: every sample of 8 correspondences was degenerate "
+            "(points on a line or a plane seen without noise)"
+        )
     inliers = found.inliers
+    _refuse_a_homography(a[inliers], b[inliers], threshold, seed)
     F = refine_fundamental(found.model, a[inliers], b[inliers])
     rms = float(np.sqrt(np.mean(sampson_distance(F, a[inliers], b[inliers]) ** 2)))
     return FundamentalFit(F, int(inliers.sum()), rms, a[inliers], b[inliers])

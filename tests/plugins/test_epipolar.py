@@ -9,6 +9,7 @@ import pytest
 
 import graphvision as gv
 from graphvision_plugins import epipolar, synthetic
+from graphvision_plugins.camera import project_points
 
 PIPELINE = Path(__file__).parents[2] / "pipelines" / "two_view.yaml"
 
@@ -128,3 +129,34 @@ def test_parallel_rays_are_refused_naming_the_correspondence():
     scene = synthetic.two_view_scene(count=10, noise=0.0, seed=0)
     with pytest.raises(ValueError, match="same centre: a zero baseline"):
         epipolar.triangulate(scene.a, scene.a, scene.camera_a, scene.camera_a)
+
+
+def _plane_views(noise, seed):
+    scene = synthetic.two_view_scene(noise=0.0, seed=0)
+    rng = np.random.default_rng(seed)
+    plane = np.column_stack([rng.uniform(-2, 2, 100), rng.uniform(-2, 2, 100), np.full(100, 6.0)])
+    views = []
+    for cam in (scene.camera_a, scene.camera_b):
+        views.append(project_points(plane, cam.K, cam.R, cam.C) + rng.normal(0, noise, (100, 2)))
+    return views
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.5])
+def test_a_planar_scene_is_refused_never_an_arbitrary_F(noise):
+    """Points on a plane leave F undetermined (F = H^{-T}[v]x for any v): noise-free, every
+    8-point sample is rank-deficient; with noise, one homography explains the matches."""
+    a, b = _plane_views(noise, seed=5)
+    with pytest.raises(ValueError, match=r"degenerate|fit one homography"):
+        epipolar.fundamental(a, b)
+
+
+def test_points_on_a_line_are_refused():
+    line = np.column_stack([np.linspace(0, 600, 50), np.linspace(0, 400, 50)])
+    with pytest.raises(ValueError, match="every sample of 8 correspondences was degenerate"):
+        epipolar.fundamental(line, line + np.array([10.0, 5.0]))
+
+
+def test_general_scenes_pass_the_homography_test():
+    for seed in range(4):
+        scene = synthetic.two_view_scene(noise=0.5, seed=seed)
+        assert epipolar.fundamental(scene.a, scene.b).inlier_count > 0.9 * len(scene.a)
