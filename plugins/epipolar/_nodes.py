@@ -23,6 +23,7 @@ from graphvision import (
 )
 from graphvision._ports import PortValueError
 
+from ..camera import normalise_pixels
 from ..fitting import ransac
 from ..geometry import estimate_homography, transfer_error
 from ._geometry import (
@@ -41,6 +42,7 @@ __all__ = [
     "EssentialPort",
     "FundamentalPort",
     "essential",
+    "essential_from_points",
     "fundamental",
     "matched_points",
     "mean_abs_dy",
@@ -48,6 +50,7 @@ __all__ = [
     "relative_pose",
     "reprojection_errors",
     "reprojection_rms",
+    "robust_fundamental",
     "triangulate",
 ]
 
@@ -154,6 +157,22 @@ def fundamental(
     inliers_a, inliers_b : the inlier correspondences
     """
     _pairs(a, b, 8, "the fundamental matrix")
+    F, inliers = robust_fundamental(a, b, threshold, confidence, max_iterations, seed)
+    rms = float(np.sqrt(np.mean(sampson_distance(F, a[inliers], b[inliers]) ** 2)))
+    return FundamentalFit(F, int(inliers.sum()), rms, a[inliers], b[inliers])
+
+
+def robust_fundamental(
+    a: np.ndarray,
+    b: np.ndarray,
+    threshold: float,
+    confidence: float = 0.999,
+    max_iterations: int = 2000,
+    seed: int = 0,
+    homography_threshold: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """F and its inlier mask by :func:`fundamental`'s method (``a``, ``b`` in any units;
+    ``homography_threshold`` defaults to twice ``threshold``)."""
     found = ransac(
         len(a),
         8,
@@ -172,9 +191,63 @@ def fundamental(
         )
     inliers = found.inliers
     _refuse_a_homography(a[inliers], b[inliers], threshold, seed)
-    F = refine_fundamental(found.model, a[inliers], b[inliers])
-    rms = float(np.sqrt(np.mean(sampson_distance(F, a[inliers], b[inliers]) ** 2)))
-    return FundamentalFit(F, int(inliers.sum()), rms, a[inliers], b[inliers])
+    return refine_fundamental(found.model, a[inliers], b[inliers]), inliers
+
+
+class EssentialFit(NamedTuple):
+    E: Essential
+    inlier_count: Int
+    inliers_a: Points2D
+    inliers_b: Points2D
+
+
+@node("epipolar.essential_from_points", version=1)
+def essential_from_points(
+    a: Points2D,
+    b: Points2D,
+    camera_a: Camera,
+    camera_b: Camera,
+    *,
+    threshold: Annotated[float, Field(gt=0)] = 1.0,
+    confidence: Annotated[float, Field(gt=0, lt=1)] = 0.999,
+    max_iterations: Annotated[int, Field(ge=1)] = 2000,
+    seed: Annotated[int, Field(ge=0)] = 0,
+) -> EssentialFit:
+    r"""E directly from normalised points: :func:`fundamental`'s robust method on
+    :math:`\hat x = K^{-1} x`, then singular values forced to (1, 1, 0).
+
+    In normalised coordinates :math:`\hat x_b^T E \hat x_a = 0`, so the 8-point
+    algorithm (with RANSAC, refit and Sampson refinement) gives E up to its
+    internal constraint, imposed by :math:`E = U \operatorname{diag}(1, 1, 0) V^T`.
+    The pixel threshold is turned into normalised units by the mean focal length.
+
+    Parameters
+    ----------
+    a, b : Points2D
+        Corresponding pixels.
+    camera_a, camera_b : Camera
+        Their calibrations (only K is used; undistort points first).
+    threshold : float
+        Inlier Sampson distance, pixels.
+    confidence : float
+        Probability of drawing one outlier-free sample.
+    max_iterations : int
+        Upper bound on the samples.
+    seed : int
+        Seed of the sampler.
+
+    Returns
+    -------
+    E : Essential
+    inlier_count : int
+    inliers_a, inliers_b : Points2D
+    """
+    _pairs(a, b, 8, "the essential matrix from points")
+    focal = float(np.mean([camera_a.K[0, 0], camera_a.K[1, 1], camera_b.K[0, 0], camera_b.K[1, 1]]))
+    na, nb = normalise_pixels(a, camera_a.K), normalise_pixels(b, camera_b.K)
+    E, inliers = robust_fundamental(na, nb, threshold / focal, confidence, max_iterations, seed)
+    E = essential_from_fundamental(E, np.eye(3), np.eye(3))
+    return EssentialFit(E, int(inliers.sum()), a[inliers], b[inliers])
 
 
 @node("epipolar.essential", version=1)

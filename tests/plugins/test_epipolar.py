@@ -160,3 +160,23 @@ def test_general_scenes_pass_the_homography_test():
     for seed in range(4):
         scene = synthetic.two_view_scene(noise=0.5, seed=seed)
         assert epipolar.fundamental(scene.a, scene.b).inlier_count > 0.9 * len(scene.a)
+
+
+def test_essential_directly_from_normalised_points():
+    clean = synthetic.two_view_scene(count=60, noise=0.0, seed=2)
+    fit = epipolar.essential_from_points(clean.a, clean.b, clean.camera_a, clean.camera_b)
+    np.testing.assert_allclose(np.linalg.svd(fit.E, compute_uv=False), [1, 1, 0], atol=1e-12)
+    pose = epipolar.relative_pose(fit.E, clean.a, clean.b, clean.camera_a, clean.camera_b)
+    error = epipolar.pose_error(pose.moved, clean.camera_a, clean.camera_b)
+    assert error.rotation_error_deg < 1e-4 and error.translation_error_deg < 1e-3
+    errors = []
+    for seed in range(10):  # the scenes: mean <= 0.25° and 0.5°
+        scene = synthetic.two_view_scene(noise=0.5, seed=seed)
+        E = epipolar.essential_from_points(scene.a, scene.b, scene.camera_a, scene.camera_b).E
+        moved = epipolar.relative_pose(E, scene.a, scene.b, scene.camera_a, scene.camera_b).moved
+        found = epipolar.pose_error(moved, scene.camera_a, scene.camera_b)
+        errors.append((found.rotation_error_deg, found.translation_error_deg))
+    rotation, translation = np.mean(errors, axis=0)
+    assert rotation <= 0.25 and translation <= 0.5
+    with pytest.raises(ValueError, match="needs at least 8 correspondences, got 7"):
+        epipolar.essential_from_points(clean.a[:7], clean.b[:7], clean.camera_a, clean.camera_b)
