@@ -1,7 +1,12 @@
 """Batch runs: one pipeline over many input files, one output folder per file.
 
-:func:`run_batch` runs the items one after another on one shared executor
-and cache; a bad file or a failed run is recorded and the batch goes on.
+:func:`run_batch` runs the items on one shared executor and cache: the first
+file alone, so that the nodes every file shares (a trained model, a template,
+a vocabulary: nodes upstream of nothing file-specific) are computed once and
+cached, then the others several at a time, as many as the executor runs tasks
+at once (its workers, or a Dask cluster's threads), each reported as it
+completes. A bad file or a failed run is recorded and the batch goes on; on
+Dask a node whose worker died runs again on another worker.
 Each file gets its own folder, named after its path below the pattern's
 fixed part (``photos/a/img.png`` and ``photos/b/img.png`` give
 ``OUT/a/img`` and ``OUT/b/img``), so no two files ever share a folder
@@ -16,7 +21,8 @@ from __future__ import annotations
 import csv
 import glob
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -24,7 +30,7 @@ from typing import Any
 from ._cache import Cache
 from ._compile import CompiledGraph
 from ._errors import GraphvisionError, InputError, OutputFolderError, RunError
-from ._executors import Executor, make_executor
+from ._executors import Executor, executor_width, make_executor
 from ._graph import Graph
 from ._registry import Registry
 from ._report import check_output_folder, owned_files, remove_owned_files, write_run
@@ -144,6 +150,7 @@ def run_batch(
     keep_going: bool = False,
     hooks: Sequence[RunHooks] = (),
     on_item: Callable[[int, int, BatchItem], None] | None = None,
+    files_at_once: int | None = None,
 ) -> BatchResult:
     """Run ``graph`` once per file, giving the file to graph input ``input``.
 
@@ -160,7 +167,11 @@ def run_batch(
     registry, inputs, outputs, overrides, executor, workers, cache, keep_going, hooks
         As for :func:`~graphvision.run`; ``inputs`` are the other graph inputs.
     on_item : callable, optional
-        Called as ``on_item(number, total, item)`` after each item (1-based).
+        Called as ``on_item(number, total, item)`` as each item completes
+        (``number`` counts completed items, 1-based).
+    files_at_once : int, optional
+        Files in flight after the first; default: the tasks the executor runs
+        at once (1 for ``sync``).
 
     Returns
     -------
@@ -192,35 +203,58 @@ def run_batch(
     for folder in previous_folders(out_dir) - current:  # its file is no longer in the batch
         remove_owned_files(folder, owned_files(folder))
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
-    items: list[BatchItem] = []
+    items: list[BatchItem | None] = [None] * len(paths)
+    options: dict[str, Any] = {
+        "registry": registry,
+        "outputs": outputs,
+        "overrides": overrides,
+        "executor": pool,
+        "cache": cache,
+        "keep_going": keep_going,
+        "hooks": hooks,
+    }
+
+    def run_one(index: int) -> BatchItem:
+        item_inputs = {**(inputs or {}), input: str(paths[index])}
+        return _run_item(graph, paths[index], folders[index], {**options, "inputs": item_inputs})
+
     try:
-        for number, (path, folder) in enumerate(zip(paths, folders, strict=True), start=1):
-            item = _run_item(
-                graph,
-                path,
-                folder,
-                run_options={
-                    "registry": registry,
-                    "inputs": {**(inputs or {}), input: str(path)},
-                    "outputs": outputs,
-                    "overrides": overrides,
-                    "executor": pool,
-                    "cache": cache,
-                    "keep_going": keep_going,
-                    "hooks": hooks,
-                },
-            )
-            items.append(item)
+        width = files_at_once or executor_width(pool)
+        for done, (index, item) in enumerate(_stream(run_one, len(paths), width), start=1):
+            items[index] = item
             if on_item is not None:
-                on_item(number, len(paths), item)
+                on_item(done, len(paths), item)
     finally:
         if isinstance(executor, str):
             pool.shutdown()
-    summary = write_summary(items, out_dir)
+    finished = [item for item in items if item is not None]
+    summary = write_summary(finished, out_dir)
     from ._html import batch_page
 
-    (out_dir / "batch.html").write_text(batch_page(items, out_dir), encoding="utf-8")
-    return BatchResult(items, summary)
+    (out_dir / "batch.html").write_text(batch_page(finished, out_dir), encoding="utf-8")
+    return BatchResult(finished, summary)
+
+
+def _stream(
+    run_one: Callable[[int], BatchItem], count: int, at_once: int
+) -> Iterator[tuple[int, BatchItem]]:
+    """``(index, item)`` as items complete: item 0 alone (it fills the cache with the shared
+    nodes), then the rest ``at_once`` at a time on client threads that wait on the executor."""
+    if count == 0:
+        return
+    yield 0, run_one(0)
+    if at_once <= 1:
+        for index in range(1, count):
+            yield index, run_one(index)
+        return
+    with ThreadPoolExecutor(max_workers=at_once, thread_name_prefix="graphvision-file") as files:
+        pending = {files.submit(run_one, index): index for index in range(1, count)}
+        try:
+            for future in as_completed(pending):
+                yield pending[future], future.result()
+        finally:  # Ctrl-C or an error: files not started yet are not started
+            for future in pending:
+                future.cancel()
 
 
 def _common_parts(parts: list[tuple[str, ...]]) -> tuple[str, ...]:

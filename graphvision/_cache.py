@@ -498,11 +498,32 @@ def _check_header(
 
 
 class Cache:
-    """Memory in front of disk; either may be absent. Values go in and out decoded."""
+    """Memory in front of disk; either may be absent. Values go in and out decoded.
+
+    ``Cache.at(folder)`` is the usual one: memory in front of a disk cache in
+    ``folder`` (created, or checked to be a graphvision cache).
+    """
 
     def __init__(self, memory: MemoryStore | None = None, disk: Store | None = None) -> None:
+        for name, store in (("memory", memory), ("disk", disk)):
+            if store is not None and not (hasattr(store, "get") and hasattr(store, "put")):
+                raise TypeError(
+                    f"Cache({name}=...) takes a store, got {type(store).__name__}: "
+                    "for a cache in a folder use graphvision.Cache.at(folder)"
+                )
         self.memory = memory
         self.disk = disk
+
+    @classmethod
+    def at(cls, directory: str | Path, max_bytes: int = 4 * 2**30) -> Cache:
+        """Memory in front of the disk cache in ``directory``, bounded to ``max_bytes``.
+
+        Raises
+        ------
+        NotACacheError
+            When ``directory`` holds files that are not a graphvision cache.
+        """
+        return cls(MemoryStore(), DiskStore.open(directory, max_bytes))
 
     def get(self, key: str, port_type: type[PortType]) -> tuple[bool, Any]:
         """(True, value) on a hit, (False, None) on a miss or an unusable entry."""

@@ -99,6 +99,11 @@ class DaskExecutor:
             )
             self.client = distributed.Client(self._cluster)
 
+    @property
+    def width(self) -> int:
+        """Tasks the cluster runs at once: the threads of all its workers."""
+        return max(1, sum(self.client.nthreads().values()))
+
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         """Run ``fn(*args)`` as a Dask task; a ``concurrent.futures`` future of its result."""
         task = self.client.submit(_on_worker, fn, *args, pure=False, retries=self.retries)

@@ -38,6 +38,7 @@ __all__ = [
     "call_node",
     "call_node_encoded",
     "encodes_values",
+    "executor_width",
     "make_executor",
 ]
 
@@ -93,6 +94,7 @@ class SyncExecutor:
     """Runs each task at once in the calling thread and returns a done future."""
 
     encodes_values = False
+    width = 1
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         try:
@@ -106,6 +108,11 @@ class SyncExecutor:
 
 class _Threads(ThreadPoolExecutor):
     encodes_values = False
+
+    @property
+    def width(self) -> int:
+        """Tasks run at once."""
+        return int(self._max_workers)
 
 
 class WorkerDiedError(RuntimeError):
@@ -127,6 +134,7 @@ class _Processes:
 
     def __init__(self, workers: int) -> None:
         self._workers = workers
+        self.width = workers
         self._lock = threading.Lock()
         self._pool = self._new_pool()
 
@@ -211,6 +219,13 @@ def _worker_setup(parent: int) -> None:
         os._exit(0)
 
     threading.Thread(target=watch, daemon=True, name="graphvision-parent-watch").start()
+
+
+def executor_width(executor: Any) -> int:
+    """How many tasks the executor runs at once (its ``width``; a plain thread pool's
+    ``max_workers``; 1 when it does not say)."""
+    width = getattr(executor, "width", None) or getattr(executor, "_max_workers", None) or 1
+    return max(1, int(width))
 
 
 def encodes_values(executor: Any) -> bool:

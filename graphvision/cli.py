@@ -161,12 +161,11 @@ def _registry(args: argparse.Namespace, extra: Sequence[str] = ()) -> Registry:
 
 
 def _cache(args: argparse.Namespace) -> Cache | None:
-    from ._cache import Cache, DiskStore, MemoryStore, default_cache_dir
+    from ._cache import Cache, default_cache_dir
 
     if args.no_cache:
         return None
-    disk = DiskStore.open(args.cache_dir or default_cache_dir(), args.cache_max_bytes)
-    return Cache(MemoryStore(), disk)
+    return Cache.at(args.cache_dir or default_cache_dir(), args.cache_max_bytes)
 
 
 def _executor(args: argparse.Namespace) -> Any:

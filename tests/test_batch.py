@@ -192,3 +192,109 @@ def test_a_batch_never_reads_its_own_outputs(capsys, tmp_path):
         rows = list(csv.DictReader((out / "batch.csv").open()))
         assert [Path(r["file"]).name for r in rows] == ["a.png"]
     capsys.readouterr()
+
+
+COUNTING_PLUGIN = '''
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from graphvision import Float, Image, node
+
+_LOCK = threading.Lock()
+
+
+def _log(path: str, line: str) -> None:
+    with _LOCK, open(path, "a") as handle:
+        handle.write(line + "\\n")
+
+
+@node("counting.model")
+def model(*, log: str = "") -> Float:
+    """A stand-in for a trained model: every file's run needs it.
+
+    Parameters
+    ----------
+    log : a file that gets one line each time this runs
+    """
+    _log(log, "model")
+    return 2.0
+
+
+@node("counting.score")
+def score(image: Image, weight: Float, *, log: str = "") -> Float:
+    """weight × mean(image), slowly, noting when it starts and ends.
+
+    Parameters
+    ----------
+    image : the file's image
+    weight : the shared model
+    log : a file that gets a start and an end line per run
+    """
+    _log(log, f"start {time.monotonic()}")
+    time.sleep(0.3)
+    _log(log, f"end {time.monotonic()}")
+    return float(weight * image.mean())
+'''
+
+
+def _counting_graph(tmp_path: Path):
+    plugin = tmp_path / "counting.py"
+    plugin.write_text(COUNTING_PLUGIN)
+    registry = gv.discover([plugin])
+    log = str(tmp_path / "log.txt")
+    graph = gv.Graph("counting")
+    image = graph.input("image", "Image")
+    weight = graph.add("model", "counting.model", params={"log": log})
+    graph.output(
+        "score",
+        graph.add("score", "counting.score", image=image, weight=weight, params={"log": log}),
+    )
+    return graph, registry, Path(log)
+
+
+def test_a_batch_computes_shared_nodes_once_and_runs_files_at_once(tmp_path):
+    graph, registry, log = _counting_graph(tmp_path)
+    levels = [10, 60, 110, 160, 210, 250]
+    files = [photo(tmp_path / "in" / f"{k}.png", level) for k, level in enumerate(levels)]
+    seen = []
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        cache=gv.Cache.at(tmp_path / "cache"),
+        executor="threads",
+        workers=3,
+        on_item=lambda number, total, item: seen.append((number, total)),
+    )
+    lines = log.read_text().splitlines()
+    assert lines.count("model") == 1  # the shared node ran for the first file only
+    assert [item.status for item in batch.items] == ["ok"] * len(files)
+    for item, level in zip(batch.items, levels, strict=True):  # results in file order
+        assert item.scalars["score"] == pytest.approx(2.0 * level / 255.0, abs=1e-6)
+    assert seen == [(n, len(files)) for n in range(1, len(files) + 1)]
+    running = most = 0
+    for line in lines:  # the log is in time order
+        running += {"start": 1, "end": -1}.get(line.split()[0], 0)
+        most = max(most, running)
+    assert most >= 2  # several files were in flight together
+
+
+def test_files_at_once_1_runs_files_one_after_another(tmp_path):
+    graph, registry, log = _counting_graph(tmp_path)
+    files = [photo(tmp_path / "in" / f"{k}.png", 50 + k) for k in range(3)]
+    gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        cache=None,
+        files_at_once=1,
+    )
+    lines = [x.split()[0] for x in log.read_text().splitlines() if x != "model"]
+    assert lines == ["start", "end"] * 3

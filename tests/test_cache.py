@@ -382,3 +382,11 @@ def test_a_read_only_cache_is_still_read(tmp_path, monkeypatch, registry):
         "o", changed.add("o", "toy.add", a=changed.input("x", "Float", default=5.0), b="x")
     )
     assert gv.run(changed, registry, cache=gv.Cache(None, store)).outputs["o"] == 10.0
+
+
+def test_a_folder_given_where_a_store_goes_says_how_to_cache_in_a_folder(tmp_path):
+    with pytest.raises(TypeError, match=r"use graphvision.Cache.at\(folder\)"):
+        gv.Cache(tmp_path / "cache")
+    cache = gv.Cache.at(tmp_path / "cache")
+    assert cache.memory is not None and cache.disk is not None
+    assert (tmp_path / "cache" / "CACHEDIR.TAG").is_file()

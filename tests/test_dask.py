@@ -83,3 +83,59 @@ def test_a_worker_that_cannot_import_the_plugin_is_named(dask_executor, tmp_path
 def test_an_unreachable_scheduler_is_refused_naming_the_address():
     with pytest.raises(DaskUnavailableError, match=r"cannot reach the Dask scheduler at tcp://127"):
         DaskExecutor(address="tcp://127.0.0.1:9", timeout=1)
+
+
+DYING_FILE_PLUGIN = '''
+import os
+from pathlib import Path
+from graphvision import Float, Image, node
+
+
+@node("dying.mean")
+def mean(image: Image, *, marker: str = "") -> Float:
+    """The image's mean; kills its worker the first time it sees the darkest file.
+
+    Parameters
+    ----------
+    image : the file's image
+    marker : a file whose existence says the worker already died once
+    """
+    if float(image.mean()) < 0.1 and not Path(marker).exists():
+        Path(marker).write_text("died once")
+        os._exit(1)
+    return float(image.mean())
+'''
+
+
+def test_a_batch_on_dask_survives_a_dying_worker_and_retries_its_file(dask_executor, tmp_path):
+    import imageio.v3 as iio
+
+    plugin = tmp_path / "dying.py"
+    plugin.write_text(DYING_FILE_PLUGIN)
+    registry = gv.discover([plugin])
+    graph = gv.Graph("dying")
+    image = graph.input("image", "Image")
+    graph.output(
+        "mean",
+        graph.add("mean", "dying.mean", image=image, params={"marker": str(tmp_path / "died")}),
+    )
+    levels = [200, 10, 120, 60, 240, 30]
+    files = []
+    for k, level in enumerate(levels):
+        files.append(tmp_path / "in" / f"{k}.png")
+        files[-1].parent.mkdir(exist_ok=True)
+        iio.imwrite(files[-1], np.full((8, 8), level, np.uint8))
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        executor=dask_executor,
+        cache=None,
+    )
+    assert (tmp_path / "died").exists()  # a worker did die, on file 1
+    assert [item.status for item in batch.items] == ["ok"] * len(levels)
+    for item, level in zip(batch.items, levels, strict=True):
+        assert item.scalars["mean"] == pytest.approx(level / 255.0, abs=1e-6)
+    assert (tmp_path / "out" / "batch.csv").is_file()
