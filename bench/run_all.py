@@ -10,6 +10,7 @@ from pathlib import Path
 HERE = Path(__file__).parent
 sys.path.insert(0, str(HERE))
 
+import bench_batch  # noqa: E402
 import bench_cache  # noqa: E402
 import bench_camera  # noqa: E402
 import bench_colour_template  # noqa: E402
@@ -37,6 +38,7 @@ def main() -> None:
         ("Colour, templates, FFT, pyramids (issue 10)", bench_colour_template.main),
         ("Two views and stereo (issue 12)", bench_stereo.main),
         ("Sweep sharing (issue 15)", bench_sweep.main),
+        ("Batch of 200 files (issue 15)", bench_batch.main),
         ("Dask executor overhead (issue 15)", bench_dask.main),
     ]
     lines = [

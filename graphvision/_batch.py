@@ -202,6 +202,11 @@ def run_batch(
     current = {folder.resolve() for folder in folders}
     for folder in previous_folders(out_dir) - current:  # its file is no longer in the batch
         remove_owned_files(folder, owned_files(folder))
+    if registry is None:  # found once for the batch, not once per file
+        from ._plugins import discover
+
+        source = graph.graph if isinstance(graph, CompiledGraph) else graph
+        registry = discover(source.plugins)
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     items: list[BatchItem | None] = [None] * len(paths)
     options: dict[str, Any] = {

@@ -33,6 +33,7 @@ checked twice on a run's hot path.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import importlib
 import inspect
@@ -429,12 +430,31 @@ def _ref_for(func: Callable) -> FunctionRef:
 def build_spec(func: Callable, plugin: str) -> NodeSpec:
     """Check a decorated function's signature and build its :class:`NodeSpec`.
 
+    A spec is immutable and depends only on the function object and the plugin
+    name, so it is built once per function and plugin and kept on the function:
+    every ``discover()`` after the first (each ``run`` without a registry does
+    one) costs no pydantic model building. A plugin file that changed is
+    imported again, so its functions are new objects and get new specs.
+
     Raises
     ------
     RegistrationError
         Naming the plugin and the function, for any signature that is not a node.
     """
     func = unchecked(func)
+    built: dict[str, NodeSpec] | None = getattr(func, "__graphvision_specs__", None)
+    if built is not None and plugin in built:
+        return built[plugin]
+    spec = _build_spec(func, plugin)
+    if built is None:
+        built = {}
+        with contextlib.suppress(AttributeError, TypeError):  # e.g. a builtin: not kept
+            func.__graphvision_specs__ = built  # type: ignore[attr-defined]
+    built[plugin] = spec
+    return spec
+
+
+def _build_spec(func: Callable, plugin: str) -> NodeSpec:
     mark: _NodeMark = func.__graphvision_node__  # type: ignore[attr-defined]
     code = getattr(func, "__code__", None)
     place = f" at {code.co_filename}:{code.co_firstlineno}" if code else ""

@@ -51,9 +51,58 @@ def _folder_sha256(folder: Path) -> str:
 def git_state(file: Path) -> tuple[str, bool]:
     """(commit of the repository holding ``file``, whether ``file`` differs from it).
 
-    Any failure (no git, not a repository) gives ``("", False)``.
+    Any failure (no git, not a repository) gives ``("", False)``. Asking git
+    takes two subprocesses; the answer is kept for as long as the file and
+    the repository's ``HEAD`` and index are unchanged (their sizes and
+    modification times), so a batch of many runs of one pipeline asks once.
     """
-    folder = file.resolve().parent
+    file = file.resolve()
+    watched = _git_files(file.parent)
+    if watched is None:  # a worktree or a submodule: ask git every time
+        return _ask_git(file)
+    stamp = (file, _stat(file), *(_stat(p) for p in watched))
+    known = _GIT_STATES.get(stamp)
+    if known is None:
+        known = _ask_git(file)
+        if len(_GIT_STATES) > 64:
+            _GIT_STATES.clear()
+        _GIT_STATES[stamp] = known
+    return known
+
+
+_GIT_STATES: dict[tuple[Any, ...], tuple[str, bool]] = {}
+
+
+def _stat(path: Path) -> tuple[int, int]:
+    try:
+        info = path.stat()
+    except OSError:
+        return (0, 0)
+    return (info.st_mtime_ns, info.st_size)
+
+
+def _git_files(folder: Path) -> list[Path] | None:
+    """``HEAD``, the checked-out branch's ref and the index of the repository above
+    ``folder`` ([] outside a repository; None when ``.git`` is a file, which points
+    elsewhere)."""
+    for parent in (folder, *folder.parents):
+        git_dir = parent / ".git"
+        if git_dir.is_dir():
+            files = [git_dir / "HEAD", git_dir / "index"]
+            try:
+                head = (git_dir / "HEAD").read_text().strip()
+            except OSError:
+                return files
+            if head.startswith("ref: "):
+                files.append(git_dir / head[5:])
+            return files
+        if git_dir.is_file():
+            return None
+    return []
+
+
+def _ask_git(file: Path) -> tuple[str, bool]:
+    folder = file.parent
 
     def git(*args: str) -> subprocess.CompletedProcess[str]:
         return subprocess.run(
@@ -64,7 +113,7 @@ def git_state(file: Path) -> tuple[str, bool]:
         head = git("rev-parse", "HEAD")
         if head.returncode != 0:
             return "", False
-        changed = git("status", "--porcelain", "--", file.resolve().name)
+        changed = git("status", "--porcelain", "--", file.name)
     except (OSError, subprocess.SubprocessError):
         return "", False
     return head.stdout.strip(), bool(changed.stdout.strip())

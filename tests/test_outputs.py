@@ -315,3 +315,30 @@ def test_an_output_named_record_is_refused_and_leftover_staging_is_cleared(capsy
     (out / ".graphvision-writing-x1").mkdir(parents=True)  # a run killed while writing
     assert run_cli(capsys, "run", DEMO, "-d", out, "-o", "psnr_noisy_gaussian")[0] == 0
     assert not (out / ".graphvision-writing-x1").exists()
+
+
+def test_the_git_state_follows_edits_and_commits_within_one_process(tmp_path):
+    import subprocess
+
+    from graphvision._provenance import git_state
+
+    repo = tmp_path / "repo"
+    repo.mkdir()
+    pipeline = repo / "p.yaml"
+    pipeline.write_text("version: 1\n")
+    git = ["git", "-C", str(repo), "-c", "user.name=t", "-c", "user.email=t@t"]
+    subprocess.run([*git, "init", "-q"], check=True)
+    subprocess.run([*git, "add", "p.yaml"], check=True)
+    subprocess.run([*git, "commit", "-qm", "one"], check=True)
+
+    def head() -> str:
+        return subprocess.run([*git, "rev-parse", "HEAD"], capture_output=True, text=True).stdout
+
+    first = head().strip()
+    assert git_state(pipeline) == (first, False)
+    assert git_state(pipeline) == (first, False)  # asked again: the kept answer
+    pipeline.write_text("version: 1\nname: edited\n")
+    assert git_state(pipeline) == (first, True)
+    subprocess.run([*git, "commit", "-qam", "two"], check=True)
+    assert git_state(pipeline) == (head().strip(), False) != (first, False)
+    assert git_state(tmp_path / "elsewhere.yaml") == ("", False)
