@@ -27,10 +27,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ._cache import Cache
+from ._cache import Cache, MemoryStore
 from ._compile import CompiledGraph
 from ._errors import GraphvisionError, InputError, OutputFolderError, RunError
-from ._executors import Executor, executor_width, make_executor
+from ._executors import Executor, encodes_values, executor_width, make_executor
+from ._file_task import Seed, file_outcome, local_plugin_paths, run_file_task, shared_seeds
 from ._graph import Graph
 from ._registry import Registry
 from ._report import check_output_folder, owned_files, remove_owned_files, write_run
@@ -151,6 +152,7 @@ def run_batch(
     hooks: Sequence[RunHooks] = (),
     on_item: Callable[[int, int, BatchItem], None] | None = None,
     files_at_once: int | None = None,
+    one_task_per_file: bool | None = None,
 ) -> BatchResult:
     """Run ``graph`` once per file, giving the file to graph input ``input``.
 
@@ -172,6 +174,11 @@ def run_batch(
     files_at_once : int, optional
         Files in flight after the first; default: the tasks the executor runs
         at once (1 for ``sync``).
+    one_task_per_file : bool, optional
+        After the first file, run each file's whole pipeline as one task of the
+        executor, the shared nodes' values sent along (see
+        :mod:`graphvision._file_task`); default: on executors whose nodes run in
+        other processes (``processes``, Dask), where a task costs most.
 
     Returns
     -------
@@ -205,9 +212,11 @@ def run_batch(
     if registry is None:  # found once for the batch, not once per file
         from ._plugins import discover
 
-        source = graph.graph if isinstance(graph, CompiledGraph) else graph
-        registry = discover(source.plugins)
+        registry = discover(_plain(graph).plugins)
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
+    one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
+    if one_task_per_file and cache is None:  # the first file's shared values are sent on
+        cache = Cache(MemoryStore())
     items: list[BatchItem | None] = [None] * len(paths)
     options: dict[str, Any] = {
         "registry": registry,
@@ -218,11 +227,29 @@ def run_batch(
         "keep_going": keep_going,
         "hooks": hooks,
     }
+    seeds: list[Seed] = []
 
     def run_one(index: int) -> BatchItem:
         item_inputs = {**(inputs or {}), input: str(paths[index])}
-        return _run_item(graph, paths[index], folders[index], {**options, "inputs": item_inputs})
+        if index == 0 or not one_task_per_file:
+            item, result = _run_item(
+                graph, paths[index], folders[index], {**options, "inputs": item_inputs}
+            )
+            if index == 0 and one_task_per_file and result is not None and cache is not None:
+                seeds.extend(shared_seeds(result.compiled, result.record, cache, input))
+                compiled.append(result.compiled)
+            return item
+        return _run_file(
+            pool,
+            _plain(graph),
+            paths[index],
+            folders[index],
+            compiled[0] if compiled else None,
+            registry,
+            (item_inputs, outputs, overrides, keep_going, seeds),
+        )
 
+    compiled: list[CompiledGraph] = []
     try:
         width = files_at_once or executor_width(pool)
         for done, (index, item) in enumerate(_stream(run_one, len(paths), width), start=1):
@@ -272,9 +299,13 @@ def _common_parts(parts: list[tuple[str, ...]]) -> tuple[str, ...]:
     return common
 
 
+def _plain(graph: Graph | CompiledGraph) -> Graph:
+    return graph.graph if isinstance(graph, CompiledGraph) else graph
+
+
 def _run_item(
     graph: Graph | CompiledGraph, path: Path, folder: Path, run_options: dict[str, Any]
-) -> BatchItem:
+) -> tuple[BatchItem, RunResult | None]:
     """Run one file and write its folder; a failure is recorded in the item, not raised."""
     item = BatchItem(path, folder)
     began = time.perf_counter()
@@ -288,6 +319,45 @@ def _run_item(
     except InputError as error:  # this file cannot be read; the others may
         item.status, item.error = "failed", str(error)
     item.seconds = time.perf_counter() - began
+    return _finish_item(item, result), result
+
+
+def _run_file(
+    pool: Executor,
+    graph: Graph,
+    path: Path,
+    folder: Path,
+    compiled: CompiledGraph | None,
+    registry: Registry,
+    task: tuple[Any, ...],
+) -> BatchItem:
+    """One file as one task of the executor (:func:`~graphvision._file_task.run_file_task`)."""
+    item = BatchItem(path, folder)
+    began = time.perf_counter()
+    result: RunResult | None = None
+    try:
+        plugins = local_plugin_paths(registry)
+        outcome = pool.submit(run_file_task, graph, plugins, *task).result()
+    except Exception as error:  # the task itself failed (a worker that died twice, ...)
+        item.status, item.error = "failed", f"{type(error).__name__}: {error}"
+    else:
+        if compiled is None:  # the first file could not be compiled or read
+            from ._compile import compile_graph
+
+            overrides = task[2]
+            plain = graph.with_overrides(overrides) if overrides else graph
+            compiled = compile_graph(plain, registry, provided=set(task[0]))
+        executor = f"{type(pool).__name__}, one task per file"
+        result, error_text = file_outcome(outcome, compiled, registry, executor)
+        if error_text:
+            item.status, item.error = "failed", error_text
+    item.seconds = time.perf_counter() - began
+    return _finish_item(item, result)
+
+
+def _finish_item(item: BatchItem, result: RunResult | None) -> BatchItem:
+    """Write the item's folder from its result (or clear it when there is none)."""
+    folder = item.output_dir
     if result is None:  # nothing produced: what a previous run left there must not look current
         remove_owned_files(folder, owned_files(folder))
         return item

@@ -298,3 +298,33 @@ def test_files_at_once_1_runs_files_one_after_another(tmp_path):
     )
     lines = [x.split()[0] for x in log.read_text().splitlines() if x != "model"]
     assert lines == ["start", "end"] * 3
+
+
+def test_on_processes_each_further_file_is_one_task_with_the_shared_values_sent(tmp_path):
+    from graphvision._file_task import shared_steps
+
+    graph, registry, log = _counting_graph(tmp_path)
+    compiled = gv.compile_graph(graph, registry, provided={"image"})
+    assert shared_steps(compiled, "image") == ["model"]
+    levels = [10, 60, 110, 160, 210]
+    files = [photo(tmp_path / "in" / f"{k}.png", level) for k, level in enumerate(levels)]
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        cache=None,
+        executor="processes",
+        workers=2,
+    )
+    assert [item.status for item in batch.items] == ["ok"] * len(files), batch.items
+    for item, level in zip(batch.items, levels, strict=True):
+        assert item.scalars["score"] == pytest.approx(2.0 * level / 255.0, abs=1e-6)
+        record = json.loads((item.output_dir / "record.json").read_text())
+        assert record["outputs"]["score"].startswith("Float")
+    assert log.read_text().splitlines().count("model") == 1  # seeded, never recomputed
+    later = json.loads((batch.items[-1].output_dir / "record.json").read_text())
+    assert "one task per file" in later["executor"]
+    statuses = {node["name"]: node["status"] for node in later["nodes"]}
+    assert statuses == {"model": "cached", "score": "computed"}
