@@ -11,6 +11,12 @@ memory (never the file on disk, which may be newer than what was imported):
   reaches through its global names, attribute chains and closures,
   recursively (a helper in another module of the package, a numba kernel's
   Python function, a lookup table);
+* the source files of this project's modules that such a function imports
+  inside its body (``from ._kernels import kernel``: a numba kernel module
+  imported on first use, so that start-up stays fast). Their code may not be
+  loaded yet, so the file's bytes are what identifies it, the same whether
+  or not the module has been imported (a module edited on disk after it was
+  imported in a long-running process is the one case this misreads);
 * the version of the installed distribution that provides the node, so that
   an upgrade of a plugin invalidates its results even where the code that
   changed is out of reach (compiled extensions).
@@ -92,6 +98,7 @@ class _Walker:
         self.hasher = hasher
         self.project = project
         self.seen: set[int] = set()
+        self.seen_modules: set[tuple[str, str]] = set()
 
     def feed(self, *parts: object) -> None:
         for part in parts:
@@ -110,14 +117,33 @@ class _Walker:
         doc = getattr(func, "__doc__", None)
         self.code(code, doc)
         namespace = getattr(func, "__globals__", {})
+        package = namespace.get("__package__") or ""
+        imported = _imported_modules(code, package)
+        # a submodule imported in the body appears in its package's namespace once imported:
+        # it is covered by its file below, the same before and after the import
+        skipped = {module.rpartition(".")[2] for module in imported}
         for name in _global_names(code):
-            if name in namespace:
+            if name in namespace and name not in skipped:
                 self.reference(name, namespace[name], _attribute_names(code))
+        for module in imported:
+            if _project_of(module) == self.project:
+                self.source_file(module)
         for cell in getattr(func, "__closure__", None) or ():
             try:
                 self.value("closure", cell.cell_contents)
             except ValueError:  # an empty cell
                 continue
+
+    def source_file(self, module: str) -> None:
+        """The bytes of ``module``'s source file (a module imported inside a function)."""
+        if ("module", module) in self.seen_modules:
+            return
+        self.seen_modules.add(("module", module))
+        origin = _module_file(module)
+        self.feed("imported module", module)
+        if origin:
+            with contextlib.suppress(OSError), open(origin, "rb") as handle:
+                self.hasher.update(hashlib.blake2b(handle.read(), digest_size=16).digest())
 
     def code(self, code: types.CodeType, doc: object) -> None:
         constants = list(code.co_consts)
@@ -175,6 +201,53 @@ def _global_names(code: types.CodeType) -> list[str]:
         if isinstance(constant, types.CodeType):
             names += _global_names(constant)
     return sorted(set(names))
+
+
+def _imported_modules(code: types.CodeType, package: str) -> list[str]:
+    """Absolute names of the modules ``code`` (and code nested in it) imports in its body,
+    with the submodules a ``from package import name`` may mean."""
+    import dis
+    from importlib.util import resolve_name
+
+    found: list[str] = []
+    constants: list[object] = []
+    for instruction in dis.get_instructions(code):
+        if instruction.opname == "LOAD_CONST":
+            constants = [*constants[-1:], instruction.argval]
+        elif instruction.opname == "IMPORT_NAME" and len(constants) == 2:
+            level, names = constants
+            relative = "." * level if isinstance(level, int) else ""
+            try:
+                module = (
+                    resolve_name(relative + instruction.argval, package)
+                    if relative
+                    else (instruction.argval)
+                )
+            except (ImportError, ValueError):
+                continue
+            found.append(module)
+            if isinstance(names, tuple):
+                found += [f"{module}.{name}" if module else name for name in names]
+    for constant in code.co_consts:
+        if isinstance(constant, types.CodeType):
+            found += _imported_modules(constant, package)
+    return found
+
+
+def _module_file(module: str) -> str:
+    """The source file of ``module`` without importing it ('' when it is not a module)."""
+    import sys
+    from importlib.util import find_spec
+
+    loaded = sys.modules.get(module)
+    if loaded is not None:
+        return str(getattr(loaded, "__file__", "") or "")
+    try:
+        spec = find_spec(module)
+    except (ImportError, ValueError, AttributeError):
+        return ""
+    origin = spec.origin if spec is not None else None
+    return origin if origin and origin.endswith(".py") else ""
 
 
 def _attribute_names(code: types.CodeType) -> set[str]:

@@ -400,3 +400,60 @@ def test_a_fully_cached_run_does_not_load_a_sample_input(tmp_path):
     second = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert first.stdout.split() == ["0", "True"], first.stderr
     assert second.stdout.split() == ["1", "False"], second.stderr
+
+
+LAZY_PACKAGE = '''
+from graphvision import Float, node
+
+
+@node("lazy.uses_kernel")
+def uses_kernel(x: Float) -> Float:
+    """Imports its kernel on first use, as the compiled kernels of the built-in families do.
+
+    Parameters
+    ----------
+    x : the value
+    """
+    from ._kernel import scaled
+
+    return scaled(x)
+
+
+@node("lazy.plain")
+def plain(x: Float) -> Float:
+    """Imports nothing.
+
+    Parameters
+    ----------
+    x : the value
+    """
+    return x + 1.0
+'''
+
+
+def test_editing_a_module_imported_inside_a_node_invalidates_that_node_only(tmp_path):
+    """A kernel module imported in the node's body (not at the top) is part of its code."""
+    import sys
+
+    from graphvision._fingerprint import _MEMO, code_fingerprint
+
+    package = tmp_path / "lazy"
+    package.mkdir()
+    (package / "__init__.py").write_text(LAZY_PACKAGE)
+    (package / "_kernel.py").write_text("def scaled(x):\n    return 2.0 * x\n")
+    before = gv.discover([package], entry_points=False)
+    uses = before.node("lazy.uses_kernel")
+    kernel_module = uses.func.__module__ + "._kernel"
+    assert kernel_module not in sys.modules  # not imported yet: fingerprinted from its file
+    first = code_fingerprint(uses.func)
+    uses.func(1.0)  # now it is imported
+    assert kernel_module in sys.modules
+    _MEMO.pop(uses.func, None)
+    assert code_fingerprint(uses.func) == first  # the same whether imported or not
+    (package / "_kernel.py").write_text("def scaled(x):\n    return 3.0 * x\n")
+    after = gv.discover([package], entry_points=False)
+    assert after.node("lazy.uses_kernel").source_hash != uses.source_hash
+    assert after.node("lazy.plain").source_hash == before.node("lazy.plain").source_hash
+    graph = gv.Graph("lazy")
+    graph.output("o", graph.add("o", "lazy.uses_kernel", x=graph.input("x", "Float", default=1.0)))
+    assert gv.run(graph, after, cache=None).outputs["o"] == 3.0

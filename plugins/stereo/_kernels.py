@@ -264,13 +264,17 @@ def right_disparity(cost: np.ndarray, d_min: int) -> np.ndarray:  # pragma: no c
     for y in prange(rows):
         for xr in range(cols):
             best = np.float32(np.inf)
-            best_d = -1
+            best_d = 0
+            found = False
             for k in range(count):
                 x = xr + d_min + k
+                if x < 0:  # a negative disparity from a pixel near the left border
+                    continue
                 if x >= cols:
                     break
                 if cost[y, x, k] < best:
                     best = cost[y, x, k]
                     best_d = d_min + k
-            out[y, xr] = np.float32(best_d) if best_d >= 0 else np.nan
+                    found = True
+            out[y, xr] = np.float32(best_d) if found else np.nan
     return out

@@ -4,7 +4,7 @@ the baseline)."""
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Generic, NamedTuple
 
 import numpy as np
 
@@ -37,9 +37,9 @@ class UncalibratedRectification(NamedTuple):
     H_b: Homography
 
 
-class RectifiedPair(NamedTuple):
-    left: Image
-    right: Image
+class RectifiedPair(NamedTuple, Generic[ImageT]):
+    left: ImageT
+    right: ImageT
 
 
 def _cross_matrix(v: np.ndarray) -> np.ndarray:
@@ -197,7 +197,9 @@ def rectify_uncalibrated(
 
 
 @node("stereo.rectify_pair", version=1)
-def rectify_pair(left: ImageT, right: ImageT, H_a: Homography, H_b: Homography) -> RectifiedPair:
+def rectify_pair(
+    left: ImageT, right: ImageT, H_a: Homography, H_b: Homography
+) -> RectifiedPair[ImageT]:
     """Warp both images by their rectifying homographies (bilinear; pixels from outside black).
 
     Parameters
@@ -210,7 +212,7 @@ def rectify_pair(left: ImageT, right: ImageT, H_a: Homography, H_b: Homography) 
     Returns
     -------
     left, right : Image
-        The rectified pair, each the size of its original.
+        The rectified pair, each the size of its original (gray stays gray).
     """
     warped = [
         sample_homography(image, np.linalg.inv(H), image.shape[:2])[0]

@@ -13,6 +13,7 @@ from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
 from ._plane_lines import plane_lines
 from ._stereo_pair import stereo_pair
 from ._structured_light import gray_code_stripes, structured_light_scene
+from ._turned_view import turned_view
 from ._two_view import two_view_scene
 from ._warps import random_homography, random_warp, two_views
 
@@ -32,6 +33,7 @@ __all__ = [
     "salt_and_pepper",
     "stereo_pair",
     "structured_light_scene",
+    "turned_view",
     "two_view_scene",
     "two_views",
 ]

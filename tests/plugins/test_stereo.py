@@ -242,3 +242,42 @@ def test_bad_structured_light_input_is_refused_by_name():
     dark = np.full((8, 24, 32), 0.1, np.float32)
     with pytest.raises(ValueError, match="no pixel was decoded"):
         stereo.depth_from_stripes(stereo.decode_gray_code(dark), scene.camera, scene.projector)
+
+
+def test_negative_disparities_are_found_and_survive_the_left_right_check(pair):
+    """Move the right image 16 px to the right: every true disparity drops by 16 (now −12..−4)."""
+    right = np.zeros_like(pair.right)
+    right[:, 16:] = pair.right[:, :-16]
+    truth = pair.disparity - 16.0
+    disparity = stereo.sgm(pair.left, right, min_disparity=-24, num_disparities=24)
+    visible = pair.visible.copy()
+    visible[:, -24:] = False  # their match moved out of the right image
+    error = np.abs(disparity - truth)[visible]
+    assert np.mean(error <= 1.0) >= 0.95
+
+
+def test_rectify_pipeline_rectifies_a_turned_view_of_motorcycle():
+    outputs = gv.run(gv.load_pipeline(PIPELINE.with_name("rectify.yaml")), cache=None).outputs
+    assert outputs["dy_before"] > 5.0  # the turn moved rows by pixels
+    assert outputs["dy_after"] <= 0.5  # the issue's rectification truth, on real matches
+    assert outputs["rectified_left"].shape == outputs["rectified_right"].shape == (500, 741)
+
+
+def test_a_turned_view_is_the_image_mapped_by_K_R_K_inverse():
+    image = synthetic.stereo_pair(width=160, height=120, seed=2).left
+    cam = camera.pinhole(fx=150.0, fy=150.0, cx=79.5, cy=59.5, width=160, height=120)
+    turned = synthetic.turned_view(image, cam, yaw=3.0, pitch=-2.0, roll=4.0)
+    ray = np.linalg.inv(cam.K) @ np.array([100.0, 40.0, 1.0])
+    moved = turned.homography @ cam.K @ ray
+    assert np.linalg.norm(moved[:2] / moved[2] - [100.0, 40.0]) > 5  # it did turn
+    H = turned.homography
+    rows, cols = np.mgrid[30:90:7, 40:120:9]
+    points = np.column_stack([cols.ravel(), rows.ravel()]).astype(float)
+    mapped = geometry.apply_homography(H, points)
+    inside = (mapped[:, 0] > 1) & (mapped[:, 0] < 158) & (mapped[:, 1] > 1) & (mapped[:, 1] < 118)
+    at = np.round(mapped[inside]).astype(int)
+    original = image[points[inside, 1].astype(int), points[inside, 0].astype(int)]
+    # bilinear sampling at a rounded position: the smooth texture differs by little
+    assert np.median(np.abs(turned.image[at[:, 1], at[:, 0]] - original)) < 0.05
+    R = np.linalg.inv(cam.K) @ H @ cam.K
+    np.testing.assert_allclose(R @ R.T / np.cbrt(np.linalg.det(R)) ** 2, np.eye(3), atol=1e-9)
