@@ -53,7 +53,8 @@ def _box_mean(values: np.ndarray, window: int) -> np.ndarray:
 def cost_volume(
     left: np.ndarray, right: np.ndarray, d_min: int, count: int, cost: Cost, window: int
 ) -> np.ndarray:
-    r"""The float32 cost volume ``(rows, cols, count)`` of a rectified gray pair.
+    r"""The cost volume ``(rows, cols, count)`` of a rectified gray pair (uint16 for census,
+    float32 otherwise).
 
     - ``census``: Hamming distance between census signatures (a bit per
       window pixel, set when darker than the centre; Zabih & Woodfill 1994):
@@ -67,9 +68,10 @@ def cost_volume(
         from ._kernels import census, census_costs  # numba compiles on first use
 
         half = window // 2
-        return census_costs(
-            census(left, half, half), census(right, half, half), d_min, count, highest
+        volume: np.ndarray = census_costs(
+            census(left, half, half), census(right, half, half), d_min, count, int(highest)
         )
+        return volume
     volume = np.empty((*left.shape, count), dtype=np.float32)
     if cost == "zncc":
         mean_l = _box_mean(left, window)

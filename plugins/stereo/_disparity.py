@@ -10,7 +10,7 @@ from pydantic import Field
 
 from graphvision import GrayImage, node
 
-from ._cost import Cost, cost_volume
+from ._cost import Cost, cost_volume, maximum_cost
 from ._ports import Disparity
 
 __all__ = ["block_match", "check_pair", "left_right_check", "sgm"]
@@ -206,7 +206,17 @@ def sgm(
     from ._kernels import aggregate_path
 
     volume = cost_volume(left, right, min_disparity, num_disparities, cost, window)
+    highest = maximum_cost(cost, window)
+    integral = volume.dtype == np.uint16 and float(p1).is_integer() and float(p2).is_integer()
+    penalty_small: np.number
+    penalty_large: np.number
+    if integral and paths * (highest + p2) <= np.iinfo(np.uint16).max:
+        # each path's cost is at most C_max + P2, so the sum fits in 16 bits
+        penalty_small, penalty_large = np.uint16(p1), np.uint16(p2)
+    else:
+        volume = volume.astype(np.float32)
+        penalty_small, penalty_large = np.float32(p1), np.float32(p2)
     total = np.zeros_like(volume)
     for step_y, step_x in PATHS[:paths]:
-        aggregate_path(volume, total, step_y, step_x, p1, p2)
+        aggregate_path(volume, total, step_y, step_x, penalty_small, penalty_large)
     return _select(total, min_disparity, uniqueness, subpixel, lr_tolerance)

@@ -1,8 +1,11 @@
 """numba kernels of the disparity search (imported on first use: compiling costs time).
 
-The cost volume is ``(rows, cols, D)`` float32 with ``cost[y, x, k]`` the cost of
-matching left pixel ``(y, x)`` with right pixel ``(y, x − d_min − k)``; a right
-pixel outside the image costs :data:`OUTSIDE` (see :func:`census_costs`).
+The cost volume is ``(rows, cols, D)`` with ``cost[y, x, k]`` the cost of matching
+left pixel ``(y, x)`` with right pixel ``(y, x − d_min − k)``; a right pixel outside
+the image costs the cost's maximum. Census costs are uint16 (bit counts), the others
+float32; every kernel is compiled for the dtype it is given, so semi-global matching
+of census costs with integer penalties runs in 16-bit integers, three times as fast
+as in float32 and with the same result.
 """
 
 from __future__ import annotations
@@ -56,11 +59,11 @@ def _popcount(value: np.uint64) -> int:  # pragma: no cover
 
 @njit(cache=True, nogil=True, parallel=True)
 def census_costs(
-    left: np.ndarray, right: np.ndarray, d_min: int, count: int, outside: float
+    left: np.ndarray, right: np.ndarray, d_min: int, count: int, outside: int
 ) -> np.ndarray:  # pragma: no cover
-    """Hamming distance between left and right census signatures, per disparity."""
+    """Hamming distance between left and right census signatures, per disparity (uint16)."""
     rows, cols = left.shape
-    cost = np.empty((rows, cols, count), dtype=np.float32)
+    cost = np.empty((rows, cols, count), dtype=np.uint16)
     for y in prange(rows):
         for x in range(cols):
             signature = left[y, x]
@@ -80,8 +83,8 @@ def _path_step(
     before_min: float,
     out: np.ndarray,
     total: np.ndarray,
-    penalty_small: float,
-    penalty_large: float,
+    penalty_small: float | np.number,
+    penalty_large: float | np.number,
 ) -> float:  # pragma: no cover
     """One pixel of a path: ``out[k] = cost[k] + min(...) − before_min``, added to
     ``total``; returns min_k out. The ends of the range are done apart so that the
@@ -125,13 +128,17 @@ def _path_start(cost: np.ndarray, out: np.ndarray, total: np.ndarray) -> float: 
 
 @njit(cache=True, nogil=True, fastmath=True, parallel=True)
 def _aggregate_rows(
-    cost: np.ndarray, total: np.ndarray, step_x: int, penalty_small: float, penalty_large: float
+    cost: np.ndarray,
+    total: np.ndarray,
+    step_x: int,
+    penalty_small: float | np.number,
+    penalty_large: float | np.number,
 ) -> None:  # pragma: no cover
     """Horizontal paths: every row is one independent path (rows in parallel)."""
     rows, cols, count = cost.shape
     for y in prange(rows):
-        before = np.empty(count, dtype=np.float32)
-        current = np.empty(count, dtype=np.float32)
+        before = np.empty(count, dtype=cost.dtype)
+        current = np.empty(count, dtype=cost.dtype)
         x = 0 if step_x > 0 else cols - 1
         before_min = _path_start(cost[y, x], before, total[y, x])
         for j in range(1, cols):
@@ -148,15 +155,15 @@ def _aggregate_across_rows(
     total: np.ndarray,
     step_y: int,
     step_x: int,
-    penalty_small: float,
-    penalty_large: float,
+    penalty_small: float | np.number,
+    penalty_large: float | np.number,
 ) -> None:  # pragma: no cover
     """Vertical and diagonal paths: row after row, the predecessor in the previous row."""
     rows, cols, count = cost.shape
-    previous = np.empty((cols, count), dtype=np.float32)
-    current = np.empty((cols, count), dtype=np.float32)
-    previous_min = np.empty(cols, dtype=np.float32)
-    current_min = np.empty(cols, dtype=np.float32)
+    previous = np.empty((cols, count), dtype=cost.dtype)
+    current = np.empty((cols, count), dtype=cost.dtype)
+    previous_min = np.empty(cols, dtype=cost.dtype)
+    current_min = np.empty(cols, dtype=cost.dtype)
     y = 0 if step_y > 0 else rows - 1
     for x in range(cols):
         previous_min[x] = _path_start(cost[y, x], previous[x], total[y, x])
@@ -185,8 +192,8 @@ def aggregate_path(
     total: np.ndarray,
     step_y: int,
     step_x: int,
-    penalty_small: float,
-    penalty_large: float,
+    penalty_small: float | np.number,
+    penalty_large: float | np.number,
 ) -> None:
     r"""Add one path's aggregated cost to ``total`` (Hirschmüller 2008, eq. 13).
 
@@ -226,25 +233,25 @@ def winner_take_all(
                 out[y, x] = np.nan
                 continue
             best_k = 0
-            best = cost[y, x, 0]
+            best = float(cost[y, x, 0])
             for k in range(1, top + 1):
                 if cost[y, x, k] < best:
-                    best = cost[y, x, k]
+                    best = float(cost[y, x, k])
                     best_k = k
             if best_k == top or best_k == 0 or not np.isfinite(best):
                 out[y, x] = np.nan
                 continue
-            second = np.float32(np.inf)
+            second = np.inf
             for k in range(top + 1):
                 if abs(k - best_k) > 1 and cost[y, x, k] < second:
-                    second = cost[y, x, k]
+                    second = float(cost[y, x, k])
             if second < best + abs(best) * uniqueness:
                 out[y, x] = np.nan
                 continue
             value = np.float32(best_k)
             if subpixel:
-                below = cost[y, x, best_k - 1]
-                above = cost[y, x, best_k + 1]
+                below = float(cost[y, x, best_k - 1])
+                above = float(cost[y, x, best_k + 1])
                 curvature = below - 2.0 * best + above
                 if curvature > 0:
                     value += np.float32(0.5 * (below - above) / curvature)
@@ -263,7 +270,7 @@ def right_disparity(cost: np.ndarray, d_min: int) -> np.ndarray:  # pragma: no c
     out = np.empty((rows, cols), dtype=np.float32)
     for y in prange(rows):
         for xr in range(cols):
-            best = np.float32(np.inf)
+            best = np.inf
             best_d = 0
             found = False
             for k in range(count):
@@ -273,7 +280,7 @@ def right_disparity(cost: np.ndarray, d_min: int) -> np.ndarray:  # pragma: no c
                 if x >= cols:
                     break
                 if cost[y, x, k] < best:
-                    best = cost[y, x, k]
+                    best = float(cost[y, x, k])
                     best_d = d_min + k
                     found = True
             out[y, xr] = np.float32(best_d) if found else np.nan

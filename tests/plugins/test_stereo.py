@@ -281,3 +281,21 @@ def test_a_turned_view_is_the_image_mapped_by_K_R_K_inverse():
     assert np.median(np.abs(turned.image[at[:, 1], at[:, 0]] - original)) < 0.05
     R = np.linalg.inv(cam.K) @ H @ cam.K
     np.testing.assert_allclose(R @ R.T / np.cbrt(np.linalg.det(R)) ** 2, np.eye(3), atol=1e-9)
+
+
+def test_16_bit_aggregation_equals_float_aggregation(pair):
+    """Census costs with integer penalties are aggregated in uint16: the same sums as float32."""
+    from graphvision_plugins.stereo._disparity import PATHS
+    from graphvision_plugins.stereo._kernels import aggregate_path
+
+    volume = stereo.cost_volume(pair.left, pair.right, 0, 24, "census", 7)
+    assert volume.dtype == np.uint16
+    totals = []
+    for dtype in (np.uint16, np.float32):
+        cost = volume.astype(dtype)
+        total = np.zeros_like(cost)
+        for step_y, step_x in PATHS:
+            aggregate_path(cost, total, step_y, step_x, dtype(8), dtype(32))
+        totals.append(total)
+    assert totals[0].max() <= 8 * (48 + 32)  # the bound that lets the sum fit in 16 bits
+    np.testing.assert_array_equal(totals[0].astype(np.float32), totals[1])
