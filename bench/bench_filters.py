@@ -24,6 +24,7 @@ def cases(image: np.ndarray, cv2):
     kernel /= kernel.sum()
     sigma = 2.0
     radius = int(np.ceil(3 * sigma))
+    image_u8 = np.round(image * 255).astype(np.uint8)
     yield (
         "gaussian σ=2",
         lambda: filters.gaussian(image, sigma=sigma),
@@ -65,7 +66,8 @@ def cases(image: np.ndarray, cv2):
             ),
         },
     )
-    for size in (3, 5):
+    for size in (3, 5, 7):
+        opencv = "cv2.medianBlur " + ("(float32)" if size <= 5 else "(uint8: float32 stops at 5)")
         yield (
             f"median {size}×{size}",
             lambda s=size: filters.median(image, size=s),
@@ -74,9 +76,9 @@ def cases(image: np.ndarray, cv2):
                     image, s, mode="reflect"
                 ),
                 "skimage.filters.median (uint8)": lambda s=size: skimage.filters.median(
-                    (image * 255).astype(np.uint8), np.ones((s, s), bool)
+                    image_u8, np.ones((s, s), bool)
                 ),
-                "cv2.medianBlur (float32)": cv2 and (lambda s=size: cv2.medianBlur(image, s)),
+                opencv: cv2 and (lambda s=size: cv2.medianBlur(image if s <= 5 else image_u8, s)),
             },
         )
 

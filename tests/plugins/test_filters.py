@@ -101,17 +101,56 @@ def test_sharpen_default_is_the_course_kernel():
     np.testing.assert_array_equal(filters.sharpen(image, amount=0.0), image)
 
 
-@pytest.mark.parametrize("size", [3, 5, 7])
-@pytest.mark.parametrize(
-    ("boundary", "mode"),
-    [("mirror", "reflect"), ("replicate", "nearest"), ("wrap", "wrap"), ("zero", "constant")],
-)
+MEDIAN_MODES = [
+    ("mirror", "reflect"),
+    ("replicate", "nearest"),
+    ("wrap", "wrap"),
+    ("zero", "constant"),
+]
+
+
+@pytest.mark.parametrize("size", [1, 3, 5, 7, 9, 15])
+@pytest.mark.parametrize(("boundary", "mode"), MEDIAN_MODES)
 def test_median_matches_scipy(size, boundary, mode):
     image = np.random.default_rng(size).random((37, 41)).astype(np.float32)
     # reference: scipy.ndimage.median_filter(image, size, mode=mode)
     np.testing.assert_array_equal(
         filters.median(image, size=size, boundary=boundary),
         ndi.median_filter(image, size=size, mode=mode),
+    )
+
+
+@pytest.mark.parametrize("size", [3, 5, 7])
+@pytest.mark.parametrize(("boundary", "mode"), MEDIAN_MODES)
+@pytest.mark.parametrize(
+    "shape", [(1, 9), (2, 2), (5, 1), (13, 600)], ids=["one-row", "tiny", "one-column", "wide"]
+)
+def test_median_matches_scipy_on_odd_shapes_and_ties(size, boundary, mode, shape):
+    """Shapes smaller than the window, wider than one column block; 8-bit levels tie often."""
+    levels = np.random.default_rng(sum(shape) + size).integers(0, 6, shape)
+    image = (levels / 255).astype(np.float32)
+    # reference: scipy.ndimage.median_filter(image, size, mode=mode)
+    np.testing.assert_array_equal(
+        filters.median(image, size=size, boundary=boundary),
+        ndi.median_filter(image, size=size, mode=mode),
+    )
+
+
+@pytest.mark.parametrize("size", [3, 5, 7])
+def test_median_of_a_constant_image_is_the_image(size):
+    image = np.full((20, 30), 0.3, np.float32)
+    for boundary in ("mirror", "replicate", "wrap", "crop"):
+        out = filters.median(image, size=size, boundary=boundary)
+        assert np.all(out == np.float32(0.3))
+
+
+@pytest.mark.parametrize("size", [3, 5, 7])
+def test_median_crop_is_the_valid_part(size):
+    image = np.random.default_rng(size).random((23, 31)).astype(np.float32)
+    half = size // 2
+    np.testing.assert_array_equal(
+        filters.median(image, size=size, boundary="crop"),
+        filters.median(image, size=size)[half:-half, half:-half],
     )
 
 
