@@ -5,11 +5,15 @@ correlations, rows then columns,
 
 .. math:: G = (F \\star h_c^{\\,\\mathrm{rows}}) \\star h_r^{\\,\\mathrm{cols}},
 
-:math:`O(k)` operations per pixel instead of :math:`O(k^2)`. The image is
-padded once per pass by the boundary rule (``np.pad``), then a numba kernel
-accumulates one tap at a time over whole contiguous rows, a loop the compiler
-turns into SIMD code; ``scipy.ndimage.correlate1d`` instead walks each output
-pixel's window through a generic line buffer. Results equal scipy's within
+:math:`O(k)` operations per pixel instead of :math:`O(k^2)`. No padded copy
+is made: the boundary rule becomes two index arrays (the source row under
+each tap, the source column at each end of a line), and a numba kernel builds
+each output row while its input rows are in cache: the column pass into one
+padded line, then the row pass along it, one tap (or one symmetric pair of
+taps) at a time over whole contiguous rows, a loop the compiler turns into
+SIMD code. ``scipy.ndimage.correlate1d`` instead walks each output pixel's
+window through a generic line buffer, one axis over the whole image at a
+time. Results equal scipy's within
 float32 rounding (the accumulation order differs). ``float64`` images are
 filtered in ``float64`` (callers that need the precision keep it); any
 other dtype in ``float32``.
@@ -64,6 +68,14 @@ def gaussian_taps(sigma: float, truncate: float = 4.0, order: int = 0) -> np.nda
     return taps
 
 
+def _boundary_index(length: int, half: int, mode: str) -> np.ndarray:
+    """Source index of each position of a line padded by ``half`` each side (−1: zero)."""
+    positions = np.arange(length, dtype=np.int64)
+    if mode == "constant":
+        return np.pad(positions, half, mode="constant", constant_values=-1)
+    return np.pad(positions, half, mode=_NUMPY_PAD[mode])
+
+
 def _symmetry(taps: np.ndarray) -> int:
     """1 for symmetric taps, -1 for antisymmetric ones, 0 otherwise (the kernels' ``symmetry``)."""
     if np.array_equal(taps, taps[::-1]):
@@ -98,20 +110,23 @@ def correlate_separable(
             ],
             axis=2,
         )
-    from ._separable_kernels import correlate_columns, correlate_rows
+    from ._separable_kernels import correlate_both
 
     dtype = np.float64 if image.dtype == np.float64 else np.float32
     data = np.ascontiguousarray(image, dtype=dtype)
     column = np.asarray(column_taps, dtype=dtype)
     row = np.asarray(row_taps, dtype=dtype)
-    half_c, half_r = column.size // 2, row.size // 2
-    pad = _NUMPY_PAD[mode]
-    tall = np.pad(data, ((half_c, half_c), (0, 0)), mode=pad)
-    middle = np.empty_like(data)
-    correlate_columns(tall, column, middle, _symmetry(column))
-    wide = np.pad(middle, ((0, 0), (half_r, half_r)), mode=pad)
     out = np.empty_like(data)
-    correlate_rows(wide, row, out, _symmetry(row))
+    correlate_both(
+        data,
+        column,
+        _symmetry(column),
+        _boundary_index(data.shape[0], column.size // 2, mode),
+        row,
+        _symmetry(row),
+        _boundary_index(data.shape[1], row.size // 2, mode),
+        out,
+    )
     return out
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["ANTISYMMETRIC", "GENERAL", "SYMMETRIC", "correlate_columns", "correlate_rows"]
+__all__ = ["ANTISYMMETRIC", "GENERAL", "SYMMETRIC", "correlate_both"]
 
 GENERAL, SYMMETRIC, ANTISYMMETRIC = 0, 1, -1
 
@@ -37,48 +37,78 @@ def _accumulate(
 
 
 @njit(cache=True, fastmath=True, nogil=True)
-def correlate_columns(
-    padded: np.ndarray, taps: np.ndarray, out: np.ndarray, symmetry: int
+def _pass(
+    out: np.ndarray,
+    lines: np.ndarray,
+    index: np.ndarray,
+    start: int,
+    taps: np.ndarray,
+    symmetry: int,
 ) -> None:  # pragma: no cover
-    """``out[r, c] = Σ_j taps[j] · padded[r + j, c]``: whole rows at a time (SIMD inner loop)."""
-    rows, cols = out.shape
+    """``out = Σ_j taps[j] · lines[index[start + j]]`` (``index`` −1: a line of zeros)."""
     size = taps.size
     half = size // 2
-    for r in range(rows):
-        row = out[r]
-        if symmetry == 0:
-            row[:] = 0.0
-            for j in range(size):
-                _accumulate(row, padded[r + j], padded[r + j], taps[j], 0)
-        else:
-            centre = padded[r + half]
-            for c in range(cols):
-                row[c] = taps[half] * centre[c]
-            for j in range(half):
-                _accumulate(
-                    row, padded[r + size - 1 - j], padded[r + j], taps[size - 1 - j], symmetry
-                )
+    zero = np.zeros(out.size, out.dtype)
+    centre = index[start + half]
+    if symmetry == 0:
+        out[:] = 0.0
+        for j in range(size):
+            line = lines[index[start + j]] if index[start + j] >= 0 else zero
+            _accumulate(out, line, line, taps[j], 0)
+        return
+    if centre >= 0:
+        source = lines[centre]
+        for c in range(out.size):
+            out[c] = taps[half] * source[c]
+    else:
+        out[:] = 0.0
+    for j in range(half):
+        far = size - 1 - j
+        first = lines[index[start + far]] if index[start + far] >= 0 else zero
+        last = lines[index[start + j]] if index[start + j] >= 0 else zero
+        _accumulate(out, first, last, taps[far], symmetry)
 
 
 @njit(cache=True, fastmath=True, nogil=True)
-def correlate_rows(
-    padded: np.ndarray, taps: np.ndarray, out: np.ndarray, symmetry: int
+def correlate_both(
+    image: np.ndarray,
+    column_taps: np.ndarray,
+    column_symmetry: int,
+    row_index: np.ndarray,
+    row_taps: np.ndarray,
+    row_symmetry: int,
+    column_index: np.ndarray,
+    out: np.ndarray,
 ) -> None:  # pragma: no cover
-    """``out[r, c] = Σ_j taps[j] · padded[r, c + j]``: one row at a time, taps outer."""
+    """Correlate down the columns then along the rows, one output row at a time.
+
+    ``row_index[r + j]`` is the image row under tap ``j`` of output row ``r``
+    (the boundary rule, −1 for zero) and ``column_index`` the same along a
+    row, so no padded copy of the image is made: each output row is the
+    column pass into a small padded line, its ends filled by ``column_index``,
+    then the row pass over that line, both while the rows are in cache.
+    """
     rows, cols = out.shape
-    size = taps.size
+    size = row_taps.size
     half = size // 2
+    line = np.zeros(cols + 2 * half, out.dtype)
     for r in range(rows):
-        row, source = out[r], padded[r]
-        if symmetry == 0:
+        centre = line[half : half + cols]
+        _pass(centre, image, row_index, r, column_taps, column_symmetry)
+        for k in range(half):
+            left, right = column_index[k], column_index[half + cols + k]
+            line[k] = centre[left] if left >= 0 else 0.0
+            line[half + cols + k] = centre[right] if right >= 0 else 0.0
+        row = out[r]
+        if row_symmetry == 0:
             row[:] = 0.0
             for j in range(size):
-                _accumulate(row, source[j : j + cols], source[j : j + cols], taps[j], 0)
-        else:
-            for c in range(cols):
-                row[c] = taps[half] * source[c + half]
-            for j in range(half):
-                far = size - 1 - j
-                _accumulate(
-                    row, source[far : far + cols], source[j : j + cols], taps[far], symmetry
-                )
+                _accumulate(row, line[j : j + cols], line[j : j + cols], row_taps[j], 0)
+            continue
+        for c in range(cols):
+            row[c] = row_taps[half] * centre[c]
+        for j in range(half):
+            far = size - 1 - j
+            _accumulate(
+                row, line[far : far + cols], line[j : j + cols], row_taps[far], row_symmetry
+            )
