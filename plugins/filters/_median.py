@@ -16,8 +16,7 @@ from ._median_network import median_network, sort_network
 __all__ = ["median"]
 
 
-_NUMPY_PAD: dict[str, Literal["constant", "wrap", "edge", "symmetric"]] = {
-    "zero": "constant",
+_NUMPY_PAD: dict[str, Literal["wrap", "edge", "symmetric"]] = {
     "wrap": "wrap",
     "replicate": "edge",
     "mirror": "symmetric",
@@ -34,17 +33,33 @@ def _odd(size: int) -> int:
 OddSize = Annotated[int, Field(ge=1, le=31), AfterValidator(_odd)]
 
 
-def _median_2d(padded: np.ndarray, size: int, out: np.ndarray) -> None:
-    """Median of every ``size × size`` window of ``padded`` (float32, C order) into ``out``."""
+def _boundary_index(length: int, half: int, boundary: str) -> np.ndarray:
+    """Source index of each padded position along an axis (−1: zero; crop: no padding)."""
+    positions = np.arange(length, dtype=np.int64)
+    if boundary == "crop":
+        return positions
+    if boundary == "zero":
+        return np.pad(positions, half, mode="constant", constant_values=-1)
+    return np.pad(positions, half, mode=_NUMPY_PAD[boundary])
+
+
+def _median_2d(plane: np.ndarray, size: int, boundary: str, out: np.ndarray) -> None:
+    """Median of every ``size × size`` window of ``plane`` (padded as read) into ``out``."""
     from ._median_kernels import median_3x3, median_by_network
 
+    half = size // 2
+    image = np.ascontiguousarray(plane, dtype=np.float32)
+    rows = _boundary_index(image.shape[0], half, boundary)
+    columns = _boundary_index(image.shape[1], half, boundary)
     if size == 1:
-        out[:] = padded
+        out[:] = image
     elif size == 3:
-        median_3x3(padded, out)
+        median_3x3(image, rows, columns, out)
     else:
         selection, median_wire = median_network(size)
-        median_by_network(padded, size, sort_network(size), selection, median_wire, out, _BLOCK)
+        median_by_network(
+            image, rows, columns, sort_network(size), selection, median_wire, out, _BLOCK
+        )
 
 
 @node("filters.median", version=1)
@@ -83,20 +98,16 @@ def median(image: ImageT, *, size: OddSize = 3, boundary: Boundary = "mirror") -
     .. [3] Szeliski (2022), section 3.3.1.
     """
     half = size // 2
+    shape = image.shape
     if boundary == "crop":
         check_window(image, (size, size), "median window")
-        padded = np.ascontiguousarray(image)
         shape = (image.shape[0] - 2 * half, image.shape[1] - 2 * half, *image.shape[2:])
-    else:
-        pad = [(half, half), (half, half)] + [(0, 0)] * (image.ndim - 2)
-        padded = np.pad(image, pad, mode=_NUMPY_PAD[boundary])
-        shape = image.shape
     out = np.empty(shape, dtype=np.float32)
     if image.ndim == 2:
-        _median_2d(padded, size, out)
+        _median_2d(image, size, boundary, out)
     else:
         for channel in range(image.shape[2]):
             plane = np.empty(shape[:2], dtype=np.float32)
-            _median_2d(np.ascontiguousarray(padded[..., channel]), size, plane)
+            _median_2d(image[..., channel], size, boundary, plane)
             out[..., channel] = plane
     return out
