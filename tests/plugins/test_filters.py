@@ -178,3 +178,51 @@ def test_to_image():
     np.testing.assert_array_equal(filters.to_image(response), [[0.0, 0.5, 1.0]])
     np.testing.assert_allclose(filters.to_image(response, method="minmax"), [[0.0, 0.5, 1.0]])
     assert filters.to_image(np.ones((2, 2), np.float32), method="minmax").max() == 0.0
+
+
+RANK_ONE_KERNELS = {
+    "gaussian": filters.gaussian_kernel(sigma=1.2),
+    "box": filters.box_kernel(size=5),
+    "sobel": np.outer([1.0, 2.0, 1.0], [-1.0, 0.0, 1.0]) / 8,
+    "row": np.array([[0.1, -0.4, 0.2, 0.3, 0.5]]),
+    "column": np.array([[0.2], [0.5], [0.3]]),
+}
+
+
+@pytest.mark.parametrize("name", list(RANK_ONE_KERNELS))
+@pytest.mark.parametrize(
+    ("boundary", "mode"),
+    [("mirror", "reflect"), ("replicate", "nearest"), ("wrap", "grid-wrap"), ("zero", "constant")],
+)
+def test_rank_one_kernels_through_the_separable_core_equal_scipy(name, boundary, mode):
+    kernel = RANK_ONE_KERNELS[name]
+    image = np.random.default_rng(len(name)).random((29, 34)).astype(np.float32)
+    # reference: scipy.ndimage.correlate / convolve(image, kernel, mode=mode)
+    np.testing.assert_allclose(
+        filters.correlate(image, kernel, boundary=boundary),
+        ndi.correlate(image, kernel, mode=mode),
+        atol=1e-6,
+    )
+    np.testing.assert_allclose(
+        filters.convolve(image, kernel, boundary=boundary),
+        ndi.convolve(image, kernel, mode=mode),
+        atol=1e-6,
+    )
+
+
+def test_rank_one_factoring_keeps_crop_colour_and_refuses_other_kernels():
+    image = np.random.default_rng(3).random((21, 26, 3)).astype(np.float32)
+    kernel = RANK_ONE_KERNELS["gaussian"]
+    full = filters.correlate(image, kernel)
+    for c in range(3):
+        # reference: scipy.ndimage.correlate(channel, kernel, mode="reflect")
+        np.testing.assert_allclose(full[..., c], ndi.correlate(image[..., c], kernel), atol=1e-6)
+    half = kernel.shape[0] // 2
+    np.testing.assert_array_equal(
+        filters.correlate(image, kernel, boundary="crop"), full[half:-half, half:-half]
+    )
+    rank_two = np.eye(3)  # not separable: scipy.ndimage.correlate does it
+    gray = image[..., 0]
+    np.testing.assert_allclose(
+        filters.correlate(gray, rank_two), ndi.correlate(gray, rank_two), atol=1e-6
+    )
