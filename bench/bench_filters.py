@@ -1,7 +1,8 @@
 """Filters side by side: graphvision, scipy.ndimage, scikit-image and OpenCV, one run.
 
 Same float32 gray images (``skimage.data.camera`` at 512², tiled to 2048²),
-same filter settings; the best of 5 runs each. Ratios are the other
+same filter settings (graphvision's Sobel is scipy's and OpenCV's divided by
+8, the same work); the best of 5 runs each. Ratios are the other
 library's time over graphvision's (above 1: graphvision is faster). Each
 library's call is written in the table's ``call`` column.
 
@@ -16,7 +17,7 @@ import skimage.data
 import skimage.filters
 from timing import best
 
-from graphvision_plugins import filters
+from graphvision_plugins import edges, filters
 
 
 def cases(image: np.ndarray, cv2):
@@ -40,6 +41,17 @@ def cases(image: np.ndarray, cv2):
                 lambda: cv2.GaussianBlur(
                     image, (2 * radius + 1, 2 * radius + 1), sigma, borderType=cv2.BORDER_REFLECT
                 )
+            ),
+        },
+    )
+    yield (
+        "Sobel ∂/∂x (÷8)",
+        lambda: edges.derivative(image, axis="x", kind="sobel"),
+        {
+            "scipy.ndimage.sobel(axis=1)": lambda: ndi.sobel(image, axis=1, mode="reflect"),
+            "cv2.Sobel(CV_32F, 1, 0)": cv2
+            and (
+                lambda: cv2.Sobel(image, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT)
             ),
         },
     )
