@@ -15,16 +15,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["ANTISYMMETRIC", "GENERAL", "SYMMETRIC", "correlate_both"]
-
-GENERAL, SYMMETRIC, ANTISYMMETRIC = 0, 1, -1
+__all__ = ["correlate_both"]
 
 
 @njit(cache=True, fastmath=True, nogil=True)
 def _accumulate(
     out: np.ndarray, first: np.ndarray, last: np.ndarray, weight: float, symmetry: int
 ) -> None:  # pragma: no cover
-    """``out += weight · (first ± last)`` (or ``weight · first`` when general), a SIMD loop."""
+    """``out += weight · (first ± last)``, ``symmetry`` 1 (+) or −1 (−); 0: ``weight · first``."""
     if symmetry == 1:
         for c in range(out.size):
             out[c] += weight * (first[c] + last[c])
@@ -44,11 +42,11 @@ def _pass(
     start: int,
     taps: np.ndarray,
     symmetry: int,
+    zero: np.ndarray,
 ) -> None:  # pragma: no cover
-    """``out = Σ_j taps[j] · lines[index[start + j]]`` (``index`` −1: a line of zeros)."""
+    """``out = Σ_j taps[j] · lines[index[start + j]]`` (``index`` −1: the line ``zero``)."""
     size = taps.size
     half = size // 2
-    zero = np.zeros(out.size, out.dtype)
     centre = index[start + half]
     if symmetry == 0:
         out[:] = 0.0
@@ -92,9 +90,10 @@ def correlate_both(
     size = row_taps.size
     half = size // 2
     line = np.zeros(cols + 2 * half, out.dtype)
+    zero = np.zeros(cols, out.dtype)  # the rows outside the image under "constant"
     for r in range(rows):
         centre = line[half : half + cols]
-        _pass(centre, image, row_index, r, column_taps, column_symmetry)
+        _pass(centre, image, row_index, r, column_taps, column_symmetry, zero)
         for k in range(half):
             left, right = column_index[k], column_index[half + cols + k]
             line[k] = centre[left] if left >= 0 else 0.0
