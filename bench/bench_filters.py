@@ -1,7 +1,8 @@
 """Filters side by side: graphvision, scipy.ndimage, scikit-image and OpenCV, one run.
 
 Same float32 gray images (``skimage.data.camera`` at 512², tiled to 2048²),
-same filter settings; the best of 5 runs each. Ratios are the other
+same filter settings (graphvision's Sobel is scipy's and OpenCV's divided by
+8, the same work); the best of 5 runs each. Ratios are the other
 library's time over graphvision's (above 1: graphvision is faster). Each
 library's call is written in the table's ``call`` column.
 
@@ -16,7 +17,7 @@ import skimage.data
 import skimage.filters
 from timing import best
 
-from graphvision_plugins import filters
+from graphvision_plugins import edges, filters
 
 
 def cases(image: np.ndarray, cv2):
@@ -24,6 +25,7 @@ def cases(image: np.ndarray, cv2):
     kernel /= kernel.sum()
     sigma = 2.0
     radius = int(np.ceil(3 * sigma))
+    image_u8 = np.round(image * 255).astype(np.uint8)
     yield (
         "gaussian σ=2",
         lambda: filters.gaussian(image, sigma=sigma),
@@ -39,6 +41,17 @@ def cases(image: np.ndarray, cv2):
                 lambda: cv2.GaussianBlur(
                     image, (2 * radius + 1, 2 * radius + 1), sigma, borderType=cv2.BORDER_REFLECT
                 )
+            ),
+        },
+    )
+    yield (
+        "Sobel ∂/∂x (÷8)",
+        lambda: edges.derivative(image, axis="x", kind="sobel"),
+        {
+            "scipy.ndimage.sobel(axis=1)": lambda: ndi.sobel(image, axis=1, mode="reflect"),
+            "cv2.Sobel(CV_32F, 1, 0)": cv2
+            and (
+                lambda: cv2.Sobel(image, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT)
             ),
         },
     )
@@ -65,7 +78,8 @@ def cases(image: np.ndarray, cv2):
             ),
         },
     )
-    for size in (3, 5):
+    for size in (3, 5, 7):
+        opencv = "cv2.medianBlur " + ("(float32)" if size <= 5 else "(uint8: float32 stops at 5)")
         yield (
             f"median {size}×{size}",
             lambda s=size: filters.median(image, size=s),
@@ -74,9 +88,9 @@ def cases(image: np.ndarray, cv2):
                     image, s, mode="reflect"
                 ),
                 "skimage.filters.median (uint8)": lambda s=size: skimage.filters.median(
-                    (image * 255).astype(np.uint8), np.ones((s, s), bool)
+                    image_u8, np.ones((s, s), bool)
                 ),
-                "cv2.medianBlur (float32)": cv2 and (lambda s=size: cv2.medianBlur(image, s)),
+                opencv: cv2 and (lambda s=size: cv2.medianBlur(image if s <= 5 else image_u8, s)),
             },
         )
 

@@ -21,6 +21,7 @@ from typing import Any
 import pydantic
 
 from ._cache import node_fingerprint
+from ._collector import collector_paused
 from ._errors import PipelineError, Problem, UnknownNameError, did_you_mean
 from ._graph import PARAM_REFERENCE, Graph, Ref
 from ._node import NodeSpec
@@ -303,4 +304,5 @@ def compile_graph(
     PipelineError
         Listing every problem found, sorted by line.
     """
-    return _Checker(graph, registry).run(provided)
+    with collector_paused():
+        return _Checker(graph, registry).run(provided)

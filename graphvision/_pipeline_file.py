@@ -25,6 +25,7 @@ import pydantic
 import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StringConstraints
 
+from ._collector import collector_paused
 from ._errors import PipelineError, Problem, did_you_mean
 from ._graph import NAME_PATTERN, REF_PATTERN, Graph, InputDecl, NodeDecl, Ref
 
@@ -347,6 +348,11 @@ def parse_pipeline(text: str, file: str = "<string>") -> Graph:
     PipelineError
         With every syntax and structure problem, each located by file and line.
     """
+    with collector_paused():
+        return _parse(text, file)
+
+
+def _parse(text: str, file: str) -> Graph:
     data, lines, problems = _read_yaml(text, file)
     if not isinstance(data, dict):
         raise PipelineError(

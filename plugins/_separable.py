@@ -5,12 +5,18 @@ correlations, rows then columns,
 
 .. math:: G = (F \\star h_c^{\\,\\mathrm{rows}}) \\star h_r^{\\,\\mathrm{cols}},
 
-:math:`O(k)` operations per pixel instead of :math:`O(k^2)`. The image is
-padded once per pass by the boundary rule (``np.pad``), then a numba kernel
-accumulates one tap at a time over whole contiguous rows, a loop the compiler
-turns into SIMD code; ``scipy.ndimage.correlate1d`` instead walks each output
-pixel's window through a generic line buffer. Results equal scipy's within
-float32 rounding (the accumulation order differs).
+:math:`O(k)` operations per pixel instead of :math:`O(k^2)`. No padded copy
+is made: the boundary rule becomes two index arrays (the source row under
+each tap, the source column at each end of a line), and a numba kernel builds
+each output row while its input rows are in cache: the column pass into one
+padded line, then the row pass along it, one tap (or one symmetric pair of
+taps) at a time over whole contiguous rows, a loop the compiler turns into
+SIMD code. ``scipy.ndimage.correlate1d`` instead walks each output pixel's
+window through a generic line buffer, one axis over the whole image at a
+time. Results equal scipy's within
+float32 rounding (the accumulation order differs). ``float64`` images are
+filtered in ``float64`` (callers that need the precision keep it); any
+other dtype in ``float32``.
 
 Boundary names are scipy's: ``reflect`` (``b a | a b c d | d c``), ``mirror``
 (``c b | a b c d | c b``), ``nearest``, ``wrap`` / ``grid-wrap`` and
@@ -28,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["correlate_separable", "gaussian_taps", "smooth_gaussian"]
+__all__ = ["correlate_separable", "gaussian_derivative", "gaussian_taps", "smooth_gaussian"]
 
 _NUMPY_PAD: dict[str, Any] = {
     "reflect": "symmetric",
@@ -41,21 +47,42 @@ _NUMPY_PAD: dict[str, Any] = {
 
 
 def gaussian_taps(sigma: float, truncate: float = 4.0, order: int = 0) -> np.ndarray:
-    r"""Correlation taps of scipy's sampled Gaussian (``order`` 0) or its derivative (1).
+    r"""Correlation taps of scipy's sampled Gaussian (``order`` 0) or its derivatives (1, 2).
 
     Radius ``int(truncate·σ + 0.5)``; :math:`g(u) = e^{-u^2/2\sigma^2} / \sum e^{\dots}`,
-    and for the derivative :math:`g'(u) = -u\, g(u) / \sigma^2`, given here as
+    for the first derivative :math:`g'(u) = -u\, g(u) / \sigma^2` and for the
+    second :math:`g''(u) = (u^2/\sigma^4 - 1/\sigma^2)\, g(u)`, given here as
     correlation taps (reversed), so that correlating with them differentiates.
     """
     radius = int(truncate * float(sigma) + 0.5)
     u = np.arange(-radius, radius + 1, dtype=np.float64)
     taps = np.exp(-0.5 * (u / sigma) ** 2)
     taps /= taps.sum()
+    variance = float(sigma) * float(sigma)
     if order == 1:
-        return u / (sigma * sigma) * taps  # -u g(u) / σ², reversed
+        return u / variance * taps  # -u g(u) / σ², reversed
+    if order == 2:
+        return (u * u / variance - 1.0) / variance * taps  # even: reversing changes nothing
     if order != 0:
-        raise ValueError(f"order must be 0 or 1, got {order}")
+        raise ValueError(f"order must be 0, 1 or 2, got {order}")
     return taps
+
+
+def _boundary_index(length: int, half: int, mode: str) -> np.ndarray:
+    """Source index of each position of a line padded by ``half`` each side (−1: zero)."""
+    positions = np.arange(length, dtype=np.int64)
+    if mode == "constant":
+        return np.pad(positions, half, mode="constant", constant_values=-1)
+    return np.pad(positions, half, mode=_NUMPY_PAD[mode])
+
+
+def _symmetry(taps: np.ndarray) -> int:
+    """1 for symmetric taps, -1 for antisymmetric ones, 0 otherwise (the kernels' ``symmetry``)."""
+    if np.array_equal(taps, taps[::-1]):
+        return 1
+    if np.array_equal(taps, -taps[::-1]):
+        return -1
+    return 0
 
 
 def correlate_separable(
@@ -65,14 +92,15 @@ def correlate_separable(
 
     Parameters
     ----------
-    image : (H, W) or (H, W, C) float32 ndarray
+    image : (H, W) or (H, W, C) ndarray
+        ``float64`` is filtered in ``float64``, anything else in ``float32``.
     column_taps, row_taps : 1-D float ndarray of odd length, centred
     mode : str
         scipy's boundary name (see the module docstring).
 
     Returns
     -------
-    out : float32 ndarray, the shape of ``image``
+    out : float32 (float64 for a float64 image) ndarray, the shape of ``image``
     """
     if image.ndim == 3:
         return np.stack(
@@ -82,19 +110,23 @@ def correlate_separable(
             ],
             axis=2,
         )
-    from ._separable_kernels import correlate_columns, correlate_rows
+    from ._separable_kernels import correlate_both
 
-    data = np.ascontiguousarray(image, dtype=np.float32)
-    column = np.asarray(column_taps, dtype=np.float32)
-    row = np.asarray(row_taps, dtype=np.float32)
-    half_c, half_r = column.size // 2, row.size // 2
-    pad = _NUMPY_PAD[mode]
-    tall = np.pad(data, ((half_c, half_c), (0, 0)), mode=pad)
-    middle = np.empty_like(data)
-    correlate_columns(tall, column, middle)
-    wide = np.pad(middle, ((0, 0), (half_r, half_r)), mode=pad)
+    dtype = np.float64 if image.dtype == np.float64 else np.float32
+    data = np.ascontiguousarray(image, dtype=dtype)
+    column = np.asarray(column_taps, dtype=dtype)
+    row = np.asarray(row_taps, dtype=dtype)
     out = np.empty_like(data)
-    correlate_rows(wide, row, out)
+    correlate_both(
+        data,
+        column,
+        _symmetry(column),
+        _boundary_index(data.shape[0], column.size // 2, mode),
+        row,
+        _symmetry(row),
+        _boundary_index(data.shape[1], row.size // 2, mode),
+        out,
+    )
     return out
 
 
@@ -104,3 +136,23 @@ def smooth_gaussian(
     """``scipy.ndimage.gaussian_filter(image, sigma, mode=mode, truncate=truncate)``, compiled."""
     taps = gaussian_taps(sigma, truncate)
     return correlate_separable(image, taps, taps, mode)
+
+
+def gaussian_derivative(
+    image: np.ndarray,
+    sigma: float,
+    order: tuple[int, int],
+    mode: str = "reflect",
+    truncate: float = 4.0,
+) -> np.ndarray:
+    """``scipy.ndimage.gaussian_filter(image, sigma, order=order, mode=mode, truncate=truncate)``.
+
+    ``order`` is the derivative order along axis 0 (rows, y) and axis 1
+    (columns, x), each 0, 1 or 2; compiled.
+    """
+    return correlate_separable(
+        image,
+        gaussian_taps(sigma, truncate, order[0]),
+        gaussian_taps(sigma, truncate, order[1]),
+        mode,
+    )

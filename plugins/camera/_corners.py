@@ -53,7 +53,9 @@ def saddle_candidates(image: np.ndarray, count: int, sigma: float) -> np.ndarray
     """The ``count`` strongest local maxima of :math:`-\\det H` (at scale ``sigma``), ``N×2``."""
     from scipy import ndimage
 
-    smooth = ndimage.gaussian_filter(image.astype(np.float64), sigma)
+    from .._separable import smooth_gaussian
+
+    smooth = smooth_gaussian(image.astype(np.float64), sigma)
     iy, ix = np.gradient(smooth)
     iyy, iyx = np.gradient(iy)
     ixy, ixx = np.gradient(ix)
@@ -141,8 +143,9 @@ def find_board(
     image: np.ndarray, columns: int, rows: int, sigma: float = 2.0, max_window: int = 15
 ) -> np.ndarray | None:
     """The ``rows·columns`` inner corners in fixed order (module docstring), or None."""
-    from scipy import ndimage
     from scipy.spatial import QhullError
+
+    from .._separable import smooth_gaussian
 
     count = columns * rows
     candidates = saddle_candidates(image, count, sigma)
@@ -168,7 +171,7 @@ def find_board(
                 accepted.append(labelled)
     if not accepted:
         return None
-    smooth = ndimage.gaussian_filter(image.astype(np.float64), 1.0)
+    smooth = smooth_gaussian(image.astype(np.float64), 1.0)
     # a 180° turn also passes: keep the labelling whose first square is dark
     darkness = [
         _cell_mean(smooth, c, columns, 0, 0) - _cell_mean(smooth, c, columns, columns - 2, rows - 2)
@@ -203,7 +206,9 @@ def refine_corners(
     """
     from scipy import ndimage
 
-    smooth = ndimage.gaussian_filter(image.astype(np.float64), 1.0)
+    from .._separable import smooth_gaussian
+
+    smooth = smooth_gaussian(image.astype(np.float64), 1.0)
     gy, gx = np.gradient(smooth)
     half = int(np.ceil(radius.max()))
     offsets = np.arange(-half, half + 1, dtype=np.float64)

@@ -71,10 +71,12 @@ def affine_adapt(
     """
     import scipy.ndimage as ndi
 
+    from .._separable import smooth_gaussian
+
     count = len(keypoints)
     if count == 0:
         return keypoints
-    smooth = ndi.gaussian_filter(image.astype(np.float64), 1.0)
+    smooth = smooth_gaussian(image.astype(np.float64), 1.0)
     axis = np.linspace(-1.0, 1.0, GRID)
     gx, gy = np.meshgrid(axis, axis)
     grid = np.stack([gx.ravel(), gy.ravel()])  # (2, G²), (x, y)

@@ -148,12 +148,12 @@ def hessian(
     ----------
     .. [1] P. R. Beaudet, "Rotationally invariant image operators", ICPR 1978.
     """
-    import scipy.ndimage as ndi
+    from .._separable import gaussian_derivative
 
     data = image.astype(np.float64)
-    ixx = ndi.gaussian_filter(data, sigma, order=(0, 2))
-    iyy = ndi.gaussian_filter(data, sigma, order=(2, 0))
-    ixy = ndi.gaussian_filter(data, sigma, order=(1, 1))
+    ixx = gaussian_derivative(data, sigma, (0, 2))
+    iyy = gaussian_derivative(data, sigma, (2, 0))
+    ixy = gaussian_derivative(data, sigma, (1, 1))
     response = sigma**4 * (ixx * iyy - ixy * ixy)
     return _peaks(response, min_distance, threshold_rel, max_keypoints, sigma)
 
@@ -201,11 +201,17 @@ def log_blobs(
     """
     import scipy.ndimage as ndi
 
+    from .._separable import gaussian_derivative
+
     if max_sigma < min_sigma:
         raise ValueError(f"max_sigma ({max_sigma}) must not be below min_sigma ({min_sigma})")
     sigmas = np.geomspace(min_sigma, max_sigma, scales)
     data = image.astype(np.float64)
-    stack = np.stack([s * s * np.abs(ndi.gaussian_laplace(data, s)) for s in sigmas])
+
+    def laplacian(s: float) -> np.ndarray:  # ndi.gaussian_laplace, compiled
+        return gaussian_derivative(data, s, (2, 0)) + gaussian_derivative(data, s, (0, 2))
+
+    stack = np.stack([s * s * np.abs(laplacian(s)) for s in sigmas])
     local = ndi.maximum_filter(stack, size=3, mode="constant", cval=-np.inf)
     peak = (stack == local) & (stack > threshold)
     level, ys, xs = np.nonzero(peak)

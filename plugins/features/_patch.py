@@ -45,9 +45,11 @@ def patch_descriptor(
     """
     import scipy.ndimage as ndi
 
+    from .._separable import smooth_gaussian
+
     if len(keypoints) == 0:
         return np.zeros((0, size * size), np.float32)
-    smooth = ndi.gaussian_filter(image.astype(np.float64), 1.0)
+    smooth = smooth_gaussian(image.astype(np.float64), 1.0)
     grid = (np.arange(size) - (size - 1) / 2) / size
     gx, gy = np.meshgrid(grid, grid)
     span = extent * keypoints.scale[:, None, None]

@@ -118,7 +118,7 @@ def hough_circles(
        shapes", Pattern Recognition 13(2), 1981 (gradient-directed voting).
     .. [2] Szeliski (2022), section 7.4.2.
     """
-    import scipy.ndimage as ndi
+    from .._separable import smooth_gaussian
 
     if min_radius > max_radius:
         raise ValueError(f"min_radius ({min_radius}) must not exceed max_radius ({max_radius})")
@@ -130,7 +130,7 @@ def hough_circles(
     votes = circle_accumulator(edges, image, radii, sigma, polarity)
     if vote_sigma > 0:
         # spread each vote as a Gaussian of height 1 (so one vote still counts one)
-        votes = ndi.gaussian_filter(votes, (0, vote_sigma, vote_sigma), mode="constant")
+        votes = np.stack([smooth_gaussian(plane, vote_sigma, "constant") for plane in votes])
         votes *= 2.0 * math.pi * vote_sigma**2
     scores = votes / (2.0 * math.pi * radii[:, None, None])
     best = scores.max(axis=0)

@@ -133,7 +133,7 @@ def generalized_hough(
     .. [1] D. H. Ballard, "Generalizing the Hough transform to detect arbitrary
        shapes", Pattern Recognition 13(2), 1981.
     """
-    import scipy.ndimage as ndi
+    from .._separable import smooth_gaussian
 
     if model_edges.shape != model_image.shape or edges.shape != image.shape:
         raise ValueError(
@@ -168,7 +168,7 @@ def generalized_hough(
                 votes += np.bincount(y[inside] * width + x[inside], minlength=height * width)
             plane = votes.reshape(height, width)
             if vote_sigma > 0:
-                plane = ndi.gaussian_filter(plane, vote_sigma, mode="constant")
+                plane = smooth_gaussian(plane, vote_sigma, "constant")
                 plane *= 2 * math.pi * vote_sigma**2
             plane /= len(model_points)
             better = plane > best

@@ -140,7 +140,7 @@ def hough_lines(
        lines and curves in pictures", Comm. ACM 15(1), 1972.
     .. [2] Szeliski (2022), section 7.4.2.
     """
-    import scipy.ndimage as ndi
+    from .._separable import smooth_gaussian
 
     if image is not None and image.shape != edges.shape:
         raise ValueError(
@@ -152,7 +152,7 @@ def hough_lines(
     pad = min(theta_bins, min_distance + 3 * math.ceil(vote_sigma) + 1)
     extended = _wrap_theta(votes, pad)
     if vote_sigma > 0:
-        extended = ndi.gaussian_filter(extended, vote_sigma, mode="nearest")
+        extended = smooth_gaussian(extended, vote_sigma, "nearest")
     smoothed = extended[pad:-pad]
     strongest = float(smoothed.max(initial=0.0))
     peaks = local_maxima(extended, 2 * min_distance + 1, threshold * strongest)

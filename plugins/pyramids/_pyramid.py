@@ -31,10 +31,9 @@ Sigma = Annotated[float, Field(gt=0, le=10, description="Gaussian σ before each
 
 def blur(image: np.ndarray, sigma: float) -> np.ndarray:
     """Gaussian smoothing of each channel (mirror boundary), truncated at 3σ, in float32."""
-    import scipy.ndimage as ndi
+    from .._separable import smooth_gaussian
 
-    sigmas = (sigma, sigma, 0.0) if image.ndim == 3 else (sigma, sigma)
-    return ndi.gaussian_filter(image, sigmas, mode="mirror", truncate=3.0, output=np.float32)
+    return smooth_gaussian(image, sigma, "mirror", truncate=3.0)
 
 
 def expand(coarse: np.ndarray, shape: tuple[int, ...], sigma: float) -> np.ndarray:

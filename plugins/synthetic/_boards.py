@@ -177,7 +177,7 @@ def board_views(
     object_points : (rows·columns, 3) the corners on the board, Z = 0
     camera : the rendering camera (its pose is the first view's)
     """
-    from scipy import ndimage
+    from .._separable import smooth_gaussian
 
     rng = np.random.default_rng(seed)
     K = np.array(
@@ -215,7 +215,7 @@ def board_views(
             continue
         image = render_board(rays, R, C, columns, rows, square)
         if blur > 0:
-            image = ndimage.gaussian_filter(image, blur, mode="nearest")
+            image = smooth_gaussian(image, blur, "nearest")
         image = image + rng.normal(0, noise, image.shape) if noise > 0 else image
         images.append(np.clip(image, 0, 1).astype(np.float32))
         corners.append(project_points(objects, K, R, C, distortion))

@@ -23,9 +23,9 @@ class StereoPair(NamedTuple):
 
 def _texture(rng: np.random.Generator, rows: int, cols: int) -> np.ndarray:
     """Band-limited noise in [0.1, 0.9] (smooth enough to sample between pixels)."""
-    from scipy import ndimage
+    from .._separable import smooth_gaussian
 
-    noise = ndimage.gaussian_filter(rng.random((rows, cols)), 1.2)
+    noise = smooth_gaussian(rng.random((rows, cols)), 1.2)
     noise -= noise.min()
     return 0.1 + 0.8 * noise / max(float(noise.max()), 1e-12)
 

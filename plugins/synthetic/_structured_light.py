@@ -88,8 +88,6 @@ def structured_light_scene(
         The true depth of every camera pixel.
     camera, projector : Camera
     """
-    from scipy import ndimage
-
     rng = np.random.default_rng(seed)
     focal = float(width)
     K = np.array([[focal, 0, (width - 1) / 2], [0, focal, (height - 1) / 2], [0, 0, 1.0]])
@@ -114,7 +112,9 @@ def structured_light_scene(
     columns = K_p[0, 0] * towards[..., 0] / towards[..., 2] + K_p[0, 2]
     lit &= (columns >= 0) & (columns < projector_width)
     planes = gray_code_stripes(np.floor(np.where(lit, columns, 0)), bits, projector_width)
-    albedo = 0.35 + 0.6 * ndimage.gaussian_filter(rng.random((height, width)), 2.0)
+    from .._separable import smooth_gaussian
+
+    albedo = 0.35 + 0.6 * smooth_gaussian(rng.random((height, width)), 2.0)
     albedo = np.clip(albedo, 0.2, 1.0)
     frames = np.empty((2 * bits, height, width), np.float32)
     for i, plane in enumerate(planes):

@@ -101,17 +101,56 @@ def test_sharpen_default_is_the_course_kernel():
     np.testing.assert_array_equal(filters.sharpen(image, amount=0.0), image)
 
 
-@pytest.mark.parametrize("size", [3, 5, 7])
-@pytest.mark.parametrize(
-    ("boundary", "mode"),
-    [("mirror", "reflect"), ("replicate", "nearest"), ("wrap", "wrap"), ("zero", "constant")],
-)
+MEDIAN_MODES = [
+    ("mirror", "reflect"),
+    ("replicate", "nearest"),
+    ("wrap", "wrap"),
+    ("zero", "constant"),
+]
+
+
+@pytest.mark.parametrize("size", [1, 3, 5, 7, 9, 15])
+@pytest.mark.parametrize(("boundary", "mode"), MEDIAN_MODES)
 def test_median_matches_scipy(size, boundary, mode):
     image = np.random.default_rng(size).random((37, 41)).astype(np.float32)
     # reference: scipy.ndimage.median_filter(image, size, mode=mode)
     np.testing.assert_array_equal(
         filters.median(image, size=size, boundary=boundary),
         ndi.median_filter(image, size=size, mode=mode),
+    )
+
+
+@pytest.mark.parametrize("size", [3, 5, 7])
+@pytest.mark.parametrize(("boundary", "mode"), MEDIAN_MODES)
+@pytest.mark.parametrize(
+    "shape", [(1, 9), (2, 2), (5, 1), (13, 600)], ids=["one-row", "tiny", "one-column", "wide"]
+)
+def test_median_matches_scipy_on_odd_shapes_and_ties(size, boundary, mode, shape):
+    """Shapes smaller than the window, wider than one column block; 8-bit levels tie often."""
+    levels = np.random.default_rng(sum(shape) + size).integers(0, 6, shape)
+    image = (levels / 255).astype(np.float32)
+    # reference: scipy.ndimage.median_filter(image, size, mode=mode)
+    np.testing.assert_array_equal(
+        filters.median(image, size=size, boundary=boundary),
+        ndi.median_filter(image, size=size, mode=mode),
+    )
+
+
+@pytest.mark.parametrize("size", [3, 5, 7])
+def test_median_of_a_constant_image_is_the_image(size):
+    image = np.full((20, 30), 0.3, np.float32)
+    for boundary in ("mirror", "replicate", "wrap", "crop"):
+        out = filters.median(image, size=size, boundary=boundary)
+        assert np.all(out == np.float32(0.3))
+
+
+@pytest.mark.parametrize("size", [3, 5, 7])
+def test_median_crop_is_the_valid_part(size):
+    image = np.random.default_rng(size).random((23, 31)).astype(np.float32)
+    half = size // 2
+    np.testing.assert_array_equal(
+        filters.median(image, size=size, boundary="crop"),
+        filters.median(image, size=size)[half:-half, half:-half],
     )
 
 
@@ -139,3 +178,51 @@ def test_to_image():
     np.testing.assert_array_equal(filters.to_image(response), [[0.0, 0.5, 1.0]])
     np.testing.assert_allclose(filters.to_image(response, method="minmax"), [[0.0, 0.5, 1.0]])
     assert filters.to_image(np.ones((2, 2), np.float32), method="minmax").max() == 0.0
+
+
+RANK_ONE_KERNELS = {
+    "gaussian": filters.gaussian_kernel(sigma=1.2),
+    "box": filters.box_kernel(size=5),
+    "sobel": np.outer([1.0, 2.0, 1.0], [-1.0, 0.0, 1.0]) / 8,
+    "row": np.array([[0.1, -0.4, 0.2, 0.3, 0.5]]),
+    "column": np.array([[0.2], [0.5], [0.3]]),
+}
+
+
+@pytest.mark.parametrize("name", list(RANK_ONE_KERNELS))
+@pytest.mark.parametrize(
+    ("boundary", "mode"),
+    [("mirror", "reflect"), ("replicate", "nearest"), ("wrap", "grid-wrap"), ("zero", "constant")],
+)
+def test_rank_one_kernels_through_the_separable_core_equal_scipy(name, boundary, mode):
+    kernel = RANK_ONE_KERNELS[name]
+    image = np.random.default_rng(len(name)).random((29, 34)).astype(np.float32)
+    # reference: scipy.ndimage.correlate / convolve(image, kernel, mode=mode)
+    np.testing.assert_allclose(
+        filters.correlate(image, kernel, boundary=boundary),
+        ndi.correlate(image, kernel, mode=mode),
+        atol=1e-6,
+    )
+    np.testing.assert_allclose(
+        filters.convolve(image, kernel, boundary=boundary),
+        ndi.convolve(image, kernel, mode=mode),
+        atol=1e-6,
+    )
+
+
+def test_rank_one_factoring_keeps_crop_colour_and_refuses_other_kernels():
+    image = np.random.default_rng(3).random((21, 26, 3)).astype(np.float32)
+    kernel = RANK_ONE_KERNELS["gaussian"]
+    full = filters.correlate(image, kernel)
+    for c in range(3):
+        # reference: scipy.ndimage.correlate(channel, kernel, mode="reflect")
+        np.testing.assert_allclose(full[..., c], ndi.correlate(image[..., c], kernel), atol=1e-6)
+    half = kernel.shape[0] // 2
+    np.testing.assert_array_equal(
+        filters.correlate(image, kernel, boundary="crop"), full[half:-half, half:-half]
+    )
+    rank_two = np.eye(3)  # not separable: scipy.ndimage.correlate does it
+    gray = image[..., 0]
+    np.testing.assert_allclose(
+        filters.correlate(gray, rank_two), ndi.correlate(gray, rank_two), atol=1e-6
+    )

@@ -26,6 +26,18 @@ def test_labels_equal_scipy(seed, connectivity, structure):
     assert labels.dtype == np.int32 and labels.max() == count
 
 
+@pytest.mark.parametrize("density", [0.2, 0.45, 0.6, 0.8])
+@pytest.mark.parametrize(("connectivity", "structure"), [(4, None), (8, np.ones((3, 3)))])
+def test_labels_equal_scipy_on_noisy_masks(density, connectivity, structure):
+    """Uniform noise: many small regions and long chains of equivalences (the union paths)."""
+    mask = np.random.default_rng(int(density * 100)).random((61, 97)) < density
+    # reference: scipy.ndimage.label(mask, structure) — same raster-order numbering
+    expected, count = ndi.label(mask, structure=structure)
+    labels = regions.label(mask, connectivity=connectivity)
+    np.testing.assert_array_equal(labels, expected)
+    assert labels.max() == count
+
+
 def test_connectivity_by_hand():
     mask = np.array([[1, 0, 0, 1], [0, 1, 0, 1], [0, 0, 0, 1]], bool)
     assert regions.label(mask, connectivity=8).tolist() == [

@@ -6,7 +6,12 @@ import numpy as np
 import pytest
 import scipy.ndimage as ndi
 
-from graphvision_plugins._separable import correlate_separable, gaussian_taps, smooth_gaussian
+from graphvision_plugins._separable import (
+    correlate_separable,
+    gaussian_derivative,
+    gaussian_taps,
+    smooth_gaussian,
+)
 
 RNG = np.random.default_rng(11)
 
@@ -40,6 +45,37 @@ def test_unequal_row_and_column_taps_match_two_correlate1d_calls():
     )
 
 
-def test_only_orders_0_and_1():
-    with pytest.raises(ValueError, match="order must be 0 or 1"):
-        gaussian_taps(1.0, order=2)
+@pytest.mark.parametrize("order", [(0, 2), (2, 0), (1, 1), (2, 1)])
+@pytest.mark.parametrize("mode", ["reflect", "nearest", "constant"])
+def test_float64_derivatives_equal_scipy_within_1e12(order, mode):
+    """float64 images stay float64: callers that keep the precision lose nothing."""
+    image = RNG.random((33, 47))
+    # reference: scipy.ndimage.gaussian_filter(image, 1.3, order=order, mode=mode)
+    expected = ndi.gaussian_filter(image, 1.3, order=order, mode=mode)
+    out = gaussian_derivative(image, 1.3, order, mode)
+    assert out.dtype == np.float64
+    np.testing.assert_allclose(out, expected, atol=1e-12)
+
+
+def test_only_orders_0_1_and_2():
+    with pytest.raises(ValueError, match="order must be 0, 1 or 2"):
+        gaussian_taps(1.0, order=3)
+
+
+@pytest.mark.parametrize("mode", ["reflect", "mirror", "nearest", "wrap", "constant"])
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_derivative_of_a_constant_is_exactly_zero(mode, dtype):
+    """Antisymmetric taps are applied as h(u)·[f(i + u) − f(i − u)], as scipy does."""
+    flat = np.full((17, 23), 0.3, dtype)
+    slope, smooth = gaussian_taps(1.7, 3.0, order=1), gaussian_taps(1.7, 3.0)
+    interior = (slice(6, -6), slice(6, -6))  # a zero boundary is not constant
+    for taps in [(smooth, slope), (slope, smooth)]:
+        assert not np.any(correlate_separable(flat, *taps, mode)[interior])
+
+
+def test_unsymmetric_symmetric_and_antisymmetric_taps_take_their_own_path():
+    image = RNG.random((25, 29), dtype=np.float32)
+    for taps in [np.array([0.2, 0.5, 0.3]), np.array([0.25, 0.5, 0.25]), np.array([-1.0, 0, 1.0])]:
+        # reference: two scipy.ndimage.correlate1d calls, mode "reflect"
+        expected = ndi.correlate1d(ndi.correlate1d(image, taps, axis=0), taps, axis=1)
+        np.testing.assert_allclose(correlate_separable(image, taps, taps), expected, atol=1e-6)

@@ -1,0 +1,135 @@
+"""numba kernel of the median filter (imported on first use: compiling costs time)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["median_by_network"]
+
+
+@njit(cache=True, nogil=True)
+def _compare(
+    wires: np.ndarray, lo: int, hi: int, kind: int, width: int
+) -> None:  # pragma: no cover
+    """One comparator over ``width`` pixels: ``lo`` ← min, ``hi`` ← max (or one of them)."""
+    low, high = wires[lo], wires[hi]
+    if kind == 0:
+        for x in range(width):
+            p, q = low[x], high[x]
+            low[x] = p if p < q else q
+            high[x] = q if p < q else p
+    elif kind == 1:
+        for x in range(width):
+            p, q = low[x], high[x]
+            low[x] = p if p < q else q
+    else:
+        for x in range(width):
+            p, q = low[x], high[x]
+            high[x] = q if p < q else p
+
+
+@njit(cache=True, nogil=True)
+def _fill_line(
+    line: np.ndarray, image: np.ndarray, source: int, column_index: np.ndarray
+) -> None:  # pragma: no cover
+    """``line`` = image row ``source`` padded by ``column_index`` (−1: zero, as a row)."""
+    if source < 0:
+        line[:] = 0.0
+        return
+    row = image[source]
+    cols = row.size
+    pad = (line.size - cols) // 2
+    line[pad : pad + cols] = row
+    for k in range(pad):
+        left, right = column_index[k], column_index[pad + cols + k]
+        line[k] = row[left] if left >= 0 else 0.0
+        line[pad + cols + k] = row[right] if right >= 0 else 0.0
+
+
+@njit(cache=True, nogil=True)
+def _advance(
+    lines: np.ndarray, image: np.ndarray, row_index: np.ndarray, column_index: np.ndarray, r: int
+) -> None:  # pragma: no cover
+    """Hold padded rows ``r .. r + size − 1`` in the ring ``lines`` (slot: row mod size)."""
+    size = lines.shape[0]
+    first = 0 if r == 0 else r + size - 1
+    for p in range(first, r + size):
+        _fill_line(lines[p % size], image, row_index[p], column_index)
+
+
+@njit(cache=True, nogil=True)
+def median_by_network(
+    image: np.ndarray,
+    row_index: np.ndarray,
+    column_index: np.ndarray,
+    column_sort: np.ndarray,
+    selection: np.ndarray,
+    median_wire: int,
+    out: np.ndarray,
+    block: int,
+) -> None:  # pragma: no cover
+    """``out[r, c]`` = median of the padded window at ``r, c``, a column block at a time.
+
+    The image is padded as it is read: padded row ``p`` is image row
+    ``row_index[p]`` with columns ``column_index`` (−1: zero), kept in a ring
+    of ``size`` lines. Per output row and block: the ``size`` lines are copied
+    and sorted down each column by ``column_sort`` (the order of the lines
+    does not matter); wire ``rank · size + d`` is then the sorted column
+    shifted by ``d``, and ``selection`` leaves the median on ``median_wire``.
+    Every comparator runs over the whole block (a SIMD loop).
+    """
+    rows, cols = out.shape
+    size = row_index.size - rows + 1
+    lines = np.empty((size, column_index.size), dtype=np.float32)
+    columns = np.empty((size, block + size - 1), dtype=np.float32)
+    wires = np.empty((size * size, block), dtype=np.float32)
+    for r in range(rows):
+        _advance(lines, image, row_index, column_index, r)
+        for start in range(0, cols, block):
+            width = min(block, cols - start)
+            span = width + size - 1
+            for rank in range(size):
+                columns[rank, :span] = lines[rank, start : start + span]
+            for t in range(column_sort.shape[0]):
+                _compare(columns, column_sort[t, 0], column_sort[t, 1], 0, span)
+            for rank in range(size):
+                for d in range(size):
+                    wires[rank * size + d, :width] = columns[rank, d : d + width]
+            for t in range(selection.shape[0]):
+                _compare(wires, selection[t, 0], selection[t, 1], selection[t, 2], width)
+            out[r, start : start + width] = wires[median_wire, :width]
+
+
+@njit(cache=True, nogil=True)
+def median_3x3(
+    image: np.ndarray, row_index: np.ndarray, column_index: np.ndarray, out: np.ndarray
+) -> None:  # pragma: no cover
+    """Exact 3×3 median from sorted column triples, fused into one pass per row.
+
+    With each column sorted into (low, mid, high), the median of the nine is
+    the median of (largest low, median of the mids, smallest high) [Paeth].
+    Padded rows come from a ring of three lines, as in :func:`median_by_network`.
+    """
+    rows, cols = out.shape
+    lines = np.empty((3, cols + 2), dtype=np.float32)
+    low = np.empty(cols + 2, dtype=np.float32)
+    mid = np.empty(cols + 2, dtype=np.float32)
+    high = np.empty(cols + 2, dtype=np.float32)
+    for r in range(rows):
+        _advance(lines, image, row_index, column_index, r)
+        top, centre, bottom = lines[0], lines[1], lines[2]
+        for x in range(cols + 2):
+            a, b, c = top[x], centre[x], bottom[x]
+            small, large = min(a, b), max(a, b)
+            low[x] = min(small, c)
+            high[x] = max(large, c)
+            mid[x] = max(small, min(large, c))
+        row = out[r]
+        for x in range(cols):
+            lows = max(max(low[x], low[x + 1]), low[x + 2])
+            highs = min(min(high[x], high[x + 1]), high[x + 2])
+            a, b, c = mid[x], mid[x + 1], mid[x + 2]
+            mids = max(min(a, b), min(max(a, b), c))
+            small, large = min(lows, mids), max(lows, mids)
+            row[x] = max(small, min(large, highs))
