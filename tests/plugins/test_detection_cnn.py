@@ -160,7 +160,7 @@ def test_digits_split_is_seeded_80_20_and_stratified(digits):
 
 
 def test_a_diverging_learning_rate_stops_with_a_message(digits):
-    with pytest.raises(ValueError, match=r"cnn.train: the loss diverged .* learning_rate=50;"):
+    with pytest.raises(ValueError, match=r"cnn\.train: the loss diverged .* learning_rate=50;"):
         cnn.train(digits.train, layers=["dense 10"], learning_rate=50.0, epochs=3)
 
 
