@@ -40,12 +40,15 @@ LAYER_SYNTAX = "'conv FxK' [pad P], 'relu', 'maxpool S' or 'dense U'"
 class Layer:
     """One layer: ``kind`` (conv, relu, maxpool, dense) and its integer settings: ``units``
     (filters of a convolution, outputs of a dense layer), ``size`` (kernel or pooling side)
-    and ``pad`` (zeros around a convolution's input)."""
+    and ``pad`` (zeros around a convolution's input). ``input_gradient`` False spares a
+    first layer the gradient with respect to its input (nothing uses it; an empty array
+    takes its place)."""
 
     kind: str
     units: int = 0
     size: int = 0
     pad: int = 0
+    input_gradient: bool = True
 
     @property
     def text(self) -> str:
@@ -149,14 +152,17 @@ def _conv_backward(
     flat = grad.transpose(0, 2, 3, 1).reshape(-1, layer.units)
     d_weights = (flat.T @ patches).reshape(weights.shape)
     d_bias = flat.sum(axis=0)
-    d_patches = (flat @ weights.reshape(layer.units, -1)).reshape(
-        count, rows, cols, channels, layer.size, layer.size
-    )
+    if not layer.input_gradient:
+        return np.zeros(0, grad.dtype), [d_weights, d_bias]
     size, pad = layer.size, layer.pad
-    d_padded = np.zeros((count, channels, height + 2 * pad, width + 2 * pad))
+    d_patches = (flat @ weights.reshape(layer.units, -1)).reshape(
+        count, rows, cols, channels, size, size
+    )
+    by_offset = np.ascontiguousarray(d_patches.transpose(4, 5, 0, 3, 1, 2))
+    d_padded = np.zeros((count, channels, height + 2 * pad, width + 2 * pad), grad.dtype)
     for i in range(size):  # col2im: k² strided additions
         for j in range(size):
-            d_padded[:, :, i : i + rows, j : j + cols] += d_patches[..., i, j].transpose(0, 3, 1, 2)
+            d_padded[:, :, i : i + rows, j : j + cols] += by_offset[i, j]
     return d_padded[:, :, pad : pad + height, pad : pad + width], [d_weights, d_bias]
 
 
@@ -189,10 +195,10 @@ def _pool_backward(
     shape, winner = saved
     count, channels = shape[:2]
     rows, cols = grad.shape[2:]
-    cells = np.zeros((count, channels, rows, cols, s * s))
+    cells = np.zeros((count, channels, rows, cols, s * s), grad.dtype)
     np.put_along_axis(cells, winner[..., None], grad[..., None], axis=4)
     cells = cells.reshape(count, channels, rows, cols, s, s).transpose(0, 1, 2, 4, 3, 5)
-    d_x = np.zeros(shape)
+    d_x = np.zeros(shape, grad.dtype)
     d_x[:, :, : rows * s, : cols * s] = cells.reshape(count, channels, rows * s, cols * s)
     return d_x, []
 

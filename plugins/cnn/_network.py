@@ -10,6 +10,7 @@ layer, one whose input does not fit.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from dataclasses import dataclass
 from typing import Annotated, Any
@@ -84,7 +85,8 @@ class Architecture:
 
 def build_architecture(input_shape: tuple[int, ...], layers: list[str]) -> Architecture:
     """Parse ``layers`` and chain their shapes from ``input_shape`` (C, H, W), or raise
-    ValueError naming the layer (its index and text) that does not fit."""
+    ValueError naming the layer (its index and text) that does not fit. The first layer
+    computes no gradient with respect to the network's input."""
     if not layers:
         raise ValueError("a network needs at least one layer")
     parsed, shapes, parameter_shapes = [], [tuple(input_shape)], []
@@ -98,6 +100,7 @@ def build_architecture(input_shape: tuple[int, ...], layers: list[str]) -> Archi
                 f"layer {index} '{text}' does not chain: {error} (input {shapes[-1]})"
             ) from None
         parsed.append(layer)
+    parsed[0] = dataclasses.replace(parsed[0], input_gradient=False)
     return Architecture(parsed, shapes, parameter_shapes)
 
 

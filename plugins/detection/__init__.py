@@ -7,7 +7,13 @@ The box maths (IoU, NMS, the (tx, ty, tw, th) coding, anchors) is shared with th
 recognition family in ``graphvision_plugins._boxes``; the network is the ``cnn`` family's.
 """
 
-from ._draw import draw_boxes, draw_rectangles
+from ._draw import draw_boxes, draw_rectangles, draw_scenes
+from ._evaluate import (
+    average_precision,
+    match_detections,
+    mean_average_precision,
+    true_positive_iou,
+)
 from ._proposals import (
     anchors,
     check_scores,
@@ -17,18 +23,59 @@ from ._proposals import (
     region_boxes,
     selective_search,
 )
+from ._rcnn import (
+    TrainingRois,
+    detect,
+    feature_extractor,
+    feature_map,
+    roi_samples,
+    scene_proposals,
+    train_head,
+    training_rois,
+)
+from ._roi import feature_rois, pool_rois, roi_pool
 from ._selective import hierarchical_grouping, selective_search_boxes
+from ._types import (
+    Detections,
+    DetectionSet,
+    DetectionsPort,
+    Detector,
+    DetectorModel,
+    DetectorPort,
+)
 
 __all__ = [
+    "DetectionSet",
+    "Detections",
+    "DetectionsPort",
+    "Detector",
+    "DetectorModel",
+    "DetectorPort",
+    "TrainingRois",
     "anchors",
+    "average_precision",
     "check_scores",
+    "detect",
     "draw_boxes",
     "draw_rectangles",
+    "draw_scenes",
+    "feature_extractor",
+    "feature_map",
+    "feature_rois",
     "hierarchical_grouping",
+    "match_detections",
+    "mean_average_precision",
+    "pool_rois",
     "recall",
     "recall_at",
     "recall_curve",
     "region_boxes",
+    "roi_pool",
+    "roi_samples",
+    "scene_proposals",
     "selective_search",
     "selective_search_boxes",
+    "train_head",
+    "training_rois",
+    "true_positive_iou",
 ]

@@ -9,7 +9,10 @@ from pydantic import Field
 
 from graphvision import Boxes, ColorImage, Image, node
 
-__all__ = ["draw_boxes", "draw_rectangles"]
+from ..synthetic._digit_scenes import Scenes
+from ._types import Detections
+
+__all__ = ["draw_boxes", "draw_rectangles", "draw_scenes"]
 
 TRUE_COLOUR = (0.1, 0.9, 0.1)
 FOUND_COLOUR = (0.95, 0.15, 0.1)
@@ -66,4 +69,51 @@ def draw_boxes(
         draw_rectangles(canvas, truth.xyxy, TRUE_COLOUR, thickness)
     shown = boxes.xyxy[:count] if count else boxes.xyxy
     draw_rectangles(canvas, shown, FOUND_COLOUR, thickness)
+    return canvas
+
+
+@node("detection.draw_scenes", version=1)
+def draw_scenes(
+    scenes: Scenes,
+    detections: Detections,
+    *,
+    count: Annotated[int, Field(ge=1)] = 8,
+    columns: Annotated[int, Field(ge=1)] = 4,
+    min_score: Annotated[float, Field(ge=0, le=1)] = 0.5,
+) -> ColorImage:
+    """The first ``count`` scenes in a grid, true boxes in green and detections scoring at
+    least ``min_score`` in red.
+
+    Parameters
+    ----------
+    scenes : Scenes
+        Scenes with their true boxes.
+    detections : Detections
+        Detections (or proposals) over those scenes.
+    count : int
+        Scenes shown.
+    columns : int
+        Scenes per row.
+    min_score : float
+        Lowest score drawn.
+
+    Returns
+    -------
+    ColorImage
+        The grid, scenes two pixels apart.
+    """
+    shown = min(count, len(scenes))
+    height, width = scenes.images.shape[1:]
+    rows = -(-shown // columns)
+    canvas = np.ones((rows * (height + 2), min(shown, columns) * (width + 2), 3), np.float32)
+    for scene in range(shown):
+        picture = np.repeat(scenes.images[scene][..., None], 3, axis=2)
+        truth, _ = scenes.boxes_of(scene)
+        draw_rectangles(picture, truth, TRUE_COLOUR, 1)
+        mine = (detections.owner == scene) & (detections.score >= min_score)
+        draw_rectangles(picture, detections.xyxy[mine], FOUND_COLOUR, 1)
+        r, c = divmod(scene, columns)
+        canvas[
+            r * (height + 2) : r * (height + 2) + height, c * (width + 2) : c * (width + 2) + width
+        ] = picture
     return canvas
