@@ -75,7 +75,8 @@ def fit_network(
                 )
             gradient = architecture.backward(weights, grad.astype(np.float32), saved)
             gradient += weight_decay * weights
-            velocity = momentum * velocity - learning_rate * gradient
+            velocity *= momentum
+            velocity -= learning_rate * gradient
             weights = weights + velocity
             losses.append(loss * len(batch))
         history.append(sum(losses) / len(order))

@@ -17,6 +17,7 @@ from ._evaluate import (
 from ._proposals import (
     anchors,
     check_scores,
+    propose,
     recall,
     recall_at,
     recall_curve,
@@ -66,6 +67,7 @@ __all__ = [
     "match_detections",
     "mean_average_precision",
     "pool_rois",
+    "propose",
     "recall",
     "recall_at",
     "recall_curve",

@@ -16,6 +16,7 @@ from ._selective import SIMILARITIES, ColourSpace, selective_search_boxes
 __all__ = [
     "anchors",
     "check_scores",
+    "propose",
     "recall",
     "recall_at",
     "recall_curve",
@@ -94,6 +95,30 @@ def selective_search(
     2013; P. F. Felzenszwalb and D. P. Huttenlocher, "Efficient graph-based image
     segmentation", IJCV 59(2), 2004.
     """
+    return propose(
+        image,
+        colour_spaces=colour_spaces,
+        similarities=similarities,
+        scales=scales,
+        sigma=sigma,
+        max_area=max_area,
+        max_boxes=max_boxes,
+        seed=seed,
+    )
+
+
+def propose(
+    image: np.ndarray,
+    *,
+    colour_spaces: list[ColourSpace],
+    similarities: list[str],
+    scales: list[float],
+    sigma: float,
+    max_area: float,
+    max_boxes: int,
+    seed: int,
+) -> BoxSet:
+    """Selective search proposals of one image (``detection.selective_search``)."""
     sets = tuple(_similarity_set(text) for text in similarities)
     if not colour_spaces or not sets or not scales:
         raise ValueError("colour_spaces, similarities and scales must each name one at least")

@@ -84,11 +84,11 @@ def scene_proposals(
     Detections
         Proposals of all scenes, each with its scene index.
     """
-    from ._proposals import selective_search
+    from ._proposals import propose
 
     pieces = []
     for index, image in enumerate(scenes.images):
-        boxes = selective_search.__wrapped__(
+        boxes = propose(
             image,
             colour_spaces=colour_spaces,
             similarities=similarities,
@@ -161,7 +161,7 @@ def training_rois(
         target[mine[positive]] = truth[best[positive]]
         label[mine[best_iou < negative_iou]] = BACKGROUND
     negatives = np.flatnonzero(label == BACKGROUND)
-    allowed = int(np.ceil(negatives_per_positive * max(np.sum(label >= 0), 1)))
+    allowed = int(np.ceil(negatives_per_positive * max(int(np.sum(label >= 0)), 1)))
     if len(negatives) > allowed:
         label[rng.choice(negatives, len(negatives) - allowed, replace=False)] = -2
     kept = label >= BACKGROUND
