@@ -148,10 +148,13 @@ class NetworkModel:
             raise ValueError(
                 f"the network takes inputs {architecture.shapes[0]} (C, H, W), got {x.shape[1:]}"
             )
-        out = [
-            architecture.forward(self.weights, x[start : start + batch])[0]
-            for start in range(0, len(x), batch)
-        ]
+        from ._blas import one_blas_thread
+
+        with one_blas_thread():
+            out = [
+                architecture.forward(self.weights, x[start : start + batch])[0]
+                for start in range(0, len(x), batch)
+            ]
         return np.concatenate(out) if out else np.zeros((0, architecture.shapes[-1][0]))
 
 

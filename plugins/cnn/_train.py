@@ -12,6 +12,7 @@ from pydantic import Field
 from graphvision import Float, Table, node
 
 from ..recognition._types import Samples, SampleSet
+from ._blas import one_blas_thread
 from ._network import Architecture, Network, NetworkModel, build_architecture, initial_weights
 
 __all__ = ["accuracy", "fit_network", "predict", "train"]
@@ -51,6 +52,27 @@ def fit_network(
     B. T. Polyak, "Some methods of speeding up the convergence of iteration methods", 1964;
     Y. LeCun et al., "Efficient BackProp", 1998.
     """
+    with one_blas_thread():
+        return _sgd(
+            architecture, images, targets, epochs=epochs, batch_size=batch_size,
+            learning_rate=learning_rate, momentum=momentum, weight_decay=weight_decay,
+            seed=seed, what=what,
+        )  # fmt: skip
+
+
+def _sgd(
+    architecture: Architecture,
+    images: np.ndarray,
+    targets: np.ndarray,
+    *,
+    epochs: int,
+    batch_size: int,
+    learning_rate: float,
+    momentum: float,
+    weight_decay: float,
+    seed: int,
+    what: str,
+) -> tuple[np.ndarray, np.ndarray]:
     from ._layers import softmax_cross_entropy
 
     rng = np.random.default_rng(seed)

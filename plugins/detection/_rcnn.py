@@ -24,6 +24,7 @@ from graphvision import node
 
 from .._boxes import decode_boxes, encode_boxes, iou_matrix, non_max_suppression
 from ..cnn import Architecture, Network, NetworkModel, build_architecture, fit_network
+from ..cnn._blas import one_blas_thread
 from ..recognition._types import Samples, SampleSet
 from ..synthetic._digit_scenes import Scenes, SceneSet
 from ._roi import pool_rois
@@ -285,12 +286,14 @@ def _pooled(
 ) -> np.ndarray:  # fmt: skip
     """ROI-pooled features (R, C, pool, pool) of boxes over their scenes."""
     out = None
-    for scene in np.unique(owner):
-        mine = np.flatnonzero(owner == scene)
-        pooled = pool_rois(feature_map(layers, weights, images[scene]), xyxy[mine], stride, pool)
-        if out is None:
-            out = np.zeros((len(xyxy), *pooled.shape[1:]))
-        out[mine] = pooled
+    with one_blas_thread():
+        for scene in np.unique(owner):
+            mine = np.flatnonzero(owner == scene)
+            maps = feature_map(layers, weights, images[scene])
+            pooled = pool_rois(maps, xyxy[mine], stride, pool)
+            if out is None:
+                out = np.zeros((len(xyxy), *pooled.shape[1:]))
+            out[mine] = pooled
     return out if out is not None else np.zeros((0, 1, pool, pool))
 
 
