@@ -126,6 +126,13 @@ class DetectorPort(RecordPort):
                 raise PortValueError(f"Detector '{name}' must be float64")
             if not np.isfinite(array).all():
                 raise PortValueError(f"Detector '{name}' must be finite")
+        classes_ok = isinstance(value.classes, np.ndarray) and value.classes.dtype == np.int64
+        if not classes_ok or value.classes.ndim != 1:
+            raise PortValueError("Detector 'classes' must be an int64 vector")
+        if not isinstance(value.stride, int) or not isinstance(value.pool, int):
+            raise PortValueError("Detector 'stride' and 'pool' must be integers")
+        if value.stride < 1 or value.pool < 1:
+            raise PortValueError("Detector 'stride' and 'pool' must be at least 1")
         try:
             layers = json.loads(value.feature_layers)
             side = 16 * value.pool * value.stride  # any map large enough to chain
@@ -137,7 +144,8 @@ class DetectorPort(RecordPort):
         if features.size != len(value.feature_weights) or head.size != len(value.head_weights):
             raise PortValueError("Detector weights do not match its layers")
         classes = len(value.classes)
-        if head.shapes[-1] != (classes + 1,) or value.regression.shape[::2] != (classes, 4):
+        pooled = int(np.prod(head.shapes[0]))
+        if head.shapes[-1] != (classes + 1,) or value.regression.shape != (classes, pooled + 1, 4):
             raise PortValueError(
                 f"Detector head gives {head.shapes[-1]} scores and {value.regression.shape} "
                 f"regressors for {classes} classes plus background"

@@ -201,3 +201,35 @@ def test_cnn_digits_pipeline_meets_the_issue_accuracy(tmp_path):
     np.testing.assert_array_equal(again.outputs["network"].weights, out["network"].weights)
     again = gv.run(graph, cache=gv.Cache(disk=gv.DiskStore(tmp_path)), outputs=["accuracy"])
     assert again.outputs["accuracy"] == out["accuracy"]
+
+
+def test_a_network_crosses_process_boundaries():
+    graph = gv.load_pipeline(PIPELINES / "cnn_digits.yaml")
+    short = {"cnn.epochs": 1, "linear.epochs": 1}
+    here = gv.run(graph, executor="sync", overrides=short, outputs=["network", "accuracy"])
+    there = gv.run(
+        graph, executor="processes", workers=2, overrides=short, outputs=["network", "accuracy"]
+    )
+    np.testing.assert_array_equal(there.outputs["network"].weights, here.outputs["network"].weights)
+    assert there.outputs["accuracy"] == here.outputs["accuracy"]
+
+
+def test_overlapping_blas_limits_restore_the_original_threads():
+    """Two nodes in threads enter and leave the limit interleaved; the process gets its
+    BLAS threads back (a save-and-restore per user would leave it on one)."""
+    from threadpoolctl import threadpool_info
+
+    from graphvision_plugins.cnn._blas import one_blas_thread
+
+    def threads() -> list[int]:
+        return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+
+    before = threads()
+    first, second = one_blas_thread(), one_blas_thread()
+    first.__enter__()
+    second.__enter__()
+    assert set(threads()) == {1}
+    first.__exit__(None, None, None)
+    assert set(threads()) == {1}  # the second user still runs
+    second.__exit__(None, None, None)
+    assert threads() == before
