@@ -193,6 +193,20 @@ class NetworkPort(RecordPort):
         return value
 
     @classmethod
+    def preview(cls, value: NetworkModel) -> np.ndarray | None:
+        """The first convolution's filters (first input channel), each stretched to [0, 1];
+        None when the network starts with another layer."""
+        from ..recognition._types import mosaic
+
+        architecture = value.parsed()
+        if architecture.layers[0].kind != "conv":
+            return None
+        filters = architecture.split(value.weights)[0][0][:, 0]
+        side = max(filters.shape[1], 1)
+        scale = max(1, 32 // side)  # a 3×3 filter is drawn 30×30
+        return mosaic(np.kron(filters, np.ones((scale, scale))))
+
+    @classmethod
     def summary(cls, value: NetworkModel) -> str:
         spec = json.loads(value.architecture)
         return f"Network {' → '.join(spec['layers'])} ({len(value.weights)} weights)"

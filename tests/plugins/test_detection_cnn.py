@@ -233,3 +233,13 @@ def test_overlapping_blas_limits_restore_the_original_threads():
     assert set(threads()) == {1}  # the second user still runs
     second.__exit__(None, None, None)
     assert threads() == before
+
+
+def test_network_preview_shows_the_first_filters():
+    architecture = cnn.build_architecture((1, 8, 8), ["conv 4x3", "relu", "dense 2"])
+    spec = '{"input": [1, 8, 8], "layers": ["conv 4x3", "relu", "dense 2"]}'
+    weights = cnn.initial_weights(architecture, 0)
+    network = cnn.NetworkModel(spec, weights, np.arange(2), np.zeros(0))
+    picture = cnn.NetworkPort.preview(network)
+    assert picture is not None and picture.shape == (30, 4 * 31 - 1)  # 4 filters drawn 30×30
+    assert picture.min() == 0 and picture.max() == 1
