@@ -20,12 +20,12 @@ __all__ = [
 ]
 
 
-def check_boxes(xyxy: np.ndarray, what: str = "boxes") -> np.ndarray:
+def check_boxes(xyxy: np.ndarray, what: str = "box") -> np.ndarray:
     """``xyxy`` as a float64 (N, 4) array, or ValueError naming ``what``, the first bad row
     and why (not 4 columns, not finite, negative or zero width or height)."""
     boxes = np.asarray(xyxy, np.float64)
     if boxes.ndim != 2 or boxes.shape[1] != 4:
-        raise ValueError(f"{what} must be an (N, 4) array of (x0, y0, x1, y1), got {boxes.shape}")
+        raise ValueError(f"{what}es must be an (N, 4) array of (x0, y0, x1, y1), got {boxes.shape}")
     finite = np.isfinite(boxes).all(axis=1)
     if not finite.all():
         row = int(np.flatnonzero(~finite)[0])

@@ -22,6 +22,7 @@ import numpy as np
 
 from graphvision import PortValueError, RecordPort
 
+from .._boxes import check_boxes
 from ..cnn import build_architecture
 
 __all__ = [
@@ -79,9 +80,10 @@ class DetectionsPort(RecordPort):
         _typed("Detections", "score", value.score, np.float64, (count,))
         _typed("Detections", "label", value.label, np.int64, (count,))
         _typed("Detections", "owner", value.owner, np.int64, (count,))
-        xyxy = value.xyxy
-        if not np.isfinite(xyxy).all() or (xyxy[:, 2:] <= xyxy[:, :2]).any():
-            raise PortValueError("Detections boxes must be finite with x0 < x1 and y0 < y1")
+        try:
+            check_boxes(value.xyxy, "Detections box")
+        except ValueError as error:
+            raise PortValueError(str(error)) from None
         if np.isnan(value.score).any():
             raise PortValueError("Detections scores must not be NaN")
         if count and (value.owner.min() < 0 or value.owner.max() >= value.scenes):

@@ -21,6 +21,8 @@ from pydantic import Field
 
 from graphvision import PortValueError, RecordPort, node
 
+from .._boxes import check_boxes
+
 __all__ = ["SceneSet", "Scenes", "ScenesPort", "digit_scenes", "render_digit_scenes"]
 
 INK = 0.2
@@ -65,8 +67,10 @@ class ScenesPort(RecordPort):
                 raise PortValueError(f"Scenes '{name}' must be int64 (M,)")
             if column.shape != (len(xyxy),):
                 raise PortValueError(f"Scenes '{name}' must have one entry per box")
-        if not np.isfinite(xyxy).all() or (xyxy[:, 2:] <= xyxy[:, :2]).any():
-            raise PortValueError("Scenes boxes must be finite with x0 < x1 and y0 < y1")
+        try:
+            check_boxes(xyxy, "Scenes box")
+        except ValueError as error:
+            raise PortValueError(str(error)) from None
         if len(value.owner) and (value.owner.min() < 0 or value.owner.max() >= len(images)):
             raise PortValueError(f"Scenes 'owner' must index the {len(images)} scenes")
         return value

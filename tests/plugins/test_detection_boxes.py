@@ -70,8 +70,16 @@ def test_anchors_are_centred_with_the_given_area_and_ratio():
 
 
 def test_boxes_of_negative_width_are_refused():
-    with pytest.raises(ValueError, match=r"boxes row 1 has width -2 and height 5"):
+    with pytest.raises(ValueError, match=r"box row 1 has width -2 and height 5"):
         _boxes.check_boxes(np.array([[0.0, 0, 1, 1], [5, 0, 3, 5]]))
+    found = detection.DetectionSet(
+        np.array([[0.0, 0, 4, 4], [6, 1, 2, 9]]), np.ones(2), np.zeros(2, np.int64),
+        np.zeros(2, np.int64), 1,
+    )  # fmt: skip
+    with pytest.raises(gv.PortValueError, match=r"Detections box row 1 has width -4 and height 8"):
+        detection.DetectionsPort.validate(found)
+    with pytest.raises(ValueError, match=r"box row 0 is not finite"):
+        _boxes.check_boxes(np.array([[0.0, np.nan, 1, 1]]))
     bad = gv.BoxSet(np.array([[5.0, 0, 3, 5]]), np.array([1.0]))
     with pytest.raises(gv.PortValueError, match="x0 < x1 and y0 < y1"):
         detection.recall(bad, bad)
