@@ -26,9 +26,11 @@ from ._proposals import (
 )
 from ._rcnn import (
     TrainingRois,
+    class_wise_nms,
     detect,
     feature_extractor,
     feature_map,
+    nms,
     roi_samples,
     scene_proposals,
     train_head,
@@ -56,6 +58,7 @@ __all__ = [
     "anchors",
     "average_precision",
     "check_scores",
+    "class_wise_nms",
     "detect",
     "draw_boxes",
     "draw_rectangles",
@@ -66,6 +69,7 @@ __all__ = [
     "hierarchical_grouping",
     "match_detections",
     "mean_average_precision",
+    "nms",
     "pool_rois",
     "propose",
     "recall",

@@ -33,9 +33,11 @@ from ._types import Detections, DetectionSet, Detector, DetectorModel
 
 __all__ = [
     "TrainingRois",
+    "class_wise_nms",
     "detect",
     "feature_extractor",
     "feature_map",
+    "nms",
     "roi_samples",
     "scene_proposals",
     "train_head",
@@ -432,12 +434,11 @@ def detect(
     *,
     regression: bool = True,
     min_score: Annotated[float, Field(ge=0, le=1)] = 0.05,
-    nms: Annotated[float, Field(ge=0, le=1)] = 0.3,
 ) -> Detections:
     """Detect objects in scenes: pool each proposal from the scene's feature map, score the
     classes (softmax), keep the best non-background class when its probability reaches
-    ``min_score``, move the box by that class's regressor, and suppress overlaps class by
-    class. A scene without proposals gives no detection.
+    ``min_score``, and move the box by that class's regressor (``detection.nms`` then
+    suppresses overlaps class by class). A scene without proposals gives no detection.
 
     Parameters
     ----------
@@ -451,13 +452,11 @@ def detect(
         Apply the box regressors (False: keep the proposals' boxes).
     min_score : float
         Lowest class probability kept.
-    nms : float
-        IoU above which a weaker detection of the same class and scene is dropped.
 
     Returns
     -------
     Detections
-        Boxes with class probability and class, best first within each scene.
+        Boxes with class probability and class, scene by scene, before suppression.
     """
     if proposals.scenes != len(scenes):
         raise ValueError(
@@ -490,23 +489,46 @@ def detect(
             boxes[:, [1, 3]] = np.clip(boxes[:, [1, 3]], 0, height)
             sound = (boxes[:, 2] - boxes[:, 0] > 0.5) & (boxes[:, 3] - boxes[:, 1] > 0.5)
             boxes, best, score = boxes[sound], best[sound], score[sound]
-        for k in np.unique(best):
-            same = np.flatnonzero(best == k)
-            kept = same[non_max_suppression(boxes[same], score[same], nms)]
-            found.append((boxes[kept], score[kept], detector.classes[k], scene))
+        found.append((boxes, score, detector.classes[best], np.full(len(boxes), scene)))
     if not found:
         empty = np.zeros(0, np.int64)
         return DetectionSet(np.zeros((0, 4)), np.zeros(0), empty, empty.copy(), len(scenes))
-    order = np.lexsort(
-        (
-            -np.concatenate([f[1] for f in found]),
-            np.concatenate([np.full(len(f[1]), f[3]) for f in found]),
-        )
-    )
     return DetectionSet(
-        np.concatenate([f[0] for f in found])[order],
-        np.concatenate([f[1] for f in found])[order],
-        np.concatenate([np.full(len(f[1]), f[2], np.int64) for f in found])[order],
-        np.concatenate([np.full(len(f[1]), f[3], np.int64) for f in found])[order],
+        np.concatenate([f[0] for f in found]).reshape(-1, 4),
+        np.concatenate([f[1] for f in found]),
+        np.concatenate([f[2] for f in found]).astype(np.int64),
+        np.concatenate([f[3] for f in found]).astype(np.int64),
         len(scenes),
     )
+
+
+def class_wise_nms(detections: DetectionSet, iou: float) -> DetectionSet:
+    """Greedy NMS within each (scene, class); the result scene by scene, best first."""
+    keep = []
+    groups = np.unique(np.column_stack([detections.owner, detections.label]), axis=0)
+    for owner, label in groups:
+        same = np.flatnonzero((detections.owner == owner) & (detections.label == label))
+        keep.append(same[non_max_suppression(detections.xyxy[same], detections.score[same], iou)])
+    kept = np.concatenate(keep) if keep else np.zeros(0, np.int64)
+    order = np.lexsort((-detections.score[kept], detections.owner[kept]))
+    return detections.take(kept[order])
+
+
+@node("detection.nms", version=1)
+def nms(detections: Detections, *, iou: Annotated[float, Field(ge=0, le=1)] = 0.3) -> Detections:
+    """Class-wise non-maximum suppression: within each scene and class, keep the best
+    detection and drop those overlapping it by IoU above ``iou``, repeat.
+
+    Parameters
+    ----------
+    detections : Detections
+        Scored, labelled boxes over scenes.
+    iou : float
+        Overlap above which the weaker detection of the same class and scene goes.
+
+    Returns
+    -------
+    Detections
+        The kept detections, scene by scene, best first.
+    """
+    return class_wise_nms(detections, iou)

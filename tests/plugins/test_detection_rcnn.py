@@ -103,6 +103,21 @@ def test_regression_targets_shift_a_box_onto_its_truth_in_the_iou():
     assert detection.true_positive_iou(shifted, scenes) == pytest.approx(80 / 120)
 
 
+def test_nms_works_within_each_scene_and_class():
+    found = _found(
+        [[0, 0, 10, 10], [1, 0, 11, 10], [0, 0, 10, 10], [0, 0, 10, 10]],
+        [0.8, 0.9, 0.7, 0.6],
+        [1, 1, 2, 1],
+        [0, 0, 0, 1],
+        2,
+    )
+    kept = detection.nms(found, iou=0.3)
+    # scene 0: box 1 (0.9) drops box 0 of its class, box 2 is another class; scene 1 alone
+    np.testing.assert_array_equal(kept.score, [0.9, 0.7, 0.6])
+    np.testing.assert_array_equal(kept.label, [1, 2, 1])
+    np.testing.assert_array_equal(kept.owner, [0, 0, 1])
+
+
 # --- scenes ----------------------------------------------------------------------------
 
 
