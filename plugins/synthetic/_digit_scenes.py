@@ -77,7 +77,7 @@ class ScenesPort(RecordPort):
 
     @classmethod
     def preview(cls, value: SceneSet) -> np.ndarray | None:
-        """The first scenes side by side with their true boxes."""
+        """The first eight scenes side by side, two white columns apart."""
         shown = value.images[:8]
         height, width = shown.shape[1:]
         canvas = np.ones((height, len(shown) * (width + 2)), np.float32)
