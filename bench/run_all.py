@@ -15,6 +15,7 @@ import bench_cache  # noqa: E402
 import bench_camera  # noqa: E402
 import bench_colour_template  # noqa: E402
 import bench_dask  # noqa: E402
+import bench_detection  # noqa: E402
 import bench_edges  # noqa: E402
 import bench_filters  # noqa: E402
 import bench_homography  # noqa: E402
@@ -37,6 +38,7 @@ def main() -> None:
         ("Edges and Hough (issue 10)", bench_edges.main),
         ("Colour, templates, FFT, pyramids (issue 10)", bench_colour_template.main),
         ("Two views and stereo (issue 12)", bench_stereo.main),
+        ("Modern detection: CNN, proposals, R-CNN (issue 14)", bench_detection.main),
         ("Sweep sharing (issue 15)", bench_sweep.main),
         ("Batch of 200 files (issue 15)", bench_batch.main),
         ("Dask executor overhead (issue 15)", bench_dask.main),

@@ -21,6 +21,7 @@ from graphvision import (
     node,
 )
 
+from .._boxes import iou_matrix, non_max_suppression
 from ._data import NON_FACE, FaceFree, face_free_image, pixel_features
 from ._haar import haar_values, integral_image, sample_haar_features
 from ._hog import hog_blocks
@@ -340,30 +341,6 @@ def detect_subspace(
         image, subspace, scale_step, min_scale, max_scale, step, -max_error
     )
     return BoxSet(boxes, scores)
-
-
-def iou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    r"""Intersection over union :math:`|A \cap B| / |A \cup B|` of every box of ``a`` (N, 4)
-    with every box of ``b`` (M, 4): (N, M)."""
-    low = np.maximum(a[:, None, :2], b[None, :, :2])
-    high = np.minimum(a[:, None, 2:], b[None, :, 2:])
-    inter = np.prod(np.clip(high - low, 0, None), axis=2)
-    area_a = np.prod(a[:, 2:] - a[:, :2], axis=1)
-    area_b = np.prod(b[:, 2:] - b[:, :2], axis=1)
-    return inter / (area_a[:, None] + area_b[None, :] - inter)
-
-
-def non_max_suppression(boxes: np.ndarray, scores: np.ndarray, iou: float) -> np.ndarray:
-    """Indices of the boxes kept by greedy NMS: the best remaining box is kept and every box
-    overlapping it by more than ``iou`` is dropped, until none remain (best first)."""
-    order = np.argsort(-scores, kind="stable")
-    keep = []
-    while len(order):
-        best = order[0]
-        keep.append(best)
-        overlap = iou_matrix(boxes[best : best + 1], boxes[order[1:]])[0]
-        order = order[1:][overlap <= iou]
-    return np.array(keep, np.int64)
 
 
 @node("recognition.nms", version=1)

@@ -8,6 +8,7 @@ nodes as their ground truth.
 
 from ._boards import board_object_points, board_views, plane_view, render_board
 from ._depth import depth_plane
+from ._digit_scenes import Scenes, SceneSet, ScenesPort, digit_scenes, render_digit_scenes
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
 from ._plane_lines import plane_lines
@@ -18,9 +19,13 @@ from ._two_view import two_view_scene
 from ._warps import random_homography, random_warp, two_views
 
 __all__ = [
+    "SceneSet",
+    "Scenes",
+    "ScenesPort",
     "board_object_points",
     "board_views",
     "depth_plane",
+    "digit_scenes",
     "gaussian_noise",
     "gray_code_stripes",
     "impulse_noise",
@@ -30,6 +35,7 @@ __all__ = [
     "random_homography",
     "random_warp",
     "render_board",
+    "render_digit_scenes",
     "salt_and_pepper",
     "stereo_pair",
     "structured_light_scene",

@@ -1,0 +1,215 @@
+"""The ``Network`` port type: a layer list and its weights, checked when built.
+
+A network is a frozen dataclass (nothing pickled): ``architecture`` is JSON text
+``{"input": [C, H, W], "layers": ["conv 16x3 pad 1", "relu", ...]}``, ``weights`` one
+float64 vector holding every layer's parameters in order (weights then bias, C order),
+``classes`` the label each output unit stands for, and ``history`` the mean training
+loss of each epoch. Building a network chains the layer shapes and refuses, naming the
+layer, one whose input does not fit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+from typing import Annotated, Any
+
+import numpy as np
+
+from graphvision import PortValueError, RecordPort
+
+from ._layers import Layer, parse_layer
+
+__all__ = [
+    "Architecture",
+    "Network",
+    "NetworkModel",
+    "NetworkPort",
+    "build_architecture",
+    "initial_weights",
+]
+
+
+@dataclass(frozen=True)
+class Architecture:
+    """Parsed layers, the shape entering each layer (and the output shape last), and the
+    shapes of each layer's parameters."""
+
+    layers: list[Layer]
+    shapes: list[tuple[int, ...]]
+    parameter_shapes: list[list[tuple[int, ...]]]
+
+    @property
+    def size(self) -> int:
+        """The number of weights."""
+        return sum(int(np.prod(shape)) for shapes in self.parameter_shapes for shape in shapes)
+
+    def split(self, weights: np.ndarray) -> list[list[np.ndarray]]:
+        """Views of the flat ``weights`` vector, one list of arrays per layer."""
+        params, start = [], 0
+        for shapes in self.parameter_shapes:
+            arrays = []
+            for shape in shapes:
+                stop = start + int(np.prod(shape))
+                arrays.append(weights[start:stop].reshape(shape))
+                start = stop
+            params.append(arrays)
+        return params
+
+    def forward(
+        self, weights: np.ndarray, x: np.ndarray, keep: bool = False
+    ) -> tuple[np.ndarray, list[Any]]:
+        """The scores of the last layer for a batch ``x`` (and, with ``keep``, what the
+        backward pass needs)."""
+        saved = []
+        for layer, params in zip(self.layers, self.split(weights), strict=True):
+            x, memo = layer.forward(x, params)
+            if keep:
+                saved.append(memo)
+        return x, saved
+
+    def backward(self, weights: np.ndarray, grad: np.ndarray, saved: list[Any]) -> np.ndarray:
+        """The gradient of the loss with respect to ``weights`` (flat, same order), given
+        its gradient ``grad`` with respect to the scores."""
+        params = self.split(weights)
+        pieces: list[list[np.ndarray]] = []
+        for layer, memo, layer_params in zip(
+            reversed(self.layers), reversed(saved), reversed(params), strict=True
+        ):
+            grad, d_params = layer.backward(grad, memo, layer_params)
+            pieces.append(d_params)
+        flat = [d.ravel() for d_params in reversed(pieces) for d in d_params]
+        return np.concatenate(flat) if flat else np.zeros(0)
+
+
+def build_architecture(input_shape: tuple[int, ...], layers: list[str]) -> Architecture:
+    """Parse ``layers`` and chain their shapes from ``input_shape`` (C, H, W), or raise
+    ValueError naming the layer (its index and text) that does not fit. The first layer
+    computes no gradient with respect to the network's input."""
+    if not layers:
+        raise ValueError("a network needs at least one layer")
+    parsed, shapes, parameter_shapes = [], [tuple(input_shape)], []
+    for index, text in enumerate(layers):
+        try:
+            layer = parse_layer(text)
+            parameter_shapes.append(layer.parameter_shapes(shapes[-1]))
+            shapes.append(layer.output_shape(shapes[-1]))
+        except ValueError as error:
+            raise ValueError(
+                f"layer {index} '{text}' does not chain: {error} (input {shapes[-1]})"
+            ) from None
+        parsed.append(layer)
+    parsed[0] = dataclasses.replace(parsed[0], input_gradient=False)
+    return Architecture(parsed, shapes, parameter_shapes)
+
+
+def initial_weights(architecture: Architecture, seed: int) -> np.ndarray:
+    r"""He initialisation: weights drawn from :math:`\mathcal{N}(0, 2 / n_\mathrm{in})`
+    (n_in the inputs of one output unit), biases zero; seeded.
+
+    References
+    ----------
+    K. He et al., "Delving deep into rectifiers", ICCV 2015.
+    """
+    rng = np.random.default_rng(seed)
+    pieces = []
+    for shapes in architecture.parameter_shapes:
+        for shape in shapes:
+            if len(shape) == 1:
+                pieces.append(np.zeros(shape[0]))
+                continue
+            fan_in = int(np.prod(shape[1:])) if len(shape) == 4 else shape[0]
+            pieces.append(rng.normal(0, np.sqrt(2 / fan_in), int(np.prod(shape))))
+    return np.concatenate(pieces) if pieces else np.zeros(0)
+
+
+@dataclass(frozen=True, eq=False)
+class NetworkModel:
+    """A trained network (see the module docstring)."""
+
+    architecture: str
+    weights: np.ndarray
+    classes: np.ndarray
+    history: np.ndarray
+
+    def parsed(self) -> Architecture:
+        """The architecture, parsed and chained."""
+        spec = json.loads(self.architecture)
+        return build_architecture(tuple(spec["input"]), spec["layers"])
+
+    def scores(self, images: np.ndarray, batch: int = 512) -> np.ndarray:
+        """The last layer's outputs for images (N, H, W) or (N, C, H, W), batch by batch."""
+        architecture = self.parsed()
+        x = np.asarray(images, np.float64)
+        if x.ndim == 3:
+            x = x[:, None]
+        if x.shape[1:] != architecture.shapes[0]:
+            raise ValueError(
+                f"the network takes inputs {architecture.shapes[0]} (C, H, W), got {x.shape[1:]}"
+            )
+        from ._blas import one_blas_thread
+
+        with one_blas_thread():
+            out = [
+                architecture.forward(self.weights, x[start : start + batch])[0]
+                for start in range(0, len(x), batch)
+            ]
+        return np.concatenate(out) if out else np.zeros((0, architecture.shapes[-1][0]))
+
+
+class NetworkPort(RecordPort):
+    """A :class:`NetworkModel`: layers that chain, finite float64 weights of the size they
+    need, one class label (int64) per output unit."""
+
+    value_class = NetworkModel
+
+    @classmethod
+    def validate(cls, value: Any) -> NetworkModel:
+        value = super().validate(value)
+        try:
+            spec = json.loads(value.architecture)
+            architecture = build_architecture(tuple(spec["input"]), list(spec["layers"]))
+        except (ValueError, KeyError, TypeError) as error:
+            raise PortValueError(f"Network architecture is invalid: {error}") from None
+        weights = value.weights
+        if not isinstance(weights, np.ndarray) or weights.dtype != np.float64:
+            raise PortValueError("Network 'weights' must be a float64 vector")
+        if weights.shape != (architecture.size,):
+            raise PortValueError(
+                f"Network 'weights' must hold {architecture.size} values for its layers, "
+                f"got {weights.shape}"
+            )
+        if not np.isfinite(weights).all():
+            raise PortValueError("Network 'weights' must be finite")
+        classes = value.classes
+        if not isinstance(classes, np.ndarray) or classes.dtype != np.int64:
+            raise PortValueError("Network 'classes' must be an int64 vector")
+        if architecture.shapes[-1] != (len(classes),):
+            raise PortValueError(
+                f"the network's last layer gives {architecture.shapes[-1]} outputs for "
+                f"{len(classes)} classes"
+            )
+        return value
+
+    @classmethod
+    def preview(cls, value: NetworkModel) -> np.ndarray | None:
+        """The first convolution's filters (first input channel), each stretched to [0, 1];
+        None when the network starts with another layer."""
+        from ..recognition._types import mosaic
+
+        architecture = value.parsed()
+        if architecture.layers[0].kind != "conv":
+            return None
+        filters = architecture.split(value.weights)[0][0][:, 0]
+        side = max(filters.shape[1], 1)
+        scale = max(1, 32 // side)  # a 3×3 filter is drawn 30×30
+        return mosaic(np.kron(filters, np.ones((scale, scale))))
+
+    @classmethod
+    def summary(cls, value: NetworkModel) -> str:
+        spec = json.loads(value.architecture)
+        return f"Network {' → '.join(spec['layers'])} ({len(value.weights)} weights)"
+
+
+Network = Annotated[NetworkModel, NetworkPort]

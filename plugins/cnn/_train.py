@@ -1,0 +1,228 @@
+"""Training a network by mini-batch SGD with momentum, and applying it (seed: "We use
+gradient descent for adjusting the weights")."""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated
+
+import numpy as np
+from pydantic import Field
+
+from graphvision import Float, Table, node
+
+from ..recognition._types import Samples, SampleSet
+from ._blas import one_blas_thread
+from ._network import Architecture, Network, NetworkModel, build_architecture, initial_weights
+
+__all__ = ["accuracy", "fit_network", "predict", "train"]
+
+DEFAULT_LAYERS = ["conv 16x3", "relu", "maxpool 2", "conv 32x3", "relu", "maxpool 2", "dense 10"]
+DIVERGENCE_FACTOR = 20.0
+"""The loss is taken as diverged when it is not finite or exceeds this many times the
+loss of guessing (log K for K classes)."""
+
+
+def fit_network(
+    architecture: Architecture,
+    images: np.ndarray,
+    targets: np.ndarray,
+    *,
+    epochs: int,
+    batch_size: int,
+    learning_rate: float,
+    momentum: float,
+    weight_decay: float,
+    seed: int,
+    what: str = "cnn.train",
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Minimise the mean softmax cross-entropy over ``images`` (N, C, H, W) with class
+    indices ``targets`` by mini-batch SGD with momentum:
+
+    .. math::
+        v \leftarrow \mu v - \eta (\nabla_w L + \lambda w),\qquad w \leftarrow w + v
+
+    over batches of a seeded permutation, each epoch, in float32. Returns the weights and the mean
+    loss of each epoch; raises ValueError naming ``what`` and the learning rate when the
+    loss diverges (not finite, or above ``DIVERGENCE_FACTOR`` · log K), so no NaN weight
+    ever leaves.
+
+    References
+    ----------
+    B. T. Polyak, "Some methods of speeding up the convergence of iteration methods", 1964;
+    Y. LeCun et al., "Efficient BackProp", 1998.
+    """
+    with one_blas_thread():
+        return _sgd(
+            architecture, images, targets, epochs=epochs, batch_size=batch_size,
+            learning_rate=learning_rate, momentum=momentum, weight_decay=weight_decay,
+            seed=seed, what=what,
+        )  # fmt: skip
+
+
+def _sgd(
+    architecture: Architecture,
+    images: np.ndarray,
+    targets: np.ndarray,
+    *,
+    epochs: int,
+    batch_size: int,
+    learning_rate: float,
+    momentum: float,
+    weight_decay: float,
+    seed: int,
+    what: str,
+) -> tuple[np.ndarray, np.ndarray]:
+    from ._layers import softmax_cross_entropy
+
+    rng = np.random.default_rng(seed)
+    images = np.asarray(images, np.float32)  # float32 halves BLAS's work; weights return float64
+    weights = initial_weights(architecture, seed).astype(np.float32)
+    velocity = np.zeros_like(weights)
+    classes = architecture.shapes[-1][0]
+    ceiling = DIVERGENCE_FACTOR * max(np.log(classes), 1.0)
+    history = []
+    for epoch in range(epochs):
+        order = rng.permutation(len(images))
+        losses = []
+        for start in range(0, len(order), batch_size):
+            batch = order[start : start + batch_size]
+            scores, saved = architecture.forward(weights, images[batch], keep=True)
+            loss, grad = softmax_cross_entropy(scores, targets[batch])
+            if not np.isfinite(loss) or loss > ceiling:
+                raise ValueError(
+                    f"{what}: the loss diverged (loss {loss:.3g} at epoch {epoch + 1}, "
+                    f"batch {start // batch_size + 1}) with learning_rate={learning_rate:g}; "
+                    "lower the learning rate"
+                )
+            gradient = architecture.backward(weights, grad.astype(np.float32), saved)
+            gradient += weight_decay * weights
+            velocity *= momentum
+            velocity -= learning_rate * gradient
+            weights = weights + velocity
+            losses.append(loss * len(batch))
+        history.append(sum(losses) / len(order))
+    if not np.isfinite(weights).all():
+        raise ValueError(f"{what}: the weights are not finite with learning_rate={learning_rate:g}")
+    return weights.astype(np.float64), np.array(history)
+
+
+@node("cnn.train", version=1)
+def train(
+    train: Samples,
+    *,
+    layers: list[str] = DEFAULT_LAYERS,
+    epochs: Annotated[int, Field(ge=1, le=1000)] = 15,
+    batch_size: Annotated[int, Field(ge=1)] = 32,
+    learning_rate: Annotated[float, Field(gt=0)] = 0.05,
+    momentum: Annotated[float, Field(ge=0, lt=1)] = 0.9,
+    weight_decay: Annotated[float, Field(ge=0)] = 1e-4,
+    seed: Annotated[int, Field(ge=0)] = 0,
+) -> Network:
+    """Build a network from its layer list and train it on labelled images by mini-batch
+    SGD with momentum, the loss being the softmax cross-entropy of the last layer.
+
+    A layer list of one ``dense K`` layer is softmax regression (a linear classifier).
+    The layers are chained from the images' shape (1, H, W) before any training: a
+    layer whose input does not fit is refused, naming it. Training stops with an error
+    naming the learning rate when the loss diverges.
+
+    Parameters
+    ----------
+    train : Samples
+        Images (N, H, W) in [0, 1] and their labels.
+    layers : list of str
+        ``conv FxK`` (F filters K×K, padded by K // 2; ``pad P`` to choose), ``relu``,
+        ``maxpool S``, ``dense U``; the last must be ``dense`` with one unit per class.
+    epochs : int
+        Passes over the training set.
+    batch_size : int
+        Images per gradient step.
+    learning_rate : float
+        Step size η.
+    momentum : float
+        Momentum μ.
+    weight_decay : float
+        L2 penalty λ on every weight.
+    seed : int
+        Seed of the initial weights and of the batch order.
+
+    Returns
+    -------
+    Network
+        The trained network and its loss per epoch.
+
+    References
+    ----------
+    Y. LeCun et al., "Gradient-based learning applied to document recognition", Proc.
+    IEEE 86(11), 1998.
+    """
+    classes, targets = np.unique(train.labels, return_inverse=True)
+    architecture = build_architecture((1, *train.images.shape[1:]), list(layers))
+    if architecture.shapes[-1] != (len(classes),):
+        raise ValueError(
+            f"layer {len(layers) - 1} '{layers[-1]}' gives {architecture.shapes[-1]} outputs "
+            f"but the samples have {len(classes)} classes; end with 'dense {len(classes)}'"
+        )
+    images = train.images[:, None]
+    weights, history = fit_network(
+        architecture,
+        images,
+        targets,
+        epochs=epochs,
+        batch_size=batch_size,
+        learning_rate=learning_rate,
+        momentum=momentum,
+        weight_decay=weight_decay,
+        seed=seed,
+    )
+    spec = json.dumps({"input": list(architecture.shapes[0]), "layers": list(layers)})
+    return NetworkModel(spec, weights, classes.astype(np.int64), history)
+
+
+def _predicted(network: NetworkModel, samples: SampleSet) -> tuple[np.ndarray, np.ndarray]:
+    scores = network.scores(samples.images)
+    shifted = np.exp(scores - scores.max(axis=1, keepdims=True))
+    probability = shifted / shifted.sum(axis=1, keepdims=True)
+    best = probability.argmax(axis=1)
+    return network.classes[best], probability[np.arange(len(best)), best]
+
+
+@node("cnn.predict", version=1)
+def predict(network: Network, samples: Samples) -> Table:
+    """The class of each sample by the network, with its softmax probability.
+
+    Parameters
+    ----------
+    network : Network
+        A trained network.
+    samples : Samples
+        Images of the shape the network was trained on.
+
+    Returns
+    -------
+    Table
+        Columns ``label`` (the samples' own), ``predicted``, ``probability``.
+    """
+    predicted, probability = _predicted(network, samples)
+    return {"label": samples.labels, "predicted": predicted, "probability": probability}
+
+
+@node("cnn.accuracy", version=1)
+def accuracy(network: Network, samples: Samples) -> Float:
+    """The fraction of samples the network classifies correctly.
+
+    Parameters
+    ----------
+    network : Network
+        A trained network.
+    samples : Samples
+        Held-out images with their labels.
+
+    Returns
+    -------
+    float
+        Accuracy in [0, 1].
+    """
+    predicted, _ = _predicted(network, samples)
+    return float(np.mean(predicted == samples.labels))
