@@ -83,6 +83,7 @@ if TYPE_CHECKING:
         PinholeCamera,
     )
     from ._registry import Registry
+    from ._report import rewrite_report
     from ._run import NodeRecord, RunHooks, RunRecord, RunResult, run
     from ._sweep import SweepResult, sweep
     from .types import (
@@ -239,6 +240,7 @@ __all__ = [
     "parse_pipeline",
     "pipeline_json_schema",
     "port_of",
+    "rewrite_report",
     "run",
     "run_batch",
     "source",

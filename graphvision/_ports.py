@@ -167,6 +167,25 @@ class PortType:
         meta_path.write_text(json.dumps(meta, indent=2))
         return [path, meta_path]
 
+    @classmethod
+    def read(cls, files: list[Path]) -> Any:
+        """The value :meth:`write` wrote to ``files`` (for a report made again from them).
+
+        Raises
+        ------
+        ValueError
+            When the files are not what this port type writes.
+        """
+        by_suffix = {path.suffix: path for path in files}
+        if ".npy" in by_suffix:
+            return cls.decode({"data": np.load(by_suffix[".npy"], allow_pickle=False)}, {})
+        if ".npz" not in by_suffix:
+            raise ValueError(f"{cls.type_name()} is written as .npy or .npz, got {files}")
+        with np.load(by_suffix[".npz"], allow_pickle=False) as archive:
+            arrays = {name: archive[name] for name in archive.files}
+        meta = json.loads(by_suffix[".json"].read_text()) if ".json" in by_suffix else {}
+        return cls.decode(arrays, meta)
+
 
 def _fail(cls: type[PortType], expected: str, value: Any) -> PortValueError:
     return PortValueError(f"expected {cls.type_name()} ({expected}), got {describe_value(value)}")
@@ -279,6 +298,13 @@ class ImagePort(FloatImagePort):
         return [path]
 
     @classmethod
+    def read(cls, files: list[Path]) -> np.ndarray:
+        """The PNG back (to 8 bits, as it was written)."""
+        import imageio.v3 as iio
+
+        return (iio.imread(files[0]).astype(np.float32) / np.float32(255.0)).astype(np.float32)
+
+    @classmethod
     def preview(cls, value: np.ndarray) -> np.ndarray | None:
         return value
 
@@ -316,6 +342,13 @@ class BinaryImagePort(ArrayPort):
         path = stem.with_suffix(".png")
         iio.imwrite(path, value.astype(np.uint8) * 255)
         return [path]
+
+    @classmethod
+    def read(cls, files: list[Path]) -> np.ndarray:
+        import imageio.v3 as iio
+
+        mask: np.ndarray = iio.imread(files[0]) > 0
+        return mask
 
     @classmethod
     def preview(cls, value: np.ndarray) -> np.ndarray | None:
@@ -393,6 +426,10 @@ class _ScalarPort(PortType):
         path.write_text(json.dumps(value) + "\n")
         return [path]
 
+    @classmethod
+    def read(cls, files: list[Path]) -> Any:
+        return json.loads(files[0].read_text())
+
 
 class FloatPort(_ScalarPort):
     """A real number (an ``Int`` is accepted where a ``Float`` is expected)."""
@@ -469,6 +506,11 @@ class TablePort(PortType):
             writer.writerows(rows)
         json_path.write_text(json.dumps({c: value[c].tolist() for c in columns}) + "\n")
         return [csv_path, json_path]
+
+    @classmethod
+    def read(cls, files: list[Path]) -> dict[str, np.ndarray]:
+        (table,) = [path for path in files if path.suffix == ".json"]
+        return {name: np.asarray(column) for name, column in json.loads(table.read_text()).items()}
 
 
 class RecordPort(PortType):
@@ -564,6 +606,13 @@ class Points3DPort(ArrayPort):
         )
         path.write_bytes(header.encode("ascii") + value.astype("<f8").tobytes())
         return [path]
+
+    @classmethod
+    def read(cls, files: list[Path]) -> np.ndarray:
+        header, _, body = files[0].read_bytes().partition(b"end_header\n")
+        if b"binary_little_endian" not in header:
+            raise ValueError(f"{files[0]} is not a PLY file graphvision wrote")
+        return np.frombuffer(body, "<f8").reshape(-1, 3).copy()
 
     @classmethod
     def preview(cls, value: np.ndarray) -> np.ndarray | None:

@@ -31,6 +31,7 @@ from ._compile import CompiledGraph
 from ._errors import OutputFolderError
 from ._html import write_html_report
 from ._ports import PortType, _ScalarPort
+from ._registry import Registry
 from ._run import RunRecord, RunResult
 
 __all__ = [
@@ -39,6 +40,7 @@ __all__ = [
     "check_output_folder",
     "owned_files",
     "remove_owned_files",
+    "rewrite_report",
     "shown_value",
     "write_outputs",
     "write_report",
@@ -254,3 +256,69 @@ def shown_value(kind: type[PortType], value: Any) -> str:
 def _cell(text: str) -> str:
     """``text`` safe inside a Markdown table cell (one line, pipes escaped)."""
     return " ".join(text.split()).replace("|", "\\|")
+
+
+def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
+    """Make ``report.md`` and ``report.html`` of a run folder again from its files.
+
+    The run's ``record.json`` names the pipeline file, the overrides and the
+    files of each output; the outputs are read back by their port types (images
+    from their PNGs, arrays from ``.npy``/``.npz``, scalars and tables from
+    JSON, point clouds from PLY). Useful after editing outputs by hand, or to
+    get the HTML page of a run written before it existed. Returns the page.
+
+    Raises
+    ------
+    OutputFolderError
+        Naming what is missing or unreadable: the folder, its record, the
+        pipeline file, an output's file. Nothing is written then.
+    """
+    from dataclasses import fields
+
+    from ._compile import compile_graph
+    from ._pipeline_file import load_pipeline
+    from ._plugins import discover
+    from ._run import NodeRecord
+
+    record_path = directory / RECORD
+    if not record_path.is_file():
+        raise OutputFolderError(f"{directory} has no {RECORD}: it is not a graphvision run folder")
+    try:
+        data = json.loads(record_path.read_text())
+        known = {f.name for f in fields(RunRecord)}
+        record = RunRecord(**{k: v for k, v in data.items() if k in known})
+        record.nodes = [NodeRecord(**node) for node in data.get("nodes", [])]
+    except (ValueError, TypeError) as error:
+        raise OutputFolderError(
+            f"{record_path} is not a graphvision run record ({error})"
+        ) from None
+    source = Path(record.pipeline_file) if record.pipeline_file else None
+    if source is None or not source.is_file():
+        raise OutputFolderError(
+            f"the pipeline file of the run in {directory} is gone ({record.pipeline_file or '?'}): "
+            "the report draws its graph"
+        )
+    graph = load_pipeline(source)
+    registry = registry or discover(graph.plugins)
+    graph = graph.with_overrides(record.overrides) if record.overrides else graph
+    compiled = compile_graph(graph, registry, provided=set(record.inputs))
+    outputs: dict[str, Any] = {}
+    for name, names in record.files.items():
+        paths = [directory / file for file in names]
+        missing = [p.name for p in paths if not p.is_file()]
+        if missing:
+            raise OutputFolderError(
+                f"output '{name}' of the run in {directory} is gone ({', '.join(missing)}): "
+                "run the pipeline again to write it"
+            )
+        port = registry.port_type(record.outputs[name].split(" ", 1)[0])
+        try:
+            outputs[name] = port.validate(port.read(paths))
+        except (ValueError, OSError, KeyError) as error:
+            raise OutputFolderError(
+                f"output '{name}' in {directory} cannot be read back as {port.type_name()} "
+                f"({error})"
+            ) from None
+    written = {name: list(names) for name, names in record.files.items()}
+    write_report(compiled, outputs, written, record, directory)
+    return write_html_report(compiled, outputs, record, directory)

@@ -445,6 +445,15 @@ def cmd_graph(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_report(args: argparse.Namespace) -> int:
+    from ._report import rewrite_report
+
+    registry = _registry(args, []) if args.plugins else None  # else: the pipeline's own
+    page = rewrite_report(Path(args.directory), registry)
+    print(f"wrote {page} and {page.with_name('report.md')}", file=sys.stderr)
+    return EXIT_OK
+
+
 def cmd_cache(args: argparse.Namespace) -> int:
     from ._cache import DiskStore, default_cache_dir
 
@@ -624,6 +633,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--format", choices=("svg", "dot", "mermaid"), default="dot", help="the drawing's format"
     )
     p.set_defaults(func=cmd_graph)
+
+    p = command("report", "write a run folder's report.md and report.html again from its files")
+    p.add_argument("directory", help="the run's output folder (-d of graphvision run)")
+    p.set_defaults(func=cmd_report)
 
     p = command("cache", "inspect, prune or empty the disk cache")
     p.add_argument("action", choices=("info", "prune", "clear"), help="what to do")

@@ -342,3 +342,29 @@ def test_the_git_state_follows_edits_and_commits_within_one_process(tmp_path):
     subprocess.run([*git, "commit", "-qam", "two"], check=True)
     assert git_state(pipeline) == (head().strip(), False) != (first, False)
     assert git_state(tmp_path / "elsewhere.yaml") == ("", False)
+
+
+def test_report_writes_a_run_folders_pages_again_and_names_what_is_gone(capsys, tmp_path):
+    import shutil
+
+    pipeline = Path(shutil.copy(DEMO, tmp_path / "denoise.yaml"))
+    out = tmp_path / "out"
+    assert run_cli(capsys, "run", pipeline, "-d", out, "--no-cache")[0] == 0
+    page = (out / "report.html").read_text()
+    (out / "report.html").unlink()
+    (out / "report.md").unlink()
+    status, err = run_cli(capsys, "report", out)
+    assert status == 0, err
+    again = (out / "report.html").read_text()
+    assert again.count("<img") == page.count("<img") > 3  # every picture is back
+    assert "psnr_noisy_gaussian" in (out / "report.md").read_text()
+    record = json.loads((out / "record.json").read_text())
+    gone = record["files"]["noisy_gaussian"][0]
+    (out / gone).unlink()
+    status, err = run_cli(capsys, "report", out)
+    assert status == 2 and f"output 'noisy_gaussian' of the run in {out} is gone ({gone})" in err
+    pipeline.unlink()
+    status, err = run_cli(capsys, "report", out)
+    assert status == 2 and "the pipeline file of the run" in err and "is gone" in err
+    status, err = run_cli(capsys, "report", tmp_path)
+    assert status == 2 and "has no record.json: it is not a graphvision run folder" in err

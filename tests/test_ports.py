@@ -109,3 +109,36 @@ def test_points3d_checks_and_ply(tmp_path):
     lines = header.decode("ascii").splitlines()
     assert lines[:3] == ["ply", "format binary_little_endian 1.0", "element vertex 2"]
     np.testing.assert_array_equal(np.frombuffer(body, "<f8").reshape(-1, 3), cloud)
+
+
+def test_every_built_in_port_type_reads_back_what_it_writes(tmp_path):
+    rng = np.random.default_rng(0)
+    image = rng.random((5, 7, 3)).astype(np.float32)
+    values = [
+        (gv.ImagePort, image),
+        (gv.GrayImagePort, image[..., 0]),
+        (gv.BinaryImagePort, image[..., 0] > 0.5),
+        (gv.LabelImagePort, (image[..., 0] * 5).astype(np.int32)),
+        (gv.FloatPort, 0.125),
+        (gv.IntPort, 24),
+        (gv.TextPort, "done"),
+        (gv.TablePort, {"label": np.array([1, 2]), "area": np.array([3.5, 4.0])}),
+        (gv.Points3DPort, rng.normal(size=(4, 3))),
+        (gv.Points2DPort, rng.normal(size=(4, 2))),
+        (gv.CameraPort, _camera()),
+    ]
+    for number, (port, value) in enumerate(values):
+        files = port.write(value, tmp_path / f"value{number}")
+        back = port.validate(port.read(files))
+        if port in (gv.ImagePort, gv.GrayImagePort):  # 8-bit PNG
+            np.testing.assert_allclose(back, value, atol=0.5 / 255 + 1e-7)
+        elif port is gv.TablePort:
+            assert set(back) == set(value)
+            for column in value:
+                np.testing.assert_array_equal(back[column], value[column])
+        elif port is gv.CameraPort:
+            np.testing.assert_array_equal(back.P, value.P)
+        elif isinstance(value, np.ndarray):
+            np.testing.assert_array_equal(back, value)
+        else:
+            assert back == value
