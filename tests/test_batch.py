@@ -328,3 +328,22 @@ def test_on_processes_each_further_file_is_one_task_with_the_shared_values_sent(
     assert "one task per file" in later["executor"]
     statuses = {node["name"]: node["status"] for node in later["nodes"]}
     assert statuses == {"model": "cached", "score": "computed"}
+
+
+@pytest.mark.parametrize("executor", ["threads", "processes"])
+def test_a_batch_where_every_file_fails_exits_1_and_still_writes_its_pages(
+    capsys, tmp_path, executor
+):
+    for name in ("a.png", "b.png", "c.png"):
+        (tmp_path / "in").mkdir(exist_ok=True)
+        (tmp_path / "in" / name).write_text("not an image")
+    out = tmp_path / "out"
+    pattern = f"image={tmp_path}/in/*.png"
+    args = ["run", str(DEMO), "--no-cache", "--batch", pattern, "-d", str(out), "-o", PSNR]
+    status = main([*args, "--executor", executor, "--workers", "2"])
+    err = capsys.readouterr().err
+    assert status == 1 and "Traceback" not in err and "0 of 3 succeeded" in err
+    rows = list(csv.DictReader((out / "batch.csv").open()))
+    assert [r["status"] for r in rows] == ["failed"] * 3
+    assert all("is not a readable image" in r["error"] for r in rows)
+    assert (out / "batch.html").read_text().count("failed") >= 3
