@@ -27,6 +27,7 @@ __all__ = [
 
 Sigma = Annotated[float, Field(gt=0, le=100, description="Standard deviation in pixels.")]
 Size = Annotated[int, Field(ge=1, le=255, description="Window side in pixels.")]
+_NUMPY_PAD = {"reflect": "symmetric", "nearest": "edge", "grid-wrap": "wrap"}
 
 
 def _rank_one_factors(kernel: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -44,10 +45,32 @@ def _rank_one_factors(kernel: np.ndarray) -> tuple[np.ndarray, np.ndarray] | Non
     return u[:, 0] * s[0], vt[0]
 
 
+def _boundary_index(length: int, before: int, after: int, boundary: str) -> np.ndarray:
+    """Source index of each padded position along an axis (−1: zero; crop pads too)."""
+    positions = np.arange(length, dtype=np.int64)
+    if boundary == "zero":
+        return np.pad(positions, (before, after), mode="constant", constant_values=-1)
+    return np.pad(positions, (before, after), mode=_NUMPY_PAD[scipy_mode(boundary)])
+
+
+def _correlate_any(image: np.ndarray, kernel: np.ndarray, boundary: str) -> np.ndarray:
+    """2-D correlation of one plane with any kernel, centre ``(kh // 2, kw // 2)``, compiled."""
+    from ._correlate_kernels import correlate_2d
+
+    (kh, kw), (rows, cols) = kernel.shape, image.shape
+    out = np.empty((rows, cols), dtype=np.float32)
+    correlate_2d(
+        np.ascontiguousarray(image, dtype=np.float32),
+        np.ascontiguousarray(kernel, dtype=np.float64),
+        _boundary_index(rows, kh // 2, kh - 1 - kh // 2, boundary),
+        _boundary_index(cols, kw // 2, kw - 1 - kw // 2, boundary),
+        out,
+    )
+    return out
+
+
 def _filter(image: np.ndarray, kernel: np.ndarray, boundary: str) -> np.ndarray:
     """Correlate each channel of ``image`` with the 2-D ``kernel`` (factored when separable)."""
-    import scipy.ndimage as ndi
-
     from .._separable import correlate_separable
 
     if boundary == "crop":
@@ -55,9 +78,13 @@ def _filter(image: np.ndarray, kernel: np.ndarray, boundary: str) -> np.ndarray:
     factors = _rank_one_factors(kernel)
     if factors is not None:
         out = correlate_separable(image, *factors, scipy_mode(boundary))
-        return crop_valid(out, kernel.shape) if boundary == "crop" else out
-    weights = kernel[:, :, None] if image.ndim == 3 else kernel
-    out = ndi.correlate(image, weights, output=np.float32, mode=scipy_mode(boundary), cval=0.0)
+    elif image.ndim == 3:
+        out = np.stack(
+            [_correlate_any(image[..., c], kernel, boundary) for c in range(image.shape[2])],
+            axis=2,
+        )
+    else:
+        out = _correlate_any(image, kernel, boundary)
     return crop_valid(out, kernel.shape) if boundary == "crop" else out
 
 
@@ -83,7 +110,9 @@ def correlate(image: FloatImage, kernel: Kernel, *, boundary: Boundary = "mirror
     valid part, smaller by the kernel size minus one. A kernel of rank one
     with odd sides (a Gaussian, a box, Sobel) is factored as
     :math:`H = c\, r^\top` and applied as two 1-D passes by the compiled
-    separable core, :math:`O(k)` instead of :math:`O(k^2)` per pixel.
+    separable core, :math:`O(k)` instead of :math:`O(k^2)` per pixel; any
+    other kernel is applied tap by tap over whole rows by a compiled loop
+    that accumulates in float64, as scipy does.
 
     Parameters
     ----------

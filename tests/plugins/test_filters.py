@@ -226,3 +226,40 @@ def test_rank_one_factoring_keeps_crop_colour_and_refuses_other_kernels():
     np.testing.assert_allclose(
         filters.correlate(gray, rank_two), ndi.correlate(gray, rank_two), atol=1e-6
     )
+
+
+@pytest.mark.parametrize("shape", [(3, 3), (4, 5), (5, 2), (7, 7), (1, 4)])
+@pytest.mark.parametrize(
+    ("boundary", "mode"),
+    [("mirror", "reflect"), ("replicate", "nearest"), ("wrap", "grid-wrap"), ("zero", "constant")],
+)
+def test_any_kernel_correlation_equals_scipy(shape, boundary, mode):
+    """Kernels of rank above one (and even sides) take the compiled 2-D path."""
+    rng = np.random.default_rng(sum(shape))
+    kernel = rng.normal(size=shape)
+    image = rng.random((23, 31)).astype(np.float32)
+    # reference: scipy.ndimage.correlate(image, kernel, mode=mode) (accumulates in double)
+    np.testing.assert_allclose(
+        filters.correlate(image, kernel, boundary=boundary),
+        ndi.correlate(image, kernel, mode=mode),
+        atol=1e-6,
+    )
+    # convolve is correlation with the flipped kernel, centred again at (kh // 2, kw // 2)
+    np.testing.assert_allclose(
+        filters.convolve(image, kernel, boundary=boundary),
+        ndi.correlate(image, kernel[::-1, ::-1], mode=mode),
+        atol=1e-6,
+    )
+
+
+def test_any_kernel_on_colour_and_crop():
+    rng = np.random.default_rng(8)
+    kernel = rng.normal(size=(4, 3))
+    image = rng.random((17, 19, 3)).astype(np.float32)
+    out = filters.correlate(image, kernel)
+    for c in range(3):
+        # reference: scipy.ndimage.correlate(channel, kernel, mode="reflect")
+        np.testing.assert_allclose(out[..., c], ndi.correlate(image[..., c], kernel), atol=1e-6)
+    np.testing.assert_array_equal(
+        filters.correlate(image, kernel, boundary="crop"), out[2:-1, 1:-1]
+    )
