@@ -27,7 +27,11 @@ __all__ = [
 
 Sigma = Annotated[float, Field(gt=0, le=100, description="Standard deviation in pixels.")]
 Size = Annotated[int, Field(ge=1, le=255, description="Window side in pixels.")]
-_NUMPY_PAD = {"reflect": "symmetric", "nearest": "edge", "grid-wrap": "wrap"}
+_NUMPY_PAD: dict[str, Literal["symmetric", "edge", "wrap"]] = {
+    "reflect": "symmetric",
+    "nearest": "edge",
+    "grid-wrap": "wrap",
+}
 
 
 def _rank_one_factors(kernel: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
