@@ -5,29 +5,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ._padded_rows import fill_line
+
 __all__ = ["correlate_2d"]
-
-
-@njit(cache=True, nogil=True)
-def _fill_line(
-    line: np.ndarray, image: np.ndarray, source: int, column_index: np.ndarray, before: int
-) -> None:  # pragma: no cover
-    """``line`` = image row ``source`` padded by ``column_index`` (−1: zero, as a row).
-
-    ``before`` positions precede the row (an even kernel pads unequally).
-    """
-    if source < 0:
-        line[:] = 0.0
-        return
-    row = image[source]
-    cols = row.size
-    line[before : before + cols] = row
-    for k in range(before):
-        index = column_index[k]
-        line[k] = row[index] if index >= 0 else 0.0
-    for k in range(before + cols, line.size):
-        index = column_index[k]
-        line[k] = row[index] if index >= 0 else 0.0
 
 
 @njit(cache=True, fastmath=True, nogil=True)
@@ -53,7 +33,7 @@ def correlate_2d(
     for r in range(rows):
         total[:] = 0.0
         for i in range(kh):
-            _fill_line(line, image, row_index[r + i], column_index, before)
+            fill_line(line, image, row_index[r + i], column_index, before)
             for j in range(kw):
                 weight = kernel[i, j]
                 if weight == 0.0:

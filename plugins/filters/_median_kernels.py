@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ._padded_rows import fill_line
+
 __all__ = ["median_by_network"]
 
 
@@ -30,32 +32,15 @@ def _compare(
 
 
 @njit(cache=True, nogil=True)
-def _fill_line(
-    line: np.ndarray, image: np.ndarray, source: int, column_index: np.ndarray
-) -> None:  # pragma: no cover
-    """``line`` = image row ``source`` padded by ``column_index`` (−1: zero, as a row)."""
-    if source < 0:
-        line[:] = 0.0
-        return
-    row = image[source]
-    cols = row.size
-    pad = (line.size - cols) // 2
-    line[pad : pad + cols] = row
-    for k in range(pad):
-        left, right = column_index[k], column_index[pad + cols + k]
-        line[k] = row[left] if left >= 0 else 0.0
-        line[pad + cols + k] = row[right] if right >= 0 else 0.0
-
-
-@njit(cache=True, nogil=True)
 def _advance(
     lines: np.ndarray, image: np.ndarray, row_index: np.ndarray, column_index: np.ndarray, r: int
 ) -> None:  # pragma: no cover
     """Hold padded rows ``r .. r + size − 1`` in the ring ``lines`` (slot: row mod size)."""
     size = lines.shape[0]
+    before = (column_index.size - image.shape[1]) // 2  # 0 for crop
     first = 0 if r == 0 else r + size - 1
     for p in range(first, r + size):
-        _fill_line(lines[p % size], image, row_index[p], column_index)
+        fill_line(lines[p % size], image, row_index[p], column_index, before)
 
 
 @njit(cache=True, nogil=True)
