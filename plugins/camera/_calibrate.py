@@ -81,7 +81,7 @@ def dlt_projection(world: np.ndarray, image: np.ndarray) -> np.ndarray:
     rows[0::2, 8:] = x[:, 1:2] * X
     rows[1::2, 0:4] = X
     rows[1::2, 8:] = -x[:, 0:1] * X
-    _, _, vt = np.linalg.svd(rows)
+    _, _, vt = np.linalg.svd(rows, full_matrices=rows.shape[0] < rows.shape[1])
     P = np.linalg.inv(T) @ vt[-1].reshape(3, 4) @ U
     return P / np.linalg.norm(P)
 

@@ -46,7 +46,7 @@ def vanishing_point(segments: np.ndarray) -> np.ndarray:
     q = np.column_stack([segments[:, 2:], np.ones(len(segments))]) @ T.T
     lines = np.cross(p, q)
     lines /= np.hypot(lines[:, 0], lines[:, 1])[:, None]
-    _, _, vt = np.linalg.svd(lines)
+    _, _, vt = np.linalg.svd(lines, full_matrices=len(lines) < 3)
     v = np.linalg.solve(T, vt[-1])
     v /= np.linalg.norm(v)
     return v if v[2] >= 0 else -v

@@ -50,7 +50,7 @@ def eight_point(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
     ha = np.column_stack([a, np.ones(len(a))]) @ ta.T
     hb = np.column_stack([b, np.ones(len(b))]) @ tb.T
     design = np.einsum("ni,nj->nij", hb, ha).reshape(len(a), 9)
-    _, singular, vt = np.linalg.svd(design)
+    _, singular, vt = np.linalg.svd(design, full_matrices=len(design) < 9)  # no N × N U
     if singular[7] < 1e-9 * singular[0]:
         return None
     f = vt[-1].reshape(3, 3)

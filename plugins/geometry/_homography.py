@@ -75,7 +75,8 @@ def estimate_homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
     rows = np.empty((2 * len(a), 9))
     rows[0::2] = np.hstack([-xs, zeros, b[:, :1] * xs])
     rows[1::2] = np.hstack([zeros, -xs, b[:, 1:] * xs])
-    _, singular, vt = np.linalg.svd(rows)
+    # the reduced SVD: the full one also builds U, 2N × 2N (1800² for 900 matches)
+    _, singular, vt = np.linalg.svd(rows, full_matrices=rows.shape[0] < rows.shape[1])
     if singular[-2] < 1e-10 * singular[0]:
         return None  # the solution is not unique: degenerate points
     h = np.linalg.inv(t_dst) @ vt[-1].reshape(3, 3) @ t_src
