@@ -42,7 +42,12 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["code_fingerprint", "top_level_distributions"]
+__all__ = [
+    "code_fingerprint",
+    "distributions_of",
+    "note_distribution",
+    "top_level_distributions",
+]
 
 _MEMO: weakref.WeakKeyDictionary[Callable[..., Any], str] = weakref.WeakKeyDictionary()
 _SCALARS = (int, float, complex, str, bytes, bool, type(None))
@@ -82,12 +87,34 @@ def top_level_distributions() -> dict[str, list[str]]:
     return dict(packages_distributions())
 
 
+_NOTED: dict[str, list[str]] = {}
+
+
+def note_distribution(top_level: str, distribution: str) -> None:
+    """Remember that ``distribution`` provides package ``top_level`` (plugin discovery knows
+    it from the entry point), so :func:`distributions_of` need not scan every installed
+    distribution's metadata (0.1 s or more)."""
+    names = _NOTED.setdefault(top_level, [])
+    if distribution not in names:
+        names.append(distribution)
+
+
+def distributions_of(top_level: str) -> list[str]:
+    """The distributions providing top-level package ``top_level``: those noted by plugin
+    discovery, none for a local plugin file, else from the installed metadata."""
+    if top_level in _NOTED:
+        return _NOTED[top_level]
+    if top_level.startswith("graphvision_local_"):  # a plugin file: no distribution
+        return []
+    return top_level_distributions().get(top_level, [])
+
+
 @cache
 def _distribution_version(project: str) -> str:
     """``name==version`` of the installed distribution providing ``project``, or ''."""
     from importlib.metadata import version
 
-    names = top_level_distributions().get(project, [])
+    names = distributions_of(project)
     return ";".join(f"{name}=={version(name)}" for name in sorted(set(names)))
 
 

@@ -24,6 +24,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 
 from ._errors import GraphvisionError, PluginLoadError
+from ._fingerprint import note_distribution
 from ._registry import Registry
 
 __all__ = ["ENTRY_POINT_GROUP", "discover", "import_file", "load_entry_points", "load_path"]
@@ -49,6 +50,8 @@ def load_entry_points(registry: Registry) -> None:
             if not isinstance(module, types.ModuleType):
                 raise PluginLoadError(f"entry point must name a module, got {module!r}")
             registry.add_plugin(module, entry.name, entry.value)
+            if entry.dist is not None:
+                note_distribution(module.__name__.partition(".")[0], entry.dist.name)
         except Exception as error:
             registry.record_failure(entry.name, entry.value, _summarise(error))
 

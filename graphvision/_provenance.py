@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ._compile import CompiledGraph
-from ._fingerprint import top_level_distributions
+from ._fingerprint import distributions_of
 from ._registry import Registry
 
 if TYPE_CHECKING:
@@ -122,7 +122,7 @@ def _ask_git(file: Path) -> tuple[str, bool]:
 @functools.cache
 def _distribution_of(module: str) -> str:
     """``name version`` of the installed distribution that provides top-level ``module``."""
-    names = top_level_distributions().get(module.partition(".")[0], [])
+    names = distributions_of(module.partition(".")[0])
     for name in names:
         try:
             return f"{name} {metadata.version(name)}"
