@@ -227,7 +227,7 @@ def run_batch(
         "keep_going": keep_going,
         "hooks": hooks,
     }
-    seeds: list[Seed] = []
+    seeds: list[Any] = []  # the shared values, or the executor's handle on them
 
     def run_one(index: int) -> BatchItem:
         item_inputs = {**(inputs or {}), input: str(paths[index])}
@@ -236,7 +236,9 @@ def run_batch(
                 graph, paths[index], folders[index], {**options, "inputs": item_inputs}
             )
             if index == 0 and one_task_per_file and result is not None and cache is not None:
-                seeds.extend(shared_seeds(result.compiled, result.record, cache, input))
+                values: list[Seed] = shared_seeds(result.compiled, result.record, cache, input)
+                share = getattr(pool, "share", None)  # Dask: sent to the workers once
+                seeds.append(share(values) if share is not None and values else values)
                 compiled.append(result.compiled)
             return item
         return _run_file(
@@ -246,7 +248,7 @@ def run_batch(
             folders[index],
             compiled[0] if compiled else None,
             registry,
-            (item_inputs, outputs, overrides, keep_going, seeds),
+            (item_inputs, outputs, overrides, keep_going, seeds[0] if seeds else []),
         )
 
     compiled: list[CompiledGraph] = []

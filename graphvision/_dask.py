@@ -104,6 +104,11 @@ class DaskExecutor:
         """Tasks the cluster runs at once: the threads of all its workers."""
         return max(1, sum(self.client.nthreads().values()))
 
+    def share(self, value: Any) -> Any:
+        """``value`` placed on every worker once; the handle stands for it in :meth:`submit`'s
+        arguments (a batch's shared values, sent once rather than with every file)."""
+        return self.client.scatter(value, broadcast=True, hash=False)
+
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         """Run ``fn(*args)`` as a Dask task; a ``concurrent.futures`` future of its result."""
         task = self.client.submit(_on_worker, fn, *args, pure=False, retries=self.retries)

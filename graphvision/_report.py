@@ -292,6 +292,12 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
         raise OutputFolderError(
             f"{record_path} is not a graphvision run record ({error})"
         ) from None
+    for name, names in record.files.items():
+        outside = [file for file in names if Path(file).name != file]
+        if outside:  # a record graphvision wrote names files in its own folder only
+            raise OutputFolderError(
+                f"{record_path} lists a file outside its folder for output '{name}': {outside[0]}"
+            )
     source = Path(record.pipeline_file) if record.pipeline_file else None
     if source is None or not source.is_file():
         raise OutputFolderError(

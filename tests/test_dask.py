@@ -139,3 +139,26 @@ def test_a_batch_on_dask_survives_a_dying_worker_and_retries_its_file(dask_execu
     for item, level in zip(batch.items, levels, strict=True):
         assert item.scalars["mean"] == pytest.approx(level / 255.0, abs=1e-6)
     assert (tmp_path / "out" / "batch.csv").is_file()
+
+
+def test_a_dask_batch_sends_the_shared_values_once_and_never_recomputes_them(
+    dask_executor, tmp_path
+):
+    from .test_batch import _counting_graph, photo
+
+    graph, registry, log = _counting_graph(tmp_path)
+    levels = [20, 90, 160, 230]
+    files = [photo(tmp_path / "in" / f"{k}.png", level) for k, level in enumerate(levels)]
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        executor=dask_executor,
+        cache=None,
+    )
+    assert [item.status for item in batch.items] == ["ok"] * len(levels)
+    for item, level in zip(batch.items, levels, strict=True):
+        assert item.scalars["score"] == pytest.approx(2.0 * level / 255.0, abs=1e-6)
+    assert log.read_text().splitlines().count("model") == 1
