@@ -11,7 +11,8 @@
   ``cv2.ximgproc`` is not installable here: opencv-contrib is not in the bench extra).
 * R-CNN (``pipelines/rcnn.yaml``): training times of the backbone and of the head,
   proposals and detection time per image, mAP@0.5 and true-positive IoU with and without
-  box regression.
+  box regression; the region proposal network's recall against selective search's at
+  5–50 proposals per held-out scene.
 
 Run: ``python bench/bench_detection.py`` (needs the ``bench`` extra for scikit-learn).
 """
@@ -112,9 +113,9 @@ def proposal_rows() -> list[str]:
 
 def rcnn_rows() -> list[str]:
     graph = gv.load_pipeline(PIPELINES / "rcnn.yaml")
-    for name in ("detector", "test_scenes", "test_proposals"):
+    for name in ("detector", "test_scenes", "test_proposals", "rpn"):
         graph.output(f"the_{name}", name)
-    result = gv.run(graph)
+    result = gv.run(graph, executor="sync")  # one node at a time: each node's own time
     seconds = _node_seconds(result)
     out = result.outputs
     scenes = out["the_test_scenes"]
@@ -126,6 +127,16 @@ def rcnn_rows() -> list[str]:
     began = time.perf_counter()
     detection.nms(detection.detect(out["the_detector"], scenes, proposals))
     detect = (time.perf_counter() - began) / len(scenes)
+    began = time.perf_counter()
+    detection.rpn_proposals(out["the_rpn"], scenes, max_boxes=10)
+    rpn = (time.perf_counter() - began) / len(scenes)
+    recalls = []
+    for count in (5, 10, 20, 50):
+        by_rpn = detection.rpn_proposals(out["the_rpn"], scenes, max_boxes=count)
+        recalls.append(
+            f"{count}: {detection.scene_recall(by_rpn, scenes):.3f} / "
+            f"{detection.scene_recall(proposals, scenes, count=count):.3f}"
+        )
     return [
         "| what | figure |",
         "| --- | --- |",
@@ -138,6 +149,10 @@ def rcnn_rows() -> list[str]:
         f"{out['map50_without_regression']:.3f} |",
         f"| mean IoU of true positives, with / without | {out['tp_iou']:.3f} / "
         f"{out['tp_iou_without_regression']:.3f} |",
+        f"| region proposal network: training, proposals per image | {seconds['rpn']:.1f} s, "
+        f"{rpn * 1000:.0f} ms |",
+        f"| recall at IoU 0.5 of the first n proposals per scene, RPN / selective search | "
+        f"{'; '.join(recalls)} |",
     ]
 
 

@@ -12,6 +12,7 @@ from ._evaluate import (
     average_precision,
     match_detections,
     mean_average_precision,
+    scene_recall,
     true_positive_iou,
 )
 from ._proposals import (
@@ -37,6 +38,14 @@ from ._rcnn import (
     training_rois,
 )
 from ._roi import feature_rois, pool_rois, roi_pool
+from ._rpn import (
+    RegionProposer,
+    RegionProposerModel,
+    RegionProposerPort,
+    cell_features,
+    rpn_proposals,
+    train_rpn,
+)
 from ._selective import hierarchical_grouping, selective_search_boxes
 from ._types import (
     Detections,
@@ -54,9 +63,13 @@ __all__ = [
     "Detector",
     "DetectorModel",
     "DetectorPort",
+    "RegionProposer",
+    "RegionProposerModel",
+    "RegionProposerPort",
     "TrainingRois",
     "anchors",
     "average_precision",
+    "cell_features",
     "check_scores",
     "class_wise_nms",
     "detect",
@@ -78,10 +91,13 @@ __all__ = [
     "region_boxes",
     "roi_pool",
     "roi_samples",
+    "rpn_proposals",
     "scene_proposals",
+    "scene_recall",
     "selective_search",
     "selective_search_boxes",
     "train_head",
+    "train_rpn",
     "training_rois",
     "true_positive_iou",
 ]

@@ -14,7 +14,13 @@ from .._boxes import iou_matrix
 from ..synthetic._digit_scenes import Scenes, SceneSet
 from ._types import Detections, DetectionSet
 
-__all__ = ["average_precision", "match_detections", "mean_average_precision", "true_positive_iou"]
+__all__ = [
+    "average_precision",
+    "match_detections",
+    "mean_average_precision",
+    "scene_recall",
+    "true_positive_iou",
+]
 
 
 def match_detections(
@@ -124,3 +130,46 @@ def true_positive_iou(
     """
     hit, overlap = match_detections(detections, scenes, iou)
     return float(overlap[hit].mean()) if hit.any() else float("nan")
+
+
+@node("detection.scene_recall", version=1)
+def scene_recall(
+    proposals: Detections,
+    scenes: Scenes,
+    *,
+    count: Annotated[int, Field(ge=0)] = 0,
+    iou: Annotated[float, Field(gt=0, le=1)] = 0.5,
+) -> Float:
+    """The fraction of all true boxes that one of the first ``count`` proposals of their
+    scene (in the proposals' order) overlaps by IoU ≥ ``iou``.
+
+    Parameters
+    ----------
+    proposals : Detections
+        Proposals of the scenes, each scene's best first.
+    scenes : Scenes
+        The scenes with their true boxes.
+    count : int
+        Proposals per scene taken (0: all).
+    iou : float
+        Overlap that counts as found.
+
+    Returns
+    -------
+    float
+        Recall in [0, 1].
+    """
+    if proposals.scenes != len(scenes):
+        raise ValueError(
+            f"the proposals cover {proposals.scenes} scenes but {len(scenes)} scenes are given"
+        )
+    if len(scenes.xyxy) == 0:
+        raise ValueError("the scenes hold no true box: recall is undefined")
+    found = 0
+    for scene in range(len(scenes)):
+        truth, _ = scenes.boxes_of(scene)
+        mine = proposals.xyxy[proposals.owner == scene]
+        mine = mine[:count] if count else mine
+        if len(truth) and len(mine):
+            found += int((iou_matrix(truth, mine).max(axis=1) >= iou).sum())
+    return found / len(scenes.xyxy)
