@@ -211,6 +211,13 @@ def train_rpn(
     )
 
 
+def _apply(design: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Every anchor shape's linear map (A, D + 1, K) applied to every cell's features
+    (N, D + 1) in one matrix product: (N, A·K), shape by shape."""
+    shapes, dims, outputs = weights.shape
+    return design @ weights.transpose(1, 0, 2).reshape(dims, shapes * outputs)
+
+
 @node("detection.rpn_proposals", version=1)
 def rpn_proposals(
     rpn: RegionProposer,
@@ -249,9 +256,10 @@ def rpn_proposals(
             features = cell_features(maps)
             design = np.hstack([features, np.ones((len(features), 1))])
             anchors = _scene_anchors(maps, rpn.stride, shapes)
-            logits = np.einsum("nd,adk->nak", design, rpn.objectness)
+            shapes_count = len(rpn.objectness)
+            logits = _apply(design, rpn.objectness).reshape(len(design), shapes_count, 2)
             score = 1 / (1 + np.exp(logits[..., 0] - logits[..., 1]))  # softmax of 2
-            moves = np.einsum("nd,adk->nak", design, rpn.regression)
+            moves = _apply(design, rpn.regression)
             boxes = decode_boxes(anchors.reshape(-1, 4), moves.reshape(-1, 4))
             boxes[:, [0, 2]] = np.clip(boxes[:, [0, 2]], 0, width)
             boxes[:, [1, 3]] = np.clip(boxes[:, [1, 3]], 0, height)
