@@ -21,6 +21,11 @@ DEFAULT_LAYERS = ["conv 16x3", "relu", "maxpool 2", "conv 32x3", "relu", "maxpoo
 DIVERGENCE_FACTOR = 20.0
 """The loss is taken as diverged when it is not finite or exceeds this many times the
 loss of guessing (log K for K classes)."""
+STUCK_FRACTION = 0.98
+"""Training that ends (after two epochs or more) with a loss above this fraction of the
+entropy of the class frequencies (the loss of guessing them) learned nothing: a learning
+rate too high for the ReLUs (they die: every output zero) leaves the loss there without
+diverging."""
 
 
 def fit_network(
@@ -45,7 +50,8 @@ def fit_network(
     over batches of a seeded permutation, each epoch, in float32. Returns the weights and the mean
     loss of each epoch; raises ValueError naming ``what`` and the learning rate when the
     loss diverges (not finite, or above ``DIVERGENCE_FACTOR`` · log K), so no NaN weight
-    ever leaves.
+    ever leaves, or when it ends where guessing the class frequencies would
+    (``STUCK_FRACTION``).
 
     References
     ----------
@@ -104,6 +110,16 @@ def _sgd(
         history.append(sum(losses) / len(order))
     if not np.isfinite(weights).all():
         raise ValueError(f"{what}: the weights are not finite with learning_rate={learning_rate:g}")
+    frequency = np.bincount(targets) / len(targets)
+    frequency = frequency[frequency > 0]
+    guessing = float(-(frequency * np.log(frequency)).sum())
+    if epochs >= 2 and guessing > 0 and history[-1] >= STUCK_FRACTION * guessing:
+        raise ValueError(
+            f"{what}: the network learned nothing: after {epochs} epochs the loss "
+            f"{history[-1]:.3g} is that of guessing the class frequencies ({guessing:.3g}) "
+            f"with learning_rate={learning_rate:g}; its ReLUs may have died: lower the "
+            "learning rate"
+        )
     return weights.astype(np.float64), np.array(history)
 
 

@@ -164,6 +164,13 @@ def test_a_diverging_learning_rate_stops_with_a_message(digits):
         cnn.train(digits.train, layers=["dense 10"], learning_rate=50.0, epochs=3)
 
 
+def test_a_network_that_learned_nothing_is_refused(digits):
+    """At learning rate 0.5 the ReLUs die: the loss stays at log 10 without diverging
+    (history 2.24, 2.35, 2.36 on this split)."""
+    with pytest.raises(ValueError, match=r"cnn\.train: the network learned nothing: after 3"):
+        cnn.train(digits.train, epochs=3, learning_rate=0.5)
+
+
 def test_divergence_in_a_pipeline_names_the_node_and_caches_nothing(tmp_path):
     cache = gv.Cache(disk=gv.DiskStore(tmp_path))
     with pytest.raises(
