@@ -250,3 +250,14 @@ def test_network_preview_shows_the_first_filters():
     picture = cnn.NetworkPort.preview(network)
     assert picture is not None and picture.shape == (30, 4 * 31 - 1)  # 4 filters drawn 30×30
     assert picture.min() == 0 and picture.max() == 1
+
+
+def test_layers_that_do_not_chain_in_a_pipeline_name_the_node_and_the_layer():
+    layers = ["conv 8x3", "maxpool 2", "maxpool 2", "maxpool 2", "maxpool 2", "dense 10"]
+    message = r"node 'cnn' \(op cnn.train\) failed.*layer 4 'maxpool 2' does not chain"
+    with pytest.raises(gv.RunError, match=message):
+        gv.run(
+            gv.load_pipeline(PIPELINES / "cnn_digits.yaml"),
+            outputs=["accuracy"],
+            overrides={"cnn.layers": layers},
+        )
