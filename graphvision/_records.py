@@ -211,7 +211,7 @@ class BoxSet:
 
 class BoxesPort(RecordPort):
     """A :class:`BoxSet`: ``xyxy`` float64 (N, 4) finite with x0 < x1 and y0 < y1, ``score``
-    float64 (N,); N may be 0."""
+    float64 (N,) not NaN (± inf allowed: "always keep" or "never"); N may be 0."""
 
     value_class = BoxSet
 
@@ -224,6 +224,9 @@ class BoxesPort(RecordPort):
         xyxy = value.xyxy
         if not np.isfinite(xyxy).all() or (xyxy[:, 2:] <= xyxy[:, :2]).any():
             raise PortValueError("boxes must be finite (x0, y0, x1, y1) with x0 < x1 and y0 < y1")
+        if np.isnan(value.score).any():
+            row = int(np.flatnonzero(np.isnan(value.score))[0])
+            raise PortValueError(f"box {row} has a NaN score: scores order boxes, NaN cannot")
         return value
 
     @classmethod

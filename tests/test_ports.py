@@ -142,3 +142,10 @@ def test_every_built_in_port_type_reads_back_what_it_writes(tmp_path):
             np.testing.assert_array_equal(back, value)
         else:
             assert back == value
+
+
+def test_boxes_refuse_a_nan_score_naming_the_row():
+    boxes = gv.BoxSet(np.array([[0.0, 0, 2, 2], [1, 1, 3, 4]]), np.array([0.9, np.nan]))
+    with pytest.raises(gv.PortValueError, match="box 1 has a NaN score"):
+        gv.BoxesPort.validate(boxes)
+    gv.BoxesPort.validate(gv.BoxSet(boxes.xyxy, np.array([np.inf, -np.inf])))

@@ -87,7 +87,9 @@ def test_boxes_of_negative_width_are_refused():
 
 def test_nan_scores_are_refused_naming_the_box():
     boxes = gv.BoxSet(np.array([[0.0, 0, 4, 4], [1, 1, 5, 5]]), np.array([1.0, np.nan]))
-    with pytest.raises(ValueError, match=r"detection\.recall: proposals: box 1 has a NaN score"):
+    with pytest.raises(
+        ValueError, match=r"detection\.recall: input 'proposals' box 1 has a NaN score"
+    ):
         detection.recall(boxes, boxes)
 
 
