@@ -26,8 +26,9 @@ Each node of the run moves through these states (``NodeRecord.status``)::
                 +--the run was interrupted--> pending (stays)
 
 (``running`` is known to the scheduler and the hooks, not written in the
-record.) The state lives in one dataclass, ``_Run``; ``plan`` decides cached
-or pending from the keys and the cache, ``start`` hands a pending node to the executor
+record.) The state lives in one dataclass, ``_Run``; :func:`plan_steps` (a function
+of the graph, the keys and the cache, changing nothing) decides cached or pending,
+``_Run.plan`` records its decision, ``start`` hands a pending node to the executor
 (encoded values for other processes, the values themselves in this one),
 ``finish`` validates, freezes, stores and releases, and the scheduler
 (:func:`~graphvision._scheduler.run_tasks`) only orders them.
@@ -38,7 +39,7 @@ from __future__ import annotations
 import hashlib
 import json
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from concurrent.futures import Future
 from dataclasses import asdict, dataclass, field
 from functools import partial
@@ -74,9 +75,11 @@ from ._scheduler import run_tasks
 
 __all__ = [
     "NodeRecord",
+    "Plan",
     "RunHooks",
     "RunRecord",
     "RunResult",
+    "plan_steps",
     "resolve_input",
     "run",
     "value_bytes",
@@ -262,6 +265,53 @@ def _freeze(port_type: type[PortType], value: Any) -> Any:
     return port_type.decode({name: freeze(a) for name, a in arrays.items()}, meta)
 
 
+@dataclass(frozen=True)
+class Plan:
+    """What a run must do: the outputs found in the cache (value and seconds to load),
+    and the steps to compute, in topological order."""
+
+    loaded: dict[tuple[str, str], tuple[Any, float]]
+    compute: list[str]
+
+
+def plan_steps(
+    compiled: CompiledGraph,
+    keys: Mapping[tuple[str, str], str],
+    wanted: Iterable[tuple[str, str]],
+    known: Collection[tuple[str, str]],
+    deferred: Collection[str],
+    lookup: Callable[[str, type[PortType]], tuple[bool, Any]] | None,
+) -> Plan:
+    """Decide, from the outputs backwards, what is loaded from the cache and what runs.
+
+    A wanted value that is ``known`` (a graph input, or already produced) or a
+    ``deferred`` input (loaded when read) needs nothing; a cached node's
+    output found by ``lookup(key, port_type)`` is loaded and its producers are
+    not visited, so a fully cached re-run reads only the requested outputs;
+    any other step is computed, and so are the producers of its inputs. The
+    function reads the cache and changes nothing else.
+    """
+    compute: set[str] = set()
+    loaded: dict[tuple[str, str], tuple[Any, float]] = {}
+    stack = list(wanted)
+    steps = compiled.steps
+    while stack:
+        source = stack.pop()
+        name, port = source
+        if source in known or source in loaded or name in compute or name in deferred:
+            continue
+        step = steps[name]
+        if step.spec.cache and lookup is not None:
+            began = time.perf_counter()
+            hit, value = lookup(keys[source], step.outputs[port])
+            if hit:
+                loaded[source] = (value, time.perf_counter() - began)
+                continue
+        compute.add(name)
+        stack.extend(step.inputs.values())
+    return Plan(loaded, [name for name in steps if name in compute])
+
+
 @dataclass(eq=False)
 class _Run:
     """The whole state of one run, in one place (see the module docstring for its machine).
@@ -330,35 +380,28 @@ class _Run:
                 self.keys[(name, port)] = output_key(step.fingerprint, inputs, port)
 
     def plan(self, wanted: Iterable[tuple[str, str]]) -> list[str]:
-        """Load what the cache has, from the outputs backwards; return the steps to compute."""
-        compute: set[str] = set()
-        stack = list(wanted)
-        steps = self.compiled.steps
-        while stack:
-            source = stack.pop()
+        """Apply :func:`plan_steps`: record the loaded values as cached nodes (and tell the
+        hooks), the others as pending; return the steps to compute in order."""
+        lookup = self.cache.get if self.cache is not None else None
+        found = plan_steps(
+            self.compiled, self.keys, wanted, self.values.keys(), self.deferred.keys(), lookup
+        )
+        for source, (value, seconds) in found.loaded.items():
             name, port = source
-            if source in self.values or name in compute or name in self.deferred:
-                continue  # a value, a step already planned, or an input loaded on demand
-            step = steps[name]
-            if step.spec.cache and self.cache is not None:
-                began = time.perf_counter()
-                hit, value = self.cache.get(self.keys[source], step.outputs[port])
-                if hit:
-                    self.values[source] = value
-                    node = self.nodes.setdefault(name, NodeRecord(name, step.spec.id, "cached"))
-                    node.seconds += time.perf_counter() - began
-                    node.output_bytes += value_bytes(step.outputs[port], value)
-                    continue
-            compute.add(name)
-            self.nodes[name] = NodeRecord(name, step.spec.id, "pending")
-            stack.extend(step.inputs.values())
+            self.values[source] = value
+            op = self.compiled.steps[name].spec.id
+            node = self.nodes.setdefault(name, NodeRecord(name, op, "cached"))
+            node.seconds += seconds
+            node.output_bytes += value_bytes(self.compiled.steps[name].outputs[port], value)
+        for name in found.compute:
+            self.nodes[name] = NodeRecord(name, self.compiled.steps[name].spec.id, "pending")
         for node in self.nodes.values():
             if node.status == "cached":
                 for hook in self.hooks:
                     hook.node_finished(
                         name=node.name, op=node.op, status="cached", seconds=node.seconds
                     )
-        return [name for name in steps if name in compute]
+        return found.compute
 
     # -- execution --------------------------------------------------------------------
 
