@@ -22,7 +22,7 @@ import csv
 import glob
 import time
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import Future, ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -30,7 +30,13 @@ from typing import Any
 from ._cache import Cache, MemoryStore
 from ._compile import CompiledGraph
 from ._errors import GraphvisionError, InputError, OutputFolderError, RunError
-from ._executors import Executor, encodes_values, executor_width, make_executor
+from ._executors import (
+    Executor,
+    encodes_values,
+    executor_name,
+    executor_width,
+    make_executor,
+)
 from ._file_task import Seed, file_outcome, local_plugin_paths, run_file_task, shared_seeds
 from ._graph import Graph
 from ._registry import Registry
@@ -248,6 +254,7 @@ def run_batch(
             folders[index],
             compiled[0] if compiled else None,
             registry,
+            cache,
             (item_inputs, outputs, overrides, keep_going, seeds[0] if seeds else []),
         )
 
@@ -331,12 +338,16 @@ def _run_file(
     folder: Path,
     compiled: CompiledGraph | None,
     registry: Registry,
+    cache: Cache | None,
     task: tuple[Any, ...],
 ) -> BatchItem:
     """One file as one task of the executor (:func:`~graphvision._file_task.run_file_task`)."""
     item = BatchItem(path, folder)
     began = time.perf_counter()
-    result: RunResult | None = None
+    result = _from_cache(graph, registry, cache, task, f"{executor_name(pool)}, from the cache")
+    if result is not None:  # every output of this file is in the cache: nothing to send
+        item.seconds = time.perf_counter() - began
+        return _finish_item(item, result)
     try:
         plugins = local_plugin_paths(registry)
         outcome = pool.submit(run_file_task, graph, plugins, *task).result()
@@ -349,12 +360,68 @@ def _run_file(
             overrides = task[2]
             plain = graph.with_overrides(overrides) if overrides else graph
             compiled = compile_graph(plain, registry, provided=set(task[0]))
-        executor = f"{type(pool).__name__}, one task per file"
+        executor = f"{executor_name(pool)}, one task per file"
         result, error_text = file_outcome(outcome, compiled, registry, executor)
         if error_text:
             item.status, item.error = "failed", error_text
+        if result is not None and cache is not None:
+            _store_outputs(result, cache)
     item.seconds = time.perf_counter() - began
     return _finish_item(item, result)
+
+
+class _NotCachedError(Exception):
+    """Raised by :class:`_CacheOnly` for the first node that is not in the cache."""
+
+
+class _CacheOnly:
+    """An executor that runs nothing: a run on it succeeds only if the cache has it all."""
+
+    encodes_values = True  # so the scheduler never runs a node in the calling thread
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
+        refused: Future = Future()
+        refused.set_exception(_NotCachedError())
+        return refused
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        return None
+
+
+def _from_cache(
+    graph: Graph, registry: Registry, cache: Cache | None, task: tuple[Any, ...], name: str
+) -> RunResult | None:
+    """The file's run, if the cache holds every output it asks for (a batch run again);
+    None when anything must be computed (or the file cannot be read: the task says why)."""
+    if cache is None:
+        return None
+    inputs, outputs, overrides = task[0], task[1], task[2]
+    try:
+        return run(
+            graph,
+            registry,
+            inputs=inputs,
+            outputs=outputs,
+            overrides=overrides,
+            executor=_CacheOnly(name),
+            cache=cache,
+        )
+    except (RunError, InputError):
+        return None
+
+
+def _store_outputs(result: RunResult, cache: Cache) -> None:
+    """Keep a file task's outputs in the client's cache under the keys the worker gave them."""
+    keys = {node.name: node.keys for node in result.record.nodes}
+    for name, value in result.outputs.items():
+        producer, port = result.compiled.outputs[name]
+        step = result.compiled.steps.get(producer)
+        key = keys.get(producer, {}).get(port)
+        if step is not None and step.spec.cache and key:
+            cache.put(key, step.outputs[port], value)
 
 
 def _finish_item(item: BatchItem, result: RunResult | None) -> BatchItem:

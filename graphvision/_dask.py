@@ -57,6 +57,7 @@ class DaskExecutor:
     """
 
     encodes_values = True
+    name = "dask"
 
     def __init__(
         self,

@@ -38,6 +38,7 @@ __all__ = [
     "call_node",
     "call_node_encoded",
     "encodes_values",
+    "executor_name",
     "executor_width",
     "make_executor",
 ]
@@ -95,6 +96,7 @@ class SyncExecutor:
 
     encodes_values = False
     width = 1
+    name = "sync"
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         try:
@@ -108,6 +110,7 @@ class SyncExecutor:
 
 class _Threads(ThreadPoolExecutor):
     encodes_values = False
+    name = "threads"
 
     @property
     def width(self) -> int:
@@ -131,6 +134,7 @@ class _Processes:
     """
 
     encodes_values = True
+    name = "processes"
 
     def __init__(self, workers: int) -> None:
         self._workers = workers
@@ -219,6 +223,14 @@ def _worker_setup(parent: int) -> None:
         os._exit(0)
 
     threading.Thread(target=watch, daemon=True, name="graphvision-parent-watch").start()
+
+
+def executor_name(executor: Any) -> str:
+    """What records call the executor: ``sync``, ``threads``, ``processes``, ``dask``, or the
+    class name of one that does not say."""
+    if isinstance(executor, str):
+        return executor
+    return str(getattr(executor, "name", "") or type(executor).__name__)
 
 
 def executor_width(executor: Any) -> int:

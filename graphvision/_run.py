@@ -65,6 +65,7 @@ from ._executors import (
     call_node,
     call_node_encoded,
     encodes_values,
+    executor_name,
     make_executor,
 )
 from ._graph import Graph
@@ -711,8 +712,7 @@ def _execute(
     """
     own = isinstance(executor, str)
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
-    name = executor if isinstance(executor, str) else type(executor).__name__
-    state = _Run(compiled, cache, pool, hooks, RunRecord(compiled.graph.name, name))
+    state = _Run(compiled, cache, pool, hooks, RunRecord(compiled.graph.name, executor_name(pool)))
     began, failed = time.perf_counter(), True
     try:
         state.key_inputs(values, reference_keys or {})

@@ -347,3 +347,27 @@ def test_a_batch_where_every_file_fails_exits_1_and_still_writes_its_pages(
     assert [r["status"] for r in rows] == ["failed"] * 3
     assert all("is not a readable image" in r["error"] for r in rows)
     assert (out / "batch.html").read_text().count("failed") >= 3
+
+
+def test_a_batch_run_again_on_processes_loads_every_file_from_the_cache(tmp_path):
+    graph, registry, log = _counting_graph(tmp_path)
+    files = [photo(tmp_path / "in" / f"{k}.png", 40 + 50 * k) for k in range(4)]
+    options = {
+        "input": "image",
+        "output_dir": tmp_path / "out",
+        "registry": registry,
+        "cache": gv.Cache.at(tmp_path / "cache"),
+        "executor": "processes",
+        "workers": 2,
+    }
+    first = gv.run_batch(graph, [str(f) for f in files], **options)
+    runs = log.read_text().count("start")
+    assert runs == len(files)
+    later = json.loads((first.items[-1].output_dir / "record.json").read_text())
+    assert later["executor"] == "processes, one task per file"
+    again = gv.run_batch(graph, [str(f) for f in files], **options)
+    assert log.read_text().count("start") == runs  # nothing computed the second time
+    assert [i.scalars for i in again.items] == [i.scalars for i in first.items]
+    for item in again.items:
+        record = json.loads((item.output_dir / "record.json").read_text())
+        assert {n["status"] for n in record["nodes"]} == {"cached"}
