@@ -201,8 +201,9 @@ def _structured_light_rows() -> list[str]:
     rows = ["| structured light, bits | depth RMSE m | valid % |", "| --- | --- | --- |"]
     for bits in (4, 6, 8, 10):
         scene = synthetic.structured_light_scene(bits=bits)
+        decoded = stereo.decode_gray_code(scene.frames)
         depth = stereo.depth_from_stripes(
-            stereo.decode_gray_code(scene.frames), scene.camera, scene.projector, bits=bits
+            decoded.stripes, decoded.bits, scene.camera, scene.projector
         )
         rmse = stereo.depth_rmse(depth, scene.depth)
         rows.append(f"| {bits} | {rmse:.4f} | {100 * np.isfinite(depth).mean():.1f} |")

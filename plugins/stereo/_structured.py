@@ -3,12 +3,12 @@ triangulate each camera ray with the plane of its projector column."""
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, NamedTuple
 
 import numpy as np
 from pydantic import Field
 
-from graphvision import Camera, node
+from graphvision import Camera, Int, node
 
 from ._ports import Depth, DisparityPort, Frames
 
@@ -25,10 +25,15 @@ class StripesPort(DisparityPort):
 Stripes = Annotated[np.ndarray, StripesPort]
 
 
-@node("stereo.decode_gray_code", version=1)
+class Decoded(NamedTuple):
+    stripes: Stripes
+    bits: Int
+
+
+@node("stereo.decode_gray_code", version=2)
 def decode_gray_code(
     frames: Frames, *, min_contrast: Annotated[float, Field(ge=0)] = 0.05
-) -> Stripes:
+) -> Decoded:
     r"""The stripe index of every pixel from captures of Gray-code bit planes and their inverses.
 
     Bit :math:`g_i = [I_{2i} > I_{2i+1}]` (pattern brighter than its
@@ -46,8 +51,10 @@ def decode_gray_code(
 
     Returns
     -------
-    Stripes
+    stripes : Stripes
         Index in :math:`[0, 2^{bits})`, float32, NaN where undecoded.
+    bits : int
+        The bit planes decoded (half the frames), for :func:`depth_from_stripes`.
 
     References
     ----------
@@ -65,7 +72,7 @@ def decode_gray_code(
     binary = np.logical_xor.accumulate(gray, axis=0)
     weights = (1 << np.arange(bits - 1, -1, -1)).astype(np.int64)
     index = np.tensordot(weights, binary.astype(np.int64), axes=1)
-    return np.where(decodable, index, np.nan).astype(np.float32)
+    return Decoded(np.where(decodable, index, np.nan).astype(np.float32), bits)
 
 
 def stripe_planes(stripes: np.ndarray, camera: Camera, projector: Camera, bits: int) -> np.ndarray:
@@ -92,14 +99,8 @@ def stripe_planes(stripes: np.ndarray, camera: Camera, projector: Camera, bits: 
     return np.where(np.isfinite(t) & (t > 0), t, np.nan)
 
 
-@node("stereo.depth_from_stripes", version=1)
-def depth_from_stripes(
-    stripes: Stripes,
-    camera: Camera,
-    projector: Camera,
-    *,
-    bits: Annotated[int, Field(ge=1, le=16)] = 8,
-) -> Depth:
+@node("stereo.depth_from_stripes", version=2)
+def depth_from_stripes(stripes: Stripes, bits: Int, camera: Camera, projector: Camera) -> Depth:
     r"""Depth by ray-plane intersection: each camera ray meets the plane of light of its stripe.
 
     A stripe :math:`s` lights projector columns :math:`[s, s + 1)\,W / 2^{bits}`;
@@ -119,13 +120,16 @@ def depth_from_stripes(
     ----------
     stripes : Stripes
         Decoded stripe index per camera pixel (NaN where undecoded).
+    bits : Int
+        Bit planes projected (:math:`2^{bits}` stripes): the decoder's ``bits``
+        output, so that the count cannot disagree with the captures.
     camera : Camera
         The camera (K, pose).
     projector : Camera
         The projector as an inverse camera (K, pose, size: its columns).
-    bits : int
-        Bit planes projected (:math:`2^{bits}` stripes).
     """
+    if not 1 <= bits <= 16:
+        raise ValueError(f"bits must be 1 to 16, got {bits}")
     if not np.isfinite(stripes).any():
         raise ValueError("no pixel was decoded: is the projector lighting the scene?")
     high = float(np.nanmax(stripes))

@@ -202,8 +202,9 @@ def _quantisation_rmse(scene, bits):
 @pytest.mark.parametrize("bits", [6, 8, 10])
 def test_structured_light_depth_is_within_the_quantisation_of_the_pattern_count(bits):
     scene = synthetic.structured_light_scene(bits=bits, width=160, height=120, seed=1)
-    stripes = stereo.decode_gray_code(scene.frames)
-    depth = stereo.depth_from_stripes(stripes, scene.camera, scene.projector, bits=bits)
+    decoded = stereo.decode_gray_code(scene.frames)
+    assert decoded.bits == bits
+    depth = stereo.depth_from_stripes(decoded.stripes, bits, scene.camera, scene.projector)
     predicted = _quantisation_rmse(scene, bits)
     assert 0.8 * predicted <= stereo.depth_rmse(depth, scene.depth) <= 1.2 * predicted
     assert 0.7 < np.isfinite(depth).mean() < 0.95  # the sphere's shadow on the wall is undecoded
@@ -218,10 +219,10 @@ def test_gray_code_decodes_every_stripe_exactly():
     frames = np.empty((2 * bits, 3, width), np.float32)
     frames[0::2] = planes * 0.8 + 0.1
     frames[1::2] = (~planes) * 0.8 + 0.1
-    stripes = stereo.decode_gray_code(frames)
+    stripes = stereo.decode_gray_code(frames).stripes
     np.testing.assert_array_equal(stripes, columns // (width // 2**bits))
     frames[:, 1, 5] = 0.3  # no contrast: a shadow
-    assert np.isnan(stereo.decode_gray_code(frames)[1, 5])
+    assert np.isnan(stereo.decode_gray_code(frames).stripes[1, 5])
 
 
 def test_structured_light_pipeline_meets_its_truth():
@@ -236,12 +237,14 @@ def test_bad_structured_light_input_is_refused_by_name():
     scene = synthetic.structured_light_scene(bits=4, width=32, height=24)
     with pytest.raises(ValueError, match=r"pairs of frames .* got 7 frames"):
         stereo.decode_gray_code(scene.frames[:7])
-    stripes = stereo.decode_gray_code(scene.frames)
+    stripes = stereo.decode_gray_code(scene.frames).stripes
     with pytest.raises(ValueError, match="does not fit in 2 bits"):
-        stereo.depth_from_stripes(stripes, scene.camera, scene.projector, bits=2)
+        stereo.depth_from_stripes(stripes, 2, scene.camera, scene.projector)
     dark = np.full((8, 24, 32), 0.1, np.float32)
     with pytest.raises(ValueError, match="no pixel was decoded"):
-        stereo.depth_from_stripes(stereo.decode_gray_code(dark), scene.camera, scene.projector)
+        stereo.depth_from_stripes(
+            stereo.decode_gray_code(dark).stripes, 4, scene.camera, scene.projector
+        )
 
 
 def test_negative_disparities_are_found_and_survive_the_left_right_check(pair):
