@@ -300,11 +300,24 @@ def _pooled(
 
 
 def _ridge(features: np.ndarray, targets: np.ndarray, penalty: float) -> np.ndarray:
-    """Least squares with an L2 penalty on all but the bias: (D + 1, 4)."""
-    design = np.hstack([features, np.ones((len(features), 1))])
-    regulariser = penalty * np.eye(design.shape[1])
-    regulariser[-1, -1] = 0
-    return np.linalg.solve(design.T @ design + regulariser, design.T @ targets)
+    r"""Least squares with an L2 penalty on all but the bias: (D + 1, 4), the bias last.
+
+    The bias is left unpenalised by centring: :math:`w` solves the ridge problem on
+    centred features and targets and :math:`b = \bar t - \bar x w`. With more
+    features than regions (D > N) it is solved in the dual,
+    :math:`w = X^T (X X^T + \lambda I)^{-1} T`, an N × N system instead of D × D
+    (a pool of 40 cells made the D × D one 20 GB).
+    """
+    mean_x, mean_t = features.mean(axis=0), targets.mean(axis=0)
+    x, t = features - mean_x, targets - mean_t
+    count, width = x.shape
+    if penalty == 0:
+        weights = np.linalg.lstsq(x, t, rcond=None)[0]
+    elif width <= count:
+        weights = np.linalg.solve(x.T @ x + penalty * np.eye(width), x.T @ t)
+    else:
+        weights = x.T @ np.linalg.solve(x @ x.T + penalty * np.eye(count), t)
+    return np.vstack([weights, mean_t - mean_x @ weights])
 
 
 @node("detection.train_head", version=1)
@@ -314,7 +327,7 @@ def train_head(
     proposals: Detections,
     *,
     feature_layers: Annotated[int, Field(ge=1)] = 5,
-    pool: Annotated[int, Field(ge=1)] = 4,
+    pool: Annotated[int, Field(ge=1, le=16)] = 4,
     hidden: list[str] = ["dense 64", "relu"],  # noqa: B006 (never mutated)
     epochs: Annotated[int, Field(ge=1)] = 30,
     batch_size: Annotated[int, Field(ge=1)] = 32,
@@ -348,7 +361,8 @@ def train_head(
         How many of the backbone's first layers compute the feature map (convolution,
         ReLU and pooling only).
     pool : int
-        ROI pooling cells per side.
+        ROI pooling cells per side (at most 16; Fast R-CNN uses 7): the head's input
+        grows with its square.
     hidden : list of str
         The head's layers before its last (``dense K+1`` is appended).
     epochs : int

@@ -223,3 +223,21 @@ def test_rcnn_pipeline_meets_the_issue_truths():
     # the region proposal network finds with 10 boxes per scene what selective search
     # needs about 50 for (measured 0.94 against 0.52 at 10)
     assert out["rpn_recall_10"] >= 0.9 > out["selective_search_recall_10"] + 0.2
+
+
+def test_box_regression_ridge_in_the_dual_equals_the_primal_and_pool_is_bounded():
+    """More features than regions: the ridge is solved through the N × N system; the
+    answer is the primal one with the bias unpenalised (the normal equations written out)."""
+    from graphvision_plugins.detection._rcnn import _ridge
+
+    rng = np.random.default_rng(0)
+    for count, width in ((200, 30), (40, 300)):
+        features, targets = rng.normal(size=(count, width)), rng.normal(size=(count, 4))
+        design = np.hstack([features, np.ones((count, 1))])
+        penalty = np.eye(width + 1) * 10.0
+        penalty[-1, -1] = 0.0
+        primal = np.linalg.solve(design.T @ design + penalty, design.T @ targets)
+        np.testing.assert_allclose(_ridge(features, targets, 10.0), primal, atol=1e-10)
+    graph = gv.load_pipeline(PIPELINES / "rcnn.yaml").with_overrides({"detector.pool": 40})
+    with pytest.raises(gv.PipelineError, match=r"detector\.params\.pool.*16"):
+        gv.compile_graph(graph, gv.discover())  # refused before anything runs
