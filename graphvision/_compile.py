@@ -118,8 +118,22 @@ class _Checker:
         try:
             return spec.validate_params(params)
         except pydantic.ValidationError as error:
+            overrides = self.graph.overrides_applied
             for param, message in spec.param_problems(error):
-                self.report(f"nodes.{name}.params.{param}", message)
+                keys = (
+                    [f"{name}.{param}"]
+                    if param
+                    else [k for k in overrides if k.startswith(f"{name}.")]
+                )
+                keys = [key for key in keys if key in overrides]
+                if keys:  # the file is fine: the command line set these values
+                    where = ", ".join(f"--set {key}={overrides[key]!r}" for key in keys)
+                    self.problems.append(Problem(0, where, message))
+                else:
+                    self.report(
+                        f"nodes.{name}.params.{param}" if param else f"nodes.{name}.params",
+                        message,
+                    )
             return {}
 
     # -- connections --------------------------------------------------------------

@@ -95,6 +95,8 @@ class Graph:
     source: str = field(default="", compare=False)
     # Pipeline params whose ${params.NAME} references an override replaced: not "unused".
     overridden_params: set[str] = field(default_factory=set, compare=False, repr=False)
+    # "node.param" -> the value an override set (so a problem with it names the override)
+    overrides_applied: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
     lines: dict[str, int] = field(default_factory=dict, compare=False, repr=False)
 
     # -- builder ------------------------------------------------------------------
@@ -173,6 +175,7 @@ class Graph:
                 old = graph.nodes[target].params.get(param)
                 graph.overridden_params.update(PARAM_REFERENCE.findall(str(old)) if old else ())
                 graph.nodes[target].params[param] = value
+                graph.overrides_applied[key] = value
             else:
                 raise KeyError(
                     f"override '{key}': no node '{target}'{did_you_mean(target, graph.nodes)}"

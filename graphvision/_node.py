@@ -74,6 +74,7 @@ class _NodeMark:
     version: int
     cache: bool
     overrides: bool
+    check: Callable[..., None] | None = None
 
 
 @dataclass(frozen=True)
@@ -83,7 +84,12 @@ class _SourceMark:
 
 
 def node(
-    id: str, *, version: int = 1, cache: bool = True, overrides: bool = False
+    id: str,
+    *,
+    version: int = 1,
+    cache: bool = True,
+    overrides: bool = False,
+    check: Callable[..., None] | None = None,
 ) -> Callable[[Callable], Callable]:
     """Mark a function as the graphvision node ``id`` (``family.name``).
 
@@ -98,10 +104,15 @@ def node(
         False opts the node out of caching (it is recomputed on every run).
     overrides : bool
         True lets this node replace another plugin's node of the same id.
+    check : callable, optional
+        ``check(**params)`` raises ``ValueError`` for parameter values that are
+        each valid but not together (``p2 < p1``, an even window): it runs with
+        the parameter model, so a pipeline is refused before anything runs and a
+        direct call before the body, naming the node.
     """
 
     def mark(func: Callable) -> Callable:
-        func.__graphvision_node__ = _NodeMark(id, version, cache, overrides)  # type: ignore[attr-defined]
+        func.__graphvision_node__ = _NodeMark(id, version, cache, overrides, check)  # type: ignore[attr-defined]
         return _checked_call(func)
 
     return mark
@@ -268,6 +279,10 @@ class NodeSpec:
         problems = []
         for item in error.errors():
             param = ".".join(str(p) for p in item["loc"])
+            if not param:  # the node's own check of the parameters together
+                message = str(item["msg"]).removeprefix("Value error, ")
+                problems.append(("", f"{self.id}: {message}"))
+                continue
             if item["type"] == "extra_forbidden":
                 listing = ", ".join(allowed) if allowed else "none"
                 message = (
@@ -537,9 +552,19 @@ def _build_spec(func: Callable, plugin: str) -> NodeSpec:
         )
 
     try:
+        validators: dict[str, Any] = {}
+        if mark.check is not None:
+            together = mark.check
+
+            def check_together(model: Any) -> Any:
+                together(**dict(model))
+                return model
+
+            validators["check_together"] = pydantic.model_validator(mode="after")(check_together)
         model = pydantic.create_model(
             f"{mark.id}.params",
             __config__=pydantic.ConfigDict(extra="forbid", validate_default=True),
+            __validators__=validators,
             **fields,
         )
         model.model_validate({})

@@ -145,3 +145,64 @@ def test_overrides_and_params_substitution(registry):
     }
     with pytest.raises(KeyError, match="no node 'cc' \\(did you mean 'c'\\?\\)"):
         graph.with_overrides({"cc.value": 1})
+
+
+CHECKED_PLUGIN = """
+from graphvision import Float, node
+
+
+def _ordered(**params):
+    if params["high"] <= params["low"]:
+        raise ValueError(f"high ({params['high']:g}) must exceed low ({params['low']:g})")
+
+
+@node("checked.clip", check=_ordered)
+def clip(x: Float, *, low: float = 0.0, high: float = 1.0) -> Float:
+    '''x clipped to [low, high].
+
+    Parameters
+    ----------
+    x : the value
+    low, high : the bounds
+    '''
+    return min(max(x, low), high)
+"""
+
+
+def test_a_nodes_check_of_its_parameters_together_runs_before_anything(tmp_path):
+    plugin = tmp_path / "checked.py"
+    plugin.write_text(CHECKED_PLUGIN)
+    registry = gv.discover([plugin], entry_points=False)
+    text = (
+        "name: c\ninputs:\n  x: {type: Float, default: 2.0}\nnodes:\n"
+        "  c: {op: checked.clip, in: {x: x}, params: {low: 3.0, high: 1.0}}\noutputs: {y: c}\n"
+    )
+    pipeline = tmp_path / "c.yaml"
+    pipeline.write_text(text)
+    with pytest.raises(gv.PipelineError) as caught:
+        gv.compile_graph(gv.load_pipeline(pipeline), registry)
+    (problem,) = caught.value.problems
+    assert problem.where == "nodes.c.params" and problem.line == 5
+    assert problem.message == "checked.clip: high (1) must exceed low (3)"
+    good = gv.load_pipeline(pipeline).with_overrides({"c.high": 5.0})
+    assert gv.run(good, registry, cache=None).outputs["y"] == 3.0
+    with pytest.raises(gv.PipelineError, match=r"--set c\.low=9\.0: checked\.clip: high"):
+        gv.compile_graph(good.with_overrides({"c.low": 9.0}), registry)
+    clip = registry.node("checked.clip")
+    with pytest.raises(gv.ParameterError, match=r"checked\.clip: high \(1\) must exceed low"):
+        clip.check_call((2.0,), {"low": 3.0, "high": 1.0})
+
+
+def test_a_bad_value_set_on_the_command_line_is_named_as_such_not_as_the_file(tmp_path):
+    pipeline = tmp_path / "p.yaml"
+    pipeline.write_text(
+        "name: p\ninputs:\n  image: {type: Image, default: 'sample:camera'}\nnodes:\n"
+        "  g: {op: color.to_gray, in: {image: image}}\n"
+        "  s: {op: filters.gaussian, in: {image: g}, params: {sigma: 2.0}}\noutputs: {s: s}\n"
+    )
+    graph = gv.load_pipeline(pipeline).with_overrides({"s.sigma": "abc"})
+    with pytest.raises(gv.PipelineError) as caught:
+        gv.compile_graph(graph, gv.discover())
+    (problem,) = caught.value.problems
+    assert problem.where == "--set s.sigma='abc'" and problem.line == 0 and not problem.file
+    assert "invalid value 'abc' for parameter 'sigma'" in str(caught.value)

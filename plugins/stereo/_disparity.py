@@ -3,7 +3,7 @@ geometry and scene reconstruction", disparity estimation with a window W)."""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import Field
@@ -22,15 +22,35 @@ Window = Annotated[int, Field(ge=1, le=31)]
 PATHS = ((0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))
 
 
+def _odd_window(**params: Any) -> None:
+    """Parameters of block matching valid together: an odd window."""
+    if params["window"] % 2 == 0:
+        raise ValueError(
+            f"window must be odd (a block centred on the pixel), got {params['window']}"
+        )
+
+
+def _sgm_params(**params: Any) -> None:
+    """Parameters of semi-global matching valid together: odd window, P2 >= P1, census <= 7."""
+    _odd_window(**params)
+    if params["p2"] < params["p1"]:
+        raise ValueError(
+            f"p2 ({params['p2']:g}) must be at least p1 ({params['p1']:g}): a jump costs more "
+            "than a step"
+        )
+    if params["cost"] == "census" and params["window"] > 7:
+        raise ValueError(
+            f"a census window is at most 7 (48 bits in a 64-bit word), got {params['window']}"
+        )
+
+
 def check_pair(left: np.ndarray, right: np.ndarray, d_min: int, count: int, window: int) -> None:
-    """Refuse a pair of different sizes, an even window and a range wider than the image."""
+    """Refuse a pair of different sizes and a range wider than the image."""
     if left.shape != right.shape:
         raise ValueError(
             f"the left image is {left.shape[1]}×{left.shape[0]} but the right is "
             f"{right.shape[1]}×{right.shape[0]}: a rectified pair has one size"
         )
-    if window % 2 == 0:
-        raise ValueError(f"window must be odd (a block centred on the pixel), got {window}")
     cols = left.shape[1]
     if abs(d_min) + count > cols:
         raise ValueError(
@@ -67,7 +87,7 @@ def _select(
     return disparity
 
 
-@node("stereo.block_match", version=2)
+@node("stereo.block_match", version=2, check=_odd_window)
 def block_match(
     left: GrayImage,
     right: GrayImage,
@@ -131,7 +151,7 @@ def block_match(
     return _select(volume, min_disparity, uniqueness, subpixel, lr_tolerance)
 
 
-@node("stereo.sgm", version=1)
+@node("stereo.sgm", version=1, check=_sgm_params)
 def sgm(
     left: GrayImage,
     right: GrayImage,
@@ -199,10 +219,6 @@ def sgm(
        information", IEEE TPAMI 30(2), 2008.
     """
     check_pair(left, right, min_disparity, num_disparities, window)
-    if p2 < p1:
-        raise ValueError(f"p2 ({p2:g}) must be at least p1 ({p1:g}): a jump costs more than a step")
-    if cost == "census" and window > 7:
-        raise ValueError(f"a census window is at most 7 (48 bits in a 64-bit word), got {window}")
     from ._kernels import aggregate_path
 
     volume = cost_volume(left, right, min_disparity, num_disparities, cost, window)
