@@ -66,9 +66,14 @@ def refine_fundamental(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarra
 
     F is parametrised by its SVD, :math:`F = U \operatorname{diag}(1, s, 0) V^T`
     with U, V updated by small rotations (7 parameters: F's degrees of
-    freedom), so every iterate has rank 2.
+    freedom), so every iterate has rank 2. With 7 correspondences or fewer
+    the Sampson error can be made zero and is no measure of fit: F is
+    returned as given.
     """
     from scipy.optimize import least_squares
+
+    if len(a) <= 7:
+        return F / np.linalg.norm(F)
 
     u0, s0, vt0 = np.linalg.svd(F)
     ratio = s0[1] / s0[0]
@@ -99,8 +104,13 @@ def refine_pose(
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""(R, t) minimising the Sampson distances of ``a, b`` under
     :math:`F = K_b^{-T} [t]_\times R K_a^{-1}` over the pose's 5 degrees of
-    freedom (a rotation increment and the direction of t), Levenberg-Marquardt."""
+    freedom (a rotation increment and the direction of t), Levenberg-Marquardt.
+    With 5 correspondences or fewer the pose is returned as given (nothing to
+    average over)."""
     from scipy.optimize import least_squares
+
+    if len(a) <= 5:
+        return R, t / np.linalg.norm(t)
 
     ka_inv, kb_inv = np.linalg.inv(Ka), np.linalg.inv(Kb)
     t = t / np.linalg.norm(t)

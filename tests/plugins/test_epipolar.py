@@ -10,6 +10,7 @@ import pytest
 import graphvision as gv
 from graphvision_plugins import epipolar, synthetic
 from graphvision_plugins.camera import project_points
+from graphvision_plugins.epipolar import _geometry
 
 PIPELINE = Path(__file__).parents[2] / "pipelines" / "two_view.yaml"
 
@@ -180,3 +181,25 @@ def test_essential_directly_from_normalised_points():
     assert rotation <= 0.25 and translation <= 0.5
     with pytest.raises(ValueError, match="needs at least 8 correspondences, got 7"):
         epipolar.essential_from_points(clean.a[:7], clean.b[:7], clean.camera_a, clean.camera_b)
+
+
+def test_refinements_without_redundancy_return_their_start():
+    """7 correspondences fit F's 7 degrees of freedom exactly and 5 fit a pose's
+    5: Levenberg-Marquardt cannot run (fewer residuals than variables) and
+    there is nothing to refine, so the estimate comes back as given."""
+    scene = synthetic.two_view_scene(count=60, noise=0.5, seed=1)
+    fit = epipolar.fundamental(scene.a, scene.b)
+    refined = _geometry.refine_fundamental(fit.F, scene.a[:7], scene.b[:7])
+    np.testing.assert_allclose(refined, fit.F / np.linalg.norm(fit.F))
+    R, t = scene.camera_b.R, np.array([1.0, 0.2, 0.1])
+    K = scene.camera_a.K
+    same_R, same_t = _geometry.refine_pose(R, t, K, K, scene.a[:5], scene.b[:5])
+    np.testing.assert_array_equal(same_R, R)
+    np.testing.assert_allclose(same_t, t / np.linalg.norm(t))
+
+
+@pytest.mark.parametrize("count", [9, 10, 11])
+def test_two_view_runs_on_a_handful_of_points(count):
+    graph = gv.load_pipeline(PIPELINE)
+    outputs = gv.run(graph, overrides={"scene.count": count}, cache=None).outputs
+    assert np.isfinite(outputs["rotation_error_deg"])
