@@ -194,12 +194,17 @@ def run_batch(
     Raises
     ------
     InputError
-        When the glob matches no file.
+        When the glob matches no file, or ``inputs`` also gives ``input``.
     OutputFolderError
         When an item folder holds files graphvision did not write, or
         ``batch.csv`` is not a graphvision summary (checked before anything
         runs).
     """
+    if inputs and input in inputs:
+        raise InputError(
+            f"input '{input}' is given twice: once per file by the batch and once as"
+            f" {inputs[input]!r}; drop one of them"
+        )
     out_dir = Path(output_dir)
     if isinstance(files, str):
         paths, root = batch_files(files, exclude=out_dir), pattern_root(files)

@@ -371,3 +371,11 @@ def test_a_batch_run_again_on_processes_loads_every_file_from_the_cache(tmp_path
     for item in again.items:
         record = json.loads((item.output_dir / "record.json").read_text())
         assert {n["status"] for n in record["nodes"]} == {"cached"}
+
+
+def test_an_input_given_by_the_batch_and_by_i_is_refused(capsys, tmp_path):
+    photo(tmp_path / "in" / "a.png", 100)
+    args = ["run", str(DEMO), "--batch", f"image={tmp_path}/in/*.png", "-d", str(tmp_path / "out")]
+    assert main([*args, "-i", "image=sample:coins"]) == 2
+    assert "input 'image' is given twice" in capsys.readouterr().err
+    assert not any((tmp_path / "out").rglob("*"))  # nothing ran
