@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import csv
 import glob
+import io
+import os
 import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor, as_completed
@@ -270,15 +272,38 @@ def run_batch(
             items[index] = item
             if on_item is not None:
                 on_item(done, len(paths), item)
+    except BaseException:  # Ctrl-C or an error: the files done so far are still summarised
+        _summarise(_not_run(items, paths, folders), out_dir)
+        raise
     finally:
         if isinstance(executor, str):
             pool.shutdown()
     finished = [item for item in items if item is not None]
-    summary = write_summary(finished, out_dir)
+    return BatchResult(finished, _summarise(finished, out_dir))
+
+
+NOT_RUN = "not run"
+
+
+def _not_run(
+    items: list[BatchItem | None], paths: list[Path], folders: list[Path]
+) -> list[BatchItem]:
+    """Every item, those that never completed marked ``not run`` (a re-run does them)."""
+    return [
+        item
+        if item is not None
+        else BatchItem(path, folder, NOT_RUN, error="the batch stopped before this file finished")
+        for item, path, folder in zip(items, paths, folders, strict=True)
+    ]
+
+
+def _summarise(items: list[BatchItem], out_dir: Path) -> Path:
+    """``batch.csv`` and ``batch.html`` for ``items``."""
     from ._html import batch_page
 
-    (out_dir / "batch.html").write_text(batch_page(finished, out_dir), encoding="utf-8")
-    return BatchResult(finished, summary)
+    summary = write_summary(items, out_dir)
+    _replace_text(out_dir / "batch.html", batch_page(items, out_dir))
+    return summary
 
 
 def _stream(
@@ -494,9 +519,21 @@ def write_summary(items: Sequence[BatchItem], out_dir: Path) -> Path:
     ]
     columns = list(dict.fromkeys(key for row in rows for key in row))
     out_dir.mkdir(parents=True, exist_ok=True)
+    text = io.StringIO(newline="")
+    writer = csv.DictWriter(text, fieldnames=columns)
+    writer.writeheader()
+    writer.writerows(rows)
     path = out_dir / SUMMARY
-    with path.open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=columns)
-        writer.writeheader()
-        writer.writerows(rows)
+    _replace_text(path, text.getvalue())
     return path
+
+
+def _replace_text(path: Path, text: str) -> None:
+    """Write ``path`` whole or not at all (a temporary file beside it, then a rename)."""
+    temp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with temp.open("w", encoding="utf-8", newline="") as handle:
+            handle.write(text)
+        os.replace(temp, path)
+    finally:
+        temp.unlink(missing_ok=True)

@@ -295,6 +295,11 @@ def _batch(
         )
     except InputError as error:
         raise UsageError(f"--batch {name}={pattern}: {error}") from None
+    except KeyboardInterrupt:
+        summary = Path(args.output_dir) / "batch.csv"
+        if summary.is_file():
+            print(f"batch interrupted; files done so far are listed in {summary}", file=sys.stderr)
+        raise
     finally:
         for bar in shown:
             bar.close()

@@ -379,3 +379,31 @@ def test_an_input_given_by_the_batch_and_by_i_is_refused(capsys, tmp_path):
     assert main([*args, "-i", "image=sample:coins"]) == 2
     assert "input 'image' is given twice" in capsys.readouterr().err
     assert not any((tmp_path / "out").rglob("*"))  # nothing ran
+
+
+def test_an_interrupted_batch_still_writes_its_summary(tmp_path):
+    for number in range(4):
+        photo(tmp_path / "in" / f"p{number}.png", 40 * number + 20)
+    out = tmp_path / "out"
+
+    def stop_after_two(done, total, item):
+        if done == 2:
+            raise KeyboardInterrupt
+
+    graph = gv.load_pipeline(DEMO)
+    with pytest.raises(KeyboardInterrupt):
+        gv.run_batch(
+            graph,
+            f"{tmp_path}/in/*.png",
+            input="image",
+            output_dir=out,
+            outputs=[PSNR],
+            executor="sync",
+            on_item=stop_after_two,
+        )
+    rows = list(csv.DictReader((out / "batch.csv").open()))
+    assert [Path(r["file"]).name for r in rows] == [f"p{n}.png" for n in range(4)]
+    assert [r["status"] for r in rows] == ["ok", "ok", "not run", "not run"]
+    assert float(rows[0][PSNR]) > 0 and rows[2][PSNR] == ""
+    assert "not run" in (out / "batch.html").read_text()
+    assert not list(out.glob(".*.tmp"))
