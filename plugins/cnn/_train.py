@@ -123,7 +123,20 @@ def _sgd(
     return weights.astype(np.float64), np.array(history)
 
 
-@node("cnn.train", version=1)
+def _layers_parse(layers: list[str], **_: object) -> None:
+    """Each layer's text is a layer (their chaining needs the images, so the node checks it)."""
+    from ._layers import parse_layer
+
+    if not layers:
+        raise ValueError("layers is empty; give at least one layer, e.g. ['dense 10']")
+    for number, text in enumerate(layers):
+        try:
+            parse_layer(text)
+        except ValueError as error:
+            raise ValueError(f"layer {number}: {error}") from None
+
+
+@node("cnn.train", version=1, check=_layers_parse)
 def train(
     train: Samples,
     *,

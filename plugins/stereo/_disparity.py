@@ -48,8 +48,8 @@ def check_pair(left: np.ndarray, right: np.ndarray, d_min: int, count: int, wind
     """Refuse a pair of different sizes and a range wider than the image."""
     if left.shape != right.shape:
         raise ValueError(
-            f"the left image is {left.shape[1]}×{left.shape[0]} but the right is "
-            f"{right.shape[1]}×{right.shape[0]}: a rectified pair has one size"
+            f"the left image is {left.shape[0]}×{left.shape[1]} (rows×columns) but the right is"
+            f" {right.shape[0]}×{right.shape[1]}: a rectified pair has one size"
         )
     cols = left.shape[1]
     if abs(d_min) + count > cols:

@@ -24,8 +24,8 @@ class DisparityError(NamedTuple):
 def _same_shape(estimate: np.ndarray, truth: np.ndarray, what: str) -> None:
     if estimate.shape != truth.shape:
         raise ValueError(
-            f"the {what} is {estimate.shape[1]}×{estimate.shape[0]} but the truth is "
-            f"{truth.shape[1]}×{truth.shape[0]}"
+            f"the {what} is {estimate.shape[0]}×{estimate.shape[1]} (rows×columns) but the"
+            f" truth is {truth.shape[0]}×{truth.shape[1]}"
         )
 
 

@@ -261,3 +261,33 @@ def test_layers_that_do_not_chain_in_a_pipeline_name_the_node_and_the_layer():
             outputs=["accuracy"],
             overrides={"cnn.layers": layers},
         )
+
+
+@pytest.mark.parametrize(
+    ("layers", "message"),
+    [
+        (["conv 8x3", "relu", "blah 3"], r"layer 2: 'blah 3' is not a layer; write 'conv FxK'"),
+        (["conv 0x3", "dense 10"], r"layer 0: 'conv 0x3': sizes and counts must be at least 1"),
+        ([], r"layers is empty"),
+    ],
+)
+def test_a_layer_that_is_not_one_is_refused_before_the_run(layers, message):
+    graph = gv.load_pipeline(PIPELINES / "cnn_digits.yaml")
+    with pytest.raises(gv.PipelineError, match=r"--set cnn\.layers=.*: cnn\.train: " + message):
+        gv.run(graph, outputs=["accuracy"], overrides={"cnn.layers": layers}, cache=None)
+
+
+def test_a_misspelt_layer_in_a_file_is_named_with_its_line(tmp_path):
+    text = (
+        (PIPELINES / "cnn_digits.yaml")
+        .read_text()
+        .replace('"maxpool 2", "conv', '"maxpol 2", "conv')
+    )
+    path = tmp_path / "typo.yaml"
+    path.write_text(text)
+    line = next(n for n, row in enumerate(text.splitlines(), 1) if "maxpol" in row)
+    with pytest.raises(
+        gv.PipelineError,
+        match=rf"nodes.cnn.params at .*typo.yaml:{line}: cnn.train: layer 2: 'maxpol 2' is not",
+    ):
+        gv.compile_graph(gv.load_pipeline(path), gv.discover())

@@ -120,7 +120,7 @@ def test_drawings_mark_invalid_black_and_order_colours():
 
 
 def test_bad_stereo_input_is_refused_by_name(pair):
-    with pytest.raises(ValueError, match="left image is 160×120 but the right is 80×120"):
+    with pytest.raises(ValueError, match=r"left image is 120×160 \(rows×columns\) but the right is 120×80"):
         stereo.sgm(pair.left, pair.right[:, :80])
     with pytest.raises(ValueError, match=r"disparity range .* does not fit in the image's 160"):
         stereo.block_match(pair.left, pair.right, num_disparities=200)
@@ -130,7 +130,7 @@ def test_bad_stereo_input_is_refused_by_name(pair):
         stereo.sgm(pair.left, pair.right, p1=8, p2=4)
     with pytest.raises(ValueError, match="census window is at most 7"):
         stereo.sgm(pair.left, pair.right, window=9)
-    with pytest.raises(ValueError, match="disparity is 2×1 but the truth is 1×1"):
+    with pytest.raises(ValueError, match=r"disparity is 1×2 \(rows×columns\) but the truth is 1×1"):
         stereo.disparity_error(np.zeros((1, 2), np.float32), np.zeros((1, 1), np.float32))
     with pytest.raises(gv.PortValueError, match="no infinities"):
         stereo.depth_from_disparity(np.full((2, 2), np.inf, np.float32))
