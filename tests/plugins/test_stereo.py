@@ -120,7 +120,8 @@ def test_drawings_mark_invalid_black_and_order_colours():
 
 
 def test_bad_stereo_input_is_refused_by_name(pair):
-    with pytest.raises(ValueError, match=r"left image is 120×160 \(rows×columns\) but the right is 120×80"):
+    sizes = r"left image is 120×160 \(rows×columns\) but the right is 120×80"
+    with pytest.raises(ValueError, match=sizes):
         stereo.sgm(pair.left, pair.right[:, :80])
     with pytest.raises(ValueError, match=r"disparity range .* does not fit in the image's 160"):
         stereo.block_match(pair.left, pair.right, num_disparities=200)
