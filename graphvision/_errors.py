@@ -113,14 +113,15 @@ class Problem:
 class PipelineError(GraphvisionError):
     """A pipeline is invalid. ``problems`` lists every problem, sorted by line."""
 
-    def __init__(self, problems: list[Problem], source: str = "") -> None:
+    def __init__(self, problems: list[Problem], source: str = "", message: str = "") -> None:
         self.problems = sorted(problems)
         self.source = source
-        head = f"invalid pipeline {source}" if source else "invalid pipeline"
-        count = len(self.problems)
-        lines = [f"{head}: {count} problem{'s' if count != 1 else ''}"]
-        lines += [f"  - {p}" for p in self.problems]
-        super().__init__("\n".join(lines))
+        if not message:  # the headline, then one line per problem
+            head = f"invalid pipeline {source}" if source else "invalid pipeline"
+            count = len(self.problems)
+            lines = [f"{head}: {count} problem{'s' if count != 1 else ''}"]
+            message = "\n".join(lines + [f"  - {p}" for p in self.problems])
+        super().__init__(message)
 
 
 class NodeExecutionError(GraphvisionError):

@@ -411,8 +411,10 @@ def load_pipeline(path: str | Path) -> Graph:
     try:
         text = path.read_text()
     except (OSError, UnicodeDecodeError) as error:
+        reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+        problem = Problem(0, "file", f"cannot read pipeline: {reason}", str(path))
         raise PipelineError(
-            [Problem(0, "file", f"cannot read pipeline: {error}", str(path))], str(path)
+            [problem], str(path), f"cannot read pipeline {path}: {reason}"
         ) from None
     graph = parse_pipeline(text, str(path))
     graph.plugins = [

@@ -281,6 +281,8 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
     from ._run import NodeRecord
 
     record_path = directory / RECORD
+    if not directory.is_dir():
+        raise OutputFolderError(f"{directory}: no such folder (give a run's -d folder)")
     if not record_path.is_file():
         raise OutputFolderError(f"{directory} has no {RECORD}: it is not a graphvision run folder")
     try:

@@ -238,7 +238,9 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
             else:
                 value = registry.source("file").func(value)
         except Exception as error:
-            raise InputError(f"input '{name}': cannot load '{value}': {error}") from error
+            told = str(error)
+            what = told if str(value) in told else f"cannot load '{value}': {told}"
+            raise InputError(f"input '{name}': {what}") from error
     try:
         value = port_type.coerce(value, origin)
         return _freeze(port_type, port_type.validate(value))

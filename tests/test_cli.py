@@ -81,7 +81,7 @@ def test_input_from_a_file(capsys, tmp_path):
 @pytest.mark.parametrize(
     ("make", "message"),
     [
-        (lambda d: d / "missing.png", "input 'image': cannot load '.*missing.png': no such file"),
+        (lambda d: d / "missing.png", "input 'image': no such file: .*missing.png$"),
         (lambda d: write(d, "text.png", "not a png"), "text.png is not a readable image"),
         (lambda d: _npy(d, np.zeros((0, 5), np.float32)), "is empty"),
         (

@@ -368,6 +368,8 @@ def test_report_writes_a_run_folders_pages_again_and_names_what_is_gone(capsys, 
     assert status == 2 and "the pipeline file of the run" in err and "is gone" in err
     status, err = run_cli(capsys, "report", tmp_path)
     assert status == 2 and "has no record.json: it is not a graphvision run folder" in err
+    status, err = run_cli(capsys, "report", tmp_path / "nowhere")
+    assert status == 2 and "nowhere: no such folder (give a run's -d folder)" in err
     record["files"]["noisy_gaussian"] = ["../../elsewhere.png"]
     (out / "record.json").write_text(json.dumps(record))
     status, err = run_cli(capsys, "report", out)

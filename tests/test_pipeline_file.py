@@ -90,8 +90,13 @@ def test_node_names_must_be_identifiers():
 
 
 def test_unreadable_file(tmp_path):
-    with pytest.raises(gv.PipelineError, match="cannot read pipeline"):
+    with pytest.raises(
+        gv.PipelineError, match=r"^cannot read pipeline .*missing.yaml: No such file"
+    ):
         gv.load_pipeline(tmp_path / "missing.yaml")
+    (tmp_path / "binary.yaml").write_bytes(b"\xff\xfe\x00")
+    with pytest.raises(gv.PipelineError, match=r"^cannot read pipeline .*binary.yaml: 'utf-8'"):
+        gv.load_pipeline(tmp_path / "binary.yaml")
 
 
 def test_json_schema_accepts_the_pipelines_and_names_sections():
