@@ -39,3 +39,16 @@ def test_the_example_plugin_passes_check_plugin(tmp_path, monkeypatch):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     assert set(check_plugin(module).nodes) >= {"mine.vignette", "mine.mean"}
+
+
+def test_the_python_section_runs_as_written(tmp_path, monkeypatch, capsys):
+    build, ports = _section_code("Python")[:2]
+    assert "gv.run(" in build and '["descriptors"]' in ports
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    exec(compile(build + ports, "README Python section", "exec"), namespace)
+    graph, result = namespace["g"], namespace["result"]
+    assert result.outputs["blurred"].shape == (512, 512)
+    outputs = namespace["gv"].run(graph, cache=None).outputs
+    assert len(outputs["keypoints"]) > 100  # SIFT on the astronaut, read by port
+    assert "blur" in capsys.readouterr().out  # the record's table was printed
