@@ -149,6 +149,9 @@ class FileProgress:
         What is counted, in the bar and the lines (``files``, ``combinations``).
     stream, bar
         As for :class:`RunProgress`.
+    began : float, optional
+        When the work began (``time.monotonic()``), if before this object was
+        made: the time left is estimated from it. Default: now.
     """
 
     def __init__(
@@ -158,11 +161,12 @@ class FileProgress:
         stream: IO[str] | None = None,
         *,
         bar: bool | None = None,
+        began: float | None = None,
     ) -> None:
         self.stream = stream or sys.stderr
         self.total, self.done, self.failed = total, 0, 0
         self.label = label
-        self.began = time.monotonic()
+        self.began = time.monotonic() if began is None else began
         self._bar: Any = None
         if _is_terminal(self.stream) if bar is None else bar:
             from tqdm import tqdm

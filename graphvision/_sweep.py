@@ -16,7 +16,7 @@ from __future__ import annotations
 import csv
 import itertools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from html import escape
 from pathlib import Path
@@ -71,6 +71,7 @@ def sweep(
     executor: str | Executor = "threads",
     workers: int | None = None,
     keep_going: bool = False,
+    on_row: Callable[[int, int, dict[str, Any]], None] | None = None,
 ) -> SweepResult:
     """Run ``graph`` for every combination of ``grid``'s values.
 
@@ -89,6 +90,9 @@ def sweep(
         sharing needs one).
     executor, workers, keep_going
         As for :func:`graphvision.run`; one executor serves every run.
+    on_row : callable, optional
+        Called as ``on_row(number, total, row)`` as each combination finishes
+        (``number`` is 1-based).
 
     Returns
     -------
@@ -156,6 +160,8 @@ def sweep(
             row["seconds"] = round(record.seconds, 4)
             result.rows.append(row)
             result.records.append(record)
+            if on_row is not None:
+                on_row(len(result.rows), len(combinations), row)
     finally:
         if isinstance(executor, str):
             pool.shutdown(wait=True)

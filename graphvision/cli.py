@@ -268,10 +268,11 @@ def _batch(
     if not args.output_dir:
         raise UsageError("--batch needs --output-dir (one folder per input file)")
     shown: list[FileProgress] = []
+    began = time.monotonic()
 
     def report(number: int, total: int, item: BatchItem) -> None:
-        if not shown:
-            shown.append(FileProgress(total, bar=None if progress else False))
+        if not shown:  # the total is known once the glob is expanded
+            shown.append(FileProgress(total, bar=None if progress else False, began=began))
         if item.error:
             print(f"error: {item.file}: {item.error}", file=sys.stderr)
         shown[0].finished(f"{item.file} -> {item.output_dir}", not item.error, item.seconds)
@@ -313,6 +314,7 @@ def _batch(
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
+    from ._progress import FileProgress
     from ._sweep import sweep, sweep_html, sweep_plot_svg
 
     graph, registry, overrides, inputs = _load(args)
@@ -328,6 +330,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if overrides:
         graph = graph.with_overrides(overrides)
     executor = _executor(args)
+    shown: list[FileProgress] = []
+    began = time.monotonic()
+
+    def report(number: int, total: int, row: dict[str, Any]) -> None:
+        if not shown:  # a bar on a terminal, else a line per combination
+            shown.append(FileProgress(total, "combinations", began=began))
+        combination = ", ".join(f"{key}={row[key]}" for key in grid)
+        shown[0].finished(combination, row["status"] == "ok", row["seconds"])
+
     try:
         result = sweep(
             graph,
@@ -338,8 +349,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             executor=executor,
             workers=args.workers,
             keep_going=args.keep_going,
+            on_row=None if args.progress is False else report,
         )
     finally:
+        for bar in shown:
+            bar.close()
         if not isinstance(executor, str):
             executor.shutdown()
     written = [result.write_csv(out_dir / "sweep.csv")]
@@ -552,6 +566,13 @@ def _run_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
     parser.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show progress (default: when stderr is a terminal; batches and sweeps print a "
+        "line per file or combination elsewhere)",
+    )
+    parser.add_argument(
         "--keep-going",
         action="store_true",
         help="after a node fails, finish every branch that does not depend on it",
@@ -594,12 +615,6 @@ def build_parser() -> argparse.ArgumentParser:
         "--keep-intermediates",
         action="store_true",
         help="with -d: keep every intermediate value and show its picture in report.html",
-    )
-    p.add_argument(
-        "--progress",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="show progress (default: when stderr is a terminal)",
     )
     p.set_defaults(func=cmd_run)
 

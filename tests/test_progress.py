@@ -71,3 +71,13 @@ def test_file_progress_reports_failures_and_time_left() -> None:
     assert lines[1].startswith("  [2/3 files] b.png FAILED")
     assert all("left)" in line for line in lines)
     assert lines[-1].endswith("(about 0 ms left)")
+
+
+def test_time_left_counts_from_when_the_work_began():
+    """A batch makes its progress when the first file is done (the total is known
+    then): the estimate must still count that file's time."""
+    stream = io.StringIO()
+    progress = FileProgress(4, stream=stream, bar=False, began=time.monotonic() - 2.0)
+    progress.finished("a.png", True, 2.0)
+    left = stream.getvalue().split("(about ")[1]
+    assert left.startswith(("5.", "6.")) and left.endswith(" s left)\n")  # 3 files × 2 s

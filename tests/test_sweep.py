@@ -92,3 +92,32 @@ def test_a_bad_grid_is_refused_before_anything_runs(grid, message) -> None:
     with pytest.raises(gv.PipelineError, match=message):
         sweep(gv.load_pipeline(LINE_FIT), grid, executor=executor)
     assert executor.submitted == 0
+
+
+def test_on_row_hears_every_combination_in_order() -> None:
+    heard: list[tuple[int, int, float]] = []
+    grid = {"robust.threshold": [1.0, 3.0]}
+    result = sweep(
+        gv.load_pipeline(LINE_FIT),
+        grid,
+        executor="sync",
+        on_row=lambda n, total, row: heard.append((n, total, row["robust.threshold"])),
+    )
+    assert heard == [(1, 2, 1.0), (2, 2, 3.0)] and len(result.rows) == 2
+
+
+def test_the_sweep_command_writes_its_files_and_a_line_per_combination(capsys, tmp_path) -> None:
+    from graphvision.cli import main
+
+    out = tmp_path / "sweep"
+    args = ["sweep", str(LINE_FIT), "--no-cache", "-d", str(out), "--progress"]
+    status = main([*args, "--grid", "robust.threshold=1,3", "--plot", "error_ransac"])
+    err = capsys.readouterr().err
+    assert status == 0, err
+    assert "[1/2 combinations] robust.threshold=1 ok" in err
+    assert "2 of 2 combinations succeeded" in err
+    rows = list(csv.DictReader((out / "sweep.csv").open()))
+    assert [row["robust.threshold"] for row in rows] == ["1", "3"]
+    assert (out / "sweep_error_ransac.svg").is_file() and (out / "sweep.html").is_file()
+    assert main([*args, "--no-progress", "--grid", "robust.threshold=2"]) == 0
+    assert "combinations]" not in capsys.readouterr().err
