@@ -778,8 +778,22 @@ def entry() -> None:
     sys.stdout.flush()
     sys.stderr.flush()
     if status == EXIT_INTERRUPTED:
+        _release_process_resources()
         os._exit(status)
     sys.exit(status)
+
+
+def _release_process_resources() -> None:
+    """Unlink the semaphores of a process pool before an immediate exit.
+
+    ``os._exit`` skips the finalizers that release them, and multiprocessing's
+    resource tracker then prints a warning about leaked semaphores. Running
+    the finalizers of priority >= 0 (close queues, unlink semaphores) does not
+    wait for the workers, which exit on their own when their parent is gone.
+    """
+    util = sys.modules.get("multiprocessing.util")
+    if util is not None:
+        util._run_finalizers(0)  # private, unchanged since Python 3.4
 
 
 if __name__ == "__main__":
