@@ -44,14 +44,19 @@ def projection_matrix(K: np.ndarray, R: np.ndarray, C: np.ndarray) -> np.ndarray
     return K @ np.hstack([R, (-R @ C)[:, None]])
 
 
+def cross_matrix(v: np.ndarray) -> np.ndarray:
+    r""":math:`[v]_\times`, the matrix with :math:`[v]_\times w = v \times w`."""
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
 def rotation_from_vector(rvec: np.ndarray) -> np.ndarray:
-    r"""Rodrigues' formula: :math:`R = I + \sin\theta [k]_\times + (1 - \cos\theta)[k]_\times^2`."""
+    r"""Rodrigues' formula: :math:`R = I + \sin\theta [k]_\times + (1 - \cos\theta)[k]_\times^2`
+    for the rotation by :math:`\theta = \lVert r \rVert` about :math:`k = r / \theta`
+    (to first order, :math:`I + [r]_\times`, below :math:`\theta = 10^{-12}`)."""
     theta = float(np.linalg.norm(rvec))
     if theta < 1e-12:
-        kx = np.array([[0, -rvec[2], rvec[1]], [rvec[2], 0, -rvec[0]], [-rvec[1], rvec[0], 0]])
-        return np.eye(3) + kx
-    k = rvec / theta
-    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        return np.eye(3) + cross_matrix(rvec)
+    kx = cross_matrix(rvec / theta)
     return np.eye(3) + np.sin(theta) * kx + (1 - np.cos(theta)) * kx @ kx
 
 

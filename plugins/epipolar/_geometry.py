@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..camera._projection import cross_matrix, rotation_from_vector
+
 __all__ = [
     "eight_point",
     "essential_from_fundamental",
@@ -78,17 +80,9 @@ def refine_fundamental(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarra
     u0, s0, vt0 = np.linalg.svd(F)
     ratio = s0[1] / s0[0]
 
-    def rotation(w: np.ndarray) -> np.ndarray:
-        theta = float(np.linalg.norm(w))
-        if theta < 1e-15:
-            return np.eye(3)
-        k = w / theta
-        kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-        return np.eye(3) + np.sin(theta) * kx + (1 - np.cos(theta)) * kx @ kx
-
     def compose(x: np.ndarray) -> np.ndarray:
-        u = rotation(x[:3]) @ u0
-        vt = vt0 @ rotation(x[3:6]).T
+        u = rotation_from_vector(x[:3]) @ u0
+        vt = vt0 @ rotation_from_vector(x[3:6]).T
         return u @ np.diag([1.0, x[6], 0.0]) @ vt
 
     def residuals(x: np.ndarray) -> np.ndarray:
@@ -119,22 +113,13 @@ def refine_pose(
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(t, e1)
 
-    def rotation(w: np.ndarray) -> np.ndarray:
-        theta = float(np.linalg.norm(w))
-        if theta < 1e-15:
-            return np.eye(3)
-        k = w / theta
-        kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-        return np.eye(3) + np.sin(theta) * kx + (1 - np.cos(theta)) * kx @ kx
-
     def pose(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         direction = t + x[3] * e1 + x[4] * e2
-        return rotation(x[:3]) @ R, direction / np.linalg.norm(direction)
+        return rotation_from_vector(x[:3]) @ R, direction / np.linalg.norm(direction)
 
     def residuals(x: np.ndarray) -> np.ndarray:
         Rx, tx = pose(x)
-        cross = np.array([[0, -tx[2], tx[1]], [tx[2], 0, -tx[0]], [-tx[1], tx[0], 0]])
-        return sampson_distance(kb_inv.T @ cross @ Rx @ ka_inv, a, b)
+        return sampson_distance(kb_inv.T @ cross_matrix(tx) @ Rx @ ka_inv, a, b)
 
     return pose(least_squares(residuals, np.zeros(5), method="lm").x)
 

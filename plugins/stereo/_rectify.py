@@ -10,6 +10,7 @@ import numpy as np
 
 from graphvision import Camera, Float, Homography, Image, ImageT, PinholeCamera, Points2D, node
 
+from ..camera._projection import cross_matrix
 from ..epipolar._nodes import Fundamental
 from ..geometry import apply_homography, sample_homography
 
@@ -40,11 +41,6 @@ class UncalibratedRectification(NamedTuple):
 class RectifiedPair(NamedTuple, Generic[ImageT]):
     left: ImageT
     right: ImageT
-
-
-def _cross_matrix(v: np.ndarray) -> np.ndarray:
-    """:math:`[v]_\\times`, so that :math:`[v]_\\times w = v \\times w`."""
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def _recentre(H_a: np.ndarray, H_b: np.ndarray, width: int, height: int) -> np.ndarray:
@@ -139,7 +135,7 @@ def hartley_homographies(
     to_infinity[2, 0] = -e[2] / e[0]
     H_b = to_infinity @ turn @ to_origin
     unit = epipole / np.linalg.norm(epipole)
-    M = _cross_matrix(unit) @ F + np.outer(unit, np.ones(3))
+    M = cross_matrix(unit) @ F + np.outer(unit, np.ones(3))
     H_0 = H_b @ M
     mapped_a = apply_homography(H_0, a)
     mapped_b = apply_homography(H_b, b)
