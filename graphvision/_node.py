@@ -279,9 +279,9 @@ class NodeSpec:
         problems = []
         for item in error.errors():
             param = ".".join(str(p) for p in item["loc"])
+            said = str(item["msg"]).removeprefix("Value error, ")  # pydantic's ValueError prefix
             if not param:  # the node's own check of the parameters together
-                message = str(item["msg"]).removeprefix("Value error, ")
-                problems.append(("", f"{self.id}: {message}"))
+                problems.append(("", f"{self.id}: {said}"))
                 continue
             if item["type"] == "extra_forbidden":
                 listing = ", ".join(allowed) if allowed else "none"
@@ -292,7 +292,7 @@ class NodeSpec:
             else:
                 message = (
                     f"invalid value {item.get('input')!r} for parameter "
-                    f"'{param}' of {self.id}: {item['msg']}"
+                    f"'{param}' of {self.id}: {said}"
                 )
             problems.append((param, message))
         return problems

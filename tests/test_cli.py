@@ -131,7 +131,7 @@ def test_bad_parameter_from_the_command_line(capsys):
     status, _, err = cli(capsys, "run", DEMO, "--set", "median_on_sp.size=4")
     assert status == 2
     assert "invalid value 4 for parameter 'size' of filters.median" in err
-    assert "size must be odd" in err
+    assert "of filters.median: must be odd so the window is centred on a pixel, got 4" in err
     status, _, err = cli(capsys, "run", DEMO, "--set", "nosuch.size=4")
     assert status == 2 and "no node 'nosuch'" in err
     status, _, err = cli(capsys, "run", DEMO, "--set", "oops")

@@ -37,6 +37,7 @@ from pydantic import Field
 
 from graphvision import Array, node
 
+from .._params import Positive
 from ..geometry import apply_homography, normalising_transform
 
 __all__ = [
@@ -252,7 +253,7 @@ def board_corners(
     *,
     columns: Annotated[int, Field(ge=2, le=40)] = 9,
     rows: Annotated[int, Field(ge=2, le=40)] = 6,
-    sigma: Annotated[float, Field(gt=0)] = 2.0,
+    sigma: Positive = 2.0,
     max_window: Annotated[int, Field(ge=3, le=50)] = 15,
 ) -> BoardCorners:
     """Inner corners of a checkerboard in each view, sub-pixel, in a fixed order.

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Annotated
-
 import numpy as np
-from pydantic import Field
 
 from graphvision import Array, Camera, ImageT, PinholeCamera, Points2D, Points3D, node
 
+from .._params import Count, Positive
 from ._projection import (
     decompose_projection,
     distort_pixels,
@@ -45,8 +43,8 @@ def check_intrinsics(camera: PinholeCamera, what: str = "camera") -> None:
 @node("camera.pinhole", version=1)
 def pinhole(
     *,
-    fx: Annotated[float, Field(gt=0)] = 800.0,
-    fy: Annotated[float, Field(gt=0)] = 800.0,
+    fx: Positive = 800.0,
+    fy: Positive = 800.0,
     cx: float = 319.5,
     cy: float = 239.5,
     skew: float = 0.0,
@@ -57,8 +55,8 @@ def pinhole(
     k3: float = 0.0,
     rotation: Vector3 = (0.0, 0.0, 0.0),
     centre: Vector3 = (0.0, 0.0, 0.0),
-    width: Annotated[int, Field(ge=1)] = 640,
-    height: Annotated[int, Field(ge=1)] = 480,
+    width: Count = 640,
+    height: Count = 480,
 ) -> Camera:
     r"""A pinhole camera from its 11 degrees of freedom and its lens distortion.
 

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Annotated, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
-from pydantic import Field
 
 from graphvision import node
 
+from .._params import Probability, Seed
 from ..recognition._data import stratified_split
 from ..recognition._types import Samples, SampleSet
 
@@ -38,8 +38,8 @@ def load_digits_images() -> tuple[np.ndarray, np.ndarray]:
 @node("cnn.digits", version=1)
 def digits(
     *,
-    test_fraction: Annotated[float, Field(gt=0, lt=1)] = 0.2,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    test_fraction: Probability = 0.2,
+    seed: Seed = 0,
 ) -> DigitSplit:
     """scikit-learn's 8×8 handwritten digits (1,797 images, classes 0–9), split per class
     at random (seeded) into training and test sets.

@@ -11,6 +11,7 @@ from pydantic import Field
 
 from graphvision import Float, Table, node
 
+from .._params import Count, Positive, Seed
 from ..recognition._types import Samples, SampleSet
 from ._blas import one_blas_thread
 from ._network import Architecture, Network, NetworkModel, build_architecture, initial_weights
@@ -142,11 +143,11 @@ def train(
     *,
     layers: list[str] = DEFAULT_LAYERS,
     epochs: Annotated[int, Field(ge=1, le=1000)] = 15,
-    batch_size: Annotated[int, Field(ge=1)] = 32,
-    learning_rate: Annotated[float, Field(gt=0)] = 0.05,
+    batch_size: Count = 32,
+    learning_rate: Positive = 0.05,
     momentum: Annotated[float, Field(ge=0, lt=1)] = 0.9,
     weight_decay: Annotated[float, Field(ge=0)] = 1e-4,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> Network:
     """Build a network from its layer list and train it on labelled images by mini-batch
     SGD with momentum, the loss being the softmax cross-entropy of the last layer.

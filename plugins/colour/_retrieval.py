@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import Array, Descriptors, Float, node
 
+from .._params import Count, Seed
 from ._histograms import Bins, Metric, colour_histogram, histogram_distances
 
 __all__ = ["Gallery", "Retrieval", "gallery", "retrieve", "transformed_copies"]
@@ -41,7 +42,7 @@ def gallery(
     *,
     copies: Annotated[int, Field(ge=1, le=50)] = 4,
     bins: Bins = 8,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> Gallery:
     """A retrieval gallery: scikit-image's colour samples and seeded transformed copies.
 
@@ -87,7 +88,7 @@ def retrieve(
     labels: Array,
     *,
     metric: Metric = "chi2",
-    k: Annotated[int, Field(ge=1)] = 4,
+    k: Count = 4,
 ) -> Retrieval:
     r"""Rank the gallery for each entry as a query (leave one out); precision at ``k``.
 

@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import Boxes, ColorImage, Image, node
 
+from .._params import Count, Fraction
 from ..synthetic._digit_scenes import Scenes
 from ._types import Detections
 
@@ -40,7 +41,7 @@ def draw_boxes(
     truth: Boxes | None = None,
     *,
     count: Annotated[int, Field(ge=0)] = 0,
-    thickness: Annotated[int, Field(ge=1)] = 1,
+    thickness: Count = 1,
 ) -> ColorImage:
     """The image with the true boxes (if given) in green and the first ``count`` boxes
     (proposals or detections, best first) in red over them.
@@ -77,9 +78,9 @@ def draw_scenes(
     scenes: Scenes,
     detections: Detections,
     *,
-    count: Annotated[int, Field(ge=1)] = 8,
-    columns: Annotated[int, Field(ge=1)] = 4,
-    min_score: Annotated[float, Field(ge=0, le=1)] = 0.5,
+    count: Count = 8,
+    columns: Count = 4,
+    min_score: Fraction = 0.5,
 ) -> ColorImage:
     """The first ``count`` scenes in a grid, true boxes in green and detections scoring at
     least ``min_score`` in red.

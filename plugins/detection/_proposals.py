@@ -11,6 +11,7 @@ from pydantic import Field
 from graphvision import Boxes, BoxSet, Float, Image, Table, node
 
 from .._boxes import anchor_boxes, iou_matrix
+from .._params import Count, Positive, Seed
 from ._selective import SIMILARITIES, ColourSpace, selective_search_boxes
 
 __all__ = [
@@ -49,11 +50,11 @@ def selective_search(
     *,
     colour_spaces: list[ColourSpace] = ["hsv", "lab"],  # noqa: B006 (never mutated)
     similarities: list[str] = ["colour+texture+size+fill", "texture+size+fill"],  # noqa: B006
-    scales: list[Annotated[float, Field(gt=0)]] = [100.0, 300.0],  # noqa: B006
+    scales: list[Positive] = [100.0, 300.0],  # noqa: B006
     sigma: Annotated[float, Field(ge=0)] = 0.8,
     max_area: Annotated[float, Field(gt=0, le=1)] = 0.9,
     max_boxes: Annotated[int, Field(ge=0)] = 1000,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> Boxes:
     """Selective search: over-segment (Felzenszwalb–Huttenlocher), group the two most
     similar neighbouring regions until one remains, and give one box per region ever
@@ -142,9 +143,9 @@ def propose(
 def anchors(
     image: Image,
     *,
-    stride: Annotated[int, Field(ge=1)] = 16,
-    sizes: list[Annotated[float, Field(gt=0)]] = [32.0, 64.0, 128.0],  # noqa: B006
-    ratios: list[Annotated[float, Field(gt=0)]] = [0.5, 1.0, 2.0],  # noqa: B006
+    stride: Count = 16,
+    sizes: list[Positive] = [32.0, 64.0, 128.0],  # noqa: B006
+    ratios: list[Positive] = [0.5, 1.0, 2.0],  # noqa: B006
 ) -> Boxes:
     """Faster R-CNN's anchors over the feature map of stride ``stride`` of an image: at
     each cell centre, one box of area s² per size s and aspect ratio r = h / w.
@@ -241,7 +242,7 @@ def recall_curve(
     truth: Boxes,
     *,
     iou: Annotated[float, Field(gt=0, le=1)] = 0.5,
-    counts: list[Annotated[int, Field(ge=1)]] = [10, 20, 50, 100, 200, 500, 1000],  # noqa: B006
+    counts: list[Count] = [10, 20, 50, 100, 200, 500, 1000],  # noqa: B006
 ) -> Table:
     """Recall of the first n proposals (in their ranking) for each n of ``counts``.
 

@@ -23,6 +23,7 @@ from pydantic import Field
 from graphvision import node
 
 from .._boxes import decode_boxes, encode_boxes, iou_matrix, non_max_suppression
+from .._params import Count, Fraction, Positive, Seed
 from ..cnn import Architecture, Network, NetworkModel, build_architecture, fit_network
 from ..cnn._blas import one_blas_thread
 from ..recognition._types import Samples, SampleSet
@@ -54,11 +55,11 @@ def scene_proposals(
     *,
     colour_spaces: list[ColourSpace] = ["gray"],  # noqa: B006 (never mutated)
     similarities: list[str] = ["colour+texture+size+fill", "texture+size+fill"],  # noqa: B006
-    scales: list[Annotated[float, Field(gt=0)]] = [50.0],  # noqa: B006
+    scales: list[Positive] = [50.0],  # noqa: B006
     sigma: Annotated[float, Field(ge=0)] = 0.8,
     max_area: Annotated[float, Field(gt=0, le=1)] = 0.5,
     max_boxes: Annotated[int, Field(ge=0)] = 200,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> Detections:
     """Selective search on every scene (``detection.selective_search`` with these
     parameters); label -1 (no class yet).
@@ -199,10 +200,10 @@ def roi_samples(
     *,
     size: Annotated[int, Field(ge=4)] = 20,
     positive_iou: Annotated[float, Field(gt=0, le=1)] = 0.5,
-    negative_iou: Annotated[float, Field(ge=0, le=1)] = 0.3,
+    negative_iou: Fraction = 0.3,
     jitter: Annotated[int, Field(ge=0)] = 4,
-    negatives_per_positive: Annotated[float, Field(gt=0)] = 2.0,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    negatives_per_positive: Positive = 2.0,
+    seed: Seed = 0,
 ) -> Samples:
     """Training crops for a CNN as in R-CNN: proposals, true boxes and jittered true boxes
     warped to ``size`` × ``size``, labelled with the class of the true box they overlap by
@@ -326,20 +327,20 @@ def train_head(
     scenes: Scenes,
     proposals: Detections,
     *,
-    feature_layers: Annotated[int, Field(ge=1)] = 5,
+    feature_layers: Count = 5,
     pool: Annotated[int, Field(ge=1, le=16)] = 4,
     hidden: list[str] = ["dense 64", "relu"],  # noqa: B006 (never mutated)
-    epochs: Annotated[int, Field(ge=1)] = 30,
-    batch_size: Annotated[int, Field(ge=1)] = 32,
-    learning_rate: Annotated[float, Field(gt=0)] = 0.02,
+    epochs: Count = 30,
+    batch_size: Count = 32,
+    learning_rate: Positive = 0.02,
     momentum: Annotated[float, Field(ge=0, lt=1)] = 0.9,
     weight_decay: Annotated[float, Field(ge=0)] = 1e-4,
     ridge: Annotated[float, Field(ge=0)] = 10.0,
     positive_iou: Annotated[float, Field(gt=0, le=1)] = 0.5,
-    negative_iou: Annotated[float, Field(ge=0, le=1)] = 0.3,
+    negative_iou: Fraction = 0.3,
     jitter: Annotated[int, Field(ge=0)] = 4,
-    negatives_per_positive: Annotated[float, Field(gt=0)] = 2.0,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    negatives_per_positive: Positive = 2.0,
+    seed: Seed = 0,
 ) -> Detector:
     """Train a Fast R-CNN head on ROI-pooled features of a backbone's first layers: a fully
     connected classifier of the classes and background (softmax cross-entropy, SGD with
@@ -447,7 +448,7 @@ def detect(
     proposals: Detections,
     *,
     regression: bool = True,
-    min_score: Annotated[float, Field(ge=0, le=1)] = 0.05,
+    min_score: Fraction = 0.05,
 ) -> Detections:
     """Detect objects in scenes: pool each proposal from the scene's feature map, score the
     classes (softmax), keep the best non-background class when its probability reaches
@@ -529,7 +530,7 @@ def class_wise_nms(detections: DetectionSet, iou: float) -> DetectionSet:
 
 
 @node("detection.nms", version=1)
-def nms(detections: Detections, *, iou: Annotated[float, Field(ge=0, le=1)] = 0.3) -> Detections:
+def nms(detections: Detections, *, iou: Fraction = 0.3) -> Detections:
     """Class-wise non-maximum suppression: within each scene and class, keep the best
     detection and drop those overlapping it by IoU above ``iou``, repeat.
 

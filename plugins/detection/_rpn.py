@@ -24,6 +24,7 @@ from pydantic import Field
 from graphvision import PortValueError, RecordPort, node
 
 from .._boxes import anchor_boxes, decode_boxes, encode_boxes, iou_matrix, non_max_suppression
+from .._params import Count, Fraction, Positive, Seed
 from ..cnn import Network, build_architecture, fit_network
 from ..cnn._blas import one_blas_thread
 from ..synthetic._digit_scenes import Scenes
@@ -105,16 +106,16 @@ def train_rpn(
     backbone: Network,
     scenes: Scenes,
     *,
-    feature_layers: Annotated[int, Field(ge=1)] = 5,
-    sizes: list[Annotated[float, Field(gt=0)]] = [16.0, 24.0, 32.0],  # noqa: B006
-    ratios: list[Annotated[float, Field(gt=0)]] = [0.7, 1.0, 1.4],  # noqa: B006
+    feature_layers: Count = 5,
+    sizes: list[Positive] = [16.0, 24.0, 32.0],  # noqa: B006
+    ratios: list[Positive] = [0.7, 1.0, 1.4],  # noqa: B006
     positive_iou: Annotated[float, Field(gt=0, le=1)] = 0.5,
-    negative_iou: Annotated[float, Field(ge=0, le=1)] = 0.3,
-    negatives_per_positive: Annotated[float, Field(gt=0)] = 3.0,
-    epochs: Annotated[int, Field(ge=1)] = 8,
-    learning_rate: Annotated[float, Field(gt=0)] = 0.02,
+    negative_iou: Fraction = 0.3,
+    negatives_per_positive: Positive = 3.0,
+    epochs: Count = 8,
+    learning_rate: Positive = 0.02,
     ridge: Annotated[float, Field(ge=0)] = 10.0,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> RegionProposer:
     """Train a region proposal network over a backbone's feature map: per anchor shape, a
     softmax regression of objectness on the 3 × 3 cell features and a ridge regressor of
@@ -223,8 +224,8 @@ def rpn_proposals(
     rpn: RegionProposer,
     scenes: Scenes,
     *,
-    max_boxes: Annotated[int, Field(ge=1)] = 50,
-    nms: Annotated[float, Field(ge=0, le=1)] = 0.7,
+    max_boxes: Count = 50,
+    nms: Fraction = 0.7,
 ) -> Detections:
     """Proposals of a region proposal network: every anchor moved by its regressor, scored
     by its objectness, clipped to the scene; the best ``max_boxes`` per scene after

@@ -6,7 +6,6 @@ from typing import Annotated, Any, ClassVar, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field
 
 from graphvision import (
     Array,
@@ -23,6 +22,7 @@ from graphvision import (
 )
 from graphvision._ports import PortValueError
 
+from .._params import Count, Positive, Probability, Seed
 from ..camera import normalise_pixels
 from ..fitting import ransac
 from ..geometry import estimate_homography, transfer_error
@@ -125,10 +125,10 @@ def fundamental(
     a: Points2D,
     b: Points2D,
     *,
-    threshold: Annotated[float, Field(gt=0)] = 1.0,
-    confidence: Annotated[float, Field(gt=0, lt=1)] = 0.999,
-    max_iterations: Annotated[int, Field(ge=1)] = 2000,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    threshold: Positive = 1.0,
+    confidence: Probability = 0.999,
+    max_iterations: Count = 2000,
+    seed: Seed = 0,
 ) -> FundamentalFit:
     r"""Robust F: RANSAC over 8-point samples scored by Sampson distance, refit on the inliers.
 
@@ -211,10 +211,10 @@ def essential_from_points(
     camera_a: Camera,
     camera_b: Camera,
     *,
-    threshold: Annotated[float, Field(gt=0)] = 1.0,
-    confidence: Annotated[float, Field(gt=0, lt=1)] = 0.999,
-    max_iterations: Annotated[int, Field(ge=1)] = 2000,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    threshold: Positive = 1.0,
+    confidence: Probability = 0.999,
+    max_iterations: Count = 2000,
+    seed: Seed = 0,
 ) -> EssentialFit:
     r"""E directly from normalised points: :func:`fundamental`'s robust method on
     :math:`\hat x = K^{-1} x`, then singular values forced to (1, 1, 0).
@@ -316,7 +316,7 @@ def relative_pose(
     camera_a: Camera,
     camera_b: Camera,
     *,
-    inlier_threshold: Annotated[float, Field(gt=0)] = 1.5,
+    inlier_threshold: Positive = 1.5,
 ) -> RelativePose:
     r"""The pose of view b relative to view a (at :math:`[I \mid 0]`), baseline 1, by cheirality.
 

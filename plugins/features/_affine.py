@@ -9,6 +9,8 @@ from pydantic import Field
 
 from graphvision import GrayImage, Keypoints, KeypointSet, node
 
+from .._params import Positive
+
 __all__ = ["affine_adapt"]
 
 GRID = 15  # samples per side of the normalised window
@@ -27,7 +29,7 @@ def affine_adapt(
     keypoints: Keypoints,
     *,
     iterations: Annotated[int, Field(ge=1, le=50)] = 10,
-    window: Annotated[float, Field(gt=0)] = 3.0,
+    window: Positive = 3.0,
     isotropy: Annotated[float, Field(gt=0, le=1)] = 0.95,
 ) -> Keypoints:
     r"""Affine adaptation: make each keypoint's region isotropic in its own frame.

@@ -9,6 +9,8 @@ from pydantic import Field
 
 from graphvision import GrayImage, Keypoints, KeypointSet, node
 
+from .._params import Count, Fraction
+
 __all__ = ["harris", "harris_response", "hessian", "log_blobs"]
 
 Sigma = Annotated[float, Field(gt=0, le=50)]
@@ -64,8 +66,8 @@ def harris(
     sigma_d: Sigma = 1.0,
     sigma_i: Sigma = 2.0,
     alpha: Annotated[float, Field(ge=0, le=0.25)] = 0.04,
-    threshold_rel: Annotated[float, Field(ge=0, le=1)] = 0.01,
-    min_distance: Annotated[int, Field(ge=1)] = 3,
+    threshold_rel: Fraction = 0.01,
+    min_distance: Count = 3,
     max_keypoints: Annotated[int, Field(ge=0)] = 2000,
 ) -> Keypoints:
     r"""Harris corners: both eigenvalues of the gradient covariance large.
@@ -115,8 +117,8 @@ def hessian(
     image: GrayImage,
     *,
     sigma: Sigma = 2.0,
-    threshold_rel: Annotated[float, Field(ge=0, le=1)] = 0.01,
-    min_distance: Annotated[int, Field(ge=1)] = 3,
+    threshold_rel: Fraction = 0.01,
+    min_distance: Count = 3,
     max_keypoints: Annotated[int, Field(ge=0)] = 2000,
 ) -> Keypoints:
     r"""Hessian detector: maxima of the scale-normalised determinant of the Hessian.

@@ -9,6 +9,8 @@ from pydantic import Field
 
 from graphvision import Descriptors, GrayImage, Keypoints, node
 
+from .._params import Positive
+
 __all__ = ["patch_descriptor"]
 
 
@@ -18,7 +20,7 @@ def patch_descriptor(
     keypoints: Keypoints,
     *,
     size: Annotated[int, Field(ge=3, le=64)] = 8,
-    extent: Annotated[float, Field(gt=0)] = 6.0,
+    extent: Positive = 6.0,
 ) -> Descriptors:
     r"""Intensities of a ``size × size`` grid around each keypoint, normalised.
 

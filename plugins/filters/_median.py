@@ -10,6 +10,7 @@ from pydantic import AfterValidator, Field
 from graphvision import ImageT, node
 
 from .._checks import check_window
+from .._params import odd
 from ._boundary import Boundary
 from ._median_network import median_network, sort_network
 
@@ -24,13 +25,7 @@ _NUMPY_PAD: dict[str, Literal["wrap", "edge", "symmetric"]] = {
 _BLOCK = 512  # columns per pass of the selection network: its wires stay in L2
 
 
-def _odd(size: int) -> int:
-    if size % 2 == 0:
-        raise ValueError(f"size must be odd so the window has a centre, got {size}")
-    return size
-
-
-OddSize = Annotated[int, Field(ge=1, le=31), AfterValidator(_odd)]
+MedianSize = Annotated[int, Field(ge=1, le=31), AfterValidator(odd)]
 
 
 def _boundary_index(length: int, half: int, boundary: str) -> np.ndarray:
@@ -63,7 +58,7 @@ def _median_2d(plane: np.ndarray, size: int, boundary: str, out: np.ndarray) -> 
 
 
 @node("filters.median", version=1)
-def median(image: ImageT, *, size: OddSize = 3, boundary: Boundary = "mirror") -> ImageT:
+def median(image: ImageT, *, size: MedianSize = 3, boundary: Boundary = "mirror") -> ImageT:
     """Median filter: each pixel becomes the median of its ``size × size`` window.
 
     A nonlinear filter: it adds no new gray levels and discards outliers, so

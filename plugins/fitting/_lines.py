@@ -6,10 +6,10 @@ from typing import Annotated, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field
 
 from graphvision import Array, ArrayPort, Float, Points2D, PortValueError, node
 
+from .._params import Count, Positive, Probability, Seed
 from ._ransac import ransac
 
 __all__ = [
@@ -184,10 +184,10 @@ class RobustLine(NamedTuple):
 def fit_line_ransac(
     points: Points2D,
     *,
-    threshold: Annotated[float, Field(gt=0)] = 2.0,
-    confidence: Annotated[float, Field(gt=0, lt=1)] = 0.99,
-    max_iterations: Annotated[int, Field(ge=1)] = 1000,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    threshold: Positive = 2.0,
+    confidence: Probability = 0.99,
+    max_iterations: Count = 1000,
+    seed: Seed = 0,
 ) -> RobustLine:
     """RANSAC line: lines through two random points, scored by inliers within ``threshold``.
 
@@ -249,9 +249,7 @@ def fit_line_ransac(
 
 
 @node("fitting.line_distance", version=1)
-def line_distance(
-    line: Line2D, truth: Line2D, *, extent: Annotated[float, Field(gt=0)] = 100.0
-) -> Float:
+def line_distance(line: Line2D, truth: Line2D, *, extent: Positive = 100.0) -> Float:
     """How far ``line`` is from ``truth``: the mean distance from ``line`` of 11 points
     spread over ``extent`` pixels of ``truth``, centred where ``truth`` passes closest
     to (50, 50), the centre of the sampled square.

@@ -32,9 +32,11 @@ from pydantic import Field
 
 from graphvision import Float, FloatImage, ImageT, node
 
+from .._params import Positive
+
 __all__ = ["circle_of_confusion", "defocus", "depth_of_field", "field_of_view", "focus_distance"]
 
-Positive = Annotated[float, Field(gt=0)]
+Positive = Positive
 
 
 @node("formation.field_of_view", version=1)

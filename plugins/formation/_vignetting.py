@@ -27,6 +27,8 @@ from pydantic import Field
 
 from graphvision import Array, ColorImage, GrayImage, ImageT, node
 
+from .._params import Positive
+
 __all__ = [
     "correct_vignetting",
     "draw_vignetting",
@@ -60,7 +62,7 @@ def vignette(
     image: ImageT,
     *,
     model: Literal["cos4", "polynomial"] = "cos4",
-    focal: Annotated[float, Field(gt=0)] = 500.0,
+    focal: Positive = 500.0,
     a1: float = -0.3,
     a2: float = 0.0,
     a3: float = 0.0,

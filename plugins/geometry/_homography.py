@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Annotated, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
-from pydantic import Field
 
 from graphvision import Float, FloatImage, Homography, Keypoints, Matches, node
 
+from .._params import Count, Positive, Probability, Seed
 from ..fitting import ransac
 
 __all__ = [
@@ -126,11 +126,11 @@ def homography_ransac(
     dst: Keypoints,
     matches: Matches,
     *,
-    threshold: Annotated[float, Field(gt=0)] = 3.0,
-    confidence: Annotated[float, Field(gt=0, lt=1)] = 0.995,
-    max_iterations: Annotated[int, Field(ge=1)] = 5000,
+    threshold: Positive = 3.0,
+    confidence: Probability = 0.995,
+    max_iterations: Count = 5000,
     refine: bool = True,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> HomographyFit:
     """The homography mapping ``src`` keypoints onto their matches in ``dst``, robust to outliers.
 
@@ -205,8 +205,8 @@ def corner_error(
     truth: Homography,
     image: FloatImage | None = None,
     *,
-    width: Annotated[int, Field(ge=1)] | None = None,
-    height: Annotated[int, Field(ge=1)] | None = None,
+    width: Count | None = None,
+    height: Count | None = None,
 ) -> Float:
     """Mean distance in pixels between the image corners mapped by ``estimated`` and by ``truth``.
 

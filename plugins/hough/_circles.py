@@ -10,6 +10,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, FloatImage, GrayImage, Int, node
 
+from .._params import Count, Positive
 from ..edges import gradient_images
 from ._peaks import local_maxima, parabolic_offset, suppress_close
 from ._ports import Circles
@@ -58,15 +59,15 @@ def hough_circles(
     edges: BinaryImage,
     image: GrayImage,
     *,
-    min_radius: Annotated[float, Field(gt=0)] = 10.0,
-    max_radius: Annotated[float, Field(gt=0)] = 30.0,
-    radius_step: Annotated[float, Field(gt=0)] = 1.0,
+    min_radius: Positive = 10.0,
+    max_radius: Positive = 30.0,
+    radius_step: Positive = 1.0,
     polarity: Polarity = "both",
     sigma: Annotated[float, Field(gt=0, le=50)] = 1.0,
     vote_sigma: Annotated[float, Field(ge=0, le=20)] = 1.0,
     threshold: Annotated[float, Field(gt=0, le=1)] = 0.3,
-    min_distance: Annotated[float, Field(gt=0)] | None = None,
-    max_circles: Annotated[int, Field(ge=1)] = 100,
+    min_distance: Positive | None = None,
+    max_circles: Count = 100,
 ) -> HoughCircles:
     r"""Circles by voting for centres along the gradient, over a range of radii.
 

@@ -20,6 +20,7 @@ from graphvision import (
     node,
 )
 
+from .._params import Count, Positive
 from ..edges import gradient_images
 from ._peaks import local_maxima, quadratic_peak_2d, suppress_close
 
@@ -71,12 +72,12 @@ def generalized_hough(
     *,
     bins: Annotated[int, Field(ge=4, le=720)] = 64,
     rotations: Annotated[list[float], Field(min_length=1)] = [0.0],  # noqa: B006
-    scales: Annotated[list[Annotated[float, Field(gt=0)]], Field(min_length=1)] = [1.0],  # noqa: B006
+    scales: Annotated[list[Positive], Field(min_length=1)] = [1.0],  # noqa: B006
     sigma: Annotated[float, Field(gt=0, le=50)] = 1.0,
     vote_sigma: Annotated[float, Field(ge=0, le=20)] = 1.0,
     threshold: Annotated[float, Field(gt=0, le=1)] = 0.3,
-    min_distance: Annotated[float, Field(gt=0)] = 10.0,
-    max_instances: Annotated[int, Field(ge=1)] = 10,
+    min_distance: Positive = 10.0,
+    max_instances: Count = 10,
 ) -> GeneralizedHough:
     r"""Find an arbitrary shape by voting for its reference point (Ballard's GHT).
 

@@ -10,6 +10,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, FloatImage, GrayImage, Int, node
 
+from .._params import Count
 from ..edges import gradient_images
 from ._peaks import local_maxima, quadratic_peak_2d, suppress_close
 from ._ports import Lines
@@ -80,7 +81,7 @@ def hough_lines(
     vote_sigma: Annotated[float, Field(ge=0, le=20)] = 1.0,
     threshold: Annotated[float, Field(gt=0, le=1)] = 0.5,
     min_distance: Annotated[int, Field(ge=1, le=1000)] = 5,
-    max_lines: Annotated[int, Field(ge=1)] = 100,
+    max_lines: Count = 100,
 ) -> HoughLines:
     r"""Lines by voting in (ρ, θ), with the course's improvements.
 

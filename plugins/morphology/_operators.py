@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, GrayImage, node
 
+from .._params import Count
 from ._footprints import Footprint
 from ._packed import MAX_HALF_WIDTH, binary_extreme
 
@@ -175,7 +176,7 @@ def fill_holes(
 def remove_small_objects(
     mask: BinaryImage,
     *,
-    min_area: Annotated[int, Field(ge=1)] = 64,
+    min_area: Count = 64,
     connectivity: Literal[4, 8] = 8,
 ) -> BinaryImage:
     """Drop connected components with fewer than ``min_area`` pixels.

@@ -10,6 +10,7 @@ from pydantic import Field
 
 from graphvision import Array, ColorImage, Float, FloatImage, GrayImage, Image, Points2D, node
 
+from .._params import Count, Positive
 from ..hough import local_maxima, quadratic_peak_2d, suppress_close
 
 __all__ = [
@@ -110,8 +111,8 @@ def find_peaks(
     response: FloatImage,
     *,
     threshold: float = 0.5,
-    min_distance: Annotated[int, Field(ge=1)] = 5,
-    max_peaks: Annotated[int, Field(ge=1)] = 10,
+    min_distance: Count = 5,
+    max_peaks: Count = 10,
 ) -> Peaks:
     """Peaks of a response map, strongest first, refined to a fraction of a pixel.
 
@@ -161,8 +162,8 @@ def match_multiscale(
     image: GrayImage,
     template: GrayImage,
     *,
-    min_scale: Annotated[float, Field(gt=0)] = 0.5,
-    max_scale: Annotated[float, Field(gt=0)] = 2.0,
+    min_scale: Positive = 0.5,
+    max_scale: Positive = 2.0,
     steps: Annotated[int, Field(ge=1, le=200)] = 25,
 ) -> MultiscaleMatch:
     r"""Find a template that appears in the image at an unknown scale, by scaling the image.

@@ -12,6 +12,7 @@ from pydantic import Field
 
 from graphvision import KeypointSet, node
 
+from .._params import Count, Positive, Seed
 from ..features import describe_sift
 from ._types import (
     Bags,
@@ -29,8 +30,8 @@ __all__ = ["bag_of_words", "dense_sift", "fit_kmeans", "kmeans", "nearest_word"]
 def dense_sift(
     samples: Samples,
     *,
-    step: Annotated[int, Field(ge=1)] = 8,
-    scale: Annotated[float, Field(gt=0)] = 2.0,
+    step: Count = 8,
+    scale: Positive = 2.0,
     margin: Annotated[int, Field(ge=0)] = 8,
     upsample: bool = True,
 ) -> Bags:
@@ -139,10 +140,10 @@ def fit_kmeans(points: np.ndarray, k: int, iterations: int, seed: int) -> np.nda
 def kmeans(
     bags: Bags,
     *,
-    words: Annotated[int, Field(ge=1)] = 50,
-    iterations: Annotated[int, Field(ge=1)] = 50,
+    words: Count = 50,
+    iterations: Count = 50,
     max_descriptors: Annotated[int, Field(ge=0)] = 5000,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> Vocabulary:
     """A vocabulary of visual words: the k-means centres of the training descriptors
     (similar descriptors form clusters; each centre is a word).

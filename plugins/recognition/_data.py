@@ -11,6 +11,7 @@ from pydantic import Field
 from graphvision import node
 
 from .._checks import to_float_image
+from .._params import Count, Probability, Seed
 from ._types import Features, FeatureSet, Samples, SampleSet
 
 __all__ = [
@@ -76,8 +77,8 @@ def stratified_split(
 @node("recognition.lfw_faces", version=1)
 def lfw_faces(
     *,
-    test_fraction: Annotated[float, Field(gt=0, lt=1)] = 0.25,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    test_fraction: Probability = 0.25,
+    seed: Seed = 0,
 ) -> Split:
     """scikit-image's ``lfw_subset``: 100 faces (label 1) and 100 non-faces (label 0), 25×25,
     split per class at random (seeded) into training and test sets.
@@ -116,7 +117,7 @@ def texture_patches(
     *,
     textures: tuple[Texture, ...] = ("brick", "grass", "gravel"),
     size: Annotated[int, Field(ge=8, le=256)] = 64,
-    stride: Annotated[int, Field(ge=1)] = 32,
+    stride: Count = 32,
 ) -> Split:
     """Square patches of scikit-image's textures, the left half of each image for training
     and the right half for testing; the label is the texture's index in ``textures``.
@@ -162,10 +163,10 @@ def face_free_image(name: str) -> np.ndarray:
 def negative_patches(
     *,
     images: tuple[FaceFree, ...] = ("brick", "grass", "gravel", "coins", "page", "text", "moon"),
-    count: Annotated[int, Field(ge=1)] = 600,
+    count: Count = 600,
     size: Annotated[int, Field(ge=4)] = 25,
     min_side: Annotated[int, Field(ge=4)] = 25,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> Samples:
     """Negatives for a detector: random squares (side ``min_side`` to a third of the image)
     cut from face-free sample images and resized to ``size``×``size``; label 0.
@@ -226,7 +227,7 @@ def augment(
     shift: Annotated[float, Field(ge=0)] = 1.5,
     scale: Annotated[float, Field(ge=0, lt=1)] = 0.08,
     angle: Annotated[float, Field(ge=0, le=180)] = 8.0,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> Samples:
     """The samples, their mirror images, and ``copies`` jittered copies of each: a random
     similarity about the centre (log-scale in ±``scale``, rotation in ±``angle`` degrees,

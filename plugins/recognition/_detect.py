@@ -22,6 +22,7 @@ from graphvision import (
 )
 
 from .._boxes import iou_matrix, non_max_suppression
+from .._params import Count, Fraction, Positive
 from ._data import NON_FACE, FaceFree, face_free_image, pixel_features
 from ._haar import haar_values, integral_image, sample_haar_features
 from ._hog import hog_blocks
@@ -158,9 +159,9 @@ def detect(
     classifier: Classifier,
     *,
     scale_step: Annotated[float, Field(gt=1, le=4)] = 1.2,
-    min_scale: Annotated[float, Field(gt=0)] = 1.0,
-    max_scale: Annotated[float, Field(gt=0)] = 64.0,
-    step: Annotated[int, Field(ge=1)] = 3,
+    min_scale: Positive = 1.0,
+    max_scale: Positive = 64.0,
+    step: Count = 3,
     threshold: float = 0.0,
 ) -> Boxes:
     """Every window the classifier accepts, over positions and a pyramid of scales.
@@ -243,11 +244,11 @@ def mine_negatives(
     classifier: Classifier,
     *,
     images: tuple[FaceFree, ...] = HARD_NEGATIVE_SOURCES,
-    count: Annotated[int, Field(ge=1)] = 400,
+    count: Count = 400,
     scale_step: Annotated[float, Field(gt=1, le=4)] = 1.25,
-    min_scale: Annotated[float, Field(gt=0)] = 1.0,
-    max_scale: Annotated[float, Field(gt=0)] = 16.0,
-    step: Annotated[int, Field(ge=1)] = 3,
+    min_scale: Positive = 1.0,
+    max_scale: Positive = 16.0,
+    step: Count = 3,
 ) -> Samples:
     """Hard negatives (Dalal–Triggs): the windows of face-free images that the classifier
     scores highest, cut out and resized to its window; retraining with them removes the
@@ -303,10 +304,10 @@ def detect_subspace(
     subspace: Subspace,
     *,
     scale_step: Annotated[float, Field(gt=1, le=4)] = 1.2,
-    min_scale: Annotated[float, Field(gt=0)] = 1.0,
-    max_scale: Annotated[float, Field(gt=0)] = 64.0,
-    step: Annotated[int, Field(ge=1)] = 2,
-    max_error: Annotated[float, Field(gt=0)] = 0.2,
+    min_scale: Positive = 1.0,
+    max_scale: Positive = 64.0,
+    step: Count = 2,
+    max_error: Positive = 0.2,
 ) -> Boxes:
     r"""Detection by distance from a subspace: windows that the subspace reconstructs well.
 
@@ -347,7 +348,7 @@ def detect_subspace(
 def nms(
     boxes: Boxes,
     *,
-    iou: Annotated[float, Field(ge=0, le=1)] = 0.3,
+    iou: Fraction = 0.3,
     max_boxes: Annotated[int, Field(ge=0)] = 0,
 ) -> Boxes:
     """Non-maximum suppression: keep the best-scored box, drop the boxes that overlap it by

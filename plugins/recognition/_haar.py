@@ -12,6 +12,7 @@ from pydantic import Field
 
 from graphvision import Array, GrayImage, node
 
+from .._params import Seed
 from ._types import Features, FeatureSet, Samples
 
 __all__ = [
@@ -148,7 +149,7 @@ def haar(
     *,
     count: Annotated[int, Field(ge=0)] = 2000,
     types: tuple[HaarType, ...] = ALL_TYPES,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> Features:
     """Haar-like features of each sample: differences of sums over adjacent rectangles
     (two side by side or stacked, three in a row or column, four in a checkerboard) at

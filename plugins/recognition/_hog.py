@@ -12,6 +12,7 @@ from pydantic import Field
 
 from graphvision import GrayImage, node
 
+from .._params import Count
 from ._types import Features, FeatureSet, Samples
 
 __all__ = [
@@ -25,7 +26,7 @@ __all__ = [
 ]
 
 HOG_EPS = 1e-5
-Pair = tuple[Annotated[int, Field(ge=1)], Annotated[int, Field(ge=1)]]
+Pair = tuple[Count, Count]
 
 
 def _gradients(images: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -5,13 +5,13 @@ reconstruction, the residual ε(m), and 1-nearest-neighbour classification."""
 from __future__ import annotations
 
 import json
-from typing import Annotated, Literal
+from typing import Literal
 
 import numpy as np
-from pydantic import Field
 
 from graphvision import Array, node
 
+from .._params import Count
 from ._types import (
     Features,
     FeatureSet,
@@ -88,7 +88,7 @@ def fit_pca(
 def pca(
     train: Features,
     *,
-    components: Annotated[int, Field(ge=1)] = 20,
+    components: Count = 20,
     method: Literal["auto", "covariance", "gram"] = "auto",
 ) -> Subspace:
     r"""PCA subspace of the training features: the directions of largest variance.

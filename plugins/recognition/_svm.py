@@ -3,13 +3,11 @@ classifier in a linear SVM")."""
 
 from __future__ import annotations
 
-from typing import Annotated
-
 import numpy as np
-from pydantic import Field
 
 from graphvision import node
 
+from .._params import Count, Positive
 from ._subspace import check_classes
 from ._types import Features, LinearClassifier, LinearModel
 
@@ -62,8 +60,8 @@ def fit_linear_svm(
 def linear_svm(
     train: Features,
     *,
-    C: Annotated[float, Field(gt=0)] = 1.0,
-    max_iterations: Annotated[int, Field(ge=1)] = 1000,
+    C: Positive = 1.0,
+    max_iterations: Count = 1000,
 ) -> LinearClassifier:
     r"""A linear SVM: the hyperplane :math:`w^T x + b = 0` of maximal margin, soft margins
     traded against :math:`\|w\|` by C (squared hinge loss, see :func:`fit_linear_svm`).

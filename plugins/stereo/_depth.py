@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Annotated
-
 import numpy as np
-from pydantic import Field
 
 from graphvision import Camera, Points3D, node
 
+from .._params import Count, Positive
 from ._ports import Depth, Disparity
 
 __all__ = ["depth_from_disparity", "depth_points"]
@@ -18,8 +16,8 @@ __all__ = ["depth_from_disparity", "depth_points"]
 def depth_from_disparity(
     disparity: Disparity,
     *,
-    focal: Annotated[float, Field(gt=0)] = 1.0,
-    baseline: Annotated[float, Field(gt=0)] = 1.0,
+    focal: Positive = 1.0,
+    baseline: Positive = 1.0,
     doffs: float = 0.0,
 ) -> Depth:
     r"""Depth of every pixel of a rectified pair from its disparity.
@@ -55,9 +53,7 @@ def depth_from_disparity(
 
 
 @node("stereo.depth_points", version=1)
-def depth_points(
-    depth: Depth, camera: Camera, *, step: Annotated[int, Field(ge=1)] = 1
-) -> Points3D:
+def depth_points(depth: Depth, camera: Camera, *, step: Count = 1) -> Points3D:
     r"""The 3-D point of every valid pixel, in the camera's coordinates.
 
     :math:`(X, Y, Z) = Z\, K^{-1} (x, y, 1)^T`.

@@ -6,33 +6,25 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import AfterValidator, Field
 
 from graphvision import GrayImage, node
 
+from .._params import Count, odd
 from ._cost import Cost, cost_volume, maximum_cost
 from ._ports import Disparity
 
 __all__ = ["block_match", "check_pair", "left_right_check", "sgm"]
 
-Window = Annotated[int, Field(ge=1, le=31)]
+Window = Annotated[int, Field(ge=1, le=31), AfterValidator(odd)]
 
 # The eight path directions (step_y, step_x) of semi-global matching; the first four
 # (horizontal and vertical) are the 4-path variant.
 PATHS = ((0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))
 
 
-def _odd_window(**params: Any) -> None:
-    """Parameters of block matching valid together: an odd window."""
-    if params["window"] % 2 == 0:
-        raise ValueError(
-            f"window must be odd (a block centred on the pixel), got {params['window']}"
-        )
-
-
 def _sgm_params(**params: Any) -> None:
-    """Parameters of semi-global matching valid together: odd window, P2 >= P1, census <= 7."""
-    _odd_window(**params)
+    """Parameters of semi-global matching valid together: P2 >= P1, census <= 7."""
     if params["p2"] < params["p1"]:
         raise ValueError(
             f"p2 ({params['p2']:g}) must be at least p1 ({params['p1']:g}): a jump costs more "
@@ -87,13 +79,13 @@ def _select(
     return disparity
 
 
-@node("stereo.block_match", version=2, check=_odd_window)
+@node("stereo.block_match", version=2)
 def block_match(
     left: GrayImage,
     right: GrayImage,
     *,
     min_disparity: int = 0,
-    num_disparities: Annotated[int, Field(ge=1)] = 64,
+    num_disparities: Count = 64,
     window: Window = 9,
     cost: Cost = "zncc",
     uniqueness: Annotated[float, Field(ge=0)] = 0.2,
@@ -157,7 +149,7 @@ def sgm(
     right: GrayImage,
     *,
     min_disparity: int = 0,
-    num_disparities: Annotated[int, Field(ge=1)] = 64,
+    num_disparities: Count = 64,
     window: Window = 7,
     cost: Cost = "census",
     p1: Annotated[float, Field(ge=0)] = 8.0,

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Annotated, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
-from pydantic import Field
 
 from graphvision import Float, node
 
+from .._params import Positive
 from ._ports import Depth, Disparity
 
 __all__ = ["DisparityError", "depth_rmse", "disparity_error"]
@@ -31,7 +31,7 @@ def _same_shape(estimate: np.ndarray, truth: np.ndarray, what: str) -> None:
 
 @node("stereo.disparity_error", version=1)
 def disparity_error(
-    disparity: Disparity, truth: Disparity, *, threshold: Annotated[float, Field(gt=0)] = 2.0
+    disparity: Disparity, truth: Disparity, *, threshold: Positive = 2.0
 ) -> DisparityError:
     r"""Percent of bad pixels, over all ground-truth pixels and over those estimated too.
 

@@ -17,6 +17,7 @@ from pydantic import Field
 
 from graphvision import Array, Camera, ImageT, PinholeCamera, Points3D, node
 
+from .._params import Fraction, Positive, Seed
 from ..camera import look_at, project_points, undistort_normalised
 
 __all__ = ["board_object_points", "board_views", "plane_view", "render_board"]
@@ -115,11 +116,11 @@ def board_views(
     views: Annotated[int, Field(ge=1, le=100)] = 10,
     columns: Annotated[int, Field(ge=2, le=40)] = 9,
     rows: Annotated[int, Field(ge=2, le=40)] = 6,
-    square: Annotated[float, Field(gt=0)] = 25.0,
+    square: Positive = 25.0,
     width: Annotated[int, Field(ge=32, le=4096)] = 640,
     height: Annotated[int, Field(ge=32, le=4096)] = 480,
-    focal: Annotated[float, Field(gt=0)] = 800.0,
-    aspect: Annotated[float, Field(gt=0)] = 1.0,
+    focal: Positive = 800.0,
+    aspect: Positive = 1.0,
     k1: float = -0.1,
     k2: float = 0.0,
     p1: float = 0.0,
@@ -128,7 +129,7 @@ def board_views(
     fill: Annotated[float, Field(gt=0, le=1)] = 0.6,
     blur: Annotated[float, Field(ge=0)] = 0.7,
     noise: Annotated[float, Field(ge=0)] = 0.01,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> BoardViews:
     """Several views of a checkerboard through one known camera, with their true corners.
 
@@ -231,8 +232,8 @@ def plane_view(
     texture: ImageT,
     camera: Camera,
     *,
-    scale: Annotated[float, Field(gt=0)] = 1.0,
-    background: Annotated[float, Field(ge=0, le=1)] = 0.0,
+    scale: Positive = 1.0,
+    background: Fraction = 0.0,
 ) -> ImageT:
     """A textured plane photographed by a known camera (with its lens distortion).
 

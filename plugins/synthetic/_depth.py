@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Annotated
-
 import numpy as np
-from pydantic import Field
 
 from graphvision import FloatImage, Image, node
+
+from .._params import Positive
 
 __all__ = ["depth_plane"]
 
@@ -16,8 +15,8 @@ __all__ = ["depth_plane"]
 def depth_plane(
     image: Image,
     *,
-    near: Annotated[float, Field(gt=0)] = 1000.0,
-    far: Annotated[float, Field(gt=0)] = 8000.0,
+    near: Positive = 1000.0,
+    far: Positive = 8000.0,
 ) -> FloatImage:
     """The depth of a plane receding from the bottom row (``near``) to the top row (``far``).
 

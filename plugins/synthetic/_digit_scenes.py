@@ -22,6 +22,7 @@ from pydantic import Field
 from graphvision import PortValueError, RecordPort, node
 
 from .._boxes import check_boxes
+from .._params import Seed
 
 __all__ = ["SceneSet", "Scenes", "ScenesPort", "digit_scenes", "render_digit_scenes"]
 
@@ -180,7 +181,7 @@ def digit_scenes(
     min_scale: Annotated[int, Field(ge=8)] = 16,
     max_scale: Annotated[int, Field(ge=8)] = 28,
     classes: list[Annotated[int, Field(ge=0, le=9)]] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9],  # noqa: B006 (never mutated)
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> Scenes:
     """Seeded detection scenes: scikit-learn's 8×8 digits pasted at random positions and
     scales on textured backgrounds, with their true boxes and classes.

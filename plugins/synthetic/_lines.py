@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import Points2D, node
 
+from .._params import Seed
 from ..fitting import Line2D
 
 __all__ = ["line_points"]
@@ -26,7 +27,7 @@ def line_points(
     outlier_ratio: Annotated[float, Field(ge=0, lt=1)] = 0.3,
     noise: Annotated[float, Field(ge=0)] = 1.0,
     angle: float = 0.5,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> LineSample:
     """Points on a known line with Gaussian noise, plus uniform outliers (seeded).
 

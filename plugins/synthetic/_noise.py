@@ -2,17 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Annotated
-
 import numpy as np
-from pydantic import Field
 
 from graphvision import ImageT, node
 
-__all__ = ["gaussian_noise", "impulse_noise", "salt_and_pepper"]
+from .._params import Fraction, Seed
 
-Fraction = Annotated[float, Field(ge=0, le=1, description="Fraction of pixels affected.")]
-Seed = Annotated[int, Field(ge=0, description="Seed of the random generator.")]
+__all__ = ["gaussian_noise", "impulse_noise", "salt_and_pepper"]
 
 
 def _pixel_mask(image: np.ndarray, amount: float, rng: np.random.Generator) -> np.ndarray:
@@ -24,7 +20,7 @@ def _pixel_mask(image: np.ndarray, amount: float, rng: np.random.Generator) -> n
 def gaussian_noise(
     image: ImageT,
     *,
-    sigma: Annotated[float, Field(ge=0, le=1)] = 0.05,
+    sigma: Fraction = 0.05,
     seed: Seed = 0,
 ) -> ImageT:
     r"""Add independent Gaussian noise to every pixel.
@@ -55,7 +51,7 @@ def salt_and_pepper(
     image: ImageT,
     *,
     amount: Fraction = 0.05,
-    salt_ratio: Annotated[float, Field(ge=0, le=1)] = 0.5,
+    salt_ratio: Fraction = 0.5,
     seed: Seed = 0,
 ) -> ImageT:
     """Salt-and-pepper noise: a random ``amount`` of pixels set to white (salt) or black (pepper).

@@ -14,6 +14,7 @@ from pydantic import Field
 
 from graphvision import Array, Camera, GrayImage, PinholeCamera, node
 
+from .._params import Positive, Seed
 from ..camera import look_at, project_points
 
 __all__ = ["plane_lines"]
@@ -34,11 +35,11 @@ def plane_lines(
     angle: Annotated[float, Field(ge=5, le=175)] = 70.0,
     rotation: float = -35.0,
     lines: Annotated[int, Field(ge=2, le=100)] = 8,
-    height: Annotated[float, Field(gt=0)] = 1.6,
+    height: Positive = 1.6,
     pitch: Annotated[float, Field(gt=0, lt=90)] = 15.0,
-    focal: Annotated[float, Field(gt=0)] = 500.0,
+    focal: Positive = 500.0,
     noise: Annotated[float, Field(ge=0)] = 0.3,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> PlaneLines:
     """Two families of parallel lines on the ground plane Y = 0, drawn as a 640×480 image.
 

@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, GrayImage, node
 
+from .._params import Seed
 from ..stereo._ports import Disparity
 
 __all__ = ["stereo_pair"]
@@ -39,7 +40,7 @@ def stereo_pair(
     slope: float = 0.02,
     foreground: Annotated[float, Field(ge=0)] = 12.0,
     noise: Annotated[float, Field(ge=0)] = 0.0,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> StereoPair:
     r"""A rectified pair: a textured background whose disparity grows down the image
     (a floor-like slant) and a textured square in front of it, with the truth.

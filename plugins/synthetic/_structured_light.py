@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import Camera, PinholeCamera, node
 
+from .._params import Positive, Seed
 from ..stereo._ports import Depth, Frames
 
 __all__ = ["gray_code_stripes", "structured_light_scene"]
@@ -50,9 +51,9 @@ def structured_light_scene(
     width: Annotated[int, Field(ge=16, le=2048)] = 320,
     height: Annotated[int, Field(ge=16, le=2048)] = 240,
     projector_width: Annotated[int, Field(ge=2, le=8192)] = 1024,
-    baseline: Annotated[float, Field(gt=0)] = 0.25,
+    baseline: Positive = 0.25,
     noise: Annotated[float, Field(ge=0)] = 0.01,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> StructuredLightScene:
     r"""A camera and a projector beside it looking at a sphere before a slanted wall; the
     projector shows each Gray-code bit plane and its inverse, the camera captures them.

@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import Camera, PinholeCamera, Points2D, Points3D, node
 
+from .._params import Positive, Seed
 from ..camera import look_at, project_points
 
 __all__ = ["two_view_scene"]
@@ -27,8 +28,8 @@ def two_view_scene(
     *,
     count: Annotated[int, Field(ge=8, le=100_000)] = 200,
     noise: Annotated[float, Field(ge=0)] = 0.5,
-    baseline: Annotated[float, Field(gt=0)] = 1.0,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    baseline: Positive = 1.0,
+    seed: Seed = 0,
 ) -> TwoViewScene:
     """Points in a 4 m box 6 m ahead, seen by two 640×480 cameras (K = 800/800/320/240).
 

@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import Homography, ImageT, node
 
+from .._params import Fraction, Positive, Seed
 from ..geometry import sample_homography
 
 __all__ = ["random_homography", "random_warp", "two_views"]
@@ -49,10 +50,10 @@ def random_warp(
     image: ImageT,
     *,
     max_rotation: Annotated[float, Field(ge=0, le=180)] = 30.0,
-    min_scale: Annotated[float, Field(gt=0)] = 0.7,
-    max_scale: Annotated[float, Field(gt=0)] = 1.3,
-    perspective: Annotated[float, Field(ge=0, le=1)] = 0.3,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    min_scale: Positive = 0.7,
+    max_scale: Positive = 1.3,
+    perspective: Fraction = 0.3,
+    seed: Seed = 0,
 ) -> RandomWarp[ImageT]:
     """Warp the image by a seeded random homography about its centre, same output size.
 
@@ -99,7 +100,7 @@ def two_views(
     overlap: Annotated[float, Field(gt=0.1, lt=1)] = 0.5,
     rotation: Annotated[float, Field(ge=0, le=45)] = 8.0,
     perspective: Annotated[float, Field(ge=0, le=0.5)] = 0.1,
-    seed: Annotated[int, Field(ge=0)] = 0,
+    seed: Seed = 0,
 ) -> TwoViews[ImageT]:
     """Two overlapping views of one image: the left and right crops, each under its own homography.
 

@@ -9,6 +9,8 @@ from pydantic import Field
 
 from graphvision import Array, BinaryImage, Float, GrayImage, LabelImage, node
 
+from .._params import Fraction
+
 __all__ = ["ght", "histogram", "manual", "multi_otsu", "otsu", "split_scores"]
 
 Bins = Annotated[int, Field(ge=2, le=65536, description="Number of histogram bins.")]
@@ -103,8 +105,8 @@ def _best_split(scores: np.ndarray, centres: np.ndarray) -> float:
 def manual(
     image: GrayImage,
     *,
-    low: Annotated[float, Field(ge=0, le=1)] = 0.5,
-    high: Annotated[float, Field(ge=0, le=1)] | None = None,
+    low: Fraction = 0.5,
+    high: Fraction | None = None,
 ) -> BinaryImage:
     """Foreground where ``low < image`` (and ``image <= high`` when ``high`` is given).
 
@@ -172,7 +174,7 @@ def ght(
     nu: Annotated[float, Field(ge=0)] = 0.0,
     tau: Annotated[float, Field(ge=0)] = 0.0,
     kappa: Annotated[float, Field(ge=0)] = 0.0,
-    omega: Annotated[float, Field(ge=0, le=1)] = 0.5,
+    omega: Fraction = 0.5,
     bins: Bins = 256,
     foreground: Foreground = "bright",
 ) -> Thresholded:

@@ -9,16 +9,12 @@ from pydantic import AfterValidator, Field
 
 from graphvision import BinaryImage, GrayImage, node
 
+from .._params import odd
+
 __all__ = ["local", "window_mean_std"]
 
 
-def _odd(size: int) -> int:
-    if size % 2 == 0:
-        raise ValueError(f"window must be odd so it is centred on the pixel, got {size}")
-    return size
-
-
-Window = Annotated[int, Field(ge=3, le=1001), AfterValidator(_odd)]
+Window = Annotated[int, Field(ge=3, le=1001), AfterValidator(odd)]
 
 
 def window_mean_std(image: np.ndarray, window: int) -> tuple[np.ndarray, np.ndarray]:

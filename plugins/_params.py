@@ -1,0 +1,43 @@
+"""Parameter types shared by the built-in plugins: seeds, probabilities, fractions, odd sizes.
+
+Each is an ``Annotated`` alias that pydantic validates and a type checker reads as
+``int`` or ``float``. A family that bounds an odd size writes the bounds before the
+check, ``Annotated[int, Field(ge=1, le=31), AfterValidator(odd)]``: constraints
+after a validator are enforced but left out of the JSON Schema. A refused value
+is reported by the engine with the node and the parameter's name, so the
+messages here say only what is wrong with the value.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import AfterValidator, Field
+
+__all__ = ["Count", "Fraction", "OddSize", "Positive", "Probability", "Seed", "odd"]
+
+
+def odd(size: int) -> int:
+    """``size`` itself if it is odd, else ValueError: a window needs a centre pixel."""
+    if size % 2 == 0:
+        raise ValueError(f"must be odd so the window is centred on a pixel, got {size}")
+    return size
+
+
+Seed = Annotated[int, Field(ge=0, description="Seed of the random generator.")]
+"""Seed of a NumPy random generator (``numpy.random.default_rng(seed)``)."""
+
+Probability = Annotated[float, Field(gt=0, lt=1)]
+"""A probability strictly between 0 and 1 (a RANSAC confidence, a held-out fraction)."""
+
+Fraction = Annotated[float, Field(ge=0, le=1)]
+"""A fraction or an overlap in [0, 1] (an IoU, a relative threshold, a score)."""
+
+Positive = Annotated[float, Field(gt=0)]
+"""A length, a tolerance or a scale: greater than 0."""
+
+Count = Annotated[int, Field(ge=1)]
+"""A number of things or iterations: at least 1."""
+
+OddSize = Annotated[int, Field(ge=1), AfterValidator(odd)]
+"""The side of a window centred on a pixel: odd, at least 1."""
