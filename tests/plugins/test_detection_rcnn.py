@@ -239,5 +239,6 @@ def test_box_regression_ridge_in_the_dual_equals_the_primal_and_pool_is_bounded(
         primal = np.linalg.solve(design.T @ design + penalty, design.T @ targets)
         np.testing.assert_allclose(_ridge(features, targets, 10.0), primal, atol=1e-10)
     graph = gv.load_pipeline(PIPELINES / "rcnn.yaml").with_overrides({"detector.pool": 40})
-    with pytest.raises(gv.PipelineError, match=r"--set detector\.pool=40: .*less than or equal to 16"):
+    refused = r"--set detector\.pool=40: .*less than or equal to 16"
+    with pytest.raises(gv.PipelineError, match=refused):
         gv.compile_graph(graph, gv.discover())  # refused before anything runs

@@ -125,7 +125,7 @@ def test_bad_stereo_input_is_refused_by_name(pair):
         stereo.sgm(pair.left, pair.right[:, :80])
     with pytest.raises(ValueError, match=r"disparity range .* does not fit in the image's 160"):
         stereo.block_match(pair.left, pair.right, num_disparities=200)
-    with pytest.raises(ValueError, match="window.*must be odd so the window is centred"):
+    with pytest.raises(ValueError, match=r"window.*must be odd so the window is centred"):
         stereo.block_match(pair.left, pair.right, window=8)
     with pytest.raises(ValueError, match=r"p2 \(4\) must be at least p1 \(8\)"):
         stereo.sgm(pair.left, pair.right, p1=8, p2=4)
