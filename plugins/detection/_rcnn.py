@@ -15,7 +15,7 @@ regressors on the same features move each box (R-CNN's appendix C).
 from __future__ import annotations
 
 import json
-from typing import Annotated, NamedTuple
+from typing import Annotated, Any, NamedTuple
 
 import numpy as np
 from pydantic import Field
@@ -193,7 +193,17 @@ class _RoiOptions(NamedTuple):
     seed: int
 
 
-@node("detection.roi_samples", version=1)
+def iou_order(**params: Any) -> None:
+    """Training parameters valid together: background below ``negative_iou`` cannot
+    overlap objects more than ``positive_iou`` does."""
+    if params["negative_iou"] > params["positive_iou"]:
+        raise ValueError(
+            f"negative_iou {params['negative_iou']} must not exceed positive_iou"
+            f" {params['positive_iou']}"
+        )
+
+
+@node("detection.roi_samples", version=1, check=iou_order)
 def roi_samples(
     scenes: Scenes,
     proposals: Detections,
@@ -238,8 +248,6 @@ def roi_samples(
     R. Girshick et al., "Rich feature hierarchies for accurate object detection and
     semantic segmentation", CVPR 2014, section 2.3.
     """
-    if negative_iou > positive_iou:
-        raise ValueError(f"negative_iou {negative_iou} must not exceed positive_iou {positive_iou}")
     rois = training_rois(
         scenes,
         proposals,
@@ -321,7 +329,7 @@ def _ridge(features: np.ndarray, targets: np.ndarray, penalty: float) -> np.ndar
     return np.vstack([weights, mean_t - mean_x @ weights])
 
 
-@node("detection.train_head", version=1)
+@node("detection.train_head", version=1, check=iou_order)
 def train_head(
     backbone: Network,
     scenes: Scenes,

@@ -28,7 +28,7 @@ from .._params import Count, Fraction, Positive, Seed
 from ..cnn import Network, build_architecture, fit_network
 from ..cnn._blas import one_blas_thread
 from ..synthetic._digit_scenes import Scenes
-from ._rcnn import feature_extractor, feature_map
+from ._rcnn import feature_extractor, feature_map, iou_order
 from ._types import Detections, DetectionSet
 
 __all__ = [
@@ -101,7 +101,7 @@ def _scene_anchors(maps: np.ndarray, stride: int, shapes: dict) -> np.ndarray:
     return boxes.reshape(rows * cols, -1, 4)
 
 
-@node("detection.train_rpn", version=1)
+@node("detection.train_rpn", version=1, check=iou_order)
 def train_rpn(
     backbone: Network,
     scenes: Scenes,

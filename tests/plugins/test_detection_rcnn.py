@@ -242,3 +242,12 @@ def test_box_regression_ridge_in_the_dual_equals_the_primal_and_pool_is_bounded(
     refused = r"--set detector\.pool=40: .*less than or equal to 16"
     with pytest.raises(gv.PipelineError, match=refused):
         gv.compile_graph(graph, gv.discover())  # refused before anything runs
+
+
+@pytest.mark.parametrize("node_id", ["crops", "detector", "rpn"])
+def test_negative_iou_above_positive_iou_is_refused_before_the_run(node_id):
+    graph = gv.load_pipeline(PIPELINES / "rcnn.yaml")
+    overrides = {f"{node_id}.negative_iou": 0.6, f"{node_id}.positive_iou": 0.5}
+    refused = rf"--set {node_id}\..*: detection\.\w+: negative_iou 0.6 must not exceed positive"
+    with pytest.raises(gv.PipelineError, match=refused):
+        gv.compile_graph(graph.with_overrides(overrides), gv.discover())
