@@ -9,19 +9,11 @@ from pydantic import Field
 
 from graphvision import Array, Camera, ColorImage, Float, FloatImage, Image, node
 
+from .._draw import colour_canvas, draw_circle, draw_segment
 from ._model import check_intrinsics
 from ._projection import distort_pixels, undistort_pixels
 
-__all__ = ["draw_board", "draw_segment", "intrinsics", "roundtrip_residual"]
-
-
-def draw_segment(canvas: np.ndarray, p: np.ndarray, q: np.ndarray, colour: np.ndarray) -> None:
-    """Draw the segment p–q on an RGB canvas in place, clipped to the canvas."""
-    from skimage.draw import line
-
-    rr, cc = line(int(round(p[1])), int(round(p[0])), int(round(q[1])), int(round(q[0])))
-    inside = (rr >= 0) & (rr < canvas.shape[0]) & (cc >= 0) & (cc < canvas.shape[1])
-    canvas[rr[inside], cc[inside]] = colour
+__all__ = ["draw_board", "intrinsics", "roundtrip_residual"]
 
 
 @node("camera.draw_board", version=1)
@@ -47,13 +39,11 @@ def draw_board(
     ValueError
         When ``view`` is beyond the stack.
     """
-    from skimage.draw import circle_perimeter
-
     stack = views[None] if views.ndim == 2 else views
     points = corners[None] if corners.ndim == 2 else corners
     if view >= len(stack) or view >= len(points):
         raise ValueError(f"view {view} is out of range: there are {len(stack)} views")
-    canvas = np.repeat(np.clip(stack[view], 0, 1)[..., None], 3, axis=2).astype(np.float32)
+    canvas = colour_canvas(np.clip(stack[view], 0, 1))
     xy = points[view]
     if not np.isfinite(xy).all():
         return canvas
@@ -62,8 +52,7 @@ def draw_board(
     for k in range(len(xy) - 1):
         draw_segment(canvas, xy[k], xy[k + 1], colours[k])
     for (x, y), colour in zip(xy, colours, strict=True):
-        rr, cc = circle_perimeter(int(round(y)), int(round(x)), 4, shape=canvas.shape[:2])
-        canvas[rr, cc] = colour
+        draw_circle(canvas, x, y, 4, colour)
     return canvas
 
 

@@ -25,8 +25,8 @@ import numpy as np
 
 from graphvision import Array, Camera, ColorImage, Float, Image, node
 
+from .._draw import colour_canvas, draw_segment
 from ..geometry import normalising_transform
-from ._draw import draw_segment
 from ._model import check_intrinsics
 
 __all__ = [
@@ -176,7 +176,7 @@ def draw_vanishing(
     horizon : Array
         The horizon line (3,), drawn in yellow.
     """
-    canvas = np.repeat(image[..., None], 3, axis=2).copy() if image.ndim == 2 else image.copy()
+    canvas = colour_canvas(image)
     colours = np.array([[0.95, 0.2, 0.1], [0.1, 0.6, 1.0], [0.2, 0.9, 0.2], [0.9, 0.2, 0.9]])
     h, w = canvas.shape[:2]
     for (x0, y0, x1, y1), label in zip(segments, family.astype(int), strict=True):

@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import Boxes, ColorImage, Image, node
 
+from .._draw import colour_canvas
 from .._params import Count, Fraction
 from ..synthetic._digit_scenes import Scenes
 from ._types import Detections
@@ -64,8 +65,7 @@ def draw_boxes(
     ColorImage
         The drawing, (H, W, 3) float32.
     """
-    canvas = np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image.copy()
-    canvas = canvas.astype(np.float32)
+    canvas = colour_canvas(image)
     if truth is not None:
         draw_rectangles(canvas, truth.xyxy, TRUE_COLOUR, thickness)
     shown = boxes.xyxy[:count] if count else boxes.xyxy
@@ -108,7 +108,7 @@ def draw_scenes(
     rows = -(-shown // columns)
     canvas = np.ones((rows * (height + 2), min(shown, columns) * (width + 2), 3), np.float32)
     for scene in range(shown):
-        picture = np.repeat(scenes.images[scene][..., None], 3, axis=2)
+        picture = colour_canvas(scenes.images[scene])
         truth, _ = scenes.boxes_of(scene)
         draw_rectangles(picture, truth, TRUE_COLOUR, 1)
         mine = (detections.owner == scene) & (detections.score >= min_score)

@@ -6,6 +6,8 @@ import numpy as np
 
 from graphvision import BinaryImage, ColorImage, Image, node
 
+from .._draw import colour_canvas
+
 __all__ = ["draw_edges"]
 
 
@@ -28,6 +30,6 @@ def draw_edges(image: Image, edges: BinaryImage) -> ColorImage:
         raise ValueError(
             f"image and edges must have the same size, got {image.shape[:2]} and {edges.shape}"
         )
-    canvas = 0.6 * (np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image)
+    canvas = 0.6 * colour_canvas(image)
     canvas[edges] = (0.1, 0.95, 0.1)
     return canvas.astype(np.float32)

@@ -6,23 +6,13 @@ import numpy as np
 
 from graphvision import ColorImage, Image, Keypoints, Matches, node
 
+from .._draw import colour_canvas, draw_circle, draw_segment
+
 __all__ = ["draw_keypoints", "draw_matches"]
 
 GREEN = (0.1, 0.9, 0.1)
 RED = (0.95, 0.15, 0.1)
 YELLOW = (1.0, 0.85, 0.0)
-
-
-def _rgb(image: np.ndarray) -> np.ndarray:
-    return np.repeat(image[..., None], 3, axis=2).copy() if image.ndim == 2 else image.copy()
-
-
-def _line(canvas: np.ndarray, p: np.ndarray, q: np.ndarray, colour: tuple) -> None:
-    from skimage.draw import line
-
-    rr, cc = line(int(round(p[1])), int(round(p[0])), int(round(q[1])), int(round(q[0])))
-    inside = (rr >= 0) & (rr < canvas.shape[0]) & (cc >= 0) & (cc < canvas.shape[1])
-    canvas[rr[inside], cc[inside]] = colour
 
 
 @node("features.draw_keypoints", version=1)
@@ -40,18 +30,15 @@ def draw_keypoints(image: Image, keypoints: Keypoints) -> ColorImage:
     -------
     image : (H, W, 3) float32
     """
-    from skimage.draw import circle_perimeter
-
-    canvas = _rgb(image)
+    canvas = colour_canvas(image)
     for (x, y), scale, angle in zip(
         keypoints.xy, keypoints.scale, keypoints.orientation, strict=True
     ):
         radius = max(2, int(round(3 * scale)))
-        rr, cc = circle_perimeter(int(round(y)), int(round(x)), radius, shape=canvas.shape[:2])
-        canvas[rr, cc] = YELLOW
+        draw_circle(canvas, x, y, radius, YELLOW)
         tip = np.array([x + radius * np.cos(angle), y + radius * np.sin(angle)])
-        _line(canvas, np.array([x, y]), tip, YELLOW)
-    return canvas.astype(np.float32)
+        draw_segment(canvas, np.array([x, y]), tip, YELLOW)
+    return canvas
 
 
 @node("features.draw_matches", version=1)
@@ -84,11 +71,11 @@ def draw_matches(
     """
     rows = max(a.shape[0], b.shape[0])
     canvas = np.zeros((rows, a.shape[1] + b.shape[1], 3), np.float32)
-    canvas[: a.shape[0], : a.shape[1]] = _rgb(a)
-    canvas[: b.shape[0], a.shape[1] :] = _rgb(b)
+    canvas[: a.shape[0], : a.shape[1]] = colour_canvas(a)
+    canvas[: b.shape[0], a.shape[1] :] = colour_canvas(b)
     good = set(map(tuple, inliers.pairs.tolist())) if inliers is not None else None
     shift = np.array([a.shape[1], 0.0])
     for i, j in matches.pairs:
         colour = GREEN if good is None or (int(i), int(j)) in good else RED
-        _line(canvas, keypoints_a.xy[i], keypoints_b.xy[j] + shift, colour)
+        draw_segment(canvas, keypoints_a.xy[i], keypoints_b.xy[j] + shift, colour)
     return canvas

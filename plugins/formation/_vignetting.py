@@ -27,6 +27,7 @@ from pydantic import Field
 
 from graphvision import Array, ColorImage, GrayImage, ImageT, node
 
+from .._draw import colour_canvas
 from .._params import Positive
 
 __all__ = [
@@ -155,7 +156,7 @@ def draw_vignetting(
     if coefficients.shape != (3,):
         raise ValueError(f"coefficients must be (a1, a2, a3), got shape {coefficients.shape}")
     field = vignetting_field(flat.shape, "polynomial", 1.0, coefficients)
-    canvas = np.repeat(flat[..., None], 3, axis=2).astype(np.float32)
+    canvas = colour_canvas(flat)
     step = np.gradient(field)
     width = np.hypot(*step)  # draw a band about one pixel wide around each level
     for k in range(1, contours + 1):

@@ -8,22 +8,13 @@ import numpy as np
 
 from graphvision import ColorImage, Image, node
 
+from .._draw import colour_canvas, plot_points
 from ._ports import Circles, Lines
 
 __all__ = ["draw_circles", "draw_lines"]
 
 RED = (0.95, 0.15, 0.1)
 GREEN = (0.1, 0.95, 0.1)
-
-
-def _canvas(image: np.ndarray) -> np.ndarray:
-    return np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image.copy()
-
-
-def _plot(canvas: np.ndarray, x: np.ndarray, y: np.ndarray, colour: tuple) -> None:
-    cols, rows = np.rint(x).astype(np.intp), np.rint(y).astype(np.intp)
-    inside = (rows >= 0) & (rows < canvas.shape[0]) & (cols >= 0) & (cols < canvas.shape[1])
-    canvas[rows[inside], cols[inside]] = colour
 
 
 @node("hough.draw_lines", version=1)
@@ -43,12 +34,12 @@ def draw_lines(image: Image, lines: Lines) -> ColorImage:
     -------
     drawing : (H, W, 3) float32 ndarray
     """
-    canvas = _canvas(image)
+    canvas = colour_canvas(image)
     reach = math.hypot(*image.shape[:2])
     t = np.arange(-reach, reach, 0.5)
     for rho, theta, _ in lines:
         normal = np.array([math.cos(theta), math.sin(theta)])
-        _plot(canvas, rho * normal[0] - t * normal[1], rho * normal[1] + t * normal[0], RED)
+        plot_points(canvas, rho * normal[0] - t * normal[1], rho * normal[1] + t * normal[0], RED)
     return canvas.astype(np.float32)
 
 
@@ -67,11 +58,11 @@ def draw_circles(image: Image, circles: Circles) -> ColorImage:
     -------
     drawing : (H, W, 3) float32 ndarray
     """
-    canvas = _canvas(image)
+    canvas = colour_canvas(image)
     for x, y, r, _ in circles:
         angle = np.linspace(0.0, 2.0 * math.pi, max(16, int(8 * r)), endpoint=False)
-        _plot(canvas, x + r * np.cos(angle), y + r * np.sin(angle), GREEN)
+        plot_points(canvas, x + r * np.cos(angle), y + r * np.sin(angle), GREEN)
         arm = np.arange(-3, 4)
-        _plot(canvas, x + arm, np.full(arm.size, y), RED)
-        _plot(canvas, np.full(arm.size, x), y + arm, RED)
+        plot_points(canvas, x + arm, np.full(arm.size, y), RED)
+        plot_points(canvas, np.full(arm.size, x), y + arm, RED)
     return canvas.astype(np.float32)

@@ -20,6 +20,7 @@ from graphvision import (
     node,
 )
 
+from .._draw import colour_canvas
 from .._params import Count, Positive
 from ..edges import gradient_images
 from ._peaks import local_maxima, quadratic_peak_2d, suppress_close
@@ -233,7 +234,7 @@ def draw_instances(
     -------
     drawing : (H, W, 3) float32 ndarray
     """
-    canvas = np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image.copy()
+    canvas = colour_canvas(image)
     points, _ = _oriented_points(model_edges, model_image, sigma)
     offsets = points - points.mean(axis=0) if len(points) else points
     rows, cols = canvas.shape[:2]

@@ -10,6 +10,7 @@ from pydantic import Field
 
 from graphvision import Array, ColorImage, Float, FloatImage, GrayImage, Image, Points2D, node
 
+from .._draw import colour_canvas
 from .._params import Count, Positive
 from ..hough import local_maxima, quadratic_peak_2d, suppress_close
 
@@ -335,7 +336,7 @@ def draw_match(
     -------
     drawing : (H, W, 3) float32 ndarray
     """
-    canvas = np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image.copy()
+    canvas = colour_canvas(image)
     factor = 1.0 if scale is None else float(scale)
     half_h = (template.shape[0] * factor - 1) / 2
     half_w = (template.shape[1] * factor - 1) / 2

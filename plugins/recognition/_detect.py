@@ -22,6 +22,7 @@ from graphvision import (
 )
 
 from .._boxes import iou_matrix, non_max_suppression
+from .._draw import colour_canvas
 from .._params import Count, Fraction, Positive
 from ._data import NON_FACE, FaceFree, face_free_image, pixel_features
 from ._haar import haar_values, integral_image, sample_haar_features
@@ -420,7 +421,7 @@ def draw_boxes(image: Image, boxes: Boxes) -> ColorImage:
     -------
     image : (H, W, 3) float32
     """
-    canvas = np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image.copy()
+    canvas = colour_canvas(image)
     height, width = canvas.shape[:2]
     best = int(np.argmax(boxes.score)) if len(boxes) else -1
     for index, box in enumerate(np.round(boxes.xyxy).astype(int)):

@@ -6,6 +6,8 @@ import numpy as np
 
 from graphvision import ColorImage, Image, LabelImage, Table, node
 
+from .._draw import colour_canvas
+
 __all__ = ["colorize", "overlay"]
 
 
@@ -72,7 +74,7 @@ def overlay(image: Image, labels: LabelImage, table: Table | None = None) -> Col
         raise ValueError(
             f"image and labels must have the same size, got {image.shape[:2]} and {labels.shape}"
         )
-    canvas = np.repeat(image[..., None], 3, axis=2) if image.ndim == 2 else image.copy()
+    canvas = colour_canvas(image)
     padded = np.pad(labels, 1, mode="edge")
     edge = np.zeros(labels.shape, dtype=bool)
     for dy, dx in ((-1, 0), (1, 0), (0, -1), (0, 1)):
