@@ -85,7 +85,7 @@ if TYPE_CHECKING:
     from ._registry import Registry
     from ._report import rewrite_report
     from ._run import NodeRecord, RunHooks, RunRecord, RunResult, run
-    from ._sweep import SweepResult, sweep
+    from ._sweep import SweepInterrupted, SweepResult, sweep
     from .types import (
         AnyImageT,
         Array,
@@ -223,6 +223,7 @@ __all__ = [
     "RunHooks",
     "RunRecord",
     "RunResult",
+    "SweepInterrupted",
     "SweepResult",
     "SyncExecutor",
     "Table",

@@ -30,7 +30,7 @@ from ._graph import Graph
 from ._registry import Registry
 from ._run import RunRecord, run
 
-__all__ = ["SweepResult", "sweep", "sweep_html", "sweep_plot_svg"]
+__all__ = ["SweepInterrupted", "SweepResult", "sweep", "sweep_html", "sweep_plot_svg"]
 
 
 @dataclass
@@ -59,6 +59,15 @@ class SweepResult:
     @property
     def columns(self) -> list[str]:
         return [*self.keys, *self.outputs, "status", "computed", "cached", "seconds"]
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a sweep. ``result`` holds the combinations done, the others
+    marked ``not run`` (a re-run through the same cache recomputes only those)."""
+
+    def __init__(self, result: SweepResult) -> None:
+        super().__init__("sweep interrupted")
+        self.result = result
 
 
 def sweep(
@@ -104,6 +113,8 @@ def sweep(
     PipelineError
         A grid key names no node or parameter, a value is invalid, or the
         grid is empty: nothing ran.
+    SweepInterrupted
+        On Ctrl-C (a ``KeyboardInterrupt``), with the rows so far.
     """
     if registry is None:
         from ._plugins import discover
@@ -162,6 +173,12 @@ def sweep(
             result.records.append(record)
             if on_row is not None:
                 on_row(len(result.rows), len(combinations), row)
+    except KeyboardInterrupt:
+        blank = {name: "" for name in scalar_outputs}
+        for combo in combinations[len(result.rows) :]:
+            rest = {"status": "not run", "computed": 0, "cached": 0, "seconds": 0.0}
+            result.rows.append({**combo, **blank, **rest})
+        raise SweepInterrupted(result) from None
     finally:
         if isinstance(executor, str):
             pool.shutdown(wait=True)

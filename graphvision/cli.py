@@ -40,6 +40,7 @@ if TYPE_CHECKING:
     from ._cache import Cache
     from ._graph import Graph
     from ._registry import Registry
+    from ._sweep import SweepResult
 
 __all__ = ["entry", "main"]
 
@@ -315,7 +316,7 @@ def _batch(
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     from ._progress import FileProgress
-    from ._sweep import sweep, sweep_html, sweep_plot_svg
+    from ._sweep import SweepInterrupted, sweep
 
     graph, registry, overrides, inputs = _load(args)
     grid = {
@@ -351,20 +352,19 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             keep_going=args.keep_going,
             on_row=None if args.progress is False else report,
         )
+    except SweepInterrupted as stopped:  # what is done is written, then the exit is 130
+        _write_sweep(stopped.result, out_dir, graph.name, [])
+        print(
+            f"sweep interrupted; combinations done so far are in {out_dir / 'sweep.csv'}",
+            file=sys.stderr,
+        )
+        raise
     finally:
         for bar in shown:
             bar.close()
         if not isinstance(executor, str):
             executor.shutdown()
-    written = [result.write_csv(out_dir / "sweep.csv")]
-    plots = [args.plot] if args.plot else []
-    for output in plots:
-        path = out_dir / f"sweep_{output}.svg"
-        path.write_text(sweep_plot_svg(result, output), encoding="utf-8")
-        written.append(path)
-    page = out_dir / "sweep.html"
-    page.write_text(sweep_html(result, graph.name, plots), encoding="utf-8")
-    written.append(page)
+    written = _write_sweep(result, out_dir, graph.name, [args.plot] if args.plot else [])
     failed = sum(row["status"] != "ok" for row in result.rows)
     print(
         f"{len(result.rows) - failed} of {len(result.rows)} combinations succeeded; wrote "
@@ -372,6 +372,21 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         file=sys.stderr,
     )
     return EXIT_FAILED if failed else EXIT_OK
+
+
+def _write_sweep(result: SweepResult, out_dir: Path, name: str, plots: list[str]) -> list[Path]:
+    """``sweep.csv``, a chart per plotted output and ``sweep.html``; the paths written."""
+    from ._sweep import sweep_html, sweep_plot_svg
+
+    written = [result.write_csv(out_dir / "sweep.csv")]
+    for output in plots:
+        path = out_dir / f"sweep_{output}.svg"
+        path.write_text(sweep_plot_svg(result, output), encoding="utf-8")
+        written.append(path)
+    page = out_dir / "sweep.html"
+    page.write_text(sweep_html(result, name, plots), encoding="utf-8")
+    written.append(page)
+    return written
 
 
 def cmd_validate(args: argparse.Namespace) -> int:

@@ -121,3 +121,37 @@ def test_the_sweep_command_writes_its_files_and_a_line_per_combination(capsys, t
     assert (out / "sweep_error_ransac.svg").is_file() and (out / "sweep.html").is_file()
     assert main([*args, "--no-progress", "--grid", "robust.threshold=2"]) == 0
     assert "combinations]" not in capsys.readouterr().err
+
+
+def test_an_interrupted_sweep_keeps_the_rows_done(capsys, tmp_path, monkeypatch) -> None:
+    """Ctrl-C after the first combination: the exception is still a KeyboardInterrupt,
+    and it carries the row done with the others marked 'not run'; the command writes
+    them to sweep.csv and exits 130."""
+    from graphvision.cli import main
+
+    def stop_after_one(number: int, total: int, row: dict[str, Any]) -> None:
+        if number == 1:
+            raise KeyboardInterrupt
+
+    grid = {"robust.threshold": [1.0, 3.0, 9.0]}
+    with pytest.raises(KeyboardInterrupt) as stopped:
+        sweep(gv.load_pipeline(LINE_FIT), grid, executor="sync", on_row=stop_after_one)
+    assert isinstance(stopped.value, gv.SweepInterrupted)
+    rows = stopped.value.result.rows
+    assert [row["status"] for row in rows] == ["ok", "not run", "not run"]
+    assert rows[0]["error_ransac"] != "" and rows[2]["robust.threshold"] == 9.0
+
+    calls = iter([None, KeyboardInterrupt])
+
+    def interrupt_second(self, *args: Any, **kwargs: Any) -> None:
+        if next(calls) is KeyboardInterrupt:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr("graphvision._progress.FileProgress.finished", interrupt_second)
+    out = tmp_path / "sweep"
+    args = ["sweep", str(LINE_FIT), "--no-cache", "-d", str(out), "--progress"]
+    assert main([*args, "--grid", "robust.threshold=1,3,9"]) == 130
+    assert "combinations done so far are in" in capsys.readouterr().err
+    statuses = [row["status"] for row in csv.DictReader((out / "sweep.csv").open())]
+    assert statuses == ["ok", "ok", "not run"]
+    assert "not run" in (out / "sweep.html").read_text()
