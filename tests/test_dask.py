@@ -66,6 +66,43 @@ def test_a_worker_that_dies_costs_one_retry_not_the_run(dask_executor, tmp_path)
     assert result.outputs["y"] == 2.0
 
 
+ODD_PLUGIN = '''
+from graphvision import Float, node
+
+
+@node("odd.refuse_odd")
+def refuse_odd(x: Float, *, value: int = 0) -> Float:
+    """Returns value, or raises for an odd one.
+
+    Parameters
+    ----------
+    x : the input
+    value : the number to return
+    """
+    if value % 2:
+        raise ValueError(f"odd value {value}")
+    return float(value)
+'''
+
+
+def test_results_and_failures_finishing_together_each_reach_their_node(dask_executor, tmp_path):
+    """Results are fetched many at a time; a failure among them fails only its own node."""
+    plugin = tmp_path / "odd.py"
+    plugin.write_text(ODD_PLUGIN)
+    registry = gv.discover([plugin])
+    graph = gv.Graph("fan")
+    x = graph.input("x", "Float", default=0.0)
+    for value in range(40):
+        graph.output(f"o{value}", graph.add(f"n{value}", "odd.refuse_odd", x=x,
+                                            params={"value": value}))  # fmt: skip
+    with pytest.raises(gv.RunError) as caught:
+        gv.run(graph, registry, executor=dask_executor, cache=None, keep_going=True)
+    assert sorted(caught.value.failures) == sorted(f"n{v}" for v in range(1, 40, 2))
+    assert "odd value 7" in str(caught.value.failures["n7"])
+    produced = caught.value.result.outputs
+    assert produced == {f"o{v}": float(v) for v in range(0, 40, 2)}
+
+
 def test_a_worker_that_cannot_import_the_plugin_is_named(dask_executor, tmp_path):
     plugin = tmp_path / "gone.py"
     plugin.write_text(FLAKY_PLUGIN.replace("flaky.die_once", "gone.die_once"))
