@@ -211,7 +211,7 @@ def batch_page(items: Sequence[Any], out_dir: Path) -> str:
     for item in items:
         folder = Path(item.output_dir)
         pictures = sorted(folder.glob("*.png")) if folder.is_dir() else []
-        link = _relative(folder / "report.html", out_dir)
+        page = folder / "report.html"
         image = (
             f'<img loading="lazy" alt="{escape(pictures[0].name)}" '
             f'src="{escape(_relative(pictures[0], out_dir))}">'
@@ -219,16 +219,21 @@ def batch_page(items: Sequence[Any], out_dir: Path) -> str:
             else '<div class="none">no picture</div>'
         )
         error = f'<div class="failed">{escape(item.error)}</div>' if item.error else ""
-        cards.append(
-            f'<a class="card {escape(item.status)}" href="{escape(link)}">{image}'
-            f"<div>{escape(Path(item.file).name)}</div>"
-            f"<small>{escape(item.status)}, {item.seconds:.2f} s</small>{error}</a>"
+        body = (
+            f"{image}<div>{escape(Path(item.file).name)}</div>"
+            f"<small>{escape(item.status)}, {item.seconds:.2f} s</small>{error}"
         )
+        kind = "ok" if item.status == "ok" else "bad"
+        if page.is_file():  # a failed or interrupted file has no page to link to
+            href = escape(_relative(page, out_dir))
+            cards.append(f'<a class="card {kind}" href="{href}">{body}</a>')
+        else:
+            cards.append(f'<div class="card {kind}">{body}</div>')
     failed = sum(item.status != "ok" for item in items)
     style = (
         "body{font-family:sans-serif;margin:2em} .grid{display:flex;flex-wrap:wrap;gap:1em}"
         ".card{width:180px;color:inherit;text-decoration:none;border:1px solid #ddd;"
-        "padding:.4em} .card img{width:100%} .card.failed{border-color:#b71c1c}"
+        "padding:.4em} .card img{width:100%} .card.bad{border-color:#b71c1c}"
         ".failed{color:#b71c1c;font-size:.8em} .none{height:120px;background:#eee}"
     )
     return (
@@ -240,6 +245,11 @@ def batch_page(items: Sequence[Any], out_dir: Path) -> str:
 
 
 def _relative(path: Path, start: Path) -> str:
+    """``path`` as a relative URL from ``start``: percent-encoded, starting ``./`` or
+    ``../``, so no file name can become a scheme (``javascript:``), a query or a fragment."""
     import os
+    from urllib.parse import quote
 
-    return Path(os.path.relpath(path, start)).as_posix()
+    relative = Path(os.path.relpath(path, start)).as_posix()
+    url = quote(relative, safe="/")
+    return url if url.startswith("../") else f"./{url}"

@@ -193,9 +193,9 @@ def write_report(
     """``record.json`` and ``report.md`` in ``directory``; returns the report's path."""
     (directory / "record.json").write_text(record.to_json() + "\n")
     graph = compiled.graph
-    lines = [f"# {graph.name}", ""]
-    if graph.description:
-        lines += [graph.description.strip(), ""]
+    lines = [f"# {_plain_text(graph.name)}", ""]
+    if graph.description:  # written by whoever wrote the pipeline: text, never markup
+        lines += [_plain_text(graph.description.strip()), ""]
     lines += ["## Outputs", "", "| output | value | files |", "| --- | --- | --- |"]
     for name in compiled.outputs:
         if name not in outputs:
@@ -212,6 +212,14 @@ def write_report(
     path = directory / "report.md"
     path.write_text("\n".join(lines))
     return path
+
+
+def _plain_text(text: str) -> str:
+    """``text`` shown as written by a Markdown viewer: HTML's special characters as
+    entities, so a pipeline's ``<script>`` or ``<img onerror=...>`` is text, not markup."""
+    from html import escape
+
+    return escape(text, quote=False)
 
 
 def _provenance_lines(record: RunRecord) -> list[str]:

@@ -147,9 +147,34 @@ def test_batch_page_has_a_card_per_file_linking_its_report(tmp_path):
     batch = gv.run_batch(graph, str(folder / "*.png"), input="image", output_dir=tmp_path / "out")
     text = (tmp_path / "out" / "batch.html").read_text()
     assert "3 of 4 files succeeded" in text
-    assert text.count('class="card ') == 4 and text.count('href="img0/report.html"') == 1
-    assert 'src="img0/' in text and "not an image" not in text.split("img3.png")[0]
+    assert text.count('class="card ') == 4 and text.count('href="./img0/report.html"') == 1
+    assert 'src="./img0/' in text and "not an image" not in text.split("img3.png")[0]
+    assert text.count("href=") == 3  # the failed file has no report to link to
     assert batch.failed == 1
+
+
+@pytest.mark.parametrize(
+    "name", ["javascript:alert(1).png", "a#b.png", "q?x=1.png", "per%41cent.png", 'qu"ote.png']
+)
+def test_batch_links_cannot_become_a_scheme_query_or_fragment(tmp_path, name):
+    """File names become relative, percent-encoded URLs: a name such as
+    'javascript:alert(1).png' was a link that ran script when clicked."""
+    import re
+    from urllib.parse import unquote
+
+    import imageio.v3 as iio
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    iio.imwrite(folder / name, np.full((16, 16), 90, np.uint8))
+    graph = gv.load_pipeline(PIPELINES / "denoise.yaml")
+    gv.run_batch(graph, str(folder / "*.png"), input="image", output_dir=tmp_path / "out")
+    text = (tmp_path / "out" / "batch.html").read_text()
+    urls = re.findall(r'(?:href|src)="([^"]*)"', text)
+    assert len(urls) == 2
+    for url in urls:
+        assert url.startswith("./") and not re.search(r"[:#?\"<>]", url)
+        assert (tmp_path / "out" / unquote(url)).is_file()  # the link still leads to the file
 
 
 def test_keep_intermediates_adds_their_pictures_to_the_report(tmp_path):

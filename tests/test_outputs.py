@@ -374,3 +374,17 @@ def test_report_writes_a_run_folders_pages_again_and_names_what_is_gone(capsys, 
     (out / "record.json").write_text(json.dumps(record))
     status, err = run_cli(capsys, "report", out)
     assert status == 2 and "lists a file outside its folder" in err
+
+
+def test_the_markdown_report_shows_a_pipelines_markup_as_text(capsys, tmp_path):
+    text = DEMO.read_text()
+    name = next(line for line in text.splitlines() if line.startswith("name:"))
+    hostile = text.replace(name, 'name: "<script>alert(1)</script>"', 1)
+    hostile = hostile.replace("description:", 'description: <img src=x onerror="alert(2)"> ', 1)
+    pipeline = tmp_path / "hostile.yaml"
+    pipeline.write_text(hostile)
+    status, err = run_cli(capsys, "run", pipeline, "--no-cache", "-d", tmp_path / "o")
+    assert status == 0, err
+    report = (tmp_path / "o" / "report.md").read_text()
+    assert "<script>" not in report and "<img" not in report
+    assert "# &lt;script&gt;alert(1)&lt;/script&gt;" in report
