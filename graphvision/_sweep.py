@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import csv
 import itertools
+import json
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -24,13 +25,28 @@ from typing import Any
 
 from ._cache import Cache, MemoryStore
 from ._compile import CompiledGraph, compile_graph
-from ._errors import GraphvisionError, PipelineError, Problem, did_you_mean
+from ._errors import GraphvisionError, OutputFolderError, PipelineError, Problem, did_you_mean
 from ._executors import Executor, make_executor
 from ._graph import Graph
 from ._registry import Registry
 from ._run import RunRecord, run
 
-__all__ = ["SweepInterrupted", "SweepResult", "sweep", "sweep_html", "sweep_plot_svg"]
+__all__ = [
+    "MAX_COMBINATIONS",
+    "SweepInterrupted",
+    "SweepResult",
+    "check_sweep_folder",
+    "sweep",
+    "sweep_html",
+    "sweep_plot_svg",
+    "write_sweep",
+]
+
+MAX_COMBINATIONS = 10_000
+"""A larger grid is refused before anything runs (each combination is a whole run)."""
+
+MANIFEST = "sweep.json"
+"""The files a sweep wrote in its folder, so that the next one replaces those and no other."""
 
 
 @dataclass
@@ -80,6 +96,7 @@ def sweep(
     executor: str | Executor = "threads",
     workers: int | None = None,
     keep_going: bool = False,
+    outputs: Sequence[str] | None = None,
     on_row: Callable[[int, int, dict[str, Any]], None] | None = None,
 ) -> SweepResult:
     """Run ``graph`` for every combination of ``grid``'s values.
@@ -97,8 +114,9 @@ def sweep(
     cache : Cache, optional
         Shared by every run; a memory cache is used when none is given (the
         sharing needs one).
-    executor, workers, keep_going
-        As for :func:`graphvision.run`; one executor serves every run.
+    executor, workers, keep_going, outputs
+        As for :func:`graphvision.run`; one executor serves every run, and
+        ``outputs`` limits each run to what those outputs need.
     on_row : callable, optional
         Called as ``on_row(number, total, row)`` as each combination finishes
         (``number`` is 1-based).
@@ -111,8 +129,11 @@ def sweep(
     Raises
     ------
     PipelineError
-        A grid key names no node or parameter, a value is invalid, or the
-        grid is empty: nothing ran.
+        A grid key names no node or parameter, a value is invalid, a
+        ``params.name`` key is shadowed by swept node parameters, the grid is
+        empty or has more than :data:`MAX_COMBINATIONS`: nothing ran. Each
+        value is checked once; values valid alone but not together fail their
+        combination's row.
     SweepInterrupted
         On Ctrl-C (a ``KeyboardInterrupt``), with the rows so far.
     """
@@ -121,6 +142,12 @@ def sweep(
 
         registry = discover(graph.plugins)
     keys = list(grid)
+    for key in keys:
+        if isinstance(grid[key], (str, bytes)) or not isinstance(grid[key], Sequence):
+            raise PipelineError(
+                [Problem(0, f"grid {key}", f"needs a list of values, got {grid[key]!r}")],
+                graph.source,
+            )
     values = [list(grid[key]) for key in keys]
     problems = [
         Problem(0, f"grid {key}", "has no values")
@@ -136,26 +163,47 @@ def sweep(
             problems.append(Problem(0, f"grid {key}", f"no node '{target}'{hint}"))
     if not keys:
         problems.append(Problem(0, "grid", "the grid is empty: give at least one node.param"))
+    problems += _shadowed(graph, keys)
+    total = math.prod(len(options) for options in values)
+    if total > MAX_COMBINATIONS:
+        sizes = " × ".join(str(len(options)) for options in values)
+        problems.append(
+            Problem(
+                0,
+                "grid",
+                f"{total:,} combinations ({sizes}); at most {MAX_COMBINATIONS:,}: "
+                "sweep fewer values, or one parameter after another",
+            )
+        )
     if problems:
         raise PipelineError(problems, graph.source)
-    combinations = [dict(zip(keys, combo, strict=True)) for combo in itertools.product(*values)]
-    compiled = [_compile(graph, registry, combo, inputs) for combo in combinations]
-    scalar_outputs = [
-        name
-        for name in compiled[0].outputs
-        if compiled[0].output_type(name).type_name() in ("Float", "Int", "Bool", "Text")
-    ]
+    first = {key: options[0] for key, options in zip(keys, values, strict=True)}
+    base = _compile(graph, registry, first, inputs)
+    for key, options in zip(keys, values, strict=True):  # each value checked once
+        for value in options[1:]:
+            _compile(graph, registry, {**first, key: value}, inputs)
+    wanted = list(outputs) if outputs is not None else list(base.outputs)
+    unknown = [name for name in wanted if name not in base.outputs]
+    if unknown:
+        listing = ", ".join(base.outputs)
+        raise PipelineError(
+            [Problem(0, "outputs", f"no output '{name}'; outputs: {listing}") for name in unknown],
+            graph.source,
+        )
+    scalar_outputs = scalar_outputs_of(base, wanted)
+    combinations = (dict(zip(keys, combo, strict=True)) for combo in itertools.product(*values))
     result = SweepResult(keys, scalar_outputs)
     cache = cache if cache is not None else Cache(MemoryStore())
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     try:
-        for combo, graph_of_combo in zip(combinations, compiled, strict=True):
+        for combo in combinations:
             row: dict[str, Any] = dict(combo)
             try:
                 outcome = run(
-                    graph_of_combo,
+                    _compile(graph, registry, combo, inputs),
                     registry,
                     inputs=inputs,
+                    outputs=wanted,
                     executor=pool,
                     cache=cache,
                     keep_going=keep_going,
@@ -172,10 +220,10 @@ def sweep(
             result.rows.append(row)
             result.records.append(record)
             if on_row is not None:
-                on_row(len(result.rows), len(combinations), row)
+                on_row(len(result.rows), total, row)
     except KeyboardInterrupt:
         blank = {name: "" for name in scalar_outputs}
-        for combo in combinations[len(result.rows) :]:
+        for combo in combinations:  # the rest, not run
             rest = {"status": "not run", "computed": 0, "cached": 0, "seconds": 0.0}
             result.rows.append({**combo, **blank, **rest})
         raise SweepInterrupted(result) from None
@@ -183,6 +231,41 @@ def sweep(
         if isinstance(executor, str):
             pool.shutdown(wait=True)
     return result
+
+
+def scalar_outputs_of(compiled: CompiledGraph, names: Sequence[str]) -> list[str]:
+    """The outputs among ``names`` a sweep tabulates and plots: numbers, booleans, text."""
+    return [
+        name
+        for name in names
+        if compiled.output_type(name).type_name() in ("Float", "Int", "Bool", "Text")
+    ]
+
+
+def _shadowed(graph: Graph, keys: list[str]) -> list[Problem]:
+    """A swept ``params.name`` whose every use is itself swept would change nothing."""
+    problems = []
+    for key in keys:
+        target, _, name = key.partition(".")
+        if target != "params":
+            continue
+        reference = f"${{params.{name}}}"
+        uses = [
+            f"{node}.{param}"
+            for node, decl in graph.nodes.items()
+            for param, value in decl.params.items()
+            if isinstance(value, str) and reference in value
+        ]
+        if uses and all(use in keys for use in uses):
+            problems.append(
+                Problem(
+                    0,
+                    f"grid {key}",
+                    f"has no effect: every parameter that uses it ({', '.join(uses)}) is "
+                    "swept itself",
+                )
+            )
+    return problems
 
 
 def _compile(
@@ -311,3 +394,81 @@ def sweep_html(result: SweepResult, title: str, plots: Sequence[str] = ()) -> st
         f"<body><h1>{escape(title)}: {len(result.rows)} combinations</h1>"
         f"<table><tr>{head}</tr>{''.join(rows)}</table>{charts}</body></html>\n"
     )
+
+
+def _is_sweep_file(name: str) -> bool:
+    return name in ("sweep.csv", "sweep.html", MANIFEST) or (
+        name.startswith("sweep_") and name.endswith(".svg")
+    )
+
+
+def check_sweep_folder(directory: Path) -> set[str]:
+    """Refuse a folder where a sweep's files would replace files graphvision did not write;
+    return the previous sweep's files there (its ``sweep.json``).
+
+    Raises
+    ------
+    OutputFolderError
+        The folder is a file, holds ``sweep.csv``, ``sweep.html``, ``sweep_*.svg`` or
+        ``sweep.json`` that no sweep manifest there lists, or its ``sweep.json`` is
+        not a graphvision manifest.
+    """
+    if directory.exists() and not directory.is_dir():
+        raise OutputFolderError(f"output folder {directory} is a file")
+    if not directory.is_dir():
+        return set()
+    owned: set[str] = set()
+    manifest = directory / MANIFEST
+    if manifest.is_file():
+        try:
+            content = json.loads(manifest.read_text(encoding="utf-8"))
+            names = content["files"] if content.get("graphvision") == "sweep" else None
+            if not isinstance(names, list) or not all(
+                isinstance(n, str) and _is_sweep_file(n) and n == Path(n).name for n in names
+            ):
+                raise ValueError("not a sweep manifest")
+            owned = {*names, MANIFEST}
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            raise OutputFolderError(
+                f"{manifest} is not a graphvision sweep manifest, so which files there are a "
+                "previous sweep's is unknown; choose another --output-dir or empty this one"
+            ) from None
+    for path in sorted(directory.iterdir()):
+        if _is_sweep_file(path.name) and path.name not in owned:
+            raise OutputFolderError(
+                f"output folder {directory} holds {path.name}, which no graphvision sweep "
+                "there wrote; the sweep would replace it: move it, or choose another "
+                "--output-dir"
+            )
+    return owned
+
+
+def write_sweep(
+    result: SweepResult, directory: Path, name: str, plots: Sequence[str]
+) -> list[Path]:
+    """Write ``sweep.csv``, a chart per output in ``plots``, ``sweep.html`` and the
+    manifest; remove what a previous sweep wrote there and this one did not.
+
+    Returns the paths written (the manifest last, not listed).
+
+    Raises
+    ------
+    OutputFolderError
+        As :func:`check_sweep_folder`.
+    """
+    previous = check_sweep_folder(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    written = [result.write_csv(directory / "sweep.csv")]
+    for output in plots:
+        path = directory / f"sweep_{output}.svg"
+        path.write_text(sweep_plot_svg(result, output), encoding="utf-8")
+        written.append(path)
+    page = directory / "sweep.html"
+    page.write_text(sweep_html(result, name, list(plots)), encoding="utf-8")
+    written.append(page)
+    names = {path.name for path in written}
+    for stale in sorted(previous - names - {MANIFEST}):
+        (directory / stale).unlink(missing_ok=True)
+    content = json.dumps({"graphvision": "sweep", "files": sorted(names)}, indent=1)
+    (directory / MANIFEST).write_text(content + "\n", encoding="utf-8")
+    return written

@@ -40,7 +40,6 @@ if TYPE_CHECKING:
     from ._cache import Cache
     from ._graph import Graph
     from ._registry import Registry
-    from ._sweep import SweepResult
 
 __all__ = ["entry", "main"]
 
@@ -62,11 +61,13 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _pairs(items: Sequence[str], flag: str) -> dict[str, str]:
-    pairs = {}
+    pairs: dict[str, str] = {}
     for item in items:
         name, sep, value = item.partition("=")
         if not sep or not name:
             raise UsageError(f"{flag} expects NAME=VALUE, got '{item}'")
+        if name in pairs:
+            raise UsageError(f"{flag} {name} is given twice ({pairs[name]!r} and {value!r})")
         pairs[name] = value
     return pairs
 
@@ -315,8 +316,9 @@ def _batch(
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
+    from ._compile import compile_graph
     from ._progress import FileProgress
-    from ._sweep import SweepInterrupted, sweep
+    from ._sweep import SweepInterrupted, check_sweep_folder, scalar_outputs_of, sweep, write_sweep
 
     graph, registry, overrides, inputs = _load(args)
     grid = {
@@ -326,10 +328,28 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if not grid:
         raise UsageError("sweep needs at least one --grid NODE.PARAM=V1,V2,...")
     _check_overrides(graph, registry, grid, "--grid")
+    both = sorted(set(grid) & set(overrides))
+    if both:
+        raise UsageError(f"{both[0]} is both swept (--grid) and set (--set); give one of them")
     out_dir = _output_dir(args.output_dir)
     assert out_dir is not None  # the option is required
+    check_sweep_folder(out_dir)  # before anything runs
     if overrides:
         graph = graph.with_overrides(overrides)
+    if args.plot:
+        compiled = compile_graph(graph, registry, provided=set(inputs))
+        unknown = [name for name in args.output or () if name not in compiled.outputs]
+        if unknown:
+            raise UsageError(
+                f"-o {unknown[0]}: no such output; outputs: {', '.join(compiled.outputs)}"
+            )
+        scalars = scalar_outputs_of(compiled, args.output or list(compiled.outputs))
+        if args.plot not in scalars:
+            listing = ", ".join(scalars) or "none"
+            raise UsageError(
+                f"--plot {args.plot}: not a scalar output of the sweep"
+                f"{did_you_mean(args.plot, scalars)}; scalar outputs: {listing}"
+            )
     executor = _executor(args)
     shown: list[FileProgress] = []
     began = time.monotonic()
@@ -350,10 +370,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             executor=executor,
             workers=args.workers,
             keep_going=args.keep_going,
+            outputs=args.output,
             on_row=None if args.progress is False else report,
         )
     except SweepInterrupted as stopped:  # what is done is written, then the exit is 130
-        _write_sweep(stopped.result, out_dir, graph.name, [])
+        write_sweep(stopped.result, out_dir, graph.name, [])
         print(
             f"sweep interrupted; combinations done so far are in {out_dir / 'sweep.csv'}",
             file=sys.stderr,
@@ -364,7 +385,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             bar.close()
         if not isinstance(executor, str):
             executor.shutdown()
-    written = _write_sweep(result, out_dir, graph.name, [args.plot] if args.plot else [])
+    written = write_sweep(result, out_dir, graph.name, [args.plot] if args.plot else [])
     failed = sum(row["status"] != "ok" for row in result.rows)
     print(
         f"{len(result.rows) - failed} of {len(result.rows)} combinations succeeded; wrote "
@@ -372,21 +393,6 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         file=sys.stderr,
     )
     return EXIT_FAILED if failed else EXIT_OK
-
-
-def _write_sweep(result: SweepResult, out_dir: Path, name: str, plots: list[str]) -> list[Path]:
-    """``sweep.csv``, a chart per plotted output and ``sweep.html``; the paths written."""
-    from ._sweep import sweep_html, sweep_plot_svg
-
-    written = [result.write_csv(out_dir / "sweep.csv")]
-    for output in plots:
-        path = out_dir / f"sweep_{output}.svg"
-        path.write_text(sweep_plot_svg(result, output), encoding="utf-8")
-        written.append(path)
-    page = out_dir / "sweep.html"
-    page.write_text(sweep_html(result, name, plots), encoding="utf-8")
-    written.append(page)
-    return written
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
@@ -641,6 +647,13 @@ def build_parser() -> argparse.ArgumentParser:
         default=[],
         metavar="NODE.PARAM=V1,V2,...",
         help="values to try for one parameter (repeatable; every combination runs)",
+    )
+    p.add_argument(
+        "--output",
+        "-o",
+        action="append",
+        metavar="NAME",
+        help="produce only this output in each run (repeatable); only what it needs runs",
     )
     p.add_argument("--output-dir", "-d", metavar="DIR", required=True, help="where to write")
     p.add_argument("--plot", metavar="OUTPUT", help="plot this scalar output against each param")

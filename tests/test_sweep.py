@@ -155,3 +155,76 @@ def test_an_interrupted_sweep_keeps_the_rows_done(capsys, tmp_path, monkeypatch)
     statuses = [row["status"] for row in csv.DictReader((out / "sweep.csv").open())]
     assert statuses == ["ok", "ok", "not run"]
     assert "not run" in (out / "sweep.html").read_text()
+
+
+COINS = Path(__file__).parent.parent / "pipelines" / "coins.yaml"
+
+
+def test_a_grid_too_large_is_refused_before_anything_is_made() -> None:
+    grid = {"binary.window": list(range(3, 403, 2)), "binary.k": [0.0] * 100, "disk.size": [3] * 2}
+    with pytest.raises(gv.PipelineError, match=r"40,000 combinations \(200 × 100 × 2\); at most"):
+        sweep(gv.load_pipeline(COINS), grid, executor="sync")
+
+
+def test_a_params_key_whose_every_use_is_swept_is_refused() -> None:
+    grid = {"params.window": [31, 51], "binary.window": [11, 21]}
+    with pytest.raises(gv.PipelineError, match=r"grid params.window: has no effect: .*binary.window"):
+        sweep(gv.load_pipeline(COINS), grid, executor="sync")
+
+
+def test_a_grid_value_that_is_not_a_list_is_refused() -> None:
+    with pytest.raises(
+        gv.PipelineError, match=r"grid binary.window: needs a list of values, got '31,51'"
+    ):
+        sweep(gv.load_pipeline(COINS), {"binary.window": "31,51"}, executor="sync")
+
+
+def test_outputs_limit_each_run_and_the_table() -> None:
+    result = sweep(
+        gv.load_pipeline(LINE_FIT), {"robust.threshold": [1.0, 3.0]}, outputs=["error_ransac"]
+    )
+    assert result.outputs == ["error_ransac"]
+    assert all(record.count("computed") < 6 for record in result.records)  # not every node
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--grid", "robust.threshold=5"], "--grid robust.threshold is given twice"),
+        (["-s", "robust.threshold=5"], "robust.threshold is both swept (--grid) and set (--set)"),
+        (["--plot", "points"], "--plot points: not a scalar output of the sweep"),
+        (["--plot", "error_ransak"], "did you mean 'error_ransac'"),
+    ],
+)
+def test_sweep_command_mistakes_are_refused_before_anything_runs(
+    capsys, tmp_path, extra, message
+) -> None:
+    from graphvision.cli import main
+
+    out = tmp_path / "sweep"
+    args = ["sweep", str(LINE_FIT), "--no-cache", "-d", str(out), "--grid", "robust.threshold=1,3"]
+    assert main([*args, *extra]) == 2
+    assert message in capsys.readouterr().err
+    assert not (out / "sweep.csv").exists()
+
+
+def test_a_sweep_never_replaces_a_users_files_and_removes_its_own_stale_ones(
+    capsys, tmp_path
+) -> None:
+    from graphvision.cli import main
+
+    out = tmp_path / "sweep"
+    out.mkdir()
+    (out / "sweep.csv").write_text("my own table")
+    args = ["sweep", str(LINE_FIT), "--no-cache", "-d", str(out), "--grid", "robust.threshold=1,3"]
+    assert main(args) == 2
+    assert "holds sweep.csv, which no graphvision sweep there wrote" in capsys.readouterr().err
+    assert (out / "sweep.csv").read_text() == "my own table"
+    (out / "sweep.csv").unlink()
+    assert main([*args, "--plot", "error_ransac"]) == 0
+    assert (out / "sweep_error_ransac.svg").is_file()
+    assert main(args) == 0  # no plot this time: the old chart goes
+    assert not (out / "sweep_error_ransac.svg").exists()
+    (out / "sweep.json").write_text("{}")
+    assert main(args) == 2
+    assert "is not a graphvision sweep manifest" in capsys.readouterr().err
