@@ -168,7 +168,8 @@ def test_a_grid_too_large_is_refused_before_anything_is_made() -> None:
 
 def test_a_params_key_whose_every_use_is_swept_is_refused() -> None:
     grid = {"params.window": [31, 51], "binary.window": [11, 21]}
-    with pytest.raises(gv.PipelineError, match=r"grid params.window: has no effect: .*binary.window"):
+    refused = r"grid params.window: has no effect: .*binary.window"
+    with pytest.raises(gv.PipelineError, match=refused):
         sweep(gv.load_pipeline(COINS), grid, executor="sync")
 
 
