@@ -114,18 +114,28 @@ class _Checker:
             return {k: self.substitute(v, f"{where}.{k}", used) for k, v in value.items()}
         return value
 
+    def overrides_behind(self, name: str, param: str) -> list[str]:
+        """The overrides (``--set``) that gave node ``name``'s parameter ``param`` its value:
+        the parameter itself (``centre`` for a problem in ``centre.0``), or a pipeline param
+        it uses (``params.seed`` behind ``${params.seed}``); every override of the node for
+        a problem of its parameters together (``param`` empty)."""
+        overrides = self.graph.overrides_applied
+        if not param:
+            return [key for key in overrides if key.startswith(f"{name}.")]
+        top = param.split(".")[0]
+        if f"{name}.{top}" in overrides:
+            return [f"{name}.{top}"]
+        raw = self.graph.nodes[name].params.get(top)
+        used = PARAM_REFERENCE.findall(str(raw)) if isinstance(raw, (str, list, dict)) else []
+        return [f"params.{p}" for p in used if f"params.{p}" in overrides]
+
     def check_params(self, name: str, spec: NodeSpec, params: dict[str, Any]) -> dict[str, Any]:
         try:
             return spec.validate_params(params)
         except pydantic.ValidationError as error:
             overrides = self.graph.overrides_applied
             for param, message in spec.param_problems(error):
-                keys = (
-                    [f"{name}.{param}"]
-                    if param
-                    else [k for k in overrides if k.startswith(f"{name}.")]
-                )
-                keys = [key for key in keys if key in overrides]
+                keys = self.overrides_behind(name, param)
                 if keys:  # the file is fine: the command line set these values
                     where = ", ".join(f"--set {key}={overrides[key]!r}" for key in keys)
                     self.problems.append(Problem(0, where, message))

@@ -171,6 +171,7 @@ class Graph:
                 raise KeyError(f"override '{key}' must be node.param or params.name")
             if target == "params":
                 graph.params[param] = value
+                graph.overrides_applied[key] = value
             elif target in graph.nodes:
                 old = graph.nodes[target].params.get(param)
                 graph.overridden_params.update(PARAM_REFERENCE.findall(str(old)) if old else ())

@@ -563,7 +563,9 @@ def _build_spec(func: Callable, plugin: str) -> NodeSpec:
             validators["check_together"] = pydantic.model_validator(mode="after")(check_together)
         model = pydantic.create_model(
             f"{mark.id}.params",
-            __config__=pydantic.ConfigDict(extra="forbid", validate_default=True),
+            __config__=pydantic.ConfigDict(
+                extra="forbid", validate_default=True, allow_inf_nan=False
+            ),
             __validators__=validators,
             **fields,
         )

@@ -268,6 +268,13 @@ def _shadowed(graph: Graph, keys: list[str]) -> list[Problem]:
     return problems
 
 
+def _grid_named(where: str, combo: dict[str, Any]) -> str:
+    """A problem's place as the user gave it: ``--grid key=value`` for a swept value."""
+    for key, value in combo.items():
+        where = where.replace(f"--set {key}={value!r}", f"--grid {key}={value!r}")
+    return where
+
+
 def _compile(
     graph: Graph, registry: Registry, combo: dict[str, Any], inputs: dict[str, Any] | None
 ) -> CompiledGraph:
@@ -278,7 +285,12 @@ def _compile(
     except PipelineError as error:
         shown = ", ".join(f"{k}={v!r}" for k, v in combo.items())
         problems = [
-            Problem(p.line, p.where, f"{p.message} (grid combination {shown})", p.file)
+            Problem(
+                p.line,
+                _grid_named(p.where, combo),
+                f"{p.message} (grid combination {shown})",
+                p.file,
+            )
             for p in error.problems
         ]
         raise PipelineError(problems, error.source) from None

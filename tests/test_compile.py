@@ -6,6 +6,8 @@ import pytest
 
 import graphvision as gv
 
+from .conftest import PIPELINES
+
 BROKEN = """\
 version: 1
 name: broken
@@ -206,3 +208,30 @@ def test_a_bad_value_set_on_the_command_line_is_named_as_such_not_as_the_file(tm
     (problem,) = caught.value.problems
     assert problem.where == "--set s.sigma='abc'" and problem.line == 0 and not problem.file
     assert "invalid value 'abc' for parameter 'sigma'" in str(caught.value)
+
+
+@pytest.mark.parametrize(
+    ("pipeline", "overrides", "where", "message"),
+    [  # a nested value, a pipeline param used by a node, a value that is not a number
+        ("reconstruct", {"camera_b.centre": [1, 2]}, "--set camera_b.centre=[1, 2]", "'centre.2'"),
+        ("two_view", {"params.seed": "abc"}, "--set params.seed='abc'", "parameter 'seed'"),
+        ("reconstruct", {"camera_a.cx": float("nan")}, "--set camera_a.cx=nan", "finite number"),
+    ],
+)
+def test_values_set_from_the_command_line_are_named_however_they_reach_a_node(
+    pipeline, overrides, where, message
+):
+    graph = gv.load_pipeline(PIPELINES / f"{pipeline}.yaml")
+    with pytest.raises(gv.PipelineError) as caught:
+        gv.compile_graph(graph.with_overrides(overrides), gv.discover())
+    (problem,) = caught.value.problems
+    assert problem.where == where and problem.line == 0, str(caught.value)
+    assert message in problem.message
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), -float("inf")])
+def test_no_float_parameter_takes_nan_or_infinity(value):
+    graph = gv.load_pipeline(PIPELINES / "denoise.yaml")
+    key = next(f"{name}.sigma" for name, decl in graph.nodes.items() if "sigma" in decl.params)
+    with pytest.raises(gv.PipelineError, match="Input should be a finite number"):
+        gv.compile_graph(graph.with_overrides({key: value}), gv.discover())

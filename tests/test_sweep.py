@@ -229,3 +229,10 @@ def test_a_sweep_never_replaces_a_users_files_and_removes_its_own_stale_ones(
     (out / "sweep.json").write_text("{}")
     assert main(args) == 2
     assert "is not a graphvision sweep manifest" in capsys.readouterr().err
+
+
+def test_a_bad_grid_value_is_named_as_the_grid_it_came_from() -> None:
+    with pytest.raises(gv.PipelineError) as caught:
+        sweep(gv.load_pipeline(COINS), {"binary.window": [31, 52]}, executor="sync")
+    (problem,) = caught.value.problems
+    assert problem.where == "--grid binary.window=52" and "must be odd" in problem.message
