@@ -242,7 +242,10 @@ def run_batch(
     }
     seeds: list[Any] = []  # the shared values, or the executor's handle on them
 
+    started: set[int] = set()
+
     def run_one(index: int) -> BatchItem:
+        started.add(index)
         item_inputs = {**(inputs or {}), input: str(paths[index])}
         if index == 0 or not one_task_per_file:
             item, result = _run_item(
@@ -273,7 +276,7 @@ def run_batch(
             if on_item is not None:
                 on_item(done, len(paths), item)
     except BaseException:  # Ctrl-C or an error: the files done so far are still summarised
-        _summarise(_not_run(items, paths, folders), out_dir)
+        _summarise(_not_run(items, paths, folders, started), out_dir)
         raise
     finally:
         if isinstance(executor, str):
@@ -282,19 +285,23 @@ def run_batch(
     return BatchResult(finished, _summarise(finished, out_dir))
 
 
-NOT_RUN = "not run"
-
-
 def _not_run(
-    items: list[BatchItem | None], paths: list[Path], folders: list[Path]
+    items: list[BatchItem | None], paths: list[Path], folders: list[Path], started: set[int]
 ) -> list[BatchItem]:
-    """Every item, those that never completed marked ``not run`` (a re-run does them)."""
-    return [
-        item
-        if item is not None
-        else BatchItem(path, folder, NOT_RUN, error="the batch stopped before this file finished")
-        for item, path, folder in zip(items, paths, folders, strict=True)
-    ]
+    """Every item; those that did not complete are ``interrupted`` (the batch stopped while
+    the file ran: its folder may or may not be complete) or ``not run`` (never started).
+    A re-run of the batch does both, from the cache where it can."""
+    marked = []
+    for index, (item, path, folder) in enumerate(zip(items, paths, folders, strict=True)):
+        if item is not None:
+            marked.append(item)
+        elif index in started:
+            reason = "the batch stopped while this file ran; re-run the batch to finish it"
+            marked.append(BatchItem(path, folder, "interrupted", error=reason))
+        else:
+            reason = "the batch stopped before this file started"
+            marked.append(BatchItem(path, folder, "not run", error=reason))
+    return marked
 
 
 def _summarise(items: list[BatchItem], out_dir: Path) -> Path:

@@ -407,3 +407,14 @@ def test_an_interrupted_batch_still_writes_its_summary(tmp_path):
     assert float(rows[0][PSNR]) > 0 and rows[2][PSNR] == ""
     assert "not run" in (out / "batch.html").read_text()
     assert not list(out.glob(".*.tmp"))
+
+
+def test_files_running_when_a_batch_stops_are_interrupted_not_unrun():
+    from graphvision._batch import BatchItem, _not_run
+
+    paths = [Path(f"p{n}.png") for n in range(3)]
+    folders = [Path(f"out/p{n}") for n in range(3)]
+    done = BatchItem(paths[0], folders[0])
+    marked = _not_run([done, None, None], paths, folders, started={0, 1})
+    assert [item.status for item in marked] == ["ok", "interrupted", "not run"]
+    assert "while this file ran" in marked[1].error and "before this file" in marked[2].error
