@@ -17,10 +17,12 @@ in, ``record.json`` last.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import shutil
 import tempfile
+import warnings
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -281,27 +283,17 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
         Naming what is missing or unreadable: the folder, its record, the
         pipeline file, an output's file. Nothing is written then.
     """
-    from dataclasses import fields
-
     from ._compile import compile_graph
     from ._pipeline_file import load_pipeline
     from ._plugins import discover
-    from ._run import NodeRecord
+    from ._provenance import file_sha256
 
     record_path = directory / RECORD
     if not directory.is_dir():
         raise OutputFolderError(f"{directory}: no such folder (give a run's -d folder)")
     if not record_path.is_file():
         raise OutputFolderError(f"{directory} has no {RECORD}: it is not a graphvision run folder")
-    try:
-        data = json.loads(record_path.read_text())
-        known = {f.name for f in fields(RunRecord)}
-        record = RunRecord(**{k: v for k, v in data.items() if k in known})
-        record.nodes = [NodeRecord(**node) for node in data.get("nodes", [])]
-    except (ValueError, TypeError) as error:
-        raise OutputFolderError(
-            f"{record_path} is not a graphvision run record ({error})"
-        ) from None
+    record = read_record(record_path)
     for name, names in record.files.items():
         outside = [file for file in names if Path(file).name != file]
         if outside:  # a record graphvision wrote names files in its own folder only
@@ -314,12 +306,31 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
             f"the pipeline file of the run in {directory} is gone ({record.pipeline_file or '?'}): "
             "the report draws its graph"
         )
+    if record.pipeline_sha256 and file_sha256(source) != record.pipeline_sha256:
+        warnings.warn(
+            f"the pipeline file {source} changed since the run (its SHA-256 is not the "
+            "record's): the report draws the graph as the file is now",
+            stacklevel=2,
+        )
     graph = load_pipeline(source)
     registry = registry or discover(graph.plugins)
-    graph = graph.with_overrides(record.overrides) if record.overrides else graph
+    try:
+        graph = graph.with_overrides(record.overrides) if record.overrides else graph
+    except KeyError as error:
+        raise OutputFolderError(
+            f"the pipeline file {source} no longer fits the run in {directory}: {error.args[0]}"
+        ) from None
     compiled = compile_graph(graph, registry, provided=set(record.inputs))
     outputs: dict[str, Any] = {}
     for name, names in record.files.items():
+        recorded = record.outputs.get(name, "").split(" ", 1)[0]
+        now = compiled.output_type(name).type_name() if name in compiled.outputs else None
+        if now != recorded:
+            change = f"is now {now}" if now else "is no longer an output"
+            raise OutputFolderError(
+                f"the pipeline file {source} no longer fits the run in {directory}: output "
+                f"'{name}' was {recorded or 'not recorded'} and {change}"
+            )
         paths = [directory / file for file in names]
         missing = [p.name for p in paths if not p.is_file()]
         if missing:
@@ -327,10 +338,10 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
                 f"output '{name}' of the run in {directory} is gone ({', '.join(missing)}): "
                 "run the pipeline again to write it"
             )
-        port = registry.port_type(record.outputs[name].split(" ", 1)[0])
+        port = compiled.output_type(name)
         try:
             outputs[name] = port.validate(port.read(paths))
-        except (ValueError, OSError, KeyError) as error:
+        except Exception as error:  # files on disk, edited by anyone: any failure is theirs
             raise OutputFolderError(
                 f"output '{name}' in {directory} cannot be read back as {port.type_name()} "
                 f"({error})"
@@ -338,3 +349,40 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
     written = {name: list(names) for name, names in record.files.items()}
     write_report(compiled, outputs, written, record, directory)
     return write_html_report(compiled, outputs, record, directory)
+
+
+def read_record(path: Path) -> RunRecord:
+    """The run record in ``path``, every field checked against :class:`RunRecord`'s types.
+
+    Raises
+    ------
+    OutputFolderError
+        Naming the file and the first field that is not what a graphvision
+        record holds (a hand-edited or damaged ``record.json``).
+    """
+    import pydantic
+
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(data, dict):
+            raise ValueError(f"a JSON {type(data).__name__}, not an object")
+        known = {key: value for key, value in data.items() if key in _RECORD_FIELDS}
+        return _record_adapter().validate_python(known)
+    except pydantic.ValidationError as error:
+        first = error.errors()[0]
+        where = ".".join(str(p) for p in first["loc"]) or "the record"
+        raise OutputFolderError(
+            f"{path} is not a graphvision run record: {where}: {first['msg']}"
+        ) from None
+    except (OSError, ValueError) as error:
+        raise OutputFolderError(f"{path} is not a graphvision run record ({error})") from None
+
+
+_RECORD_FIELDS = frozenset(RunRecord.__dataclass_fields__)
+
+
+@functools.cache
+def _record_adapter() -> Any:
+    import pydantic
+
+    return pydantic.TypeAdapter(RunRecord)

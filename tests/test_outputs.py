@@ -388,3 +388,75 @@ def test_the_markdown_report_shows_a_pipelines_markup_as_text(capsys, tmp_path):
     report = (tmp_path / "o" / "report.md").read_text()
     assert "<script>" not in report and "<img" not in report
     assert "# &lt;script&gt;alert(1)&lt;/script&gt;" in report
+
+
+@pytest.fixture(scope="module")
+def run_folder(tmp_path_factory):
+    """A run of the denoise demo, with its pipeline copied beside it."""
+    import shutil
+
+    from graphvision.cli import main
+
+    folder = tmp_path_factory.mktemp("run")
+    pipeline = Path(shutil.copy(DEMO, folder / "denoise.yaml"))
+    assert main(["run", str(pipeline), "-d", str(folder / "out"), "--no-cache"]) == 0
+    return folder
+
+
+def _damaged(record: dict, case: int) -> object:
+    """The record with one field of the wrong kind, case by case (every field, four kinds)."""
+    fields = [*record, "nodes.0.name", "nodes.0.seconds", "files.noisy_gaussian"]
+    key, wrong = fields[case // 4], [None, [], "x", 5][case % 4]
+    damaged = json.loads(json.dumps(record))
+    target, name = damaged, key
+    for part in key.split(".")[:-1]:
+        target = target[int(part)] if part.isdigit() else target[part]
+        name = key.split(".")[-1]
+    target[name] = wrong
+    return damaged
+
+
+@pytest.mark.parametrize("case", range(4 * 19))
+def test_report_refuses_a_damaged_record_naming_it(capsys, run_folder, tmp_path, case):
+    import shutil
+
+    out = Path(shutil.copytree(run_folder / "out", tmp_path / "out"))
+    record = json.loads((out / "record.json").read_text())
+    if case // 4 >= len(record) + 3:
+        pytest.skip("no such field in this record")
+    damaged = _damaged(record, case)
+    (out / "record.json").write_text(json.dumps(damaged))
+    status, err = run_cli(capsys, "report", out)
+    if status == 0:  # the wrong value was one the record may hold (an empty list of files)
+        return
+    assert status == 2, err
+    assert err.startswith("error: ") and len(err.strip().splitlines()) == 1, err
+    assert "internal error" not in err
+
+
+@pytest.mark.parametrize("content", ["[]", "5", '"text"', "{", ""])
+def test_report_refuses_a_record_that_is_not_an_object(capsys, run_folder, tmp_path, content):
+    import shutil
+
+    out = Path(shutil.copytree(run_folder / "out", tmp_path / "out"))
+    (out / "record.json").write_text(content)
+    status, err = run_cli(capsys, "report", out)
+    assert status == 2 and "is not a graphvision run record" in err, err
+
+
+def test_report_after_the_pipeline_changed_warns_or_refuses(capsys, run_folder, tmp_path):
+    import shutil
+
+    out = Path(shutil.copytree(run_folder / "out", tmp_path / "out"))
+    pipeline = run_folder / "denoise.yaml"
+    original = pipeline.read_text()
+    try:
+        pipeline.write_text(original + "\n# a comment added after the run\n")
+        status, err = run_cli(capsys, "report", out)
+        assert status == 0 and "changed since the run" in err
+        output = next(line for line in original.splitlines() if "psnr_noisy_gaussian:" in line)
+        pipeline.write_text(original.replace(output, "  psnr_noisy_gaussian: noisy_gauss"))
+        status, err = run_cli(capsys, "report", out)
+        assert status == 2 and "output 'psnr_noisy_gaussian' was Float and is now" in err, err
+    finally:
+        pipeline.write_text(original)
