@@ -202,6 +202,15 @@ def run_batch(
         ``batch.csv`` is not a graphvision summary (checked before anything
         runs).
     """
+    from ._arguments import graph_argument, mapping_argument, names_argument, run_arguments
+
+    run_arguments(cache, executor, workers)
+    graph = graph_argument(graph)
+    inputs = mapping_argument(inputs, "inputs")
+    outputs = names_argument(outputs, "outputs")
+    overrides = mapping_argument(overrides, "overrides")
+    if not isinstance(output_dir, (str, os.PathLike)):
+        raise TypeError(f"output_dir must be a folder's path, got {output_dir!r}")
     if inputs and input in inputs:
         raise InputError(
             f"input '{input}' is given twice: once per file by the batch and once as"

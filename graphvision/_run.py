@@ -573,8 +573,10 @@ def run(
         Nodes failed; ``error.failures`` names them, ``error.result`` holds
         the outputs that were produced and the record.
     """
-    inputs = dict(inputs or {})
-    compiled, registry = _compiled(graph, registry, inputs, overrides or {})
+    graph, inputs, outputs, overrides = _checked_arguments(
+        graph, inputs, outputs, overrides, cache, executor, workers
+    )
+    compiled, registry = _compiled(graph, registry, inputs, overrides)
     wanted = _wanted_outputs(compiled, outputs, inputs)
     needed = compiled.needed_for(wanted)
     given = _given_inputs(compiled, needed, wanted, inputs)
@@ -598,13 +600,28 @@ def run(
         keep_intermediates,
         reference_keys,
     )
-    describe_run(state.record, compiled, registry, given, state.keys, overrides or {})
+    describe_run(state.record, compiled, registry, given, state.keys, overrides)
     result = state.result(wanted)
     if state.failures:
         failure = RunError(state.failures, state.record)
         failure.result = result  # type: ignore[attr-defined]  # read by callers as error.result
         raise failure
     return result
+
+
+def _checked_arguments(
+    graph: Any, inputs: Any, outputs: Any, overrides: Any, cache: Any, executor: Any, workers: Any
+) -> tuple[Graph | CompiledGraph, dict[str, Any], list[str] | None, dict[str, Any]]:
+    """The arguments of :func:`run` as it uses them, or a TypeError naming the wrong one."""
+    from ._arguments import graph_argument, mapping_argument, names_argument, run_arguments
+
+    run_arguments(cache, executor, workers)
+    return (
+        graph_argument(graph),
+        mapping_argument(inputs, "inputs"),
+        names_argument(outputs, "outputs"),
+        mapping_argument(overrides, "overrides"),
+    )
 
 
 def _compiled(

@@ -137,6 +137,15 @@ def sweep(
     SweepInterrupted
         On Ctrl-C (a ``KeyboardInterrupt``), with the rows so far.
     """
+    from ._arguments import graph_argument, mapping_argument, names_argument, run_arguments
+
+    run_arguments(cache, executor, workers)
+    inputs = mapping_argument(inputs, "inputs")
+    outputs = names_argument(outputs, "outputs")
+    given = graph_argument(graph)
+    graph = given.graph if isinstance(given, CompiledGraph) else given
+    if not isinstance(grid, Mapping):
+        raise TypeError(f"grid must be a dict from 'node.param' to a list of values, got {grid!r}")
     if registry is None:
         from ._plugins import discover
 
