@@ -89,13 +89,18 @@ def batch_files(pattern: str, exclude: Path | None = None) -> list[Path]:
 
     Files under ``exclude`` (the batch's output folder, when it lies inside
     the searched folders) are left out, so a batch never reads its own outputs.
+    A file reached by several paths (a folder symlink, a link back up the tree)
+    is taken once, by its shortest path.
     """
     skipped = exclude.resolve() if exclude is not None else None
-    return sorted(
-        path
-        for path in map(Path, glob.glob(pattern, recursive=True))
-        if path.is_file() and (skipped is None or skipped not in path.resolve().parents)
-    )
+    found: dict[Path, Path] = {}
+    for path in sorted(map(Path, glob.glob(pattern, recursive=True)), key=lambda p: len(p.parts)):
+        if not path.is_file():
+            continue
+        real = path.resolve()
+        if (skipped is None or skipped not in real.parents) and real not in found:
+            found[real] = path
+    return sorted(found.values())
 
 
 def pattern_root(pattern: str) -> Path:

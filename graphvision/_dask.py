@@ -93,7 +93,7 @@ class DaskExecutor:
         elif address:
             try:
                 self.client = distributed.Client(address, timeout=timeout)
-            except (OSError, TimeoutError) as error:
+            except Exception as error:  # unreachable, refused, or not an address at all
                 raise DaskUnavailableError(
                     f"cannot reach the Dask scheduler at {address} within {timeout:g} s "
                     f"({type(error).__name__}); check the address, or leave out "

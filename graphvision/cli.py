@@ -16,8 +16,9 @@
 
 ``--plugins PATH`` and ``--debug`` go anywhere on the line. Exit status: 0
 success, 1 a run failed (or the environment: a full disk, a closed pipe), 2
-an invalid pipeline or usage, 130 interrupted. Every mistake is one message,
-never a traceback (``--debug`` adds it). Every sub-command calls the Python
+an invalid pipeline or usage, 130 interrupted (Ctrl-C), 143 terminated
+(SIGTERM). Every mistake is one message, never a traceback (``--debug`` adds
+it). Every sub-command calls the Python
 API; heavy modules are imported by the command that needs them, so ``--help``
 is quick.
 """
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 import time
 import traceback
@@ -43,8 +45,9 @@ if TYPE_CHECKING:
 
 __all__ = ["entry", "main"]
 
-EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 EXECUTORS = ("threads", "sync", "processes", "dask")
+MAX_WORKERS = 256  # workers of one machine's pool or local cluster (each is a thread or a process)
 CACHE_DIR_HELP = "$GRAPHVISION_CACHE_DIR, else $XDG_CACHE_HOME/graphvision or ~/.cache/graphvision"
 
 
@@ -91,6 +94,8 @@ def _positive_int(text: str) -> int:
         raise argparse.ArgumentTypeError(f"not a whole number: '{text}'") from None
     if value <= 0:
         raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    if value > MAX_WORKERS:
+        raise argparse.ArgumentTypeError(f"at most {MAX_WORKERS}, got {value}")
     return value
 
 
@@ -137,6 +142,8 @@ def _output_dir(text: str | None) -> Path | None:
     """The output folder, made now: a file or a folder that cannot be made is refused first."""
     if text is None:
         return None
+    if not text.strip():
+        raise UsageError("--output-dir is empty: give a folder (use . for this one)")
     folder = Path(text)
     if folder.exists() and not folder.is_dir():
         raise UsageError(f"--output-dir {folder}: is a file, not a folder")
@@ -728,7 +735,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     The one place errors become messages: a graphvision error is a usage
     problem (2), a failed run or a problem of the environment (a full disk,
-    no permission, a closed pipe) a failure (1), Ctrl-C 130.
+    no permission, a closed pipe) a failure (1), Ctrl-C 130, SIGTERM 143.
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
@@ -749,9 +756,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command is None:
             raise UsageError("give a command: " + ", ".join(_commands(parser)))
         return int(args.func(args))
-    except KeyboardInterrupt:
-        print(f"interrupted after {time.perf_counter() - began:.1f} s", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as stop:
+        what = "terminated" if isinstance(stop, Terminated) else "interrupted"
+        print(f"{what} after {time.perf_counter() - began:.1f} s", file=sys.stderr)
+        return EXIT_TERMINATED if isinstance(stop, Terminated) else EXIT_INTERRUPTED
     except BrokenPipeError:  # `graphvision nodes | head -1`: the reader has what it wanted
         _silence_stdout()
         return EXIT_OK
@@ -802,13 +810,23 @@ def entry() -> None:
     the node they run (cache entries and outputs are written atomically, so
     nothing is left half-written; worker processes see their parent go and exit).
     """
+    signal.signal(signal.SIGTERM, _terminate)
     status = main()
     sys.stdout.flush()
     sys.stderr.flush()
-    if status == EXIT_INTERRUPTED:
+    if status in (EXIT_INTERRUPTED, EXIT_TERMINATED):
         _release_process_resources()
         os._exit(status)
     sys.exit(status)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, ``timeout``, ``docker stop``, a batch scheduler): stopped as Ctrl-C
+    stops a run, so a batch or sweep still writes what it has done."""
+
+
+def _terminate(signum: int, frame: Any) -> None:
+    raise Terminated
 
 
 def _release_process_resources() -> None:

@@ -418,3 +418,15 @@ def test_files_running_when_a_batch_stops_are_interrupted_not_unrun():
     marked = _not_run([done, None, None], paths, folders, started={0, 1})
     assert [item.status for item in marked] == ["ok", "interrupted", "not run"]
     assert "while this file ran" in marked[1].error and "before this file" in marked[2].error
+
+
+def test_a_file_reached_through_folder_links_is_taken_once(tmp_path):
+    from graphvision._batch import batch_files
+
+    photos = tmp_path / "photos"
+    photo(photos / "a.png", 10)
+    photo(photos / "sub" / "b.png", 20)
+    (photos / "sub" / "up").symlink_to(photos, target_is_directory=True)  # a loop
+    (tmp_path / "alias").symlink_to(photos, target_is_directory=True)
+    found = batch_files(f"{photos}/**/*.png")
+    assert found == [photos / "a.png", photos / "sub" / "b.png"]

@@ -366,3 +366,19 @@ def test_every_option_has_help_and_node_summaries_are_plain_text(capsys):
                 assert action.help, f"{name} {action.dest} has no help"
     status, out, _ = cli(capsys, "nodes")
     assert status == 0 and "``" not in out and ":math:" not in out and ":func:" not in out
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--workers", "100000"], "at most 256, got 100000"),
+        (["-d", ""], "--output-dir is empty"),
+        (["--executor", "dask", "--scheduler", "garbage"], "cannot reach the Dask scheduler at"),
+    ],
+)
+def test_command_line_values_out_of_reach_are_usage_errors(capsys, extra, message):
+    if "dask" in extra:
+        pytest.importorskip("distributed")
+    status, _, err = cli(capsys, "run", DEMO, "--no-cache", *extra)
+    assert status == 2 and message in err, err
+    assert len(err.strip().splitlines()) == 1

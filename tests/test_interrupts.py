@@ -74,6 +74,17 @@ def test_ctrl_c_exits_130_with_one_line_and_nothing_written(tmp_path, executor):
     assert not (tmp_path / "out" / "record.json").exists()
 
 
+def test_sigterm_stops_a_run_as_ctrl_c_does_and_exits_143(tmp_path):
+    """kill, timeout, docker stop and batch schedulers send SIGTERM: the run stops as it
+    does on Ctrl-C (one line, nothing half-written) instead of dying mid-write."""
+    process = _start(tmp_path, "threads")
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 143
+    assert err.strip().startswith("terminated after") and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "out" / "record.json").exists()
+
+
 def _children(pid: int) -> set[int]:
     found = set()
     for task in Path(f"/proc/{pid}/task").glob("*"):
