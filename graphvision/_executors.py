@@ -29,6 +29,7 @@ from typing import Any, Protocol
 
 from ._node import FunctionRef
 from ._ports import PortType, freeze
+from ._warnings import running, show_warning
 
 __all__ = [
     "EXECUTORS",
@@ -214,8 +215,12 @@ def _copy(source: Future, target: Future) -> None:
 
 
 def _worker_setup(parent: int) -> None:
-    """In each worker: leave Ctrl-C to the parent, and exit when the parent is gone."""
+    """In each worker: leave Ctrl-C to the parent, exit when the parent is gone, and print
+    warnings as the command line does (one line naming the node)."""
+    import warnings
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    warnings.showwarning = show_warning
 
     def watch() -> None:
         while os.getppid() == parent:
@@ -266,8 +271,13 @@ def call_node(
     func: Callable[..., Any], params: dict[str, Any], inputs: dict[str, Any]
 ) -> tuple[Any, float]:
     """Call a node function; return its result and wall time in seconds."""
+    mark = getattr(func, "__graphvision_node__", None)
+    running.op = mark.id if mark is not None else getattr(func, "__qualname__", "")
     began = time.perf_counter()
-    result = func(**inputs, **params)
+    try:
+        result = func(**inputs, **params)
+    finally:
+        running.op = ""
     return result, time.perf_counter() - began
 
 

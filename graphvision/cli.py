@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ._errors import GraphvisionError, did_you_mean
+from ._warnings import show_warning
 
 if TYPE_CHECKING:
     from ._cache import Cache
@@ -719,17 +720,6 @@ def _version() -> str:
 # -- main -------------------------------------------------------------------------------
 
 
-def _show_warning(
-    message: Any,
-    category: type,
-    filename: str,
-    lineno: int,
-    file: Any = None,
-    line: str | None = None,
-) -> None:
-    print(f"warning: {message}", file=sys.stderr)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line on ``argv``; return the exit status (never raises for a mistake).
 
@@ -739,7 +729,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
-    warnings.showwarning = _show_warning
+    warnings.showwarning = show_warning
     began = time.perf_counter()
     try:
         parser = build_parser()

@@ -382,3 +382,37 @@ def test_command_line_values_out_of_reach_are_usage_errors(capsys, extra, messag
     status, _, err = cli(capsys, "run", DEMO, "--no-cache", *extra)
     assert status == 2 and message in err, err
     assert len(err.strip().splitlines()) == 1
+
+
+WARNING_PLUGIN = '''
+import numpy as np
+from graphvision import Float, node
+
+
+@node("noisy.divide")
+def divide(x: Float) -> Float:
+    """x / 0 in numpy: a RuntimeWarning, and infinity.
+
+    Parameters
+    ----------
+    x : the numerator
+    """
+    return float(np.float64(x) / np.float64(0.0) * 0.0)
+'''
+
+
+@pytest.mark.parametrize("executor", ["threads", "processes"])
+def test_a_warning_inside_a_node_names_the_node(capsys, tmp_path, executor):
+    plugin = tmp_path / "noisy.py"
+    plugin.write_text(WARNING_PLUGIN)
+    pipeline = tmp_path / "p.yaml"
+    pipeline.write_text(
+        "name: p\ninputs:\n  x: {type: Float, default: 1.0}\n"
+        "nodes:\n  d: {op: noisy.divide, in: {x: x}}\noutputs: {d: d}\n"
+    )
+    command = [sys.executable, "-m", "graphvision", "run", str(pipeline), "--plugins", str(plugin)]
+    done = subprocess.run(
+        [*command, "--no-cache", "--executor", executor], capture_output=True, text=True
+    )
+    assert "warning: noisy.divide: divide by zero encountered" in done.stderr, done.stderr
+    assert "RuntimeWarning" not in done.stderr and ".py:" not in done.stderr
