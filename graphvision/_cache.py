@@ -56,6 +56,7 @@ from typing import Any, Protocol
 import numpy as np
 import xxhash
 
+from ._cache_dir import default_cache_dir
 from ._errors import GraphvisionError
 from ._ports import PortType
 
@@ -92,14 +93,6 @@ class CacheWarning(UserWarning):
 
 class NotACacheError(GraphvisionError):
     """A cache directory was asked for in a folder that holds other files."""
-
-
-def default_cache_dir() -> Path:
-    """``$GRAPHVISION_CACHE_DIR``, else ``$XDG_CACHE_HOME/graphvision``, else ``~/.cache/...``."""
-    if os.environ.get("GRAPHVISION_CACHE_DIR"):
-        return Path(os.environ["GRAPHVISION_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "graphvision"
 
 
 # -- keys ---------------------------------------------------------------------------

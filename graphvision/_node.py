@@ -244,13 +244,14 @@ class NodeSpec:
     ref: FunctionRef
     inputs: dict[str, InputPort]
     outputs: dict[str, type[PortType]]
-    params_model: type[pydantic.BaseModel]
+    param_fields: dict[str, tuple[Any, Any]]
     doc: str
     plugin: str
     cache: bool = True
     overrides: bool = False
     output_tuple: type | None = field(default=None, repr=False)
     output_vars: dict[str, str] = field(default_factory=dict)
+    check: Callable[..., None] | None = field(default=None, repr=False)
 
     @property
     def family(self) -> str:
@@ -264,6 +265,17 @@ class NodeSpec:
     def source_hash(self) -> str:
         """Digest of the code the node runs, from the loaded code (see ``_fingerprint``)."""
         return code_fingerprint(self.func)
+
+    @cached_property
+    def params_model(self) -> type[pydantic.BaseModel]:
+        """The pydantic model of the parameters, built on first use.
+
+        Building the models of every node is most of what registering the
+        built-in plugins costs, and a command or a run uses few of them.
+        Registration has checked that the model builds (or the plugin index
+        recorded that it did for the same files: :mod:`._plugin_index`).
+        """
+        return _params_model(self.id, self.param_fields, self.check)
 
     def params_schema(self) -> dict[str, Any]:
         return self.params_model.model_json_schema()
@@ -442,7 +454,7 @@ def _ref_for(func: Callable) -> FunctionRef:
     return FunctionRef(func.__module__, func.__qualname__, path)
 
 
-def build_spec(func: Callable, plugin: str) -> NodeSpec:
+def build_spec(func: Callable, plugin: str, *, params_checked: bool = False) -> NodeSpec:
     """Check a decorated function's signature and build its :class:`NodeSpec`.
 
     A spec is immutable and depends only on the function object and the plugin
@@ -450,6 +462,11 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
     every ``discover()`` after the first (each ``run`` without a registry does
     one) costs no pydantic model building. A plugin file that changed is
     imported again, so its functions are new objects and get new specs.
+
+    The parameter model is built, validated on the defaults and given its JSON
+    schema here, so that a node whose parameters cannot be validated is refused
+    when it registers, unless ``params_checked`` says that this was done for the
+    same code already (the plugin index); then the model is built on first use.
 
     Raises
     ------
@@ -460,7 +477,7 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
     built: dict[str, NodeSpec] | None = getattr(func, "__graphvision_specs__", None)
     if built is not None and plugin in built:
         return built[plugin]
-    spec = _build_spec(func, plugin)
+    spec = _build_spec(func, plugin, params_checked)
     if built is None:
         built = {}
         with contextlib.suppress(AttributeError, TypeError):  # e.g. a builtin: not kept
@@ -469,7 +486,7 @@ def build_spec(func: Callable, plugin: str) -> NodeSpec:
     return spec
 
 
-def _build_spec(func: Callable, plugin: str) -> NodeSpec:
+def _build_spec(func: Callable, plugin: str, params_checked: bool) -> NodeSpec:
     mark: _NodeMark = func.__graphvision_node__  # type: ignore[attr-defined]
     code = getattr(func, "__code__", None)
     place = f" at {code.co_filename}:{code.co_firstlineno}" if code else ""
@@ -551,41 +568,48 @@ def _build_spec(func: Callable, plugin: str) -> NodeSpec:
             f"got {type_label(returned)}"
         )
 
-    try:
-        validators: dict[str, Any] = {}
-        if mark.check is not None:
-            together = mark.check
-
-            def check_together(model: Any) -> Any:
-                together(**dict(model))
-                return model
-
-            validators["check_together"] = pydantic.model_validator(mode="after")(check_together)
-        model = pydantic.create_model(
-            f"{mark.id}.params",
-            __config__=pydantic.ConfigDict(
-                extra="forbid", validate_default=True, allow_inf_nan=False
-            ),
-            __validators__=validators,
-            **fields,
-        )
-        model.model_validate({})
-        model.model_json_schema()
-    except Exception as error:
-        raise reject(f"parameters cannot be validated: {error}") from error
-
-    return NodeSpec(
+    spec = NodeSpec(
         id=mark.id,
         version=mark.version,
         func=func,
         ref=_ref_for(func),
         inputs=inputs,
         outputs=outputs,
-        params_model=model,
+        param_fields=fields,
         doc=func.__doc__ or "",
         plugin=plugin,
         cache=mark.cache,
         overrides=mark.overrides,
         output_tuple=output_tuple,
         output_vars=output_vars,
+        check=mark.check,
+    )
+    if not params_checked:
+        try:
+            spec.params_model.model_validate({})
+            spec.params_schema()
+        except Exception as error:
+            raise reject(f"parameters cannot be validated: {error}") from error
+    return spec
+
+
+def _params_model(
+    id: str, fields: dict[str, tuple[Any, Any]], check: Callable[..., None] | None
+) -> type[pydantic.BaseModel]:
+    """The pydantic model of a node's parameters: no unknown names, defaults validated,
+    no NaN or infinity."""
+    validators: dict[str, Any] = {}
+    if check is not None:
+        together = check
+
+        def check_together(model: Any) -> Any:
+            together(**dict(model))
+            return model
+
+        validators["check_together"] = pydantic.model_validator(mode="after")(check_together)
+    return pydantic.create_model(
+        f"{id}.params",
+        __config__=pydantic.ConfigDict(extra="forbid", validate_default=True, allow_inf_nan=False),
+        __validators__=validators,
+        **fields,
     )

@@ -8,7 +8,8 @@ its error and the others keep working.
 
 Plugins import only light modules at the top (numpy); heavy ones (scipy,
 scikit-image) are imported inside the node functions, so listing nodes stays
-fast.
+fast. When the plugin index (:mod:`._plugin_index`) matches the installed
+plugins, their nodes' parameter models are built on first use.
 """
 
 from __future__ import annotations
@@ -20,16 +21,20 @@ import sys
 import traceback
 import types
 from collections.abc import Iterable
-from importlib.metadata import entry_points
 from pathlib import Path
 
 from ._errors import GraphvisionError, PluginLoadError
 from ._fingerprint import note_distribution
+from ._plugin_index import (
+    ENTRY_POINT_GROUP,
+    environment_key,
+    installed_entry_points,
+    read_index,
+    write_index,
+)
 from ._registry import Registry
 
 __all__ = ["ENTRY_POINT_GROUP", "discover", "import_file", "load_entry_points", "load_path"]
-
-ENTRY_POINT_GROUP = "graphvision.plugins"
 
 
 def _summarise(error: BaseException) -> str:
@@ -41,19 +46,31 @@ def _summarise(error: BaseException) -> str:
 
 
 def load_entry_points(registry: Registry) -> None:
-    """Register every plugin of the ``graphvision.plugins`` entry-point group."""
-    for entry in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
+    """Register every plugin of the ``graphvision.plugins`` entry-point group.
+
+    With a plugin index for the same files, the nodes' parameter models are
+    left to be built on first use; without one, they are built and checked
+    now, and the index is written for the next discovery.
+    """
+    fresh = not registry.plugins  # only a registry of these plugins alone is recorded
+    entries = installed_entry_points()
+    key = environment_key(entries)
+    indexed = read_index(key) is not None
+    for entry in entries:
         if entry.name in registry.plugins:
             continue
         try:
             module = entry.load()
             if not isinstance(module, types.ModuleType):
                 raise PluginLoadError(f"entry point must name a module, got {module!r}")
-            registry.add_plugin(module, entry.name, entry.value)
+            registry.add_plugin(module, entry.name, entry.value, params_checked=indexed)
             if entry.dist is not None:
                 note_distribution(module.__name__.partition(".")[0], entry.dist.name)
         except Exception as error:
             registry.record_failure(entry.name, entry.value, _summarise(error))
+    if fresh and not indexed and not registry.failed_plugins():
+        if environment_key(entries) == key:  # no file changed while the plugins loaded
+            write_index(key, registry)
 
 
 def import_file(path: str | Path, module_name: str = "") -> types.ModuleType:

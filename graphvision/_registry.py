@@ -46,8 +46,18 @@ class Registry:
 
     # -- registration -------------------------------------------------------------
 
-    def add_plugin(self, module: types.ModuleType, name: str, origin: str = "") -> PluginStatus:
+    def add_plugin(
+        self,
+        module: types.ModuleType,
+        name: str,
+        origin: str = "",
+        *,
+        params_checked: bool = False,
+    ) -> PluginStatus:
         """Register every node, source and port type that ``module`` exposes.
+
+        ``params_checked`` (the plugin index knows these files registered
+        before) leaves each node's parameter model to be built on first use.
 
         Raises
         ------
@@ -60,7 +70,7 @@ class Registry:
         for member in members:
             if hasattr(member, "__graphvision_node__"):
                 try:
-                    specs.append(build_spec(member, name))
+                    specs.append(build_spec(member, name, params_checked=params_checked))
                 except RegistrationError as error:
                     rejected.append(str(error))
         if len(rejected) == 1:

@@ -32,11 +32,11 @@ import sys
 import time
 import traceback
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ._errors import GraphvisionError, did_you_mean
+from ._errors import GraphvisionError, UnknownNameError, did_you_mean
 from ._warnings import show_warning
 
 if TYPE_CHECKING:
@@ -130,8 +130,8 @@ def _check_overrides(
             hint = did_you_mean(target, graph.nodes)
             raise UsageError(f"{shown}: the pipeline has no node '{target}'{hint}")
         spec = registry.nodes.get(graph.nodes[target].op)
-        if spec is not None and param not in spec.params_model.model_fields:
-            names = list(spec.params_model.model_fields)
+        if spec is not None and param not in spec.param_fields:
+            names = list(spec.param_fields)
             hint = did_you_mean(param, names)
             listing = ", ".join(names) or "none"
             raise UsageError(
@@ -428,34 +428,53 @@ def plain_text(text: str) -> str:
     return text.replace("``", "")
 
 
+def _listed_nodes(args: argparse.Namespace) -> tuple[dict[str, str], Callable[[str], Any]]:
+    """Each node's one-line summary by id, and a function giving a node's description.
+
+    From the plugin index when it matches the installed plugins and no local
+    plugin is asked for (no plugin is imported then), else by discovering them.
+    """
+    if not args.plugins:
+        from ._plugin_index import environment_key, installed_entry_points, read_index
+
+        indexed = read_index(environment_key(installed_entry_points()))
+        if indexed is not None:
+            summaries = {op: str(entry["summary"]) for op, entry in indexed.items()}
+            return summaries, lambda op: indexed[op]["description"]
+    registry = _registry(args)
+    summaries = {op: spec.summary for op, spec in registry.nodes.items()}
+    return summaries, lambda op: registry.nodes[op].describe()
+
+
 def cmd_nodes(args: argparse.Namespace) -> int:
     import json
 
-    registry = _registry(args)
+    summaries, describe = _listed_nodes(args)
     if args.json:
-        print(
-            json.dumps(
-                {op: spec.describe() for op, spec in sorted(registry.nodes.items())}, indent=2
-            )
-        )
+        print(json.dumps({op: describe(op) for op in sorted(summaries)}, indent=2))
         return EXIT_OK
-    for family, specs in registry.families().items():
+    families: dict[str, list[str]] = {}
+    for op in sorted(summaries):
+        families.setdefault(op.split(".", 1)[0], []).append(op)
+    for family, ops in families.items():
         print(f"{family}")
-        width = max(len(s.id) for s in specs)
-        for spec in specs:
-            print(f"  {spec.id.ljust(width)}  {plain_text(spec.summary)}")
+        width = max(len(op) for op in ops)
+        for op in ops:
+            print(f"  {op.ljust(width)}  {plain_text(summaries[op])}")
     return EXIT_OK
 
 
 def cmd_describe(args: argparse.Namespace) -> int:
     import json
 
-    spec = _registry(args).node(args.op)
-    info = spec.describe()
+    summaries, describe = _listed_nodes(args)
+    if args.op not in summaries:
+        raise UnknownNameError(f"unknown op '{args.op}'{did_you_mean(args.op, summaries)}")
+    info = describe(args.op)
     if args.json:
         print(json.dumps(info, indent=2))
         return EXIT_OK
-    print(f"{spec.id} (version {spec.version}, plugin {spec.plugin}, {info['function']})\n")
+    print(f"{info['id']} (version {info['version']}, plugin {info['plugin']}, {info['function']})\n")
     print("inputs:")
     for name, port in info["inputs"].items():
         print(f"  {name}: {port['type']}{' (optional)' if port['optional'] else ''}")

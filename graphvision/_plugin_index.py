@@ -1,0 +1,148 @@
+"""The plugin index: what discovering the installed plugins found, kept on disk.
+
+Importing every installed family and building each node's parameter model
+(a pydantic model, checked on the defaults, and its JSON schema) is most of
+what ``graphvision nodes`` and the start of a run cost. The index records,
+for one state of the installed plugins, each node's listing line and
+description, and that every node registered. With an index that matches,
+
+* ``graphvision nodes`` and ``graphvision describe`` print from it without
+  importing any plugin (nor NumPy, nor pydantic);
+* :func:`~graphvision.discover` still imports the plugins (a run calls their
+  functions) but leaves each parameter model to be built on first use, so a
+  run builds the models of the nodes it uses only.
+
+An index is never served stale: it is keyed by a digest of everything that
+can change what discovery finds, computed on every use:
+
+* the bytes of every file of each entry point's top-level package and of
+  graphvision itself (an edit anywhere in a plugin shows at once, whatever
+  the file's time stamp);
+* the entry points (name, target, distribution and its version);
+* the modification time of each ``sys.path`` folder but the first (a package
+  installed or removed there, such as a dependency a plugin imports; the
+  first is the script's folder or, for ``python -m``, the current one, whose
+  time changes with every file made there, and the packages it provides are
+  hashed as above);
+* the Python version and executable.
+
+An index is written only after a discovery in which every entry-point plugin
+loaded (a failing plugin is imported, and its error reported, every time),
+and only if the key is the same after the plugins were imported as before (a
+file edited meanwhile). It is one JSON file per Python environment, next to
+the default cache folder, replaced atomically; an index that cannot be read
+or written is simply not used.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import sys
+import tempfile
+from importlib.metadata import EntryPoint, entry_points
+from importlib.util import find_spec
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ._cache_dir import default_cache_dir
+
+if TYPE_CHECKING:
+    from ._registry import Registry
+
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "environment_key",
+    "index_path",
+    "installed_entry_points",
+    "read_index",
+    "write_index",
+]
+
+ENTRY_POINT_GROUP = "graphvision.plugins"
+FORMAT = 1  # bump when what an index holds changes
+
+
+def installed_entry_points() -> list[EntryPoint]:
+    """The ``graphvision.plugins`` entry points, in name order."""
+    return sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name)
+
+
+def environment_key(entries: list[EntryPoint]) -> str:
+    """A digest of what discovering ``entries`` depends on (see the module docstring)."""
+    hasher = hashlib.blake2b(digest_size=16)
+    hasher.update(f"{FORMAT}|{sys.version}|{sys.executable}\n".encode())
+    for folder in sys.path[1:]:
+        with contextlib.suppress(OSError):
+            hasher.update(f"{folder}|{os.stat(folder or '.').st_mtime_ns}\n".encode())
+    packages = {"graphvision"}
+    for entry in entries:
+        dist = entry.dist
+        release = f"{dist.name} {dist.version}" if dist is not None else ""
+        hasher.update(f"{entry.name}|{entry.value}|{release}\n".encode())
+        packages.add(entry.value.partition(":")[0].partition(".")[0])
+    for package in sorted(packages):
+        hasher.update(f"package {package}\n".encode())
+        for file in _package_files(package):
+            hasher.update(f"{file}\n".encode())
+            with contextlib.suppress(OSError):
+                hasher.update(file.read_bytes())
+    return hasher.hexdigest()
+
+
+def _package_files(name: str) -> list[Path]:
+    """Every file of a top-level package or module, found without importing it."""
+    try:
+        spec = find_spec(name)
+    except (ImportError, ValueError):
+        return []
+    if spec is None:
+        return []
+    if not spec.submodule_search_locations:
+        return [Path(spec.origin)] if spec.origin else []
+    files = []
+    for location in spec.submodule_search_locations:
+        for folder, subfolders, names in os.walk(location):
+            subfolders[:] = sorted(d for d in subfolders if d != "__pycache__")
+            files += [Path(folder, n) for n in sorted(names) if not n.endswith(".pyc")]
+    return files
+
+
+def index_path() -> Path:
+    """This Python environment's index file, beside the default cache folder."""
+    environment = hashlib.blake2b(sys.prefix.encode(), digest_size=4).hexdigest()
+    cache = default_cache_dir()
+    return cache.parent / f"{cache.name}-plugin-index-{environment}.json"
+
+
+def read_index(key: str) -> dict[str, Any] | None:
+    """The nodes of the index written under ``key``, or None (none, another key, unreadable)."""
+    try:
+        index = json.loads(index_path().read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(index, dict) or index.get("key") != key:
+        return None
+    nodes = index.get("nodes")
+    return nodes if isinstance(nodes, dict) else None
+
+
+def write_index(key: str, registry: Registry) -> None:
+    """Record ``registry``'s nodes under ``key`` (quietly nothing if the file cannot be written)."""
+    nodes = {
+        op: {"summary": spec.summary, "description": spec.describe()}
+        for op, spec in sorted(registry.nodes.items())
+    }
+    path = index_path()
+    with contextlib.suppress(OSError, TypeError, ValueError):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
+        try:
+            with os.fdopen(handle, "w", encoding="utf-8") as stream:
+                json.dump({"key": key, "nodes": nodes}, stream)
+            os.replace(temporary, path)
+        finally:
+            with contextlib.suppress(FileNotFoundError):
+                os.remove(temporary)
