@@ -594,7 +594,7 @@ def _build_spec(func: Callable, plugin: str, params_checked: bool) -> NodeSpec:
 
 
 def _params_model(
-    id: str, fields: dict[str, tuple[Any, Any]], check: Callable[..., None] | None
+    id: str, fields: dict[str, Any], check: Callable[..., None] | None
 ) -> type[pydantic.BaseModel]:
     """The pydantic model of a node's parameters: no unknown names, defaults validated,
     no NaN or infinity."""

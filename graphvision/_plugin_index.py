@@ -18,7 +18,8 @@ can change what discovery finds, computed on every use:
 * the bytes of every file of each entry point's top-level package and of
   graphvision itself (an edit anywhere in a plugin shows at once, whatever
   the file's time stamp);
-* the entry points (name, target, distribution and its version);
+* the entry points (name, target, and their distribution's metadata file,
+  which holds its name and version);
 * the modification time of each ``sys.path`` folder but the first (a package
   installed or removed there, such as a dependency a plugin imports; the
   first is the script's folder or, for ``python -m``, the current one, whose
@@ -78,9 +79,12 @@ def environment_key(entries: list[EntryPoint]) -> str:
         with contextlib.suppress(OSError):
             hasher.update(f"{folder}|{os.stat(folder or '.').st_mtime_ns}\n".encode())
     packages = {"graphvision"}
+    releases: dict[int, str] = {}  # read once per distribution (parsing it is slow)
     for entry in entries:
         dist = entry.dist
-        release = f"{dist.name} {dist.version}" if dist is not None else ""
+        if dist is not None and id(dist) not in releases:
+            releases[id(dist)] = dist.read_text("METADATA") or dist.read_text("PKG-INFO") or ""
+        release = releases[id(dist)] if dist is not None else ""
         hasher.update(f"{entry.name}|{entry.value}|{release}\n".encode())
         packages.add(entry.value.partition(":")[0].partition(".")[0])
     for package in sorted(packages):

@@ -56,6 +56,7 @@ def load_entry_points(registry: Registry) -> None:
     entries = installed_entry_points()
     key = environment_key(entries)
     indexed = read_index(key) is not None
+    names: dict[int, str] = {}  # a distribution's name, parsed once for all its entry points
     for entry in entries:
         if entry.name in registry.plugins:
             continue
@@ -65,12 +66,14 @@ def load_entry_points(registry: Registry) -> None:
                 raise PluginLoadError(f"entry point must name a module, got {module!r}")
             registry.add_plugin(module, entry.name, entry.value, params_checked=indexed)
             if entry.dist is not None:
-                note_distribution(module.__name__.partition(".")[0], entry.dist.name)
+                if id(entry.dist) not in names:
+                    names[id(entry.dist)] = entry.dist.name
+                note_distribution(module.__name__.partition(".")[0], names[id(entry.dist)])
         except Exception as error:
             registry.record_failure(entry.name, entry.value, _summarise(error))
-    if fresh and not indexed and not registry.failed_plugins():
-        if environment_key(entries) == key:  # no file changed while the plugins loaded
-            write_index(key, registry)
+    unchanged = fresh and not indexed and not registry.failed_plugins()
+    if unchanged and environment_key(entries) == key:  # no file changed while they loaded
+        write_index(key, registry)
 
 
 def import_file(path: str | Path, module_name: str = "") -> types.ModuleType:

@@ -474,7 +474,8 @@ def cmd_describe(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(info, indent=2))
         return EXIT_OK
-    print(f"{info['id']} (version {info['version']}, plugin {info['plugin']}, {info['function']})\n")
+    where = f"version {info['version']}, plugin {info['plugin']}, {info['function']}"
+    print(f"{info['id']} ({where})\n")
     print("inputs:")
     for name, port in info["inputs"].items():
         print(f"  {name}: {port['type']}{' (optional)' if port['optional'] else ''}")
