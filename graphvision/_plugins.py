@@ -71,8 +71,8 @@ def load_entry_points(registry: Registry) -> None:
                 note_distribution(module.__name__.partition(".")[0], names[id(entry.dist)])
         except Exception as error:
             registry.record_failure(entry.name, entry.value, _summarise(error))
-    unchanged = fresh and not indexed and not registry.failed_plugins()
-    if unchanged and environment_key(entries) == key:  # no file changed while they loaded
+    recordable = fresh and not indexed and not registry.failed_plugins()
+    if recordable and environment_key(entries) == key:  # no file changed while they loaded
         write_index(key, registry)
 
 

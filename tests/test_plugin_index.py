@@ -1,0 +1,163 @@
+"""The plugin index: same listings as a discovery, never stale, lazy parameter models."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+from importlib.metadata import EntryPoint
+from pathlib import Path
+from typing import Annotated
+
+import pytest
+from pydantic import Field
+
+import graphvision as gv
+from graphvision import _plugin_index
+from graphvision._node import build_spec
+from graphvision.cli import main
+
+
+def cli(capsys, *args):
+    status = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err
+    return status, out, err
+
+
+def refuse_discovery(*args, **kwargs):
+    raise AssertionError("plugins were discovered although the index matches")
+
+
+@pytest.mark.parametrize(
+    "command",
+    [("nodes",), ("nodes", "--json"), ("describe", "filters.gaussian"), ("describe", "geometry.warp")],
+)
+def test_the_index_prints_what_a_discovery_prints(capsys, monkeypatch, command):
+    assert not _plugin_index.index_path().exists()
+    status, discovered, _ = cli(capsys, *command)  # no index yet: discovers, writes it
+    assert status == 0 and _plugin_index.index_path().exists()
+    monkeypatch.setattr("graphvision._plugins.discover", refuse_discovery)
+    status, indexed, _ = cli(capsys, *command)
+    assert status == 0 and indexed == discovered
+
+
+def test_an_unknown_op_is_named_from_the_index_as_from_a_discovery(capsys, monkeypatch):
+    status, _, first = cli(capsys, "describe", "filters.gausian")
+    monkeypatch.setattr("graphvision._plugins.discover", refuse_discovery)
+    status_again, _, again = cli(capsys, "describe", "filters.gausian")
+    assert status == status_again == 2 and first == again
+    assert "unknown op 'filters.gausian' (did you mean 'filters.gaussian'?)" in again
+
+
+def test_local_plugins_are_always_discovered(capsys):
+    from .conftest import TOY
+
+    cli(capsys, "nodes")  # writes the index
+    status, out, _ = cli(capsys, "--plugins", TOY, "nodes")
+    assert status == 0 and "toy." in out
+
+
+def test_an_unreadable_index_is_rebuilt(capsys):
+    _, first, _ = cli(capsys, "nodes")
+    _plugin_index.index_path().write_text("{not json")
+    _, again, _ = cli(capsys, "nodes")
+    assert again == first
+    assert _plugin_index.index_path().read_text().startswith('{"key"')
+
+
+def _package(root: Path, summary: str) -> Path:
+    package = root / "fakeplug_nodes"
+    package.mkdir(exist_ok=True)
+    (package / "__init__.py").write_text(
+        textwrap.dedent(
+            f'''
+            """A plugin installed as a distribution."""
+            from graphvision import Float, node
+
+            __all__ = ["scale"]
+
+
+            @node("fakeplug.scale")
+            def scale(x: Float, *, factor: float = 2.0) -> Float:
+                """{summary}
+
+                Parameters
+                ----------
+                x : Float
+                    Value.
+                factor : float
+                    Factor.
+                """
+                return x * factor
+            '''
+        )
+    )
+    return package / "__init__.py"
+
+
+def _edit_keeping_size_and_time(path: Path, old: str, new: str) -> None:
+    assert len(old) == len(new)
+    before = path.stat()
+    path.write_text(path.read_text().replace(old, new))
+    os.utime(path, ns=(before.st_atime_ns, before.st_mtime_ns))
+    assert path.stat().st_size == before.st_size
+
+
+def test_a_plugin_edit_shows_at_once(tmp_path):
+    """An installed plugin (an entry point of a distribution) edited between two commands."""
+    site = tmp_path / "site"
+    dist = site / "fakeplug-1.0.dist-info"
+    dist.mkdir(parents=True)
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: fakeplug\nVersion: 1.0\n")
+    (dist / "entry_points.txt").write_text("[graphvision.plugins]\nfakeplug = fakeplug_nodes\n")
+    module = _package(site, "First summary of the node.")
+    env = {**os.environ, "PYTHONPATH": str(site), "GRAPHVISION_CACHE_DIR": str(tmp_path / "c")}
+
+    def nodes() -> subprocess.CompletedProcess:
+        command = [sys.executable, "-m", "graphvision", "nodes"]
+        return subprocess.run(command, env=env, capture_output=True, text=True, timeout=120)
+
+    assert "First summary of the node." in nodes().stdout  # discovered, index written
+    assert "First summary of the node." in nodes().stdout  # from the index
+    # the same size and modification time: only the bytes tell
+    _edit_keeping_size_and_time(module, "First summary", "Other summary")
+    assert "Other summary of the node." in nodes().stdout
+    # parameters that cannot be validated are refused although an index exists
+    _edit_keeping_size_and_time(module, "float = 2.0", "int = 'two'")
+    broken = nodes()
+    assert "fakeplug.scale" not in broken.stdout
+    assert "plugin 'fakeplug' failed to load" in broken.stderr
+    assert "parameters cannot be validated" in broken.stderr
+    # a failing plugin is never recorded: it is imported, and reported, every time
+    again = nodes()
+    assert "parameters cannot be validated" in again.stderr
+
+
+def test_the_key_changes_with_a_files_bytes_alone(tmp_path, monkeypatch):
+    module = _package(tmp_path, "First summary of the node.")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    entries = [EntryPoint("fakeplug", "fakeplug_nodes", _plugin_index.ENTRY_POINT_GROUP)]
+    key = _plugin_index.environment_key(entries)
+    assert _plugin_index.environment_key(entries) == key
+    _edit_keeping_size_and_time(module, "First summary", "Other summary")
+    edited = _plugin_index.environment_key(entries)
+    assert edited != key
+    (module.parent / "_more.py").write_text("")
+    assert _plugin_index.environment_key(entries) not in (key, edited)
+
+
+def test_a_parameter_model_left_to_first_use_is_the_one_registration_builds():
+    @gv.node("lazy.scale")
+    def scale(x: gv.Float, *, factor: Annotated[float, Field(gt=0)] = 2.0) -> gv.Float:
+        """Scale."""
+        return x * factor
+
+    eager = build_spec(scale, "eager")
+    lazy = build_spec(scale, "lazy", params_checked=True)
+    assert "params_model" in eager.__dict__ and "params_model" not in lazy.__dict__
+    assert lazy.params_schema() == eager.params_schema()
+    assert lazy.validate_params({"factor": 3}) == {"factor": 3.0}
+    with pytest.raises(gv.ParameterError, match="'factor' of lazy.scale"):
+        lazy.check_call((1.0,), {"factor": -1.0})
