@@ -32,7 +32,12 @@ def refuse_discovery(*args, **kwargs):
 
 @pytest.mark.parametrize(
     "command",
-    [("nodes",), ("nodes", "--json"), ("describe", "filters.gaussian"), ("describe", "geometry.warp")],
+    [
+        ("nodes",),
+        ("nodes", "--json"),
+        ("describe", "filters.gaussian"),
+        ("describe", "geometry.warp"),
+    ],
 )
 def test_the_index_prints_what_a_discovery_prints(capsys, monkeypatch, command):
     assert not _plugin_index.index_path().exists()
@@ -159,5 +164,5 @@ def test_a_parameter_model_left_to_first_use_is_the_one_registration_builds():
     assert "params_model" in eager.__dict__ and "params_model" not in lazy.__dict__
     assert lazy.params_schema() == eager.params_schema()
     assert lazy.validate_params({"factor": 3}) == {"factor": 3.0}
-    with pytest.raises(gv.ParameterError, match="'factor' of lazy.scale"):
+    with pytest.raises(gv.ParameterError, match=r"'factor' of lazy\.scale"):
         lazy.check_call((1.0,), {"factor": -1.0})
