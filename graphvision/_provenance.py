@@ -29,6 +29,8 @@ if TYPE_CHECKING:
 
 __all__ = ["describe_run", "file_sha256", "git_state", "package_versions"]
 
+NOT_INSTALLED = "not installed"
+
 
 def file_sha256(path: Path) -> str:
     """SHA-256 of a file's bytes, read in 1 MiB blocks."""
@@ -124,19 +126,19 @@ def _distribution_of(module: str) -> str:
     """``name version`` of the installed distribution that provides top-level ``module``."""
     names = distributions_of(module.partition(".")[0])
     for name in names:
-        try:
-            return f"{name} {metadata.version(name)}"
-        except metadata.PackageNotFoundError:
-            continue
+        if (version := _version(name)) != NOT_INSTALLED:
+            return f"{name} {version}"
     return ""
 
 
 @functools.cache
 def _version(distribution: str) -> str:
+    """The installed version of ``distribution``, read once per process (each read parses
+    its metadata: the 24 built-in families share one distribution)."""
     try:
         return metadata.version(distribution)
     except metadata.PackageNotFoundError:
-        return "not installed"
+        return NOT_INSTALLED
 
 
 def package_versions(registry: Registry) -> dict[str, str]:
