@@ -1,4 +1,4 @@
-"""Cache figures: warm against cold runs of the demo pipeline, and input hashing speed.
+"""Cache figures: warm against cold runs of the demo, input hashing, command start-up.
 
 * Cold: a new process runs ``pipelines/homography.yaml`` with an empty disk
   cache. Warm: another new process runs it again on the same cache (every
@@ -6,6 +6,15 @@
   process start-up included, and as the run record times the run alone.
 * Hashing: :func:`graphvision._cache.content_key` (xxh3-128 over dtype,
   shape and bytes) on arrays of 1 MiB to 256 MiB.
+* Start-up: whole-process wall time of ``graphvision --help``, ``nodes``
+  (with the plugin index, and without: a new cache folder, so the plugins are
+  imported and the index written) and ``validate`` of the demo.
+
+Cold means nothing cached: each cold run gets a new ``GRAPHVISION_CACHE_DIR``
+(results and the plugin index), which its warm run then reuses. Python's own
+bytecode cache is as the environment sets it (``PYTHONDONTWRITEBYTECODE``
+makes every process compile graphvision's and the plugins' modules again);
+the tables say which.
 
 Run: ``python bench/bench_cache.py``.
 """
@@ -13,6 +22,7 @@ Run: ``python bench/bench_cache.py``.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -26,6 +36,16 @@ from graphvision._cache import content_key
 
 ROOT = Path(__file__).parent.parent
 DEMO = ROOT / "pipelines" / "homography.yaml"  # what make demo runs
+
+
+def _environment(cache: Path) -> dict[str, str]:
+    """The environment of a CLI process whose caches (results, plugin index) are in ``cache``."""
+    return {**os.environ, "GRAPHVISION_CACHE_DIR": str(cache)}
+
+
+def _bytecode_note() -> str:
+    written = "not written" if os.environ.get("PYTHONDONTWRITEBYTECODE") else "written"
+    return f"Python bytecode of graphvision and the plugins: {written} (PYTHONDONTWRITEBYTECODE)."
 
 
 def cli_run(cache: Path, out: Path) -> tuple[float, float]:
@@ -46,6 +66,7 @@ def cli_run(cache: Path, out: Path) -> tuple[float, float]:
         ],
         check=True,
         capture_output=True,
+        env=_environment(cache),
     )
     wall = time.perf_counter() - began
     record = json.loads((out / "record.json").read_text())
@@ -64,7 +85,35 @@ def warm_cold(repeats: int = 3) -> list[str]:
     rows.append(f"| cold (empty disk cache) | {cold[0]:.3f} | {cold[1]:.4f} |")
     rows.append(f"| warm (new process, disk cache) | {warm[0]:.3f} | {warm[1]:.4f} |")
     rows.append(f"| warm / cold | {warm[0] / cold[0]:.0%} | {warm[1] / cold[1]:.1%} |")
-    return rows
+    return [*rows, "", _bytecode_note()]
+
+
+def _command_seconds(args: list[str], cache: Path) -> float:
+    began = time.perf_counter()
+    command = [sys.executable, "-m", "graphvision", *args]
+    subprocess.run(command, check=True, capture_output=True, env=_environment(cache))
+    return time.perf_counter() - began
+
+
+def startup(repeats: int = 5) -> list[str]:
+    """Best whole-process wall time of the commands a user waits for before any work."""
+    rows = ["| command | process wall s |", "| --- | ---: |"]
+    with tempfile.TemporaryDirectory() as tmp:
+        cache = Path(tmp) / "cache"
+        commands = {
+            "graphvision --help": ["--help"],
+            "graphvision nodes (plugin index present)": ["nodes"],
+            "graphvision validate pipelines/homography.yaml": ["validate", str(DEMO)],
+        }
+        _command_seconds(["nodes"], cache)  # writes the plugin index
+        for label, args in commands.items():
+            seconds = min(_command_seconds(args, cache) for _ in range(repeats))
+            rows.append(f"| {label} | {seconds:.3f} |")
+        fresh = min(_command_seconds(["nodes"], Path(tmp) / f"new-{i}") for i in range(repeats))
+        rows.append(
+            f"| graphvision nodes (no index: plugins imported, index written) | {fresh:.3f} |"
+        )
+    return [*rows, "", _bytecode_note()]
 
 
 def hashing() -> list[str]:
@@ -96,6 +145,10 @@ def main() -> list[str]:
         "### Hashing graph inputs",
         "",
         *hashing(),
+        "",
+        "### Start-up of commands",
+        "",
+        *startup(),
     ]
 
 

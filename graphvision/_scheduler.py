@@ -144,6 +144,9 @@ def run_tasks(
             dependents[dep].append(name)
 
     finished: queue.SimpleQueue[tuple[str, Future]] = queue.SimpleQueue()
+    # A task run here is the only one running, so nothing else can be finished before
+    # it: the loop takes it next without the queue (nor a callback) on the way.
+    finished_here: list[tuple[str, Future]] = []
     started: set[str] = set()
     blocked: set[str] = set()
     stopping = False
@@ -154,12 +157,15 @@ def run_tasks(
 
     def launch(names: list[str]) -> None:
         nonlocal running
-        run_here = start_inline if running == 0 and len(names) == 1 else None
+        if start_inline is not None and running == 0 and len(names) == 1:
+            started.add(names[0])
+            running += 1
+            finished_here.append((names[0], start_inline(names[0])))
+            return
         for name in names:
             started.add(name)
             running += 1
-            future = run_here(name) if run_here is not None else start(name)
-            future.add_done_callback(report_to_loop(name))
+            start(name).add_done_callback(report_to_loop(name))
 
     def block(name: str) -> None:
         stack = [name]
@@ -171,7 +177,7 @@ def run_tasks(
 
     launch([name for name, count in waiting.items() if count == 0])
     while running:
-        name, future = finished.get()
+        name, future = finished_here.pop() if finished_here else finished.get()
         running -= 1
         if finish(name, future):
             ready = []
