@@ -31,8 +31,8 @@ An index is written only after a discovery in which every entry-point plugin
 loaded (a failing plugin is imported, and its error reported, every time),
 and only if the key is the same after the plugins were imported as before (a
 file edited meanwhile). It is one JSON file per Python environment, next to
-the default cache folder, replaced atomically; an index that cannot be read
-or written is simply not used.
+the default cache folder, named by its key and written atomically; an index
+that cannot be read or written is simply not used.
 """
 
 from __future__ import annotations
@@ -56,6 +56,7 @@ if TYPE_CHECKING:
 __all__ = [
     "ENTRY_POINT_GROUP",
     "environment_key",
+    "has_index",
     "index_path",
     "installed_entry_points",
     "read_index",
@@ -72,8 +73,14 @@ def installed_entry_points() -> list[EntryPoint]:
 
 
 def environment_key(entries: list[EntryPoint]) -> str:
-    """A digest of what discovering ``entries`` depends on (see the module docstring)."""
-    hasher = hashlib.blake2b(digest_size=16)
+    """A digest of what discovering ``entries`` depends on (see the module docstring).
+
+    xxh3-128, as the cache's content keys: a megabyte of plugin sources is
+    hashed in well under a millisecond.
+    """
+    import xxhash
+
+    hasher = xxhash.xxh3_128()
     hasher.update(f"{FORMAT}|{sys.version}|{sys.executable}\n".encode())
     for folder in sys.path[1:]:
         with contextlib.suppress(OSError):
@@ -114,32 +121,55 @@ def _package_files(name: str) -> list[Path]:
     return files
 
 
-def index_path() -> Path:
-    """This Python environment's index file, beside the default cache folder."""
+def index_path(key: str) -> Path:
+    """The index file of ``key`` in this Python environment, beside the default cache folder.
+
+    The key is in the name, so a discovery knows whether the index matches
+    from the file's existence alone, without reading it.
+    """
+    return _index_stem().with_name(f"{_index_stem().name}{key}.json")
+
+
+def _index_stem() -> Path:
     environment = hashlib.blake2b(sys.prefix.encode(), digest_size=4).hexdigest()
     cache = default_cache_dir()
-    return cache.parent / f"{cache.name}-plugin-index-{environment}.json"
+    return cache.parent / f"{cache.name}-plugin-index-{environment}-"
+
+
+def has_index(key: str) -> bool:
+    """True when an index was written under ``key``."""
+    return index_path(key).is_file()
 
 
 def read_index(key: str) -> dict[str, Any] | None:
-    """The nodes of the index written under ``key``, or None (none, another key, unreadable)."""
+    """The nodes of the index written under ``key``, or None.
+
+    An index that cannot be read is removed, so that the discovery that
+    replaces it writes it again.
+    """
+    path = index_path(key)
     try:
-        index = json.loads(index_path().read_text(encoding="utf-8"))
+        index = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return None
     except (OSError, ValueError):
+        index = None
+    nodes = index.get("nodes") if isinstance(index, dict) and index.get("key") == key else None
+    if not isinstance(nodes, dict):
+        with contextlib.suppress(OSError):
+            path.unlink()
         return None
-    if not isinstance(index, dict) or index.get("key") != key:
-        return None
-    nodes = index.get("nodes")
-    return nodes if isinstance(nodes, dict) else None
+    return nodes
 
 
 def write_index(key: str, registry: Registry) -> None:
-    """Record ``registry``'s nodes under ``key`` (quietly nothing if the file cannot be written)."""
+    """Record ``registry``'s nodes under ``key`` and remove this environment's older indexes
+    (quietly nothing if the files cannot be written)."""
     nodes = {
         op: {"summary": spec.summary, "description": spec.describe()}
         for op, spec in sorted(registry.nodes.items())
     }
-    path = index_path()
+    path = index_path(key)
     with contextlib.suppress(OSError, TypeError, ValueError):
         path.parent.mkdir(parents=True, exist_ok=True)
         handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
@@ -150,3 +180,8 @@ def write_index(key: str, registry: Registry) -> None:
         finally:
             with contextlib.suppress(FileNotFoundError):
                 os.remove(temporary)
+        stem = _index_stem()
+        for older in stem.parent.glob(f"{stem.name}*.json"):
+            if older != path:
+                with contextlib.suppress(OSError):
+                    older.unlink()

@@ -28,8 +28,8 @@ from ._fingerprint import note_distribution
 from ._plugin_index import (
     ENTRY_POINT_GROUP,
     environment_key,
+    has_index,
     installed_entry_points,
-    read_index,
     write_index,
 )
 from ._registry import Registry
@@ -55,7 +55,7 @@ def load_entry_points(registry: Registry) -> None:
     fresh = not registry.plugins  # only a registry of these plugins alone is recorded
     entries = installed_entry_points()
     key = environment_key(entries)
-    indexed = read_index(key) is not None
+    indexed = has_index(key)
     names: dict[int, str] = {}  # a distribution's name, parsed once for all its entry points
     for entry in entries:
         if entry.name in registry.plugins:

@@ -26,6 +26,11 @@ def cli(capsys, *args):
     return status, out, err
 
 
+def index_files() -> list[Path]:
+    stem = _plugin_index._index_stem()
+    return sorted(stem.parent.glob(f"{stem.name}*.json"))
+
+
 def refuse_discovery(*args, **kwargs):
     raise AssertionError("plugins were discovered although the index matches")
 
@@ -40,9 +45,9 @@ def refuse_discovery(*args, **kwargs):
     ],
 )
 def test_the_index_prints_what_a_discovery_prints(capsys, monkeypatch, command):
-    assert not _plugin_index.index_path().exists()
+    assert not index_files()
     status, discovered, _ = cli(capsys, *command)  # no index yet: discovers, writes it
-    assert status == 0 and _plugin_index.index_path().exists()
+    assert status == 0 and len(index_files()) == 1
     monkeypatch.setattr("graphvision._plugins.discover", refuse_discovery)
     status, indexed, _ = cli(capsys, *command)
     assert status == 0 and indexed == discovered
@@ -66,10 +71,20 @@ def test_local_plugins_are_always_discovered(capsys):
 
 def test_an_unreadable_index_is_rebuilt(capsys):
     _, first, _ = cli(capsys, "nodes")
-    _plugin_index.index_path().write_text("{not json")
+    [index] = index_files()
+    index.write_text("{not json")
     _, again, _ = cli(capsys, "nodes")
     assert again == first
-    assert _plugin_index.index_path().read_text().startswith('{"key"')
+    assert index_files() == [index] and index.read_text().startswith('{"key"')
+
+
+def test_an_edit_replaces_the_index(capsys, tmp_path, monkeypatch):
+    cli(capsys, "nodes")
+    [first] = index_files()
+    monkeypatch.setattr(_plugin_index, "FORMAT", _plugin_index.FORMAT + 1)  # another key
+    cli(capsys, "nodes")
+    [second] = index_files()
+    assert second != first
 
 
 def _package(root: Path, summary: str) -> Path:
