@@ -34,6 +34,7 @@ checked twice on a run's hot path.
 from __future__ import annotations
 
 import contextlib
+import copy
 import functools
 import importlib
 import inspect
@@ -278,6 +279,11 @@ class NodeSpec:
         return _params_model(self.id, self.param_fields, self.check)
 
     def params_schema(self) -> dict[str, Any]:
+        """The JSON schema of the parameters (a copy: the caller may change it)."""
+        return copy.deepcopy(self._params_schema)
+
+    @cached_property
+    def _params_schema(self) -> dict[str, Any]:
         return self.params_model.model_json_schema()
 
     def validate_params(self, params: dict[str, Any]) -> dict[str, Any]:
