@@ -126,7 +126,11 @@ def output_key(fingerprint: str, input_keys: dict[str, str], port: str) -> str:
     ``fingerprint`` comes from :func:`node_fingerprint`; input keys are taken
     in port order, so the key does not depend on how the graph was written.
     """
-    inputs = "|".join(f"{name}={key}" for name, key in sorted(input_keys.items()))
+    if len(input_keys) == 1:  # most nodes: the same text without sorting (0.45 µs of 1.2)
+        [(name, key)] = input_keys.items()
+        inputs = f"{name}={key}"
+    else:
+        inputs = "|".join([f"{name}={key}" for name, key in sorted(input_keys.items())])
     text = f"{fingerprint}\n{inputs}\n{port}"
     return hashlib.blake2b(text.encode(), digest_size=20).hexdigest()
 

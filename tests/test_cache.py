@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import subprocess
@@ -158,6 +159,16 @@ def test_keys_depend_on_dtype_shape_and_bytes():
         key(port="other"),
     ]
     assert len({base, *changed}) == 7
+
+
+@pytest.mark.parametrize("count", [0, 1, 2, 3])
+def test_an_output_key_is_the_blake2b_of_its_documented_text(count):
+    """Keys stay those of earlier versions (caches on disk stay valid), however many inputs;
+    the text: fingerprint, the inputs as name=key sorted by name and joined by '|', port."""
+    inputs = {name: f"key-{name}" for name in ["mask", "image", "b"][:count]}
+    text = "fp\n" + "|".join(f"{n}={inputs[n]}" for n in sorted(inputs)) + "\nout"
+    expected = hashlib.blake2b(text.encode(), digest_size=20).hexdigest()
+    assert output_key("fp", inputs, "out") == expected
 
 
 def test_two_processes_share_one_cache_directory(tmp_path):
