@@ -18,6 +18,8 @@ from graphvision import _plugin_index
 from graphvision._node import build_spec
 from graphvision.cli import main
 
+from .conftest import TOY
+
 
 def cli(capsys, *args):
     status = main([str(a) for a in args])
@@ -62,8 +64,6 @@ def test_an_unknown_op_is_named_from_the_index_as_from_a_discovery(capsys, monke
 
 
 def test_local_plugins_are_always_discovered(capsys):
-    from .conftest import TOY
-
     cli(capsys, "nodes")  # writes the index
     status, out, _ = cli(capsys, "--plugins", TOY, "nodes")
     assert status == 0 and "toy." in out
