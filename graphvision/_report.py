@@ -33,6 +33,7 @@ from ._compile import CompiledGraph
 from ._errors import OutputFolderError
 from ._html import write_html_report
 from ._ports import PortType, _ScalarPort
+from ._provenance import file_sha256
 from ._registry import Registry
 from ._run import RunRecord, RunResult
 
@@ -147,10 +148,18 @@ def write_run(result: RunResult, directory: Path) -> dict[str, list[str]]:
     directory.mkdir(parents=True, exist_ok=True)
     for left in directory.glob(f"{STAGING}*"):  # from a run killed while writing
         shutil.rmtree(left, ignore_errors=True)
+    kept = _unchanged_outputs(result, directory, owned)
     staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=directory))
     try:
-        files = write_outputs(result.compiled, result.outputs, staging)
+        changed = {name: v for name, v in result.outputs.items() if name not in kept}
+        written = write_outputs(result.compiled, changed, staging)
+        digests = {f: file_sha256(staging / f) for names in written.values() for f in names}
+        previous = _previous_record(directory)
+        for names in kept.values():
+            digests.update({f: previous["file_sha256"][f] for f in names})
+        files = {name: kept.get(name) or written[name] for name in result.outputs}
         result.record.files = files
+        result.record.file_sha256 = digests
         write_report(result.compiled, result.outputs, files, result.record, staging)
         failures = {name: str(error) for name, error in result.failures.items()}
         write_html_report(
@@ -161,16 +170,67 @@ def write_run(result: RunResult, directory: Path) -> dict[str, list[str]]:
             failures=failures,
             intermediates=result.intermediates,
         )
-        new = [name for names in files.values() for name in names] + [REPORT_HTML, REPORT, RECORD]
+        new = [name for names in written.values() for name in names] + [REPORT_HTML, REPORT, RECORD]
         for name in new:
             if (directory / name).exists() and name not in owned:
                 _refuse(directory, name)
-        remove_owned_files(directory, owned - {RECORD})  # the old record stays until replaced
+        unchanged = {name for names in kept.values() for name in names}
+        remove_owned_files(directory, owned - {RECORD} - unchanged)  # the record: replaced last
         for name in new:  # the record last, in one atomic replace
             os.replace(staging / name, directory / name)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return files
+
+
+def _previous_record(directory: Path) -> dict[str, Any]:
+    """The last run's record in ``directory`` as JSON, or ``{}`` if there is none to trust."""
+    try:
+        content = json.loads((directory / RECORD).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return content if isinstance(content, dict) else {}
+
+
+def _unchanged_outputs(result: RunResult, directory: Path, owned: set[str]) -> dict[str, list[str]]:
+    """Outputs whose files the last run in ``directory`` wrote for the same value (the same
+    cache key) and that nobody changed since (their SHA-256 as recorded): kept as they are,
+    so a warm re-run does not encode its images again."""
+    previous = _previous_record(directory)
+    try:
+        old_keys = {
+            (node["name"], port): key
+            for node in previous["nodes"]
+            for port, key in node["keys"].items()
+        }
+        old_files, old_digests = previous["files"], previous["file_sha256"]
+    except (KeyError, TypeError, AttributeError):
+        return {}
+    new_keys = {
+        (node.name, port): key for node in result.record.nodes for port, key in node.keys.items()
+    }
+    kept: dict[str, list[str]] = {}
+    for name, source in result.compiled.outputs.items():
+        files = old_files.get(name) if isinstance(old_files, dict) else None
+        if (
+            name not in result.outputs
+            or not isinstance(files, list)
+            or not files
+            or source not in new_keys
+            or old_keys.get(source) != new_keys[source]
+        ):
+            continue
+        intact = all(
+            isinstance(f, str)
+            and f in owned
+            and (directory / f).is_file()
+            and not (directory / f).is_symlink()
+            and old_digests.get(f) == file_sha256(directory / f)
+            for f in files
+        )
+        if intact:
+            kept[name] = list(files)
+    return kept
 
 
 def write_outputs(
@@ -286,7 +346,6 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
     from ._compile import compile_graph
     from ._pipeline_file import load_pipeline
     from ._plugins import discover
-    from ._provenance import file_sha256
 
     record_path = directory / RECORD
     if not directory.is_dir():
@@ -337,6 +396,17 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
             raise OutputFolderError(
                 f"output '{name}' of the run in {directory} is gone ({', '.join(missing)}): "
                 "run the pipeline again to write it"
+            )
+        edited = [
+            p.name
+            for p in paths
+            if p.name in record.file_sha256 and file_sha256(p) != record.file_sha256[p.name]
+        ]
+        if edited:
+            warnings.warn(
+                f"output '{name}' in {directory} was edited since the run ({', '.join(edited)}): "
+                "the report shows it as it is now",
+                stacklevel=2,
             )
         port = compiled.output_type(name)
         try:

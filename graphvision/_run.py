@@ -118,7 +118,9 @@ class RunRecord:
     used input (``inputs``: what was given, the file's SHA-256 for a path,
     the content key), pipeline ``params`` and command-line ``overrides``, and
     ``versions`` of Python, graphvision, numpy, scipy and each plugin.
-    ``files`` lists the files written for each output (set by the writer).
+    ``files`` lists the files written for each output and ``file_sha256`` their
+    digests (set by the writer: a re-run keeps a file whose value and bytes are
+    unchanged, and ``graphvision report`` warns about a file edited since).
     """
 
     pipeline: str
@@ -136,6 +138,7 @@ class RunRecord:
     overrides: dict[str, Any] = field(default_factory=dict)
     versions: dict[str, str] = field(default_factory=dict)
     files: dict[str, list[str]] = field(default_factory=dict)
+    file_sha256: dict[str, str] = field(default_factory=dict)
 
     def count(self, status: str) -> int:
         return sum(n.status == status for n in self.nodes)

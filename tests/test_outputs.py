@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import graphvision as gv
+from graphvision._provenance import file_sha256
 from graphvision._report import write_outputs, write_report
 from graphvision.cli import main
 
@@ -416,7 +417,7 @@ def _damaged(record: dict, case: int) -> object:
     return damaged
 
 
-@pytest.mark.parametrize("case", range(4 * 19))
+@pytest.mark.parametrize("case", range(4 * 21))
 def test_report_refuses_a_damaged_record_naming_it(capsys, run_folder, tmp_path, case):
     import shutil
 
@@ -460,3 +461,29 @@ def test_report_after_the_pipeline_changed_warns_or_refuses(capsys, run_folder, 
         assert status == 2 and "output 'psnr_noisy_gaussian' was Float and is now" in err, err
     finally:
         pipeline.write_text(original)
+
+
+def test_a_rerun_keeps_output_files_whose_value_and_bytes_are_unchanged(capsys, tmp_path):
+    """Same value (cache key) and untouched bytes (SHA-256 as recorded): the file is kept,
+    not encoded again; an edited file or a new value is written again."""
+    import os
+
+    out = tmp_path / "o"
+    args = ["run", DEMO, "-d", out, "--cache-dir", tmp_path / "cache"]
+    assert run_cli(capsys, *args)[0] == 0
+    record = json.loads((out / "record.json").read_text())
+    picture = out / record["files"]["noisy_gaussian"][0]
+    assert record["file_sha256"][picture.name] == file_sha256(picture)
+    os.utime(picture, (1, 1))  # a time no writer would give it
+    assert run_cli(capsys, *args)[0] == 0
+    assert picture.stat().st_mtime == 1  # kept as it was
+    assert json.loads((out / "record.json").read_text())["file_sha256"] == record["file_sha256"]
+    picture.write_bytes(picture.read_bytes()[:-1])  # edited by hand
+    status, err = run_cli(capsys, "report", out)
+    assert status == 0 and f"output 'noisy_gaussian' in {out} was edited since the run" in err
+    assert run_cli(capsys, *args)[0] == 0
+    assert file_sha256(picture) == record["file_sha256"][picture.name]  # written again
+    os.utime(picture, (1, 1))
+    assert run_cli(capsys, *args, "-s", "noisy_gauss.sigma=0.2")[0] == 0
+    assert picture.stat().st_mtime != 1  # a new value: a new file
+    assert file_sha256(picture) != record["file_sha256"][picture.name]
