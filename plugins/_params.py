@@ -14,7 +14,29 @@ from typing import Annotated
 
 from pydantic import AfterValidator, Field
 
-__all__ = ["Count", "Fraction", "OddSize", "Positive", "Probability", "Seed", "odd"]
+__all__ = [
+    "MAX_EPOCHS",
+    "MAX_ITERATIONS",
+    "Count",
+    "Epochs",
+    "Fraction",
+    "Iterations",
+    "OddSize",
+    "Positive",
+    "Probability",
+    "Seed",
+    "odd",
+]
+
+MAX_EPOCHS = 1000
+"""Most passes over a training set: a NumPy network on this machine takes seconds per
+epoch, so more would run for hours (and the small training sets here converge in tens)."""
+
+MAX_ITERATIONS = 1_000_000
+r"""Most iterations of an iterative fit (RANSAC hypotheses, k-means, SVM, boosting
+rounds). RANSAC's adaptive count :math:`\log(1 - p) / \log(1 - w^s)` is 105,000 for an
+8-point sample at w = 30 % inliers and p = 99.9 % confidence; a million takes about a
+minute, more only makes a run that never ends."""
 
 
 def odd(size: int) -> int:
@@ -38,6 +60,12 @@ Positive = Annotated[float, Field(gt=0)]
 
 Count = Annotated[int, Field(ge=1)]
 """A number of things or iterations: at least 1."""
+
+Epochs = Annotated[int, Field(ge=1, le=MAX_EPOCHS)]
+"""Passes over a training set: 1 to ``MAX_EPOCHS``."""
+
+Iterations = Annotated[int, Field(ge=1, le=MAX_ITERATIONS)]
+"""Most iterations of an iterative fit: 1 to ``MAX_ITERATIONS``."""
 
 OddSize = Annotated[int, Field(ge=1), AfterValidator(odd)]
 """The side of a window centred on a pixel: odd, at least 1."""

@@ -15,7 +15,7 @@ from ._network import (
     build_architecture,
     initial_weights,
 )
-from ._train import accuracy, fit_network, predict, train
+from ._train import accuracy, check_layer_texts, fit_network, predict, train
 
 __all__ = [
     "Architecture",
@@ -25,6 +25,7 @@ __all__ = [
     "NetworkPort",
     "accuracy",
     "build_architecture",
+    "check_layer_texts",
     "digits",
     "fit_network",
     "initial_weights",

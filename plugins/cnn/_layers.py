@@ -34,6 +34,14 @@ _PATTERNS = {
     "dense": re.compile(r"dense (\d+)"),
 }
 LAYER_SYNTAX = "'conv FxK' [pad P], 'relu', 'maxpool S' or 'dense U'"
+MAX_UNITS = 4096
+"""Most filters of a convolution or units of a dense layer: a NumPy network trained on one
+core; 4,096 is the width of AlexNet's and VGG's fully connected layers."""
+MAX_KERNEL = 31
+"""Largest side of a convolution kernel (and largest padding is one less): the im2col
+matrix grows with its square."""
+MAX_POOL = 32
+"""Largest side of a max-pooling cell."""
 
 
 @dataclass(frozen=True)
@@ -105,7 +113,13 @@ class Layer:
 
 def parse_layer(text: str) -> Layer:
     """A layer from its text, e.g. ``"conv 16x3"`` (16 filters 3×3, padded by 1 so that
-    the size is kept), ``"conv 8x5 pad 0"``, ``"relu"``, ``"maxpool 2"``, ``"dense 10"``."""
+    the size is kept), ``"conv 8x5 pad 0"``, ``"relu"``, ``"maxpool 2"``, ``"dense 10"``.
+
+    Numbers are bounded for a NumPy network on one core: at most ``MAX_UNITS`` (4,096)
+    filters or units, kernels up to ``MAX_KERNEL`` (31) with a padding below the kernel,
+    pooling cells up to ``MAX_POOL`` (32); ValueError names the layer and the bound. The
+    whole network's size, which needs the input shape, is bounded when it is built
+    (``build_architecture``)."""
     spec = " ".join(text.split()).lower()
     for kind, pattern in _PATTERNS.items():
         found = pattern.fullmatch(spec)
@@ -114,6 +128,7 @@ def parse_layer(text: str) -> Layer:
         numbers = [int(group) for group in found.groups() if group is not None]
         if any(number < 1 for number in numbers[:2]):
             raise ValueError(f"'{text}': sizes and counts must be at least 1")
+        _check_maxima(text, kind, numbers)
         if kind == "conv":
             pad = numbers[2] if len(numbers) > 2 else numbers[1] // 2
             return Layer(kind, units=numbers[0], size=numbers[1], pad=pad)
@@ -123,6 +138,18 @@ def parse_layer(text: str) -> Layer:
             return Layer(kind, units=numbers[0])
         return Layer(kind)
     raise ValueError(f"'{text}' is not a layer; write {LAYER_SYNTAX}")
+
+
+def _check_maxima(text: str, kind: str, numbers: list[int]) -> None:
+    """ValueError naming the layer's text when one of its numbers exceeds its maximum."""
+    bounds = {
+        "conv": [("filters", MAX_UNITS), ("kernel size", MAX_KERNEL), ("padding", MAX_KERNEL - 1)],
+        "maxpool": [("pooling size", MAX_POOL)],
+        "dense": [("units", MAX_UNITS)],
+    }.get(kind, [])
+    for (what, most), number in zip(bounds, numbers, strict=False):
+        if number > most:
+            raise ValueError(f"'{text}': {what} {number} exceeds the maximum {most}")
 
 
 def _patches(layer: Layer, x: np.ndarray) -> np.ndarray:

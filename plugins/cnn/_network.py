@@ -22,6 +22,9 @@ from graphvision import PortValueError, RecordPort
 from ._layers import Layer, parse_layer
 
 __all__ = [
+    "MAX_BATCH_VALUES",
+    "MAX_SAMPLE_VALUES",
+    "MAX_WEIGHTS",
     "Architecture",
     "Network",
     "NetworkModel",
@@ -29,6 +32,15 @@ __all__ = [
     "build_architecture",
     "initial_weights",
 ]
+
+MAX_WEIGHTS = 10_000_000
+"""Most weights of a network (80 MB in float64, as much again for the gradient and the
+momentum): a NumPy network trained on one core of this machine."""
+MAX_SAMPLE_VALUES = 2**25
+"""Most values of the largest array one input makes in a forward pass (a layer's output
+or a convolution's im2col matrix): 256 MB in float64."""
+MAX_BATCH_VALUES = 2**27
+"""Most values of that array over a training batch: 512 MB in float32."""
 
 
 @dataclass(frozen=True)
@@ -44,6 +56,17 @@ class Architecture:
     def size(self) -> int:
         """The number of weights."""
         return sum(int(np.prod(shape)) for shapes in self.parameter_shapes for shape in shapes)
+
+    @property
+    def sample_values(self) -> int:
+        """The values of the largest array one input makes in a forward pass: a layer's
+        output, or a convolution's im2col matrix (output pixels × C·k·k)."""
+        return max(self.layer_values())
+
+    def layer_values(self) -> list[int]:
+        """Per layer, the values of the largest array it makes for one input."""
+        pairs = zip(self.layers, self.shapes[:-1], strict=True)
+        return [_layer_values(layer, shape) for layer, shape in pairs]
 
     def split(self, weights: np.ndarray) -> list[list[np.ndarray]]:
         """Views of the flat ``weights`` vector, one list of arrays per layer."""
@@ -85,8 +108,10 @@ class Architecture:
 
 def build_architecture(input_shape: tuple[int, ...], layers: list[str]) -> Architecture:
     """Parse ``layers`` and chain their shapes from ``input_shape`` (C, H, W), or raise
-    ValueError naming the layer (its index and text) that does not fit. The first layer
-    computes no gradient with respect to the network's input."""
+    ValueError naming the layer (its index and text) that does not fit, or saying how
+    large the network would be when it holds more than ``MAX_WEIGHTS`` weights or one
+    input makes more than ``MAX_SAMPLE_VALUES`` values. The first layer computes no
+    gradient with respect to the network's input."""
     if not layers:
         raise ValueError("a network needs at least one layer")
     parsed, shapes, parameter_shapes = [], [tuple(input_shape)], []
@@ -101,7 +126,40 @@ def build_architecture(input_shape: tuple[int, ...], layers: list[str]) -> Archi
             ) from None
         parsed.append(layer)
     parsed[0] = dataclasses.replace(parsed[0], input_gradient=False)
-    return Architecture(parsed, shapes, parameter_shapes)
+    architecture = Architecture(parsed, shapes, parameter_shapes)
+    _check_size(architecture, layers)
+    return architecture
+
+
+def _layer_values(layer: Layer, shape: tuple[int, ...]) -> int:
+    """The values of the largest array ``layer`` makes for one input of ``shape``."""
+    out = layer.output_shape(shape)
+    values = int(np.prod(out))
+    if layer.kind == "conv":
+        values = max(values, int(np.prod(out[1:])) * shape[0] * layer.size**2)
+    return max(values, int(np.prod(shape)))
+
+
+def _check_size(architecture: Architecture, texts: list[str]) -> None:
+    """ValueError naming the largest layer when the network holds more than
+    ``MAX_WEIGHTS`` weights, or one input makes more than ``MAX_SAMPLE_VALUES`` values."""
+    weights = [sum(int(np.prod(s)) for s in shapes) for shapes in architecture.parameter_shapes]
+    if sum(weights) > MAX_WEIGHTS:
+        index = int(np.argmax(weights))
+        raise ValueError(
+            f"the network would hold {sum(weights):,} weights ({sum(weights) * 8 / 2**30:.1f} "
+            f"GiB) for its input {architecture.shapes[0]}, at most {MAX_WEIGHTS:,}; layer "
+            f"{index} '{texts[index]}' alone holds {weights[index]:,}: use fewer filters or units"
+        )
+    values = architecture.layer_values()
+    if max(values) > MAX_SAMPLE_VALUES:
+        index = int(np.argmax(values))
+        raise ValueError(
+            f"layer {index} '{texts[index]}' would make {values[index]:,} values "
+            f"({values[index] * 8 / 2**30:.1f} GiB) for one input {architecture.shapes[0]}, "
+            f"at most {MAX_SAMPLE_VALUES:,}: use fewer filters, a smaller kernel or an "
+            "earlier pooling"
+        )
 
 
 def initial_weights(architecture: Architecture, seed: int) -> np.ndarray:

@@ -11,12 +11,19 @@ from pydantic import Field
 
 from graphvision import Float, Table, node
 
-from .._params import Count, Positive, Seed
+from .._params import Count, Epochs, Positive, Seed
 from ..recognition._types import Samples, SampleSet
 from ._blas import one_blas_thread
-from ._network import Architecture, Network, NetworkModel, build_architecture, initial_weights
+from ._network import (
+    MAX_BATCH_VALUES,
+    Architecture,
+    Network,
+    NetworkModel,
+    build_architecture,
+    initial_weights,
+)
 
-__all__ = ["accuracy", "fit_network", "predict", "train"]
+__all__ = ["accuracy", "check_layer_texts", "fit_network", "predict", "train"]
 
 DEFAULT_LAYERS = ["conv 16x3", "relu", "maxpool 2", "conv 32x3", "relu", "maxpool 2", "dense 10"]
 DIVERGENCE_FACTOR = 20.0
@@ -52,13 +59,22 @@ def fit_network(
     loss of each epoch; raises ValueError naming ``what`` and the learning rate when the
     loss diverges (not finite, or above ``DIVERGENCE_FACTOR`` · log K), so no NaN weight
     ever leaves, or when it ends where guessing the class frequencies would
-    (``STUCK_FRACTION``).
+    (``STUCK_FRACTION``), and, before training, when a batch would make more than
+    ``MAX_BATCH_VALUES`` values in the largest layer.
 
     References
     ----------
     B. T. Polyak, "Some methods of speeding up the convergence of iteration methods", 1964;
     Y. LeCun et al., "Efficient BackProp", 1998.
     """
+    batch = min(batch_size, len(images))
+    if batch * architecture.sample_values > MAX_BATCH_VALUES:
+        most = max(MAX_BATCH_VALUES // architecture.sample_values, 1)
+        raise ValueError(
+            f"{what}: a batch of {batch} inputs would make {batch * architecture.sample_values:,} "
+            f"values in the network's largest layer, at most {MAX_BATCH_VALUES:,}: set "
+            f"batch_size to {most} or less"
+        )
     with one_blas_thread():
         return _sgd(
             architecture, images, targets, epochs=epochs, batch_size=batch_size,
@@ -124,17 +140,24 @@ def _sgd(
     return weights.astype(np.float64), np.array(history)
 
 
-def _layers_parse(layers: list[str], **_: object) -> None:
-    """Each layer's text is a layer (their chaining needs the images, so the node checks it)."""
+def check_layer_texts(texts: list[str], name: str = "layers") -> None:
+    """ValueError naming the parameter ``name`` and the layer's index when a text is not a
+    layer or exceeds a layer's maxima (their chaining needs the input shape, so the node
+    checks it)."""
     from ._layers import parse_layer
 
-    if not layers:
-        raise ValueError("layers is empty; give at least one layer, e.g. ['dense 10']")
-    for number, text in enumerate(layers):
+    for number, text in enumerate(texts):
         try:
             parse_layer(text)
         except ValueError as error:
-            raise ValueError(f"layer {number}: {error}") from None
+            raise ValueError(f"{name}: layer {number}: {error}") from None
+
+
+def _layers_parse(layers: list[str], **_: object) -> None:
+    """The layer list is not empty and each text is a layer."""
+    if not layers:
+        raise ValueError("layers is empty; give at least one layer, e.g. ['dense 10']")
+    check_layer_texts(layers)
 
 
 @node("cnn.train", version=1, check=_layers_parse)
@@ -142,7 +165,7 @@ def train(
     train: Samples,
     *,
     layers: list[str] = DEFAULT_LAYERS,
-    epochs: Annotated[int, Field(ge=1, le=1000)] = 15,
+    epochs: Epochs = 15,
     batch_size: Count = 32,
     learning_rate: Positive = 0.05,
     momentum: Annotated[float, Field(ge=0, lt=1)] = 0.9,

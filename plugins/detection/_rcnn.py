@@ -23,8 +23,15 @@ from pydantic import Field
 from graphvision import node
 
 from .._boxes import decode_boxes, encode_boxes, iou_matrix, non_max_suppression
-from .._params import Count, Fraction, Positive, Seed
-from ..cnn import Architecture, Network, NetworkModel, build_architecture, fit_network
+from .._params import Count, Epochs, Fraction, Positive, Seed
+from ..cnn import (
+    Architecture,
+    Network,
+    NetworkModel,
+    build_architecture,
+    check_layer_texts,
+    fit_network,
+)
 from ..cnn._blas import one_blas_thread
 from ..recognition._types import Samples, SampleSet
 from ..synthetic._digit_scenes import Scenes, SceneSet
@@ -329,7 +336,13 @@ def _ridge(features: np.ndarray, targets: np.ndarray, penalty: float) -> np.ndar
     return np.vstack([weights, mean_t - mean_x @ weights])
 
 
-@node("detection.train_head", version=1, check=iou_order)
+def _head_params(**params: Any) -> None:
+    """The IoU thresholds in order (:func:`iou_order`) and each hidden layer a layer."""
+    iou_order(**params)
+    check_layer_texts(params["hidden"], "hidden")
+
+
+@node("detection.train_head", version=1, check=_head_params)
 def train_head(
     backbone: Network,
     scenes: Scenes,
@@ -338,7 +351,7 @@ def train_head(
     feature_layers: Count = 5,
     pool: Annotated[int, Field(ge=1, le=16)] = 4,
     hidden: list[str] = ["dense 64", "relu"],  # noqa: B006 (never mutated)
-    epochs: Count = 30,
+    epochs: Epochs = 30,
     batch_size: Count = 32,
     learning_rate: Positive = 0.02,
     momentum: Annotated[float, Field(ge=0, lt=1)] = 0.9,

@@ -24,7 +24,7 @@ from pydantic import Field
 from graphvision import PortValueError, RecordPort, node
 
 from .._boxes import anchor_boxes, decode_boxes, encode_boxes, iou_matrix, non_max_suppression
-from .._params import Count, Fraction, Positive, Seed
+from .._params import Count, Epochs, Fraction, Positive, Seed
 from ..cnn import Network, build_architecture, fit_network
 from ..cnn._blas import one_blas_thread
 from ..synthetic._digit_scenes import Scenes
@@ -112,7 +112,7 @@ def train_rpn(
     positive_iou: Annotated[float, Field(gt=0, le=1)] = 0.5,
     negative_iou: Fraction = 0.3,
     negatives_per_positive: Positive = 3.0,
-    epochs: Count = 8,
+    epochs: Epochs = 8,
     learning_rate: Positive = 0.02,
     ridge: Annotated[float, Field(ge=0)] = 10.0,
     seed: Seed = 0,

@@ -22,7 +22,7 @@ from graphvision import (
 )
 from graphvision._ports import PortValueError
 
-from .._params import Count, Positive, Probability, Seed
+from .._params import Iterations, Positive, Probability, Seed
 from ..camera import normalise_pixels
 from ..fitting import ransac
 from ..geometry import estimate_homography, transfer_error
@@ -127,7 +127,7 @@ def fundamental(
     *,
     threshold: Positive = 1.0,
     confidence: Probability = 0.999,
-    max_iterations: Count = 2000,
+    max_iterations: Iterations = 2000,
     seed: Seed = 0,
 ) -> FundamentalFit:
     r"""Robust F: RANSAC over 8-point samples scored by Sampson distance, refit on the inliers.
@@ -213,7 +213,7 @@ def essential_from_points(
     *,
     threshold: Positive = 1.0,
     confidence: Probability = 0.999,
-    max_iterations: Count = 2000,
+    max_iterations: Iterations = 2000,
     seed: Seed = 0,
 ) -> EssentialFit:
     r"""E directly from normalised points: :func:`fundamental`'s robust method on

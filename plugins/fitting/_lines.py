@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from graphvision import Array, ArrayPort, Float, Points2D, PortValueError, node
 
-from .._params import Count, Positive, Probability, Seed
+from .._params import Iterations, Positive, Probability, Seed
 from ._ransac import ransac
 
 __all__ = [
@@ -186,7 +186,7 @@ def fit_line_ransac(
     *,
     threshold: Positive = 2.0,
     confidence: Probability = 0.99,
-    max_iterations: Count = 1000,
+    max_iterations: Iterations = 1000,
     seed: Seed = 0,
 ) -> RobustLine:
     """RANSAC line: lines through two random points, scored by inliers within ``threshold``.

@@ -8,7 +8,7 @@ import numpy as np
 
 from graphvision import Float, FloatImage, Homography, Keypoints, Matches, node
 
-from .._params import Count, Positive, Probability, Seed
+from .._params import Count, Iterations, Positive, Probability, Seed
 from ..fitting import ransac
 
 __all__ = [
@@ -128,7 +128,7 @@ def homography_ransac(
     *,
     threshold: Positive = 3.0,
     confidence: Probability = 0.995,
-    max_iterations: Count = 5000,
+    max_iterations: Iterations = 5000,
     refine: bool = True,
     seed: Seed = 0,
 ) -> HomographyFit:

@@ -11,7 +11,7 @@ from pydantic import Field
 
 from graphvision import Table, node
 
-from .._params import Count, Probability
+from .._params import Iterations, Probability
 from ._subspace import check_classes
 from ._types import (
     Cascade,
@@ -100,7 +100,7 @@ def _two_classes(labels: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]
 def adaboost(
     train: Features,
     *,
-    rounds: Count = 100,
+    rounds: Iterations = 100,
 ) -> StumpClassifier:
     r"""Discrete AdaBoost over decision stumps: a strong classifier
     :math:`H(x) = \mathrm{sign}\sum_t \alpha_t h_t(x)` from weak ones that each split the
@@ -207,8 +207,8 @@ def cascade(
     detection_rate: Annotated[float, Field(gt=0, le=1)] = 0.99,
     false_positive_rate: Probability = 0.5,
     target_false_positive_rate: Annotated[float, Field(ge=0, lt=1)] = 0.01,
-    max_stages: Count = 10,
-    max_stumps: Count = 50,
+    max_stages: Iterations = 10,
+    max_stumps: Iterations = 50,
 ) -> Cascade:
     """A Viola–Jones cascade: boosted stages, each cheap enough to reject most negatives
     early, trained one after the other on the positives and the negatives that all

@@ -12,7 +12,7 @@ from pydantic import Field
 
 from graphvision import KeypointSet, node
 
-from .._params import Count, Positive, Seed
+from .._params import Count, Iterations, Positive, Seed
 from ..features import describe_sift
 from ._types import (
     Bags,
@@ -141,7 +141,7 @@ def kmeans(
     bags: Bags,
     *,
     words: Count = 50,
-    iterations: Count = 50,
+    iterations: Iterations = 50,
     max_descriptors: Annotated[int, Field(ge=0)] = 5000,
     seed: Seed = 0,
 ) -> Vocabulary:

@@ -7,7 +7,7 @@ import numpy as np
 
 from graphvision import node
 
-from .._params import Count, Positive
+from .._params import Iterations, Positive
 from ._subspace import check_classes
 from ._types import Features, LinearClassifier, LinearModel
 
@@ -61,7 +61,7 @@ def linear_svm(
     train: Features,
     *,
     C: Positive = 1.0,
-    max_iterations: Count = 1000,
+    max_iterations: Iterations = 1000,
 ) -> LinearClassifier:
     r"""A linear SVM: the hyperplane :math:`w^T x + b = 0` of maximal margin, soft margins
     traded against :math:`\|w\|` by C (squared hinge loss, see :func:`fit_linear_svm`).
