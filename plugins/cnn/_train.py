@@ -150,7 +150,7 @@ def check_layer_texts(texts: list[str], name: str = "layers") -> None:
         try:
             parse_layer(text)
         except ValueError as error:
-            raise ValueError(f"{name}: layer {number}: {error}") from None
+            raise ValueError(f"{name}[{number}]: {error}") from None
 
 
 def _layers_parse(layers: list[str], **_: object) -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Annotated
 
 import numpy as np
-from pydantic import Field
+from pydantic import AfterValidator, Field
 
 from graphvision import Boxes, BoxSet, Float, Image, Table, node
 
@@ -15,6 +15,7 @@ from .._params import Count, Positive, Seed
 from ._selective import SIMILARITIES, ColourSpace, selective_search_boxes
 
 __all__ = [
+    "SimilarityText",
     "anchors",
     "check_scores",
     "propose",
@@ -36,7 +37,7 @@ def check_scores(boxes: BoxSet, what: str) -> None:
 def _similarity_set(text: str) -> tuple[str, ...]:
     measures = tuple(part.strip() for part in text.split("+"))
     unknown = [m for m in measures if m not in SIMILARITIES]
-    if unknown or not measures:
+    if unknown:
         raise ValueError(
             f"similarity set '{text}' names {unknown}; use measures among {list(SIMILARITIES)} "
             "joined by '+'"
@@ -44,13 +45,31 @@ def _similarity_set(text: str) -> tuple[str, ...]:
     return measures
 
 
+def _check_similarity_text(text: str) -> str:
+    """``text`` itself when it names similarity measures joined by '+', else ValueError."""
+    _similarity_set(text)
+    return text
+
+
+SimilarityText = Annotated[str, AfterValidator(_check_similarity_text)]
+"""A similarity set: measures among colour, texture, size, fill joined by '+'."""
+SimilaritySets = Annotated[list[SimilarityText], Field(min_length=1)]
+"""One similarity set at least."""
+ColourSpaces = Annotated[list[ColourSpace], Field(min_length=1)]
+"""One colour space at least."""
+PositiveList = Annotated[list[Positive], Field(min_length=1)]
+"""One positive number at least (Felzenszwalb scales, anchor sizes and ratios)."""
+COUNTS: list[int] = [10, 20, 50, 100, 200, 500, 1000]
+"""The default numbers of proposals of a recall curve."""
+
+
 @node("detection.selective_search", version=1)
 def selective_search(
     image: Image,
     *,
-    colour_spaces: list[ColourSpace] = ["hsv", "lab"],  # noqa: B006 (never mutated)
-    similarities: list[str] = ["colour+texture+size+fill", "texture+size+fill"],  # noqa: B006
-    scales: list[Positive] = [100.0, 300.0],  # noqa: B006
+    colour_spaces: ColourSpaces = ["hsv", "lab"],  # noqa: B006 (never mutated)
+    similarities: SimilaritySets = ["colour+texture+size+fill", "texture+size+fill"],  # noqa: B006
+    scales: PositiveList = [100.0, 300.0],  # noqa: B006
     sigma: Annotated[float, Field(ge=0)] = 0.8,
     max_area: Annotated[float, Field(gt=0, le=1)] = 0.9,
     max_boxes: Annotated[int, Field(ge=0)] = 1000,
@@ -112,7 +131,7 @@ def propose(
     image: np.ndarray,
     *,
     colour_spaces: list[ColourSpace],
-    similarities: list[str],
+    similarities: list[SimilarityText],
     scales: list[float],
     sigma: float,
     max_area: float,
@@ -144,8 +163,8 @@ def anchors(
     image: Image,
     *,
     stride: Count = 16,
-    sizes: list[Positive] = [32.0, 64.0, 128.0],  # noqa: B006
-    ratios: list[Positive] = [0.5, 1.0, 2.0],  # noqa: B006
+    sizes: PositiveList = [32.0, 64.0, 128.0],  # noqa: B006
+    ratios: PositiveList = [0.5, 1.0, 2.0],  # noqa: B006
 ) -> Boxes:
     """Faster R-CNN's anchors over the feature map of stride ``stride`` of an image: at
     each cell centre, one box of area s² per size s and aspect ratio r = h / w.
@@ -242,7 +261,7 @@ def recall_curve(
     truth: Boxes,
     *,
     iou: Annotated[float, Field(gt=0, le=1)] = 0.5,
-    counts: list[Count] = [10, 20, 50, 100, 200, 500, 1000],  # noqa: B006
+    counts: Annotated[list[Count], Field(min_length=1)] = COUNTS,
 ) -> Table:
     """Recall of the first n proposals (in their ranking) for each n of ``counts``.
 

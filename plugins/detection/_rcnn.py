@@ -35,8 +35,8 @@ from ..cnn import (
 from ..cnn._blas import one_blas_thread
 from ..recognition._types import Samples, SampleSet
 from ..synthetic._digit_scenes import Scenes, SceneSet
+from ._proposals import ColourSpaces, PositiveList, SimilaritySets
 from ._roi import pool_rois
-from ._selective import ColourSpace
 from ._types import Detections, DetectionSet, Detector, DetectorModel
 
 __all__ = [
@@ -60,9 +60,9 @@ BACKGROUND = -1
 def scene_proposals(
     scenes: Scenes,
     *,
-    colour_spaces: list[ColourSpace] = ["gray"],  # noqa: B006 (never mutated)
-    similarities: list[str] = ["colour+texture+size+fill", "texture+size+fill"],  # noqa: B006
-    scales: list[Positive] = [50.0],  # noqa: B006
+    colour_spaces: ColourSpaces = ["gray"],  # noqa: B006 (never mutated)
+    similarities: SimilaritySets = ["colour+texture+size+fill", "texture+size+fill"],  # noqa: B006
+    scales: PositiveList = [50.0],  # noqa: B006
     sigma: Annotated[float, Field(ge=0)] = 0.8,
     max_area: Annotated[float, Field(gt=0, le=1)] = 0.5,
     max_boxes: Annotated[int, Field(ge=0)] = 200,

@@ -28,6 +28,7 @@ from .._params import Count, Epochs, Fraction, Positive, Seed
 from ..cnn import Network, build_architecture, fit_network
 from ..cnn._blas import one_blas_thread
 from ..synthetic._digit_scenes import Scenes
+from ._proposals import PositiveList
 from ._rcnn import feature_extractor, feature_map, iou_order
 from ._types import Detections, DetectionSet
 
@@ -107,8 +108,8 @@ def train_rpn(
     scenes: Scenes,
     *,
     feature_layers: Count = 5,
-    sizes: list[Positive] = [16.0, 24.0, 32.0],  # noqa: B006
-    ratios: list[Positive] = [0.7, 1.0, 1.4],  # noqa: B006
+    sizes: PositiveList = [16.0, 24.0, 32.0],  # noqa: B006
+    ratios: PositiveList = [0.7, 1.0, 1.4],  # noqa: B006
     positive_iou: Annotated[float, Field(gt=0, le=1)] = 0.5,
     negative_iou: Fraction = 0.3,
     negatives_per_positive: Positive = 3.0,

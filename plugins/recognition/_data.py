@@ -115,7 +115,7 @@ def _patches(image: np.ndarray, size: int, stride: int) -> np.ndarray:
 @node("recognition.texture_patches", version=1)
 def texture_patches(
     *,
-    textures: tuple[Texture, ...] = ("brick", "grass", "gravel"),
+    textures: Annotated[tuple[Texture, ...], Field(min_length=1)] = ("brick", "grass", "gravel"),
     size: Annotated[int, Field(ge=8, le=256)] = 64,
     stride: Count = 32,
 ) -> Split:
@@ -159,10 +159,22 @@ def face_free_image(name: str) -> np.ndarray:
     return image.mean(axis=2) if image.ndim == 3 else image
 
 
+NEGATIVE_SOURCES: tuple[FaceFree, ...] = (
+    "brick",
+    "grass",
+    "gravel",
+    "coins",
+    "page",
+    "text",
+    "moon",
+)
+"""The face-free images ``recognition.negative_patches`` cuts patches from by default."""
+
+
 @node("recognition.negative_patches", version=1)
 def negative_patches(
     *,
-    images: tuple[FaceFree, ...] = ("brick", "grass", "gravel", "coins", "page", "text", "moon"),
+    images: Annotated[tuple[FaceFree, ...], Field(min_length=1)] = NEGATIVE_SOURCES,
     count: Count = 600,
     size: Annotated[int, Field(ge=4)] = 25,
     min_side: Annotated[int, Field(ge=4)] = 25,

@@ -244,7 +244,7 @@ def sliding_windows(
 def mine_negatives(
     classifier: Classifier,
     *,
-    images: tuple[FaceFree, ...] = HARD_NEGATIVE_SOURCES,
+    images: Annotated[tuple[FaceFree, ...], Field(min_length=1)] = HARD_NEGATIVE_SOURCES,
     count: Count = 400,
     scale_step: Annotated[float, Field(gt=1, le=4)] = 1.25,
     min_scale: Positive = 1.0,

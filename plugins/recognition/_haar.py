@@ -148,7 +148,7 @@ def haar(
     samples: Samples,
     *,
     count: Annotated[int, Field(ge=0)] = 2000,
-    types: tuple[HaarType, ...] = ALL_TYPES,
+    types: Annotated[tuple[HaarType, ...], Field(min_length=1)] = ALL_TYPES,
     seed: Seed = 0,
 ) -> Features:
     """Haar-like features of each sample: differences of sums over adjacent rectangles

@@ -170,6 +170,10 @@ def render_digit_scenes(
     )
 
 
+Digit = Annotated[int, Field(ge=0, le=9)]
+"""A digit class."""
+
+
 @node("synthetic.digit_scenes", version=1)
 def digit_scenes(
     *,
@@ -180,7 +184,7 @@ def digit_scenes(
     max_objects: Annotated[int, Field(ge=0)] = 3,
     min_scale: Annotated[int, Field(ge=8)] = 16,
     max_scale: Annotated[int, Field(ge=8)] = 28,
-    classes: list[Annotated[int, Field(ge=0, le=9)]] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9],  # noqa: B006 (never mutated)
+    classes: Annotated[list[Digit], Field(min_length=1)] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9],  # noqa: B006
     seed: Seed = 0,
 ) -> Scenes:
     """Seeded detection scenes: scikit-learn's 8×8 digits pasted at random positions and

@@ -266,8 +266,8 @@ def test_layers_that_do_not_chain_in_a_pipeline_name_the_node_and_the_layer():
 @pytest.mark.parametrize(
     ("layers", "message"),
     [
-        (["conv 8x3", "relu", "blah 3"], r"layer 2: 'blah 3' is not a layer; write 'conv FxK'"),
-        (["conv 0x3", "dense 10"], r"layer 0: 'conv 0x3': sizes and counts must be at least 1"),
+        (["conv 8x3", "relu", "blah 3"], r"layers\[2\]: 'blah 3' is not a layer; write 'conv FxK'"),
+        (["conv 0x3", "dense 10"], r"layers\[0\]: 'conv 0x3': sizes and counts must be at least 1"),
         ([], r"layers is empty"),
     ],
 )
@@ -288,6 +288,6 @@ def test_a_misspelt_layer_in_a_file_is_named_with_its_line(tmp_path):
     line = next(n for n, row in enumerate(text.splitlines(), 1) if "maxpol" in row)
     with pytest.raises(
         gv.PipelineError,
-        match=rf"nodes.cnn.params at .*typo.yaml:{line}: cnn.train: layer 2: 'maxpol 2' is not",
+        match=rf"nodes.cnn.params at .*typo.yaml:{line}: cnn.train: layers\[2\]: 'maxpol 2' is not",
     ):
         gv.compile_graph(gv.load_pipeline(path), gv.discover())
