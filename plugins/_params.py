@@ -17,9 +17,11 @@ from pydantic import AfterValidator, Field
 __all__ = [
     "MAX_EPOCHS",
     "MAX_ITERATIONS",
+    "MAX_SIDE",
     "Count",
     "Epochs",
     "Fraction",
+    "ImageSide",
     "Iterations",
     "OddSize",
     "Positive",
@@ -37,6 +39,10 @@ r"""Most iterations of an iterative fit (RANSAC hypotheses, k-means, SVM, boosti
 rounds). RANSAC's adaptive count :math:`\log(1 - p) / \log(1 - w^s)` is 105,000 for an
 8-point sample at w = 30 % inliers and p = 99.9 % confidence; a million takes about a
 minute, more only makes a run that never ends."""
+
+MAX_SIDE = 8192
+"""Largest side of an image a node makes (a warp's output, a rendered camera view): a
+float64 8192 × 8192 colour image is 1.5 GiB."""
 
 
 def odd(size: int) -> int:
@@ -66,6 +72,9 @@ Epochs = Annotated[int, Field(ge=1, le=MAX_EPOCHS)]
 
 Iterations = Annotated[int, Field(ge=1, le=MAX_ITERATIONS)]
 """Most iterations of an iterative fit: 1 to ``MAX_ITERATIONS``."""
+
+ImageSide = Annotated[int, Field(ge=1, le=MAX_SIDE)]
+"""The side of an image a node makes, in pixels: 1 to ``MAX_SIDE``."""
 
 OddSize = Annotated[int, Field(ge=1), AfterValidator(odd)]
 """The side of a window centred on a pixel: odd, at least 1."""

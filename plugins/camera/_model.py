@@ -6,7 +6,7 @@ import numpy as np
 
 from graphvision import Array, Camera, ImageT, PinholeCamera, Points2D, Points3D, node
 
-from .._params import Count, Positive
+from .._params import ImageSide, Positive
 from ._projection import (
     decompose_projection,
     distort_pixels,
@@ -55,8 +55,8 @@ def pinhole(
     k3: float = 0.0,
     rotation: Vector3 = (0.0, 0.0, 0.0),
     centre: Vector3 = (0.0, 0.0, 0.0),
-    width: Count = 640,
-    height: Count = 480,
+    width: ImageSide = 640,
+    height: ImageSide = 480,
 ) -> Camera:
     r"""A pinhole camera from its 11 degrees of freedom and its lens distortion.
 

@@ -162,7 +162,7 @@ def propose(
 def anchors(
     image: Image,
     *,
-    stride: Count = 16,
+    stride: Annotated[int, Field(ge=1, le=1024)] = 16,
     sizes: PositiveList = [32.0, 64.0, 128.0],  # noqa: B006
     ratios: PositiveList = [0.5, 1.0, 2.0],  # noqa: B006
 ) -> Boxes:

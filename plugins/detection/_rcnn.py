@@ -215,10 +215,10 @@ def roi_samples(
     scenes: Scenes,
     proposals: Detections,
     *,
-    size: Annotated[int, Field(ge=4)] = 20,
+    size: Annotated[int, Field(ge=4, le=64)] = 20,
     positive_iou: Annotated[float, Field(gt=0, le=1)] = 0.5,
     negative_iou: Fraction = 0.3,
-    jitter: Annotated[int, Field(ge=0)] = 4,
+    jitter: Annotated[int, Field(ge=0, le=32)] = 4,
     negatives_per_positive: Positive = 2.0,
     seed: Seed = 0,
 ) -> Samples:
@@ -359,7 +359,7 @@ def train_head(
     ridge: Annotated[float, Field(ge=0)] = 10.0,
     positive_iou: Annotated[float, Field(gt=0, le=1)] = 0.5,
     negative_iou: Fraction = 0.3,
-    jitter: Annotated[int, Field(ge=0)] = 4,
+    jitter: Annotated[int, Field(ge=0, le=32)] = 4,
     negatives_per_positive: Positive = 2.0,
     seed: Seed = 0,
 ) -> Detector:

@@ -12,11 +12,12 @@ the crop.
 
 from __future__ import annotations
 
+from typing import Annotated
+
 import numpy as np
+from pydantic import Field
 
 from graphvision import Array, Boxes, node
-
-from .._params import Count
 
 __all__ = ["feature_rois", "pool_rois", "roi_pool"]
 
@@ -62,8 +63,8 @@ def roi_pool(
     features: Array,
     boxes: Boxes,
     *,
-    size: Count = 4,
-    stride: Count = 1,
+    size: Annotated[int, Field(ge=1, le=16)] = 4,
+    stride: Annotated[int, Field(ge=1, le=64)] = 1,
 ) -> Array:
     """Fast R-CNN's ROI pooling: each box of a feature map max-pooled into ``size`` ×
     ``size`` cells.

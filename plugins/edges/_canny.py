@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, FloatImage, GrayImage, node
 
+from .._checks import ordered
 from ._derivatives import EdgeBoundary, gradient_images
 
 __all__ = ["Canny", "canny", "canny_edges", "hysteresis", "non_maximum_suppression"]
@@ -73,7 +74,7 @@ class Canny(NamedTuple):
 Threshold = Annotated[float, Field(ge=0, description="Absolute magnitude or quantile in [0, 1].")]
 
 
-@node("edges.canny", version=2)
+@node("edges.canny", version=2, check=ordered(("low", "high")))
 def canny(
     image: GrayImage,
     *,
@@ -125,8 +126,6 @@ def canny(
        TPAMI 8(6), 1986.
     .. [2] Szeliski (2022), section 7.2.1.
     """
-    if low > high:
-        raise ValueError(f"low threshold ({low}) must not exceed high threshold ({high})")
     if thresholds == "quantile" and high > 1:
         raise ValueError(f"quantile thresholds lie in [0, 1], got high={high}")
     edges, magnitude = canny_edges(image, sigma, low, high, thresholds, boundary)

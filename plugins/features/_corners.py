@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import GrayImage, Keypoints, KeypointSet, node
 
+from .._checks import ordered
 from .._params import Count, Fraction
 
 __all__ = ["harris", "harris_response", "hessian", "log_blobs"]
@@ -160,7 +161,7 @@ def hessian(
     return _peaks(response, min_distance, threshold_rel, max_keypoints, sigma)
 
 
-@node("features.log", version=1)
+@node("features.log", version=1, check=ordered(("min_sigma", "max_sigma")))
 def log_blobs(
     image: GrayImage,
     *,

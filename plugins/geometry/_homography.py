@@ -8,7 +8,7 @@ import numpy as np
 
 from graphvision import Float, FloatImage, Homography, Keypoints, Matches, node
 
-from .._params import Count, Iterations, Positive, Probability, Seed
+from .._params import ImageSide, Iterations, Positive, Probability, Seed
 from ..fitting import ransac
 
 __all__ = [
@@ -205,8 +205,8 @@ def corner_error(
     truth: Homography,
     image: FloatImage | None = None,
     *,
-    width: Count | None = None,
-    height: Count | None = None,
+    width: ImageSide | None = None,
+    height: ImageSide | None = None,
 ) -> Float:
     """Mean distance in pixels between the image corners mapped by ``estimated`` and by ``truth``.
 

@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, ColorImage, Homography, Image, node
 
+from .._params import MAX_SIDE
 from ._homography import apply_homography
 
 __all__ = ["sample_homography", "stitch", "warp"]
@@ -59,8 +60,8 @@ def warp(
     image: Image,
     homography: Homography,
     *,
-    width: Annotated[int, Field(ge=0)] = 0,
-    height: Annotated[int, Field(ge=0)] = 0,
+    width: Annotated[int, Field(ge=0, le=MAX_SIDE)] = 0,
+    height: Annotated[int, Field(ge=0, le=MAX_SIDE)] = 0,
 ) -> Warped:
     r"""Perspective warp: output pixel :math:`x'` takes input :math:`H^{-1} x'`, bilinearly.
 

@@ -10,6 +10,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, FloatImage, GrayImage, Int, node
 
+from .._checks import ordered
 from .._params import Count, Positive
 from ..edges import gradient_images
 from ._peaks import local_maxima, parabolic_offset, suppress_close
@@ -54,7 +55,7 @@ class HoughCircles(NamedTuple):
     accumulator: FloatImage
 
 
-@node("hough.circles", version=1)
+@node("hough.circles", version=1, check=ordered(("min_radius", "max_radius")))
 def hough_circles(
     edges: BinaryImage,
     image: GrayImage,
@@ -121,8 +122,6 @@ def hough_circles(
     """
     from .._separable import smooth_gaussian
 
-    if min_radius > max_radius:
-        raise ValueError(f"min_radius ({min_radius}) must not exceed max_radius ({max_radius})")
     if image.shape != edges.shape:
         raise ValueError(
             f"edges and image must have the same size, got {edges.shape} and {image.shape}"

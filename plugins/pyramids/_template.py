@@ -10,6 +10,7 @@ from pydantic import Field
 
 from graphvision import Array, ColorImage, Float, FloatImage, GrayImage, Image, Points2D, node
 
+from .._checks import ordered
 from .._draw import colour_canvas
 from .._params import Count, Positive
 from ..hough import local_maxima, quadratic_peak_2d, suppress_close
@@ -158,7 +159,7 @@ class MultiscaleMatch(NamedTuple):
     score: Float
 
 
-@node("pyramids.match_multiscale", version=1)
+@node("pyramids.match_multiscale", version=1, check=ordered(("min_scale", "max_scale")))
 def match_multiscale(
     image: GrayImage,
     template: GrayImage,
@@ -198,8 +199,6 @@ def match_multiscale(
 
     from ..hough import parabolic_offset
 
-    if min_scale > max_scale:
-        raise ValueError(f"min_scale ({min_scale}) must not exceed max_scale ({max_scale})")
     scales = np.geomspace(min_scale, max_scale, steps)
     h, w = template.shape
     results: list[tuple[float, int, int, np.ndarray]] = []
@@ -247,7 +246,7 @@ def sample_template(
     *,
     x: Annotated[int, Field(ge=0)] = 0,
     y: Annotated[int, Field(ge=0)] = 0,
-    size: Annotated[int, Field(ge=3)] = 48,
+    size: Annotated[int, Field(ge=3, le=1024)] = 48,
     factor: Annotated[float, Field(gt=0.05, le=20)] = 0.5,
 ) -> SampledTemplate:
     """A template with its truth: the ``size``² patch at top-left ``(x, y)``, resized by ``factor``.

@@ -140,9 +140,9 @@ def fit_kmeans(points: np.ndarray, k: int, iterations: int, seed: int) -> np.nda
 def kmeans(
     bags: Bags,
     *,
-    words: Count = 50,
+    words: Annotated[int, Field(ge=1, le=4096)] = 50,
     iterations: Iterations = 50,
-    max_descriptors: Annotated[int, Field(ge=0)] = 5000,
+    max_descriptors: Annotated[int, Field(ge=0, le=1_000_000)] = 5000,
     seed: Seed = 0,
 ) -> Vocabulary:
     """A vocabulary of visual words: the k-means centres of the training descriptors

@@ -11,7 +11,7 @@ from pydantic import Field
 from graphvision import node
 
 from .._checks import to_float_image
-from .._params import Count, Probability, Seed
+from .._params import MAX_SIDE, Probability, Seed
 from ._types import Features, FeatureSet, Samples, SampleSet
 
 __all__ = [
@@ -117,7 +117,7 @@ def texture_patches(
     *,
     textures: Annotated[tuple[Texture, ...], Field(min_length=1)] = ("brick", "grass", "gravel"),
     size: Annotated[int, Field(ge=8, le=256)] = 64,
-    stride: Count = 32,
+    stride: Annotated[int, Field(ge=1, le=MAX_SIDE)] = 32,
 ) -> Split:
     """Square patches of scikit-image's textures, the left half of each image for training
     and the right half for testing; the label is the texture's index in ``textures``.
@@ -175,9 +175,9 @@ NEGATIVE_SOURCES: tuple[FaceFree, ...] = (
 def negative_patches(
     *,
     images: Annotated[tuple[FaceFree, ...], Field(min_length=1)] = NEGATIVE_SOURCES,
-    count: Count = 600,
-    size: Annotated[int, Field(ge=4)] = 25,
-    min_side: Annotated[int, Field(ge=4)] = 25,
+    count: Annotated[int, Field(ge=1, le=100_000)] = 600,
+    size: Annotated[int, Field(ge=4, le=256)] = 25,
+    min_side: Annotated[int, Field(ge=4, le=MAX_SIDE)] = 25,
     seed: Seed = 0,
 ) -> Samples:
     """Negatives for a detector: random squares (side ``min_side`` to a third of the image)
@@ -235,7 +235,7 @@ def combine(a: Samples, b: Samples) -> Samples:
 def augment(
     samples: Samples,
     *,
-    copies: Annotated[int, Field(ge=0)] = 4,
+    copies: Annotated[int, Field(ge=0, le=100)] = 4,
     shift: Annotated[float, Field(ge=0)] = 1.5,
     scale: Annotated[float, Field(ge=0, lt=1)] = 0.08,
     angle: Annotated[float, Field(ge=0, le=180)] = 8.0,

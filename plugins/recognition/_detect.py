@@ -22,6 +22,7 @@ from graphvision import (
 )
 
 from .._boxes import iou_matrix, non_max_suppression
+from .._checks import ordered
 from .._draw import colour_canvas
 from .._params import Count, Fraction, Positive
 from ._data import NON_FACE, FaceFree, face_free_image, pixel_features
@@ -154,7 +155,7 @@ def _pyramid(
         scale *= scale_step
 
 
-@node("recognition.detect", version=1)
+@node("recognition.detect", version=1, check=ordered(("min_scale", "max_scale")))
 def detect(
     image: GrayImage,
     classifier: Classifier,
@@ -240,12 +241,12 @@ def sliding_windows(
     return np.concatenate(found_boxes), np.concatenate(found_scores).astype(np.float64)
 
 
-@node("recognition.mine_negatives", version=1)
+@node("recognition.mine_negatives", version=1, check=ordered(("min_scale", "max_scale")))
 def mine_negatives(
     classifier: Classifier,
     *,
     images: Annotated[tuple[FaceFree, ...], Field(min_length=1)] = HARD_NEGATIVE_SOURCES,
-    count: Count = 400,
+    count: Annotated[int, Field(ge=1, le=100_000)] = 400,
     scale_step: Annotated[float, Field(gt=1, le=4)] = 1.25,
     min_scale: Positive = 1.0,
     max_scale: Positive = 16.0,
@@ -299,7 +300,7 @@ def _score(classifier: ClassifierModel | SubspaceModel, features: np.ndarray) ->
     return np.asarray(classifier.decision(features), np.float64)
 
 
-@node("recognition.detect_subspace", version=1)
+@node("recognition.detect_subspace", version=1, check=ordered(("min_scale", "max_scale")))
 def detect_subspace(
     image: GrayImage,
     subspace: Subspace,

@@ -147,7 +147,7 @@ def sample_haar_features(
 def haar(
     samples: Samples,
     *,
-    count: Annotated[int, Field(ge=0)] = 2000,
+    count: Annotated[int, Field(ge=0, le=100_000)] = 2000,
     types: Annotated[tuple[HaarType, ...], Field(min_length=1)] = ALL_TYPES,
     seed: Seed = 0,
 ) -> Features:

@@ -10,7 +10,7 @@ from pydantic import AfterValidator, Field
 
 from graphvision import GrayImage, node
 
-from .._params import Count, odd
+from .._params import odd
 from ._cost import Cost, cost_volume, maximum_cost
 from ._ports import Disparity
 
@@ -85,7 +85,7 @@ def block_match(
     right: GrayImage,
     *,
     min_disparity: int = 0,
-    num_disparities: Count = 64,
+    num_disparities: Annotated[int, Field(ge=1, le=1024)] = 64,
     window: Window = 9,
     cost: Cost = "zncc",
     uniqueness: Annotated[float, Field(ge=0)] = 0.2,
@@ -149,7 +149,7 @@ def sgm(
     right: GrayImage,
     *,
     min_disparity: int = 0,
-    num_disparities: Count = 64,
+    num_disparities: Annotated[int, Field(ge=1, le=1024)] = 64,
     window: Window = 7,
     cost: Cost = "census",
     p1: Annotated[float, Field(ge=0)] = 8.0,

@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import ColorImage, Points3D, node
 
+from .._checks import ordered
 from ._ports import Disparity
 
 __all__ = ["colour_map", "draw_disparity", "draw_point_cloud"]
@@ -50,7 +51,7 @@ def colour_map(
     return rgb
 
 
-@node("stereo.draw_disparity", version=1)
+@node("stereo.draw_disparity", version=1, check=ordered(("low", "high"), strict=True))
 def draw_disparity(
     disparity: Disparity, *, low: float | None = None, high: float | None = None
 ) -> ColorImage:

@@ -6,12 +6,13 @@ import numpy as np
 
 from graphvision import FloatImage, Image, node
 
+from .._checks import ordered
 from .._params import Positive
 
 __all__ = ["depth_plane"]
 
 
-@node("synthetic.depth_plane", version=1)
+@node("synthetic.depth_plane", version=1, check=ordered(("near", "far")))
 def depth_plane(
     image: Image,
     *,

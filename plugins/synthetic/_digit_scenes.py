@@ -22,6 +22,7 @@ from pydantic import Field
 from graphvision import PortValueError, RecordPort, node
 
 from .._boxes import check_boxes
+from .._checks import ordered
 from .._params import Seed
 
 __all__ = ["SceneSet", "Scenes", "ScenesPort", "digit_scenes", "render_digit_scenes"]
@@ -174,7 +175,11 @@ Digit = Annotated[int, Field(ge=0, le=9)]
 """A digit class."""
 
 
-@node("synthetic.digit_scenes", version=1)
+@node(
+    "synthetic.digit_scenes",
+    version=1,
+    check=ordered(("min_objects", "max_objects"), ("min_scale", "max_scale")),
+)
 def digit_scenes(
     *,
     split: Literal["train", "test"] = "train",
@@ -220,10 +225,10 @@ def digit_scenes(
     from ..cnn._digits import load_digits_images
     from ..recognition._data import stratified_split
 
-    if min_objects > max_objects or min_scale > max_scale or max_scale > size:
+    if max_scale > size:
         raise ValueError(
-            "need min_objects ≤ max_objects and min_scale ≤ max_scale ≤ size, got "
-            f"objects {min_objects}..{max_objects}, scales {min_scale}..{max_scale}, size {size}"
+            f"max_scale ({max_scale}) must be at most the scene's size ({size}): a digit is "
+            "pasted whole"
         )
     images, labels = load_digits_images()
     train, test = stratified_split(labels, 0.2, 0)

@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import Homography, ImageT, node
 
+from .._checks import ordered
 from .._params import Fraction, Positive, Seed
 from ..geometry import sample_homography
 
@@ -45,7 +46,7 @@ class RandomWarp(NamedTuple, Generic[ImageT]):
     homography: Homography
 
 
-@node("synthetic.random_warp", version=1)
+@node("synthetic.random_warp", version=1, check=ordered(("min_scale", "max_scale")))
 def random_warp(
     image: ImageT,
     *,
@@ -79,8 +80,6 @@ def random_warp(
     image : the warped image
     homography : the true homography, mapping ``image`` coordinates to the warped ones
     """
-    if min_scale > max_scale:
-        raise ValueError(f"min_scale ({min_scale}) must not exceed max_scale ({max_scale})")
     rng = np.random.default_rng(seed)
     h = random_homography(image.shape[:2], rng, max_rotation, (min_scale, max_scale), perspective)
     warped, _ = sample_homography(image, np.linalg.inv(h), image.shape[:2])

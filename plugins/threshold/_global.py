@@ -9,6 +9,7 @@ from pydantic import Field
 
 from graphvision import Array, BinaryImage, Float, GrayImage, LabelImage, node
 
+from .._checks import ordered
 from .._params import Fraction
 
 __all__ = ["ght", "histogram", "manual", "multi_otsu", "otsu", "split_scores"]
@@ -101,7 +102,7 @@ def _best_split(scores: np.ndarray, centres: np.ndarray) -> float:
     return float(np.mean(centres[:-1][scores == scores.max()]))
 
 
-@node("threshold.manual", version=1)
+@node("threshold.manual", version=1, check=ordered(("low", "high"), strict=True))
 def manual(
     image: GrayImage,
     *,

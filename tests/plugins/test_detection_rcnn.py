@@ -156,8 +156,12 @@ def test_digit_scenes_hold_their_digits_in_disjoint_boxes():
 
 
 def test_digit_scenes_refuse_impossible_settings():
-    with pytest.raises(ValueError, match="min_scale ≤ max_scale ≤ size"):
+    with pytest.raises(
+        ValueError, match=r"max_scale \(28\) must be at most the scene's size \(20\)"
+    ):
         digit_scenes(size=20, min_scale=16, max_scale=28)
+    with pytest.raises(ValueError, match=r"min_objects \(3\) must be at most max_objects \(2\)"):
+        digit_scenes(min_objects=3, max_objects=2)
 
 
 # --- a small trained detector for bad input -----------------------------------------
