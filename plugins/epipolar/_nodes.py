@@ -173,9 +173,14 @@ def robust_fundamental(
     max_iterations: int = 2000,
     seed: int = 0,
     homography_threshold: float | None = None,
+    *,
+    what: str = "the fundamental matrix",
+    pixel_threshold: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """F and its inlier mask by :func:`fundamental`'s method (``a``, ``b`` in any units;
-    ``homography_threshold`` defaults to twice ``threshold``)."""
+    ``homography_threshold`` defaults to twice ``threshold``). ValueError naming ``what``
+    and the threshold (``pixel_threshold`` when given: the user's value before a change of
+    units) when fewer than 8 correspondences are inliers."""
     found = ransac(
         len(a),
         8,
@@ -192,6 +197,7 @@ def robust_fundamental(
             "no fundamental matrix: every sample of 8 correspondences was degenerate "
             "(points on a line or a plane seen without noise)"
         )
+    found.require_support(8, threshold if pixel_threshold is None else pixel_threshold, what)
     inliers = found.inliers
     _refuse_a_homography(a[inliers], b[inliers], threshold, seed)
     return refine_fundamental(found.model, a[inliers], b[inliers]), inliers
@@ -248,7 +254,10 @@ def essential_from_points(
     _pairs(a, b, 8, "the essential matrix from points")
     focal = float(np.mean([camera_a.K[0, 0], camera_a.K[1, 1], camera_b.K[0, 0], camera_b.K[1, 1]]))
     na, nb = normalise_pixels(a, camera_a.K), normalise_pixels(b, camera_b.K)
-    E, inliers = robust_fundamental(na, nb, threshold / focal, confidence, max_iterations, seed)
+    E, inliers = robust_fundamental(
+        na, nb, threshold / focal, confidence, max_iterations, seed,
+        what="the essential matrix", pixel_threshold=threshold,
+    )  # fmt: skip
     E = essential_from_fundamental(E, np.eye(3), np.eye(3))
     return EssentialFit(E, int(inliers.sum()), a[inliers], b[inliers])
 

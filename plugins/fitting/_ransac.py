@@ -23,9 +23,10 @@ def ransac_iterations(outlier_ratio: float, sample_size: int, confidence: float)
     good = (1.0 - outlier_ratio) ** sample_size
     if good >= 1.0:
         return 1
-    if good <= 0.0:
+    miss = math.log1p(-good)  # log(1 - good) without rounding 1 - 1e-18 to 1
+    if miss == 0.0:
         return 10**9
-    return math.ceil(math.log(1.0 - confidence) / math.log(1.0 - good))
+    return math.ceil(math.log(1.0 - confidence) / miss)
 
 
 @dataclass(frozen=True)
@@ -35,6 +36,19 @@ class RansacResult:
     model: Any
     inliers: np.ndarray
     iterations: int
+
+    def require_support(self, sample_size: int, threshold: float, what: str) -> None:
+        """ValueError naming ``threshold`` when the model has fewer inliers than a minimal
+        sample of ``sample_size`` (after the refit, which may lose its sample's points): it
+        is then fitted to noise or to nothing, and every figure computed from its inliers
+        (an RMS, a pose) would be meaningless."""
+        found = int(self.inliers.sum()) if self.model is not None else 0
+        if found < sample_size:
+            raise ValueError(
+                f"{what}: only {found} of {len(self.inliers)} points lie within "
+                f"threshold={threshold:g} of the best model, fewer than the {sample_size} of "
+                "a minimal sample: raise the threshold, or the data has no such model"
+            )
 
 
 def ransac(

@@ -198,8 +198,26 @@ def test_refinements_without_redundancy_return_their_start():
     np.testing.assert_allclose(same_t, t / np.linalg.norm(t))
 
 
-@pytest.mark.parametrize("count", [9, 10, 11])
+@pytest.mark.parametrize("count", [10, 11])
 def test_two_view_runs_on_a_handful_of_points(count):
     graph = gv.load_pipeline(PIPELINE)
     outputs = gv.run(graph, overrides={"scene.count": count}, cache=None).outputs
     assert np.isfinite(outputs["rotation_error_deg"])
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        {"scene.count": 9},  # 8 points seen by both cameras, 6 within 1.5 px of the best F
+        {"F.threshold": 1e-12},  # no correspondence fits any F that closely
+        {"scene.noise": 1e6},  # no structure left: 2 inliers (was a ZeroDivisionError)
+    ],
+)
+def test_a_fundamental_matrix_with_fewer_inliers_than_a_sample_is_refused(overrides):
+    graph = gv.load_pipeline(PIPELINE)
+    message = (
+        r"node 'F' \(op epipolar.fundamental\) failed: .*the fundamental matrix: only \d+ of "
+        r"\d+ points lie within threshold=[0-9.e-]+ of the best model, fewer than the 8"
+    )
+    with pytest.raises(gv.RunError, match=message):
+        gv.run(graph, outputs=["sampson_rms"], overrides=overrides, cache=None)
