@@ -37,6 +37,7 @@ __all__ = [
     "RegionProposerModel",
     "RegionProposerPort",
     "cell_features",
+    "check_anchors_fit",
     "rpn_proposals",
     "train_rpn",
 ]
@@ -94,6 +95,24 @@ def cell_features(maps: np.ndarray) -> np.ndarray:
     windows = sliding_window_view(padded, (3, 3), axis=(1, 2))  # (C, h, w, 3, 3)
     channels, rows, cols = maps.shape
     return windows.transpose(1, 2, 0, 3, 4).reshape(rows * cols, channels * 9)
+
+
+def check_anchors_fit(
+    sizes: list[float], ratios: list[float], image_shape: tuple[int, ...]
+) -> None:
+    r"""ValueError naming the anchor size and ratio whose box (:math:`w = s / \sqrt{r}`,
+    :math:`h = s \sqrt{r}`) is larger than the scenes in both directions: such an anchor
+    overlaps every true box by little more than the box's share of the scene, so none of
+    its anchors can be an object and its objectness cannot be learned."""
+    height, width = image_shape[:2]
+    for size in sizes:
+        for ratio in ratios:
+            w, h = size / np.sqrt(ratio), size * np.sqrt(ratio)
+            if w > width and h > height:
+                raise ValueError(
+                    f"anchor size {size:g} with ratio {ratio:g} is a {w:.0f}×{h:.0f} box, "
+                    f"larger than the {width}×{height} scenes: give sizes smaller than the scenes"
+                )
 
 
 def _scene_anchors(maps: np.ndarray, stride: int, shapes: dict) -> np.ndarray:
@@ -161,6 +180,7 @@ def train_rpn(
     """
     from ._rcnn import _ridge
 
+    check_anchors_fit(sizes, ratios, scenes.images.shape[1:])
     layers, weights, stride = feature_extractor(backbone, feature_layers)
     shapes = {"sizes": list(sizes), "ratios": list(ratios)}
     count = len(sizes) * len(ratios)

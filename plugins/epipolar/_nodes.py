@@ -493,8 +493,14 @@ def pose_error(moved: Camera, truth_a: Camera, truth_b: Camera) -> PoseError:
     moved : Camera
         Estimated camera b relative to a (``epipolar.relative_pose``).
     truth_a, truth_b : Camera
-        The true cameras.
+        The true cameras; at the same centre (a zero baseline: no translation direction
+        to compare with) they are refused.
     """
+    if np.linalg.norm(truth_a.C - truth_b.C) < 1e-12:
+        raise ValueError(
+            "truth_a and truth_b have the same centre: a zero baseline has no translation "
+            "direction to compare with (and two views from one centre determine no pose)"
+        )
     R_true = truth_b.R @ truth_a.R.T
     t_true = truth_b.R @ (truth_a.C - truth_b.C)
     cos_r = np.clip((np.trace(moved.R @ R_true.T) - 1) / 2, -1.0, 1.0)

@@ -63,14 +63,28 @@ def stratified_split(
     labels: np.ndarray, test_fraction: float, seed: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """Indices (train, test): ``round(test_fraction · n_c)`` random members of each class c
-    go to the test side, the rest to training (seeded, sorted)."""
+    go to the test side, the rest to training (seeded, sorted). ValueError naming
+    ``test_fraction`` when it leaves a class without a training sample (a classifier
+    cannot learn it) or the test side empty (nothing to measure)."""
     rng = np.random.default_rng(seed)
     train, test = [], []
     for label in np.unique(labels):
         members = rng.permutation(np.flatnonzero(labels == label))
         held = int(round(test_fraction * len(members)))
+        if held == len(members):
+            raise ValueError(
+                f"test_fraction={test_fraction:g} holds out all {len(members)} samples of class "
+                f"{label}, leaving it no training sample: use a test_fraction below "
+                f"{(len(members) - 0.5) / len(members):.3g}"
+            )
         test.append(members[:held])
         train.append(members[held:])
+    if not sum(len(part) for part in test):
+        largest = max(len(part) for part in train)
+        raise ValueError(
+            f"test_fraction={test_fraction:g} holds out no sample of any class: use a "
+            f"test_fraction above {0.5 / largest:.3g}"
+        )
     return np.sort(np.concatenate(train)), np.sort(np.concatenate(test))
 
 
