@@ -197,7 +197,8 @@ def robust_fundamental(
             "no fundamental matrix: every sample of 8 correspondences was degenerate "
             "(points on a line or a plane seen without noise)"
         )
-    found.require_support(8, threshold if pixel_threshold is None else pixel_threshold, what)
+    shown = threshold if pixel_threshold is None else pixel_threshold
+    found.require_support(8, shown, what, data=np.hstack([a, b]))
     inliers = found.inliers
     _refuse_a_homography(a[inliers], b[inliers], threshold, seed)
     return refine_fundamental(found.model, a[inliers], b[inliers]), inliers

@@ -245,7 +245,7 @@ def fit_line_ransac(
     )
     if result.model is None:
         raise ValueError("all points coincide: no line is defined")
-    result.require_support(2, threshold, "the line")
+    result.require_support(2, threshold, "the line", exact=True, data=points)
     return RobustLine(result.model, result.inliers)
 
 

@@ -37,17 +37,36 @@ class RansacResult:
     inliers: np.ndarray
     iterations: int
 
-    def require_support(self, sample_size: int, threshold: float, what: str) -> None:
+    def require_support(
+        self,
+        sample_size: int,
+        threshold: float,
+        what: str,
+        *,
+        exact: bool = False,
+        data: np.ndarray | None = None,
+    ) -> None:
         """ValueError naming ``threshold`` when the model has fewer inliers than a minimal
-        sample of ``sample_size`` (after the refit, which may lose its sample's points): it
-        is then fitted to noise or to nothing, and every figure computed from its inliers
-        (an RMS, a pose) would be meaningless."""
+        sample of ``sample_size`` (after the refit, which may lose its sample's points),
+        or, for a model that passes ``exact``-ly through its sample (a line through two
+        points, a homography through four), no inlier beyond that sample: it is then
+        fitted to noise or to nothing, and every figure computed from its inliers (an
+        RMS, a pose, an inlier ratio) would be meaningless. With the ``data`` rows, inliers
+        at the same place count once (a detector's keypoints repeated with several
+        orientations support a model no more than one)."""
         found = int(self.inliers.sum()) if self.model is not None else 0
-        if found < sample_size:
+        if found and data is not None:
+            found = len(np.unique(np.asarray(data)[self.inliers], axis=0))
+        if found < sample_size + exact:
+            reason = (
+                f"fewer than the {sample_size} of a minimal sample"
+                if found < sample_size
+                else f"none beyond the {sample_size} of the sample it passes through"
+            )
             raise ValueError(
                 f"{what}: only {found} of {len(self.inliers)} points lie within "
-                f"threshold={threshold:g} of the best model, fewer than the {sample_size} of "
-                "a minimal sample: raise the threshold, or the data has no such model"
+                f"threshold={threshold:g} of the best model, {reason}: raise the threshold, "
+                "or the data has no such model"
             )
 
 

@@ -195,7 +195,7 @@ def homography_ransac(
             f"no homography: all {result.iterations} samples of 4 matches were "
             "degenerate (collinear or coincident points)"
         )
-    result.require_support(4, threshold, "the homography")
+    result.require_support(4, threshold, "the homography", exact=True, data=np.hstack([a, b]))
     inliers = result.inliers
     return HomographyFit(result.model, matches.take(inliers), float(inliers.mean()))
 
