@@ -13,7 +13,19 @@ import numpy as np
 
 from graphvision import to_float_image  # the one dtype policy lives in the engine
 
-__all__ = ["check_same_shape", "check_window", "ordered", "to_float_image"]
+__all__ = [
+    "MAX_VALUES",
+    "all_of",
+    "at_most_values",
+    "check_same_shape",
+    "check_window",
+    "ordered",
+    "to_float_image",
+]
+
+MAX_VALUES = 2**28
+"""Most values a node may make from its parameters alone (1 GiB in float32): a generator
+of ``count`` images of ``size`` × ``size`` pixels is refused beyond it before it runs."""
 
 
 def check_same_shape(a: np.ndarray, b: np.ndarray, names: tuple[str, str] = ("a", "b")) -> None:
@@ -50,5 +62,36 @@ def ordered(*pairs: tuple[str, str], strict: bool = False) -> Callable[..., None
                     f"{lower} ({low:g}) must be {relation} {upper} ({high:g}): swap them or "
                     "widen the range"
                 )
+
+    return check
+
+
+def at_most_values(*names: str, limit: int = MAX_VALUES) -> Callable[..., None]:
+    """A node's ``check=`` refusing parameters whose product (a name given twice is
+    squared: ``at_most_values("count", "size", "size")``) exceeds ``limit`` values, naming
+    the parameters, the product and its size in GiB as float32."""
+
+    def check(**params: Any) -> None:
+        values = int(np.prod([params[name] for name in names], dtype=np.float64))
+        if values > limit:
+            powers = {name: names.count(name) for name in names}
+            formula = " × ".join(
+                f"{name}={params[name]}" + ("" if power == 1 else f"^{power}")
+                for name, power in powers.items()
+            )
+            raise ValueError(
+                f"{formula} would make {values:,} values ({values * 4 / 2**30:.1f} GiB as "
+                f"float32), at most {limit:,}: lower one of them"
+            )
+
+    return check
+
+
+def all_of(*checks: Callable[..., None]) -> Callable[..., None]:
+    """A node's ``check=`` running each of ``checks`` in turn."""
+
+    def check(**params: Any) -> None:
+        for one in checks:
+            one(**params)
 
     return check

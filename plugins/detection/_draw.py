@@ -42,7 +42,7 @@ def draw_boxes(
     truth: Boxes | None = None,
     *,
     count: Annotated[int, Field(ge=0)] = 0,
-    thickness: Count = 1,
+    thickness: Annotated[int, Field(ge=1, le=50)] = 1,
 ) -> ColorImage:
     """The image with the true boxes (if given) in green and the first ``count`` boxes
     (proposals or detections, best first) in red over them.

@@ -10,7 +10,7 @@ from pydantic import Field
 
 from graphvision import node
 
-from .._checks import to_float_image
+from .._checks import at_most_values, to_float_image
 from .._params import MAX_SIDE, Probability, Seed
 from ._types import Features, FeatureSet, Samples, SampleSet
 
@@ -185,7 +185,7 @@ NEGATIVE_SOURCES: tuple[FaceFree, ...] = (
 """The face-free images ``recognition.negative_patches`` cuts patches from by default."""
 
 
-@node("recognition.negative_patches", version=1)
+@node("recognition.negative_patches", version=1, check=at_most_values("count", "size", "size"))
 def negative_patches(
     *,
     images: Annotated[tuple[FaceFree, ...], Field(min_length=1)] = NEGATIVE_SOURCES,

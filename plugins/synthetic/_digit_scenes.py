@@ -22,7 +22,7 @@ from pydantic import Field
 from graphvision import PortValueError, RecordPort, node
 
 from .._boxes import check_boxes
-from .._checks import ordered
+from .._checks import all_of, at_most_values, ordered
 from .._params import Seed
 
 __all__ = ["SceneSet", "Scenes", "ScenesPort", "digit_scenes", "render_digit_scenes"]
@@ -178,15 +178,18 @@ Digit = Annotated[int, Field(ge=0, le=9)]
 @node(
     "synthetic.digit_scenes",
     version=1,
-    check=ordered(("min_objects", "max_objects"), ("min_scale", "max_scale")),
+    check=all_of(
+        ordered(("min_objects", "max_objects"), ("min_scale", "max_scale")),
+        at_most_values("count", "size", "size"),
+    ),
 )
 def digit_scenes(
     *,
     split: Literal["train", "test"] = "train",
     count: Annotated[int, Field(ge=1, le=10_000)] = 60,
     size: Annotated[int, Field(ge=16, le=512)] = 80,
-    min_objects: Annotated[int, Field(ge=0)] = 1,
-    max_objects: Annotated[int, Field(ge=0)] = 3,
+    min_objects: Annotated[int, Field(ge=0, le=100)] = 1,
+    max_objects: Annotated[int, Field(ge=0, le=100)] = 3,
     min_scale: Annotated[int, Field(ge=8)] = 16,
     max_scale: Annotated[int, Field(ge=8)] = 28,
     classes: Annotated[list[Digit], Field(min_length=1)] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9],  # noqa: B006

@@ -296,3 +296,19 @@ def test_a_homography_fitted_to_repeated_keypoints_only_is_refused():
     message = r"the homography: only 4 of \d+ points lie within threshold=1e-12 .* none beyond"
     with pytest.raises(gv.RunError, match=message):
         gv.run(graph, outputs=["inlier_ratio"], overrides={"fit.threshold": 1e-12}, cache=None)
+
+
+@pytest.mark.parametrize(
+    ("node", "params", "message"),
+    [
+        ("synthetic.digit_scenes", {"count": 10_000, "size": 512},
+         r"count=10000 × size=512\^2 would make 2,621,440,000 values \(9.8 GiB as float32\)"),
+        ("recognition.negative_patches", {"count": 100_000, "size": 256},
+         r"count=100000 × size=256\^2 would make 6,553,600,000 values"),
+    ],
+)  # fmt: skip
+def test_generated_data_beyond_memory_is_refused_before_it_runs(node, params, message):
+    with pytest.raises(pydantic.ValidationError, match=message):
+        REGISTRY.node(node).params_model.model_validate(params)
+    one = {name: 1 if name == "count" else value for name, value in params.items()}
+    REGISTRY.node(node).params_model.model_validate(one)
