@@ -48,6 +48,8 @@ def digits(
     ----------
     test_fraction : float
         Fraction of each class held out for testing (0.2: the issue's 80/20 split).
+        A fraction leaving a class no training sample, or no test sample at all, is
+        refused.
     seed : int
         Seed of the split.
 

@@ -187,8 +187,10 @@ def train(
     layers : list of str
         ``conv FxK`` (F filters K×K, padded by K // 2; ``pad P`` to choose), ``relu``,
         ``maxpool S``, ``dense U``; the last must be ``dense`` with one unit per class.
+        At most 4,096 filters or units, K ≤ 31, P < 31, S ≤ 32, and at most 10 million
+        weights for the images' shape (``parse_layer``, ``build_architecture``).
     epochs : int
-        Passes over the training set.
+        Passes over the training set (at most 1,000).
     batch_size : int
         Images per gradient step.
     learning_rate : float

@@ -233,7 +233,7 @@ def roi_samples(
     proposals : Detections
         Proposals of those scenes.
     size : int
-        Side of the warped crops.
+        Side of the warped crops (4 to 64: thousands of crops are made).
     positive_iou : float
         Overlap from which a crop takes the class of its true box.
     negative_iou : float
@@ -386,9 +386,10 @@ def train_head(
         ROI pooling cells per side (at most 16; Fast R-CNN uses 7): the head's input
         grows with its square.
     hidden : list of str
-        The head's layers before its last (``dense K+1`` is appended).
+        The head's layers before its last (``dense K+1`` is appended), bounded as
+        ``cnn.train``'s layers.
     epochs : int
-        Passes over the training ROIs.
+        Passes over the training ROIs (at most 1,000).
     batch_size : int
         ROIs per gradient step.
     learning_rate : float

@@ -150,7 +150,7 @@ def train_rpn(
     feature_layers : int
         How many of the backbone's first layers compute the feature map.
     sizes : list of float
-        Anchor sides (pixels).
+        Anchor sides (pixels); an anchor larger than the scenes is refused.
     ratios : list of float
         Anchor aspect ratios h / w.
     positive_iou : float
@@ -160,7 +160,7 @@ def train_rpn(
     negatives_per_positive : float
         Most background anchors per object anchor (a seeded subset) of each shape.
     epochs : int
-        Passes of the objectness training.
+        Passes of the objectness training (at most 1,000).
     learning_rate : float
         Step size of the objectness training.
     ridge : float
