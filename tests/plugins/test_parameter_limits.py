@@ -312,3 +312,15 @@ def test_generated_data_beyond_memory_is_refused_before_it_runs(node, params, me
         REGISTRY.node(node).params_model.model_validate(params)
     one = {name: 1 if name == "count" else value for name, value in params.items()}
     REGISTRY.node(node).params_model.model_validate(one)
+
+
+def test_an_essential_matrix_with_fewer_inliers_than_a_sample_names_the_pixel_threshold():
+    from graphvision_plugins.epipolar import essential_from_points
+    from graphvision_plugins.synthetic import two_view_scene
+
+    scene = two_view_scene(count=60, noise=0.5, seed=3)
+    message = r"the essential matrix: only \d of \d+ points lie within threshold=1e-12 of"
+    with pytest.raises(ValueError, match=message):
+        essential_from_points(scene.a, scene.b, scene.camera_a, scene.camera_b, threshold=1e-12)
+    fit = essential_from_points(scene.a, scene.b, scene.camera_a, scene.camera_b, threshold=1.5)
+    assert fit.inlier_count > len(scene.a) // 2
