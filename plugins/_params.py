@@ -26,6 +26,7 @@ __all__ = [
     "OddSize",
     "Positive",
     "Probability",
+    "ScaleFactor",
     "Seed",
     "odd",
 ]
@@ -75,6 +76,10 @@ Iterations = Annotated[int, Field(ge=1, le=MAX_ITERATIONS)]
 
 ImageSide = Annotated[int, Field(ge=1, le=MAX_SIDE)]
 """The side of an image a node makes, in pixels: 1 to ``MAX_SIDE``."""
+
+ScaleFactor = Annotated[float, Field(ge=0.125, le=1024)]
+"""A factor an image is shrunk by, 1/8 to 1,024: below 1 it is enlarged, and 1/8 makes it
+64 times larger in area already (a 512 × 512 image becomes 4096 × 4096)."""
 
 OddSize = Annotated[int, Field(ge=1), AfterValidator(odd)]
 """The side of a window centred on a pixel: odd, at least 1."""

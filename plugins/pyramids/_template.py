@@ -12,7 +12,7 @@ from graphvision import Array, ColorImage, Float, FloatImage, GrayImage, Image, 
 
 from .._checks import ordered
 from .._draw import colour_canvas
-from .._params import Count, Positive
+from .._params import Count, ScaleFactor
 from ..hough import local_maxima, quadratic_peak_2d, suppress_close
 
 __all__ = [
@@ -164,8 +164,8 @@ def match_multiscale(
     image: GrayImage,
     template: GrayImage,
     *,
-    min_scale: Positive = 0.5,
-    max_scale: Positive = 2.0,
+    min_scale: ScaleFactor = 0.5,
+    max_scale: ScaleFactor = 2.0,
     steps: Annotated[int, Field(ge=1, le=200)] = 25,
 ) -> MultiscaleMatch:
     r"""Find a template that appears in the image at an unknown scale, by scaling the image.
@@ -185,7 +185,8 @@ def match_multiscale(
     template : (h, w) float32 ndarray
         What to search for.
     min_scale, max_scale : float
-        Range of the template's scale in the image.
+        Range of the template's scale in the image, 1/8 to 1,024 (the image is
+        resized by 1 / s: 1/8 makes it 64 times larger).
     steps : int
         Number of scales tried.
 

@@ -24,7 +24,7 @@ from graphvision import (
 from .._boxes import iou_matrix, non_max_suppression
 from .._checks import ordered
 from .._draw import colour_canvas
-from .._params import Count, Fraction, Positive
+from .._params import Count, Fraction, Positive, ScaleFactor
 from ._data import NON_FACE, FaceFree, face_free_image, pixel_features
 from ._haar import haar_values, integral_image, sample_haar_features
 from ._hog import hog_blocks
@@ -161,8 +161,8 @@ def detect(
     classifier: Classifier,
     *,
     scale_step: Annotated[float, Field(gt=1, le=4)] = 1.2,
-    min_scale: Positive = 1.0,
-    max_scale: Positive = 64.0,
+    min_scale: ScaleFactor = 1.0,
+    max_scale: ScaleFactor = 64.0,
     step: Count = 3,
     threshold: float = 0.0,
 ) -> Boxes:
@@ -182,7 +182,7 @@ def detect(
         the object)
     scale_step : ratio between pyramid levels
     min_scale, max_scale : smallest and largest window scale, in multiples of the
-        training window
+        training window, 1/8 to 1,024 (below 1 the image is enlarged)
     step : window step in pixels of a level (HOG uses offsets 0, step, ... within a cell)
     threshold : least decision value of a detection
 
@@ -248,8 +248,8 @@ def mine_negatives(
     images: Annotated[tuple[FaceFree, ...], Field(min_length=1)] = HARD_NEGATIVE_SOURCES,
     count: Annotated[int, Field(ge=1, le=100_000)] = 400,
     scale_step: Annotated[float, Field(gt=1, le=4)] = 1.25,
-    min_scale: Positive = 1.0,
-    max_scale: Positive = 16.0,
+    min_scale: ScaleFactor = 1.0,
+    max_scale: ScaleFactor = 16.0,
     step: Count = 3,
 ) -> Samples:
     """Hard negatives (Dalal–Triggs): the windows of face-free images that the classifier
@@ -306,8 +306,8 @@ def detect_subspace(
     subspace: Subspace,
     *,
     scale_step: Annotated[float, Field(gt=1, le=4)] = 1.2,
-    min_scale: Positive = 1.0,
-    max_scale: Positive = 64.0,
+    min_scale: ScaleFactor = 1.0,
+    max_scale: ScaleFactor = 64.0,
     step: Count = 2,
     max_error: Positive = 0.2,
 ) -> Boxes:

@@ -324,3 +324,13 @@ def test_an_essential_matrix_with_fewer_inliers_than_a_sample_names_the_pixel_th
         essential_from_points(scene.a, scene.b, scene.camera_a, scene.camera_b, threshold=1e-12)
     fit = essential_from_points(scene.a, scene.b, scene.camera_a, scene.camera_b, threshold=1.5)
     assert fit.inlier_count > len(scene.a) // 2
+
+
+@pytest.mark.parametrize(
+    "node", ["pyramids.match_multiscale", "recognition.detect", "recognition.detect_subspace"]
+)
+def test_a_scale_that_would_enlarge_an_image_beyond_64_times_its_area_is_refused(node):
+    model = REGISTRY.node(node).params_model
+    message = r"min_scale\n.*greater than or equal to 0.125"
+    with pytest.raises(pydantic.ValidationError, match=message):
+        model.model_validate({"min_scale": 1e-6})
