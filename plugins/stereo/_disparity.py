@@ -14,13 +14,19 @@ from .._params import odd
 from ._cost import Cost, cost_volume, maximum_cost
 from ._ports import Disparity
 
-__all__ = ["block_match", "check_pair", "left_right_check", "sgm"]
+__all__ = ["MAX_VOLUME", "block_match", "check_pair", "left_right_check", "sgm"]
 
 Window = Annotated[int, Field(ge=1, le=31), AfterValidator(odd)]
 
 # The eight path directions (step_y, step_x) of semi-global matching; the first four
 # (horizontal and vertical) are the 4-path variant.
 PATHS = ((0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))
+
+
+MAX_VOLUME = 2**27
+"""Most values of a cost volume (512 MB in float32): semi-global matching keeps a few of
+them at once, so this is what this machine holds; a 500 × 741 pair with 64 disparities
+(stereo.yaml) needs 23.7 million."""
 
 
 def _sgm_params(**params: Any) -> None:
@@ -37,7 +43,8 @@ def _sgm_params(**params: Any) -> None:
 
 
 def check_pair(left: np.ndarray, right: np.ndarray, d_min: int, count: int, window: int) -> None:
-    """Refuse a pair of different sizes and a range wider than the image."""
+    """Refuse a pair of different sizes, a range wider than the image, and a cost volume
+    (rows × columns × disparities) beyond ``MAX_VOLUME`` values, saying what it needs."""
     if left.shape != right.shape:
         raise ValueError(
             f"the left image is {left.shape[0]}×{left.shape[1]} (rows×columns) but the right is"
@@ -48,6 +55,13 @@ def check_pair(left: np.ndarray, right: np.ndarray, d_min: int, count: int, wind
         raise ValueError(
             f"the disparity range [{d_min}, {d_min + count - 1}] does not fit in the image's "
             f"{cols} columns: lower num_disparities or min_disparity"
+        )
+    volume = left.shape[0] * cols * count
+    if volume > MAX_VOLUME:
+        raise ValueError(
+            f"the cost volume {left.shape[0]}×{cols}×{count} would hold {volume:,} values "
+            f"({volume * 4 / 2**30:.1f} GiB as float32, more again to aggregate it), at most "
+            f"{MAX_VOLUME:,}: lower num_disparities or match smaller images"
         )
 
 

@@ -334,3 +334,13 @@ def test_a_scale_that_would_enlarge_an_image_beyond_64_times_its_area_is_refused
     message = r"min_scale\n.*greater than or equal to 0.125"
     with pytest.raises(pydantic.ValidationError, match=message):
         model.model_validate({"min_scale": 1e-6})
+
+
+def test_a_cost_volume_beyond_memory_is_refused_before_it_is_made():
+    from graphvision_plugins.stereo import block_match, sgm
+
+    image = np.zeros((512, 1024), np.float32)  # 512·1024·512 = 2^28 values, twice the maximum
+    message = r"the cost volume 512×1024×512 would hold 268,435,456 values \(1.0 GiB as float32"
+    for method in (block_match, sgm):
+        with pytest.raises(ValueError, match=message):
+            method(image, image, num_disparities=512)
