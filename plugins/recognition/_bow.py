@@ -12,6 +12,7 @@ from pydantic import Field
 
 from graphvision import KeypointSet, node
 
+from .._checks import at_most_values
 from .._params import Count, Iterations, Positive, Seed
 from ..features import describe_sift
 from ._types import (
@@ -136,7 +137,16 @@ def fit_kmeans(points: np.ndarray, k: int, iterations: int, seed: int) -> np.nda
     return centres
 
 
-@node("recognition.kmeans", version=2)
+MAX_ASSIGNMENTS = 2**26
+"""Most words × descriptors for k-means: each Lloyd iteration makes two arrays of that
+many float64 values (distances and memberships), 512 MB each at this maximum."""
+
+
+@node(
+    "recognition.kmeans",
+    version=2,
+    check=at_most_values("words", "max_descriptors", limit=MAX_ASSIGNMENTS),
+)
 def kmeans(
     bags: Bags,
     *,
@@ -154,7 +164,7 @@ def kmeans(
     words : k, the number of words
     iterations : most Lloyd iterations
     max_descriptors : cluster a random subset (seeded) of at most this many descriptors
-        (0: all of them)
+        (0: all of them); words × descriptors is at most 2^26
     seed : seed of the subset and of the k-means++ start
 
     Returns
@@ -175,6 +185,12 @@ def kmeans(
     if 0 < max_descriptors < len(points):
         chosen = np.random.default_rng(seed).choice(len(points), max_descriptors, replace=False)
         points = points[np.sort(chosen)]
+    if words * len(points) > MAX_ASSIGNMENTS:
+        raise ValueError(
+            f"{words} words × {len(points):,} descriptors would make {words * len(points):,} "
+            f"distances per iteration ({words * len(points) * 8 / 2**30:.1f} GiB), at most "
+            f"{MAX_ASSIGNMENTS:,}: lower words or max_descriptors"
+        )
     return fit_kmeans(points, words, iterations, seed)
 
 

@@ -344,3 +344,20 @@ def test_a_cost_volume_beyond_memory_is_refused_before_it_is_made():
     for method in (block_match, sgm):
         with pytest.raises(ValueError, match=message):
             method(image, image, num_disparities=512)
+
+
+def test_a_vocabulary_too_large_for_its_descriptors_is_refused():
+    model = REGISTRY.node("recognition.kmeans").params_model
+    message = r"words=4096 × max_descriptors=1000000 would make 4,096,000,000 values"
+    with pytest.raises(pydantic.ValidationError, match=message):
+        model.model_validate({"words": 4096, "max_descriptors": 1_000_000})
+    # max_descriptors=0 (all of them): the node refuses once it knows how many there are
+    from graphvision_plugins.recognition import kmeans
+    from graphvision_plugins.recognition._types import DescriptorBags
+
+    bags = DescriptorBags(
+        np.zeros((20_000, 4), np.float32), np.zeros(20_000, np.int64), np.zeros(1, np.int64)
+    )
+    message = r"4096 words × 20,000 descriptors would make 81,920,000 distances per iteration"
+    with pytest.raises(ValueError, match=message):
+        kmeans(bags, words=4096, max_descriptors=0)
