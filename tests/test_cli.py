@@ -6,6 +6,7 @@ import json
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -82,6 +83,7 @@ def test_input_from_a_file(capsys, tmp_path):
     ("make", "message"),
     [
         (lambda d: d / "missing.png", "input 'image': no such file: .*missing.png$"),
+        (lambda d: Path("/dev/zero"), "/dev/zero is not a regular file"),
         (lambda d: write(d, "text.png", "not a png"), "text.png is not a readable image"),
         (lambda d: _npy(d, np.zeros((0, 5), np.float32)), "is empty"),
         (

@@ -107,8 +107,10 @@ def read_array(path: str) -> np.ndarray:
     file = Path(path)
     if file.is_dir():
         raise IsADirectoryError(f"{file} is a folder, not an image file")
-    if not file.is_file():
+    if not file.exists():
         raise FileNotFoundError(f"no such file: {file}")
+    if not file.is_file():  # a device, a pipe, a socket: endless or blocking to read
+        raise ValueError(f"{file} is not a regular file (a device, pipe or socket)")
     if file.suffix.lower() == ".npy":
         try:
             array: np.ndarray = np.load(file, allow_pickle=False)
