@@ -10,10 +10,13 @@ stores them in its own cache: the cache never has to be on storage the
 workers share, and a value is written once, by one process, with the cache's
 atomic rename.
 
-Results are fetched in batches: a collector thread takes every task that has
-finished since it last looked and gathers their results in one call (one
-fetch per task, from a done-callback each, made independent tasks cost twice
-what raw Dask's ``gather`` costs).
+Results are fetched where it costs least. A task submitted while others are
+in flight has its result awaited on the client's event loop, so many results
+are fetched at once (a blocking fetch per task, one after another, made
+independent tasks cost twice what raw Dask's ``gather`` costs); a task
+submitted alone (a chain) is fetched by Dask's callback thread, one thread
+hop fewer (an interleaved A/B on a 200-task chain: 11.1 against 13.0 ms a
+task).
 
 A worker that dies while it runs a node is replaced by Dask and the node is
 run again on another worker (``retries``), so one lost worker costs one node,
@@ -24,7 +27,6 @@ graphvision[dask]``), imported only when this executor is made.
 from __future__ import annotations
 
 import os
-import queue
 import threading
 from collections.abc import Callable
 from concurrent.futures import Future
@@ -83,8 +85,8 @@ class DaskExecutor:
                 "the dask executor needs Dask: pip install 'graphvision[dask]'"
             ) from error
         self.retries = retries
-        self._finished: queue.SimpleQueue[tuple[Any, Future] | None] | None = None
-        self._collector_lock = threading.Lock()
+        self._in_flight = 0
+        self._in_flight_lock = threading.Lock()
         self._cluster: Any = None
         self._owns_client = client is None
         address = address or os.environ.get(SCHEDULER_VARIABLE) or None
@@ -121,76 +123,38 @@ class DaskExecutor:
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         """Run ``fn(*args)`` as a Dask task; a ``concurrent.futures`` future of its result."""
-        finished = self._collector_queue()
         task = self.client.submit(_on_worker, fn, *args, pure=False, retries=self.retries)
         future: Future = Future()
         future.set_running_or_notify_cancel()
-        task.add_done_callback(lambda done: finished.put((done, future)))
+        with self._in_flight_lock:
+            alone = self._in_flight == 0
+            self._in_flight += 1
+        future.add_done_callback(self._landed)
+        if alone:
+            task.add_done_callback(lambda done: _settle(done, future))
+        else:
+
+            async def fetch() -> None:
+                try:
+                    value = await task
+                except BaseException as error:  # the run reports it as that node's failure
+                    future.set_exception(error)
+                else:
+                    future.set_result(value)
+
+            self.client.loop.add_callback(fetch)
         return future
 
-    def _collector_queue(self) -> queue.SimpleQueue[tuple[Any, Future] | None]:
-        """The queue of the thread that collects results, started on first use."""
-        with self._collector_lock:
-            if self._finished is None:
-                self._finished = queue.SimpleQueue()
-                threading.Thread(
-                    target=_collect,
-                    args=(self.client, self._finished),
-                    daemon=True,
-                    name="graphvision-dask-results",
-                ).start()
-            return self._finished
+    def _landed(self, _: Future) -> None:
+        with self._in_flight_lock:
+            self._in_flight -= 1
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         """Close the client and the local cluster this executor started (not a given client)."""
-        with self._collector_lock:
-            if self._finished is not None:
-                self._finished.put(None)  # the collector stops after what it was given
-                self._finished = None
         if self._owns_client:
             self.client.close()
         if self._cluster is not None:
             self._cluster.close()
-
-
-def _collect(client: Any, finished: queue.SimpleQueue[tuple[Any, Future] | None]) -> None:
-    """Hand each finished task's result (or error) to its future, many per fetch, until
-    the ``None`` that :meth:`DaskExecutor.shutdown` sends."""
-    while True:
-        first = finished.get()
-        if first is None:
-            return
-        batch = [first]
-        stop = False
-        while not stop:
-            try:
-                item = finished.get_nowait()
-            except queue.Empty:
-                break
-            if item is None:
-                stop = True
-            else:
-                batch.append(item)
-        _deliver(client, batch)
-        if stop:
-            return
-
-
-def _deliver(client: Any, batch: list[tuple[Any, Future]]) -> None:
-    """Set each future from its finished task: the successful ones gathered in one call."""
-    ok = [(task, future) for task, future in batch if task.status == "finished"]
-    try:
-        results = client.gather([task for task, _ in ok]) if ok else []
-    except BaseException:  # a result lost between finishing and the fetch: one at a time
-        results = None
-    for index, (task, future) in enumerate(ok):
-        if results is not None:
-            future.set_result(results[index])
-        else:
-            _settle(task, future)
-    for task, future in batch:
-        if task.status != "finished":
-            _settle(task, future)
 
 
 def _settle(task: Any, future: Future) -> None:
