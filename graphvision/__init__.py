@@ -50,7 +50,7 @@ if TYPE_CHECKING:
     from ._graph import NAME_PATTERN, REF_PATTERN, Graph, Ref
     from ._node import NodeSpec, node, source
     from ._pipeline_file import dump_pipeline, load_pipeline, parse_pipeline, pipeline_json_schema
-    from ._plugins import discover
+    from ._plugins import Needs, discover
     from ._ports import (
         ArrayPort,
         BinaryImagePort,
@@ -199,6 +199,7 @@ __all__ = [
     "Matches",
     "MatchesPort",
     "MemoryStore",
+    "Needs",
     "NodeExecutionError",
     "NodeRecord",
     "NodeSpec",

@@ -91,5 +91,7 @@ def png_bytes(picture: np.ndarray, smallest: int = 64) -> bytes:
         picture = np.repeat(np.repeat(picture, factor, axis=0), factor, axis=1)
     data = np.round(np.clip(picture, 0.0, 1.0) * 255.0).astype(np.uint8)
     buffer = io.BytesIO()
-    Image.fromarray(data).save(buffer, format="PNG")
+    # zlib's fastest level: 2-4x faster than Pillow's default (6) on a 512-pixel
+    # thumbnail, for files about 10 % larger; a report page is written on every run.
+    Image.fromarray(data).save(buffer, format="PNG", compress_level=1)
     return buffer.getvalue()

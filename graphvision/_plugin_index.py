@@ -60,11 +60,12 @@ __all__ = [
     "index_path",
     "installed_entry_points",
     "read_index",
+    "read_providers",
     "write_index",
 ]
 
 ENTRY_POINT_GROUP = "graphvision.plugins"
-FORMAT = 1  # bump when what an index holds changes
+FORMAT = 2  # bump when what an index holds changes
 
 
 def installed_entry_points() -> list[EntryPoint]:
@@ -162,6 +163,24 @@ def read_index(key: str) -> dict[str, Any] | None:
     return nodes
 
 
+def read_providers(key: str) -> dict[str, dict[str, list[str]]] | None:
+    """For each entry-point plugin of the index under ``key``, the node ids, port type
+    names and input-source schemes it registers; None without a readable index."""
+    path = index_path(key)
+    try:
+        index = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    plugins = index.get("plugins") if isinstance(index, dict) and index.get("key") == key else None
+    if not isinstance(plugins, dict) or not all(
+        isinstance(entry, dict)
+        and all(isinstance(entry.get(kind), list) for kind in ("nodes", "port_types", "sources"))
+        for entry in plugins.values()
+    ):
+        return None
+    return plugins
+
+
 def write_index(key: str, registry: Registry) -> None:
     """Record ``registry``'s nodes under ``key`` and remove this environment's older indexes
     (quietly nothing if the files cannot be written)."""
@@ -169,13 +188,21 @@ def write_index(key: str, registry: Registry) -> None:
         op: {"summary": spec.summary, "description": spec.describe()}
         for op, spec in sorted(registry.nodes.items())
     }
+    plugins = {
+        name: {
+            "nodes": sorted(status.nodes),
+            "port_types": sorted(status.port_types),
+            "sources": sorted(status.sources),
+        }
+        for name, status in sorted(registry.plugins.items())
+    }
     path = index_path(key)
     with contextlib.suppress(OSError, TypeError, ValueError):
         path.parent.mkdir(parents=True, exist_ok=True)
         handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
         try:
             with os.fdopen(handle, "w", encoding="utf-8") as stream:
-                json.dump({"key": key, "nodes": nodes}, stream)
+                json.dump({"key": key, "nodes": nodes, "plugins": plugins}, stream)
             os.replace(temporary, path)
         finally:
             with contextlib.suppress(FileNotFoundError):

@@ -21,20 +21,30 @@ import sys
 import traceback
 import types
 from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 
 from ._errors import GraphvisionError, PluginLoadError
 from ._fingerprint import note_distribution
+from ._graph import Graph
 from ._plugin_index import (
     ENTRY_POINT_GROUP,
     environment_key,
     has_index,
     installed_entry_points,
+    read_providers,
     write_index,
 )
 from ._registry import Registry
 
-__all__ = ["ENTRY_POINT_GROUP", "discover", "import_file", "load_entry_points", "load_path"]
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "Needs",
+    "discover",
+    "import_file",
+    "load_entry_points",
+    "load_path",
+]
 
 
 def _summarise(error: BaseException) -> str:
@@ -45,17 +55,24 @@ def _summarise(error: BaseException) -> str:
     return f"{type(error).__name__}: {error}{where}"
 
 
-def load_entry_points(registry: Registry) -> None:
-    """Register every plugin of the ``graphvision.plugins`` entry-point group.
+def load_entry_points(registry: Registry, needs: Needs | None = None) -> None:
+    """Register the plugins of the ``graphvision.plugins`` entry-point group.
 
     With a plugin index for the same files, the nodes' parameter models are
-    left to be built on first use; without one, they are built and checked
-    now, and the index is written for the next discovery.
+    left to be built on first use, and given ``needs`` (what a pipeline uses)
+    only the plugins that provide it are imported, with every plugin that
+    loads input values (``sample:``, files); without an index, every plugin is
+    imported and checked, and the index is written for the next discovery.
     """
     fresh = not registry.plugins  # only a registry of these plugins alone is recorded
     entries = installed_entry_points()
     key = environment_key(entries)
     indexed = has_index(key)
+    if indexed and needs is not None:
+        wanted = _providers(read_providers(key), needs, set(registry.port_types))
+        if wanted is not None:
+            entries = [entry for entry in entries if entry.name in wanted]
+            fresh = False  # a part of the plugins: never recorded as the whole
     names: dict[int, str] = {}  # a distribution's name, parsed once for all its entry points
     for entry in entries:
         if entry.name in registry.plugins:
@@ -74,6 +91,48 @@ def load_entry_points(registry: Registry) -> None:
     recordable = fresh and not indexed and not registry.failed_plugins()
     if recordable and environment_key(entries) == key:  # no file changed while they loaded
         write_index(key, registry)
+
+
+@dataclass(frozen=True)
+class Needs:
+    """What a pipeline asks of the installed plugins: its ops and its inputs' port types.
+
+    >>> graph = Graph("g"); image = graph.input("image", "Image")
+    >>> graph.output("smooth", graph.add("smooth", "filters.gaussian", image=image))
+    >>> Needs.of(graph)
+    Needs(ops=frozenset({'filters.gaussian'}), port_types=frozenset({'Image'}))
+    """
+
+    ops: frozenset[str]
+    port_types: frozenset[str] = frozenset()
+
+    @classmethod
+    def of(cls, graph: Graph) -> Needs:
+        return cls(
+            frozenset(decl.op for decl in graph.nodes.values()),
+            frozenset(decl.type for decl in graph.inputs.values()),
+        )
+
+
+def _providers(
+    plugins: dict[str, dict[str, list[str]]] | None, needs: Needs, builtin: set[str]
+) -> set[str] | None:
+    """The entry points to import for ``needs``: those registering a needed op or a
+    needed port type that is not built in, and every one that loads input values.
+
+    None (import all) when the index does not say, or when a need is provided by
+    no plugin: the error then lists every plugin's names for a "did you mean".
+    """
+    if plugins is None:
+        return None
+    wanted = {name for name, entry in plugins.items() if entry["sources"]}
+    for kinds, needed in (("nodes", needs.ops), ("port_types", needs.port_types - builtin)):
+        for name in needed:
+            providers = {plugin for plugin, entry in plugins.items() if name in entry[kinds]}
+            if not providers:
+                return None
+            wanted |= providers
+    return wanted
 
 
 def import_file(path: str | Path, module_name: str = "") -> types.ModuleType:
@@ -141,11 +200,18 @@ def load_path(registry: Registry, path: str | Path) -> None:
             registry.record_failure(name, name, _summarise(error))
 
 
-def discover(paths: Iterable[str | Path] = (), *, entry_points: bool = True) -> Registry:
-    """A registry with the entry-point plugins and the local plugins at ``paths``."""
+def discover(
+    paths: Iterable[str | Path] = (), *, entry_points: bool = True, needs: Needs | None = None
+) -> Registry:
+    """A registry with the entry-point plugins and the local plugins at ``paths``.
+
+    ``needs`` (a pipeline's ops and input types) lets a discovery with a plugin
+    index import only the plugins that provide them; the registry then holds
+    those alone (the command line runs a pipeline this way).
+    """
     registry = Registry()
     if entry_points:
-        load_entry_points(registry)
+        load_entry_points(registry, needs)
     for path in paths:
         load_path(registry, path)
     return registry

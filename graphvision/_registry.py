@@ -31,6 +31,8 @@ class PluginStatus:
     origin: str
     nodes: list[str] = field(default_factory=list)
     error: str = ""
+    port_types: list[str] = field(default_factory=list)
+    sources: list[str] = field(default_factory=list)
 
 
 class Registry:
@@ -104,7 +106,13 @@ class Registry:
             self.sources[source_spec.scheme] = source_spec
         for port_type in port_types:
             self.port_types.setdefault(port_type.type_name(), port_type)
-        status = PluginStatus(name, origin or module.__name__, [s.id for s in kept])
+        status = PluginStatus(
+            name,
+            origin or module.__name__,
+            [s.id for s in kept],
+            port_types=sorted({t.type_name() for t in port_types}),
+            sources=[s.scheme for s in sources],
+        )
         self.plugins[name] = status
         return status
 

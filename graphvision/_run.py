@@ -636,9 +636,9 @@ def _compiled(
     """The graph, overrides applied, compiled (step 1); the registry it was checked against."""
     if isinstance(graph, CompiledGraph):
         if not overrides:
-            return graph, registry or _discover(graph.graph.plugins)
+            return graph, registry or _discover(graph.graph)
         graph = graph.graph  # overrides change parameters: compile again
-    registry = registry or _discover(graph.plugins)
+    registry = registry or _discover(graph)
     if overrides:
         try:
             graph = graph.with_overrides(overrides)
@@ -647,10 +647,11 @@ def _compiled(
     return compile_graph(graph, registry, provided=set(inputs)), registry
 
 
-def _discover(paths: list[str]) -> Registry:
-    from ._plugins import discover
+def _discover(graph: Graph) -> Registry:
+    """The graph's local plugins and the installed families it uses."""
+    from ._plugins import Needs, discover
 
-    return discover(paths)
+    return discover(graph.plugins, needs=Needs.of(graph))
 
 
 def _wanted_outputs(

@@ -158,13 +158,18 @@ def _output_dir(text: str | None) -> Path | None:
 # -- shared set-up ---------------------------------------------------------------------
 
 
-def _registry(args: argparse.Namespace, extra: Sequence[str] = ()) -> Registry:
-    from ._plugins import discover
+def _registry(
+    args: argparse.Namespace, extra: Sequence[str] = (), graph: Graph | None = None
+) -> Registry:
+    """The plugins: with a pipeline, only the installed families it uses are imported
+    (when the plugin index says which those are), else all of them."""
+    from ._plugins import Needs, discover
 
     for path in args.plugins:
         if not Path(path).exists():
             raise UsageError(f"--plugins {path}: no such file or folder")
-    registry = discover([*args.plugins, *extra])
+    needs = Needs.of(graph) if graph is not None else None
+    registry = discover([*args.plugins, *extra], needs=needs)
     for plugin in registry.failed_plugins():
         print(f"warning: plugin '{plugin.name}' failed to load: {plugin.error}", file=sys.stderr)
     return registry
@@ -194,7 +199,7 @@ def _load(args: argparse.Namespace) -> tuple[Graph, Registry, dict[str, Any], di
     from ._pipeline_file import load_pipeline
 
     graph = load_pipeline(args.pipeline)
-    registry = _registry(args, graph.plugins)
+    registry = _registry(args, graph.plugins, graph)
     overrides = {
         key: _yaml_value(value, f"--set {key}={value}")
         for key, value in _pairs(args.set, "--set").items()
@@ -412,7 +417,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     for path in args.pipelines:
         try:
             graph = load_pipeline(path)
-            compile_graph(graph, _registry(args, graph.plugins))
+            compile_graph(graph, _registry(args, graph.plugins, graph))
             print(f"{path}: ok")
         except PipelineError as error:
             print(error, file=sys.stderr)
@@ -508,7 +513,7 @@ def cmd_graph(args: argparse.Namespace) -> int:
     from ._render import render
 
     graph = load_pipeline(args.pipeline)
-    compile_graph(graph, _registry(args, graph.plugins))
+    compile_graph(graph, _registry(args, graph.plugins, graph))
     print(render(graph, args.format))
     return EXIT_OK
 

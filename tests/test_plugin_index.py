@@ -181,3 +181,74 @@ def test_a_parameter_model_left_to_first_use_is_the_one_registration_builds():
     assert lazy.validate_params({"factor": 3}) == {"factor": 3.0}
     with pytest.raises(gv.ParameterError, match=r"'factor' of lazy\.scale"):
         lazy.check_call((1.0,), {"factor": -1.0})
+
+
+# -- importing only the families a pipeline uses ---------------------------------------
+
+SMALL_PIPELINE = """\
+version: 1
+name: smooth
+inputs:
+  image: {type: Image, default: "sample:camera"}
+nodes:
+  gray: {op: color.to_gray, in: {image: image}}
+  smooth: {op: filters.gaussian, in: {image: gray}, params: {sigma: %s}}
+outputs:
+  smooth: smooth
+"""
+
+
+def test_with_an_index_a_pipeline_imports_only_the_families_it_uses():
+    everything = gv.discover()  # no index yet: imports every family and writes the index
+    assert index_files() and len(everything.plugins) > 10
+    needs = gv.Needs(frozenset({"filters.gaussian", "color.to_gray"}), frozenset({"Image"}))
+    used = gv.discover(needs=needs)
+    # the two families, and io, which loads input values (sample:, files)
+    assert set(used.plugins) == {"filters", "color", "io"}
+    assert set(used.nodes) == {op for op in everything.nodes if op.split(".")[0] in used.plugins}
+
+
+def test_a_needed_port_type_brings_the_family_that_defines_it():
+    gv.discover()
+    used = gv.discover(needs=gv.Needs(frozenset({"filters.gaussian"}), frozenset({"Lines"})))
+    assert "Lines" in used.port_types and "hough" in used.plugins
+
+
+def test_needs_without_an_index_import_everything():
+    assert not index_files()
+    used = gv.discover(needs=gv.Needs(frozenset({"filters.gaussian"})))
+    assert len(used.plugins) > 10 and index_files()
+
+
+@pytest.mark.parametrize("unknown", ["op", "type"])
+def test_a_need_no_family_provides_imports_every_family_to_name_it(unknown):
+    gv.discover()
+    ops, kinds = {"filters.gaussian"}, set()
+    (ops if unknown == "op" else kinds).add("filters.gausian" if unknown == "op" else "Imag")
+    used = gv.discover(needs=gv.Needs(frozenset(ops), frozenset(kinds)))
+    assert len(used.plugins) > 10
+
+
+def test_a_run_from_the_command_line_records_the_families_it_imported(capsys, tmp_path):
+    gv.discover()
+    pipeline = tmp_path / "smooth.yaml"
+    pipeline.write_text(SMALL_PIPELINE % "1.0")
+    status, _, _ = cli(capsys, "run", pipeline, "-d", tmp_path / "out", "--record")
+    assert status == 0
+    record = (tmp_path / "out" / "record.json").read_text()
+    plugins = {
+        line.split('"plugin ')[1].split('"')[0]
+        for line in record.splitlines()
+        if '"plugin ' in line
+    }
+    assert plugins == {"filters", "color", "io"}
+
+
+def test_a_misspelt_op_is_named_with_every_familys_ops_to_choose_from(capsys, tmp_path):
+    gv.discover()
+    pipeline = tmp_path / "smooth.yaml"
+    pipeline.write_text((SMALL_PIPELINE % "1.0").replace("filters.gaussian", "filters.gausian"))
+    status, _, err = cli(capsys, "validate", pipeline)
+    assert status == 2
+    assert "unknown op 'filters.gausian' (did you mean 'filters.gaussian'?)" in err
+    assert "smooth.yaml" in err
