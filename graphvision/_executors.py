@@ -38,6 +38,7 @@ __all__ = [
     "WorkerDiedError",
     "call_node",
     "call_node_encoded",
+    "chains_tasks",
     "encodes_values",
     "executor_name",
     "executor_width",
@@ -54,6 +55,13 @@ class Executor(Protocol):
     processes, so that a node travels as a :class:`FunctionRef` and values in
     their port type's array encoding (:func:`call_node_encoded`); False when
     they run in this process and get the values themselves (:func:`call_node`).
+
+    An executor may also declare ``chains_tasks = True`` (read with
+    :func:`chains_tasks`): each future it returns then has a ``task``, a handle
+    that its ``submit`` accepts inside the arguments in place of the task's
+    result, so a node can be submitted before its inputs reach this process
+    (the Dask executor; a chain then runs at the cluster's pace, not at that of
+    a round trip through the client per node).
     """
 
     encodes_values: bool
@@ -245,6 +253,11 @@ def executor_width(executor: Any) -> int:
     return max(1, int(width))
 
 
+def chains_tasks(executor: Any) -> bool:
+    """Whether the executor takes its futures' ``task`` as inputs (see :class:`Executor`)."""
+    return bool(getattr(executor, "chains_tasks", False))
+
+
 def encodes_values(executor: Any) -> bool:
     """The executor's transport (see :class:`Executor`); a plain ``concurrent.futures``
     thread pool, which does not declare one, runs in this process."""
@@ -290,9 +303,18 @@ def call_node_encoded(
     inputs: Payload,
     outputs: dict[str, type[PortType]],
     output_tuple: bool,
+    upstream: dict[str, tuple[tuple[Payload, float], str]] | None = None,
 ) -> tuple[Payload, float]:
-    """:func:`call_node` for another process: inputs and outputs travel encoded."""
+    """:func:`call_node` for another process: inputs and outputs travel encoded.
+
+    ``upstream`` holds the inputs submitted before they were computed: by
+    port, the producing task's result (what this function returned there) and
+    the producer's output port. A chaining executor (:func:`chains_tasks`)
+    puts the result there.
+    """
     func = ref.resolve()
+    for port, ((produced, _), source_port) in (upstream or {}).items():
+        inputs = {**inputs, port: produced[source_port]}
     values = {  # read-only for good, as under threads
         port: kind.decode({name: freeze(a) for name, a in arrays.items()}, meta)
         for port, (kind, arrays, meta) in inputs.items()

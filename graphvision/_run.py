@@ -29,7 +29,9 @@ Each node of the run moves through these states (``NodeRecord.status``)::
 record.) The state lives in one dataclass, ``_Run``; :func:`plan_steps` (a function
 of the graph, the keys and the cache, changing nothing) decides cached or pending,
 ``_Run.plan`` records its decision, ``start`` hands a pending node to the executor
-(encoded values for other processes, the values themselves in this one),
+(encoded values for other processes, the values themselves in this one; to an
+executor that chains tasks, such as Dask's, as soon as the nodes it reads are
+submitted, their tasks standing for their values),
 ``finish`` validates, freezes, stores and releases, and the scheduler
 (:func:`~graphvision._scheduler.run_tasks`) only orders them.
 """
@@ -64,6 +66,7 @@ from ._executors import (
     SyncExecutor,
     call_node,
     call_node_encoded,
+    chains_tasks,
     encodes_values,
     executor_name,
     make_executor,
@@ -346,6 +349,9 @@ class _Run:
 
     def __post_init__(self) -> None:
         self.encoded = encodes_values(self.executor)  # the transport, read once
+        self.chained = self.encoded and chains_tasks(self.executor)
+        # With a chaining executor, its futures (each with a ``task``) of the steps not finished.
+        self.in_flight: dict[str, Any] = {}
 
     def track_consumers(self, compute: list[str], pinned: list[tuple[str, str]]) -> None:
         """Count readers of each value so intermediates are dropped after their last one."""
@@ -421,7 +427,6 @@ class _Run:
 
     def _submit(self, name: str, executor: Executor) -> Future:
         step = self.compiled.steps[name]
-        inputs = {port: self.values[source] for port, source in step.inputs.items()}
         for hook in self.hooks:
             hook.node_started(name=name, op=step.spec.id)
         self.started[name] = time.perf_counter()
@@ -436,23 +441,32 @@ class _Run:
                     )
                 )
                 return refused
-            payload = {}
-            for port, value in inputs.items():
-                kind = step.spec.inputs[port].type
-                payload[port] = (kind, *kind.encode(value))
-            return executor.submit(
+            payload, upstream = {}, {}
+            for port, source in step.inputs.items():
+                if source in self.values:
+                    kind = step.spec.inputs[port].type
+                    payload[port] = (kind, *kind.encode(self.values[source]))
+                else:  # submitted ahead: the producer's task stands for its result
+                    upstream[port] = (self.in_flight[source[0]].task, source[1])
+            future = executor.submit(
                 call_node_encoded,
                 step.spec.ref,
                 step.params,
                 payload,
                 step.outputs,
                 step.spec.output_tuple is not None,
+                upstream,
             )
+            if self.chained:
+                self.in_flight[name] = future
+            return future
+        inputs = {port: self.values[source] for port, source in step.inputs.items()}
         return executor.submit(call_node, step.spec.func, step.params, inputs)
 
     def finish(self, name: str, future: Future) -> bool:
         step = self.compiled.steps[name]
         node = self.nodes[name]
+        self.in_flight.pop(name, None)
         try:
             result, seconds = future.result()
             outputs = self.accept(step, result)
@@ -756,7 +770,12 @@ def _execute(
         state.track_consumers(compute, pinned)
         inline = None if encodes_values(pool) else state.start_inline
         skipped = run_tasks(
-            dependencies, state.start, state.finish, keep_going=keep_going, start_inline=inline
+            dependencies,
+            state.start,
+            state.finish,
+            keep_going=keep_going,
+            start_inline=inline,
+            ahead=state.chained,
         )
         for step in skipped:  # downstream of a failure
             state.nodes[step].status = "skipped"

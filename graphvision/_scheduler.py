@@ -10,6 +10,14 @@ State machine of a task::
     waiting --(all dependencies succeeded)--> running --> done | failed
     waiting --(a dependency failed, or the run is stopping)--> skipped
 
+With ``ahead`` (an executor that passes results between its tasks itself, as
+Dask does) a task starts once its dependencies have *started*; one that
+completes first is held until they finish, so ``finish`` still sees every
+task after its dependencies, and one whose dependency failed is skipped::
+
+    waiting --(all dependencies started)--> running --> held --> done | failed
+    running or held --(a dependency failed)--> skipped
+
 Finished futures are handed back through a queue fed by done-callbacks, so
 each completion costs O(1) however many tasks are in flight. On a failure
 without ``keep_going`` no new task starts; tasks already running finish (and
@@ -117,6 +125,7 @@ def run_tasks(
     *,
     keep_going: bool = False,
     start_inline: Callable[[str], Future] | None = None,
+    ahead: bool = False,
 ) -> list[str]:
     """Run every task once its dependencies succeeded; return the tasks skipped.
 
@@ -128,7 +137,7 @@ def run_tasks(
         Submits a task, returns its future (may be already done).
     finish : callable
         Called in this thread with each finished future; returns False when
-        the task failed.
+        the task failed. Always called for a task's dependencies first.
     keep_going : bool
         Keep starting tasks that do not depend on a failed one.
     start_inline : callable, optional
@@ -136,8 +145,14 @@ def run_tasks(
         run (nothing else running or ready), where a hand-off to a worker
         would cost time and buy no parallelism: a chain runs at the cost of
         plain calls.
+    ahead : bool
+        Start a task as soon as its dependencies have started, not finished
+        (for an executor that passes results from task to task itself). A
+        task that completes before a dependency has finished waits for it; one
+        whose dependency failed is skipped, whatever its own future says.
     """
     waiting = {name: len(deps) for name, deps in dependencies.items()}
+    unstarted = dict(waiting)  # dependencies not started yet (for ``ahead``)
     dependents: dict[str, list[str]] = {name: [] for name in dependencies}
     for name, deps in dependencies.items():
         for dep in deps:
@@ -146,7 +161,9 @@ def run_tasks(
     finished: queue.SimpleQueue[tuple[str, Future]] = queue.SimpleQueue()
     # A task run here is the only one running, so nothing else can be finished before
     # it: the loop takes it next without the queue (nor a callback) on the way.
+    # Tasks held back until their dependencies finished join it there.
     finished_here: list[tuple[str, Future]] = []
+    held: dict[str, Future] = {}  # started ahead, done before a dependency finished
     started: set[str] = set()
     blocked: set[str] = set()
     stopping = False
@@ -162,31 +179,54 @@ def run_tasks(
             running += 1
             finished_here.append((names[0], start_inline(names[0])))
             return
-        for name in names:
+        names = list(names)
+        for name in names:  # grows while it runs when tasks start ahead
             started.add(name)
             running += 1
             start(name).add_done_callback(report_to_loop(name))
+            if ahead:
+                for child in dependents[name]:
+                    unstarted[child] -= 1
+                    if unstarted[child] == 0 and child not in blocked and not stopping:
+                        names.append(child)
 
     def block(name: str) -> None:
+        nonlocal running
         stack = [name]
         while stack:
             for child in dependents[stack.pop()]:
                 if child not in blocked:
                     blocked.add(child)
                     stack.append(child)
+                    if child in held:  # it ran ahead, on a value that never came
+                        del held[child]
+                        running -= 1
 
     launch([name for name, count in waiting.items() if count == 0])
     while running:
         name, future = finished_here.pop() if finished_here else finished.get()
+        if name in blocked:  # started ahead of a dependency that then failed
+            running -= 1
+            continue
+        if waiting[name]:  # started ahead and done first: its dependencies finish first
+            held[name] = future
+            continue
         running -= 1
         if finish(name, future):
             ready = []
             for child in dependents[name]:
                 waiting[child] -= 1
-                if waiting[child] == 0 and child not in blocked and not stopping:
+                if waiting[child] == 0 and child in held:
+                    finished_here.append((child, held.pop(child)))
+                elif (
+                    waiting[child] == 0
+                    and child not in blocked
+                    and child not in started
+                    and not stopping
+                ):
                     ready.append(child)
             launch(ready)
         else:
             block(name)
             stopping = stopping or not keep_going
-    return [name for name in dependencies if name not in started]
+    return [name for name in dependencies if name not in started or name in blocked]

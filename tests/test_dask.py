@@ -199,3 +199,75 @@ def test_a_dask_batch_sends_the_shared_values_once_and_never_recomputes_them(
     for item, level in zip(batch.items, levels, strict=True):
         assert item.scalars["score"] == pytest.approx(2.0 * level / 255.0, abs=1e-6)
     assert log.read_text().splitlines().count("model") == 1
+
+
+STEP_PLUGIN = '''
+from graphvision import Float, node
+
+
+@node("step.add")
+def add(x: Float, *, fail: bool = False) -> Float:
+    """x + 1, or an error.
+
+    Parameters
+    ----------
+    x : the value
+    fail : raise instead
+    """
+    if fail:
+        raise ValueError("asked to fail")
+    return x + 1.0
+'''
+
+
+class Order(gv.RunHooks):
+    def __init__(self) -> None:
+        self.events: list[str] = []
+
+    def node_started(self, *, name, op):
+        self.events.append(f"start {name}")
+
+    def node_finished(self, *, name, op, status, seconds):
+        self.events.append(f"{status} {name}")
+
+
+def step_chain(tmp_path, length, failing=None):
+    plugin = tmp_path / "step.py"
+    plugin.write_text(STEP_PLUGIN)
+    graph = gv.Graph("steps")
+    value = graph.input("x", "Float", default=0.0)
+    for k in range(length):
+        value = graph.add(f"n{k}", "step.add", x=value, params={"fail": k == failing})
+    graph.output("last", value)
+    return graph, gv.discover([plugin])
+
+
+def test_a_chain_is_submitted_whole_and_computed_on_the_workers(dask_executor, tmp_path):
+    """Each node goes to Dask with its predecessor's task, not after its value came back."""
+    graph, registry = step_chain(tmp_path, 12)
+    order = Order()
+    result = gv.run(graph, registry, executor=dask_executor, cache=None, hooks=[order])
+    assert result.outputs["last"] == 12.0
+    assert order.events[:12] == [f"start n{k}" for k in range(12)]
+    assert order.events[12:] == [f"computed n{k}" for k in range(12)]
+
+
+def test_nodes_submitted_ahead_of_a_failure_are_skipped_not_failed(dask_executor, tmp_path):
+    graph, registry = step_chain(tmp_path, 6, failing=2)
+    cache = gv.Cache.at(tmp_path / "cache")
+    with pytest.raises(gv.RunError) as caught:
+        gv.run(graph, registry, executor=dask_executor, cache=cache)
+    assert list(caught.value.failures) == ["n2"]
+    assert "asked to fail" in str(caught.value.failures["n2"])
+    statuses = {node.name: node.status for node in caught.value.record.nodes}
+    assert statuses == {
+        "n0": "computed", "n1": "computed", "n2": "failed",
+        "n3": "skipped", "n4": "skipped", "n5": "skipped",
+    }  # fmt: skip
+    fixed = step_chain(tmp_path, 6)[0]  # the same first two nodes, then no failure
+    again = gv.run(fixed, registry, executor=dask_executor, cache=cache)
+    assert again.outputs["last"] == 6.0
+    statuses = {node.name: node.status for node in again.record.nodes}
+    assert statuses == {  # n1's value was stored, so n0 is not even looked at
+        "n1": "cached", "n2": "computed", "n3": "computed", "n4": "computed", "n5": "computed",
+    }  # fmt: skip

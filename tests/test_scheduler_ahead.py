@@ -1,0 +1,85 @@
+"""Starting tasks ahead of their dependencies (for executors that chain tasks themselves)."""
+
+from __future__ import annotations
+
+import threading
+from concurrent.futures import Future
+
+from graphvision._scheduler import run_tasks
+
+CHAIN = {"a": set(), "b": {"a"}, "c": {"b"}}
+
+
+class Tasks:
+    """Futures completed by a thread in a chosen order, once every task has started."""
+
+    def __init__(self, expected: int, outcomes: list[tuple[str, object]]) -> None:
+        self.futures: dict[str, Future] = {}
+        self.started: list[str] = []
+        self.finished: list[str] = []
+        self.outcomes = outcomes
+        self.all_started = threading.Event()
+        self.expected = expected
+        self.thread = threading.Thread(target=self.complete)
+        self.thread.start()
+
+    def start(self, name: str) -> Future:
+        self.started.append(name)
+        self.futures[name] = Future()
+        if len(self.started) == self.expected:
+            self.all_started.set()
+        return self.futures[name]
+
+    def complete(self) -> None:
+        assert self.all_started.wait(10)
+        for name, outcome in self.outcomes:
+            if isinstance(outcome, Exception):
+                self.futures[name].set_exception(outcome)
+            else:
+                self.futures[name].set_result(outcome)
+
+    def finish(self, name: str, future: Future) -> bool:
+        self.finished.append(name)
+        return future.exception() is None
+
+
+def test_a_chain_starts_at_once_and_finishes_in_dependency_order():
+    tasks = Tasks(3, [("c", 3), ("b", 2), ("a", 1)])  # the last one done first
+    skipped = run_tasks(CHAIN, tasks.start, tasks.finish, ahead=True)
+    tasks.thread.join()
+    assert tasks.started == ["a", "b", "c"]
+    assert tasks.finished == ["a", "b", "c"] and skipped == []
+
+
+def test_tasks_started_ahead_of_a_failure_are_skipped_whatever_they_returned():
+    tasks = Tasks(3, [("c", 3), ("a", ValueError("a failed")), ("b", ValueError("a failed"))])
+    skipped = run_tasks(CHAIN, tasks.start, tasks.finish, ahead=True)
+    tasks.thread.join()
+    assert tasks.finished == ["a"] and skipped == ["b", "c"]
+
+
+def test_without_ahead_a_task_starts_after_its_dependencies_finished():
+    order: list[str] = []
+
+    def start(name: str) -> Future:
+        order.append(f"start {name}")
+        future: Future = Future()
+        future.set_result(name)
+        return future
+
+    def finish(name: str, future: Future) -> bool:
+        order.append(f"finish {name}")
+        return True
+
+    run_tasks(CHAIN, start, finish)
+    assert order == ["start a", "finish a", "start b", "finish b", "start c", "finish c"]
+
+
+def test_an_independent_branch_started_ahead_keeps_its_result_after_a_failure():
+    graph = {"a": set(), "b": {"a"}, "x": set(), "y": {"x"}}
+    tasks = Tasks(
+        4, [("a", ValueError("a failed")), ("b", ValueError("a failed")), ("x", 1), ("y", 2)]
+    )
+    skipped = run_tasks(graph, tasks.start, tasks.finish, ahead=True)
+    tasks.thread.join()
+    assert sorted(tasks.finished) == ["a", "x", "y"] and skipped == ["b"]
