@@ -29,7 +29,7 @@ from ._ports import PortType
 from ._registry import Registry
 from ._scheduler import CycleError, topological_order
 
-__all__ = ["CompiledGraph", "Step", "compile_graph"]
+__all__ = ["CompiledGraph", "Schedule", "Step", "compile_graph"]
 
 
 @dataclass(frozen=True)
@@ -54,6 +54,22 @@ class Step:
 
 
 @dataclass(frozen=True)
+class Schedule:
+    """What computing some outputs from nothing involves, fixed by the graph alone.
+
+    ``steps`` in topological order; ``inputs`` the graph inputs they (or the
+    outputs themselves) read; ``dependencies`` each step's producers among the
+    steps; ``readers`` how many of the steps read each value (``(node, port)``,
+    port ``''`` for a graph input). A run reads it and changes nothing in it.
+    """
+
+    steps: list[str]
+    inputs: frozenset[str]
+    dependencies: dict[str, frozenset[str]]
+    readers: dict[tuple[str, str], int]
+
+
+@dataclass(frozen=True)
 class CompiledGraph:
     """A validated graph: steps in topological order, typed inputs and outputs."""
 
@@ -68,17 +84,36 @@ class CompiledGraph:
             return self.input_types[producer]
         return self.steps[producer].outputs[port]
 
-    def needed_for(self, outputs: list[str]) -> list[str]:
-        """Steps that the given outputs depend on, in topological order."""
-        wanted: set[str] = set()
-        stack = [self.outputs[o][0] for o in outputs]
-        while stack:
-            name = stack.pop()
-            if name in wanted or name not in self.steps:
-                continue
-            wanted.add(name)
-            stack.extend(src for src, _ in self.steps[name].inputs.values())
-        return [name for name in self.steps if name in wanted]
+    def schedule_for(self, outputs: list[str]) -> Schedule:
+        """What computing ``outputs`` from nothing involves (see :class:`Schedule`); the
+        one for all outputs is made once per compiled graph and shared by its runs."""
+        if len(outputs) == len(self.outputs) and set(outputs) == self.outputs.keys():
+            return self.full_schedule
+        return self._schedule(outputs)
+
+    @cached_property
+    def full_schedule(self) -> Schedule:
+        return self._schedule(list(self.outputs))
+
+    def _schedule(self, outputs: list[str]) -> Schedule:
+        """One pass over the steps from the last (they are in topological order, so
+        every reader of a step comes after it), one from the first."""
+        wanted = {self.outputs[o][0] for o in outputs}
+        needed = []
+        for name, step in reversed(self.steps.items()):
+            if name in wanted:
+                needed.append(name)
+                wanted.update([src for src, _ in step.inputs.values()])
+        needed.reverse()
+        dependencies: dict[str, frozenset[str]] = {}
+        readers: dict[tuple[str, str], int] = {}
+        for name in needed:
+            sources = self.steps[name].inputs.values()
+            dependencies[name] = frozenset([src for src, _ in sources if src in dependencies])
+            for source in sources:
+                readers[source] = readers.get(source, 0) + 1
+        inputs = frozenset(name for name in self.input_types if name in wanted)
+        return Schedule(needed, inputs, dependencies, readers)
 
 
 class _Checker:

@@ -100,12 +100,17 @@ class PortType:
     """Base class of port types. Subclass it to add a type (a plugin may)."""
 
     description: ClassVar[str] = ""
+    _type_name: ClassVar[str] = "PortType"
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        name = cls.__name__  # named once: records and summaries ask for it per value
+        cls._type_name = name[: -len("Port")] if name.endswith("Port") and name != "Port" else name
 
     @classmethod
     def type_name(cls) -> str:
         """The name used in pipeline files and messages: the class name without ``Port``."""
-        name = cls.__name__
-        return name[: -len("Port")] if name.endswith("Port") and name != "Port" else name
+        return cls._type_name
 
     @classmethod
     def is_a(cls, other: type[PortType]) -> bool:
@@ -400,6 +405,8 @@ class _ScalarPort(PortType):
 
     @classmethod
     def validate(cls, value: Any) -> Any:
+        if type(value) is cls.python_type:  # the common case, decided at once
+            return value
         if isinstance(value, np.generic):
             value = value.item()
         if not isinstance(value, cls.python_type) or (
@@ -438,6 +445,8 @@ class FloatPort(_ScalarPort):
 
     @classmethod
     def validate(cls, value: Any) -> Any:
+        if type(value) is cls.python_type:  # the common case, decided at once
+            return value
         if isinstance(value, np.generic):
             value = value.item()
         if isinstance(value, int) and not isinstance(value, bool) and cls is FloatPort:

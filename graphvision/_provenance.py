@@ -180,7 +180,8 @@ def describe_run(
     keys: Mapping[tuple[str, str], str],
     overrides: Mapping[str, Any],
 ) -> None:
-    """Fill ``record``'s provenance fields and each node's parameters and cache keys."""
+    """Fill ``record``'s provenance fields (each node's record holds its parameters and
+    cache keys from the start)."""
     record.date = datetime.now(UTC).isoformat(timespec="seconds")
     source = Path(compiled.graph.source) if compiled.graph.source else None
     if source is not None and source.is_file():
@@ -193,9 +194,3 @@ def describe_run(
     record.params = dict(compiled.graph.params)
     record.overrides = dict(overrides)
     record.versions = package_versions(registry)
-    for node in record.nodes:
-        step = compiled.steps[node.name]
-        node.params = dict(step.params)
-        node.keys = {
-            port: keys[(node.name, port)] for port in step.outputs if (node.name, port) in keys
-        }

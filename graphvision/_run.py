@@ -42,6 +42,7 @@ import hashlib
 import json
 import time
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from concurrent.futures import Future
 from dataclasses import asdict, dataclass, field
 from functools import partial
@@ -50,8 +51,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from ._cache import Cache, content_key, output_key
-from ._compile import CompiledGraph, Step, compile_graph
+from ._cache import Cache, content_key, output_keys
+from ._compile import CompiledGraph, Schedule, Step, compile_graph
 from ._errors import (
     GraphvisionError,
     InputError,
@@ -63,12 +64,12 @@ from ._errors import (
 )
 from ._executors import (
     Executor,
-    SyncExecutor,
     call_node,
     call_node_encoded,
     chains_tasks,
     encodes_values,
     executor_name,
+    executor_width,
     make_executor,
 )
 from ._graph import Graph
@@ -76,6 +77,7 @@ from ._ports import PortType, TextPort, _ScalarPort, freeze
 from ._provenance import describe_run
 from ._registry import Registry
 from ._scheduler import run_tasks
+from ._warnings import running
 
 __all__ = [
     "NodeRecord",
@@ -89,10 +91,12 @@ __all__ = [
     "value_bytes",
 ]
 
-_INLINE = SyncExecutor()
+# About what handing a node to a thread and taking its result back costs (measured on
+# a fan-out of trivial nodes): a node faster than this gains nothing from a thread.
+_QUICK_SECONDS = 25e-6
 
 
-@dataclass
+@dataclass(slots=True)
 class NodeRecord:
     """What happened to one node: ``computed``, ``cached`` (loaded), ``failed``, ``skipped``
     (downstream of a failure) or ``pending`` (the run stopped before it ran).
@@ -352,18 +356,13 @@ class _Run:
         self.chained = self.encoded and chains_tasks(self.executor)
         # With a chaining executor, its futures (each with a ``task``) of the steps not finished.
         self.in_flight: dict[str, Any] = {}
-
-    def track_consumers(self, compute: list[str], pinned: list[tuple[str, str]]) -> None:
-        """Count readers of each value so intermediates are dropped after their last one."""
-        for name in compute:
-            for source in self.compiled.steps[name].inputs.values():
-                self.consumers[source] = self.consumers.get(source, 0) + 1
-        self.pinned = set(pinned)
+        self.quick_ops: set[str] = set()  # ops whose last call here took under _QUICK_SECONDS
 
     def release_inputs(self, step: Step) -> None:
+        consumers = self.consumers
         for source in step.inputs.values():
-            self.consumers[source] -= 1
-            if self.consumers[source] == 0 and source not in self.pinned:
+            consumers[source] -= 1
+            if consumers[source] == 0 and source not in self.pinned:
                 self.values.pop(source, None)
 
     def key_inputs(self, values: dict[str, Any], reference_keys: dict[str, str]) -> None:
@@ -376,44 +375,90 @@ class _Run:
             self.values[(name, "")] = value
             self.keys[(name, "")] = content_key(self.compiled.input_types[name], value)
 
-    def load_inputs(self, compute: list[str], wanted: list[tuple[str, str]]) -> None:
-        """Load the inputs keyed by reference that a node to compute (or an output) reads."""
-        steps = self.compiled.steps
-        read = {src for step in compute for src, port in steps[step].inputs.values() if not port}
-        read |= {name for name, port in wanted if not port}
-        for name in sorted(read & self.deferred.keys()):
-            self.values[(name, "")] = self.deferred.pop(name)()
-
     def key_steps(self, names: list[str]) -> None:
+        keys, steps = self.keys, self.compiled.steps
         for name in names:
-            step = self.compiled.steps[name]
-            inputs = {port: self.keys[source] for port, source in step.inputs.items()}
-            for port in step.outputs:
-                self.keys[(name, port)] = output_key(step.fingerprint, inputs, port)
+            step = steps[name]
+            inputs = {port: keys[source] for port, source in step.inputs.items()}
+            made = output_keys(step.fingerprint, inputs, step.outputs)
+            for port, key in zip(step.outputs, made, strict=True):
+                keys[(name, port)] = key
 
-    def plan(self, wanted: Iterable[tuple[str, str]]) -> list[str]:
+    def plan(self, needed: list[str], wanted: list[tuple[str, str]]) -> list[str]:
         """Apply :func:`plan_steps`: record the loaded values as cached nodes (and tell the
-        hooks), the others as pending; return the steps to compute in order."""
-        lookup = self.cache.get if self.cache is not None else None
+        hooks); return the steps to compute in order (all ``needed`` without a cache)."""
+        if self.cache is None:
+            return needed
         found = plan_steps(
-            self.compiled, self.keys, wanted, self.values.keys(), self.deferred.keys(), lookup
-        )
+            self.compiled, self.keys, wanted, self.values.keys(), self.deferred.keys(),
+            self.cache.get,
+        )  # fmt: skip
         for source, (value, seconds) in found.loaded.items():
             name, port = source
             self.values[source] = value
-            op = self.compiled.steps[name].spec.id
-            node = self.nodes.setdefault(name, NodeRecord(name, op, "cached"))
+            step = self.compiled.steps[name]
+            node = self.nodes.get(name)
+            if node is None:
+                node = self.nodes[name] = self.new_record(step, "cached")
             node.seconds += seconds
-            node.output_bytes += value_bytes(self.compiled.steps[name].outputs[port], value)
-        for name in found.compute:
-            self.nodes[name] = NodeRecord(name, self.compiled.steps[name].spec.id, "pending")
+            node.output_bytes += value_bytes(step.outputs[port], value)
         for node in self.nodes.values():
-            if node.status == "cached":
-                for hook in self.hooks:
-                    hook.node_finished(
-                        name=node.name, op=node.op, status="cached", seconds=node.seconds
-                    )
+            for hook in self.hooks:
+                hook.node_finished(
+                    name=node.name, op=node.op, status="cached", seconds=node.seconds
+                )
         return found.compute
+
+    def prepare(
+        self, compute: list[str], wanted: list[tuple[str, str]], schedule: Schedule
+    ) -> Mapping[str, AbstractSet[str]]:
+        """The steps to compute get their records (pending); count how many of them read
+        each value (so intermediates are dropped after their last reader), load the
+        inputs keyed by reference that they read; return their dependencies among
+        themselves. With nothing cached that is the graph's ``schedule`` as it is."""
+        steps, nodes = self.compiled.steps, self.nodes
+        if len(compute) == len(schedule.steps):  # compute is a part of the schedule's steps
+            dependencies: Mapping[str, AbstractSet[str]] = schedule.dependencies
+            self.consumers = dict(schedule.readers)
+            read = set(schedule.inputs)
+        else:
+            dependencies, read = self.count_readers(compute, wanted)
+        for name in compute:
+            nodes[name] = self.new_record(steps[name], "pending")
+        self.pinned = set(wanted)
+        if self.keep_intermediates:
+            self.pinned.update((name, port) for name in compute for port in steps[name].outputs)
+        for name in sorted(read & self.deferred.keys()):
+            self.values[(name, "")] = self.deferred.pop(name)()
+        return dependencies
+
+    def count_readers(
+        self, compute: list[str], wanted: list[tuple[str, str]]
+    ) -> tuple[dict[str, set[str]], set[str]]:
+        """For some of the steps: their dependencies, their readers (``consumers``) and the
+        graph inputs they or the wanted outputs read."""
+        steps, consumers = self.compiled.steps, self.consumers
+        dependencies: dict[str, set[str]] = {}
+        read = {name for name, port in wanted if not port}
+        for name in compute:
+            sources = steps[name].inputs.values()
+            dependencies[name] = {src for src, _ in sources if src in dependencies}
+            for source in sources:
+                consumers[source] = consumers.get(source, 0) + 1
+                if not source[1]:
+                    read.add(source[0])
+        return dependencies, read
+
+    def new_record(self, step: Step, status: str) -> NodeRecord:
+        """A node's record, with the parameters it runs with and its outputs' keys."""
+        name, keys = step.name, self.keys
+        return NodeRecord(
+            name,
+            step.spec.id,
+            status,
+            params=dict(step.params),
+            keys={port: keys[(name, port)] for port in step.outputs},
+        )
 
     # -- execution --------------------------------------------------------------------
 
@@ -421,16 +466,37 @@ class _Run:
         """Hand a step to the run's executor."""
         return self._submit(name, self.executor)
 
-    def start_inline(self, name: str) -> Future:
-        """Run a step in this thread (the scheduler does when nothing else can run)."""
-        return self._submit(name, _INLINE)
+    def is_quick(self, name: str) -> bool:
+        """Whether the step's op last ran here faster than a hand-off to a thread costs."""
+        return self.compiled.steps[name].spec.id in self.quick_ops
+
+    def run_here(self, name: str) -> bool:
+        """Run a step in this thread and finish it (the scheduler does when nothing else
+        can run, or the step is quick); False when it failed."""
+        step = self.compiled.steps[name]
+        spec, values = step.spec, self.values
+        for hook in self.hooks:
+            hook.node_started(name=name, op=spec.id)
+        inputs = {port: values[source] for port, source in step.inputs.items()}
+        running.op = spec.id  # warnings name the node (as call_node does on a worker)
+        began = time.perf_counter()
+        try:
+            result = spec.func(**inputs, **step.params)
+            seconds = time.perf_counter() - began
+            outputs = self.accept(step, result)
+        except Exception as error:
+            self.started[name] = began
+            return self.failed(step, error)
+        finally:
+            running.op = ""
+        return self.computed(step, outputs, seconds)
 
     def _submit(self, name: str, executor: Executor) -> Future:
         step = self.compiled.steps[name]
         for hook in self.hooks:
             hook.node_started(name=name, op=step.spec.id)
         self.started[name] = time.perf_counter()
-        if self.encoded and executor is not _INLINE:
+        if self.encoded:
             if step.spec.ref.module == "__main__" and not step.spec.ref.path:
                 refused: Future = Future()
                 refused.set_exception(
@@ -464,33 +530,49 @@ class _Run:
         return executor.submit(call_node, step.spec.func, step.params, inputs)
 
     def finish(self, name: str, future: Future) -> bool:
+        """Finish a step the executor ran; False when it failed."""
         step = self.compiled.steps[name]
-        node = self.nodes[name]
-        self.in_flight.pop(name, None)
+        if self.chained:
+            self.in_flight.pop(name, None)
         try:
             result, seconds = future.result()
             outputs = self.accept(step, result)
         except Exception as error:
-            node.status, node.seconds = "failed", time.perf_counter() - self.started[name]
-            node.error = f"{type(error).__name__}: {error}"
-            self.failures[name] = self.wrap(step, error)
-            self.release_inputs(step)
-            for hook in self.hooks:
-                hook.node_finished(
-                    name=name, op=step.spec.id, status="failed", seconds=node.seconds
-                )
-            return False
+            return self.failed(step, error)
+        return self.computed(step, outputs, seconds)
+
+    def failed(self, step: Step, error: Exception) -> bool:
+        node = self.nodes[step.name]
+        node.status, node.seconds = "failed", time.perf_counter() - self.started[step.name]
+        node.error = f"{type(error).__name__}: {error}"
+        self.failures[step.name] = self.wrap(step, error)
+        self.release_inputs(step)
+        for hook in self.hooks:
+            hook.node_finished(
+                name=step.name, op=step.spec.id, status="failed", seconds=node.seconds
+            )
+        return False
+
+    def computed(self, step: Step, outputs: dict[str, Any], seconds: float) -> bool:
+        """Store a step's accepted outputs (and in the cache), release its inputs."""
+        name, op = step.name, step.spec.id
+        node = self.nodes[name]
         node.status, node.seconds = "computed", seconds
+        if seconds < _QUICK_SECONDS:
+            self.quick_ops.add(op)
+        else:
+            self.quick_ops.discard(op)
+        cache = self.cache if step.spec.cache else None
         for port, value in outputs.items():
             kind = step.outputs[port]
             self.values[(name, port)] = value
-            if step.spec.cache and self.cache is not None:
-                node.output_bytes += self.cache.put(self.keys[(name, port)], kind, value)
-            else:
+            if cache is not None:
+                node.output_bytes += cache.put(self.keys[(name, port)], kind, value)
+            elif not issubclass(kind, _ScalarPort):
                 node.output_bytes += value_bytes(kind, value)
         self.release_inputs(step)
         for hook in self.hooks:
-            hook.node_finished(name=name, op=step.spec.id, status="computed", seconds=seconds)
+            hook.node_finished(name=name, op=op, status="computed", seconds=seconds)
         return True
 
     def accept(self, step: Step, result: Any) -> dict[str, Any]:
@@ -499,6 +581,12 @@ class _Run:
                 port: _freeze(kind, kind.decode(arrays, meta))
                 for port, (kind, arrays, meta) in result.items()
             }
+        if step.spec.output_tuple is None:  # one output: no tuple to split
+            [(port, kind)] = step.outputs.items()
+            try:
+                return {port: _freeze(kind, kind.validate(result))}
+            except PortValueError as error:
+                raise PortValueError(f"node returned an invalid output '{port}': {error}") from None
         outputs = {}
         for port, value in step.spec.split_outputs(result).items():
             kind = step.outputs[port]
@@ -595,8 +683,8 @@ def run(
     )
     compiled, registry = _compiled(graph, registry, inputs, overrides)
     wanted = _wanted_outputs(compiled, outputs, inputs)
-    needed = compiled.needed_for(wanted)
-    given = _given_inputs(compiled, needed, wanted, inputs)
+    schedule = compiled.schedule_for(wanted)
+    given = _given_inputs(compiled, schedule, inputs)
     reference_keys = _referenced_inputs(compiled, given, registry)
     values = {
         name: partial(resolve_input, name, compiled.input_types[name], value, registry)
@@ -607,7 +695,7 @@ def run(
     state = _execute(
         compiled,
         values,
-        needed,
+        schedule,
         wanted,
         cache,
         executor,
@@ -689,17 +777,13 @@ def _wanted_outputs(
 
 
 def _given_inputs(
-    compiled: CompiledGraph, needed: Iterable[str], wanted: list[str], inputs: dict[str, Any]
+    compiled: CompiledGraph, schedule: Schedule, inputs: dict[str, Any]
 ) -> dict[str, Any]:
     """What is given for each graph input the wanted outputs read (step 2): value or default."""
-    used = {src for n in needed for src, port in compiled.steps[n].inputs.values() if not port}
-    used |= {
-        compiled.outputs[o][0] for o in wanted if compiled.outputs[o][0] in compiled.input_types
-    }
     return {
         name: inputs.get(name, compiled.graph.inputs[name].default)
         for name in compiled.input_types
-        if name in used
+        if name in schedule.inputs
     }
 
 
@@ -732,7 +816,7 @@ def _referenced_inputs(
 def _execute(
     compiled: CompiledGraph,
     values: dict[str, Any],
-    needed: list[str],
+    schedule: Schedule,
     wanted: list[str],
     cache: Cache | None,
     executor: str | Executor,
@@ -752,29 +836,23 @@ def _execute(
     state = _Run(compiled, cache, pool, hooks, RunRecord(compiled.graph.name, executor_name(pool)))
     began, failed = time.perf_counter(), True
     try:
+        state.keep_intermediates = keep_intermediates
         state.key_inputs(values, reference_keys or {})
-        state.key_steps(needed)
-        compute = state.plan(compiled.outputs[o] for o in wanted)
-        state.load_inputs(compute, [compiled.outputs[o] for o in wanted])
+        state.key_steps(schedule.steps)
+        sources = [compiled.outputs[o] for o in wanted]
+        compute = state.plan(schedule.steps, sources)
+        dependencies = state.prepare(compute, sources, schedule)
         for hook in hooks:
             hook.run_started(pipeline=compiled.graph.name, steps=compute)
-        computed = set(compute)
-        dependencies = {
-            step: {src for src, _ in compiled.steps[step].inputs.values() if src in computed}
-            for step in compute
-        }
-        pinned = [compiled.outputs[o] for o in wanted]
-        state.keep_intermediates = keep_intermediates
-        if keep_intermediates:
-            pinned += [(step, port) for step in compute for port in compiled.steps[step].outputs]
-        state.track_consumers(compute, pinned)
-        inline = None if encodes_values(pool) else state.start_inline
+        here = not state.encoded  # nodes run in this process: some may run in this thread
         skipped = run_tasks(
             dependencies,
             state.start,
             state.finish,
             keep_going=keep_going,
-            start_inline=inline,
+            run_here=state.run_here if here else None,
+            quick=state.is_quick if here else None,
+            limit=2 * executor_width(pool) if here else None,
             ahead=state.chained,
         )
         for step in skipped:  # downstream of a failure

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import heapq
 import queue
+from collections import deque
 from collections.abc import Callable, Mapping, Set
 from concurrent.futures import Future
 
@@ -124,7 +125,9 @@ def run_tasks(
     finish: Callable[[str, Future], bool],
     *,
     keep_going: bool = False,
-    start_inline: Callable[[str], Future] | None = None,
+    run_here: Callable[[str], bool] | None = None,
+    quick: Callable[[str], bool] | None = None,
+    limit: int | None = None,
     ahead: bool = False,
 ) -> list[str]:
     """Run every task once its dependencies succeeded; return the tasks skipped.
@@ -140,11 +143,21 @@ def run_tasks(
         the task failed. Always called for a task's dependencies first.
     keep_going : bool
         Keep starting tasks that do not depend on a failed one.
-    start_inline : callable, optional
-        Runs a task in this thread. Used when a task is the only one that can
-        run (nothing else running or ready), where a hand-off to a worker
-        would cost time and buy no parallelism: a chain runs at the cost of
-        plain calls.
+    run_here : callable, optional
+        Runs and finishes a task in this thread, returning False when it
+        failed. Used when a task is the only one that can run (nothing else
+        running or ready), where a hand-off to a worker would cost time and
+        buy no parallelism (a chain runs at the cost of plain calls), and for
+        the tasks ``quick`` names.
+    quick : callable, optional
+        Whether a task is known to take less time than a hand-off to a worker
+        costs (it then runs in this thread: a fan-out of tiny tasks gains
+        nothing from threads but the hand-offs).
+    limit : int, optional
+        At most this many tasks with the executor at once; the other ready
+        tasks wait here, so that what the first ones teach ``quick`` applies
+        to the rest. Ready tasks still start after a failure: only tasks that
+        become ready later do not.
     ahead : bool
         Start a task as soon as its dependencies have started, not finished
         (for an executor that passes results from task to task itself). A
@@ -159,11 +172,12 @@ def run_tasks(
             dependents[dep].append(name)
 
     finished: queue.SimpleQueue[tuple[str, Future]] = queue.SimpleQueue()
-    # A task run here is the only one running, so nothing else can be finished before
-    # it: the loop takes it next without the queue (nor a callback) on the way.
-    # Tasks held back until their dependencies finished join it there.
+    here: list[str] = []  # started, to run in this thread (``run_here``)
+    # Tasks held back until their dependencies finished come back to the loop here.
     finished_here: list[tuple[str, Future]] = []
     held: dict[str, Future] = {}  # started ahead, done before a dependency finished
+    ready: deque[str] = deque()  # may start; not started yet (``limit``)
+    handed: set[str] = set()  # with the executor now
     started: set[str] = set()
     blocked: set[str] = set()
     stopping = False
@@ -172,23 +186,31 @@ def run_tasks(
     def report_to_loop(name: str) -> Callable[[Future], None]:
         return lambda done: finished.put((name, done))
 
-    def launch(names: list[str]) -> None:
+    def launch() -> None:
+        """Start ready tasks: in this thread when alone or quick, else while under ``limit``."""
         nonlocal running
-        if start_inline is not None and running == 0 and len(names) == 1:
-            started.add(names[0])
-            running += 1
-            finished_here.append((names[0], start_inline(names[0])))
-            return
-        names = list(names)
-        for name in names:  # grows while it runs when tasks start ahead
+        while ready:
+            name = ready[0]
+            if run_here is not None and (
+                (running == 0 and len(ready) == 1) or (quick is not None and quick(name))
+            ):
+                ready.popleft()
+                started.add(name)
+                running += 1
+                here.append(name)
+                continue
+            if limit is not None and len(handed) >= limit:
+                return
+            ready.popleft()
             started.add(name)
+            handed.add(name)
             running += 1
             start(name).add_done_callback(report_to_loop(name))
             if ahead:
                 for child in dependents[name]:
                     unstarted[child] -= 1
                     if unstarted[child] == 0 and child not in blocked and not stopping:
-                        names.append(child)
+                        ready.append(child)
 
     def block(name: str) -> None:
         nonlocal running
@@ -202,18 +224,25 @@ def run_tasks(
                         del held[child]
                         running -= 1
 
-    launch([name for name, count in waiting.items() if count == 0])
+    ready.extend(name for name, count in waiting.items() if count == 0)
+    launch()
     while running:
-        name, future = finished_here.pop() if finished_here else finished.get()
-        if name in blocked:  # started ahead of a dependency that then failed
-            running -= 1
-            continue
-        if waiting[name]:  # started ahead and done first: its dependencies finish first
-            held[name] = future
-            continue
+        if here:
+            name = here.pop()
+            assert run_here is not None  # the only way into ``here``
+            succeeded = run_here(name)
+        else:
+            name, future = finished_here.pop() if finished_here else finished.get()
+            handed.discard(name)
+            if name in blocked:  # started ahead of a dependency that then failed
+                running -= 1
+                continue
+            if waiting[name]:  # started ahead and done first: its dependencies finish first
+                held[name] = future
+                continue
+            succeeded = finish(name, future)
         running -= 1
-        if finish(name, future):
-            ready = []
+        if succeeded:
             for child in dependents[name]:
                 waiting[child] -= 1
                 if waiting[child] == 0 and child in held:
@@ -225,8 +254,8 @@ def run_tasks(
                     and not stopping
                 ):
                     ready.append(child)
-            launch(ready)
         else:
             block(name)
             stopping = stopping or not keep_going
+        launch()
     return [name for name in dependencies if name not in started or name in blocked]
