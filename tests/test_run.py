@@ -457,3 +457,69 @@ def test_editing_a_module_imported_inside_a_node_invalidates_that_node_only(tmp_
     graph = gv.Graph("lazy")
     graph.output("o", graph.add("o", "lazy.uses_kernel", x=graph.input("x", "Float", default=1.0)))
     assert gv.run(graph, after, cache=None).outputs["o"] == 3.0
+
+
+THREAD_PLUGIN = '''
+import threading
+from graphvision import Float, node
+
+BARRIER = threading.Barrier(2, timeout=10)
+THREADS = []
+
+
+@node("threads.meet")
+def meet(x: Float) -> Float:
+    """Waits until a second node waits too (so only nodes running at once finish).
+
+    Parameters
+    ----------
+    x : the value
+    """
+    BARRIER.wait()
+    return x
+
+
+@node("threads.where")
+def where(x: Float) -> Float:
+    """Notes the thread it runs in.
+
+    Parameters
+    ----------
+    x : the value
+    """
+    THREADS.append(threading.current_thread())
+    return x
+'''
+
+
+def _thread_nodes(tmp_path):
+    plugin = tmp_path / "threads_plugin.py"
+    plugin.write_text(THREAD_PLUGIN)
+    return gv.discover([plugin])
+
+
+def test_slow_nodes_run_at_once_on_threads(tmp_path):
+    registry = _thread_nodes(tmp_path)
+    graph = gv.Graph("meet")
+    x = graph.input("x", "Float", default=1.0)
+    for name in ("a", "b"):
+        graph.output(name, graph.add(name, "threads.meet", x=x))
+    result = gv.run(graph, registry, executor="threads", workers=2)
+    assert result.outputs == {"a": 1.0, "b": 1.0}  # each waited for the other
+
+
+def test_quick_nodes_run_in_the_calling_thread(tmp_path):
+    """A hand-off to a thread costs more than a trivial node: after the first ones show
+    they are quick, the rest run in the scheduler's own thread."""
+    import sys
+    import threading
+
+    registry = _thread_nodes(tmp_path)
+    graph = gv.Graph("where")
+    x = graph.input("x", "Float", default=1.0)
+    for k in range(200):
+        graph.output(f"o{k}", graph.add(f"n{k}", "threads.where", x=x))
+    gv.run(graph, registry, executor="threads", workers=2)
+    threads = sys.modules[registry.nodes["threads.where"].ref.module].THREADS
+    here = sum(thread is threading.current_thread() for thread in threads)
+    assert len(threads) == 200 and here >= 150

@@ -1,4 +1,4 @@
-"""Starting tasks ahead of their dependencies (for executors that chain tasks themselves)."""
+"""The scheduler: starting tasks ahead, in this thread, and under a limit."""
 
 from __future__ import annotations
 
@@ -83,3 +83,34 @@ def test_an_independent_branch_started_ahead_keeps_its_result_after_a_failure():
     skipped = run_tasks(graph, tasks.start, tasks.finish, ahead=True)
     tasks.thread.join()
     assert sorted(tasks.finished) == ["a", "x", "y"] and skipped == ["b"]
+
+
+def test_quick_tasks_run_in_this_thread_and_the_others_under_the_limit():
+    fan = {f"t{k}": set() for k in range(10)}
+    handed, here, most = [], [], [0]
+    in_flight: list[Future] = []
+
+    def start(name: str) -> Future:
+        handed.append(name)
+        future: Future = Future()
+        in_flight.append(future)
+        most[0] = max(most[0], sum(not f.done() for f in in_flight))
+        threading.Timer(0.01, future.set_result, (name,)).start()
+        return future
+
+    def run_here(name: str) -> bool:
+        here.append(name)
+        return True
+
+    quick = {f"t{k}" for k in range(5, 10)}
+    skipped = run_tasks(
+        fan, start, lambda name, future: True, run_here=run_here, quick=quick.__contains__, limit=2
+    )
+    assert skipped == [] and sorted(here) == sorted(quick)
+    assert sorted(handed) == [f"t{k}" for k in range(5)] and most[0] == 2
+
+
+def test_a_chain_runs_in_this_thread():
+    started, here = [], []
+    run_tasks(CHAIN, started.append, lambda n, f: True, run_here=lambda n: here.append(n) or True)
+    assert started == [] and here == ["a", "b", "c"]
