@@ -205,9 +205,10 @@ def run_tasks(
             started.add(name)
             handed.add(name)
             running += 1
-            start(name).add_done_callback(report_to_loop(name))
-            if ahead:
-                for child in dependents[name]:
+            future = start(name)
+            future.add_done_callback(report_to_loop(name))
+            if ahead and not (future.done() and future.exception() is not None):
+                for child in dependents[name]:  # not after one refused at once
                     unstarted[child] -= 1
                     if unstarted[child] == 0 and child not in blocked and not stopping:
                         ready.append(child)

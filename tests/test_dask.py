@@ -271,3 +271,38 @@ def test_nodes_submitted_ahead_of_a_failure_are_skipped_not_failed(dask_executor
     assert statuses == {  # n1's value was stored, so n0 is not even looked at
         "n1": "cached", "n2": "computed", "n3": "computed", "n4": "computed", "n5": "computed",
     }  # fmt: skip
+
+
+def test_a_node_workers_cannot_import_fails_alone_and_its_readers_are_skipped(
+    dask_executor, tmp_path
+):
+    """A node defined in __main__ is refused before it is sent; nothing is sent ahead of it."""
+    import types
+
+    def twice(x: gv.Float) -> gv.Float:
+        """2 x.
+
+        Parameters
+        ----------
+        x : the value
+        """
+        return 2.0 * x
+
+    twice.__module__ = "__main__"
+    module = types.ModuleType("in_a_notebook")
+    module.twice = gv.node("notebook.twice")(twice)  # type: ignore[attr-defined]
+    plugin = tmp_path / "step.py"
+    plugin.write_text(STEP_PLUGIN)
+    registry = gv.discover([plugin])
+    registry.add_plugin(module, "in_a_notebook")
+    graph = gv.Graph("notebook")
+    x = graph.input("x", "Float", default=1.0)
+    graph.output("y", graph.add("b", "step.add", x=graph.add("a", "notebook.twice", x=x)))
+    with pytest.raises(gv.RunError) as caught:
+        gv.run(graph, registry, executor=dask_executor, cache=None)
+    assert list(caught.value.failures) == ["a"]
+    assert "defined in __main__" in str(caught.value.failures["a"])
+    assert [(n.name, n.status) for n in caught.value.record.nodes] == [
+        ("a", "failed"),
+        ("b", "skipped"),
+    ]

@@ -114,3 +114,16 @@ def test_a_chain_runs_in_this_thread():
     started, here = [], []
     run_tasks(CHAIN, started.append, lambda n, f: True, run_here=lambda n: here.append(n) or True)
     assert started == [] and here == ["a", "b", "c"]
+
+
+def test_nothing_starts_ahead_of_a_task_refused_at_once():
+    started = []
+
+    def start(name: str) -> Future:
+        started.append(name)
+        future: Future = Future()
+        future.set_exception(RuntimeError("cannot send it"))
+        return future
+
+    skipped = run_tasks(CHAIN, start, lambda name, future: False, ahead=True)
+    assert started == ["a"] and skipped == ["b", "c"]
