@@ -33,6 +33,7 @@ graphvision[dask]``), imported only when this executor is made.
 
 from __future__ import annotations
 
+import logging
 import os
 import threading
 from collections.abc import Callable
@@ -116,6 +117,9 @@ class DaskExecutor:
                 processes=True,
                 scheduler_port=0,
                 dashboard_address=":0",
+                # a failing node is reported once, by the run, naming it: not also as
+                # each worker's "Compute Failed" traceback
+                silence_logs=logging.CRITICAL,
             )
             self.client = distributed.Client(self._cluster)
 

@@ -65,7 +65,7 @@ __all__ = [
 ]
 
 ENTRY_POINT_GROUP = "graphvision.plugins"
-FORMAT = 2  # bump when what an index holds changes
+FORMAT = 3  # bump when what an index holds changes
 
 
 def installed_entry_points() -> list[EntryPoint]:
@@ -142,43 +142,58 @@ def has_index(key: str) -> bool:
     return index_path(key).is_file()
 
 
-def read_index(key: str) -> dict[str, Any] | None:
-    """The nodes of the index written under ``key``, or None.
+def _read(key: str) -> dict[str, Any] | None:
+    """The index written under ``key``, its every byte checked; None without one.
 
-    An index that cannot be read is removed, so that the discovery that
-    replaces it writes it again.
+    The file is a header line (the key and a BLAKE2b digest of the rest) and
+    the index as JSON. One that does not match its digest, does not parse or
+    holds the wrong shapes (truncated, hand-edited, hostile) is removed, so that
+    the discovery that replaces it writes it again.
     """
     path = index_path(key)
     try:
-        index = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
+        data = path.read_bytes()
+    except OSError:
         return None
-    except (OSError, ValueError):
+    header, _, body = data.partition(b"\n")
+    try:
+        head = json.loads(header)
+        index = json.loads(body) if head == _header(key, body) else None
+    except (ValueError, RecursionError):
         index = None
-    nodes = index.get("nodes") if isinstance(index, dict) and index.get("key") == key else None
-    if not isinstance(nodes, dict):
+    if not _well_formed(index):
         with contextlib.suppress(OSError):
             path.unlink()
         return None
-    return nodes
+    return index
+
+
+def _header(key: str, body: bytes) -> dict[str, str]:
+    return {"key": key, "blake2b": hashlib.blake2b(body, digest_size=20).hexdigest()}
+
+
+def _well_formed(index: Any) -> bool:
+    if not isinstance(index, dict) or not isinstance(index.get("nodes"), dict):
+        return False
+    plugins = index.get("plugins")
+    return isinstance(plugins, dict) and all(
+        isinstance(entry, dict)
+        and all(isinstance(entry.get(kind), list) for kind in ("nodes", "port_types", "sources"))
+        for entry in plugins.values()
+    )
+
+
+def read_index(key: str) -> dict[str, Any] | None:
+    """The nodes of the index written under ``key``, or None (see :func:`_read`)."""
+    index = _read(key)
+    return index["nodes"] if index is not None else None
 
 
 def read_providers(key: str) -> dict[str, dict[str, list[str]]] | None:
     """For each entry-point plugin of the index under ``key``, the node ids, port type
-    names and input-source schemes it registers; None without a readable index."""
-    path = index_path(key)
-    try:
-        index = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    plugins = index.get("plugins") if isinstance(index, dict) and index.get("key") == key else None
-    if not isinstance(plugins, dict) or not all(
-        isinstance(entry, dict)
-        and all(isinstance(entry.get(kind), list) for kind in ("nodes", "port_types", "sources"))
-        for entry in plugins.values()
-    ):
-        return None
-    return plugins
+    names and input-source schemes it registers; None without a sound index."""
+    index = _read(key)
+    return index["plugins"] if index is not None else None
 
 
 def write_index(key: str, registry: Registry) -> None:
@@ -201,8 +216,9 @@ def write_index(key: str, registry: Registry) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
         try:
-            with os.fdopen(handle, "w", encoding="utf-8") as stream:
-                json.dump({"key": key, "nodes": nodes, "plugins": plugins}, stream)
+            body = json.dumps({"nodes": nodes, "plugins": plugins}).encode()
+            with os.fdopen(handle, "wb") as stream:
+                stream.write(json.dumps(_header(key, body)).encode() + b"\n" + body)
             os.replace(temporary, path)
         finally:
             with contextlib.suppress(FileNotFoundError):

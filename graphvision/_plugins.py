@@ -67,9 +67,10 @@ def load_entry_points(registry: Registry, needs: Needs | None = None) -> None:
     fresh = not registry.plugins  # only a registry of these plugins alone is recorded
     entries = installed_entry_points()
     key = environment_key(entries)
-    indexed = has_index(key)
-    if indexed and needs is not None:
-        wanted = _providers(read_providers(key), needs, set(registry.port_types))
+    providers = read_providers(key) if has_index(key) else None  # a damaged one is removed
+    indexed = providers is not None
+    if providers is not None and needs is not None:
+        wanted = _providers(providers, needs, set(registry.port_types))
         if wanted is not None:
             entries = [entry for entry in entries if entry.name in wanted]
             fresh = False  # a part of the plugins: never recorded as the whole
@@ -115,16 +116,14 @@ class Needs:
 
 
 def _providers(
-    plugins: dict[str, dict[str, list[str]]] | None, needs: Needs, builtin: set[str]
+    plugins: dict[str, dict[str, list[str]]], needs: Needs, builtin: set[str]
 ) -> set[str] | None:
     """The entry points to import for ``needs``: those registering a needed op or a
     needed port type that is not built in, and every one that loads input values.
 
-    None (import all) when the index does not say, or when a need is provided by
-    no plugin: the error then lists every plugin's names for a "did you mean".
+    None (import all) when a need is provided by no plugin: the error then lists
+    every plugin's names for a "did you mean".
     """
-    if plugins is None:
-        return None
     wanted = {name for name, entry in plugins.items() if entry["sources"]}
     for kinds, needed in (("nodes", needs.ops), ("port_types", needs.port_types - builtin)):
         for name in needed:

@@ -14,7 +14,7 @@ import functools
 import hashlib
 import platform
 import subprocess
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
@@ -141,13 +141,21 @@ def _version(distribution: str) -> str:
         return NOT_INSTALLED
 
 
-def package_versions(registry: Registry) -> dict[str, str]:
-    """Python, graphvision, numpy, scipy and every loaded plugin's version or file hash."""
+def package_versions(registry: Registry, ops: Collection[str] | None = None) -> dict[str, str]:
+    """Python, graphvision, numpy, scipy and the version or file hash of each plugin that
+    provides one of ``ops`` or loads input values (every loaded plugin without ``ops``).
+
+    With ``ops`` the list depends on the pipeline alone, not on which plugins
+    happened to be imported (all of them when the plugin index was missing).
+    """
     versions = {
         "python": platform.python_version(),
         **{name: _version(name) for name in ("graphvision", "numpy", "scipy")},
     }
+    used = set(ops) if ops is not None else None
     for name, plugin in sorted(registry.plugins.items()):
+        if used is not None and not (plugin.sources or used.intersection(plugin.nodes)):
+            continue
         origin = Path(plugin.origin)
         if origin.is_file():
             versions[f"plugin {name}"] = f"sha256 {file_sha256(origin)}"
@@ -193,4 +201,4 @@ def describe_run(
     }
     record.params = dict(compiled.graph.params)
     record.overrides = dict(overrides)
-    record.versions = package_versions(registry)
+    record.versions = package_versions(registry, {s.spec.id for s in compiled.steps.values()})

@@ -216,7 +216,8 @@ class RunHooks:
         """A node was handed to the executor."""
 
     def node_finished(self, *, name: str, op: str, status: str, seconds: float) -> None:
-        """A node was computed, loaded from the cache, or failed."""
+        """A node was computed, loaded from the cache, or failed; or, after it was started
+        ahead of its inputs (on Dask), skipped because one of them failed."""
 
     def run_finished(self, *, record: RunRecord, failed: bool) -> None:
         """After the run, whatever happened."""
@@ -857,6 +858,11 @@ def _execute(
         )
         for step in skipped:  # downstream of a failure
             state.nodes[step].status = "skipped"
+            if step in state.started:  # sent ahead (Dask): its start was reported, so its end is
+                for hook in hooks:
+                    hook.node_finished(
+                        name=step, op=state.nodes[step].op, status="skipped", seconds=0.0
+                    )
         failed = bool(state.failures)
     except BaseException:  # Ctrl-C, or a bug: do not wait for the nodes still running
         if own:

@@ -255,8 +255,17 @@ def test_a_chain_is_submitted_whole_and_computed_on_the_workers(dask_executor, t
 def test_nodes_submitted_ahead_of_a_failure_are_skipped_not_failed(dask_executor, tmp_path):
     graph, registry = step_chain(tmp_path, 6, failing=2)
     cache = gv.Cache.at(tmp_path / "cache")
+    order = Order()
     with pytest.raises(gv.RunError) as caught:
-        gv.run(graph, registry, executor=dask_executor, cache=cache)
+        gv.run(graph, registry, executor=dask_executor, cache=cache, hooks=[order])
+    started = sorted(e.split()[1] for e in order.events if e.startswith("start"))
+    finished = sorted(e.split()[1] for e in order.events if not e.startswith("start"))
+    assert started == finished == [f"n{k}" for k in range(6)]  # each start has its end
+    assert [e for e in order.events if e.startswith("skipped")] == [
+        "skipped n3",
+        "skipped n4",
+        "skipped n5",
+    ]
     assert list(caught.value.failures) == ["n2"]
     assert "asked to fail" in str(caught.value.failures["n2"])
     statuses = {node.name: node.status for node in caught.value.record.nodes}

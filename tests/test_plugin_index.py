@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -229,19 +230,60 @@ def test_a_need_no_family_provides_imports_every_family_to_name_it(unknown):
     assert len(used.plugins) > 10
 
 
-def test_a_run_from_the_command_line_records_the_families_it_imported(capsys, tmp_path):
-    gv.discover()
+@pytest.mark.parametrize("index_first", [True, False])
+def test_a_record_lists_the_families_its_pipeline_uses_whatever_was_imported(
+    capsys, tmp_path, index_first
+):
+    """The first run without an index imports every family; its record says the same."""
+    if index_first:
+        gv.discover()
     pipeline = tmp_path / "smooth.yaml"
     pipeline.write_text(SMALL_PIPELINE % "1.0")
     status, _, _ = cli(capsys, "run", pipeline, "-d", tmp_path / "out", "--record")
     assert status == 0
-    record = (tmp_path / "out" / "record.json").read_text()
-    plugins = {
-        line.split('"plugin ')[1].split('"')[0]
-        for line in record.splitlines()
-        if '"plugin ' in line
-    }
+    record = json.loads((tmp_path / "out" / "record.json").read_text())
+    plugins = {name.removeprefix("plugin ") for name in record["versions"] if " " in name}
     assert plugins == {"filters", "color", "io"}
+
+
+def _truncated(data: bytes) -> bytes:
+    return data[: len(data) // 2]
+
+
+def _one_byte_changed(data: bytes) -> bytes:
+    middle = len(data) // 2
+    return data[:middle] + bytes([data[middle] ^ 0x01]) + data[middle + 1 :]
+
+
+def _no_sources(data: bytes) -> bytes:  # valid JSON, edited by hand: the digest no longer fits
+    assert b'"sources": ["file", "sample"]' in data
+    return data.replace(b'"sources": ["file", "sample"]', b'"sources": []')
+
+
+def _deeply_nested(data: bytes) -> bytes:
+    header = data.partition(b"\n")[0]
+    return header + b"\n" + b"[" * 200_000 + b"]" * 200_000
+
+
+def _no_header(data: bytes) -> bytes:
+    return data.partition(b"\n")[2]
+
+
+@pytest.mark.parametrize(
+    "damage", [_truncated, _one_byte_changed, _no_sources, _deeply_nested, _no_header]
+)
+def test_a_damaged_index_is_never_trusted_and_is_written_again(capsys, tmp_path, damage):
+    gv.discover()
+    [index] = index_files()
+    sound = index.read_bytes()
+    index.write_bytes(damage(sound))
+    pipeline = tmp_path / "smooth.yaml"
+    pipeline.write_text(SMALL_PIPELINE % "1.0")
+    status, _, err = cli(capsys, "run", pipeline, "-d", tmp_path / "out")
+    assert status == 0 and "error" not in err
+    assert index_files() == [index] and index.read_bytes() == sound  # replaced, sound again
+    status, listed, _ = cli(capsys, "nodes")
+    assert status == 0 and "filters.gaussian" in listed
 
 
 def test_a_misspelt_op_is_named_with_every_familys_ops_to_choose_from(capsys, tmp_path):
