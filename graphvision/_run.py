@@ -46,6 +46,7 @@ from collections.abc import Set as AbstractSet
 from concurrent.futures import Future
 from dataclasses import asdict, dataclass, field
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -228,10 +229,13 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
 
     A string for a non-``Text`` port is a reference: ``scheme:rest`` goes to the
     plugin source of that scheme (e.g. ``sample:camera``), a scalar port parses
-    it as YAML (``--input sigma=2``), anything else is a path for the ``file``
-    source. The loaded value, or an array the caller passed, then goes through
-    the port's dtype policy (:meth:`PortType.coerce`), so a ``uint8`` array
-    from OpenCV is the same image as the PNG it was read from.
+    it as YAML (``--input sigma=2``), a ``.npz`` path is read by the port type
+    as it writes its values (with the ``.json`` beside it, if any: a trained
+    network, keypoints or boxes from an earlier run's output folder), anything
+    else is a path for the ``file`` source. The loaded value, or an array the
+    caller passed, then goes through the port's dtype policy
+    (:meth:`PortType.coerce`), so a ``uint8`` array from OpenCV is the same
+    image as the PNG it was read from.
 
     Raises
     ------
@@ -246,6 +250,8 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
                 value = registry.sources[scheme].func(rest)
             elif issubclass(port_type, _ScalarPort):
                 value = yaml.safe_load(value)
+            elif value.lower().endswith(".npz"):
+                value = _read_written(port_type, Path(value))
             else:
                 value = registry.source("file").func(value)
         except Exception as error:
@@ -257,6 +263,21 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
         return _freeze(port_type, port_type.validate(value))
     except PortValueError as error:
         raise InputError(f"input '{name}': {error}") from None
+
+
+def _read_written(port_type: type[PortType], archive: Path) -> Any:
+    """The value in an ``.npz`` ``port_type`` wrote (with the ``.json`` of its header
+    beside it, if any), or an error naming the file and what it lacks."""
+    if not archive.is_file():
+        raise FileNotFoundError(f"no such file: {archive}")
+    header = archive.with_suffix(".json")
+    try:
+        return port_type.read([archive, header] if header.is_file() else [archive])
+    except (KeyError, TypeError, ValueError, OSError) as error:
+        raise ValueError(
+            f"{archive} is not a {port_type.type_name()} as graphvision writes it "
+            f"({type(error).__name__}: {error})"
+        ) from None
 
 
 def value_bytes(port_type: type[PortType], value: Any) -> int:

@@ -523,3 +523,29 @@ def test_quick_nodes_run_in_the_calling_thread(tmp_path):
     threads = sys.modules[registry.nodes["threads.where"].ref.module].THREADS
     here = sum(thread is threading.current_thread() for thread in threads)
     assert len(threads) == 200 and here >= 150
+
+
+def test_a_value_an_earlier_run_wrote_as_npz_is_an_input_of_its_type(tmp_path):
+    """Keypoints (an .npz and its .json header) written by one run are read back by the next."""
+    keypoints = gv.KeypointSet(
+        xy=np.array([[3.0, 4.0], [10.5, 2.25]]),
+        scale=np.array([1.6, 3.2]),
+        orientation=np.array([0.0, 1.0]),
+        response=np.array([0.5, 0.25]),
+    )
+    files = gv.KeypointsPort.write(keypoints, tmp_path / "keypoints")
+    assert {f.suffix for f in files} >= {".npz"}
+    graph = gv.Graph("again")
+    graph.output("same", graph.input("kp", "Keypoints"))
+    archive = next(f for f in files if f.suffix == ".npz")
+    result = gv.run(graph, inputs={"kp": str(archive)})
+    np.testing.assert_array_equal(result.outputs["same"].xy, keypoints.xy)
+    np.testing.assert_array_equal(result.outputs["same"].scale, keypoints.scale)
+
+
+def test_an_npz_that_is_not_of_the_inputs_type_is_named(tmp_path):
+    np.savez(tmp_path / "other.npz", something=np.zeros(3))
+    graph = gv.Graph("again")
+    graph.output("same", graph.input("kp", "Keypoints"))
+    with pytest.raises(gv.InputError, match=r"input 'kp': .*other\.npz is not a Keypoints"):
+        gv.run(graph, inputs={"kp": str(tmp_path / "other.npz")})
