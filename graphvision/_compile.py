@@ -312,6 +312,8 @@ class _Checker:
                 for port, ref in decl.inputs.items():  # still check the references
                     if ref.node not in graph.nodes and ref.node not in graph.inputs:
                         self.source_type(ref, f"nodes.{name}.in.{port}")
+                # and the ${params.NAME} it uses (so they are not reported unused)
+                self.substitute(decl.params, f"nodes.{name}.params", used_params)
                 continue
             params = self.substitute(decl.params, f"nodes.{name}.params", used_params)
             checked = self.check_params(name, spec, params)

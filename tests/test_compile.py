@@ -235,3 +235,22 @@ def test_no_float_parameter_takes_nan_or_infinity(value):
     key = next(f"{name}.sigma" for name, decl in graph.nodes.items() if "sigma" in decl.params)
     with pytest.raises(gv.PipelineError, match="Input should be a finite number"):
         gv.compile_graph(graph.with_overrides({key: value}), gv.discover())
+
+
+def test_a_misspelt_op_still_uses_the_params_it_refers_to(registry):
+    text = """\
+version: 1
+name: misspelt
+inputs:
+  x: {type: Float, default: 1.0}
+params:
+  offset: 2
+nodes:
+  a: {op: toy.ad, in: {a: x, b: x}, params: {offset: "${params.offset}"}}
+outputs:
+  out: a
+"""
+    with pytest.raises(gv.PipelineError) as info:
+        gv.compile_graph(gv.parse_pipeline(text, "misspelt.yaml"), registry)
+    messages = [p.message for p in info.value.problems]
+    assert len(messages) == 1 and "unknown op 'toy.ad'" in messages[0]
