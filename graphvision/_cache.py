@@ -514,6 +514,11 @@ class Cache:
                     f"Cache({name}=...) takes a store, got {type(store).__name__}: "
                     "for a cache in a folder use graphvision.Cache.at(folder)"
                 )
+        if memory is not None and not isinstance(memory, MemoryStore):  # it holds decoded values
+            raise TypeError(
+                f"Cache(memory=...) takes a MemoryStore, got {type(memory).__name__}: a disk "
+                "store goes second, Cache(disk=store), or use graphvision.Cache.at(folder)"
+            )
         self.memory = memory
         self.disk = disk
 

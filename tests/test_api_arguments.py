@@ -69,3 +69,17 @@ def test_a_graph_built_in_python_is_taken_as_before():
     graph.output("y", x)
     assert gv.run(graph, cache=None).outputs == {"y": 1.0}
     assert Path(COINS).is_file()
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        (("some/folder",), r"takes a store, got str: .*Cache\.at\(folder\)"),
+        ((None, "some/folder"), r"takes a store, got str"),
+        (("disk",), r"takes a MemoryStore, got DiskStore: a disk store goes second"),
+    ],
+)
+def test_a_cache_made_from_the_wrong_parts_is_refused_when_made(tmp_path, arguments, message):
+    made = tuple(gv.DiskStore(tmp_path / "store") if a == "disk" else a for a in arguments)
+    with pytest.raises(TypeError, match=message):
+        gv.Cache(*made)
