@@ -26,6 +26,7 @@ is quick.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import signal
 import sys
@@ -218,6 +219,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from ._run import run
 
     graph, registry, overrides, inputs = _load(args)
+    made = args.output_dir is not None and not Path(args.output_dir).exists()
     out_dir = _output_dir(args.output_dir)
     progress = args.progress or (args.progress is None and sys.stderr.isatty())
     if args.batch:
@@ -246,6 +248,11 @@ def cmd_run(args: argparse.Namespace) -> int:
             for failure in error.failures.values():
                 traceback.print_exception(failure.__cause__ or failure, file=sys.stderr)
         status, result = EXIT_FAILED, error.result  # type: ignore[attr-defined]
+    except BaseException:  # interrupted: a folder made for this run goes again, still empty
+        if made and out_dir is not None:
+            with contextlib.suppress(OSError):
+                out_dir.rmdir()
+        raise
     finally:
         if not isinstance(executor, str):
             executor.shutdown()
