@@ -85,7 +85,9 @@ class RunProgress(RunHooks):
             self._ticker = _Ticker(self._refresh, 0.5)
         else:
             self._write(f"running {pipeline}: {self.total} node(s) to compute")
-            self._ticker = _Ticker(self._still_running, min(1.0, self.heartbeat))
+            # a quarter of the heartbeat: a node is announced within 1.25 heartbeats of its
+            # start, whenever in the ticker's period it started
+            self._ticker = _Ticker(self._still_running, min(1.0, self.heartbeat / 4))
 
     def node_started(self, *, name: str, op: str) -> None:
         with self._lock:
