@@ -145,10 +145,10 @@ def run_tasks(
         Keep starting tasks that do not depend on a failed one.
     run_here : callable, optional
         Runs and finishes a task in this thread, returning False when it
-        failed. Used when a task is the only one that can run (nothing else
-        running or ready), where a hand-off to a worker would cost time and
-        buy no parallelism (a chain runs at the cost of plain calls), and for
-        the tasks ``quick`` names.
+        failed. Used for the tasks ``quick`` names, one at a time; without
+        ``quick``, when a task is the only one that can run. A task of
+        unknown length goes to the executor even alone, so that this thread
+        stays free to take Ctrl-C at once.
     quick : callable, optional
         Whether a task is known to take less time than a hand-off to a worker
         costs (it then runs in this thread: a fan-out of tiny tasks gains
@@ -187,13 +187,17 @@ def run_tasks(
         return lambda done: finished.put((name, done))
 
     def launch() -> None:
-        """Start ready tasks: in this thread when alone or quick, else while under ``limit``."""
+        """Start ready tasks: in this thread when quick (without ``quick``: when alone), one
+        at a time, so that what each one takes is known before the next is placed; else
+        while under ``limit``."""
         nonlocal running
         while ready:
             name = ready[0]
             if run_here is not None and (
-                (running == 0 and len(ready) == 1) or (quick is not None and quick(name))
+                quick(name) if quick is not None else (running == 0 and len(ready) == 1)
             ):
+                if here:  # one is waiting to run here: it may show the next is not quick
+                    return
                 ready.popleft()
                 started.add(name)
                 running += 1

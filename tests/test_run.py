@@ -549,3 +549,46 @@ def test_an_npz_that_is_not_of_the_inputs_type_is_named(tmp_path):
     graph.output("same", graph.input("kp", "Keypoints"))
     with pytest.raises(gv.InputError, match=r"input 'kp': .*other\.npz is not a Keypoints"):
         gv.run(graph, inputs={"kp": str(tmp_path / "other.npz")})
+
+
+SIZED_PLUGIN = '''
+import threading
+import time
+from graphvision import Float, node
+
+MAIN = []
+
+
+@node("sized.work")
+def work(x: Float, then: Float) -> Float:
+    """At once for a small x, 0.3 s for a large one; notes whether it ran in the main thread.
+
+    Parameters
+    ----------
+    x : the size
+    then : read only to run after the node that gives it
+    """
+    if x > 10:
+        MAIN.append(threading.current_thread() is threading.main_thread())
+        time.sleep(0.3)
+    return x
+'''
+
+
+def test_an_op_quick_on_small_inputs_does_not_run_its_slow_calls_one_after_another(tmp_path):
+    """One slow call in the loop's thread shows the op is not quick; the others go to threads."""
+    import sys
+
+    plugin = tmp_path / "sized_plugin.py"
+    plugin.write_text(SIZED_PLUGIN)
+    registry = gv.discover([plugin])
+    graph = gv.Graph("sized")
+    s = graph.input("s", "Float", default=1.0)
+    small = graph.add("small", "sized.work", x=s, then=s)
+    big = graph.input("b", "Float", default=100.0)
+    graph.output("small", small)
+    for k in range(4):  # ready together once the small one has shown the op quick
+        graph.output(f"big{k}", graph.add(f"big{k}", "sized.work", x=big, then=small))
+    gv.run(graph, registry, executor="threads", workers=2)
+    ran_here = sys.modules[registry.nodes["sized.work"].ref.module].MAIN
+    assert len(ran_here) == 4 and sum(ran_here) <= 1
