@@ -11,12 +11,19 @@ leaving the process on one thread for good. :func:`one_blas_thread` counts its u
 under a lock; the first applies the limit, the last restores the original. Meanwhile
 nodes running in other threads get one BLAS thread too, which changes their speed,
 never their results.
+
+The limit is set and lifted from a helper thread of its own, whatever thread the node
+runs in: once the main thread has lowered OpenBLAS's thread count, a call from another
+thread cannot raise it again, so a node in the main thread (the engine runs some there)
+that entered first, beside one on a worker that left last, left the process on one
+BLAS thread for good (and a later decomposition in the main thread gave results a few
+1e-15 away from the same one in a worker process).
 """
 
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
@@ -36,15 +43,36 @@ class _SharedLimit:
 
         with self.lock:
             if self.users == 0:
-                self.limiter = threadpool_limits(limits=1, user_api="blas")
+                self.limiter = _in_a_helper_thread(
+                    lambda: threadpool_limits(limits=1, user_api="blas")
+                )
             self.users += 1
 
     def leave(self) -> None:
         with self.lock:
             self.users -= 1
             if self.users == 0:
-                self.limiter.restore_original_limits()
+                _in_a_helper_thread(self.limiter.restore_original_limits)
                 self.limiter = None
+
+
+def _in_a_helper_thread(call: Callable[[], Any]) -> Any:
+    """``call()`` in a thread of its own (see the module docstring), its result or error."""
+    outcome: list[Any] = []
+
+    def run() -> None:
+        try:
+            outcome.append((True, call()))
+        except BaseException as error:  # re-raised in the caller's thread
+            outcome.append((False, error))
+
+    helper = threading.Thread(target=run, name="graphvision-blas-limit")
+    helper.start()
+    helper.join()
+    succeeded, value = outcome[0]
+    if not succeeded:
+        raise value
+    return value
 
 
 _LIMIT = _SharedLimit()
