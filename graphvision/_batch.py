@@ -237,10 +237,9 @@ def run_batch(
     for folder in previous_folders(out_dir) - current:  # its file is no longer in the batch
         remove_owned_files(folder, owned_files(folder))
     if registry is None:  # found once for the batch, not once per file
-        from ._plugins import Needs, discover
+        from ._plugins import discover_for
 
-        plain = _plain(graph)
-        registry = discover(plain.plugins, needs=Needs.of(plain))
+        registry = discover_for(_plain(graph))
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
     if one_task_per_file and cache is None:  # the first file's shared values are sent on

@@ -313,8 +313,9 @@ def call_node_encoded(
     puts the result there.
     """
     func = ref.resolve()
-    for port, ((produced, _), source_port) in (upstream or {}).items():
-        inputs = {**inputs, port: produced[source_port]}
+    if upstream:
+        sent = {port: produced[source] for port, ((produced, _), source) in upstream.items()}
+        inputs = {**inputs, **sent}
     values = {  # read-only for good, as under threads
         port: kind.decode({name: freeze(a) for name, a in arrays.items()}, meta)
         for port, (kind, arrays, meta) in inputs.items()

@@ -41,6 +41,7 @@ __all__ = [
     "ENTRY_POINT_GROUP",
     "Needs",
     "discover",
+    "discover_for",
     "import_file",
     "load_entry_points",
     "load_path",
@@ -214,3 +215,9 @@ def discover(
     for path in paths:
         load_path(registry, path)
     return registry
+
+
+def discover_for(graph: Graph, paths: Iterable[str | Path] = ()) -> Registry:
+    """The registry a run of ``graph`` needs: the local plugins at ``paths`` and of its
+    ``plugins:``, and the installed families of its ops and input types."""
+    return discover([*paths, *graph.plugins], needs=Needs.of(graph))

@@ -485,16 +485,24 @@ class _Run:
     # -- execution --------------------------------------------------------------------
 
     def start(self, name: str) -> Future:
-        """Hand a step to the run's executor."""
-        return self._submit(name, self.executor)
+        """Hand a step to the run's executor (encoded values for other processes; to a
+        chaining one, before its inputs are computed, their tasks standing for them)."""
+        step = self.compiled.steps[name]
+        for hook in self.hooks:
+            hook.node_started(name=name, op=step.spec.id)
+        self.started[name] = time.perf_counter()
+        if self.encoded:
+            return self._submit_encoded(name, step)
+        inputs = {port: self.values[source] for port, source in step.inputs.items()}
+        return self.executor.submit(call_node, step.spec.func, step.params, inputs)
 
     def is_quick(self, name: str) -> bool:
         """Whether the step's op last ran here faster than a hand-off to a thread costs."""
         return self.compiled.steps[name].spec.id in self.quick_ops
 
     def run_here(self, name: str) -> bool:
-        """Run a step in this thread and finish it (the scheduler does when nothing else
-        can run, or the step is quick); False when it failed."""
+        """Run a step in this thread and finish it (the scheduler does for a quick one);
+        False when it failed."""
         step = self.compiled.steps[name]
         spec, values = step.spec, self.values
         for hook in self.hooks:
@@ -513,43 +521,36 @@ class _Run:
             running.op = ""
         return self.computed(step, outputs, seconds)
 
-    def _submit(self, name: str, executor: Executor) -> Future:
-        step = self.compiled.steps[name]
-        for hook in self.hooks:
-            hook.node_started(name=name, op=step.spec.id)
-        self.started[name] = time.perf_counter()
-        if self.encoded:
-            if step.spec.ref.module == "__main__" and not step.spec.ref.path:
-                refused: Future = Future()
-                refused.set_exception(
-                    RuntimeError(
-                        "the node is defined in __main__ (a script or a notebook), which "
-                        "worker processes cannot import: put it in a module file and load "
-                        "that with gv.discover([path]) or --plugins PATH, or use threads"
-                    )
+    def _submit_encoded(self, name: str, step: Step) -> Future:
+        if step.spec.ref.module == "__main__" and not step.spec.ref.path:
+            refused: Future = Future()
+            refused.set_exception(
+                RuntimeError(
+                    "the node is defined in __main__ (a script or a notebook), which "
+                    "worker processes cannot import: put it in a module file and load "
+                    "that with gv.discover([path]) or --plugins PATH, or use threads"
                 )
-                return refused
-            payload, upstream = {}, {}
-            for port, source in step.inputs.items():
-                if source in self.values:
-                    kind = step.spec.inputs[port].type
-                    payload[port] = (kind, *kind.encode(self.values[source]))
-                else:  # submitted ahead: the producer's task stands for its result
-                    upstream[port] = (self.in_flight[source[0]].task, source[1])
-            future = executor.submit(
-                call_node_encoded,
-                step.spec.ref,
-                step.params,
-                payload,
-                step.outputs,
-                step.spec.output_tuple is not None,
-                upstream,
             )
-            if self.chained:
-                self.in_flight[name] = future
-            return future
-        inputs = {port: self.values[source] for port, source in step.inputs.items()}
-        return executor.submit(call_node, step.spec.func, step.params, inputs)
+            return refused
+        payload, upstream = {}, {}
+        for port, source in step.inputs.items():
+            if source in self.values:
+                kind = step.spec.inputs[port].type
+                payload[port] = (kind, *kind.encode(self.values[source]))
+            else:  # submitted ahead: the producer's task stands for its result
+                upstream[port] = (self.in_flight[source[0]].task, source[1])
+        future = self.executor.submit(
+            call_node_encoded,
+            step.spec.ref,
+            step.params,
+            payload,
+            step.outputs,
+            step.spec.output_tuple is not None,
+            upstream,
+        )
+        if self.chained:
+            self.in_flight[name] = future
+        return future
 
     def finish(self, name: str, future: Future) -> bool:
         """Finish a step the executor ran; False when it failed."""
@@ -760,9 +761,9 @@ def _compiled(
     """The graph, overrides applied, compiled (step 1); the registry it was checked against."""
     if isinstance(graph, CompiledGraph):
         if not overrides:
-            return graph, registry or _discover(graph.graph)
+            return graph, registry or _discover_for(graph.graph)
         graph = graph.graph  # overrides change parameters: compile again
-    registry = registry or _discover(graph)
+    registry = registry or _discover_for(graph)
     if overrides:
         try:
             graph = graph.with_overrides(overrides)
@@ -771,11 +772,10 @@ def _compiled(
     return compile_graph(graph, registry, provided=set(inputs)), registry
 
 
-def _discover(graph: Graph) -> Registry:
-    """The graph's local plugins and the installed families it uses."""
-    from ._plugins import Needs, discover
+def _discover_for(graph: Graph) -> Registry:
+    from ._plugins import discover_for  # the plugins are imported only for a run
 
-    return discover(graph.plugins, needs=Needs.of(graph))
+    return discover_for(graph)
 
 
 def _wanted_outputs(

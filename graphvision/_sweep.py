@@ -147,9 +147,9 @@ def sweep(
     if not isinstance(grid, Mapping):
         raise TypeError(f"grid must be a dict from 'node.param' to a list of values, got {grid!r}")
     if registry is None:
-        from ._plugins import Needs, discover
+        from ._plugins import discover_for
 
-        registry = discover(graph.plugins, needs=Needs.of(graph))
+        registry = discover_for(graph)
     keys = list(grid)
     for key in keys:
         if isinstance(grid[key], (str, bytes)) or not isinstance(grid[key], Sequence):

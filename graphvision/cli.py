@@ -159,18 +159,15 @@ def _output_dir(text: str | None) -> Path | None:
 # -- shared set-up ---------------------------------------------------------------------
 
 
-def _registry(
-    args: argparse.Namespace, extra: Sequence[str] = (), graph: Graph | None = None
-) -> Registry:
-    """The plugins: with a pipeline, only the installed families it uses are imported
-    (when the plugin index says which those are), else all of them."""
-    from ._plugins import Needs, discover
+def _registry(args: argparse.Namespace, graph: Graph | None = None) -> Registry:
+    """The plugins: ``--plugins``, and with a pipeline its own and only the installed
+    families it uses (when the plugin index says which those are), else all of them."""
+    from ._plugins import discover, discover_for
 
     for path in args.plugins:
         if not Path(path).exists():
             raise UsageError(f"--plugins {path}: no such file or folder")
-    needs = Needs.of(graph) if graph is not None else None
-    registry = discover([*args.plugins, *extra], needs=needs)
+    registry = discover_for(graph, args.plugins) if graph is not None else discover(args.plugins)
     for plugin in registry.failed_plugins():
         print(f"warning: plugin '{plugin.name}' failed to load: {plugin.error}", file=sys.stderr)
     return registry
@@ -200,7 +197,7 @@ def _load(args: argparse.Namespace) -> tuple[Graph, Registry, dict[str, Any], di
     from ._pipeline_file import load_pipeline
 
     graph = load_pipeline(args.pipeline)
-    registry = _registry(args, graph.plugins, graph)
+    registry = _registry(args, graph)
     overrides = {
         key: _yaml_value(value, f"--set {key}={value}")
         for key, value in _pairs(args.set, "--set").items()
@@ -424,7 +421,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     for path in args.pipelines:
         try:
             graph = load_pipeline(path)
-            compile_graph(graph, _registry(args, graph.plugins, graph))
+            compile_graph(graph, _registry(args, graph))
             print(f"{path}: ok")
         except PipelineError as error:
             print(error, file=sys.stderr)
@@ -520,7 +517,7 @@ def cmd_graph(args: argparse.Namespace) -> int:
     from ._render import render
 
     graph = load_pipeline(args.pipeline)
-    compile_graph(graph, _registry(args, graph.plugins, graph))
+    compile_graph(graph, _registry(args, graph))
     print(render(graph, args.format))
     return EXIT_OK
 
@@ -528,7 +525,7 @@ def cmd_graph(args: argparse.Namespace) -> int:
 def cmd_report(args: argparse.Namespace) -> int:
     from ._report import rewrite_report
 
-    registry = _registry(args, []) if args.plugins else None  # else: the pipeline's own
+    registry = _registry(args) if args.plugins else None  # else: the pipeline's own
     page = rewrite_report(Path(args.directory), registry)
     print(f"wrote {page} and {page.with_name('report.md')}", file=sys.stderr)
     return EXIT_OK
