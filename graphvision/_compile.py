@@ -121,6 +121,7 @@ class _Checker:
         self.graph, self.registry = graph, registry
         self.problems: list[Problem] = []
         self.resolved: dict[str, dict[str, type[PortType]]] = {}
+        self.untyped: set[str] = set()  # generic nodes whose input's type is unknown
 
     def report(self, where: str, message: str) -> None:
         self.problems.append(Problem(self.graph.line_of(where), where, message, self.graph.source))
@@ -200,8 +201,8 @@ class _Checker:
             )
             return None
         op = graph.nodes[ref.node].op
-        if op not in self.registry.nodes:
-            return None  # reported on that node
+        if op not in self.registry.nodes or ref.node in self.untyped:
+            return None  # reported on that node, or upstream of it
         outputs = self.resolved.get(ref.node) or self.registry.nodes[op].outputs
         port = ref.port
         if port is None:
@@ -239,6 +240,8 @@ class _Checker:
                 continue
             found = self.source_type(ref, where)
             if found is None:
+                if spec.inputs[port].typevar:  # its outputs' types are unknown, not Array
+                    self.untyped.add(name)
                 continue
             wired[port], given = found
             declared = spec.inputs[port]

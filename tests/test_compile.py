@@ -254,3 +254,13 @@ outputs:
         gv.compile_graph(gv.parse_pipeline(text, "misspelt.yaml"), registry)
     messages = [p.message for p in info.value.problems]
     assert len(messages) == 1 and "unknown op 'toy.ad'" in messages[0]
+
+
+def test_a_misspelt_op_upstream_of_a_generic_node_is_the_only_problem():
+    """A generic node fed by an unknown op has outputs of unknown type, not Array."""
+    graph = gv.parse_pipeline((PIPELINES / "coins.yaml").read_text(), "coins.yaml")
+    graph.nodes["filled"].op = "morphology.fill_hole"
+    with pytest.raises(gv.PipelineError) as info:
+        gv.compile_graph(graph, gv.discover())
+    messages = [p.message for p in info.value.problems]
+    assert len(messages) == 1 and "unknown op 'morphology.fill_hole'" in messages[0], messages
