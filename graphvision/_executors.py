@@ -33,6 +33,7 @@ from ._warnings import running, show_warning
 
 __all__ = [
     "EXECUTORS",
+    "NODE_ERRORS",
     "Executor",
     "SyncExecutor",
     "WorkerDiedError",
@@ -46,6 +47,9 @@ __all__ = [
 ]
 
 EXECUTORS: tuple[str, ...] = ("sync", "threads", "processes", "dask")
+# What a node may raise that fails that node alone: exceptions, and the exits and generator
+# closings a node's code can raise by mistake (KeyboardInterrupt stays the user's Ctrl-C).
+NODE_ERRORS: tuple[type[BaseException], ...] = (Exception, SystemExit, GeneratorExit)
 
 
 class Executor(Protocol):
@@ -110,7 +114,7 @@ class SyncExecutor:
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         try:
             return _Done(fn(*args))
-        except Exception as error:  # the scheduler reports it as a node failure
+        except NODE_ERRORS as error:  # the scheduler reports it as a node failure
             return _Done(error=error)
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:

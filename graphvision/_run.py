@@ -64,6 +64,7 @@ from ._errors import (
     did_you_mean,
 )
 from ._executors import (
+    NODE_ERRORS,
     Executor,
     call_node,
     call_node_encoded,
@@ -263,6 +264,11 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
         return _freeze(port_type, port_type.validate(value))
     except PortValueError as error:
         raise InputError(f"input '{name}': {error}") from None
+    except (Exception, RecursionError) as error:  # a port type's check undone by hostile data
+        raise InputError(
+            f"input '{name}': not a valid {port_type.type_name()} ({type(error).__name__}: "
+            f"{str(error)[:200]})"
+        ) from None
 
 
 def _read_written(port_type: type[PortType], archive: Path) -> Any:
@@ -514,7 +520,7 @@ class _Run:
             result = spec.func(**inputs, **step.params)
             seconds = time.perf_counter() - began
             outputs = self.accept(step, result)
-        except Exception as error:
+        except NODE_ERRORS as error:
             self.started[name] = began
             return self.failed(step, error)
         finally:
@@ -560,11 +566,11 @@ class _Run:
         try:
             result, seconds = future.result()
             outputs = self.accept(step, result)
-        except Exception as error:
+        except NODE_ERRORS as error:
             return self.failed(step, error)
         return self.computed(step, outputs, seconds)
 
-    def failed(self, step: Step, error: Exception) -> bool:
+    def failed(self, step: Step, error: BaseException) -> bool:
         node = self.nodes[step.name]
         node.status, node.seconds = "failed", time.perf_counter() - self.started[step.name]
         node.error = f"{type(error).__name__}: {error}"
@@ -639,7 +645,7 @@ class _Run:
         }
         return RunResult(produced, self.record, self.compiled, self.failures, kept)
 
-    def wrap(self, step: Step, error: Exception) -> NodeExecutionError:
+    def wrap(self, step: Step, error: BaseException) -> NodeExecutionError:
         summary = {}
         for port, source in step.inputs.items():
             value = self.values.get(source)

@@ -592,3 +592,47 @@ def test_an_op_quick_on_small_inputs_does_not_run_its_slow_calls_one_after_anoth
     gv.run(graph, registry, executor="threads", workers=2)
     ran_here = sys.modules[registry.nodes["sized.work"].ref.module].MAIN
     assert len(ran_here) == 4 and sum(ran_here) <= 1
+
+
+EXITING_PLUGIN = '''
+from graphvision import Float, node
+
+
+@node("exiting.quit")
+def quit_(x: Float) -> Float:
+    """Calls sys.exit, as a careless script might.
+
+    Parameters
+    ----------
+    x : the value
+    """
+    raise SystemExit(3)
+'''
+
+
+@pytest.mark.parametrize("executor", ["sync", "threads"])
+def test_a_node_that_exits_fails_alone_naming_itself(tmp_path, executor):
+    plugin = tmp_path / "exiting.py"
+    plugin.write_text(EXITING_PLUGIN)
+    graph = gv.Graph("exits")
+    x = graph.input("x", "Float", default=1.0)
+    graph.output("bad", graph.add("bad", "exiting.quit", x=x))
+    graph.output("same", x)
+    with pytest.raises(gv.RunError) as caught:
+        gv.run(graph, gv.discover([plugin]), executor=executor, keep_going=True)
+    assert list(caught.value.failures) == ["bad"] and "SystemExit" in str(caught.value)
+    assert caught.value.result.outputs == {"same": 1.0}
+
+
+def test_an_input_whose_port_check_breaks_on_hostile_data_is_named(tmp_path):
+    class Fragile(gv.PortType):
+        @classmethod
+        def validate(cls, value):
+            return value.missing_attribute
+
+    registry = gv.discover()
+    registry.port_types["Fragile"] = Fragile
+    graph = gv.Graph("fragile")
+    graph.output("same", graph.input("x", "Fragile"))
+    with pytest.raises(gv.InputError, match=r"input 'x': not a valid Fragile \(AttributeError"):
+        gv.run(graph, registry, inputs={"x": 1.0})
