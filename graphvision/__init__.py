@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from ._batch import BatchItem, BatchResult, run_batch
+    from ._blas import one_blas_thread
     from ._cache import (
         Cache,
         CacheWarning,
@@ -239,6 +240,7 @@ __all__ = [
     "load_pipeline",
     "make_executor",
     "node",
+    "one_blas_thread",
     "parse_pipeline",
     "pipeline_json_schema",
     "port_of",

@@ -14,16 +14,21 @@ A cache directory holds a marker, ``CACHEDIR.TAG`` (the Cache Directory
 Tagging convention, so backup tools skip it, with a line naming graphvision),
 and one file per output, ``<dir>/<key[:2]>/<key>.gvc``::
 
-    b"GVC2" | header length (8 bytes, little endian) | digest (16 bytes) | JSON header | payload
+    b"GVC3" | header length (8 bytes, little endian) | digest (16 bytes) | JSON header
+            | zeros to a multiple of 64 bytes | payload
 
-The digest is xxh3-128 of the header and the payload together, so every
-byte after the fixed prefix is verified before any of it is used. The header
-holds the port type, its JSON metadata, and each array's name, dtype, shape,
-offset and size; after the digest, the header's structure is checked too
-(a JSON object, the fields and their types, sizes that add up to the
-payload), so an entry is used only if it is whole. Arrays are read back with
-``numpy.frombuffer`` over the immutable bytes of the file (object dtypes are
-refused): there is no pickle to load, and the values cannot be made writable.
+The digest is xxh3-128 of everything after it (header, padding and payload),
+so every byte after the fixed prefix is verified before any of it is used.
+The header holds the port type, its JSON metadata, and each array's name,
+dtype, shape, offset and size; after the digest, the header's structure is
+checked too (a JSON object, the fields and their types, offsets at multiples
+of 64, sizes that add up to the payload), so an entry is used only if it is
+whole. The payload and every array in it start at a multiple of 64 bytes, and
+a file is read into an immutable buffer that starts at a 64-byte aligned
+address (:mod:`graphvision._memory`), so arrays read back with
+``numpy.frombuffer`` are aligned exactly as computed values are (a reduction
+over them takes the same path and gives the same bits), cannot be made
+writable, and hold no pickle (object dtypes are refused).
 
 Writes go to a temporary file in the same folder and are renamed into place,
 so a reader, another process, or an interrupted run never sees half an
@@ -58,6 +63,7 @@ import xxhash
 
 from ._cache_dir import default_cache_dir
 from ._errors import GraphvisionError
+from ._memory import ALIGNMENT, read_aligned
 from ._ports import PortType
 
 __all__ = [
@@ -75,7 +81,7 @@ __all__ = [
     "output_keys",
 ]
 
-MAGIC = b"GVC2"
+MAGIC = b"GVC3"
 SUFFIX = ".gvc"
 STALE_TEMP_SECONDS = 3600
 MARKER = "CACHEDIR.TAG"
@@ -299,8 +305,12 @@ class DiskStore:
     def get(self, key: str) -> Encoded | None:
         path = self.path(key)
         try:
-            blob = path.read_bytes()
+            with path.open("rb") as stream:
+                blob = read_aligned(stream, os.fstat(stream.fileno()).st_size)
         except FileNotFoundError:
+            return None
+        except EOFError as error:  # cut short while it was read: replaced meanwhile
+            self._drop(path, f"truncated while read: {error}", remove=False)
             return None
         except OSError as error:  # a shard replaced by a file, an entry by a folder, no access
             self._drop(path, f"unreadable: {error.strerror or error}", remove=False)
@@ -413,27 +423,35 @@ def _is_own_file(shard: Path, path: Path) -> bool:
     return name.startswith(shard.name) or bool(_TEMP.match(name))
 
 
+def _padded(offset: int) -> int:
+    """``offset`` rounded up to a multiple of :data:`ALIGNMENT`."""
+    return -(-offset // ALIGNMENT) * ALIGNMENT
+
+
 def encode_blob(entry: Encoded) -> Iterator[bytes | memoryview]:
     """The bytes of a disk entry for ``entry``, in chunks (arrays are not copied)."""
-    specs, offset = [], 0
+    specs, chunks, offset = [], [], 0
     arrays = {name: np.ascontiguousarray(a) for name, a in entry.arrays.items()}
     for name, array in arrays.items():
         if array.dtype.hasobject:
             raise TypeError(f"cannot cache object array '{name}'")
+        start = _padded(offset)
+        if array.size:
+            chunks += [bytes(start - offset), array.data.cast("B")]
+            offset = start + array.nbytes
         specs.append(
             {
                 "name": name,
                 "dtype": array.dtype.str,
                 "shape": list(array.shape),
-                "offset": offset,
+                "offset": start if array.size else offset,
                 "nbytes": array.nbytes,
             }
         )
-        offset += array.nbytes
     header = json.dumps(
         {"type": entry.type_name, "meta": entry.meta, "arrays": specs, "payload": offset}
     ).encode()
-    chunks = [a.data.cast("B") for a in arrays.values() if a.size]
+    chunks.insert(0, bytes(_padded(_PREFIX.size + len(header)) - _PREFIX.size - len(header)))
     digest = xxhash.xxh3_128(header)
     for chunk in chunks:
         digest.update(chunk)
@@ -441,8 +459,12 @@ def encode_blob(entry: Encoded) -> Iterator[bytes | memoryview]:
     yield from chunks
 
 
-def decode_blob(blob: bytes) -> Encoded:
-    """The entry in ``blob``, after checking every byte; ValueError says what is wrong."""
+def decode_blob(blob: bytes | memoryview) -> Encoded:
+    """The entry in ``blob``, after checking every byte; ValueError says what is wrong.
+
+    Arrays are views of ``blob``: aligned when ``blob`` starts at a multiple of
+    :data:`ALIGNMENT` (as :func:`~graphvision._memory.read_aligned` gives).
+    """
     if len(blob) < _PREFIX.size:
         raise ValueError(f"truncated: {len(blob)} bytes")
     magic, length, digest = _PREFIX.unpack_from(blob)
@@ -457,7 +479,7 @@ def decode_blob(blob: bytes) -> Encoded:
         header = json.loads(bytes(body[:length]))
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(f"unreadable header: {error}") from None
-    payload = body[length:]
+    payload = memoryview(blob)[_padded(_PREFIX.size + length) :]
     specs = _check_header(header, len(payload))
     arrays = {}
     for name, dtype, shape, offset in specs:
@@ -489,12 +511,13 @@ def _check_header(
             raise ValueError(f"an array description is malformed ({error})") from None
         if dtype.hasobject:
             raise ValueError("object dtype refused")
-        if any(n < 0 for n in shape) or offset != expected_offset:
+        start = _padded(expected_offset) if nbytes else expected_offset
+        if any(n < 0 for n in shape) or offset != start:
             raise ValueError(f"array '{name}' has a bad shape or offset")
         if nbytes != int(np.prod(shape, dtype=np.int64)) * dtype.itemsize:
             raise ValueError(f"array '{name}': shape {list(shape)} disagrees with {nbytes} bytes")
         specs.append((name, dtype, shape, offset))
-        expected_offset += nbytes
+        expected_offset = start + nbytes
     if expected_offset != payload_bytes:
         raise ValueError(f"arrays add up to {expected_offset} bytes, payload is {payload_bytes}")
     return specs

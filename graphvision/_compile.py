@@ -23,7 +23,7 @@ import pydantic
 from ._cache import node_fingerprint
 from ._collector import collector_paused
 from ._errors import PipelineError, Problem, UnknownNameError, did_you_mean
-from ._graph import PARAM_REFERENCE, Graph, Ref
+from ._graph import NAME, PARAM_REFERENCE, Graph, Ref, output_name_problem
 from ._node import NodeSpec
 from ._ports import PortType
 from ._registry import Registry
@@ -327,6 +327,9 @@ class _Checker:
         if not graph.outputs:
             self.report("outputs", "a pipeline needs at least one output")
         for out_name, ref in graph.outputs.items():
+            if not NAME.match(out_name):
+                self.report(f"outputs.{out_name}", output_name_problem(out_name))
+                continue
             found = self.source_type(ref, f"outputs.{out_name}")
             if found is not None:
                 outputs[out_name] = found[0]

@@ -34,12 +34,14 @@ graphvision[dask]``), imported only when this executor is made.
 from __future__ import annotations
 
 import logging
+import multiprocessing
 import os
 import threading
 from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
 
+from ._blas import one_blas_thread, one_blas_thread_for_good
 from ._errors import GraphvisionError
 from ._node import FunctionRef
 
@@ -205,4 +207,8 @@ def _on_worker(fn: Callable[..., Any], *args: Any) -> Any:
                 "plugin in every worker's environment, or put local plugin files on storage "
                 "the workers share"
             ) from None
-    return fn(*args)
+    if multiprocessing.parent_process() is not None:  # a worker process: nodes only
+        one_blas_thread_for_good()  # set by the first task, a flag read after
+        return fn(*args)
+    with one_blas_thread():  # a worker thread in the client's process (processes=False)
+        return fn(*args)

@@ -231,8 +231,11 @@ def _worker_setup(parent: int) -> None:
     warnings as the command line does (one line naming the node)."""
     import warnings
 
+    from ._blas import one_blas_thread_for_good
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     warnings.showwarning = show_warning
+    one_blas_thread_for_good()  # the same bits as in the parent's runs (see graphvision._blas)
 
     def watch() -> None:
         while os.getppid() == parent:

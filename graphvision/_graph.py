@@ -27,13 +27,31 @@ if TYPE_CHECKING:
     import networkx as nx
 
 
-__all__ = ["NAME_PATTERN", "REF_PATTERN", "Graph", "InputDecl", "NodeDecl", "Ref"]
+__all__ = [
+    "NAME",
+    "NAME_PATTERN",
+    "REF_PATTERN",
+    "Graph",
+    "InputDecl",
+    "NodeDecl",
+    "Ref",
+    "output_name_problem",
+]
 
 NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*$"
 """Names of graph inputs and nodes: identifiers (the one place this rule is written)."""
 REF_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)?$"
 """References: ``node`` or ``node.port``."""
 NAME = re.compile(NAME_PATTERN)
+
+
+def output_name_problem(name: str) -> str:
+    """Why ``name`` cannot name an output: its files would be written as ``<name>.png``
+    and so on, and anything but a plain name could reach outside the output folder."""
+    return (
+        f"output name {name!r} must be a plain name (letters, digits, _): it names the "
+        "output's files, which must stay inside the output folder"
+    )
 PARAM_REFERENCE = re.compile(r"\$\{params\.([A-Za-z_][A-Za-z0-9_]*)\}")
 """``${params.NAME}`` in a node parameter: a pipeline param substituted when compiling."""
 
@@ -124,7 +142,13 @@ class Graph:
         return Ref(name)
 
     def output(self, name: str, ref: Ref | str) -> None:
-        """Name ``ref`` as the graph output ``name``."""
+        """Name ``ref`` as the graph output ``name``.
+
+        An output's name becomes the stem of its files in an output folder, so
+        it must be a plain identifier (no ``..``, separator or absolute path).
+        """
+        if not NAME.match(name):
+            raise ValueError(output_name_problem(name))
         self.outputs[name] = ref if isinstance(ref, Ref) else Ref.parse(ref)
 
     def _check_new_name(self, name: str) -> None:

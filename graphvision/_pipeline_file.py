@@ -27,7 +27,15 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StringConstr
 
 from ._collector import collector_paused
 from ._errors import PipelineError, Problem, did_you_mean
-from ._graph import NAME_PATTERN, REF_PATTERN, Graph, InputDecl, NodeDecl, Ref
+from ._graph import (
+    NAME_PATTERN,
+    REF_PATTERN,
+    Graph,
+    InputDecl,
+    NodeDecl,
+    Ref,
+    output_name_problem,
+)
 
 __all__ = [
     "MAX_DEPTH",
@@ -104,7 +112,10 @@ class PipelineModel(_Section):
     nodes: dict[Name, NodeModel] = Field(
         description="The steps, by name.", json_schema_extra=_ONLY_NAMES
     )
-    outputs: dict[str, Reference] = Field(description="Output name -> 'node' or 'node.port'.")
+    outputs: dict[Name, Reference] = Field(
+        description="Output name -> 'node' or 'node.port'; the name is the stem of its files.",
+        json_schema_extra=_ONLY_NAMES,
+    )
 
 
 def pipeline_json_schema() -> dict[str, Any]:
@@ -319,6 +330,8 @@ def _model_problems(
                 message += f"; allowed: {', '.join(options)}"
         elif item["type"] == "missing":
             message = f"missing required key '{loc[-1]}'"
+        elif item["type"] == "string_pattern_mismatch" and loc[0] == "outputs" and len(loc) == 2:
+            message = output_name_problem(loc[1])
         elif item["type"] == "string_pattern_mismatch":
             message = _PATTERN_MESSAGES.get(item.get("ctx", {}).get("pattern", ""), message)
         line = 0
@@ -399,8 +412,21 @@ def _graph_from_model(model: PipelineModel, file: str, lines: dict[str, int]) ->
     )
 
 
-def load_pipeline(path: str | Path) -> Graph:
+def load_pipeline(path: str | Path, *, allow_outside_plugins: bool = False) -> Graph:
     """Read and parse a pipeline file; ``plugins:`` paths are resolved against its folder.
+
+    Reading a pipeline never runs its code: its ``plugins:`` are only listed
+    here (``graph.plugins``); a run imports them. A plugin must lie inside the
+    pipeline's folder (after symbolic links are followed), so that running a
+    pipeline someone sent imports only the code that came with it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The pipeline file.
+    allow_outside_plugins : bool
+        Accept ``plugins:`` outside the pipeline's folder (``../x.py``, absolute
+        paths, links leading out): the command line's ``--allow-outside-plugins``.
 
     Raises
     ------
@@ -417,6 +443,23 @@ def load_pipeline(path: str | Path) -> Graph:
             [problem], str(path), f"cannot read pipeline {path}: {reason}"
         ) from None
     graph = parse_pipeline(text, str(path))
+    folder = path.parent.resolve()
+    problems = []
+    for index, plugin in enumerate(graph.plugins):
+        resolved = (folder / plugin).resolve()
+        if not allow_outside_plugins and not resolved.is_relative_to(folder):
+            problems.append(
+                Problem(
+                    graph.lines.get(f"plugins.{index}", graph.lines.get("plugins", 0)),
+                    f"plugins.{index}",
+                    f"plugin '{plugin}' is outside the pipeline's folder ({resolved}); a run "
+                    "imports only plugins beside its pipeline: move it there, or pass "
+                    "--allow-outside-plugins if you trust it",
+                    str(path),
+                )
+            )
+    if problems:
+        raise PipelineError(problems, str(path))
     graph.plugins = [
         str(path.parent / p) if not Path(p).is_absolute() else p for p in graph.plugins
     ]

@@ -44,6 +44,7 @@ import numpy as np
 
 from ._dtype_policy import to_dtype, to_float_image, to_labels, to_mask
 from ._errors import PortValueError
+from ._memory import frozen_copy, is_aligned
 
 __all__ = [
     "ArrayPort",
@@ -74,13 +75,13 @@ Meta = dict[str, Any]
 
 
 def freeze(array: np.ndarray) -> np.ndarray:
-    """``array`` over an immutable buffer: read-only in a way no node can undo.
+    """``array`` in immutable memory at a 64-byte aligned address (see :mod:`._memory`).
 
     A flag is not enough: ``flags.writeable = True`` succeeds again on an
     array that owns its memory (or on a view of a writable base). An array
     over a ``bytes`` object cannot be made writable at all, so the value is
-    copied once into one, unless it already lies over immutable memory (a
-    value read from the disk cache does).
+    copied once into one, unless it already lies, aligned, over immutable
+    memory (a value read from the disk cache does).
     """
     root: object = array
     while isinstance(root, np.ndarray | memoryview):
@@ -90,10 +91,9 @@ def freeze(array: np.ndarray) -> np.ndarray:
             break
         else:
             root = root.base
-    if isinstance(root, bytes):
-        return array
-    data = np.ascontiguousarray(array)
-    return np.frombuffer(data.tobytes(), dtype=data.dtype).reshape(data.shape)
+    if isinstance(root, bytes) and is_aligned(array) and not array.flags.writeable:
+        return array  # (an array unpickled over bytes can be writable: it is copied)
+    return frozen_copy(array)
 
 
 class PortType:

@@ -31,6 +31,7 @@ import numpy as np
 
 from ._compile import CompiledGraph
 from ._errors import OutputFolderError
+from ._graph import NAME, output_name_problem
 from ._html import write_html_report
 from ._ports import PortType, _ScalarPort
 from ._provenance import file_sha256
@@ -240,7 +241,16 @@ def write_outputs(
     directory.mkdir(parents=True, exist_ok=True)
     written = {}
     for name, value in outputs.items():
-        files = compiled.output_type(name).write(value, directory / name)
+        if not NAME.match(name):  # compile_graph refuses these; a port type may not add any
+            raise OutputFolderError(output_name_problem(name))
+        kind = compiled.output_type(name)
+        files = kind.write(value, directory / name)
+        for file in files:
+            if file.parent != directory or file.is_symlink() or not file.is_file():
+                raise OutputFolderError(
+                    f"port type {kind.type_name()} wrote output '{name}' as {file}, which is "
+                    f"not a plain file directly in {directory}"
+                )
         written[name] = [f.name for f in files]
     return written
 

@@ -38,6 +38,7 @@ submitted, their tasks standing for their values),
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import time
@@ -52,6 +53,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from ._blas import one_blas_thread
 from ._cache import Cache, content_key, output_keys
 from ._compile import CompiledGraph, Schedule, Step, compile_graph
 from ._errors import (
@@ -873,16 +875,19 @@ def _execute(
         for hook in hooks:
             hook.run_started(pipeline=compiled.graph.name, steps=compute)
         here = not state.encoded  # nodes run in this process: some may run in this thread
-        skipped = run_tasks(
-            dependencies,
-            state.start,
-            state.finish,
-            keep_going=keep_going,
-            run_here=state.run_here if here else None,
-            quick=state.is_quick if here else None,
-            limit=2 * executor_width(pool) if here else None,
-            ahead=state.chained,
-        )
+        # one BLAS thread while nodes run here, so a node's bits do not depend on its
+        # neighbours (worker processes hold it for good; see graphvision._blas)
+        with one_blas_thread() if here and compute else contextlib.nullcontext():
+            skipped = run_tasks(
+                dependencies,
+                state.start,
+                state.finish,
+                keep_going=keep_going,
+                run_here=state.run_here if here else None,
+                quick=state.is_quick if here else None,
+                limit=2 * executor_width(pool) if here else None,
+                ahead=state.chained,
+            )
         for step in skipped:  # downstream of a failure
             state.nodes[step].status = "skipped"
             if step in state.started:  # sent ahead (Dask): its start was reported, so its end is

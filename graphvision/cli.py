@@ -159,15 +159,25 @@ def _output_dir(text: str | None) -> Path | None:
 # -- shared set-up ---------------------------------------------------------------------
 
 
-def _registry(args: argparse.Namespace, graph: Graph | None = None) -> Registry:
-    """The plugins: ``--plugins``, and with a pipeline its own and only the installed
-    families it uses (when the plugin index says which those are), else all of them."""
-    from ._plugins import discover, discover_for
+def _registry(
+    args: argparse.Namespace, graph: Graph | None = None, *, run_its_plugins: bool = True
+) -> Registry:
+    """The plugins: ``--plugins``, and with a pipeline only the installed families it uses
+    (when the plugin index says which those are), else all of them; and the pipeline's
+    own ``plugins:`` when it is to run (announced), never when it is only read."""
+    from ._plugins import Needs, discover, discover_for
 
     for path in args.plugins:
         if not Path(path).exists():
             raise UsageError(f"--plugins {path}: no such file or folder")
-    registry = discover_for(graph, args.plugins) if graph is not None else discover(args.plugins)
+    if graph is None:
+        registry = discover(args.plugins)
+    elif run_its_plugins:
+        if graph.plugins:
+            print(f"loading local plugins: {', '.join(graph.plugins)}", file=sys.stderr)
+        registry = discover_for(graph, args.plugins)
+    else:
+        registry = discover(args.plugins, needs=Needs.of(graph))
     for plugin in registry.failed_plugins():
         print(f"warning: plugin '{plugin.name}' failed to load: {plugin.error}", file=sys.stderr)
     return registry
@@ -196,7 +206,7 @@ def _load(args: argparse.Namespace) -> tuple[Graph, Registry, dict[str, Any], di
     """The pipeline, its registry, the checked overrides (``--set``) and inputs (``--input``)."""
     from ._pipeline_file import load_pipeline
 
-    graph = load_pipeline(args.pipeline)
+    graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
     registry = _registry(args, graph)
     overrides = {
         key: _yaml_value(value, f"--set {key}={value}")
@@ -420,13 +430,25 @@ def cmd_validate(args: argparse.Namespace) -> int:
     status = EXIT_OK
     for path in args.pipelines:
         try:
-            graph = load_pipeline(path)
-            compile_graph(graph, _registry(args, graph))
+            graph = load_pipeline(path, allow_outside_plugins=args.allow_outside_plugins)
+            _note_unread_plugins(graph)
+            compile_graph(graph, _registry(args, graph, run_its_plugins=False))
             print(f"{path}: ok")
         except PipelineError as error:
             print(error, file=sys.stderr)
             status = EXIT_USAGE
     return status
+
+
+def _note_unread_plugins(graph: Graph) -> None:
+    """Say which local plugins a pipeline names that reading it does not import."""
+    if graph.plugins:
+        print(
+            f"note: {graph.source} names local plugins {', '.join(graph.plugins)}; they are "
+            "not imported to check or draw it (nothing in a pipeline runs until `run`): "
+            "pass --plugins PATH to load and check their ops",
+            file=sys.stderr,
+        )
 
 
 def plain_text(text: str) -> str:
@@ -516,8 +538,9 @@ def cmd_graph(args: argparse.Namespace) -> int:
     from ._pipeline_file import load_pipeline
     from ._render import render
 
-    graph = load_pipeline(args.pipeline)
-    compile_graph(graph, _registry(args, graph))
+    graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
+    _note_unread_plugins(graph)
+    compile_graph(graph, _registry(args, graph, run_its_plugins=False))
     print(render(graph, args.format))
     return EXIT_OK
 
@@ -564,6 +587,12 @@ def _global_options(parser: argparse.ArgumentParser, top: bool) -> None:
         default=[] if top else argparse.SUPPRESS,
         metavar="PATH",
         help="load a local plugin file or folder (repeatable)",
+    )
+    parser.add_argument(
+        "--allow-outside-plugins",
+        action="store_true",
+        default=False if top else argparse.SUPPRESS,
+        help="let a pipeline's plugins: name files outside its folder (they run its code)",
     )
     parser.add_argument(
         "--debug",

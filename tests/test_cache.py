@@ -30,7 +30,7 @@ def test_disk_round_trip_and_no_pickle(tmp_path):
     np.testing.assert_array_equal(value["y"], table["y"])
     assert not value["x"].flags.writeable
     raw = store.path("k1").read_bytes()
-    assert raw.startswith(b"GVC2") and b"pickle" not in raw and b"\x80\x04" not in raw[:64]
+    assert raw.startswith(b"GVC3") and b"pickle" not in raw and b"\x80\x04" not in raw[:64]
 
 
 def test_object_arrays_are_refused(tmp_path):
@@ -74,7 +74,7 @@ def test_an_interrupted_write_leaves_no_entry(tmp_path, monkeypatch):
     import graphvision._cache as cache_module
 
     def broken(entry):
-        yield b"GVC2"
+        yield b"GVC3"
         raise KeyboardInterrupt  # the run is interrupted mid-write
 
     monkeypatch.setattr(cache_module, "encode_blob", broken)
@@ -249,9 +249,10 @@ def _forged(header) -> bytes:
     from graphvision._cache import _PREFIX, MAGIC
 
     text = json.dumps(header).encode() if not isinstance(header, bytes) else header
+    padding = bytes(-(_PREFIX.size + len(text)) % 64)  # the payload starts at 64 bytes
     payload = np.arange(4, dtype=np.float32).tobytes()
-    digest = xxhash.xxh3_128(text + payload).digest()
-    return _PREFIX.pack(MAGIC, len(text), digest) + text + payload
+    digest = xxhash.xxh3_128(text + padding + payload).digest()
+    return _PREFIX.pack(MAGIC, len(text), digest) + text + padding + payload
 
 
 GOOD = {

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -10,10 +12,34 @@ import graphvision as gv
 from .conftest import PIPELINES
 
 
+def encoded(result: gv.RunResult) -> dict[str, tuple[dict[str, tuple[str, tuple, bytes]], str]]:
+    """Each output as its port type's arrays (dtype, shape, bytes) and header: the bits."""
+    bits = {}
+    for name, value in result.outputs.items():
+        arrays, meta = result.compiled.output_type(name).encode(value)
+        bits[name] = (
+            {k: (a.dtype.str, a.shape, np.ascontiguousarray(a).tobytes()) for k, a in arrays.items()},
+            json.dumps(meta, sort_keys=True, default=str),
+        )
+    return bits
+
+
 @pytest.mark.parametrize("path", sorted(PIPELINES.glob("*.yaml")), ids=lambda p: p.name)
-def test_pipeline_runs_on_defaults(path):
-    result = gv.run(gv.load_pipeline(path))
-    assert set(result.outputs) == set(result.compiled.outputs)
+def test_pipeline_runs_on_defaults_and_gives_the_same_bits_warm(path, tmp_path):
+    """Cold, then warm with every other node's entries removed (so nodes compute on values
+    read back from the disk cache), then fully warm: every output equal bit for bit."""
+    graph = gv.load_pipeline(path)
+    cold = gv.run(graph, cache=gv.Cache(None, gv.DiskStore(tmp_path)))
+    assert set(cold.outputs) == set(cold.compiled.outputs)
+    store = gv.DiskStore(tmp_path)
+    for node in cold.record.nodes[1::2]:
+        for key in node.keys.values():
+            store.path(key).unlink(missing_ok=True)
+    mixed = gv.run(graph, cache=gv.Cache(None, store))
+    assert {n.status for n in mixed.record.nodes} >= {"cached"}
+    warm = gv.run(graph, cache=gv.Cache(None, gv.DiskStore(tmp_path)))
+    assert encoded(mixed) == encoded(cold)
+    assert encoded(warm) == encoded(cold)
 
 
 def test_denoise_shows_what_each_filter_is_for():

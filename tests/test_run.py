@@ -108,12 +108,31 @@ def test_invalid_node_output_is_a_node_failure(registry):
         gv.run(graph, registry)
 
 
-def test_nodes_cannot_change_their_inputs(registry):
+@pytest.mark.parametrize("executor", ["sync", "threads", "processes"])
+def test_nodes_cannot_change_their_inputs(registry, executor):
     graph = gv.Graph("mutate")
     image = graph.input("image", "GrayImage")
     graph.output("o", graph.add("o", "toy.mutate", image=image))
     with pytest.raises(gv.RunError, match="read-only"):
-        gv.run(graph, registry, inputs={"image": np.ones((4, 4), np.float32)})
+        gv.run(graph, registry, inputs={"image": np.ones((4, 4), np.float32)}, executor=executor)
+
+
+@pytest.mark.parametrize("executor", ["sync", "threads", "processes"])
+def test_nodes_cannot_change_their_inputs_in_any_file_of_a_batch(registry, executor, tmp_path):
+    """On processes, arrays arrive unpickled over writable bytes: they are copied into
+    immutable memory too (the first file failed, the others wrote zeros and succeeded)."""
+    import imageio.v3 as iio
+
+    for i in range(3):
+        iio.imwrite(tmp_path / f"{i}.png", np.full((4, 5), 60 * i + 10, np.uint8))
+    graph = gv.Graph("mutate")
+    graph.output("o", graph.add("o", "toy.mutate", image=graph.input("image", "GrayImage")))
+    batch = gv.run_batch(
+        graph, str(tmp_path / "*.png"), input="image", output_dir=tmp_path / "out",
+        registry=registry, executor=executor,
+    )  # fmt: skip
+    assert [item.status for item in batch.items] == ["failed"] * 3
+    assert all("read-only" in (item.error or "") for item in batch.items)
 
 
 @pytest.mark.parametrize("executor", ["threads", "processes"])

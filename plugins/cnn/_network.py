@@ -206,7 +206,7 @@ class NetworkModel:
             raise ValueError(
                 f"the network takes inputs {architecture.shapes[0]} (C, H, W), got {x.shape[1:]}"
             )
-        from ._blas import one_blas_thread
+        from graphvision import one_blas_thread
 
         with one_blas_thread():
             out = [

@@ -13,7 +13,7 @@ from graphvision import Float, Table, node
 
 from .._params import Count, Epochs, Positive, Seed
 from ..recognition._types import Samples, SampleSet
-from ._blas import one_blas_thread
+from graphvision import one_blas_thread
 from ._network import (
     MAX_BATCH_VALUES,
     Architecture,

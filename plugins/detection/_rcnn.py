@@ -32,7 +32,7 @@ from ..cnn import (
     check_layer_texts,
     fit_network,
 )
-from ..cnn._blas import one_blas_thread
+from graphvision import one_blas_thread
 from ..recognition._types import Samples, SampleSet
 from ..synthetic._digit_scenes import Scenes, SceneSet
 from ._proposals import ColourSpaces, PositiveList, SimilaritySets

@@ -221,53 +221,6 @@ def test_a_network_crosses_process_boundaries():
     assert there.outputs["accuracy"] == here.outputs["accuracy"]
 
 
-def test_overlapping_blas_limits_restore_the_original_threads():
-    """Two nodes in threads enter and leave the limit interleaved; the process gets its
-    BLAS threads back (a save-and-restore per user would leave it on one)."""
-    from threadpoolctl import threadpool_info
-
-    from graphvision_plugins.cnn._blas import one_blas_thread
-
-    def threads() -> list[int]:
-        return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
-
-    before = threads()
-    first, second = one_blas_thread(), one_blas_thread()
-    first.__enter__()
-    second.__enter__()
-    assert set(threads()) == {1}
-    first.__exit__(None, None, None)
-    assert set(threads()) == {1}  # the second user still runs
-    second.__exit__(None, None, None)
-    assert threads() == before
-
-
-def test_one_blas_thread_entered_in_the_main_thread_and_left_in_another_restores():
-    """The engine runs some nodes in the main thread beside others on workers; OpenBLAS
-    ignores a raise of its thread count from a worker once the main thread lowered it."""
-    import threading
-
-    from threadpoolctl import threadpool_info
-
-    from graphvision_plugins.cnn._blas import one_blas_thread
-
-    def threads() -> list[int]:
-        return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
-
-    before = threads()
-    here, there = one_blas_thread(), one_blas_thread()
-    here.__enter__()
-    worker = threading.Thread(target=there.__enter__)
-    worker.start()
-    worker.join()
-    assert set(threads()) == {1}
-    here.__exit__(None, None, None)
-    worker = threading.Thread(target=lambda: there.__exit__(None, None, None))
-    worker.start()
-    worker.join()
-    assert threads() == before
-
-
 def test_network_preview_shows_the_first_filters():
     architecture = cnn.build_architecture((1, 8, 8), ["conv 4x3", "relu", "dense 2"])
     spec = '{"input": [1, 8, 8], "layers": ["conv 4x3", "relu", "dense 2"]}'

@@ -1,0 +1,95 @@
+"""Reading a pipeline never runs its code (issue 29 B): validate and graph list the local
+plugins a pipeline names without importing them; run imports only plugins inside the
+pipeline's folder, unless --allow-outside-plugins, and says which files it loads."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from graphvision.cli import main
+
+EVIL = """
+from pathlib import Path
+Path({marker!r}).write_text("ran")
+from graphvision import Float, node
+
+@node("evil.one")
+def one() -> Float:
+    '''One.'''
+    return 1.0
+"""
+
+PIPELINE = """version: 1
+name: trust
+plugins:
+  - {plugin}
+nodes:
+  n: {{op: {op}}}
+outputs:
+  value: n
+"""
+
+
+def setup(tmp_path: Path, plugin_at: str, op: str = "evil.one") -> tuple[Path, Path]:
+    """A pipeline in tmp/p/ naming a plugin at ``plugin_at`` (relative to tmp/p/)."""
+    marker = tmp_path / "marker"
+    folder = tmp_path / "p"
+    folder.mkdir()
+    plugin = (folder / plugin_at).resolve()
+    plugin.parent.mkdir(parents=True, exist_ok=True)
+    plugin.write_text(EVIL.format(marker=str(marker)))
+    pipeline = folder / "p.yaml"
+    pipeline.write_text(PIPELINE.format(plugin=plugin_at, op=op))
+    return pipeline, marker
+
+
+def run_cli(capsys, *args) -> tuple[int, str, str]:
+    status = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err
+    return status, out, err
+
+
+@pytest.mark.parametrize("command", ["validate", "graph"])
+def test_checking_or_drawing_a_pipeline_imports_none_of_its_plugins(capsys, tmp_path, command):
+    pipeline, marker = setup(tmp_path, "evil.py")
+    status, _, err = run_cli(capsys, command, pipeline)
+    assert not marker.exists()
+    assert "names local plugins" in err and "evil.py" in err and "not imported" in err
+    assert status == 2 and "unknown op 'evil.one'" in err  # its ops cannot be checked
+    status, _, err = run_cli(capsys, command, pipeline, "--plugins", pipeline.parent / "evil.py")
+    assert status == 0 and marker.exists()  # asked for by name: loaded and checked
+
+
+def test_a_pipeline_that_uses_no_op_of_its_plugins_validates_without_them(capsys, tmp_path):
+    pipeline, marker = setup(tmp_path, "evil.py", op="pyramids.zone_plate")
+    status, out, err = run_cli(capsys, "validate", pipeline)
+    assert status == 0 and "ok" in out and not marker.exists()
+
+
+def test_run_loads_a_plugin_beside_its_pipeline_and_says_so(capsys, tmp_path):
+    pipeline, marker = setup(tmp_path, "lib/evil.py")
+    status, out, err = run_cli(capsys, "run", pipeline, "--no-cache")
+    assert status == 0 and marker.exists()
+    assert f"loading local plugins: {pipeline.parent / 'lib/evil.py'}" in err
+
+
+@pytest.mark.parametrize("where", ["../elsewhere/evil.py", "ABSOLUTE", "link.py"])
+def test_run_refuses_a_plugin_outside_its_pipelines_folder(capsys, tmp_path, where):
+    outside = tmp_path / "elsewhere" / "evil.py"
+    if where == "ABSOLUTE":
+        where = str(outside)
+    pipeline, marker = setup(tmp_path, "../elsewhere/evil.py")
+    if where == "link.py":
+        (pipeline.parent / "link.py").symlink_to(outside)  # inside by name, outside in fact
+    pipeline.write_text(PIPELINE.format(plugin=where, op="evil.one"))
+    for command in ("run", "validate", "graph"):
+        status, _, err = run_cli(capsys, command, pipeline)
+        assert status == 2, err
+        assert f"{pipeline}:4" in err and "is outside the pipeline's folder" in err
+        assert "--allow-outside-plugins" in err
+    assert not marker.exists()
+    status, _, err = run_cli(capsys, "run", pipeline, "--allow-outside-plugins", "--no-cache")
+    assert status == 0 and marker.exists() and "loading local plugins" in err
