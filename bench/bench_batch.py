@@ -21,7 +21,7 @@ import imageio.v3 as iio
 import numpy as np
 
 import graphvision as gv
-from graphvision._node import unchecked
+from graphvision.nodes.marks import unchecked
 from graphvision_plugins import color, morphology, regions, threshold
 from graphvision_plugins.io import read_array, read_sample
 

@@ -4,7 +4,7 @@
   cache. Warm: another new process runs it again on the same cache (every
   output is read from disk, no intermediate). Both as the CLI runs them,
   process start-up included, and as the run record times the run alone.
-* Hashing: :func:`graphvision._cache.content_key` (xxh3-128 over dtype,
+* Hashing: :func:`graphvision.cache.store.content_key` (xxh3-128 over dtype,
   shape and bytes) on arrays of 1 MiB to 256 MiB.
 * Start-up: whole-process wall time of ``graphvision --help``, ``nodes``
   (with the plugin index, and without: a new cache folder, so the plugins are
@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 import graphvision as gv
-from graphvision._cache import content_key
+from graphvision.cache.keys import content_key
 
 ROOT = Path(__file__).parent.parent
 DEMO = ROOT / "pipelines" / "homography.yaml"  # what make demo runs

@@ -86,7 +86,7 @@ def chain_file(n: int) -> str:
 def validation_rows(registry: gv.Registry) -> list[str]:
     import tracemalloc
 
-    from graphvision._pipeline_file import parse_pipeline
+    from graphvision.graph.pipeline_file import parse_pipeline
 
     rows = [
         "| pipeline file | nodes | parse + compile µs/node | peak traced memory, bytes/node |",

@@ -15,24 +15,17 @@ from __future__ import annotations
 
 import ast
 import importlib
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ._batch import BatchItem, BatchResult, run_batch
-    from ._blas import one_blas_thread
-    from ._cache import (
-        Cache,
-        CacheWarning,
-        DiskStore,
-        MemoryStore,
-        NotACacheError,
-        default_cache_dir,
-    )
-    from ._compile import CompiledGraph, compile_graph
-    from ._dask import DaskExecutor
-    from ._dtype_policy import to_float_image
-    from ._errors import (
+    from graphvision.cache.disk import DiskStore
+    from graphvision.cache.entries import CacheWarning, NotACacheError
+    from graphvision.cache.memory_store import MemoryStore
+    from graphvision.cache.store import Cache
+    from graphvision.compiler.compile import CompiledGraph, compile_graph
+    from graphvision.errors import (
         DuplicateNodeError,
         GraphvisionError,
         InputError,
@@ -47,47 +40,22 @@ if TYPE_CHECKING:
         RunError,
         UnknownNameError,
     )
-    from ._executors import SyncExecutor, make_executor
-    from ._graph import NAME_PATTERN, REF_PATTERN, Graph, Ref
-    from ._node import NodeSpec, node, source
-    from ._pipeline_file import dump_pipeline, load_pipeline, parse_pipeline, pipeline_json_schema
-    from ._plugins import Needs, discover
-    from ._ports import (
-        ArrayPort,
-        BinaryImagePort,
-        BoolPort,
-        ColorImagePort,
-        DescriptorsPort,
-        FloatImagePort,
-        FloatPort,
-        GrayImagePort,
-        HomographyPort,
-        ImagePort,
-        IntPort,
-        KernelPort,
-        LabelImagePort,
-        Points2DPort,
-        Points3DPort,
-        PortType,
-        RecordPort,
-        TablePort,
-        TextPort,
-    )
-    from ._records import (
-        BoxesPort,
-        BoxSet,
-        CameraPort,
-        KeypointSet,
-        KeypointsPort,
-        MatchesPort,
-        MatchSet,
-        PinholeCamera,
-    )
-    from ._registry import Registry
-    from ._report import rewrite_report
-    from ._run import NodeRecord, RunHooks, RunRecord, RunResult, run
-    from ._sweep import SweepInterrupted, SweepResult, sweep
-    from .types import (
+    from graphvision.execution.batch_files import BatchItem, BatchResult
+    from graphvision.execution.blas import one_blas_thread
+    from graphvision.execution.dask import DaskExecutor
+    from graphvision.execution.executors import SyncExecutor, make_executor
+    from graphvision.execution.record import NodeRecord, RunHooks, RunRecord, RunResult
+    from graphvision.execution.run import run
+    from graphvision.execution.sweep import SweepInterrupted, SweepResult, sweep
+    from graphvision.graph.model import NAME_PATTERN, REF_PATTERN, Graph, Ref
+    from graphvision.graph.pipeline_file import dump_pipeline, load_pipeline, parse_pipeline
+    from graphvision.graph.schema import pipeline_json_schema
+    from graphvision.locations import default_cache_dir
+    from graphvision.nodes.node import node, source
+    from graphvision.nodes.plugins import Needs, discover
+    from graphvision.nodes.registry import Registry
+    from graphvision.nodes.spec import NodeSpec
+    from graphvision.types import (
         AnyImageT,
         Array,
         BinaryImage,
@@ -113,6 +81,36 @@ if TYPE_CHECKING:
         Text,
         port_of,
     )
+    from graphvision.values.dtype_policy import to_float_image
+    from graphvision.values.geometry import (
+        DescriptorsPort,
+        HomographyPort,
+        Points2DPort,
+        Points3DPort,
+    )
+    from graphvision.values.images import (
+        BinaryImagePort,
+        ColorImagePort,
+        FloatImagePort,
+        GrayImagePort,
+        ImagePort,
+        KernelPort,
+        LabelImagePort,
+    )
+    from graphvision.values.ports import ArrayPort, PortType, RecordPort
+    from graphvision.values.records import (
+        BoxesPort,
+        BoxSet,
+        CameraPort,
+        KeypointSet,
+        KeypointsPort,
+        MatchesPort,
+        MatchSet,
+        PinholeCamera,
+    )
+    from graphvision.values.scalars import BoolPort, FloatPort, IntPort, TablePort, TextPort
+    from graphvision.views.batch_page import run_batch
+    from graphvision.views.report import rewrite_report
 
 
 def _public_names() -> dict[str, str]:
@@ -139,6 +137,11 @@ def __getattr__(name: str) -> Any:
         raise AttributeError(f"module 'graphvision' has no attribute '{name}'")
     value = getattr(importlib.import_module(_WHERE[name], __name__), name)
     globals()[name] = value  # later look-ups are plain attribute reads
+    if "IPython" in sys.modules and not _WHERE.get("__notebook__"):  # inside a kernel:
+        _WHERE["__notebook__"] = "registered"  # results show their report page inline
+        from graphvision.views.notebook import register
+
+        register()
     return value
 
 

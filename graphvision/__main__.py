@@ -1,5 +1,5 @@
 """``python -m graphvision``: the command line."""
 
-from .cli import entry
+from graphvision.cli import entry
 
 entry()

@@ -27,9 +27,9 @@ import textwrap
 import types
 import typing
 
-from ._errors import GraphvisionError
-from ._ports import PortType
-from ._registry import Registry
+from graphvision.errors import GraphvisionError
+from graphvision.nodes.registry import Registry
+from graphvision.values.ports import PortType
 
 __all__ = ["PluginCheckError", "check_plugin", "documented_parameters"]
 

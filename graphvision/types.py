@@ -36,27 +36,18 @@ from typing import Annotated, Any, TypeVar, get_args, get_origin
 import numpy as np
 from numpy.typing import NDArray
 
-from ._ports import (
-    ArrayPort,
+from graphvision.values.geometry import DescriptorsPort, HomographyPort, Points2DPort, Points3DPort
+from graphvision.values.images import (
     BinaryImagePort,
-    BoolPort,
     ColorImagePort,
-    DescriptorsPort,
     FloatImagePort,
-    FloatPort,
     GrayImagePort,
-    HomographyPort,
     ImagePort,
-    IntPort,
     KernelPort,
     LabelImagePort,
-    Points2DPort,
-    Points3DPort,
-    PortType,
-    TablePort,
-    TextPort,
 )
-from ._records import (
+from graphvision.values.ports import ArrayPort, PortType
+from graphvision.values.records import (
     BoxesPort,
     BoxSet,
     CameraPort,
@@ -66,6 +57,7 @@ from ._records import (
     MatchSet,
     PinholeCamera,
 )
+from graphvision.values.scalars import BoolPort, FloatPort, IntPort, TablePort, TextPort
 
 __all__ = [
     "AnyImageT",

@@ -36,3 +36,10 @@ def write(tmp_path: Path, name: str, text: str) -> Path:
     path = tmp_path / name
     path.write_text(text)
     return path
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """One line per test file as it completes (see ``tests/file_summary.py``)."""
+    from .file_summary import FileSummary
+
+    config.pluginmanager.register(FileSummary(config), "graphvision-file-summary")

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-from graphvision._batch import output_folders, pattern_root
 from graphvision.cli import main
+from graphvision.execution.batch_files import output_folders, pattern_root
 
 from .conftest import PIPELINES
 
@@ -301,7 +301,7 @@ def test_files_at_once_1_runs_files_one_after_another(tmp_path):
 
 
 def test_on_processes_each_further_file_is_one_task_with_the_shared_values_sent(tmp_path):
-    from graphvision._file_task import shared_steps
+    from graphvision.execution.file_task import shared_steps
 
     graph, registry, log = _counting_graph(tmp_path)
     compiled = gv.compile_graph(graph, registry, provided={"image"})
@@ -410,7 +410,8 @@ def test_an_interrupted_batch_still_writes_its_summary(tmp_path):
 
 
 def test_files_running_when_a_batch_stops_are_interrupted_not_unrun():
-    from graphvision._batch import BatchItem, _not_run
+    from graphvision.execution.batch import _not_run
+    from graphvision.execution.batch_files import BatchItem
 
     paths = [Path(f"p{n}.png") for n in range(3)]
     folders = [Path(f"out/p{n}") for n in range(3)]
@@ -421,7 +422,7 @@ def test_files_running_when_a_batch_stops_are_interrupted_not_unrun():
 
 
 def test_a_file_reached_through_folder_links_is_taken_once(tmp_path):
-    from graphvision._batch import batch_files
+    from graphvision.execution.batch_files import batch_files
 
     photos = tmp_path / "photos"
     photo(photos / "a.png", 10)

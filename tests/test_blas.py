@@ -1,4 +1,4 @@
-"""One BLAS thread while nodes run (graphvision._blas): a node's bits do not depend on
+"""One BLAS thread while nodes run (graphvision.execution.blas): a node's bits do not depend on
 what runs beside it, on any executor, and the process gets its threads back."""
 
 from __future__ import annotations

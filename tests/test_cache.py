@@ -13,7 +13,9 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-from graphvision._cache import Encoded, content_key, node_fingerprint, output_key
+from graphvision.cache.entries import Encoded
+from graphvision.cache.keys import content_key, output_key
+from graphvision.nodes.fingerprint import node_fingerprint
 
 
 def entry(values):
@@ -71,7 +73,7 @@ def test_a_corrupt_entry_is_recomputed_in_a_run(registry, tmp_path):
 
 def test_an_interrupted_write_leaves_no_entry(tmp_path, monkeypatch):
     store = gv.DiskStore(tmp_path)
-    import graphvision._cache as cache_module
+    import graphvision.cache.disk as cache_module
 
     def broken(entry):
         yield b"GVC3"
@@ -246,7 +248,7 @@ def _forged(header) -> bytes:
     """An entry with a valid digest around ``header``: only the structure checks can catch it."""
     import xxhash
 
-    from graphvision._cache import _PREFIX, MAGIC
+    from graphvision.cache.format import _PREFIX, MAGIC
 
     text = json.dumps(header).encode() if not isinstance(header, bytes) else header
     padding = bytes(-(_PREFIX.size + len(text)) % 64)  # the payload starts at 64 bytes
@@ -377,7 +379,7 @@ def test_a_read_only_cache_is_still_read(tmp_path, monkeypatch, registry):
     graph.output("o", graph.add("o", "toy.add", a=graph.input("x", "Float", default=1.0), b="x"))
     warm = gv.Cache(None, gv.DiskStore.open(tmp_path))
     gv.run(graph, registry, cache=warm)
-    import graphvision._cache as cache_module
+    import graphvision.cache.disk as cache_module
 
     def read_only(*args, **kwargs):
         raise OSError(30, "Read-only file system")

@@ -327,7 +327,7 @@ def test_a_plugins_path_that_does_not_exist_is_a_usage_error(capsys, tmp_path):
 def test_environment_errors_are_one_line_exit_1(capsys, tmp_path, monkeypatch):
     import errno
 
-    import graphvision._report as report
+    import graphvision.execution.folders as report
 
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "out" / "x.png"))
@@ -358,7 +358,7 @@ def test_version_bare_usage_and_python_m(capsys):
 def test_every_option_has_help_and_node_summaries_are_plain_text(capsys):
     import argparse
 
-    from graphvision.cli import build_parser
+    from graphvision.cli.parser import build_parser
 
     parser = build_parser()
     subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))

@@ -7,8 +7,8 @@ import gc
 import pytest
 
 import graphvision as gv
-from graphvision._collector import collector_paused
-from graphvision._pipeline_file import parse_pipeline
+from graphvision.graph.collector import collector_paused
+from graphvision.graph.pipeline_file import parse_pipeline
 
 
 def test_the_collector_is_paused_inside_and_restored_after_an_error():

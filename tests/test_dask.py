@@ -13,7 +13,7 @@ distributed = pytest.importorskip(
     "distributed", reason="Dask is an optional extra: graphvision[dask]"
 )
 
-from graphvision._dask import DaskExecutor, DaskUnavailableError  # noqa: E402
+from graphvision.execution.dask import DaskExecutor, DaskUnavailableError  # noqa: E402
 
 PIPELINES = Path(__file__).parent.parent / "pipelines"
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-from graphvision._node import unchecked
+from graphvision.nodes.marks import unchecked
 from graphvision_plugins import (
     color,
     features,

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-from graphvision._html import write_html_report
-from graphvision._svg import STATUS_COLOURS
+from graphvision.graph.svg import STATUS_COLOURS
+from graphvision.views.html import write_html_report
 
 PIPELINES = Path(__file__).parent.parent / "pipelines"
 BROWSERS = ("chromium", "chromium-browser", "google-chrome", "chrome")
@@ -75,7 +75,7 @@ def test_every_output_has_a_section_and_pictures_are_pngs(coins_report: Path) ->
 
 
 def test_labels_are_coloured_and_background_black() -> None:
-    from graphvision._pictures import label_colours
+    from graphvision.values.pictures import label_colours
 
     labels = np.array([[0, 1, 2], [3, 0, 1]], np.int32)
     rgb = label_colours(labels)
@@ -127,12 +127,30 @@ def test_a_real_browser_loads_the_report_without_errors(coins_report: Path, tmp_
     assert check == {"images": 2, "broken": 0, "errors": []}
 
 
-def test_a_run_result_shows_as_its_report_in_a_notebook():
+def test_a_run_result_shows_as_its_report_in_a_notebook(monkeypatch):
+    import sys
+    import types
+
+    from graphvision.execution import display
+
+    monkeypatch.setattr(display, "_RENDERERS", {})
+    monkeypatch.delitem(gv.__dict__, "run", raising=False)  # looked up again, as in a kernel
+    monkeypatch.setitem(sys.modules, "IPython", types.ModuleType("IPython"))
+    monkeypatch.setattr(gv, "_WHERE", {})
     result = gv.run(gv.load_pipeline(PIPELINES / "line_fit.yaml"), cache=None)
     page = _Page()
     page.feed(result._repr_html_())
     assert page.headings[: len(result.compiled.outputs)] == list(result.compiled.outputs)
     assert len(page.images) == 1  # the points, drawn
+
+
+def test_a_run_result_outside_a_kernel_shows_its_record_as_text(monkeypatch):
+    from graphvision.execution import display
+
+    monkeypatch.setattr(display, "_RENDERERS", {})
+    result = gv.run(gv.load_pipeline(PIPELINES / "line_fit.yaml"), cache=None)
+    shown = result._repr_html_()
+    assert shown.startswith("<pre>") and "node" in shown and "<img" not in shown
 
 
 def test_batch_page_has_a_card_per_file_linking_its_report(tmp_path):

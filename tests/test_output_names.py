@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-from graphvision._errors import OutputFolderError
-from graphvision._report import write_outputs
 from graphvision.cli import main
+from graphvision.errors import OutputFolderError
+from graphvision.execution.folders import write_outputs
 
 from .conftest import PIPELINES
 

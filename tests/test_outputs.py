@@ -14,9 +14,10 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-from graphvision._provenance import file_sha256
-from graphvision._report import write_outputs, write_report
 from graphvision.cli import main
+from graphvision.execution.folders import write_outputs
+from graphvision.execution.provenance import file_sha256
+from graphvision.views.report import write_report
 
 from .conftest import PIPELINES
 
@@ -131,7 +132,7 @@ def values_of_every_builtin_type() -> dict[type[gv.PortType], list[object]]:
 
 
 def test_every_builtin_port_type_is_written_and_reported(tmp_path):
-    from graphvision._ports import builtin_port_types
+    from graphvision.values.builtin import builtin_port_types
 
     samples = values_of_every_builtin_type()
     assert set(builtin_port_types()) == set(samples), "a port type without a sample value"
@@ -154,7 +155,7 @@ def test_every_builtin_port_type_is_written_and_reported(tmp_path):
         if isinstance(value, np.ndarray) and files[name][0].endswith(".npy"):
             np.testing.assert_array_equal(np.load(tmp_path / files[name][0]), value)
     assert "`[[true, false, false, false]," in report.read_text()  # the 4×4 mask by value
-    json.loads((tmp_path / "record.json").read_text())
+    json.loads(result.record.to_json())
 
 
 # -- item 16: a pipeline's metric uses the geometry of its input ---------------------------
@@ -322,7 +323,7 @@ def test_an_output_named_record_is_refused_and_leftover_staging_is_cleared(capsy
 def test_the_git_state_follows_edits_and_commits_within_one_process(tmp_path):
     import subprocess
 
-    from graphvision._provenance import git_state
+    from graphvision.execution.provenance import git_state
 
     repo = tmp_path / "repo"
     repo.mkdir()

@@ -7,7 +7,7 @@ import json
 import pytest
 
 import graphvision as gv
-from graphvision._pipeline_file import graph_to_dict
+from graphvision.graph.pipeline_file import graph_to_dict
 
 from .conftest import PIPELINES
 
@@ -110,10 +110,11 @@ def test_json_schema_accepts_the_pipelines_and_names_sections():
 
 def test_json_schema_states_the_name_and_reference_rules():
     schema = gv.pipeline_json_schema()
-    for section in ("nodes", "inputs"):
+    for section in ("nodes", "inputs", "outputs"):  # output names name files: plain names too
         assert list(schema["properties"][section]["patternProperties"]) == [gv.NAME_PATTERN]
         assert schema["properties"][section]["additionalProperties"] is False
-    assert schema["properties"]["outputs"]["additionalProperties"]["pattern"] == gv.REF_PATTERN
+    outputs = schema["properties"]["outputs"]["patternProperties"][gv.NAME_PATTERN]
+    assert outputs["pattern"] == gv.REF_PATTERN
 
 
 LAUGHS = """\

@@ -18,7 +18,10 @@ def encoded(result: gv.RunResult) -> dict[str, tuple[dict[str, tuple[str, tuple,
     for name, value in result.outputs.items():
         arrays, meta = result.compiled.output_type(name).encode(value)
         bits[name] = (
-            {k: (a.dtype.str, a.shape, np.ascontiguousarray(a).tobytes()) for k, a in arrays.items()},
+            {
+                k: (a.dtype.str, a.shape, np.ascontiguousarray(a).tobytes())
+                for k, a in arrays.items()
+            },
             json.dumps(meta, sort_keys=True, default=str),
         )
     return bits

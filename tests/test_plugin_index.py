@@ -15,9 +15,9 @@ import pytest
 from pydantic import Field
 
 import graphvision as gv
-from graphvision import _plugin_index
-from graphvision._node import build_spec
 from graphvision.cli import main
+from graphvision.nodes import plugin_index as _plugin_index
+from graphvision.nodes.signature import build_spec
 
 from .conftest import TOY
 
@@ -51,14 +51,14 @@ def test_the_index_prints_what_a_discovery_prints(capsys, monkeypatch, command):
     assert not index_files()
     status, discovered, _ = cli(capsys, *command)  # no index yet: discovers, writes it
     assert status == 0 and len(index_files()) == 1
-    monkeypatch.setattr("graphvision._plugins.discover", refuse_discovery)
+    monkeypatch.setattr("graphvision.nodes.plugins.discover", refuse_discovery)
     status, indexed, _ = cli(capsys, *command)
     assert status == 0 and indexed == discovered
 
 
 def test_an_unknown_op_is_named_from_the_index_as_from_a_discovery(capsys, monkeypatch):
     status, _, first = cli(capsys, "describe", "filters.gausian")
-    monkeypatch.setattr("graphvision._plugins.discover", refuse_discovery)
+    monkeypatch.setattr("graphvision.nodes.plugins.discover", refuse_discovery)
     status_again, _, again = cli(capsys, "describe", "filters.gausian")
     assert status == status_again == 2 and first == again
     assert "unknown op 'filters.gausian' (did you mean 'filters.gaussian'?)" in again

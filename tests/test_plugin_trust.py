@@ -65,13 +65,13 @@ def test_checking_or_drawing_a_pipeline_imports_none_of_its_plugins(capsys, tmp_
 
 def test_a_pipeline_that_uses_no_op_of_its_plugins_validates_without_them(capsys, tmp_path):
     pipeline, marker = setup(tmp_path, "evil.py", op="pyramids.zone_plate")
-    status, out, err = run_cli(capsys, "validate", pipeline)
+    status, out, _err = run_cli(capsys, "validate", pipeline)
     assert status == 0 and "ok" in out and not marker.exists()
 
 
 def test_run_loads_a_plugin_beside_its_pipeline_and_says_so(capsys, tmp_path):
     pipeline, marker = setup(tmp_path, "lib/evil.py")
-    status, out, err = run_cli(capsys, "run", pipeline, "--no-cache")
+    status, _out, err = run_cli(capsys, "run", pipeline, "--no-cache")
     assert status == 0 and marker.exists()
     assert f"loading local plugins: {pipeline.parent / 'lib/evil.py'}" in err
 

@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 import graphvision as gv
-from graphvision._progress import FileProgress, RunProgress
+from graphvision.views.progress import FileProgress, RunProgress
 
 COINS = Path(__file__).parent.parent / "pipelines" / "coins.yaml"
 

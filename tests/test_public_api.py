@@ -26,7 +26,8 @@ def test_all_is_unique_and_exported():
 @pytest.mark.parametrize(
     "module",
     [
-        "graphvision._scheduler",
+        "graphvision.execution.scheduler",
+        "graphvision.graph.order",
         "graphvision_plugins.color._color",
         "graphvision_plugins.filters._linear",
         "graphvision_plugins.metrics._quality",

@@ -252,3 +252,34 @@ def test_every_bad_node_of_a_plugin_is_reported_with_readable_types(tmp_path):
         "input 'sigma' must be annotated with a port type (e.g. Image), got float;" in failure.error
     )
     assert "function three" in failure.error and "needs a docstring" in failure.error
+
+
+def test_an_op_of_a_family_no_plugin_provides_says_how_to_load_one(registry):
+    """A forgotten --plugins: the family is named, with the three ways to load a plugin
+    (before, the closest op of another family was suggested)."""
+    with pytest.raises(gv.UnknownNameError) as caught:
+        registry.node("mine.vignette")
+    message = str(caught.value)
+    assert "no loaded plugin provides the family 'mine'" in message
+    assert "--plugins PATH" in message and "gv.discover([PATH])" in message
+    assert "formation.vignette" not in message
+
+
+def test_a_renamed_op_names_its_new_id(tmp_path):
+    plugin = tmp_path / "renaming.py"
+    plugin.write_text(
+        "from graphvision import Float, node\n"
+        'RENAMED_OPS = {"old.one": "renaming.one"}\n'
+        '__all__ = ["one", "RENAMED_OPS"]\n'
+        '@node("renaming.one")\n'
+        "def one() -> Float:\n"
+        '    """One."""\n'
+        "    return 1.0\n"
+    )
+    registry = gv.discover([plugin], entry_points=False)
+    with pytest.raises(gv.UnknownNameError, match=r"op 'old\.one' was renamed 'renaming\.one'"):
+        registry.node("old.one")
+    graph = gv.Graph("g")
+    graph.output("o", graph.add("o", "old.one"))
+    with pytest.raises(gv.PipelineError, match=r"was renamed 'renaming\.one'"):
+        gv.compile_graph(graph, registry)

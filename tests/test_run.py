@@ -229,7 +229,7 @@ def test_editing_a_node_invalidates_its_entries(tmp_path, cache):
 
 
 def test_docstring_comment_and_position_edits_keep_the_fingerprint(registry):
-    from graphvision._fingerprint import code_fingerprint
+    from graphvision.nodes.fingerprint import code_fingerprint
 
     def add(a, b, *, offset=0.0):
         return a + b + offset
@@ -315,7 +315,7 @@ def test_editing_a_helper_invalidates_its_callers_and_no_others(tmp_path, edit, 
 
 
 def test_an_installed_plugin_fingerprint_includes_its_distribution_version(registry):
-    from graphvision._fingerprint import _distribution_version
+    from graphvision.nodes.fingerprint import _distribution_version
 
     assert _distribution_version("graphvision_plugins").startswith("graphvision==")
 
@@ -454,7 +454,7 @@ def test_editing_a_module_imported_inside_a_node_invalidates_that_node_only(tmp_
     """A kernel module imported in the node's body (not at the top) is part of its code."""
     import sys
 
-    from graphvision._fingerprint import _MEMO, code_fingerprint
+    from graphvision.nodes.fingerprint import _MEMO, code_fingerprint
 
     package = tmp_path / "lazy"
     package.mkdir()

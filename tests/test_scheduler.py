@@ -5,7 +5,7 @@ from __future__ import annotations
 import threading
 from concurrent.futures import Future
 
-from graphvision._scheduler import run_tasks
+from graphvision.execution.scheduler import run_tasks
 
 CHAIN = {"a": set(), "b": {"a"}, "c": {"b"}}
 

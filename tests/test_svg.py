@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 import graphvision as gv
-from graphvision._svg import STATUS_COLOURS, graph_svg
+from graphvision.graph.svg import STATUS_COLOURS, graph_svg
 
 PIPELINES = sorted(Path(__file__).parent.parent.joinpath("pipelines").glob("*.yaml"))
 SVG = "{http://www.w3.org/2000/svg}"

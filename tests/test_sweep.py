@@ -11,7 +11,8 @@ from typing import Any
 import pytest
 
 import graphvision as gv
-from graphvision._sweep import sweep, sweep_plot_svg
+from graphvision.execution.sweep import sweep
+from graphvision.views.sweep_page import sweep_plot_svg
 
 LINE_FIT = Path(__file__).parent.parent / "pipelines" / "line_fit.yaml"
 GRID = {"robust.threshold": [1.0, 3.0, 9.0], "robust.confidence": [0.9, 0.99]}
@@ -147,7 +148,7 @@ def test_an_interrupted_sweep_keeps_the_rows_done(capsys, tmp_path, monkeypatch)
         if next(calls) is KeyboardInterrupt:
             raise KeyboardInterrupt
 
-    monkeypatch.setattr("graphvision._progress.FileProgress.finished", interrupt_second)
+    monkeypatch.setattr("graphvision.views.progress.FileProgress.finished", interrupt_second)
     out = tmp_path / "sweep"
     args = ["sweep", str(LINE_FIT), "--no-cache", "-d", str(out), "--progress"]
     assert main([*args, "--grid", "robust.threshold=1,3,9"]) == 130

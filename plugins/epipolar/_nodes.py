@@ -20,7 +20,7 @@ from graphvision import (
     Points3D,
     node,
 )
-from graphvision._ports import PortValueError
+from graphvision import PortValueError
 
 from .._params import Iterations, Positive, Probability, Seed
 from ..camera import normalise_pixels

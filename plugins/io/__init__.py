@@ -6,7 +6,7 @@ Sources (values of graph inputs):
 * a path — PNG, JPEG, TIFF, BMP, ... read with imageio, or ``.npy``.
 
 The sources return arrays as stored; the graph input's port type applies the
-one dtype policy (:mod:`graphvision._dtype_policy`): an ``Image`` input gets
+one dtype policy (:mod:`graphvision.values.dtype_policy`): an ``Image`` input gets
 ``float32`` in [0, 1], gray ``H×W`` or RGB ``H×W×3``, a ``BinaryImage`` input
 a bool mask. :func:`read_file` and :func:`read_sample` apply the image policy
 for scripts.

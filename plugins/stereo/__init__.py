@@ -3,10 +3,11 @@ by block matching and semi-global matching, depth and 3-D points, evaluation aga
 ground truth, rectification (calibrated and uncalibrated), structured light, drawings.
 """
 
+from ._colour_map import colour_map
 from ._cost import cost_volume
 from ._depth import depth_from_disparity, depth_points
 from ._disparity import block_match, left_right_check, sgm
-from ._draw import colour_map, draw_disparity, draw_point_cloud
+from ._draw import draw_disparity, draw_point_cloud
 from ._evaluate import depth_rmse, disparity_error
 from ._ports import Depth, DepthPort, Disparity, DisparityPort, Frames, FramesPort
 from ._rectify import (

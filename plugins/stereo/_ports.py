@@ -34,7 +34,7 @@ class DisparityPort(ArrayPort):
 
     @classmethod
     def preview(cls, value: np.ndarray) -> np.ndarray | None:
-        from ._draw import colour_map
+        from ._colour_map import colour_map
 
         return colour_map(value)
 

@@ -1,0 +1,30 @@
+"""``graphvision cache info|prune|clear``."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from graphvision.cli.common import EXIT_OK
+
+if TYPE_CHECKING:
+    pass
+
+
+def cmd_cache(args: argparse.Namespace) -> int:
+    from graphvision.cache.disk import DiskStore
+    from graphvision.locations import default_cache_dir
+
+    store = DiskStore(args.cache_dir or default_cache_dir(), args.cache_max_bytes)
+    if args.action == "info":
+        info = store.info()
+        print(
+            f"directory: {info.directory}\nentries:   {info.entries}\n"
+            f"size:      {info.bytes / 2**20:.1f} MiB of {info.max_bytes / 2**20:.0f} MiB"
+        )
+    elif args.action == "prune":
+        freed = store.prune(args.max_bytes if args.max_bytes is not None else store.max_bytes)
+        print(f"freed {freed / 2**20:.1f} MiB")
+    else:
+        print(f"removed {store.clear()} entries from {store.directory}")
+    return EXIT_OK

@@ -1,0 +1,197 @@
+"""What every command shares: exit statuses, values given on the command line, and
+the set-up of a run (plugins, cache, executor, the pipeline with its --set and --input)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from graphvision.errors import GraphvisionError, did_you_mean
+
+if TYPE_CHECKING:
+    from graphvision.cache.store import Cache
+    from graphvision.graph.model import Graph
+    from graphvision.nodes.registry import Registry
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
+EXECUTORS = ("threads", "sync", "processes", "dask")
+MAX_WORKERS = 256  # workers of one machine's pool or local cluster (each is a thread or a process)
+CACHE_DIR_HELP = "$GRAPHVISION_CACHE_DIR, else $XDG_CACHE_HOME/graphvision or ~/.cache/graphvision"
+
+
+class UsageError(GraphvisionError):
+    """A command-line mistake (exit status 2)."""
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]  # raises, as the base does
+        raise UsageError(f"{self.prog}: {message}")
+
+
+# -- values given on the command line ---------------------------------------------------
+
+
+def named_pairs(items: Sequence[str], flag: str) -> dict[str, str]:
+    pairs: dict[str, str] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise UsageError(f"{flag} expects NAME=VALUE, got '{item}'")
+        if name in pairs:
+            raise UsageError(f"{flag} {name} is given twice ({pairs[name]!r} and {value!r})")
+        pairs[name] = value
+    return pairs
+
+
+def yaml_value(text: str, where: str) -> Any:
+    """A command-line value read as YAML (``2``, ``true``, ``[1, 2]``), or a UsageError."""
+    from graphvision.errors import PipelineError
+    from graphvision.graph.yaml_reader import parse_value
+
+    try:
+        return parse_value(text)
+    except PipelineError as error:
+        reasons = "; ".join(problem.message for problem in error.problems)
+        raise UsageError(f"{where}: {reasons}") from None
+
+
+def positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: '{text}'") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    if value > MAX_WORKERS:
+        raise argparse.ArgumentTypeError(f"at most {MAX_WORKERS}, got {value}")
+    return value
+
+
+def byte_size(text: str) -> int:
+    units = {"k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}
+    text = text.strip().lower().removesuffix("ib").removesuffix("b")
+    try:
+        size = int(float(text[:-1]) * units[text[-1]]) if text and text[-1] in units else int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a size: '{text}' (e.g. 500M, 2G)") from None
+    if size <= 0:
+        raise argparse.ArgumentTypeError(f"a size must be positive, got '{text}' (e.g. 500M, 2G)")
+    return size
+
+
+def check_overrides(graph: Graph, registry: Registry, overrides: dict[str, Any], flag: str) -> None:
+    """Refuse, naming the command line, an override of a node or parameter that does not exist."""
+    for key, value in overrides.items():
+        target, _, param = key.partition(".")
+        shown = f"{flag} {key}={value!r}"
+        if not param:
+            raise UsageError(f"{shown}: expected NODE.PARAM or params.NAME")
+        if target == "params":
+            if param not in graph.params:
+                hint = did_you_mean(param, graph.params)
+                raise UsageError(f"{shown}: the pipeline has no param '{param}'{hint}")
+            continue
+        if target not in graph.nodes:
+            hint = did_you_mean(target, graph.nodes)
+            raise UsageError(f"{shown}: the pipeline has no node '{target}'{hint}")
+        spec = registry.nodes.get(graph.nodes[target].op)
+        if spec is not None and param not in spec.param_fields:
+            names = list(spec.param_fields)
+            hint = did_you_mean(param, names)
+            listing = ", ".join(names) or "none"
+            raise UsageError(
+                f"{shown}: {spec.id} has no parameter '{param}'{hint}; parameters: {listing}"
+            )
+
+
+def output_folder(text: str | None) -> Path | None:
+    """The output folder, made now: a file or a folder that cannot be made is refused first."""
+    if text is None:
+        return None
+    if not text.strip():
+        raise UsageError("--output-dir is empty: give a folder (use . for this one)")
+    folder = Path(text)
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"--output-dir {folder}: is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UsageError(f"--output-dir {folder}: cannot be made ({error.strerror})") from None
+    return folder
+
+
+# -- shared set-up ---------------------------------------------------------------------
+
+
+def registry_for(
+    args: argparse.Namespace, graph: Graph | None = None, *, run_its_plugins: bool = True
+) -> Registry:
+    """The plugins: ``--plugins``, and with a pipeline only the installed families it uses
+    (when the plugin index says which those are), else all of them; and the pipeline's
+    own ``plugins:`` when it is to run (announced), never when it is only read."""
+    from graphvision.nodes.plugins import Needs, discover, discover_for
+
+    for path in args.plugins:
+        if not Path(path).exists():
+            raise UsageError(f"--plugins {path}: no such file or folder")
+    if graph is None:
+        registry = discover(args.plugins)
+    elif run_its_plugins:
+        if graph.plugins:
+            print(f"loading local plugins: {', '.join(graph.plugins)}", file=sys.stderr)
+        registry = discover_for(graph, args.plugins)
+    else:
+        registry = discover(args.plugins, needs=Needs.of(graph))
+    for plugin in registry.failed_plugins():
+        print(f"warning: plugin '{plugin.name}' failed to load: {plugin.error}", file=sys.stderr)
+    return registry
+
+
+def disk_cache(args: argparse.Namespace) -> Cache | None:
+    from graphvision.cache.store import Cache
+    from graphvision.locations import default_cache_dir
+
+    if args.no_cache:
+        return None
+    return Cache.at(args.cache_dir or default_cache_dir(), args.cache_max_bytes)
+
+
+def executor_for(args: argparse.Namespace) -> Any:
+    """The executor name, or a Dask executor (started here, so that it can be shut down)."""
+    if args.executor != "dask":
+        if args.scheduler:
+            raise UsageError("--scheduler goes with --executor dask")
+        return args.executor
+    from graphvision.execution.dask import DaskExecutor
+
+    return DaskExecutor(address=args.scheduler, workers=args.workers or 2)
+
+
+def load_run_arguments(
+    args: argparse.Namespace,
+) -> tuple[Graph, Registry, dict[str, Any], dict[str, Any]]:
+    """The pipeline, its registry, the checked overrides (``--set``) and inputs (``--input``)."""
+    from graphvision.graph.pipeline_file import load_pipeline
+
+    graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
+    registry = registry_for(args, graph)
+    overrides = {
+        key: yaml_value(value, f"--set {key}={value}")
+        for key, value in named_pairs(args.set, "--set").items()
+    }
+    check_overrides(graph, registry, overrides, "--set")
+    return graph, registry, overrides, dict(named_pairs(args.input, "--input"))
+
+
+def note_unread_plugins(graph: Graph) -> None:
+    """Say which local plugins a pipeline names that reading it does not import."""
+    if graph.plugins:
+        print(
+            f"note: {graph.source} names local plugins {', '.join(graph.plugins)}; they are "
+            "not imported to check or draw it (nothing in a pipeline runs until `run`): "
+            "pass --plugins PATH to load and check their ops",
+            file=sys.stderr,
+        )

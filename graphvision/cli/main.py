@@ -1,0 +1,170 @@
+"""The ``graphvision`` command line: argument parsing and printing, nothing else.
+
+::
+
+    graphvision run PIPELINE [-i NAME=VALUE]... [-s NODE.PARAM=VALUE]... [-o NAME]...
+                             [-d DIR] [--batch NAME=GLOB] [--executor KIND] [--workers N]
+                             [--scheduler ADDRESS] [--no-cache | --cache-dir DIR]
+                             [--keep-going] [--record] [--[no-]progress]
+    graphvision sweep PIPELINE --grid NODE.PARAM=V1,V2,... [--grid ...] -d DIR [--plot OUTPUT]
+    graphvision validate PIPELINE...
+    graphvision nodes [--json]
+    graphvision describe OP [--json]
+    graphvision schema
+    graphvision graph PIPELINE [--format dot|mermaid|svg]
+    graphvision cache info|prune|clear [--cache-dir DIR] [--max-bytes SIZE]
+
+``--plugins PATH`` and ``--debug`` go anywhere on the line. Exit status: 0
+success, 1 a run failed (or the environment: a full disk, a closed pipe), 2
+an invalid pipeline or usage, 130 interrupted (Ctrl-C), 143 terminated
+(SIGTERM). Every mistake is one message, never a traceback (``--debug`` adds
+it). Every sub-command calls the Python
+API; heavy modules are imported by the command that needs them, so ``--help``
+is quick.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import signal
+import sys
+import time
+import traceback
+import warnings
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+from graphvision.cli.common import (
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_TERMINATED,
+    EXIT_USAGE,
+    UsageError,
+)
+from graphvision.cli.parser import build_parser
+from graphvision.errors import GraphvisionError
+from graphvision.execution.warnings import show_warning
+
+if TYPE_CHECKING:
+    pass
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line on ``argv``; return the exit status (never raises for a mistake).
+
+    The one place errors become messages: a graphvision error is a usage
+    problem (2), a failed run or a problem of the environment (a full disk,
+    no permission, a closed pipe) a failure (1), Ctrl-C 130, SIGTERM 143.
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    warnings.showwarning = show_warning
+    began = time.perf_counter()
+    try:
+        parser = build_parser()
+        if not argv:
+            parser.print_usage(sys.stderr)
+            print(
+                "commands: " + ", ".join(_commands(parser)) + "; --help for more", file=sys.stderr
+            )
+            return EXIT_USAGE
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as done:  # --help, --version
+            return int(done.code or 0)
+        if args.command is None:
+            raise UsageError("give a command: " + ", ".join(_commands(parser)))
+        return int(args.func(args))
+    except KeyboardInterrupt as stop:
+        what = "terminated" if isinstance(stop, Terminated) else "interrupted"
+        print(f"{what} after {time.perf_counter() - began:.1f} s", file=sys.stderr)
+        return EXIT_TERMINATED if isinstance(stop, Terminated) else EXIT_INTERRUPTED
+    except BrokenPipeError:  # `graphvision nodes | head -1`: the reader has what it wanted
+        _silence_stdout()
+        return EXIT_OK
+    except Exception as error:
+        if debug:
+            traceback.print_exc()
+        return _report_error(error)
+
+
+def _report_error(error: Exception) -> int:
+    from graphvision.errors import RunError
+
+    if isinstance(error, RunError):
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_FAILED
+    if isinstance(error, GraphvisionError):
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    if isinstance(error, OSError):  # the environment: disk full, permissions, a vanished file
+        where = f": {error.filename}" if error.filename else ""
+        print(f"error: {error.strerror or error}{where}", file=sys.stderr)
+        return EXIT_FAILED
+    print(
+        f"error: internal error ({type(error).__name__}: {error}); please report it, "
+        "with the output of --debug",
+        file=sys.stderr,
+    )
+    return EXIT_FAILED
+
+
+def _commands(parser: argparse.ArgumentParser) -> list[str]:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return list(action.choices)
+    return []
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that the interpreter's final flush does not fail again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+
+
+def entry() -> None:
+    """The ``graphvision`` console script: :func:`main`, then exit at once with its status.
+
+    On Ctrl-C the process exits without waiting for worker threads to finish
+    the node they run (cache entries and outputs are written atomically, so
+    nothing is left half-written; worker processes see their parent go and exit).
+    """
+    signal.signal(signal.SIGTERM, _terminate)
+    status = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if status in (EXIT_INTERRUPTED, EXIT_TERMINATED):
+        _release_process_resources()
+        os._exit(status)
+    sys.exit(status)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, ``timeout``, ``docker stop``, a batch scheduler): stopped as Ctrl-C
+    stops a run, so a batch or sweep still writes what it has done."""
+
+
+def _terminate(signum: int, frame: Any) -> None:
+    raise Terminated
+
+
+def _release_process_resources() -> None:
+    """End the worker processes and unlink a process pool's semaphores before an immediate exit.
+
+    ``os._exit`` skips the finalizers that release them, and multiprocessing's
+    resource tracker then prints a warning about leaked semaphores. Running
+    the finalizers of priority >= 0 (close queues, unlink semaphores) does not
+    wait for the workers, which exit on their own when their parent is gone.
+    """
+    if "multiprocessing" in sys.modules:  # workers still starting would find the semaphores
+        import multiprocessing  # gone and print a traceback: end them first, at once
+
+        for child in multiprocessing.active_children():
+            with contextlib.suppress(OSError):
+                child.kill()
+    util = sys.modules.get("multiprocessing.util")
+    if util is not None:
+        util._run_finalizers(0)  # private, unchanged since Python 3.4

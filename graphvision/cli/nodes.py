@@ -1,0 +1,91 @@
+"""``graphvision nodes`` and ``graphvision describe``: the registry, read from the plugin
+index when it is current (no plugin is imported then)."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from graphvision.cli.common import EXIT_OK, registry_for
+from graphvision.errors import UnknownNameError, did_you_mean
+
+if TYPE_CHECKING:
+    pass
+
+
+def plain_text(text: str) -> str:
+    """reStructuredText roles and literals as plain text (``:math:`x``` -> ``x``)."""
+    import re
+
+    text = re.sub(r":[a-z]+:`~?([^`]+)`", lambda m: m.group(1).rsplit(".", 1)[-1], text)
+    return text.replace("``", "")
+
+
+def listed_nodes(args: argparse.Namespace) -> tuple[dict[str, str], Callable[[str], Any]]:
+    """Each node's one-line summary by id, and a function giving a node's description.
+
+    From the plugin index when it matches the installed plugins and no local
+    plugin is asked for (no plugin is imported then), else by discovering them.
+    """
+    if not args.plugins:
+        from graphvision.nodes.plugin_index import (
+            environment_key,
+            installed_entry_points,
+            read_index,
+        )
+
+        indexed = read_index(environment_key(installed_entry_points()))
+        if indexed is not None:
+            summaries = {op: str(entry["summary"]) for op, entry in indexed.items()}
+            return summaries, lambda op: indexed[op]["description"]
+    registry = registry_for(args)
+    summaries = {op: spec.summary for op, spec in registry.nodes.items()}
+    return summaries, lambda op: registry.nodes[op].describe()
+
+
+def cmd_nodes(args: argparse.Namespace) -> int:
+    import json
+
+    summaries, describe = listed_nodes(args)
+    if args.json:
+        print(json.dumps({op: describe(op) for op in sorted(summaries)}, indent=2))
+        return EXIT_OK
+    families: dict[str, list[str]] = {}
+    for op in sorted(summaries):
+        families.setdefault(op.split(".", 1)[0], []).append(op)
+    for family, ops in families.items():
+        print(f"{family}")
+        width = max(len(op) for op in ops)
+        for op in ops:
+            print(f"  {op.ljust(width)}  {plain_text(summaries[op])}")
+    return EXIT_OK
+
+
+def cmd_describe(args: argparse.Namespace) -> int:
+    import json
+
+    summaries, describe = listed_nodes(args)
+    if args.op not in summaries:
+        raise UnknownNameError(f"unknown op '{args.op}'{did_you_mean(args.op, summaries)}")
+    info = describe(args.op)
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return EXIT_OK
+    where = f"version {info['version']}, plugin {info['plugin']}, {info['function']}"
+    print(f"{info['id']} ({where})\n")
+    print("inputs:")
+    for name, port in info["inputs"].items():
+        print(f"  {name}: {port['type']}{' (optional)' if port['optional'] else ''}")
+    print("outputs:")
+    for name, kind in info["outputs"].items():
+        print(f"  {name}: {kind}")
+    print("parameters:")
+    props = info["params"].get("properties", {})
+    for name, schema in props.items():
+        shown = {k: v for k, v in schema.items() if k not in ("title",)}
+        print(f"  {name}: {json.dumps(shown)}")
+    if not props:
+        print("  none")
+    print(f"\n{plain_text(info['doc'])}")
+    return EXIT_OK

@@ -1,0 +1,219 @@
+"""The argument parser: global options, shared run options, one sub-parser per command."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from graphvision.cli.cache import cmd_cache
+from graphvision.cli.common import CACHE_DIR_HELP, EXECUTORS, Parser, byte_size, positive_int
+from graphvision.cli.graph import cmd_graph
+from graphvision.cli.nodes import cmd_describe, cmd_nodes
+from graphvision.cli.report import cmd_report
+from graphvision.cli.run import cmd_run
+from graphvision.cli.schema import cmd_schema
+from graphvision.cli.sweep import cmd_sweep
+from graphvision.cli.validate import cmd_validate
+
+if TYPE_CHECKING:
+    pass
+
+
+def global_options(parser: argparse.ArgumentParser, top: bool) -> None:
+    """``--plugins`` and ``--debug``, accepted before and after the sub-command.
+
+    The sub-commands' copies default to SUPPRESS, so that a value given before
+    the sub-command is not reset by the sub-command's default.
+    """
+    parser.add_argument(
+        "--plugins",
+        action="append",
+        default=[] if top else argparse.SUPPRESS,
+        metavar="PATH",
+        help="load a local plugin file or folder (repeatable)",
+    )
+    parser.add_argument(
+        "--allow-outside-plugins",
+        action="store_true",
+        default=False if top else argparse.SUPPRESS,
+        help="let a pipeline's plugins: name files outside its folder (they run its code)",
+    )
+    parser.add_argument(
+        "--debug",
+        action="store_true",
+        default=False if top else argparse.SUPPRESS,
+        help="show Python tracebacks",
+    )
+
+
+def cache_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--cache-dir", metavar="DIR", help=f"disk cache folder ({CACHE_DIR_HELP})")
+    parser.add_argument(
+        "--cache-max-bytes",
+        type=byte_size,
+        default=4 * 2**30,
+        metavar="SIZE",
+        help="disk cache bound, e.g. 500M, 4G (default 4G)",
+    )
+
+
+def run_options(parser: argparse.ArgumentParser) -> None:
+    """Options shared by ``run`` and ``sweep``."""
+    parser.add_argument("pipeline", help="the pipeline file (YAML)")
+    parser.add_argument(
+        "--input",
+        "-i",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="graph input: a path, sample:NAME, or a literal",
+    )
+    parser.add_argument(
+        "--set",
+        "-s",
+        action="append",
+        default=[],
+        metavar="NODE.PARAM=VALUE",
+        help="override a node parameter (params.NAME for a pipeline param); VALUE is YAML",
+    )
+    parser.add_argument(
+        "--executor",
+        choices=EXECUTORS,
+        default="threads",
+        help="where nodes run: threads (default), sync, processes, or dask",
+    )
+    parser.add_argument(
+        "--workers",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="threads or processes (default: the number of cores); dask: local workers (2)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="with --executor dask: an existing scheduler, tcp://HOST:PORT "
+        "(default $GRAPHVISION_DASK_SCHEDULER, else a local cluster)",
+    )
+    parser.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
+    parser.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show progress (default: when stderr is a terminal; batches and sweeps print a "
+        "line per file or combination elsewhere)",
+    )
+    parser.add_argument(
+        "--keep-going",
+        action="store_true",
+        help="after a node fails, finish every branch that does not depend on it",
+    )
+    cache_options(parser)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = Parser(prog="graphvision", description="Run classical computer-vision pipelines.")
+    parser.add_argument("--version", action="version", version=f"graphvision {version()}")
+    global_options(parser, top=True)
+    commands = parser.add_subparsers(dest="command", parser_class=Parser, metavar="COMMAND")
+
+    def command(name: str, help: str) -> argparse.ArgumentParser:
+        sub = commands.add_parser(name, help=help, description=help)
+        global_options(sub, top=False)
+        return sub
+
+    p = command("run", "run a pipeline (once, or once per file with --batch)")
+    run_options(p)
+    p.add_argument(
+        "--output",
+        "-o",
+        action="append",
+        metavar="NAME",
+        help="produce only this output (repeatable); only what it needs runs",
+    )
+    p.add_argument(
+        "--output-dir", "-d", metavar="DIR", help="write outputs, record, report.md, report.html"
+    )
+    p.add_argument(
+        "--batch",
+        action="append",
+        default=[],
+        metavar="NAME=GLOB",
+        help="run once per file matching GLOB (given to input NAME; ** recurses); needs -d",
+    )
+    p.add_argument("--record", action="store_true", help="print the run record")
+    p.add_argument(
+        "--keep-intermediates",
+        action="store_true",
+        help="with -d: keep every intermediate value and show its picture in report.html",
+    )
+    p.set_defaults(func=cmd_run)
+
+    p = command("sweep", "run every combination of parameter values; sweep.csv, plots, page")
+    run_options(p)
+    p.add_argument(
+        "--grid",
+        action="append",
+        default=[],
+        metavar="NODE.PARAM=V1,V2,...",
+        help="values to try for one parameter (repeatable; every combination runs)",
+    )
+    p.add_argument(
+        "--output",
+        "-o",
+        action="append",
+        metavar="NAME",
+        help="produce only this output in each run (repeatable); only what it needs runs",
+    )
+    p.add_argument("--output-dir", "-d", metavar="DIR", required=True, help="where to write")
+    p.add_argument("--plot", metavar="OUTPUT", help="plot this scalar output against each param")
+    p.set_defaults(func=cmd_sweep)
+
+    p = command("validate", "check pipelines without running them")
+    p.add_argument("pipelines", nargs="+", metavar="PIPELINE", help="pipeline files")
+    p.set_defaults(func=cmd_validate)
+
+    p = command("nodes", "list the nodes by family")
+    p.add_argument("--json", action="store_true", help="every node's description as JSON")
+    p.set_defaults(func=cmd_nodes)
+
+    p = command("describe", "show a node's ports, parameters and documentation")
+    p.add_argument("op", help="the node id, family.name")
+    p.add_argument("--json", action="store_true", help="the description as JSON")
+    p.set_defaults(func=cmd_describe)
+
+    p = command("schema", "print the JSON Schema of pipeline files")
+    p.set_defaults(func=cmd_schema)
+
+    p = command("graph", "draw a pipeline as SVG, DOT or Mermaid")
+    p.add_argument("pipeline", help="the pipeline file (YAML)")
+    p.add_argument(
+        "--format", choices=("svg", "dot", "mermaid"), default="dot", help="the drawing's format"
+    )
+    p.set_defaults(func=cmd_graph)
+
+    p = command("report", "write a run folder's report.md and report.html again from its files")
+    p.add_argument("directory", help="the run's output folder (-d of graphvision run)")
+    p.set_defaults(func=cmd_report)
+
+    p = command("cache", "inspect, prune or empty the disk cache")
+    p.add_argument("action", choices=("info", "prune", "clear"), help="what to do")
+    cache_options(p)
+    p.add_argument(
+        "--max-bytes",
+        type=byte_size,
+        default=None,
+        metavar="SIZE",
+        help="with prune: size to prune down to",
+    )
+    p.set_defaults(func=cmd_cache)
+    return parser
+
+
+def version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("graphvision")
+    except PackageNotFoundError:  # pragma: no cover - run from a source tree
+        return "unknown"

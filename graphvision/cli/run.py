@@ -1,0 +1,151 @@
+"""``graphvision run``: one run, or one per file with ``--batch``."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+import time
+import traceback
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from graphvision.cli.common import (
+    EXIT_FAILED,
+    EXIT_OK,
+    UsageError,
+    disk_cache,
+    executor_for,
+    load_run_arguments,
+    named_pairs,
+    output_folder,
+)
+
+if TYPE_CHECKING:
+    from graphvision.graph.model import Graph
+    from graphvision.nodes.registry import Registry
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from graphvision.errors import RunError
+    from graphvision.execution.folders import check_output_folder, write_run
+    from graphvision.execution.run import run
+    from graphvision.views.progress import RunProgress
+    from graphvision.views.report import RUN_PAGES
+
+    graph, registry, overrides, inputs = load_run_arguments(args)
+    made = args.output_dir is not None and not Path(args.output_dir).exists()
+    out_dir = output_folder(args.output_dir)
+    progress = args.progress or (args.progress is None and sys.stderr.isatty())
+    if args.batch:
+        return run_batch_command(graph, registry, inputs, overrides, args, progress)
+    if out_dir is not None:  # refuse before running, not after
+        check_output_folder(out_dir, args.output or graph.outputs)
+    executor = executor_for(args)
+    status = EXIT_OK
+    try:
+        result = run(
+            graph,
+            registry,
+            inputs=inputs,
+            outputs=args.output or None,
+            overrides=overrides,
+            executor=executor,
+            workers=args.workers,
+            cache=disk_cache(args),
+            keep_going=args.keep_going,
+            hooks=[RunProgress()] if progress else [],
+            keep_intermediates=args.keep_intermediates,
+        )
+    except RunError as error:
+        print(f"error: run failed\n{error}", file=sys.stderr)
+        if args.debug:
+            for failure in error.failures.values():
+                traceback.print_exception(failure.__cause__ or failure, file=sys.stderr)
+        status, result = EXIT_FAILED, error.result  # type: ignore[attr-defined]
+    except BaseException:  # interrupted: a folder made for this run goes again, still empty
+        if made and out_dir is not None:
+            with contextlib.suppress(OSError):
+                out_dir.rmdir()
+        raise
+    finally:
+        if not isinstance(executor, str):
+            executor.shutdown()
+    if out_dir is not None:
+        files = write_run(result, out_dir, RUN_PAGES)
+        print(
+            f"wrote {len(files)} output(s), record.json, {out_dir / 'report.md'} "
+            f"and {out_dir / 'report.html'}",
+            file=sys.stderr,
+        )
+    else:
+        for name, summary in result.record.outputs.items():
+            print(f"{name}: {summary}")
+    if args.record:
+        print(result.record.table())
+    return status
+
+
+def run_batch_command(
+    graph: Graph,
+    registry: Registry,
+    inputs: dict[str, Any],
+    overrides: dict[str, Any],
+    args: argparse.Namespace,
+    progress: bool,
+) -> int:
+    """``--batch NAME=GLOB``: :func:`~graphvision.run_batch`, a line (or a bar) per file."""
+    from graphvision.errors import InputError
+    from graphvision.execution.batch_files import BatchItem
+    from graphvision.views.batch_page import run_batch
+    from graphvision.views.progress import FileProgress
+
+    if len(args.batch) > 1:
+        raise UsageError("--batch maps one input; give it once")
+    name, pattern = next(iter(named_pairs(args.batch, "--batch").items()))
+    if not args.output_dir:
+        raise UsageError("--batch needs --output-dir (one folder per input file)")
+    shown: list[FileProgress] = []
+    began = time.monotonic()
+
+    def report(number: int, total: int, item: BatchItem) -> None:
+        if not shown:  # the total is known once the glob is expanded
+            shown.append(FileProgress(total, bar=None if progress else False, began=began))
+        if item.error:
+            print(f"error: {item.file}: {item.error}", file=sys.stderr)
+        shown[0].finished(f"{item.file} -> {item.output_dir}", not item.error, item.seconds)
+
+    executor = executor_for(args)
+    try:
+        batch = run_batch(
+            graph,
+            pattern,
+            input=name,
+            output_dir=args.output_dir,
+            registry=registry,
+            inputs=inputs,
+            outputs=args.output or None,
+            overrides=overrides,
+            executor=executor,
+            workers=args.workers,
+            cache=disk_cache(args),
+            keep_going=args.keep_going,
+            on_item=report,
+        )
+    except InputError as error:
+        raise UsageError(f"--batch {name}={pattern}: {error}") from None
+    except KeyboardInterrupt:
+        summary = Path(args.output_dir) / "batch.csv"
+        if summary.is_file():
+            print(f"batch interrupted; files done so far are listed in {summary}", file=sys.stderr)
+        raise
+    finally:
+        for bar in shown:
+            bar.close()
+        if not isinstance(executor, str):
+            executor.shutdown()
+    total = len(batch.items)
+    print(
+        f"{total - batch.failed} of {total} succeeded; summary in {batch.summary}", file=sys.stderr
+    )
+    return EXIT_FAILED if batch.failed else EXIT_OK

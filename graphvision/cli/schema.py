@@ -1,0 +1,20 @@
+"""``graphvision schema``: the JSON Schema of pipeline files."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from graphvision.cli.common import EXIT_OK
+
+if TYPE_CHECKING:
+    pass
+
+
+def cmd_schema(args: argparse.Namespace) -> int:
+    import json
+
+    from graphvision.graph.schema import pipeline_json_schema
+
+    print(json.dumps(pipeline_json_schema(), indent=2))
+    return EXIT_OK

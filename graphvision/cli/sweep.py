@@ -1,0 +1,106 @@
+"""``graphvision sweep``: every combination of ``--grid`` values, sharing the cache."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from typing import TYPE_CHECKING, Any
+
+from graphvision.cli.common import (
+    EXIT_FAILED,
+    EXIT_OK,
+    UsageError,
+    check_overrides,
+    disk_cache,
+    executor_for,
+    load_run_arguments,
+    named_pairs,
+    output_folder,
+    yaml_value,
+)
+from graphvision.errors import did_you_mean
+
+if TYPE_CHECKING:
+    pass
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from graphvision.compiler.compile import compile_graph
+    from graphvision.execution.sweep import SweepInterrupted, scalar_outputs_of, sweep
+    from graphvision.views.progress import FileProgress
+    from graphvision.views.sweep_page import check_sweep_folder, write_sweep
+
+    graph, registry, overrides, inputs = load_run_arguments(args)
+    grid = {
+        key: yaml_value(f"[{values}]", f"--grid {key}={values}")
+        for key, values in named_pairs(args.grid, "--grid").items()
+    }
+    if not grid:
+        raise UsageError("sweep needs at least one --grid NODE.PARAM=V1,V2,...")
+    check_overrides(graph, registry, grid, "--grid")
+    both = sorted(set(grid) & set(overrides))
+    if both:
+        raise UsageError(f"{both[0]} is both swept (--grid) and set (--set); give one of them")
+    out_dir = output_folder(args.output_dir)
+    assert out_dir is not None  # the option is required
+    check_sweep_folder(out_dir)  # before anything runs
+    if overrides:
+        graph = graph.with_overrides(overrides)
+    if args.plot:
+        compiled = compile_graph(graph, registry, provided=set(inputs))
+        unknown = [name for name in args.output or () if name not in compiled.outputs]
+        if unknown:
+            raise UsageError(
+                f"-o {unknown[0]}: no such output; outputs: {', '.join(compiled.outputs)}"
+            )
+        scalars = scalar_outputs_of(compiled, args.output or list(compiled.outputs))
+        if args.plot not in scalars:
+            listing = ", ".join(scalars) or "none"
+            raise UsageError(
+                f"--plot {args.plot}: not a scalar output of the sweep"
+                f"{did_you_mean(args.plot, scalars)}; scalar outputs: {listing}"
+            )
+    executor = executor_for(args)
+    shown: list[FileProgress] = []
+    began = time.monotonic()
+
+    def report(number: int, total: int, row: dict[str, Any]) -> None:
+        if not shown:  # a bar on a terminal, else a line per combination
+            shown.append(FileProgress(total, "combinations", began=began))
+        combination = ", ".join(f"{key}={row[key]}" for key in grid)
+        shown[0].finished(combination, row["status"] == "ok", row["seconds"])
+
+    try:
+        result = sweep(
+            graph,
+            grid,
+            registry,
+            inputs=inputs,
+            cache=disk_cache(args),
+            executor=executor,
+            workers=args.workers,
+            keep_going=args.keep_going,
+            outputs=args.output,
+            on_row=None if args.progress is False else report,
+        )
+    except SweepInterrupted as stopped:  # what is done is written, then the exit is 130
+        write_sweep(stopped.result, out_dir, graph.name, [])
+        print(
+            f"sweep interrupted; combinations done so far are in {out_dir / 'sweep.csv'}",
+            file=sys.stderr,
+        )
+        raise
+    finally:
+        for bar in shown:
+            bar.close()
+        if not isinstance(executor, str):
+            executor.shutdown()
+    written = write_sweep(result, out_dir, graph.name, [args.plot] if args.plot else [])
+    failed = sum(row["status"] != "ok" for row in result.rows)
+    print(
+        f"{len(result.rows) - failed} of {len(result.rows)} combinations succeeded; wrote "
+        + ", ".join(str(p) for p in written),
+        file=sys.stderr,
+    )
+    return EXIT_FAILED if failed else EXIT_OK

@@ -1,0 +1,81 @@
+"""Arguments of the Python API checked at the door: :func:`~graphvision.run`,
+:func:`~graphvision.run_batch` and :func:`~graphvision.sweep` take what people
+pass (a pipeline file's path, one output name, ``pathlib`` paths) and refuse
+the rest with a ``TypeError`` naming the argument, instead of an
+``AttributeError`` from deep inside the engine.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from graphvision.compiler.compile import CompiledGraph
+    from graphvision.graph.model import Graph
+
+__all__ = ["graph_argument", "mapping_argument", "names_argument", "run_arguments"]
+
+
+def graph_argument(graph: Any) -> Graph | CompiledGraph:
+    """A ``Graph`` or ``CompiledGraph`` as given, or the pipeline file a path names."""
+    from graphvision.compiler.compile import CompiledGraph
+    from graphvision.graph.model import Graph
+
+    if isinstance(graph, (Graph, CompiledGraph)):
+        return graph
+    if isinstance(graph, (str, os.PathLike)):
+        from graphvision.graph.pipeline_file import load_pipeline
+
+        return load_pipeline(Path(graph))
+    raise TypeError(
+        f"graph must be a gv.Graph, a compiled graph or a pipeline file's path, "
+        f"got {type(graph).__name__}"
+    )
+
+
+def names_argument(names: Any, what: str) -> list[str] | None:
+    """``None``, one name, or an iterable of names, as a list (``outputs="count"`` is one)."""
+    if names is None:
+        return None
+    if isinstance(names, str):
+        return [names]
+    if isinstance(names, Iterable) and not isinstance(names, Mapping):
+        listed = list(names)
+        if all(isinstance(name, str) for name in listed):
+            return listed
+    raise TypeError(f"{what} must be a name or a list of names, got {names!r}")
+
+
+def mapping_argument(value: Any, what: str) -> dict[str, Any]:
+    """``None`` or a mapping from names, as a dict; ``pathlib`` paths among the values as
+    strings (a path given as ``Path`` reads like the same path given as ``str``)."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping) or not all(isinstance(key, str) for key in value):
+        raise TypeError(f"{what} must be a dict from names to values, got {value!r}")
+    return {key: os.fspath(v) if isinstance(v, os.PathLike) else v for key, v in value.items()}
+
+
+def run_arguments(cache: Any, executor: Any, workers: Any) -> None:
+    """Refuse a cache, executor or worker count of the wrong kind, saying what is taken."""
+    from graphvision.cache.store import Cache
+    from graphvision.execution.executors import EXECUTORS
+
+    if cache is not None and not isinstance(cache, Cache):
+        hint = " (for a folder: gv.Cache.at(path))" if isinstance(cache, (str, os.PathLike)) else ""
+        raise TypeError(f"cache must be a gv.Cache or None, got {cache!r}{hint}")
+    if isinstance(executor, str):
+        if executor not in EXECUTORS:
+            raise ValueError(f"executor must be one of {', '.join(EXECUTORS)}, got {executor!r}")
+    elif not callable(getattr(executor, "submit", None)):
+        raise TypeError(
+            f"executor must be one of {', '.join(EXECUTORS)} or an executor with submit(), "
+            f"got {executor!r}"
+        )
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)):
+        raise TypeError(f"workers must be a whole number, got {workers!r}")
+    if isinstance(workers, int) and workers < 1:
+        raise ValueError(f"workers must be at least 1, got {workers}")

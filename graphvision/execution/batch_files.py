@@ -1,0 +1,212 @@
+"""What a batch reads and writes around its runs: the files a pattern matches, one output
+folder per file, the items and their summary (``batch.csv``)."""
+
+from __future__ import annotations
+
+import csv
+import glob
+import io
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from graphvision.errors import OutputFolderError
+from graphvision.execution.folders import (
+    RunPage,
+)
+
+__all__ = [
+    "NO_PAGES",
+    "SUMMARY",
+    "BatchItem",
+    "BatchPages",
+    "BatchResult",
+    "batch_files",
+    "common_parts",
+    "output_folders",
+    "pattern_root",
+    "previous_folders",
+    "replace_text",
+    "write_summary",
+]
+
+SUMMARY = "batch.csv"
+
+
+@dataclass
+class BatchItem:
+    """One file of a batch: where its outputs went, how it went, its scalar outputs."""
+
+    file: Path
+    output_dir: Path
+    status: str = "ok"
+    seconds: float = 0.0
+    error: str = ""
+    scalars: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class BatchResult:
+    """Every item, and the summary table written to ``summary``."""
+
+    items: list[BatchItem]
+    summary: Path
+
+    @property
+    def failed(self) -> int:
+        return sum(item.status != "ok" for item in self.items)
+
+
+@dataclass(frozen=True)
+class BatchPages:
+    """The report pages a batch writes: ``run`` in each item folder, and ``summary`` (a
+    function of the items and the batch folder giving a file name and its text)."""
+
+    run: Sequence[RunPage] = ()
+    summary: Callable[[Sequence[BatchItem], Path], tuple[str, str]] | None = None
+
+
+NO_PAGES = BatchPages()
+
+
+def batch_files(pattern: str, exclude: Path | None = None) -> list[Path]:
+    """The files a glob matches, sorted; ``**`` matches any depth of folders.
+
+    Files under ``exclude`` (the batch's output folder, when it lies inside
+    the searched folders) are left out, so a batch never reads its own outputs.
+    A file reached by several paths (a folder symlink, a link back up the tree)
+    is taken once, by its shortest path.
+    """
+    skipped = exclude.resolve() if exclude is not None else None
+    found: dict[Path, Path] = {}
+    for path in sorted(map(Path, glob.glob(pattern, recursive=True)), key=lambda p: len(p.parts)):
+        if not path.is_file():
+            continue
+        real = path.resolve()
+        if (skipped is None or skipped not in real.parents) and real not in found:
+            found[real] = path
+    return sorted(found.values())
+
+
+def pattern_root(pattern: str) -> Path:
+    """The folder before a glob's first wildcard (``photos`` for ``photos/**/*.png``)."""
+    fixed = []
+    for part in Path(pattern).parts:
+        if glob.has_magic(part):
+            break
+        fixed.append(part)
+    else:  # no wildcard: a single file, named by its own folder
+        fixed = fixed[:-1]
+    return Path(*fixed) if fixed else Path()
+
+
+def output_folders(files: Sequence[Path], root: Path, out_dir: Path) -> list[Path]:
+    """A distinct folder under ``out_dir`` for each file: its path below ``root`` without suffix.
+
+    Two files whose paths differ only by suffix (``img.png``, ``img.jpg``) keep
+    it (``img_png``, ``img_jpg``); any name still taken, or the summary's
+    name, gets ``-2``, ``-3``... so the folders are always distinct.
+    """
+    relative = [_below(f, root) for f in files]
+    plain = [r.with_suffix("") for r in relative]
+    counts: dict[Path, int] = {}
+    for name in plain:
+        counts[name] = counts.get(name, 0) + 1
+    taken = {Path(SUMMARY)}
+    folders = []
+    for rel, name in zip(relative, plain, strict=True):
+        if counts[name] > 1 and rel.suffix:
+            name = name.with_name(f"{name.name}_{rel.suffix[1:]}")
+        candidate, number = name, 1
+        while candidate in taken:
+            number += 1
+            candidate = name.with_name(f"{name.name}-{number}")
+        taken.add(candidate)
+        folders.append(out_dir / candidate)
+    return folders
+
+
+def _below(file: Path, root: Path) -> Path:
+    try:
+        return file.relative_to(root)
+    except ValueError:  # outside the root: keep what can be kept, without '..' or an anchor
+        return Path(*[p for p in file.parts if p not in ("..", file.anchor)])
+
+
+def common_parts(parts: list[tuple[str, ...]]) -> tuple[str, ...]:
+    common: tuple[str, ...] = parts[0] if parts else ()
+    for other in parts[1:]:
+        length = 0
+        while length < min(len(common), len(other)) and common[length] == other[length]:
+            length += 1
+        common = common[:length]
+    return common
+
+
+def previous_folders(out_dir: Path) -> set[Path]:
+    """The item folders (resolved) a previous ``batch.csv`` lists, only those inside ``out_dir``.
+
+    Raises
+    ------
+    OutputFolderError
+        When ``out_dir`` holds a ``batch.csv`` that is not a graphvision
+        summary (the batch would overwrite it).
+    """
+    summary = out_dir / SUMMARY
+    if not summary.is_file():
+        return set()
+    try:
+        with summary.open(newline="") as handle:
+            reader = csv.DictReader(handle)
+            if (
+                not reader.fieldnames
+                or reader.fieldnames[0] != "file"
+                or ("status" not in reader.fieldnames)
+            ):
+                raise ValueError("not a batch summary")
+            listed = [row.get("output_dir") or "" for row in reader]
+    except (OSError, UnicodeDecodeError, ValueError, csv.Error):
+        raise OutputFolderError(
+            f"{summary} is not a graphvision batch summary; the batch would replace it: "
+            "move it, or choose another --output-dir"
+        ) from None
+    root = out_dir.resolve()
+    folders = {Path(folder).resolve() for folder in listed if folder}
+    return {folder for folder in folders if root in folder.parents and folder.is_dir()}
+
+
+def write_summary(items: Sequence[BatchItem], out_dir: Path) -> Path:
+    """``batch.csv``: file, output_dir, status, seconds, error, then every scalar output."""
+    rows = [
+        {
+            "file": str(item.file),
+            "output_dir": str(item.output_dir),
+            "status": item.status,
+            "seconds": round(item.seconds, 4),
+            "error": item.error,
+            **item.scalars,
+        }
+        for item in items
+    ]
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    text = io.StringIO(newline="")
+    writer = csv.DictWriter(text, fieldnames=columns)
+    writer.writeheader()
+    writer.writerows(rows)
+    path = out_dir / SUMMARY
+    replace_text(path, text.getvalue())
+    return path
+
+
+def replace_text(path: Path, text: str) -> None:
+    """Write ``path`` whole or not at all (a temporary file beside it, then a rename)."""
+    temp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with temp.open("w", encoding="utf-8", newline="") as handle:
+            handle.write(text)
+        os.replace(temp, path)
+    finally:
+        temp.unlink(missing_ok=True)

@@ -1,0 +1,337 @@
+"""Executors: where node functions run.
+
+An executor is anything with ``submit(fn, *args) -> Future`` and
+``shutdown()``, so ``concurrent.futures`` pools fit as they are. Choose one
+by name with :func:`make_executor`:
+
+``sync``
+    In the calling thread, one node at a time (debugging, profiling).
+``threads`` (default)
+    A thread pool; numpy and scipy release the GIL in their kernels.
+``processes``
+    A process pool (``spawn``). The node function travels as a
+    :class:`~graphvision.nodes.node.FunctionRef` (imported by name in the worker,
+    local plugin files by path) and values travel in their port type's
+    encoding (named arrays and a JSON header), never as pickled objects.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import threading
+import time
+from collections.abc import Callable
+from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from typing import Any, Protocol
+
+from graphvision.execution.warnings import running, show_warning
+from graphvision.nodes.spec import FunctionRef
+from graphvision.values.ports import PortType, freeze
+
+__all__ = [
+    "EXECUTORS",
+    "NODE_ERRORS",
+    "Executor",
+    "SyncExecutor",
+    "WorkerDiedError",
+    "call_node",
+    "call_node_encoded",
+    "chains_tasks",
+    "encodes_values",
+    "executor_name",
+    "executor_width",
+    "make_executor",
+]
+
+EXECUTORS: tuple[str, ...] = ("sync", "threads", "processes", "dask")
+# What a node may raise that fails that node alone: exceptions, and the exits and generator
+# closings a node's code can raise by mistake (KeyboardInterrupt stays the user's Ctrl-C).
+NODE_ERRORS: tuple[type[BaseException], ...] = (Exception, SystemExit, GeneratorExit)
+
+
+class Executor(Protocol):
+    """What the run needs of an executor: ``submit``, ``shutdown``, and its transport.
+
+    ``encodes_values`` is the transport: True when nodes run in other
+    processes, so that a node travels as a :class:`FunctionRef` and values in
+    their port type's array encoding (:func:`call_node_encoded`); False when
+    they run in this process and get the values themselves (:func:`call_node`).
+
+    An executor may also declare ``chains_tasks = True`` (read with
+    :func:`chains_tasks`): each future it returns then has a ``task``, a handle
+    that its ``submit`` accepts inside the arguments in place of the task's
+    result, so a node can be submitted before its inputs reach this process
+    (the Dask executor; a chain then runs at the cluster's pace, not at that of
+    a round trip through the client per node).
+    """
+
+    encodes_values: bool
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future: ...
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None: ...
+
+
+class _Done(Future):
+    """A future that is done when it is made: no lock, no condition, callbacks run at once.
+
+    ``concurrent.futures.Future`` pays for the thread synchronisation it
+    offers; a result computed in the calling thread needs none of it, and on a
+    chain of tiny nodes that cost is a large part of the engine's per-node time.
+    """
+
+    def __init__(self, result: Any = None, error: BaseException | None = None) -> None:
+        self._value, self._error = result, error
+
+    def done(self) -> bool:
+        return True
+
+    def cancelled(self) -> bool:
+        return False
+
+    def result(self, timeout: float | None = None) -> Any:
+        if self._error is not None:
+            raise self._error
+        return self._value
+
+    def exception(self, timeout: float | None = None) -> BaseException | None:
+        return self._error
+
+    def add_done_callback(self, fn: Callable[[Future], object]) -> None:
+        fn(self)
+
+
+class SyncExecutor:
+    """Runs each task at once in the calling thread and returns a done future."""
+
+    encodes_values = False
+    width = 1
+    name = "sync"
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
+        try:
+            return _Done(fn(*args))
+        except NODE_ERRORS as error:  # the scheduler reports it as a node failure
+            return _Done(error=error)
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        return None
+
+
+class _Threads(ThreadPoolExecutor):
+    encodes_values = False
+    name = "threads"
+
+    @property
+    def width(self) -> int:
+        """Tasks run at once."""
+        return int(self._max_workers)
+
+
+class WorkerDiedError(RuntimeError):
+    """The worker process running a node died (killed, out of memory), also on the retry."""
+
+
+class _Processes:
+    """A spawn process pool that survives a dying worker.
+
+    When a worker dies, ``concurrent.futures`` breaks the whole pool and fails
+    every node running in it. Here the pool is replaced and each node whose
+    future broke runs again, once, in a worker of its own: a node that kills
+    its worker again fails (it is the culprit), the others complete. Workers ignore Ctrl-C (the
+    parent handles it) and exit when their parent process is gone, even after
+    ``kill -9``.
+    """
+
+    encodes_values = True
+    name = "processes"
+
+    def __init__(self, workers: int) -> None:
+        self._workers = workers
+        self.width = workers
+        self._lock = threading.Lock()
+        self._pool = self._new_pool()
+
+    def _new_pool(self, workers: int = 0) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(
+            max_workers=workers or self._workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_worker_setup,
+            initargs=(os.getpid(),),
+        )
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
+        outer: Future = Future()
+        outer.set_running_or_notify_cancel()
+        pool = self._pool
+        try:
+            inner = pool.submit(fn, *args)
+        except BrokenProcessPool:
+            pool = self._replace(pool)
+            inner = pool.submit(fn, *args)
+
+        def settle(done: Future) -> None:
+            if isinstance(done.exception(), BrokenProcessPool):
+                self._replace(pool)
+                self._retry_alone(outer, fn, args)
+            else:
+                _copy(done, outer)
+
+        inner.add_done_callback(settle)
+        return outer
+
+    def _retry_alone(self, outer: Future, fn: Callable[..., Any], args: tuple) -> None:
+        """Run a node whose pool broke again, in a worker of its own.
+
+        The pool breaks for every node it was running when one worker died, so
+        the retry is isolated: a node that kills its worker again is the one
+        at fault and fails; the others complete.
+        """
+        alone = self._new_pool(workers=1)
+        retry = alone.submit(fn, *args)
+
+        def settle(done: Future) -> None:
+            alone.shutdown(wait=False)
+            if isinstance(done.exception(), BrokenProcessPool):
+                outer.set_exception(
+                    WorkerDiedError(
+                        "the worker process running this node died (killed, or out of "
+                        "memory), and again when retried alone"
+                    )
+                )
+            else:
+                _copy(done, outer)
+
+        retry.add_done_callback(settle)
+
+    def _replace(self, broken: ProcessPoolExecutor) -> ProcessPoolExecutor:
+        with self._lock:
+            if self._pool is broken:
+                broken.shutdown(wait=False, cancel_futures=True)
+                self._pool = self._new_pool()
+            return self._pool
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        self._pool.shutdown(wait=wait, cancel_futures=cancel_futures)
+
+
+def _copy(source: Future, target: Future) -> None:
+    error = source.exception()
+    if error is not None:
+        target.set_exception(error)
+    else:
+        target.set_result(source.result())
+
+
+def _worker_setup(parent: int) -> None:
+    """In each worker: leave Ctrl-C to the parent, exit when the parent is gone, and print
+    warnings as the command line does (one line naming the node)."""
+    import warnings
+
+    from graphvision.execution.blas import one_blas_thread_for_good
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    warnings.showwarning = show_warning
+    one_blas_thread_for_good()  # the same bits as in the parent's runs (execution.blas)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(0)
+
+    threading.Thread(target=watch, daemon=True, name="graphvision-parent-watch").start()
+
+
+def executor_name(executor: Any) -> str:
+    """What records call the executor: ``sync``, ``threads``, ``processes``, ``dask``, or the
+    class name of one that does not say."""
+    if isinstance(executor, str):
+        return executor
+    return str(getattr(executor, "name", "") or type(executor).__name__)
+
+
+def executor_width(executor: Any) -> int:
+    """How many tasks the executor runs at once (its ``width``; a plain thread pool's
+    ``max_workers``; 1 when it does not say)."""
+    width = getattr(executor, "width", None) or getattr(executor, "_max_workers", None) or 1
+    return max(1, int(width))
+
+
+def chains_tasks(executor: Any) -> bool:
+    """Whether the executor takes its futures' ``task`` as inputs (see :class:`Executor`)."""
+    return bool(getattr(executor, "chains_tasks", False))
+
+
+def encodes_values(executor: Any) -> bool:
+    """The executor's transport (see :class:`Executor`); a plain ``concurrent.futures``
+    thread pool, which does not declare one, runs in this process."""
+    return bool(getattr(executor, "encodes_values", False))
+
+
+def make_executor(name: str = "threads", workers: int | None = None) -> Executor:
+    """An executor by name: ``sync``, ``threads``, ``processes`` or ``dask`` (a local cluster)."""
+    if name == "dask":
+        from graphvision.execution.dask import DaskExecutor
+
+        return DaskExecutor(workers=workers or 2)
+    workers = workers or os.cpu_count() or 1
+    if name == "sync":
+        return SyncExecutor()
+    if name == "threads":
+        return _Threads(max_workers=workers, thread_name_prefix="graphvision")
+    if name == "processes":
+        return _Processes(workers)
+    raise ValueError(f"unknown executor '{name}'; choose one of {', '.join(EXECUTORS)}")
+
+
+def call_node(
+    func: Callable[..., Any], params: dict[str, Any], inputs: dict[str, Any]
+) -> tuple[Any, float]:
+    """Call a node function; return its result and wall time in seconds."""
+    mark = getattr(func, "__graphvision_node__", None)
+    running.op = mark.id if mark is not None else getattr(func, "__qualname__", "")
+    began = time.perf_counter()
+    try:
+        result = func(**inputs, **params)
+    finally:
+        running.op = ""
+    return result, time.perf_counter() - began
+
+
+Payload = dict[str, tuple[type[PortType], dict, dict]]
+
+
+def call_node_encoded(
+    ref: FunctionRef,
+    params: dict[str, Any],
+    inputs: Payload,
+    outputs: dict[str, type[PortType]],
+    output_tuple: bool,
+    upstream: dict[str, tuple[tuple[Payload, float], str]] | None = None,
+) -> tuple[Payload, float]:
+    """:func:`call_node` for another process: inputs and outputs travel encoded.
+
+    ``upstream`` holds the inputs submitted before they were computed: by
+    port, the producing task's result (what this function returned there) and
+    the producer's output port. A chaining executor (:func:`chains_tasks`)
+    puts the result there.
+    """
+    func = ref.resolve()
+    if upstream:
+        sent = {port: produced[source] for port, ((produced, _), source) in upstream.items()}
+        inputs = {**inputs, **sent}
+    values = {  # read-only for good, as under threads
+        port: kind.decode({name: freeze(a) for name, a in arrays.items()}, meta)
+        for port, (kind, arrays, meta) in inputs.items()
+    }
+    result, seconds = call_node(func, params, values)
+    parts = dict(zip(outputs, result, strict=True)) if output_tuple else {"out": result}
+    encoded: Payload = {}
+    for port, value in parts.items():
+        kind = outputs[port]
+        arrays, meta = kind.encode(kind.validate(value))
+        encoded[port] = (kind, arrays, meta)
+    return encoded, seconds

@@ -1,0 +1,250 @@
+"""A run's output folder: which files there are graphvision's, and writing a run into it.
+
+A folder holds one run. Its ``record.json`` lists the files the run wrote;
+that list is how the next run knows what is its to replace, and a file that
+no record lists is never replaced (the run is refused before it starts).
+Files are written to a hidden staging folder and moved into place, the
+record last, so an interrupted run leaves the previous run's folder whole.
+What a report page shows is not decided here: pages are writers passed in
+(:data:`graphvision.views.report.RUN_PAGES`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+from graphvision.compiler.compile import CompiledGraph
+from graphvision.errors import OutputFolderError
+from graphvision.execution.provenance import file_sha256
+from graphvision.execution.record import RunResult
+from graphvision.graph.model import NAME, output_name_problem
+
+__all__ = [
+    "RECORD",
+    "REPORT",
+    "REPORT_HTML",
+    "RunPage",
+    "check_output_folder",
+    "owned_files",
+    "remove_owned_files",
+    "write_outputs",
+    "write_run",
+]
+
+RECORD, REPORT, REPORT_HTML = "record.json", "report.md", "report.html"
+STAGING = ".graphvision-writing-"  # prefix of the hidden folder a run's files are written to
+OUTPUT_SUFFIXES = (".png", ".npy", ".npz", ".json", ".csv", ".ply")  # the built-in writers'
+
+RunPage = Callable[[RunResult, Path], list[str]]
+"""A report page writer: given a run and a folder, writes its files there and names them."""
+
+
+def owned_files(directory: Path) -> set[str]:
+    """The file names in ``directory`` that a previous graphvision run wrote (its record's list).
+
+    Raises
+    ------
+    OutputFolderError
+        When ``directory`` has a ``record.json`` that is not a graphvision
+        record listing its files (so what is ours there cannot be known).
+    """
+    record = directory / RECORD
+    if not record.is_file():
+        return set()
+    try:
+        content = json.loads(record.read_text())
+        listed = content["files"]
+        names = {name for files in listed.values() for name in files}
+        if not all(
+            isinstance(n, str) and n == Path(n).name and n not in ("", ".", "..") for n in names
+        ):
+            raise ValueError("a listed file is not a plain file name")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
+        raise OutputFolderError(
+            f"{record} is not a graphvision record listing its files ({type(error).__name__}), "
+            "so which files there are a previous run's is unknown; choose another "
+            "--output-dir or empty this one"
+        ) from None
+    return names | {RECORD, REPORT, REPORT_HTML}
+
+
+def check_output_folder(directory: Path, outputs: Iterable[str]) -> set[str]:
+    """Refuse, before a run, a folder where the run's files would replace files not graphvision's.
+
+    A file counts as the run's when its name is ``record.json``, ``report.md``
+    or an output name with a suffix a port type writes. Returns the previous
+    run's files (:func:`owned_files`).
+
+    Raises
+    ------
+    OutputFolderError
+        Naming the folder and the first file in the way, or an output named
+        ``record`` (its file would be the record's).
+    """
+    if directory.exists() and not directory.is_dir():
+        raise OutputFolderError(f"output folder {directory} is a file")
+    stems = set(outputs)
+    if Path(RECORD).stem in stems:
+        raise OutputFolderError(
+            f"output '{Path(RECORD).stem}' cannot be written to an output folder: its file "
+            f"would be {RECORD}, the run record; rename the output"
+        )
+    owned = owned_files(directory)
+    if not directory.is_dir():
+        return owned
+    for path in sorted(directory.iterdir()):
+        ours = path.name in (RECORD, REPORT, REPORT_HTML) or (
+            path.stem in stems and path.suffix in OUTPUT_SUFFIXES
+        )
+        if ours and path.name not in owned:
+            _refuse(directory, path.name)
+    return owned
+
+
+def _refuse(directory: Path, name: str) -> None:
+    raise OutputFolderError(
+        f"output folder {directory} holds {name}, which no graphvision record there lists; "
+        "the run would replace it: move it, or choose another --output-dir"
+    )
+
+
+def remove_owned_files(directory: Path, names: Iterable[str]) -> None:
+    """Delete the listed files of a previous run (plain files directly in ``directory`` only)."""
+    for name in names:
+        path = directory / name
+        if path.is_file() or path.is_symlink():
+            path.unlink()
+
+
+def write_run(
+    result: RunResult, directory: Path, pages: Sequence[RunPage] = ()
+) -> dict[str, list[str]]:
+    """Write outputs, ``record.json`` and ``pages``, replacing the last run's files.
+
+    Everything is written to a hidden staging folder first, then moved into
+    place, the record last. Returns output name -> file names. The record
+    lists the files (``record.files``), which is how the next run knows what
+    is its to remove.
+
+    Parameters
+    ----------
+    result : RunResult
+        The run.
+    directory : Path
+        Its output folder.
+    pages : sequence of RunPage
+        Writers of report pages (:data:`graphvision.views.report.RUN_PAGES`
+        writes ``report.md`` and ``report.html``); each writes into the folder
+        it is given and returns the names of the files it wrote there.
+
+    Raises
+    ------
+    OutputFolderError
+        When a file would replace one no graphvision record there lists.
+    """
+    owned = check_output_folder(directory, result.compiled.outputs)
+    directory.mkdir(parents=True, exist_ok=True)
+    for left in directory.glob(f"{STAGING}*"):  # from a run killed while writing
+        shutil.rmtree(left, ignore_errors=True)
+    kept = _unchanged_outputs(result, directory, owned)
+    staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=directory))
+    try:
+        changed = {name: v for name, v in result.outputs.items() if name not in kept}
+        written = write_outputs(result.compiled, changed, staging)
+        digests = {f: file_sha256(staging / f) for names in written.values() for f in names}
+        previous = _previous_record(directory)
+        for names in kept.values():
+            digests.update({f: previous["file_sha256"][f] for f in names})
+        files = {name: kept.get(name) or written[name] for name in result.outputs}
+        result.record.files = files
+        result.record.file_sha256 = digests
+        (staging / RECORD).write_text(result.record.to_json() + "\n")
+        shown = [name for page in pages for name in page(result, staging)]
+        new = [name for names in written.values() for name in names] + shown + [RECORD]
+        for name in new:
+            if (directory / name).exists() and name not in owned:
+                _refuse(directory, name)
+        unchanged = {name for names in kept.values() for name in names}
+        remove_owned_files(directory, owned - {RECORD} - unchanged)  # the record: replaced last
+        for name in new:  # the record last, in one atomic replace
+            os.replace(staging / name, directory / name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return files
+
+
+def _previous_record(directory: Path) -> dict[str, Any]:
+    """The last run's record in ``directory`` as JSON, or ``{}`` if there is none to trust."""
+    try:
+        content = json.loads((directory / RECORD).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return content if isinstance(content, dict) else {}
+
+
+def _unchanged_outputs(result: RunResult, directory: Path, owned: set[str]) -> dict[str, list[str]]:
+    """Outputs whose files the last run in ``directory`` wrote for the same value (the same
+    cache key) and that nobody changed since (their SHA-256 as recorded): kept as they are,
+    so a warm re-run does not encode its images again."""
+    previous = _previous_record(directory)
+    try:
+        old_keys = {
+            (node["name"], port): key
+            for node in previous["nodes"]
+            for port, key in node["keys"].items()
+        }
+        old_files, old_digests = previous["files"], previous["file_sha256"]
+    except (KeyError, TypeError, AttributeError):
+        return {}
+    new_keys = {
+        (node.name, port): key for node in result.record.nodes for port, key in node.keys.items()
+    }
+    kept: dict[str, list[str]] = {}
+    for name, source in result.compiled.outputs.items():
+        files = old_files.get(name) if isinstance(old_files, dict) else None
+        if (
+            name not in result.outputs
+            or not isinstance(files, list)
+            or not files
+            or source not in new_keys
+            or old_keys.get(source) != new_keys[source]
+        ):
+            continue
+        intact = all(
+            isinstance(f, str)
+            and f in owned
+            and (directory / f).is_file()
+            and not (directory / f).is_symlink()
+            and old_digests.get(f) == file_sha256(directory / f)
+            for f in files
+        )
+        if intact:
+            kept[name] = list(files)
+    return kept
+
+
+def write_outputs(
+    compiled: CompiledGraph, outputs: dict[str, Any], directory: Path
+) -> dict[str, list[str]]:
+    """Write every produced output to ``directory``; return output name -> file names."""
+    directory.mkdir(parents=True, exist_ok=True)
+    written = {}
+    for name, value in outputs.items():
+        if not NAME.match(name):  # compile_graph refuses these; a port type may not add any
+            raise OutputFolderError(output_name_problem(name))
+        kind = compiled.output_type(name)
+        files = kind.write(value, directory / name)
+        for file in files:
+            if file.parent != directory or file.is_symlink() or not file.is_file():
+                raise OutputFolderError(
+                    f"port type {kind.type_name()} wrote output '{name}' as {file}, which is "
+                    f"not a plain file directly in {directory}"
+                )
+        written[name] = [f.name for f in files]
+    return written

@@ -1,0 +1,61 @@
+"""Planning a run: which nodes are cached and which must compute (a pure function of
+the graph, the keys and the cache)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Collection, Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from graphvision.compiler.compile import CompiledGraph
+from graphvision.values.ports import PortType
+
+__all__ = ["Plan", "plan_steps"]
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What a run must do: the outputs found in the cache (value and seconds to load),
+    and the steps to compute, in topological order."""
+
+    loaded: dict[tuple[str, str], tuple[Any, float]]
+    compute: list[str]
+
+
+def plan_steps(
+    compiled: CompiledGraph,
+    keys: Mapping[tuple[str, str], str],
+    wanted: Iterable[tuple[str, str]],
+    known: Collection[tuple[str, str]],
+    deferred: Collection[str],
+    lookup: Callable[[str, type[PortType]], tuple[bool, Any]] | None,
+) -> Plan:
+    """Decide, from the outputs backwards, what is loaded from the cache and what runs.
+
+    A wanted value that is ``known`` (a graph input, or already produced) or a
+    ``deferred`` input (loaded when read) needs nothing; a cached node's
+    output found by ``lookup(key, port_type)`` is loaded and its producers are
+    not visited, so a fully cached re-run reads only the requested outputs;
+    any other step is computed, and so are the producers of its inputs. The
+    function reads the cache and changes nothing else.
+    """
+    compute: set[str] = set()
+    loaded: dict[tuple[str, str], tuple[Any, float]] = {}
+    stack = list(wanted)
+    steps = compiled.steps
+    while stack:
+        source = stack.pop()
+        name, port = source
+        if source in known or source in loaded or name in compute or name in deferred:
+            continue
+        step = steps[name]
+        if step.spec.cache and lookup is not None:
+            began = time.perf_counter()
+            hit, value = lookup(keys[source], step.outputs[port])
+            if hit:
+                loaded[source] = (value, time.perf_counter() - began)
+                continue
+        compute.add(name)
+        stack.extend(step.inputs.values())
+    return Plan(loaded, [name for name in steps if name in compute])

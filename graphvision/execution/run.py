@@ -1,0 +1,330 @@
+r"""Running a graph: inputs, keys, cache plan, execution, record.
+
+:func:`run` does, in order:
+
+1. compile the graph (every problem reported at once, before anything runs);
+2. prune it to what the requested outputs need;
+3. resolve graph inputs (literals, paths, ``sample:NAME``...) and key them by
+   content;
+4. chain the Merkle keys of every node output without computing anything;
+5. plan from the outputs backwards: an output found in the cache is loaded
+   and its producers are not visited, so a fully cached re-run reads only the
+   requested outputs; everything else is computed;
+6. hand the computed steps to :func:`~graphvision.execution.scheduler.run_tasks` with
+   the chosen executor, validating, freezing and caching each result, and
+   releasing each intermediate value once its last consumer has run.
+
+Hooks (:class:`RunHooks`) observe it; the run record is always produced.
+
+Each node of the run moves through these states (``NodeRecord.status``)::
+
+    (planned) --cache hit--> cached
+        |
+        +--> pending --started by the scheduler--> running --> computed
+                |                                        \--> failed
+                +--an upstream node failed--> skipped
+                +--the run was interrupted--> pending (stays)
+
+(``running`` is known to the scheduler and the hooks, not written in the
+record.) The state lives in one dataclass, ``RunState``; :func:`plan_steps` (a function
+of the graph, the keys and the cache, changing nothing) decides cached or pending,
+``RunState.plan`` records its decision, ``start`` hands a pending node to the executor
+(encoded values for other processes, the values themselves in this one; to an
+executor that chains tasks, such as Dask's, as soon as the nodes it reads are
+submitted, their tasks standing for their values),
+``finish`` validates, freezes, stores and releases, and the scheduler
+(:func:`~graphvision.execution.scheduler.run_tasks`) only orders them.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import time
+from collections.abc import Sequence
+from functools import partial
+from typing import Any
+
+from graphvision.cache.store import Cache
+from graphvision.compiler.compile import CompiledGraph, Schedule, compile_graph
+from graphvision.errors import (
+    RunError,
+    UnknownNameError,
+    did_you_mean,
+)
+from graphvision.execution.blas import one_blas_thread
+from graphvision.execution.executors import (
+    Executor,
+    executor_name,
+    executor_width,
+    make_executor,
+)
+from graphvision.execution.inputs import resolve_input
+from graphvision.execution.provenance import describe_run
+from graphvision.execution.record import RunHooks, RunRecord, RunResult
+from graphvision.execution.scheduler import run_tasks
+from graphvision.execution.state import RunState
+from graphvision.graph.model import Graph
+from graphvision.nodes.registry import Registry
+from graphvision.values.scalars import TextPort
+
+__all__ = ["run"]
+
+
+def run(
+    graph: Graph | CompiledGraph,
+    registry: Registry | None = None,
+    *,
+    inputs: dict[str, Any] | None = None,
+    outputs: Sequence[str] | None = None,
+    overrides: dict[str, Any] | None = None,
+    executor: str | Executor = "threads",
+    workers: int | None = None,
+    cache: Cache | None = None,
+    keep_going: bool = False,
+    hooks: Sequence[RunHooks] = (),
+    keep_intermediates: bool = False,
+) -> RunResult:
+    """Run a pipeline and return its outputs and run record.
+
+    Parameters
+    ----------
+    graph : Graph or CompiledGraph
+        The pipeline (validated here if it is a Graph).
+    registry : Registry, optional
+        Defaults to the installed plugins plus the graph's ``plugins:``.
+    inputs : dict, optional
+        Values of graph inputs: arrays, scalars, or strings (paths, ``sample:NAME``).
+    outputs : sequence of str, optional
+        The outputs to produce (default: all); only what they need runs.
+    overrides : dict, optional
+        ``{"node.param": value, "params.name": value}`` applied before validation.
+    executor : {"threads", "sync", "processes"} or Executor
+        Where nodes run. An executor instance is used and not shut down.
+    cache : Cache, optional
+        Where results are looked up and stored; None disables caching.
+    keep_going : bool
+        After a failure, still run every branch that does not depend on it.
+    hooks : sequence of RunHooks
+        Observers of the run.
+    keep_intermediates : bool
+        Keep every node output of the run in ``result.intermediates`` (instead
+        of dropping each after its last reader), e.g. to look at them in the report.
+
+    Raises
+    ------
+    PipelineError
+        The graph is invalid (nothing ran).
+    InputError
+        A graph input could not be resolved (nothing ran).
+    RunError
+        Nodes failed; ``error.failures`` names them, ``error.result`` holds
+        the outputs that were produced and the record.
+    """
+    graph, inputs, outputs, overrides = _checked_arguments(
+        graph, inputs, outputs, overrides, cache, executor, workers
+    )
+    compiled, registry = _compiled(graph, registry, inputs, overrides)
+    wanted = _wanted_outputs(compiled, outputs, inputs)
+    schedule = compiled.schedule_for(wanted)
+    given = _given_inputs(compiled, schedule, inputs)
+    reference_keys = _referenced_inputs(compiled, given, registry)
+    values = {
+        name: partial(resolve_input, name, compiled.input_types[name], value, registry)
+        if name in reference_keys
+        else resolve_input(name, compiled.input_types[name], value, registry)
+        for name, value in given.items()
+    }
+    state = _execute(
+        compiled,
+        values,
+        schedule,
+        wanted,
+        cache,
+        executor,
+        workers,
+        keep_going,
+        hooks,
+        keep_intermediates,
+        reference_keys,
+    )
+    describe_run(state.record, compiled, registry, given, state.keys, overrides)
+    result = state.result(wanted)
+    if state.failures:
+        failure = RunError(state.failures, state.record)
+        failure.result = result  # type: ignore[attr-defined]  # read by callers as error.result
+        raise failure
+    return result
+
+
+def _checked_arguments(
+    graph: Any, inputs: Any, outputs: Any, overrides: Any, cache: Any, executor: Any, workers: Any
+) -> tuple[Graph | CompiledGraph, dict[str, Any], list[str] | None, dict[str, Any]]:
+    """The arguments of :func:`run` as it uses them, or a TypeError naming the wrong one."""
+    from graphvision.execution.arguments import (
+        graph_argument,
+        mapping_argument,
+        names_argument,
+        run_arguments,
+    )
+
+    run_arguments(cache, executor, workers)
+    return (
+        graph_argument(graph),
+        mapping_argument(inputs, "inputs"),
+        names_argument(outputs, "outputs"),
+        mapping_argument(overrides, "overrides"),
+    )
+
+
+def _compiled(
+    graph: Graph | CompiledGraph,
+    registry: Registry | None,
+    inputs: dict[str, Any],
+    overrides: dict[str, Any],
+) -> tuple[CompiledGraph, Registry]:
+    """The graph, overrides applied, compiled (step 1); the registry it was checked against."""
+    if isinstance(graph, CompiledGraph):
+        if not overrides:
+            return graph, registry or _discover_for(graph.graph)
+        graph = graph.graph  # overrides change parameters: compile again
+    registry = registry or _discover_for(graph)
+    if overrides:
+        try:
+            graph = graph.with_overrides(overrides)
+        except KeyError as error:
+            raise UnknownNameError(str(error.args[0])) from None
+    return compile_graph(graph, registry, provided=set(inputs)), registry
+
+
+def _discover_for(graph: Graph) -> Registry:
+    from graphvision.nodes.plugins import discover_for  # the plugins are imported only for a run
+
+    return discover_for(graph)
+
+
+def _wanted_outputs(
+    compiled: CompiledGraph, outputs: Sequence[str] | None, inputs: dict[str, Any]
+) -> list[str]:
+    """The outputs asked for, after checking every output and input name given."""
+    wanted = list(outputs) if outputs is not None else list(compiled.outputs)
+    for name in wanted:
+        if name not in compiled.outputs:
+            raise UnknownNameError(
+                f"unknown output '{name}'{did_you_mean(name, compiled.outputs)}"
+                f"; outputs: {', '.join(compiled.outputs)}"
+            )
+    for name in inputs:
+        if name not in compiled.input_types:
+            raise UnknownNameError(
+                f"unknown input '{name}'{did_you_mean(name, compiled.input_types)}; "
+                f"inputs: {', '.join(compiled.input_types) or 'none'}"
+            )
+    return wanted
+
+
+def _given_inputs(
+    compiled: CompiledGraph, schedule: Schedule, inputs: dict[str, Any]
+) -> dict[str, Any]:
+    """What is given for each graph input the wanted outputs read (step 2): value or default."""
+    return {
+        name: inputs.get(name, compiled.graph.inputs[name].default)
+        for name in compiled.input_types
+        if name in schedule.inputs
+    }
+
+
+def _referenced_inputs(
+    compiled: CompiledGraph, given: dict[str, Any], registry: Registry
+) -> dict[str, str]:
+    """Input name -> key, for inputs given as a reference whose source keys it without loading.
+
+    ``sample:astronaut`` is fixed by its name and scikit-image's version: the
+    run keys it by that and loads it only if a node that reads it must run.
+    """
+    keys = {}
+    for name, value in given.items():
+        if not isinstance(value, str) or issubclass(compiled.input_types[name], TextPort):
+            continue
+        scheme, sep, rest = value.partition(":")
+        spec = registry.sources.get(scheme) if sep else None
+        if spec is None or spec.key is None:
+            continue
+        try:
+            text = spec.key(rest)
+        except Exception:  # loading reports the problem, with its message
+            continue
+        kind = compiled.input_types[name].type_name()
+        digest = hashlib.blake2b(f"{kind}|{text}".encode(), digest_size=16).hexdigest()
+        keys[name] = "r" + digest
+    return keys
+
+
+def _execute(
+    compiled: CompiledGraph,
+    values: dict[str, Any],
+    schedule: Schedule,
+    wanted: list[str],
+    cache: Cache | None,
+    executor: str | Executor,
+    workers: int | None,
+    keep_going: bool,
+    hooks: Sequence[RunHooks],
+    keep_intermediates: bool = False,
+    reference_keys: dict[str, str] | None = None,
+) -> RunState:
+    """Steps 4 to 6: key, plan, schedule; the run's state, with its record, whatever happens.
+
+    An executor made here is shut down here: after the run, or at once
+    (without waiting for running nodes) when the run is interrupted.
+    """
+    own = isinstance(executor, str)
+    pool = make_executor(executor, workers) if isinstance(executor, str) else executor
+    state = RunState(
+        compiled, cache, pool, hooks, RunRecord(compiled.graph.name, executor_name(pool))
+    )
+    began, failed = time.perf_counter(), True
+    try:
+        state.keep_intermediates = keep_intermediates
+        state.key_inputs(values, reference_keys or {})
+        state.key_steps(schedule.steps)
+        sources = [compiled.outputs[o] for o in wanted]
+        compute = state.plan(schedule.steps, sources)
+        dependencies = state.prepare(compute, sources, schedule)
+        for hook in hooks:
+            hook.run_started(pipeline=compiled.graph.name, steps=compute)
+        here = not state.encoded  # nodes run in this process: some may run in this thread
+        # one BLAS thread while nodes run here, so a node's bits do not depend on its
+        # neighbours (worker processes hold it for good; see graphvision.execution.blas)
+        with one_blas_thread() if here and compute else contextlib.nullcontext():
+            skipped = run_tasks(
+                dependencies,
+                state.start,
+                state.finish,
+                keep_going=keep_going,
+                run_here=state.run_here if here else None,
+                quick=state.is_quick if here else None,
+                limit=2 * executor_width(pool) if here else None,
+                ahead=state.chained,
+            )
+        for step in skipped:  # downstream of a failure
+            state.nodes[step].status = "skipped"
+            if step in state.started:  # sent ahead (Dask): its start was reported, so its end is
+                for hook in hooks:
+                    hook.node_finished(
+                        name=step, op=state.nodes[step].op, status="skipped", seconds=0.0
+                    )
+        failed = bool(state.failures)
+    except BaseException:  # Ctrl-C, or a bug: do not wait for the nodes still running
+        if own:
+            pool.shutdown(wait=False, cancel_futures=True)
+            own = False
+        raise
+    finally:
+        if own:
+            pool.shutdown(wait=True)
+        state.record.seconds = time.perf_counter() - began
+        state.record.nodes = [state.nodes[n] for n in compiled.steps if n in state.nodes]
+        for hook in hooks:
+            hook.run_finished(record=state.record, failed=failed)
+    return state

@@ -1,0 +1,220 @@
+"""The graph model: graph inputs, nodes, outputs, and a Python builder.
+
+A :class:`Graph` is plain data (it names ops, it does not hold functions), so
+it can be written to YAML and read back unchanged, and validated against any
+registry. The YAML front door lives in :mod:`graphvision.graph.pipeline_file`; both
+produce this same object.
+
+::
+
+    g = Graph("denoise")
+    image = g.input("image", "Image", default="sample:camera")
+    gray = g.add("gray", "color.to_gray", image=image)
+    blur = g.add("blur", "filters.gaussian", image=gray, params={"sigma": 1.5})
+    g.output("smooth", blur)
+"""
+
+from __future__ import annotations
+
+import copy
+import re
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from graphvision.errors import did_you_mean
+
+if TYPE_CHECKING:
+    import networkx as nx
+
+
+__all__ = [
+    "NAME",
+    "NAME_PATTERN",
+    "REF_PATTERN",
+    "Graph",
+    "InputDecl",
+    "NodeDecl",
+    "Ref",
+    "output_name_problem",
+]
+
+NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*$"
+"""Names of graph inputs and nodes: identifiers (the one place this rule is written)."""
+REF_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)?$"
+"""References: ``node`` or ``node.port``."""
+NAME = re.compile(NAME_PATTERN)
+
+
+def output_name_problem(name: str) -> str:
+    """Why ``name`` cannot name an output: its files would be written as ``<name>.png``
+    and so on, and anything but a plain name could reach outside the output folder."""
+    return (
+        f"output name {name!r} must be a plain name (letters, digits, _): it names the "
+        "output's files, which must stay inside the output folder"
+    )
+
+
+PARAM_REFERENCE = re.compile(r"\$\{params\.([A-Za-z_][A-Za-z0-9_]*)\}")
+"""``${params.NAME}`` in a node parameter: a pipeline param substituted when compiling."""
+
+
+@dataclass(frozen=True)
+class Ref:
+    """A reference to a graph input or a node output: ``node`` or ``node.port``.
+
+    ``port`` is None for a graph input and for the single output of a node.
+    Index a reference to name a port: ``g.add(...)["mask"]``.
+    """
+
+    node: str
+    port: str | None = None
+
+    @classmethod
+    def parse(cls, text: str) -> Ref:
+        node, _, port = str(text).partition(".")
+        return cls(node, port or None)
+
+    def __getitem__(self, port: str) -> Ref:
+        return Ref(self.node, port)
+
+    def __str__(self) -> str:
+        return self.node if self.port is None else f"{self.node}.{self.port}"
+
+
+@dataclass
+class InputDecl:
+    """A graph input: its port type name, an optional default and a description."""
+
+    type: str
+    default: Any = None
+    description: str = ""
+
+
+@dataclass
+class NodeDecl:
+    """One node of a graph: the op it runs, where its inputs come from, its parameters."""
+
+    op: str
+    inputs: dict[str, Ref] = field(default_factory=dict)
+    params: dict[str, Any] = field(default_factory=dict)
+    description: str = ""
+
+
+@dataclass
+class Graph:
+    """A pipeline as data. Build it in Python or load it from YAML."""
+
+    name: str
+    description: str = ""
+    inputs: dict[str, InputDecl] = field(default_factory=dict)
+    params: dict[str, Any] = field(default_factory=dict)
+    nodes: dict[str, NodeDecl] = field(default_factory=dict)
+    outputs: dict[str, Ref] = field(default_factory=dict)
+    plugins: list[str] = field(default_factory=list)
+    # Where the graph came from, for error messages; not part of equality.
+    source: str = field(default="", compare=False)
+    # Pipeline params whose ${params.NAME} references an override replaced: not "unused".
+    overridden_params: set[str] = field(default_factory=set, compare=False, repr=False)
+    # "node.param" -> the value an override set (so a problem with it names the override)
+    overrides_applied: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    lines: dict[str, int] = field(default_factory=dict, compare=False, repr=False)
+
+    # -- builder ------------------------------------------------------------------
+
+    def input(self, name: str, type: str, default: Any = None, description: str = "") -> Ref:
+        """Declare a graph input and return a reference to it."""
+        self._check_new_name(name)
+        self.inputs[name] = InputDecl(type, default, description)
+        return Ref(name)
+
+    def add(
+        self,
+        name: str,
+        op: str,
+        /,
+        params: dict[str, Any] | None = None,
+        **inputs: Ref | str,
+    ) -> Ref:
+        """Add node ``name`` running ``op``; keyword arguments connect its input ports."""
+        self._check_new_name(name)
+        refs = {
+            port: ref if isinstance(ref, Ref) else Ref.parse(ref) for port, ref in inputs.items()
+        }
+        self.nodes[name] = NodeDecl(op, refs, dict(params or {}))
+        return Ref(name)
+
+    def output(self, name: str, ref: Ref | str) -> None:
+        """Name ``ref`` as the graph output ``name``.
+
+        An output's name becomes the stem of its files in an output folder, so
+        it must be a plain identifier (no ``..``, separator or absolute path).
+        """
+        if not NAME.match(name):
+            raise ValueError(output_name_problem(name))
+        self.outputs[name] = ref if isinstance(ref, Ref) else Ref.parse(ref)
+
+    def _check_new_name(self, name: str) -> None:
+        if not NAME.match(name):
+            raise ValueError(f"name '{name}' must be an identifier (letters, digits, _)")
+        if name in self.inputs or name in self.nodes:
+            raise ValueError(f"name '{name}' is already used in graph '{self.name}'")
+
+    # -- views --------------------------------------------------------------------
+
+    def _repr_svg_(self) -> str:
+        """The graph's drawing, shown by Jupyter when a graph is the value of a cell."""
+        from graphvision.graph.svg import graph_svg
+
+        return graph_svg(self)
+
+    def to_networkx(self) -> nx.DiGraph:
+        """Nodes and graph inputs as vertices, one edge per connection (port names on edges)."""
+        import networkx as nx  # imported on use: start-up of the CLI stays fast
+
+        graph = nx.DiGraph()
+        for name, input_decl in self.inputs.items():
+            graph.add_node(name, kind="input", type=input_decl.type)
+        for name, node_decl in self.nodes.items():
+            graph.add_node(name, kind="node", op=node_decl.op)
+        for name, node_decl in self.nodes.items():
+            for port, ref in node_decl.inputs.items():
+                if ref.node in graph:
+                    graph.add_edge(ref.node, name, port=port, source_port=ref.port)
+        return graph
+
+    def with_overrides(self, overrides: dict[str, Any]) -> Graph:
+        """A copy with ``{"node.param": value}`` set (``params.x`` sets a pipeline param).
+
+        Raises
+        ------
+        KeyError
+            Naming the first override whose node does not exist.
+        """
+        graph = copy.deepcopy(self)
+        for key, value in overrides.items():
+            target, _, param = key.partition(".")
+            if not param:
+                raise KeyError(f"override '{key}' must be node.param or params.name")
+            if target == "params":
+                graph.params[param] = value
+                graph.overrides_applied[key] = value
+            elif target in graph.nodes:
+                old = graph.nodes[target].params.get(param)
+                graph.overridden_params.update(PARAM_REFERENCE.findall(str(old)) if old else ())
+                graph.nodes[target].params[param] = value
+                graph.overrides_applied[key] = value
+            else:
+                raise KeyError(
+                    f"override '{key}': no node '{target}'{did_you_mean(target, graph.nodes)}"
+                )
+        return graph
+
+    def line_of(self, where: str) -> int:
+        """The YAML line of the dotted location ``where`` (or of its closest parent)."""
+        parts = where.split(".")
+        while parts:
+            line = self.lines.get(".".join(parts))
+            if line:
+                return line
+            parts.pop()
+        return 0

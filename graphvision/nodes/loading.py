@@ -1,0 +1,62 @@
+"""Importing a local plugin file or package folder under a stable module name, so that a
+worker process importing the same file gets the same module (and the same node ids)."""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import importlib.util
+import sys
+import types
+from pathlib import Path
+
+from graphvision.errors import PluginLoadError
+
+__all__ = ["import_file"]
+
+
+def import_file(path: str | Path, module_name: str = "") -> types.ModuleType:
+    """Import a plugin file (or a package folder) under a stable module name.
+
+    The name is derived from the resolved path, so that a worker process
+    importing the same file gets the same module name. A file imported before
+    is imported again when its content has changed since (so ``discover()``
+    after an edit runs, and fingerprints, the edited code).
+    """
+    path = Path(path).resolve()
+    target = path / "__init__.py" if path.is_dir() else path
+    digest = hashlib.blake2b(str(path).encode(), digest_size=4).hexdigest()
+    name = module_name or f"graphvision_local_{path.stem}_{digest}"
+    content = _content_digest(path)
+    loaded = sys.modules.get(name)
+    if loaded is not None:
+        if getattr(loaded, "__graphvision_digest__", content) == content:
+            return loaded
+        for stale in [n for n in sys.modules if n == name or n.startswith(name + ".")]:
+            del sys.modules[stale]
+    spec = importlib.util.spec_from_file_location(
+        name, target, submodule_search_locations=[str(path)] if path.is_dir() else None
+    )
+    if spec is None or spec.loader is None:
+        raise PluginLoadError(f"cannot import plugin file {path}")
+    module = importlib.util.module_from_spec(spec)
+    module.__graphvision_path__ = str(path)  # type: ignore[attr-defined]
+    module.__graphvision_digest__ = content  # type: ignore[attr-defined]
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        del sys.modules[name]
+        raise
+    return module
+
+
+def _content_digest(path: Path) -> str:
+    """Digest of a plugin file, or of every ``.py`` file of a package folder."""
+    files = sorted(path.rglob("*.py")) if path.is_dir() else [path]
+    hasher = hashlib.blake2b(digest_size=16)
+    for file in files:
+        with contextlib.suppress(OSError):
+            hasher.update(str(file.relative_to(path.parent)).encode())
+            hasher.update(file.read_bytes())
+    return hasher.hexdigest()

@@ -1,0 +1,230 @@
+"""The plugin index: what discovering the installed plugins found, kept on disk.
+
+Importing every installed family and building each node's parameter model
+(a pydantic model, checked on the defaults, and its JSON schema) is most of
+what ``graphvision nodes`` and the start of a run cost. The index records,
+for one state of the installed plugins, each node's listing line and
+description, and that every node registered. With an index that matches,
+
+* ``graphvision nodes`` and ``graphvision describe`` print from it without
+  importing any plugin (nor NumPy, nor pydantic);
+* :func:`~graphvision.discover` still imports the plugins (a run calls their
+  functions) but leaves each parameter model to be built on first use, so a
+  run builds the models of the nodes it uses only.
+
+An index is never served stale: it is keyed by a digest of everything that
+can change what discovery finds, computed on every use:
+
+* the bytes of every file of each entry point's top-level package and of
+  graphvision itself (an edit anywhere in a plugin shows at once, whatever
+  the file's time stamp);
+* the entry points (name, target, and their distribution's metadata file,
+  which holds its name and version);
+* the modification time of each ``sys.path`` folder but the first (a package
+  installed or removed there, such as a dependency a plugin imports; the
+  first is the script's folder or, for ``python -m``, the current one, whose
+  time changes with every file made there, and the packages it provides are
+  hashed as above);
+* the Python version and executable.
+
+An index is written only after a discovery in which every entry-point plugin
+loaded (a failing plugin is imported, and its error reported, every time),
+and only if the key is the same after the plugins were imported as before (a
+file edited meanwhile). It is one JSON file per Python environment, next to
+the default cache folder, named by its key and written atomically; an index
+that cannot be read or written is simply not used.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import sys
+import tempfile
+from importlib.metadata import EntryPoint, entry_points
+from importlib.util import find_spec
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from graphvision.locations import default_cache_dir
+
+if TYPE_CHECKING:
+    from graphvision.nodes.registry import Registry
+
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "environment_key",
+    "has_index",
+    "index_path",
+    "installed_entry_points",
+    "read_index",
+    "read_providers",
+    "write_index",
+]
+
+ENTRY_POINT_GROUP = "graphvision.plugins"
+FORMAT = 3  # bump when what an index holds changes
+
+
+def installed_entry_points() -> list[EntryPoint]:
+    """The ``graphvision.plugins`` entry points, in name order."""
+    return sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name)
+
+
+def environment_key(entries: list[EntryPoint]) -> str:
+    """A digest of what discovering ``entries`` depends on (see the module docstring).
+
+    xxh3-128, as the cache's content keys: a megabyte of plugin sources is
+    hashed in well under a millisecond.
+    """
+    import xxhash
+
+    hasher = xxhash.xxh3_128()
+    hasher.update(f"{FORMAT}|{sys.version}|{sys.executable}\n".encode())
+    for folder in sys.path[1:]:
+        with contextlib.suppress(OSError):
+            hasher.update(f"{folder}|{os.stat(folder or '.').st_mtime_ns}\n".encode())
+    packages = {"graphvision"}
+    releases: dict[int, str] = {}  # read once per distribution (parsing it is slow)
+    for entry in entries:
+        dist = entry.dist
+        if dist is not None and id(dist) not in releases:
+            releases[id(dist)] = dist.read_text("METADATA") or dist.read_text("PKG-INFO") or ""
+        release = releases[id(dist)] if dist is not None else ""
+        hasher.update(f"{entry.name}|{entry.value}|{release}\n".encode())
+        packages.add(entry.value.partition(":")[0].partition(".")[0])
+    for package in sorted(packages):
+        hasher.update(f"package {package}\n".encode())
+        for file in _package_files(package):
+            hasher.update(f"{file}\n".encode())
+            with contextlib.suppress(OSError):
+                hasher.update(file.read_bytes())
+    return hasher.hexdigest()
+
+
+def _package_files(name: str) -> list[Path]:
+    """Every file of a top-level package or module, found without importing it."""
+    try:
+        spec = find_spec(name)
+    except (ImportError, ValueError):
+        return []
+    if spec is None:
+        return []
+    if not spec.submodule_search_locations:
+        return [Path(spec.origin)] if spec.origin else []
+    files = []
+    for location in spec.submodule_search_locations:
+        for folder, subfolders, names in os.walk(location):
+            subfolders[:] = sorted(d for d in subfolders if d != "__pycache__")
+            files += [Path(folder, n) for n in sorted(names) if not n.endswith(".pyc")]
+    return files
+
+
+def index_path(key: str) -> Path:
+    """The index file of ``key`` in this Python environment, beside the default cache folder.
+
+    The key is in the name, so a discovery knows whether the index matches
+    from the file's existence alone, without reading it.
+    """
+    return _index_stem().with_name(f"{_index_stem().name}{key}.json")
+
+
+def _index_stem() -> Path:
+    environment = hashlib.blake2b(sys.prefix.encode(), digest_size=4).hexdigest()
+    cache = default_cache_dir()
+    return cache.parent / f"{cache.name}-plugin-index-{environment}-"
+
+
+def has_index(key: str) -> bool:
+    """True when an index was written under ``key``."""
+    return index_path(key).is_file()
+
+
+def _read(key: str) -> dict[str, Any] | None:
+    """The index written under ``key``, its every byte checked; None without one.
+
+    The file is a header line (the key and a BLAKE2b digest of the rest) and
+    the index as JSON. One that does not match its digest, does not parse or
+    holds the wrong shapes (truncated, hand-edited, hostile) is removed, so that
+    the discovery that replaces it writes it again.
+    """
+    path = index_path(key)
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    header, _, body = data.partition(b"\n")
+    try:
+        head = json.loads(header)
+        index = json.loads(body) if head == _header(key, body) else None
+    except (ValueError, RecursionError):
+        index = None
+    if not _well_formed(index):
+        with contextlib.suppress(OSError):
+            path.unlink()
+        return None
+    return index
+
+
+def _header(key: str, body: bytes) -> dict[str, str]:
+    return {"key": key, "blake2b": hashlib.blake2b(body, digest_size=20).hexdigest()}
+
+
+def _well_formed(index: Any) -> bool:
+    if not isinstance(index, dict) or not isinstance(index.get("nodes"), dict):
+        return False
+    plugins = index.get("plugins")
+    return isinstance(plugins, dict) and all(
+        isinstance(entry, dict)
+        and all(isinstance(entry.get(kind), list) for kind in ("nodes", "port_types", "sources"))
+        for entry in plugins.values()
+    )
+
+
+def read_index(key: str) -> dict[str, Any] | None:
+    """The nodes of the index written under ``key``, or None (see :func:`_read`)."""
+    index = _read(key)
+    return index["nodes"] if index is not None else None
+
+
+def read_providers(key: str) -> dict[str, dict[str, list[str]]] | None:
+    """For each entry-point plugin of the index under ``key``, the node ids, port type
+    names and input-source schemes it registers; None without a sound index."""
+    index = _read(key)
+    return index["plugins"] if index is not None else None
+
+
+def write_index(key: str, registry: Registry) -> None:
+    """Record ``registry``'s nodes under ``key`` and remove this environment's older indexes
+    (quietly nothing if the files cannot be written)."""
+    nodes = {
+        op: {"summary": spec.summary, "description": spec.describe()}
+        for op, spec in sorted(registry.nodes.items())
+    }
+    plugins = {
+        name: {
+            "nodes": sorted(status.nodes),
+            "port_types": sorted(status.port_types),
+            "sources": sorted(status.sources),
+        }
+        for name, status in sorted(registry.plugins.items())
+    }
+    path = index_path(key)
+    with contextlib.suppress(OSError, TypeError, ValueError):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
+        try:
+            body = json.dumps({"nodes": nodes, "plugins": plugins}).encode()
+            with os.fdopen(handle, "wb") as stream:
+                stream.write(json.dumps(_header(key, body)).encode() + b"\n" + body)
+            os.replace(temporary, path)
+        finally:
+            with contextlib.suppress(FileNotFoundError):
+                os.remove(temporary)
+        stem = _index_stem()
+        for older in stem.parent.glob(f"{stem.name}*.json"):
+            if older != path:
+                with contextlib.suppress(OSError):
+                    older.unlink()

@@ -1,0 +1,172 @@
+"""Plugin discovery: the ``graphvision.plugins`` entry-point group and local paths.
+
+Built-in plugins are found exactly as third-party ones are: each entry point
+names a module, which is imported and registered. A user may also name a
+local plugin file or folder (``--plugins PATH`` on the CLI, ``plugins:`` in a
+pipeline file). A plugin that fails to import or register is recorded with
+its error and the others keep working.
+
+Plugins import only light modules at the top (numpy); heavy ones (scipy,
+scikit-image) are imported inside the node functions, so listing nodes stays
+fast. When the plugin index (:mod:`._plugin_index`) matches the installed
+plugins, their nodes' parameter models are built on first use.
+"""
+
+from __future__ import annotations
+
+import traceback
+import types
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+from graphvision.errors import GraphvisionError, PluginLoadError
+from graphvision.graph.model import Graph
+from graphvision.nodes.fingerprint import note_distribution
+from graphvision.nodes.loading import import_file
+from graphvision.nodes.plugin_index import (
+    ENTRY_POINT_GROUP,
+    environment_key,
+    has_index,
+    installed_entry_points,
+    read_providers,
+    write_index,
+)
+from graphvision.nodes.registry import Registry
+
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "Needs",
+    "discover",
+    "discover_for",
+    "load_entry_points",
+    "load_path",
+]
+
+
+def _summarise(error: BaseException) -> str:
+    if isinstance(error, GraphvisionError):
+        return str(error)
+    frame = traceback.extract_tb(error.__traceback__)[-1:] if error.__traceback__ else []
+    where = f" ({frame[0].filename}:{frame[0].lineno})" if frame else ""
+    return f"{type(error).__name__}: {error}{where}"
+
+
+def load_entry_points(registry: Registry, needs: Needs | None = None) -> None:
+    """Register the plugins of the ``graphvision.plugins`` entry-point group.
+
+    With a plugin index for the same files, the nodes' parameter models are
+    left to be built on first use, and given ``needs`` (what a pipeline uses)
+    only the plugins that provide it are imported, with every plugin that
+    loads input values (``sample:``, files); without an index, every plugin is
+    imported and checked, and the index is written for the next discovery.
+    """
+    fresh = not registry.plugins  # only a registry of these plugins alone is recorded
+    entries = installed_entry_points()
+    key = environment_key(entries)
+    providers = read_providers(key) if has_index(key) else None  # a damaged one is removed
+    indexed = providers is not None
+    if providers is not None and needs is not None:
+        wanted = _providers(providers, needs, set(registry.port_types))
+        if wanted is not None:
+            entries = [entry for entry in entries if entry.name in wanted]
+            fresh = False  # a part of the plugins: never recorded as the whole
+    names: dict[int, str] = {}  # a distribution's name, parsed once for all its entry points
+    for entry in entries:
+        if entry.name in registry.plugins:
+            continue
+        try:
+            module = entry.load()
+            if not isinstance(module, types.ModuleType):
+                raise PluginLoadError(f"entry point must name a module, got {module!r}")
+            registry.add_plugin(module, entry.name, entry.value, params_checked=indexed)
+            if entry.dist is not None:
+                if id(entry.dist) not in names:
+                    names[id(entry.dist)] = entry.dist.name
+                note_distribution(module.__name__.partition(".")[0], names[id(entry.dist)])
+        except Exception as error:
+            registry.record_failure(entry.name, entry.value, _summarise(error))
+    recordable = fresh and not indexed and not registry.failed_plugins()
+    if recordable and environment_key(entries) == key:  # no file changed while they loaded
+        write_index(key, registry)
+
+
+@dataclass(frozen=True)
+class Needs:
+    """What a pipeline asks of the installed plugins: its ops and its inputs' port types.
+
+    >>> graph = Graph("g"); image = graph.input("image", "Image")
+    >>> graph.output("smooth", graph.add("smooth", "filters.gaussian", image=image))
+    >>> Needs.of(graph)
+    Needs(ops=frozenset({'filters.gaussian'}), port_types=frozenset({'Image'}))
+    """
+
+    ops: frozenset[str]
+    port_types: frozenset[str] = frozenset()
+
+    @classmethod
+    def of(cls, graph: Graph) -> Needs:
+        return cls(
+            frozenset(decl.op for decl in graph.nodes.values()),
+            frozenset(decl.type for decl in graph.inputs.values()),
+        )
+
+
+def _providers(
+    plugins: dict[str, dict[str, list[str]]], needs: Needs, builtin: set[str]
+) -> set[str] | None:
+    """The entry points to import for ``needs``: those registering a needed op or a
+    needed port type that is not built in, and every one that loads input values.
+
+    None (import all) when a need is provided by no plugin: the error then lists
+    every plugin's names for a "did you mean".
+    """
+    wanted = {name for name, entry in plugins.items() if entry["sources"]}
+    for kinds, needed in (("nodes", needs.ops), ("port_types", needs.port_types - builtin)):
+        for name in needed:
+            providers = {plugin for plugin, entry in plugins.items() if name in entry[kinds]}
+            if not providers:
+                return None
+            wanted |= providers
+    return wanted
+
+
+def load_path(registry: Registry, path: str | Path) -> None:
+    """Register a local plugin: a ``.py`` file, a package folder, or a folder of ``.py`` files."""
+    path = Path(path)
+    if not path.exists():
+        registry.record_failure(str(path), str(path), f"plugin path {path} does not exist")
+        return
+    if path.is_dir() and not (path / "__init__.py").exists():
+        targets = sorted(p for p in path.glob("*.py") if not p.name.startswith("_"))
+    else:
+        targets = [path]
+    for target in targets:
+        name = str(target)
+        try:
+            registry.add_plugin(import_file(target), name, name)
+        except Exception as error:
+            registry.record_failure(name, name, _summarise(error))
+
+
+def discover(
+    paths: Iterable[str | Path] = (), *, entry_points: bool = True, needs: Needs | None = None
+) -> Registry:
+    """A registry with the entry-point plugins and the local plugins at ``paths``.
+
+    ``needs`` (a pipeline's ops and input types) lets a discovery with a plugin
+    index import only the plugins that provide them; the registry then holds
+    those alone (the command line runs a pipeline this way).
+    """
+    registry = Registry()
+    if entry_points:
+        load_entry_points(registry, needs)
+    for path in paths:
+        load_path(registry, path)
+    return registry
+
+
+def discover_for(graph: Graph, paths: Iterable[str | Path] = ()) -> Registry:
+    """The registry a run of ``graph`` needs: the local plugins at ``paths`` and of its
+    ``plugins:``, and the installed families of its ops and input types."""
+    return discover([*paths, *graph.plugins], needs=Needs.of(graph))

@@ -1,0 +1,208 @@
+"""A sweep's folder: ``sweep.csv``, ``sweep.html`` and an SVG chart per plotted output,
+listed in ``sweep.json`` so that the next sweep there replaces its own files and refuses
+anyone else's."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from html import escape
+from pathlib import Path
+
+from graphvision.errors import OutputFolderError, PipelineError, Problem, did_you_mean
+from graphvision.execution.sweep import SweepResult
+
+__all__ = ["check_sweep_folder", "sweep_html", "sweep_plot_svg", "write_sweep"]
+
+MANIFEST = "sweep.json"
+
+
+def sweep_plot_svg(result: SweepResult, output: str) -> str:
+    """``output`` against each swept parameter, one small chart per parameter, as SVG.
+
+    Each chart has the parameter's values on x and ``output`` on y; one line
+    per combination of the other parameters, so interactions show as lines
+    that are not parallel. Values that are not numbers are placed evenly.
+    """
+    if output not in result.outputs:
+        listing = ", ".join(result.outputs) or "none"
+        message = f"no scalar output '{output}'{did_you_mean(output, result.outputs)}; "
+        raise PipelineError([Problem(0, "plot", message + f"outputs: {listing}")])
+    width, height, pad = 320.0, 220.0, 48.0
+    charts = [_chart(result, output, key, width, height, pad) for key in result.keys]
+    total = width * len(charts)
+    body = "".join(
+        f'<g transform="translate({i * width:.0f},0)">{chart}</g>' for i, chart in enumerate(charts)
+    )
+    return (
+        f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {total:.0f} {height:.0f}" '
+        f'width="{total:.0f}" height="{height:.0f}" font-family="sans-serif" font-size="11">'
+        f"<title>{escape(output)} against {escape(', '.join(result.keys))}</title>{body}</svg>"
+    )
+
+
+_PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2")
+
+
+def _chart(
+    result: SweepResult, output: str, key: str, width: float, height: float, pad: float
+) -> str:
+    levels = list(dict.fromkeys(row[key] for row in result.rows))
+    numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in levels)
+    position = {v: float(v) if numeric else float(i) for i, v in enumerate(levels)}
+    points = [
+        (position[row[key]], float(row[output]), tuple(row[k] for k in result.keys if k != key))
+        for row in result.rows
+        if isinstance(row.get(output), (int, float)) and math.isfinite(float(row[output]))
+    ]
+    if not points:
+        return f'<text x="{pad}" y="{height / 2}">no finite values of {escape(output)}</text>'
+    xs, ys = [p[0] for p in points], [p[1] for p in points]
+    x0, x1 = min(xs), max(xs) if max(xs) > min(xs) else min(xs) + 1
+    y0, y1 = min(ys), max(ys) if max(ys) > min(ys) else min(ys) + 1
+
+    def sx(x: float) -> float:
+        return pad + (x - x0) / (x1 - x0) * (width - 1.5 * pad)
+
+    def sy(y: float) -> float:
+        return height - pad - (y - y0) / (y1 - y0) * (height - 1.7 * pad)
+
+    parts = [
+        _line(pad, height - pad, width - pad / 2, height - pad),
+        _line(pad, pad * 0.7, pad, height - pad),
+        f'<text x="{width / 2:.0f}" y="{height - 8}" text-anchor="middle">{escape(key)}</text>',
+        f'<text x="{pad}" y="{pad * 0.5:.0f}">{escape(output)}</text>',
+    ]
+    for level in levels:
+        x = sx(position[level])
+        tick = escape(str(level))
+        parts.append(
+            f'<text x="{x:.1f}" y="{height - pad + 14}" text-anchor="middle">{tick}</text>'
+        )
+    for y, label in ((y0, f"{y0:.3g}"), (y1, f"{y1:.3g}")):
+        parts.append(f'<text x="{pad - 4}" y="{sy(y) + 4:.1f}" text-anchor="end">{label}</text>')
+    groups: dict[tuple, list[tuple[float, float]]] = {}
+    for x, y, group in points:
+        groups.setdefault(group, []).append((x, y))
+    for number, (group, line) in enumerate(sorted(groups.items(), key=lambda g: str(g[0]))):
+        colour = _PALETTE[number % len(_PALETTE)]
+        line.sort()
+        path = " ".join(f"{sx(x):.1f},{sy(y):.1f}" for x, y in line)
+        others = ", ".join(
+            f"{k}={v}" for k, v in zip([k for k in result.keys if k != key], group, strict=True)
+        )
+        parts.append(
+            f'<polyline points="{path}" fill="none" stroke="{colour}">'
+            f"<title>{escape(others)}</title></polyline>"
+        )
+        parts += [
+            f'<circle cx="{sx(x):.1f}" cy="{sy(y):.1f}" r="3" fill="{colour}"/>' for x, y in line
+        ]
+    return "".join(parts)
+
+
+def _line(x1: float, y1: float, x2: float, y2: float) -> str:
+    return f'<line x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" y2="{y2:.1f}" stroke="#333"/>'
+
+
+def sweep_html(result: SweepResult, title: str, plots: Sequence[str] = ()) -> str:
+    """``sweep.html``: the sweep's table (failures in red) and a chart per plotted output."""
+    head = "".join(f"<th>{escape(column)}</th>" for column in result.columns)
+    rows = []
+    for row in result.rows:
+        cells = []
+        for column in result.columns:
+            value = row.get(column, "")
+            text = f"{value:.6g}" if isinstance(value, float) else str(value)
+            cells.append(f"<td>{escape(text)}</td>")
+        style = "" if row.get("status") == "ok" else ' class="failed"'
+        rows.append(f"<tr{style}>{''.join(cells)}</tr>")
+    charts = "".join(f"<h2>{escape(o)}</h2>{sweep_plot_svg(result, o)}" for o in plots)
+    return (
+        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        f"<title>{escape(title)}: sweep</title><style>"
+        "body{font-family:sans-serif;margin:2em} table{border-collapse:collapse}"
+        "td,th{border:1px solid #ddd;padding:.2em .6em;text-align:right}"
+        "tr.failed td{color:#b71c1c}</style></head>"
+        f"<body><h1>{escape(title)}: {len(result.rows)} combinations</h1>"
+        f"<table><tr>{head}</tr>{''.join(rows)}</table>{charts}</body></html>\n"
+    )
+
+
+def _is_sweep_file(name: str) -> bool:
+    return name in ("sweep.csv", "sweep.html", MANIFEST) or (
+        name.startswith("sweep_") and name.endswith(".svg")
+    )
+
+
+def check_sweep_folder(directory: Path) -> set[str]:
+    """Refuse a folder where a sweep's files would replace files graphvision did not write;
+    return the previous sweep's files there (its ``sweep.json``).
+
+    Raises
+    ------
+    OutputFolderError
+        The folder is a file, holds ``sweep.csv``, ``sweep.html``, ``sweep_*.svg`` or
+        ``sweep.json`` that no sweep manifest there lists, or its ``sweep.json`` is
+        not a graphvision manifest.
+    """
+    if directory.exists() and not directory.is_dir():
+        raise OutputFolderError(f"output folder {directory} is a file")
+    if not directory.is_dir():
+        return set()
+    owned: set[str] = set()
+    manifest = directory / MANIFEST
+    if manifest.is_file():
+        try:
+            content = json.loads(manifest.read_text(encoding="utf-8"))
+            names = content["files"] if content.get("graphvision") == "sweep" else None
+            if not isinstance(names, list) or not all(
+                isinstance(n, str) and _is_sweep_file(n) and n == Path(n).name for n in names
+            ):
+                raise ValueError("not a sweep manifest")
+            owned = {*names, MANIFEST}
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            raise OutputFolderError(
+                f"{manifest} is not a graphvision sweep manifest, so which files there are a "
+                "previous sweep's is unknown; choose another --output-dir or empty this one"
+            ) from None
+    for path in sorted(directory.iterdir()):
+        if _is_sweep_file(path.name) and path.name not in owned:
+            raise OutputFolderError(
+                f"output folder {directory} holds {path.name}, which no graphvision sweep "
+                "there wrote; the sweep would replace it: move it, or choose another "
+                "--output-dir"
+            )
+    return owned
+
+
+def write_sweep(
+    result: SweepResult, directory: Path, name: str, plots: Sequence[str]
+) -> list[Path]:
+    """Write ``sweep.csv``, a chart per output in ``plots``, ``sweep.html`` and the
+    manifest; remove what a previous sweep wrote there and this one did not.
+
+    Returns the paths written (the manifest last, not listed).
+
+    Raises
+    ------
+    OutputFolderError
+        As :func:`check_sweep_folder`.
+    """
+    previous = check_sweep_folder(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    written = [result.write_csv(directory / "sweep.csv")]
+    for output in plots:
+        path = directory / f"sweep_{output}.svg"
+        path.write_text(sweep_plot_svg(result, output), encoding="utf-8")
+        written.append(path)
+    page = directory / "sweep.html"
+    page.write_text(sweep_html(result, name, list(plots)), encoding="utf-8")
+    written.append(page)
+    names = {path.name for path in written}
+    for stale in sorted(previous - names - {MANIFEST}):
+        (directory / stale).unlink(missing_ok=True)
+    content = json.dumps({"graphvision": "sweep", "files": sorted(names)}, indent=1)
+    (directory / MANIFEST).write_text(content + "\n", encoding="utf-8")
+    return written
