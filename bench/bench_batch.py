@@ -22,7 +22,7 @@ import numpy as np
 
 import graphvision as gv
 from graphvision.nodes.marks import unchecked
-from graphvision_plugins import color, morphology, regions, threshold
+from graphvision_plugins import colour, morphology, regions, threshold
 from graphvision_plugins.io import read_array, read_sample
 
 PIPELINE = Path(__file__).parents[1] / "pipelines" / "coins.yaml"
@@ -48,7 +48,7 @@ def _loop(paths: list[Path]) -> list[int]:
     counts = []
     for path in paths:
         image = read_array(str(path)).astype(np.float32) / 255.0
-        gray = unchecked(color.to_gray)(image)
+        gray = unchecked(colour.to_gray)(image)
         binary = unchecked(threshold.local)(gray, window=51, k=0.0, foreground="bright")
         closed = unchecked(morphology.close)(binary, disk)
         filled = unchecked(morphology.fill_holes)(closed)

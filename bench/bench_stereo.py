@@ -33,7 +33,7 @@ import numpy as np
 from timing import best
 
 import graphvision as gv
-from graphvision_plugins import color, epipolar, stereo, synthetic
+from graphvision_plugins import colour, epipolar, stereo, synthetic
 from graphvision_plugins.io import read_sample, sample_array
 
 PIPELINES = __import__("pathlib").Path(__file__).parents[1] / "pipelines"
@@ -45,8 +45,8 @@ def _opencv_disparity(matcher, left: np.ndarray, right: np.ndarray) -> np.ndarra
 
 
 def _dense_rows(cv2) -> list[str]:
-    left = color.to_gray(read_sample("motorcycle_left"))
-    right = color.to_gray(read_sample("motorcycle_right"))
+    left = colour.to_gray(read_sample("motorcycle_left"))
+    right = colour.to_gray(read_sample("motorcycle_right"))
     truth = sample_array("motorcycle_disparity")
     left8, right8 = (np.round(im * 255).astype(np.uint8) for im in (left, right))
 

@@ -186,7 +186,7 @@ def test_two_processes_share_one_cache_directory(tmp_path):
     """)
     (tmp_path / "p.yaml").write_text(
         "name: p\ninputs:\n  image: {type: Image, default: 'sample:astronaut'}\nnodes:\n"
-        "  g: {op: color.to_gray, in: {image: image}}\n"
+        "  g: {op: colour.to_gray, in: {image: image}}\n"
         + "".join(
             f"  s{i}: {{op: filters.gaussian, in: {{image: {'g' if i == 0 else f's{i - 1}'}}}}}\n"
             for i in range(6)

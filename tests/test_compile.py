@@ -199,7 +199,7 @@ def test_a_bad_value_set_on_the_command_line_is_named_as_such_not_as_the_file(tm
     pipeline = tmp_path / "p.yaml"
     pipeline.write_text(
         "name: p\ninputs:\n  image: {type: Image, default: 'sample:camera'}\nnodes:\n"
-        "  g: {op: color.to_gray, in: {image: image}}\n"
+        "  g: {op: colour.to_gray, in: {image: image}}\n"
         "  s: {op: filters.gaussian, in: {image: g}, params: {sigma: 2.0}}\noutputs: {s: s}\n"
     )
     graph = gv.load_pipeline(pipeline).with_overrides({"s.sigma": "abc"})

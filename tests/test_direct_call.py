@@ -17,7 +17,7 @@ import pytest
 import graphvision as gv
 from graphvision.nodes.marks import unchecked
 from graphvision_plugins import (
-    color,
+    colour,
     features,
     filters,
     fitting,
@@ -40,11 +40,11 @@ CROSS = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
 # (call with wrong dtype, call with wrong channels/shape, call with a bad parameter,
 #  what the messages name)
 CASES: dict[str, tuple[Callable[[], Any], Callable[[], Any], Callable[[], Any], str]] = {
-    "color": (
-        lambda: color.chromaticity((RGB * 255).astype(np.uint8)),
-        lambda: color.chromaticity(GRAY),
-        lambda: color.to_gray(RGB, method="median"),
-        "color.",
+    "colour": (
+        lambda: colour.chromaticity((RGB * 255).astype(np.uint8)),
+        lambda: colour.chromaticity(GRAY),
+        lambda: colour.to_gray(RGB, method="median"),
+        "colour.",
     ),
     "filters": (
         lambda: filters.gaussian((GRAY * 255).astype(np.uint8)),

@@ -192,7 +192,7 @@ name: smooth
 inputs:
   image: {type: Image, default: "sample:camera"}
 nodes:
-  gray: {op: color.to_gray, in: {image: image}}
+  gray: {op: colour.to_gray, in: {image: image}}
   smooth: {op: filters.gaussian, in: {image: gray}, params: {sigma: %s}}
 outputs:
   smooth: smooth
@@ -202,10 +202,10 @@ outputs:
 def test_with_an_index_a_pipeline_imports_only_the_families_it_uses():
     everything = gv.discover()  # no index yet: imports every family and writes the index
     assert index_files() and len(everything.plugins) > 10
-    needs = gv.Needs(frozenset({"filters.gaussian", "color.to_gray"}), frozenset({"Image"}))
+    needs = gv.Needs(frozenset({"filters.gaussian", "colour.to_gray"}), frozenset({"Image"}))
     used = gv.discover(needs=needs)
     # the two families, and io, which loads input values (sample:, files)
-    assert set(used.plugins) == {"filters", "color", "io"}
+    assert set(used.plugins) == {"filters", "colour", "io"}
     assert set(used.nodes) == {op for op in everything.nodes if op.split(".")[0] in used.plugins}
 
 
@@ -243,7 +243,7 @@ def test_a_record_lists_the_families_its_pipeline_uses_whatever_was_imported(
     assert status == 0
     record = json.loads((tmp_path / "out" / "record.json").read_text())
     plugins = {name.removeprefix("plugin ") for name in record["versions"] if " " in name}
-    assert plugins == {"filters", "color", "io"}
+    assert plugins == {"filters", "colour", "io"}
 
 
 def _truncated(data: bytes) -> bytes:

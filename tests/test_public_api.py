@@ -28,7 +28,7 @@ def test_all_is_unique_and_exported():
     [
         "graphvision.execution.scheduler",
         "graphvision.graph.order",
-        "graphvision_plugins.color._color",
+        "graphvision_plugins.colour._intensity",
         "graphvision_plugins.filters._linear",
         "graphvision_plugins.metrics._quality",
     ],

@@ -165,7 +165,7 @@ def test_unknown_op_suggests(registry):
 
 
 def test_builtins_come_through_entry_points(registry):
-    assert {"io", "color", "filters", "metrics"} <= set(registry.plugins)
+    assert {"io", "colour", "filters", "metrics"} <= set(registry.plugins)
     assert registry.plugins["filters"].origin == "graphvision_plugins.filters"
 
 
@@ -199,7 +199,7 @@ def test_a_third_party_package_installed_with_pip_is_found(tmp_path):
     pipeline = tmp_path / "p.yaml"
     pipeline.write_text(
         "name: third\ninputs:\n  image: {type: Image, default: 'sample:camera'}\nnodes:\n"
-        "  g: {op: color.to_gray, in: {image: image}}\n"
+        "  g: {op: colour.to_gray, in: {image: image}}\n"
         "  inv: {op: thirdparty.invert, in: {image: g}}\n"
         "  again: {op: thirdparty.invert, in: {image: inv}}\n"
         "  diff: {op: metrics.mse, in: {a: g, b: again}}\noutputs: {mse: diff}\n"

@@ -324,7 +324,7 @@ def test_an_installed_plugin_fingerprint_includes_its_distribution_version(regis
 def test_every_executor_gives_the_same_results(registry, executor):
     graph = gv.parse_pipeline(
         "name: p\ninputs:\n  image: {type: Image, default: 'sample:camera'}\nnodes:\n"
-        "  g: {op: color.to_gray, in: {image: image}}\n"
+        "  g: {op: colour.to_gray, in: {image: image}}\n"
         "  s: {op: filters.gaussian, in: {image: g}, params: {sigma: 2.0}}\n"
         "  m: {op: filters.median, in: {image: g}}\n"
         "  q: {op: metrics.psnr, in: {a: s, b: m}}\n"
@@ -411,7 +411,7 @@ def test_a_fully_cached_run_does_not_load_a_sample_input(tmp_path):
         f"cache = gv.Cache(None, gv.DiskStore({str(tmp_path)!r}))\n"
         "g = gv.Graph('s')\n"
         "image = g.input('image', 'Image', default='sample:camera')\n"
-        "g.output('gray', g.add('gray', 'color.to_gray', image=image))\n"
+        "g.output('gray', g.add('gray', 'colour.to_gray', image=image))\n"
         "result = gv.run(g, cache=cache)\n"
         "print(result.record.count('cached'), 'skimage.data' in sys.modules)\n"
     )

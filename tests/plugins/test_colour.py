@@ -1,4 +1,5 @@
-"""Colour spaces against scikit-image, histograms against numpy, distances by hand, retrieval."""
+"""Gray and chromaticity by hand, colour spaces against scikit-image, histograms against numpy,
+distances by hand, retrieval; the ops renamed when ``color`` joined ``colour``."""
 
 from __future__ import annotations
 
@@ -29,6 +30,27 @@ def pictures() -> list[np.ndarray]:
         rng.random((40, 40, 3)),
         corners.reshape(8, 1, 3).astype(np.float64),  # the cube's corners: black, white, primaries
     ]
+
+
+def test_gray_is_the_channel_mean_or_bt601_luminance():
+    rgb = np.array([[[0.3, 0.6, 0.9], [1.0, 0.0, 0.0]]], np.float32)
+    np.testing.assert_allclose(colour.to_gray(rgb), [[0.6, 1 / 3]], rtol=1e-6)
+    np.testing.assert_allclose(
+        colour.to_gray(rgb, method="luminance"),
+        [[0.299 * 0.3 + 0.587 * 0.6 + 0.114 * 0.9, 0.299]],
+        rtol=1e-6,
+    )
+    gray = np.full((2, 2), 0.25, np.float32)
+    assert colour.to_gray(gray) is gray
+
+
+def test_chromaticity_sums_to_one_and_ignores_intensity():
+    rgb = np.random.default_rng(0).random((10, 10, 3)).astype(np.float32) * 0.5
+    chroma = colour.chromaticity(rgb)
+    np.testing.assert_allclose(chroma.sum(axis=2), 1.0, rtol=1e-6)
+    np.testing.assert_allclose(colour.chromaticity(rgb * 2), chroma, rtol=1e-5)
+    black = np.zeros((1, 1, 3), np.float32)
+    np.testing.assert_allclose(colour.chromaticity(black), 1 / 3)
 
 
 @pytest.mark.parametrize("space", colour.SPACES)
@@ -110,3 +132,29 @@ def test_bad_input_is_refused_naming_it():
         colour.retrieve(np.ones((3, 2), np.float32), np.arange(3), k=5)
     with pytest.raises(gv.PortValueError, match="expected Histogram"):
         colour.HistogramPort.validate(np.array([0.5, -0.1]))
+
+
+# -- one family: the former ``color`` ops live here under new ids (issue 23, item 3) ----------
+
+
+def test_the_renamed_ops_are_exactly_the_ops_that_moved(registry):
+    # the ops of the ``color`` family before the merge (``graphvision nodes`` at 0ccde11)
+    assert set(colour.RENAMED_OPS) == {"color.chromaticity", "color.to_gray"}
+    moved = {
+        spec.id
+        for spec in registry.nodes.values()
+        if spec.ref.module == "graphvision_plugins.colour._intensity"
+    }
+    assert set(colour.RENAMED_OPS.values()) == moved
+    for old, new in colour.RENAMED_OPS.items():
+        assert new == "colour." + old.removeprefix("color.")
+        assert old not in registry.nodes and registry.node(new).plugin == "colour"
+    assert "color" not in registry.plugins
+    assert not [op for op in registry.nodes if op.startswith("color.")]
+
+
+@pytest.mark.parametrize("path", sorted(PIPELINES.glob("*.yaml")), ids=lambda p: p.name)
+def test_no_shipped_pipeline_uses_an_old_op_id(path):
+    ops = {decl.op for decl in gv.load_pipeline(path).nodes.values()}
+    assert not ops & colour.RENAMED_OPS.keys()
+    assert not [old for old in colour.RENAMED_OPS if old in path.read_text()]  # nor names one

@@ -1,4 +1,4 @@
-"""Colour conversion, image metrics and image reading."""
+"""Image metrics and image reading."""
 
 from __future__ import annotations
 
@@ -8,28 +8,7 @@ import pytest
 import skimage.data
 import skimage.metrics
 
-from graphvision_plugins import color, io, metrics
-
-
-def test_gray_is_the_channel_mean_or_bt601_luminance():
-    rgb = np.array([[[0.3, 0.6, 0.9], [1.0, 0.0, 0.0]]], np.float32)
-    np.testing.assert_allclose(color.to_gray(rgb), [[0.6, 1 / 3]], rtol=1e-6)
-    np.testing.assert_allclose(
-        color.to_gray(rgb, method="luminance"),
-        [[0.299 * 0.3 + 0.587 * 0.6 + 0.114 * 0.9, 0.299]],
-        rtol=1e-6,
-    )
-    gray = np.full((2, 2), 0.25, np.float32)
-    assert color.to_gray(gray) is gray
-
-
-def test_chromaticity_sums_to_one_and_ignores_intensity():
-    rgb = np.random.default_rng(0).random((10, 10, 3)).astype(np.float32) * 0.5
-    chroma = color.chromaticity(rgb)
-    np.testing.assert_allclose(chroma.sum(axis=2), 1.0, rtol=1e-6)
-    np.testing.assert_allclose(color.chromaticity(rgb * 2), chroma, rtol=1e-5)
-    black = np.zeros((1, 1, 3), np.float32)
-    np.testing.assert_allclose(color.chromaticity(black), 1 / 3)
+from graphvision_plugins import io, metrics
 
 
 def test_mse_and_psnr_against_scikit_image():

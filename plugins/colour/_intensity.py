@@ -1,4 +1,9 @@
-"""Grayscale conversion and chromaticity (seed: "Image processing 1", "Color")."""
+"""Intensity and chromaticity: grayscale conversion and normalised rgb (seed: "Image processing 1",
+"Color").
+
+Moved from the former ``color`` family: ``color.to_gray`` is now ``colour.to_gray`` and
+``color.chromaticity`` is ``colour.chromaticity`` (see ``RENAMED_OPS`` in the family).
+"""
 
 from __future__ import annotations
 
@@ -14,7 +19,7 @@ __all__ = ["LUMINANCE_WEIGHTS", "chromaticity", "to_gray"]
 LUMINANCE_WEIGHTS = np.array([0.299, 0.587, 0.114], dtype=np.float32)
 
 
-@node("color.to_gray", version=1)
+@node("colour.to_gray", version=1)
 def to_gray(image: Image, *, method: Literal["mean", "luminance"] = "mean") -> GrayImage:
     r"""Convert an RGB image to gray; a gray image passes through unchanged.
 
@@ -50,7 +55,7 @@ def to_gray(image: Image, *, method: Literal["mean", "luminance"] = "mean") -> G
     return np.clip(gray, 0.0, 1.0, out=gray)
 
 
-@node("color.chromaticity", version=1)
+@node("colour.chromaticity", version=1)
 def chromaticity(image: ColorImage) -> ColorImage:
     r"""Normalised rgb chromaticity: each channel divided by the pixel's sum.
 
