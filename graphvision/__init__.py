@@ -81,6 +81,7 @@ if TYPE_CHECKING:
         Text,
         port_of,
     )
+    from graphvision.values.budget import check_array_file, check_pixels, max_pixels
     from graphvision.values.dtype_policy import to_float_image
     from graphvision.values.geometry import (
         DescriptorsPort,
@@ -236,12 +237,15 @@ __all__ = [
     "Text",
     "TextPort",
     "UnknownNameError",
+    "check_array_file",
+    "check_pixels",
     "compile_graph",
     "default_cache_dir",
     "discover",
     "dump_pipeline",
     "load_pipeline",
     "make_executor",
+    "max_pixels",
     "node",
     "one_blas_thread",
     "parse_pipeline",

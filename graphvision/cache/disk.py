@@ -143,7 +143,7 @@ class DiskStore:
         """
         store = cls(directory, max_bytes)
         try:
-            store.directory.mkdir(parents=True, exist_ok=True)
+            _owner_only_folder(store.directory, parents=True)
         except OSError as error:
             warnings.warn(
                 f"cache directory {directory} cannot be created ({error.strerror or error}); "
@@ -207,10 +207,11 @@ class DiskStore:
             return
         path = self.path(key)
         if not self.directory.is_dir():
-            self.directory.mkdir(parents=True, exist_ok=True)
+            _owner_only_folder(self.directory, parents=True)
         if not (self.directory / MARKER).is_file():
             (self.directory / MARKER).write_text(MARKER_TEXT)
-        path.parent.mkdir(exist_ok=True)
+        if not path.parent.is_dir():
+            _owner_only_folder(path.parent)
         handle, temp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=SUFFIX)
         try:
             with os.fdopen(handle, "wb") as stream:
@@ -276,6 +277,18 @@ class DiskStore:
             path.unlink(missing_ok=True)
             removed += not path.name.startswith(".")
         return removed
+
+
+def _owner_only_folder(folder: Path, parents: bool = False) -> None:
+    """Make ``folder`` readable and writable by its owner only, whatever the umask (at
+    umask 000 ``mkdir`` made shard folders anyone could write into). Entries are made by
+    ``mkstemp`` (0600) and renamed, so they are the owner's only too. A folder that
+    existed before (the user's) keeps its mode."""
+    if folder.is_dir():
+        return
+    folder.mkdir(mode=0o700, parents=parents, exist_ok=True)
+    with contextlib.suppress(OSError):
+        os.chmod(folder, 0o700)
 
 
 def _is_shard(item: Path) -> bool:

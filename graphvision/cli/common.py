@@ -4,6 +4,7 @@ the set-up of a run (plugins, cache, executor, the pipeline with its --set and -
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -67,6 +68,17 @@ def positive_int(text: str) -> int:
         raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
     if value > MAX_WORKERS:
         raise argparse.ArgumentTypeError(f"at most {MAX_WORKERS}, got {value}")
+    return value
+
+
+def pixel_count(text: str) -> int:
+    """A pixel budget: a whole number of at least 1 (``1e9`` and ``1_000_000`` accepted)."""
+    try:
+        value = int(float(text)) if "e" in text.lower() else int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number of pixels: '{text}'") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
     return value
 
 
@@ -175,7 +187,10 @@ def load_run_arguments(
 ) -> tuple[Graph, Registry, dict[str, Any], dict[str, Any]]:
     """The pipeline, its registry, the checked overrides (``--set``) and inputs (``--input``)."""
     from graphvision.graph.pipeline_file import load_pipeline
+    from graphvision.values.budget import ENVIRONMENT_VARIABLE
 
+    if args.max_pixels is not None:  # in the environment: worker processes read it too
+        os.environ[ENVIRONMENT_VARIABLE] = str(args.max_pixels)
     graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
     registry = registry_for(args, graph)
     overrides = {

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import faulthandler
 import os
 import signal
 import sys
@@ -133,6 +134,7 @@ def entry() -> None:
     nothing is left half-written; worker processes see their parent go and exit).
     """
     signal.signal(signal.SIGTERM, _terminate)
+    faulthandler.enable(all_threads=True)  # a node that crashes the process: where it was
     status = main()
     sys.stdout.flush()
     sys.stderr.flush()

@@ -6,7 +6,14 @@ import argparse
 from typing import TYPE_CHECKING
 
 from graphvision.cli.cache import cmd_cache
-from graphvision.cli.common import CACHE_DIR_HELP, EXECUTORS, Parser, byte_size, positive_int
+from graphvision.cli.common import (
+    CACHE_DIR_HELP,
+    EXECUTORS,
+    Parser,
+    byte_size,
+    pixel_count,
+    positive_int,
+)
 from graphvision.cli.graph import cmd_graph
 from graphvision.cli.nodes import cmd_describe, cmd_nodes
 from graphvision.cli.report import cmd_report
@@ -60,6 +67,13 @@ def cache_options(parser: argparse.ArgumentParser) -> None:
 def run_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``run`` and ``sweep``."""
     parser.add_argument("pipeline", help="the pipeline file (YAML)")
+    parser.add_argument(
+        "--max-pixels",
+        type=pixel_count,
+        metavar="N",
+        help="pixel budget of every image and array read (default 100000000; files that "
+        "declare more are refused before they are decoded)",
+    )
     parser.add_argument(
         "--input",
         "-i",

@@ -66,6 +66,7 @@ from graphvision.execution.scheduler import run_tasks
 from graphvision.execution.state import RunState
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
+from graphvision.values.budget import pixel_budget
 from graphvision.values.scalars import TextPort
 
 __all__ = ["run"]
@@ -84,6 +85,7 @@ def run(
     keep_going: bool = False,
     hooks: Sequence[RunHooks] = (),
     keep_intermediates: bool = False,
+    max_pixels: int | None = None,
 ) -> RunResult:
     """Run a pipeline and return its outputs and run record.
 
@@ -110,6 +112,10 @@ def run(
     keep_intermediates : bool
         Keep every node output of the run in ``result.intermediates`` (instead
         of dropping each after its last reader), e.g. to look at them in the report.
+    max_pixels : int, optional
+        The pixel budget of every image and array the run reads (default: the
+        ``GRAPHVISION_MAX_PIXELS`` environment variable, else 100 megapixels);
+        a file declaring more is refused before it is decoded.
 
     Raises
     ------
@@ -129,25 +135,26 @@ def run(
     schedule = compiled.schedule_for(wanted)
     given = _given_inputs(compiled, schedule, inputs)
     reference_keys = _referenced_inputs(compiled, given, registry)
-    values = {
-        name: partial(resolve_input, name, compiled.input_types[name], value, registry)
-        if name in reference_keys
-        else resolve_input(name, compiled.input_types[name], value, registry)
-        for name, value in given.items()
-    }
-    state = _execute(
-        compiled,
-        values,
-        schedule,
-        wanted,
-        cache,
-        executor,
-        workers,
-        keep_going,
-        hooks,
-        keep_intermediates,
-        reference_keys,
-    )
+    with pixel_budget(max_pixels):
+        values = {
+            name: partial(resolve_input, name, compiled.input_types[name], value, registry)
+            if name in reference_keys
+            else resolve_input(name, compiled.input_types[name], value, registry)
+            for name, value in given.items()
+        }
+        state = _execute(
+            compiled,
+            values,
+            schedule,
+            wanted,
+            cache,
+            executor,
+            workers,
+            keep_going,
+            hooks,
+            keep_intermediates,
+            reference_keys,
+        )
     describe_run(state.record, compiled, registry, given, state.keys, overrides)
     result = state.result(wanted)
     if state.failures:

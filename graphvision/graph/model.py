@@ -9,7 +9,7 @@ produce this same object.
 
     g = Graph("denoise")
     image = g.input("image", "Image", default="sample:camera")
-    gray = g.add("gray", "color.to_gray", image=image)
+    gray = g.add("gray", "colour.to_gray", image=image)
     blur = g.add("blur", "filters.gaussian", image=gray, params={"sigma": 1.5})
     g.output("smooth", blur)
 """

@@ -42,6 +42,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from graphvision.errors import PortValueError
+from graphvision.values.budget import check_array_file
 from graphvision.values.dtype_policy import to_dtype
 from graphvision.values.memory import frozen_copy, is_aligned
 
@@ -168,6 +169,8 @@ class PortType:
             When the files are not what this port type writes.
         """
         by_suffix = {path.suffix: path for path in files}
+        for path in files:  # what each array declares, within the budget, before inflating
+            check_array_file(path)
         if ".npy" in by_suffix:
             return cls.decode({"data": np.load(by_suffix[".npy"], allow_pickle=False)}, {})
         if ".npz" not in by_suffix:

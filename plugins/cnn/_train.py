@@ -9,11 +9,10 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from graphvision import Float, Table, node
+from graphvision import Float, Table, node, one_blas_thread
 
 from .._params import Count, Epochs, Positive, Seed
 from ..recognition._types import Samples, SampleSet
-from graphvision import one_blas_thread
 from ._network import (
     MAX_BATCH_VALUES,
     Architecture,

@@ -20,7 +20,7 @@ from typing import Annotated, Any, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import node
+from graphvision import node, one_blas_thread
 
 from .._boxes import decode_boxes, encode_boxes, iou_matrix, non_max_suppression
 from .._params import Count, Epochs, Fraction, Positive, Seed
@@ -32,7 +32,6 @@ from ..cnn import (
     check_layer_texts,
     fit_network,
 )
-from graphvision import one_blas_thread
 from ..recognition._types import Samples, SampleSet
 from ..synthetic._digit_scenes import Scenes, SceneSet
 from ._proposals import ColourSpaces, PositiveList, SimilaritySets

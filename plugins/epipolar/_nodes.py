@@ -18,9 +18,9 @@ from graphvision import (
     PinholeCamera,
     Points2D,
     Points3D,
+    PortValueError,
     node,
 )
-from graphvision import PortValueError
 
 from .._params import Iterations, Positive, Probability, Seed
 from ..camera import normalise_pixels

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import io
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Literal, get_args
 
 import numpy as np
 
-from graphvision import Image, node, source
+from graphvision import Image, InputError, check_array_file, check_pixels, node, source
 
 from .._checks import to_float_image
 
@@ -113,6 +115,7 @@ def read_array(path: str) -> np.ndarray:
         raise ValueError(f"{file} is not a regular file (a device, pipe or socket)")
     if file.suffix.lower() == ".npy":
         try:
+            check_array_file(file)  # what its header declares, within the budget, first
             array: np.ndarray = np.load(file, allow_pickle=False)
         except ValueError as error:
             raise ValueError(f"{file} is not a plain numpy array file: {error}") from None
@@ -120,7 +123,10 @@ def read_array(path: str) -> np.ndarray:
     import imageio.v3 as iio
 
     try:
-        frames = iio.improps(file).n_images
+        with _pillow_checks_left_to_the_budget():
+            properties = iio.improps(file)  # the header only: nothing is decoded yet
+        check_pixels(properties.shape, str(file))
+        frames = properties.n_images
         if frames is not None and frames > 1:
             raise _FramesError(
                 f"{file} holds {frames} frames (an animation or a multi-page file); "
@@ -128,9 +134,10 @@ def read_array(path: str) -> np.ndarray:
                 "(e.g. imageio.v3.imwrite('frame.png', imageio.v3.imread(path, index=0))) "
                 "or run --batch over the frames saved as files"
             )
-        cmyk = _cmyk_as_rgb(file)
-        data: np.ndarray = iio.imread(file) if cmyk is None else cmyk
-    except (PermissionError, _FramesError, _ColourError):
+        with _pillow_checks_left_to_the_budget():
+            cmyk = _cmyk_as_rgb(file)
+            data: np.ndarray = iio.imread(file) if cmyk is None else cmyk
+    except (PermissionError, _FramesError, _ColourError, InputError):
         raise
     except Exception as error:  # imageio raises many types for undecodable files
         raise ValueError(f"{file} is not a readable image ({type(error).__name__})") from None
@@ -151,6 +158,20 @@ def read_file(path: str) -> np.ndarray:
         unsupported shape or dtype.
     """
     return to_float_image(read_array(path), source=str(path))
+
+
+@contextlib.contextmanager
+def _pillow_checks_left_to_the_budget() -> Iterator[None]:
+    """Pillow's own decompression-bomb limit (89 megapixels, a warning, then an error at
+    twice that) lifted while a file the budget admitted is read: one limit, the run's."""
+    from PIL import Image as PILImage
+
+    before = PILImage.MAX_IMAGE_PIXELS
+    PILImage.MAX_IMAGE_PIXELS = None
+    try:
+        yield
+    finally:
+        PILImage.MAX_IMAGE_PIXELS = before
 
 
 class _FramesError(ValueError):
