@@ -334,6 +334,15 @@ class _Checker:
             if found is not None:
                 outputs[out_name] = found[0]
 
+        self.check_unused(used_params)
+
+        if self.problems:
+            raise PipelineError(self.problems, graph.source)
+        return CompiledGraph(graph, {n: steps[n] for n in order or []}, input_types, outputs)
+
+    def check_unused(self, used_params: set[str]) -> None:
+        """Inputs nothing reads and pipeline params no node refers to."""
+        graph = self.graph
         referenced = {ref.node for d in graph.nodes.values() for ref in d.inputs.values()}
         referenced |= {ref.node for ref in graph.outputs.values()}
         for name in graph.inputs:
@@ -345,10 +354,6 @@ class _Checker:
                     f"params.{name}",
                     f"unused pipeline param '{name}': no node refers to ${{params." + name + "}",
                 )
-
-        if self.problems:
-            raise PipelineError(self.problems, graph.source)
-        return CompiledGraph(graph, {n: steps[n] for n in order or []}, input_types, outputs)
 
 
 def compile_graph(

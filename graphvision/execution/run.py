@@ -314,13 +314,7 @@ def _execute(
                 limit=2 * executor_width(pool) if here else None,
                 ahead=state.chained,
             )
-        for step in skipped:  # downstream of a failure
-            state.nodes[step].status = "skipped"
-            if step in state.started:  # sent ahead (Dask): its start was reported, so its end is
-                for hook in hooks:
-                    hook.node_finished(
-                        name=step, op=state.nodes[step].op, status="skipped", seconds=0.0
-                    )
+        _mark_skipped(state, skipped, hooks)
         failed = bool(state.failures)
     except BaseException:  # Ctrl-C, or a bug: do not wait for the nodes still running
         if own:
@@ -335,3 +329,15 @@ def _execute(
         for hook in hooks:
             hook.run_finished(record=state.record, failed=failed)
     return state
+
+
+def _mark_skipped(state: RunState, skipped: list[str], hooks: Sequence[RunHooks]) -> None:
+    """Nodes downstream of a failure are skipped; one sent ahead (Dask) had its start
+    reported, so its end is too."""
+    for step in skipped:
+        state.nodes[step].status = "skipped"
+        if step in state.started:
+            for hook in hooks:
+                hook.node_finished(
+                    name=step, op=state.nodes[step].op, status="skipped", seconds=0.0
+                )

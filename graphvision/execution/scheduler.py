@@ -88,103 +88,136 @@ def run_tasks(
         task that completes before a dependency has finished waits for it; one
         whose dependency failed is skipped, whatever its own future says.
     """
-    waiting = {name: len(deps) for name, deps in dependencies.items()}
-    unstarted = dict(waiting)  # dependencies not started yet (for ``ahead``)
-    dependents: dict[str, list[str]] = {name: [] for name in dependencies}
-    for name, deps in dependencies.items():
-        for dep in deps:
-            dependents[dep].append(name)
+    loop = _Loop(dependencies, start, finish, keep_going, run_here, quick, limit, ahead)
+    loop.ready.extend(name for name, count in loop.waiting.items() if count == 0)
+    loop.launch()
+    while loop.running:
+        loop.step()
+    return [name for name in dependencies if name not in loop.started or name in loop.blocked]
 
-    finished: queue.SimpleQueue[tuple[str, Future]] = queue.SimpleQueue()
-    here: list[str] = []  # started, to run in this thread (``run_here``)
-    # Tasks held back until their dependencies finished come back to the loop here.
-    finished_here: list[tuple[str, Future]] = []
-    held: dict[str, Future] = {}  # started ahead, done before a dependency finished
-    ready: deque[str] = deque()  # may start; not started yet (``limit``)
-    handed: set[str] = set()  # with the executor now
-    started: set[str] = set()
-    blocked: set[str] = set()
-    stopping = False
-    running = 0
 
-    def report_to_loop(name: str) -> Callable[[Future], None]:
-        return lambda done: finished.put((name, done))
+class _Loop:
+    """The state of one :func:`run_tasks` call and its steps (see the module docstring)."""
 
-    def launch() -> None:
-        """Start ready tasks: in this thread when quick (without ``quick``: when alone), one
-        at a time, so that what each one takes is known before the next is placed; else
-        while under ``limit``."""
-        nonlocal running
-        while ready:
-            name = ready[0]
-            if run_here is not None and (
-                quick(name) if quick is not None else (running == 0 and len(ready) == 1)
-            ):
-                if here:  # one is waiting to run here: it may show the next is not quick
+    def __init__(
+        self,
+        dependencies: Mapping[str, Set[str]],
+        start: Callable[[str], Future],
+        finish: Callable[[str, Future], bool],
+        keep_going: bool,
+        run_here: Callable[[str], bool] | None,
+        quick: Callable[[str], bool] | None,
+        limit: int | None,
+        ahead: bool,
+    ) -> None:
+        self.start, self.finish, self.keep_going = start, finish, keep_going
+        self.run_here, self.quick, self.limit, self.ahead = run_here, quick, limit, ahead
+        self.waiting = {name: len(deps) for name, deps in dependencies.items()}
+        self.unstarted = dict(self.waiting)  # dependencies not started yet (for ``ahead``)
+        self.dependents: dict[str, list[str]] = {name: [] for name in dependencies}
+        for name, deps in dependencies.items():
+            for dep in deps:
+                self.dependents[dep].append(name)
+        self.finished: queue.SimpleQueue[tuple[str, Future]] = queue.SimpleQueue()
+        self.here: list[str] = []  # started, to run in this thread (``run_here``)
+        # Tasks held back until their dependencies finished come back to the loop here.
+        self.finished_here: list[tuple[str, Future]] = []
+        self.held: dict[str, Future] = {}  # started ahead, done before a dependency finished
+        self.ready: deque[str] = deque()  # may start; not started yet (``limit``)
+        self.handed: set[str] = set()  # with the executor now
+        self.started: set[str] = set()
+        self.blocked: set[str] = set()
+        self.stopping = False
+        self.running = 0
+
+    def report_to_loop(self, name: str) -> Callable[[Future], None]:
+        return lambda done: self.finished.put((name, done))
+
+    def runs_here(self, name: str) -> bool:
+        """Whether ``name`` runs in this thread: quick (without ``quick``: when alone)."""
+        if self.run_here is None:
+            return False
+        if self.quick is not None:
+            return self.quick(name)
+        return self.running == 0 and len(self.ready) == 1
+
+    def launch(self) -> None:
+        """Start ready tasks: in this thread when quick, one at a time, so that what each
+        one takes is known before the next is placed; else while under ``limit``."""
+        while self.ready:
+            name = self.ready[0]
+            if self.runs_here(name):
+                if self.here:  # one is waiting to run here: it may show the next is not quick
                     return
-                ready.popleft()
-                started.add(name)
-                running += 1
-                here.append(name)
+                self.ready.popleft()
+                self.started.add(name)
+                self.running += 1
+                self.here.append(name)
                 continue
-            if limit is not None and len(handed) >= limit:
+            if self.limit is not None and len(self.handed) >= self.limit:
                 return
-            ready.popleft()
-            started.add(name)
-            handed.add(name)
-            running += 1
-            future = start(name)
-            future.add_done_callback(report_to_loop(name))
-            if ahead and not (future.done() and future.exception() is not None):
-                for child in dependents[name]:  # not after one refused at once
-                    unstarted[child] -= 1
-                    if unstarted[child] == 0 and child not in blocked and not stopping:
-                        ready.append(child)
+            self.ready.popleft()
+            self.hand_out(name)
 
-    def block(name: str) -> None:
-        nonlocal running
+    def hand_out(self, name: str) -> None:
+        """Give ``name`` to the executor; with ``ahead``, its dependents may start now."""
+        self.started.add(name)
+        self.handed.add(name)
+        self.running += 1
+        future = self.start(name)
+        future.add_done_callback(self.report_to_loop(name))
+        if self.ahead and not (future.done() and future.exception() is not None):
+            for child in self.dependents[name]:  # not after one refused at once
+                self.unstarted[child] -= 1
+                if self.unstarted[child] == 0 and child not in self.blocked and not self.stopping:
+                    self.ready.append(child)
+
+    def block(self, name: str) -> None:
+        """Everything downstream of a failed ``name`` is skipped."""
         stack = [name]
         while stack:
-            for child in dependents[stack.pop()]:
-                if child not in blocked:
-                    blocked.add(child)
+            for child in self.dependents[stack.pop()]:
+                if child not in self.blocked:
+                    self.blocked.add(child)
                     stack.append(child)
-                    if child in held:  # it ran ahead, on a value that never came
-                        del held[child]
-                        running -= 1
+                    if child in self.held:  # it ran ahead, on a value that never came
+                        del self.held[child]
+                        self.running -= 1
 
-    ready.extend(name for name, count in waiting.items() if count == 0)
-    launch()
-    while running:
-        if here:
-            name = here.pop()
-            assert run_here is not None  # the only way into ``here``
-            succeeded = run_here(name)
+    def step(self) -> None:
+        """Take one finished task (or run one here), release its dependents, launch more."""
+        if self.here:
+            name = self.here.pop()
+            assert self.run_here is not None  # the only way into ``here``
+            succeeded = self.run_here(name)
         else:
-            name, future = finished_here.pop() if finished_here else finished.get()
-            handed.discard(name)
-            if name in blocked:  # started ahead of a dependency that then failed
-                running -= 1
-                continue
-            if waiting[name]:  # started ahead and done first: its dependencies finish first
-                held[name] = future
-                continue
-            succeeded = finish(name, future)
-        running -= 1
+            name, future = self.finished_here.pop() if self.finished_here else self.finished.get()
+            self.handed.discard(name)
+            if name in self.blocked:  # started ahead of a dependency that then failed
+                self.running -= 1
+                return
+            if self.waiting[name]:  # started ahead and done first: dependencies finish first
+                self.held[name] = future
+                return
+            succeeded = self.finish(name, future)
+        self.running -= 1
         if succeeded:
-            for child in dependents[name]:
-                waiting[child] -= 1
-                if waiting[child] == 0 and child in held:
-                    finished_here.append((child, held.pop(child)))
-                elif (
-                    waiting[child] == 0
-                    and child not in blocked
-                    and child not in started
-                    and not stopping
-                ):
-                    ready.append(child)
+            self.release(name)
         else:
-            block(name)
-            stopping = stopping or not keep_going
-        launch()
-    return [name for name in dependencies if name not in started or name in blocked]
+            self.block(name)
+            self.stopping = self.stopping or not self.keep_going
+        self.launch()
+
+    def release(self, name: str) -> None:
+        """``name`` succeeded: dependents whose dependencies all did may start (or finish)."""
+        for child in self.dependents[name]:
+            self.waiting[child] -= 1
+            if self.waiting[child] == 0 and child in self.held:
+                self.finished_here.append((child, self.held.pop(child)))
+            elif (
+                self.waiting[child] == 0
+                and child not in self.blocked
+                and child not in self.started
+                and not self.stopping
+            ):
+                self.ready.append(child)

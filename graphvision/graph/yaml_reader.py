@@ -74,99 +74,119 @@ def read_yaml(text: str, file: str) -> tuple[Any, dict[str, int], list[Problem]]
 
 
 def _stream(text: str, file: str) -> tuple[Any, dict[str, int], list[Problem]]:
+    reader = _Reader(file)
     loader = _Loader(text)
-    anchors: dict[str, tuple[Any, int]] = {}
-    open_anchors: set[str] = set()
-    stack: list[_Open] = []
-    lines: dict[str, int] = {}
-    problems: list[Problem] = []
-    root: Any = None
-    written = expanded = documents = 0
+    try:
+        while not loader.check_event(yaml.StreamEndEvent):
+            reader.take(loader, loader.get_event())
+    finally:
+        loader.dispose()
+    return reader.root, reader.lines, reader.problems
 
-    def attach(value: Any, size: int, line: int, is_scalar: bool) -> None:
-        nonlocal root, expanded
-        expanded += size
-        if expanded > MIN_VALUE_BUDGET and expanded > 10 * written:
+
+class _Reader:
+    """Values built from YAML events as they stream (see :func:`read_yaml`)."""
+
+    def __init__(self, file: str) -> None:
+        self.file = file
+        self.anchors: dict[str, tuple[Any, int]] = {}
+        self.open_anchors: set[str] = set()
+        self.stack: list[_Open] = []
+        self.lines: dict[str, int] = {}
+        self.problems: list[Problem] = []
+        self.root: Any = None
+        self.written = self.expanded = self.documents = 0
+
+    def take(self, loader: Any, event: Any) -> None:
+        """One event: a scalar, a collection opened or closed, an alias, a document."""
+        kind = type(event)
+        line = event.start_mark.line + 1
+        if kind is yaml.ScalarEvent:
+            self.written += 1
+            value = _scalar(loader, event)
+            if event.anchor:
+                self.anchors[event.anchor] = (value, 1)
+            self.attach(value, 1, line, True)
+        elif kind is yaml.MappingStartEvent or kind is yaml.SequenceStartEvent:
+            self.open(event, line, {} if kind is yaml.MappingStartEvent else [])
+        elif kind is yaml.MappingEndEvent or kind is yaml.SequenceEndEvent:
+            self.close(line)
+        elif kind is yaml.AliasEvent:
+            if event.anchor in self.open_anchors:
+                raise _RefusedError(line, f"alias *{event.anchor} refers to itself")
+            if event.anchor not in self.anchors:
+                raise _RefusedError(line, f"alias *{event.anchor} names no anchor before it")
+            value, size = self.anchors[event.anchor]
+            self.attach(value, size, line, not isinstance(value, dict | list))
+        elif kind is yaml.DocumentStartEvent:
+            self.documents += 1
+            if self.documents > 1:
+                raise _RefusedError(line, "a pipeline file holds one YAML document")
+
+    def open(self, event: Any, line: int, container: dict | list) -> None:
+        self.written += 1
+        if len(self.stack) >= MAX_DEPTH:
+            raise _RefusedError(line, f"nested deeper than {MAX_DEPTH} levels")
+        self.stack.append(_Open(container, self.child_path(), event.anchor))
+        if event.anchor:
+            self.open_anchors.add(event.anchor)
+
+    def close(self, line: int) -> None:
+        done = self.stack.pop()
+        value = done.value
+        if done.merged and isinstance(value, dict):
+            value = {**done.merged, **value}
+        if done.anchor:
+            self.open_anchors.discard(done.anchor)
+            self.anchors[done.anchor] = (value, done.size)
+        self.attach(value, done.size, line, False)
+
+    def child_path(self) -> list[str]:
+        if not self.stack:
+            return []
+        parent = self.stack[-1]
+        if isinstance(parent.value, list):
+            return [*parent.path, str(len(parent.value))]
+        return [*parent.path, str(parent.key)]
+
+    def attach(self, value: Any, size: int, line: int, is_scalar: bool) -> None:
+        """Put a finished value into its parent (as an item, a key, or a key's value)."""
+        self.expanded += size
+        if self.expanded > MIN_VALUE_BUDGET and self.expanded > 10 * self.written:
             raise _RefusedError(
                 line, "the file expands to too many values (aliases of aliases?); refused"
             )
-        if not stack:
-            root = value
+        if not self.stack:
+            self.root = value
             return
-        parent = stack[-1]
+        parent = self.stack[-1]
         parent.size += size
         if isinstance(parent.value, list):
-            lines.setdefault(".".join([*parent.path, str(len(parent.value))]), line)
+            self.lines.setdefault(".".join([*parent.path, str(len(parent.value))]), line)
             parent.value.append(value)
         elif parent.key is _NO_KEY:
             if not is_scalar:
                 raise _RefusedError(line, "mapping keys must be plain values, not collections")
             parent.key, parent.key_line = value, line
         else:
-            key, parent.key = parent.key, _NO_KEY
-            if key is _MERGE_KEY:  # `<<: *defaults` (explicit keys win)
-                sources = value if isinstance(value, list) else [value]
-                if not all(isinstance(source, dict) for source in sources):
-                    raise _RefusedError(parent.key_line, "a merge key '<<' must name mappings")
-                for source in sources:
-                    parent.merged = {**source, **parent.merged}
-                return
-            where = ".".join([*parent.path, str(key)])
-            if key in parent.value:
-                problems.append(Problem(parent.key_line, where, f"duplicate key '{key}'", file))
-            lines[where] = parent.key_line
-            parent.value[key] = value
+            self.set_value(parent, value)
 
-    def child_path() -> list[str]:
-        if not stack:
-            return []
-        parent = stack[-1]
-        if isinstance(parent.value, list):
-            return [*parent.path, str(len(parent.value))]
-        return [*parent.path, str(parent.key)]
-
-    try:
-        while not loader.check_event(yaml.StreamEndEvent):
-            event = loader.get_event()
-            kind = type(event)
-            line = event.start_mark.line + 1
-            if kind is yaml.ScalarEvent:
-                written += 1
-                value = _scalar(loader, event)
-                if event.anchor:
-                    anchors[event.anchor] = (value, 1)
-                attach(value, 1, line, True)
-            elif kind is yaml.MappingStartEvent or kind is yaml.SequenceStartEvent:
-                written += 1
-                if len(stack) >= MAX_DEPTH:
-                    raise _RefusedError(line, f"nested deeper than {MAX_DEPTH} levels")
-                container: dict | list = {} if kind is yaml.MappingStartEvent else []
-                stack.append(_Open(container, child_path(), event.anchor))
-                if event.anchor:
-                    open_anchors.add(event.anchor)
-            elif kind is yaml.MappingEndEvent or kind is yaml.SequenceEndEvent:
-                done = stack.pop()
-                value = done.value
-                if done.merged and isinstance(value, dict):
-                    value = {**done.merged, **value}
-                if done.anchor:
-                    open_anchors.discard(done.anchor)
-                    anchors[done.anchor] = (value, done.size)
-                attach(value, done.size, line, False)
-            elif kind is yaml.AliasEvent:
-                if event.anchor in open_anchors:
-                    raise _RefusedError(line, f"alias *{event.anchor} refers to itself")
-                if event.anchor not in anchors:
-                    raise _RefusedError(line, f"alias *{event.anchor} names no anchor before it")
-                value, size = anchors[event.anchor]
-                attach(value, size, line, not isinstance(value, dict | list))
-            elif kind is yaml.DocumentStartEvent:
-                documents += 1
-                if documents > 1:
-                    raise _RefusedError(line, "a pipeline file holds one YAML document")
-    finally:
-        loader.dispose()
-    return root, lines, problems
+    def set_value(self, parent: _Open, value: Any) -> None:
+        key, parent.key = parent.key, _NO_KEY
+        if key is _MERGE_KEY:  # `<<: *defaults` (explicit keys win)
+            sources = value if isinstance(value, list) else [value]
+            if not all(isinstance(source, dict) for source in sources):
+                raise _RefusedError(parent.key_line, "a merge key '<<' must name mappings")
+            for source in sources:
+                parent.merged = {**source, **parent.merged}
+            return
+        where = ".".join([*parent.path, str(key)])
+        if key in parent.value:
+            self.problems.append(
+                Problem(parent.key_line, where, f"duplicate key '{key}'", self.file)
+            )
+        self.lines[where] = parent.key_line
+        parent.value[key] = value
 
 
 def _scalar(loader: Any, event: yaml.ScalarEvent) -> Any:

@@ -120,86 +120,10 @@ def build_spec(func: Callable, plugin: str, *, params_checked: bool = False) -> 
 
 def _build_spec(func: Callable, plugin: str, params_checked: bool) -> NodeSpec:
     mark: NodeMark = func.__graphvision_node__  # type: ignore[attr-defined]
-    code = getattr(func, "__code__", None)
-    place = f" at {code.co_filename}:{code.co_firstlineno}" if code else ""
-    where = f"plugin '{plugin}', function {func.__qualname__}{place}"
-
-    def reject(reason: str) -> RegistrationError:
-        return RegistrationError(f"{where} (node '{mark.id}'): {reason}")
-
-    if not NODE_ID.match(mark.id):
-        raise reject("node id must be 'family.name' in lower snake case")
-    if not isinstance(mark.version, int) or isinstance(mark.version, bool) or mark.version < 1:
-        raise reject(f"version must be a positive integer, got {mark.version!r}")
-    if not (func.__doc__ or "").strip():
-        raise reject("a node needs a docstring (it is the node's documentation)")
-    try:
-        hints = typing.get_type_hints(func, include_extras=True)
-    except Exception as error:  # NameError etc. from an unresolvable annotation
-        raise reject(f"cannot resolve annotations: {error}") from error
-
-    inputs: dict[str, InputPort] = {}
-    fields: dict[str, Any] = {}
-    for name, parameter in inspect.signature(func).parameters.items():
-        annotation = hints.get(name, inspect.Parameter.empty)
-        if parameter.kind in (parameter.VAR_POSITIONAL, parameter.VAR_KEYWORD):
-            raise reject(f"*{name} / **{name} are not allowed; declare each port and parameter")
-        if parameter.kind is parameter.POSITIONAL_ONLY or (
-            parameter.kind is parameter.POSITIONAL_OR_KEYWORD
-        ):
-            port, optional = _port_type(annotation)
-            if port is None:
-                raise reject(
-                    f"input '{name}' must be annotated with a port type "
-                    f"(e.g. Image), got {type_label(annotation)}; parameters go after '*'"
-                )
-            if optional and parameter.default is not None:
-                raise reject(f"optional input '{name}' must default to None")
-            if not optional and parameter.default is not parameter.empty:
-                raise reject(f"input '{name}' has a default; only Optional[...] = None inputs may")
-            typevar = annotation.__name__ if isinstance(annotation, TypeVar) else ""
-            inputs[name] = InputPort(port, optional, typevar, _typevar_choices(annotation))
-        else:
-            if parameter.default is parameter.empty:
-                raise reject(f"parameter '{name}' needs a default value")
-            if annotation is inspect.Parameter.empty:
-                raise reject(f"parameter '{name}' needs a type annotation")
-            fields[name] = (annotation, parameter.default)
-
-    returned = hints.get("return", inspect.Parameter.empty)
-    output_tuple = None
-    output_vars: dict[str, str] = {}
-    bound_vars = {port.typevar for port in inputs.values() if port.typevar}
-    if isinstance(returned, TypeVar):
-        if returned.__name__ not in bound_vars:
-            raise reject(f"output type variable {returned.__name__} must also annotate an input")
-        outputs = {SINGLE_OUTPUT: _typevar_port(returned)}
-        output_vars[SINGLE_OUTPUT] = returned.__name__
-    elif (single := port_of(returned)) is not None:
-        outputs = {SINGLE_OUTPUT: single}
-    elif _is_named_tuple(tuple_class := get_origin(returned) or returned):
-        returned = tuple_class  # a generic NamedTuple's fields name its TypeVars
-        field_hints = typing.get_type_hints(returned, include_extras=True)
-        outputs = {}
-        for name in returned._fields:
-            hint = field_hints.get(name)
-            if isinstance(hint, TypeVar) and hint.__name__ in bound_vars:
-                outputs[name] = _typevar_port(hint)
-                output_vars[name] = hint.__name__
-            elif (field_port := port_of(hint)) is not None:
-                outputs[name] = field_port
-            else:
-                raise reject(
-                    f"output '{name}' of {returned.__name__} must be a port type "
-                    "(or a type variable of an input)"
-                )
-        output_tuple = returned
-    else:
-        raise reject(
-            "the return annotation must be a port type or a NamedTuple of port types, "
-            f"got {type_label(returned)}"
-        )
-
+    reject = _rejecter(func, plugin, mark.id)
+    hints = _checked_mark_and_hints(func, mark, reject)
+    inputs, fields = _ports_and_parameters(func, hints, reject)
+    outputs, output_tuple, output_vars = _outputs(hints, inputs, reject)
     spec = NodeSpec(
         id=mark.id,
         version=mark.version,
@@ -223,3 +147,102 @@ def _build_spec(func: Callable, plugin: str, params_checked: bool) -> NodeSpec:
         except Exception as error:
             raise reject(f"parameters cannot be validated: {error}") from error
     return spec
+
+
+Reject = Callable[[str], RegistrationError]
+
+
+def _rejecter(func: Callable, plugin: str, node_id: str) -> Reject:
+    """A function making the registration error of ``func``, naming plugin, function and place."""
+    code = getattr(func, "__code__", None)
+    place = f" at {code.co_filename}:{code.co_firstlineno}" if code else ""
+    where = f"plugin '{plugin}', function {func.__qualname__}{place}"
+    return lambda reason: RegistrationError(f"{where} (node '{node_id}'): {reason}")
+
+
+def _checked_mark_and_hints(func: Callable, mark: NodeMark, reject: Reject) -> dict[str, Any]:
+    """The id, version and docstring checked; the resolved annotations."""
+    if not NODE_ID.match(mark.id):
+        raise reject("node id must be 'family.name' in lower snake case")
+    if not isinstance(mark.version, int) or isinstance(mark.version, bool) or mark.version < 1:
+        raise reject(f"version must be a positive integer, got {mark.version!r}")
+    if not (func.__doc__ or "").strip():
+        raise reject("a node needs a docstring (it is the node's documentation)")
+    try:
+        return typing.get_type_hints(func, include_extras=True)
+    except Exception as error:  # NameError etc. from an unresolvable annotation
+        raise reject(f"cannot resolve annotations: {error}") from error
+
+
+def _ports_and_parameters(
+    func: Callable, hints: dict[str, Any], reject: Reject
+) -> tuple[dict[str, InputPort], dict[str, Any]]:
+    """Input ports (positional, annotated with port types) and parameters (keyword-only)."""
+    inputs: dict[str, InputPort] = {}
+    fields: dict[str, Any] = {}
+    for name, parameter in inspect.signature(func).parameters.items():
+        annotation = hints.get(name, inspect.Parameter.empty)
+        if parameter.kind in (parameter.VAR_POSITIONAL, parameter.VAR_KEYWORD):
+            raise reject(f"*{name} / **{name} are not allowed; declare each port and parameter")
+        if parameter.kind in (parameter.POSITIONAL_ONLY, parameter.POSITIONAL_OR_KEYWORD):
+            inputs[name] = _input_port(name, parameter, annotation, reject)
+        else:
+            if parameter.default is parameter.empty:
+                raise reject(f"parameter '{name}' needs a default value")
+            if annotation is inspect.Parameter.empty:
+                raise reject(f"parameter '{name}' needs a type annotation")
+            fields[name] = (annotation, parameter.default)
+    return inputs, fields
+
+
+def _input_port(
+    name: str, parameter: inspect.Parameter, annotation: Any, reject: Reject
+) -> InputPort:
+    port, optional = _port_type(annotation)
+    if port is None:
+        raise reject(
+            f"input '{name}' must be annotated with a port type "
+            f"(e.g. Image), got {type_label(annotation)}; parameters go after '*'"
+        )
+    if optional and parameter.default is not None:
+        raise reject(f"optional input '{name}' must default to None")
+    if not optional and parameter.default is not parameter.empty:
+        raise reject(f"input '{name}' has a default; only Optional[...] = None inputs may")
+    typevar = annotation.__name__ if isinstance(annotation, TypeVar) else ""
+    return InputPort(port, optional, typevar, _typevar_choices(annotation))
+
+
+def _outputs(
+    hints: dict[str, Any], inputs: dict[str, InputPort], reject: Reject
+) -> tuple[dict[str, type[PortType]], Any, dict[str, str]]:
+    """Output ports from the return annotation: one port type, a type variable of an
+    input, or a (generic) NamedTuple of those; with the tuple class and bound variables."""
+    returned = hints.get("return", inspect.Parameter.empty)
+    output_vars: dict[str, str] = {}
+    bound_vars = {port.typevar for port in inputs.values() if port.typevar}
+    if isinstance(returned, TypeVar):
+        if returned.__name__ not in bound_vars:
+            raise reject(f"output type variable {returned.__name__} must also annotate an input")
+        return {SINGLE_OUTPUT: _typevar_port(returned)}, None, {SINGLE_OUTPUT: returned.__name__}
+    if (single := port_of(returned)) is not None:
+        return {SINGLE_OUTPUT: single}, None, output_vars
+    if not _is_named_tuple(tuple_class := get_origin(returned) or returned):
+        raise reject(
+            "the return annotation must be a port type or a NamedTuple of port types, "
+            f"got {type_label(returned)}"
+        )
+    field_hints = typing.get_type_hints(tuple_class, include_extras=True)
+    outputs = {}
+    for name in tuple_class._fields:  # a generic NamedTuple's fields name its TypeVars
+        hint = field_hints.get(name)
+        if isinstance(hint, TypeVar) and hint.__name__ in bound_vars:
+            outputs[name] = _typevar_port(hint)
+            output_vars[name] = hint.__name__
+        elif (field_port := port_of(hint)) is not None:
+            outputs[name] = field_port
+        else:
+            raise reject(
+                f"output '{name}' of {tuple_class.__name__} must be a port type "
+                "(or a type variable of an input)"
+            )
+    return outputs, tuple_class, output_vars
