@@ -60,3 +60,18 @@ def test_importing_the_package_imports_no_numpy_pydantic_or_yaml() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_pyproject_lists_every_package_so_a_wheel_holds_them_all():
+    import tomllib
+    from pathlib import Path
+
+    root = Path(__file__).parents[1]
+    listed = tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]
+    engine = {"graphvision"} | {
+        f"graphvision.{p.parent.name}" for p in (root / "graphvision").glob("*/__init__.py")
+    }
+    families = {"graphvision_plugins"} | {
+        f"graphvision_plugins.{p.parent.name}" for p in (root / "plugins").glob("*/__init__.py")
+    }
+    assert set(listed) == engine | families
