@@ -290,15 +290,35 @@ def make_executor(name: str = "threads", workers: int | None = None) -> Executor
 def call_node(
     func: Callable[..., Any], params: dict[str, Any], inputs: dict[str, Any]
 ) -> tuple[Any, float]:
-    """Call a node function; return its result and wall time in seconds."""
+    """Call a node function; return its result and wall time in seconds.
+
+    A node that forks (``os.fork()``, or a library that does) and whose child
+    returns here would have the child go on running the graph (on ``sync`` it
+    wrote the output folder a second time; on threads its idle pool kept the
+    command's pipes open, so the run never ended): the child is ended here,
+    with one line naming the node.
+    """
     mark = getattr(func, "__graphvision_node__", None)
     running.op = mark.id if mark is not None else getattr(func, "__qualname__", "")
+    parent = os.getpid()
     began = time.perf_counter()
     try:
         result = func(**inputs, **params)
     finally:
+        if os.getpid() != parent:
+            _end_forked_child(running.op)
         running.op = ""
     return result, time.perf_counter() - began
+
+
+def _end_forked_child(op: str) -> None:
+    """In a process a node forked that returned into graphvision: say so and exit."""
+    os.write(
+        2,
+        f"graphvision: node op {op} forked a process that returned from the node; the "
+        "child may not run the graph and is ended (exit its child itself: os._exit)\n".encode(),
+    )
+    os._exit(70)  # EX_SOFTWARE
 
 
 Payload = dict[str, tuple[type[PortType], dict, dict]]
