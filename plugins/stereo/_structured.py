@@ -12,7 +12,14 @@ from graphvision import Camera, Int, node
 
 from ._ports import Depth, DisparityPort, Frames
 
-__all__ = ["Stripes", "StripesPort", "decode_gray_code", "depth_from_stripes", "stripe_planes"]
+__all__ = [
+    "Stripes",
+    "StripesPort",
+    "decode_gray_code",
+    "depth_from_stripes",
+    "stripe_middle_column",
+    "stripe_planes",
+]
 
 
 class StripesPort(DisparityPort):
@@ -75,11 +82,36 @@ def decode_gray_code(
     return Decoded(np.where(decodable, index, np.nan).astype(np.float32), bits)
 
 
+def stripe_middle_column(stripes: np.ndarray, width: int, bits: int) -> np.ndarray:
+    r"""The projector column at the middle of each stripe, in the pixel-centre convention.
+
+    Stripe :math:`s` lights the projector pixels :math:`j` with
+    :math:`\lfloor j\, 2^{bits} / W \rfloor = s`, from :math:`a_s = \lceil s W / 2^{bits} \rceil`
+    to :math:`a_{s+1} - 1`; pixel :math:`j` covers the columns :math:`[j - \tfrac12, j + \tfrac12)`
+    about its centre (the convention of a principal point at :math:`(W - 1)/2`), so the
+    stripe covers :math:`[a_s - \tfrac12, a_{s+1} - \tfrac12)` and its middle is
+    :math:`u_s = (a_s + a_{s+1} - 1) / 2` (:math:`(s + \tfrac12) W / 2^{bits} - \tfrac12`
+    when :math:`2^{bits}` divides :math:`W`). A fractional index ``s`` is interpolated
+    linearly between the middles of its neighbours.
+    """
+    index = stripes.astype(np.float64)
+    low = np.floor(np.where(np.isfinite(index), index, 0.0))
+    step = 1 << bits
+
+    def first_pixel(s: np.ndarray) -> np.ndarray:
+        return -np.floor_divide(-s * width, step)  # ⌈s W / 2^bits⌉, exact in integers
+
+    def middle(s: np.ndarray) -> np.ndarray:
+        return (first_pixel(s) + first_pixel(s + 1) - 1) / 2
+
+    fraction = index - low
+    return (1 - fraction) * middle(low) + fraction * middle(low + 1)
+
+
 def stripe_planes(stripes: np.ndarray, camera: Camera, projector: Camera, bits: int) -> np.ndarray:
     """Depth of each camera ray where it meets the plane through the projector's centre and
     the middle column of its stripe (see :func:`depth_from_stripes`)."""
-    width = float(projector.size[0])
-    columns = (stripes.astype(np.float64) + 0.5) * width / (1 << bits)
+    columns = stripe_middle_column(stripes, int(projector.size[0]), bits)
     rows, cols = stripes.shape
     y, x = np.mgrid[0:rows, 0:cols].astype(np.float64)
     pixels = np.stack([x, y, np.ones_like(x)], axis=-1)
@@ -103,8 +135,13 @@ def stripe_planes(stripes: np.ndarray, camera: Camera, projector: Camera, bits: 
 def depth_from_stripes(stripes: Stripes, bits: Int, camera: Camera, projector: Camera) -> Depth:
     r"""Depth by ray-plane intersection: each camera ray meets the plane of light of its stripe.
 
-    A stripe :math:`s` lights projector columns :math:`[s, s + 1)\,W / 2^{bits}`;
-    its middle column :math:`u` spans, with the projector's centre, the plane
+    A stripe :math:`s` lights the projector pixels :math:`j` with
+    :math:`\lfloor j\, 2^{bits} / W \rfloor = s`, from :math:`a_s = \lceil s W / 2^{bits} \rceil`
+    to :math:`a_{s+1} - 1`. Pixel :math:`j` covers the columns :math:`[j - \tfrac12, j + \tfrac12)`
+    about its centre (pixel centres are integers, as a principal point at
+    :math:`(W - 1)/2` says), so the stripe's middle column is
+    :math:`u = (a_s + a_{s+1} - 1)/2`, i.e. :math:`(s + \tfrac12)\,W / 2^{bits} - \tfrac12` when
+    :math:`2^{bits}` divides :math:`W`. That column spans, with the projector's centre, the plane
     :math:`n_p \cdot X_p = 0`, :math:`n_p = (f_x, 0, -(u - c_x))` in the
     projector's frame :math:`X_p = R_p (X - \tilde C_p)`. The camera ray
     :math:`X = \tilde C_c + t\, R_c^T K_c^{-1} (x, y, 1)^T` meets it at

@@ -26,8 +26,9 @@ class StructuredLightScene(NamedTuple):
 
 
 def gray_code_stripes(columns: np.ndarray, bits: int, width: int) -> np.ndarray:
-    """Bit planes ``(bits, ...)`` of the reflected Gray code of each projector column's
-    stripe, most significant first: stripe ``s = ⌊u · 2^bits / width⌋``, code ``s ⊕ (s ≫ 1)``."""
+    """Bit planes ``(bits, ...)`` of the reflected Gray code of each projector pixel's
+    stripe, most significant first: pixel ``j`` (an integer column index) is in stripe
+    ``s = ⌊j · 2^bits / width⌋``, whose code is ``s ⊕ (s ≫ 1)``."""
     stripe = np.clip((columns * (1 << bits)) // width, 0, (1 << bits) - 1).astype(np.int64)
     code = stripe ^ (stripe >> 1)
     return np.stack([(code >> (bits - 1 - i)) & 1 for i in range(bits)]).astype(bool)
@@ -63,8 +64,10 @@ def structured_light_scene(
     ``baseline`` metres to its right with the same orientation. The wall's depth
     goes from 2.0 m (left edge) to 2.7 m (right edge); a sphere of radius 0.3 m sits
     1.5 m ahead. Each scene point shows albedo × (0.1 + 0.9 × pattern) of the
-    projector column it lies on (points the sphere hides from the projector
-    stay dark), plus Gaussian noise.
+    projector pixel it lies in (points the sphere hides from the projector
+    stay dark), plus Gaussian noise. Pixel centres are integers in the camera
+    and the projector alike (principal points at :math:`(W - 1)/2`): projector
+    pixel :math:`j` lights the columns :math:`[j - \tfrac12, j + \tfrac12)`.
 
     Parameters
     ----------
@@ -111,8 +114,9 @@ def structured_light_scene(
     towards = points - centre_p
     lit = _sphere_hit(centre_p, towards) >= 1.0 - 1e-9  # nothing between projector and point
     columns = K_p[0, 0] * towards[..., 0] / towards[..., 2] + K_p[0, 2]
-    lit &= (columns >= 0) & (columns < projector_width)
-    planes = gray_code_stripes(np.floor(np.where(lit, columns, 0)), bits, projector_width)
+    pixel = np.floor(columns + 0.5)  # projector pixel j lights [j − ½, j + ½) about its centre
+    lit &= (pixel >= 0) & (pixel < projector_width)
+    planes = gray_code_stripes(np.where(lit, pixel, 0), bits, projector_width)
     from .._separable import smooth_gaussian
 
     albedo = 0.35 + 0.6 * smooth_gaussian(rng.random((height, width)), 2.0)
