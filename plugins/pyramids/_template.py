@@ -176,7 +176,13 @@ def match_multiscale(
     by :math:`1/s` (smoothed first when it shrinks, so it does not alias)
     and matched by NCC. The best scale is refined by a parabola through the
     scores of its neighbours (in :math:`\log s`), the position by a quadratic
-    through the 3×3 around the peak, and mapped back to the image.
+    through the 3×3 around the peak, and mapped back to the image with the
+    factors the image was really resized by, :math:`a_y = H / \operatorname{round}(H/s)`
+    and :math:`a_x = W / \operatorname{round}(W/s)`:
+    :math:`x = (x' + \tfrac12)\, a_x - \tfrac12` for the template's centre :math:`x'`
+    in the resized image (pixel centres at integers). The nominal :math:`s`
+    differs from them by up to :math:`s / (2 \operatorname{round}(W/s))`, a
+    fraction of a pixel at the far side of the image.
 
     Parameters
     ----------
@@ -203,8 +209,10 @@ def match_multiscale(
     scales = np.geomspace(min_scale, max_scale, steps)
     h, w = template.shape
     results: list[tuple[float, int, int, np.ndarray]] = []
+    shapes: list[tuple[int, ...]] = []  # round(H / s) × round(W / s): the sizes really made
     for s in scales:
         resized = rescale(image, 1.0 / s, order=1, anti_aliasing=s > 1, mode="reflect")
+        shapes.append(resized.shape)
         if resized.shape[0] < h or resized.shape[1] < w:
             results.append((-np.inf, 0, 0, resized))
             continue
@@ -229,9 +237,12 @@ def match_multiscale(
     dy, dx = 0.0, 0.0
     if 0 < row < response.shape[0] - 1 and 0 < col < response.shape[1] - 1:
         dy, dx = quadratic_peak_2d(response, np.array([row]), np.array([col]))[0]
-    s = scales[best]
-    centre_x = (col + dx + (w - 1) / 2 + 0.5) * s - 0.5
-    centre_y = (row + dy + (h - 1) / 2 + 0.5) * s - 0.5
+    # the image was resized to round(H / s) × round(W / s): the factors that map it back are
+    # those of the sizes, not the nominal s (they differ by up to s / (2 round(H / s)))
+    factor_y = image.shape[0] / shapes[best][0]
+    factor_x = image.shape[1] / shapes[best][1]
+    centre_x = (col + dx + (w - 1) / 2 + 0.5) * factor_x - 0.5
+    centre_y = (row + dy + (h - 1) / 2 + 0.5) * factor_y - 0.5
     return MultiscaleMatch(np.array([[centre_x, centre_y]]), math.exp(log_scale), score)
 
 
