@@ -1,10 +1,11 @@
 """The Hough transform (seed: "Edge detection by parametric models").
 
 Lines in (ρ, θ) with the course's improvements (votes near the gradient
-orientation, weighted by magnitude, spread by a Gaussian, peaks by
-non-maximum suppression), circles of a known radius or a radius range voting
-along the gradient, and drawings of both. Results travel as the ``Lines`` and
-``Circles`` port types.
+orientation, weighted by magnitude, spread by a Gaussian; peaks kept by the
+length of line their edge points cover and refitted to them), circles of a
+known radius or a radius range voting along the gradient, the generalised
+transform, and drawings. Results travel as the ``Lines`` and ``Circles``
+port types.
 """
 
 from ._circles import HoughCircles, circle_accumulator, hough_circles

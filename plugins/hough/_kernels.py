@@ -9,7 +9,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["vote_lines"]
+__all__ = ["line_support", "select_lines", "vote_lines"]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -29,3 +29,177 @@ def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho):
                 accumulator[t, lower] += weights[i] * (1.0 - frac)
                 accumulator[t, lower + 1] += weights[i] * frac
     return accumulator
+
+
+@numba.njit(cache=True, nogil=True)
+def _scan_ranges(orientation, check, theta, window):
+    """Index ranges ``(a0, a1, b0, b1)`` of the points, sorted by ``orientation`` in [0, π),
+    whose orientation can be within ``window`` of ``theta`` mod π (all of them unless
+    ``check``)."""
+    n = orientation.size
+    if not check or window >= 0.5 * np.pi:
+        return 0, n, 0, 0
+    t = theta % np.pi
+    low, high = t - window, t + window
+    if low < 0:
+        return np.searchsorted(orientation, low + np.pi), n, 0, np.searchsorted(orientation, high)
+    if high >= np.pi:
+        return np.searchsorted(orientation, low), n, 0, np.searchsorted(orientation, high - np.pi)
+    return np.searchsorted(orientation, low), np.searchsorted(orientation, high), 0, 0
+
+
+@numba.njit(cache=True, nogil=True)
+def _gather(x, y, orientation, check, free, rho, theta, tolerance, window, cells, stamp, on, mark):
+    """Mark in ``on`` (if ``mark``; cleared first) the free points supporting the line
+    ``(rho, theta)``: within ``tolerance`` of it and, where ``check``, with ``orientation``
+    within ``window`` of ``theta`` mod π. Returns how many 1-px cells along the line they
+    cover (``cells`` holds ``stamp`` where covered; positions are offset by half its size).
+    """
+    c, s = np.cos(theta), np.sin(theta)
+    t = theta % np.pi
+    offset = cells.size // 2
+    covered = 0
+    if mark:
+        on[:] = False
+    a0, a1, b0, b1 = _scan_ranges(orientation, check, theta, window)
+    for first, last in ((a0, a1), (b0, b1)):
+        for i in range(first, last):
+            if not free[i] or abs(x[i] * c + y[i] * s - rho) > tolerance:
+                continue
+            if check:
+                gap = abs(orientation[i] - t)
+                if min(gap, np.pi - gap) > window:
+                    continue
+            if mark:
+                on[i] = True
+            cell = int(np.floor(y[i] * c - x[i] * s)) + offset
+            if cells[cell] != stamp:
+                cells[cell] = stamp
+                covered += 1
+    return covered
+
+
+@numba.njit(cache=True, nogil=True)
+def line_support(x, y, orientation, check, rho, theta, tolerance, window, extent):
+    """Length in pixels of each line ``(rho[k], theta[k])`` covered by edge points: the number
+    of 1-px cells along it holding the projection of a point within ``tolerance`` of it (and,
+    where ``check``, of ``orientation`` within ``window`` radians of ``theta`` mod π). Points
+    sorted by ``orientation`` in [0, π); positions along a line within ``±extent``."""
+    counts = np.zeros(rho.size, dtype=np.int64)
+    cells = np.zeros(2 * int(np.ceil(extent)) + 4, dtype=np.int64)
+    free = np.ones(x.size, dtype=np.bool_)
+    on = np.zeros(x.size, dtype=np.bool_)
+    for k in range(rho.size):
+        counts[k] = _gather(
+            x,
+            y,
+            orientation,
+            check,
+            free,
+            rho[k],
+            theta[k],
+            tolerance,
+            window,
+            cells,
+            k + 1,
+            on,
+            False,
+        )
+    return counts
+
+
+@numba.njit(cache=True, nogil=True)
+def select_lines(
+    x,
+    y,
+    orientation,
+    check,
+    rho,
+    theta,
+    order,
+    floor,
+    tolerance,
+    window,
+    extent,
+    max_lines,
+    min_distance,
+    theta_step,
+    rho_step,
+):
+    """Greedy selection of lines ``(ρ, θ, covered length)`` from candidates ``order``: each
+    candidate is refitted twice by total least squares to its free supporting points, kept
+    when they still cover ``floor`` cells and it is ``min_distance`` bins from every line
+    kept, and then claims those points."""
+    cells = np.zeros(2 * int(np.ceil(extent)) + 4, dtype=np.int64)
+    stamp = 0
+    free = np.ones(x.size, dtype=np.bool_)
+    on = np.zeros(x.size, dtype=np.bool_)
+    out = np.zeros((min(max_lines, order.size), 3))
+    count = 0
+    for k in order:
+        if count == max_lines:
+            break
+        r, t = rho[k], theta[k]
+        stamp += 1
+        covered = _gather(
+            x, y, orientation, check, free, r, t, tolerance, window, cells, stamp, on, True
+        )
+        if covered < floor:
+            continue
+        for _ in range(2):  # a peak's θ is coarse for a short segment: fit its points
+            n = 0
+            mx = 0.0
+            my = 0.0
+            for i in range(x.size):
+                if on[i]:
+                    n += 1
+                    mx += x[i]
+                    my += y[i]
+            if n < 2:
+                break
+            mx /= n
+            my /= n
+            sxx = 0.0
+            sxy = 0.0
+            syy = 0.0
+            for i in range(x.size):
+                if on[i]:
+                    dx, dy = x[i] - mx, y[i] - my
+                    sxx += dx * dx
+                    sxy += dx * dy
+                    syy += dy * dy
+            normal = 0.5 * np.arctan2(2.0 * sxy, sxx - syy) + 0.5 * np.pi  # least spread
+            nx, ny = np.cos(normal), np.sin(normal)
+            if nx * np.cos(t) + ny * np.sin(t) < 0:  # stay on the candidate's branch of θ
+                nx, ny = -nx, -ny
+            t = np.arctan2(ny, nx)
+            r = mx * nx + my * ny
+            stamp += 1
+            covered = _gather(
+                x, y, orientation, check, free, r, t, tolerance, window, cells, stamp, on, True
+            )
+        if covered < floor:
+            continue
+        if abs(t) < 1e-12 or abs(t - np.pi) < 1e-12:  # rounding of an axis-parallel fit
+            r, t = (r, 0.0) if abs(t) < 1e-12 else (-r, 0.0)
+        if t < 0 or t >= np.pi:  # the same line with θ in [0, π)
+            r, t = -r, t % np.pi
+        close = False
+        for j in range(count):
+            d_theta = abs(out[j, 1] - t)
+            other = out[j, 0]
+            if d_theta > 0.5 * np.pi:
+                d_theta, other = np.pi - d_theta, -other
+            if np.hypot(d_theta / theta_step, (r - other) / rho_step) < min_distance:
+                close = True
+                break
+        if close:
+            continue
+        for i in range(x.size):
+            if on[i]:
+                free[i] = False
+        out[count, 0] = r
+        out[count, 1] = t
+        out[count, 2] = covered
+        count += 1
+    return out[:count]

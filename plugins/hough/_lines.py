@@ -12,16 +12,29 @@ from graphvision import BinaryImage, FloatImage, GrayImage, Int, node
 
 from .._params import Count
 from ..edges import gradient_images
-from ._peaks import local_maxima, quadratic_peak_2d, suppress_close
+from ._peaks import local_maxima, quadratic_peak_2d
 from ._ports import Lines
 
 __all__ = ["HoughLines", "hough_lines", "line_accumulator"]
+SUPPORT_ORIENTATION = math.pi / 16  # a supporting point's gradient, at least this near the normal
 
 
 def _rho_grid(shape: tuple[int, ...], step: float) -> tuple[int, float]:
     """Number of ρ bins and the ρ of bin 0: a grid symmetric about 0 covering the diagonal."""
     half = math.ceil(math.hypot(shape[0], shape[1]) / step) + 1
     return 2 * half + 1, -half * step
+
+
+def _edge_points(
+    edges: np.ndarray, image: np.ndarray | None, sigma: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """Edge points ``x`` (column), ``y`` (row) and, with ``image``, their gradient ``gx, gy``."""
+    rows, cols = np.nonzero(edges)
+    x, y = cols.astype(np.float64), rows.astype(np.float64)
+    if image is None:
+        return x, y, None, None
+    dx, dy = gradient_images(image, "gaussian", sigma)
+    return x, y, dx[rows, cols].astype(np.float64), dy[rows, cols].astype(np.float64)
 
 
 def line_accumulator(
@@ -34,16 +47,27 @@ def line_accumulator(
     sigma: float,
 ) -> np.ndarray:
     """The (θ, ρ) vote array (``theta_bins × n_rho``), votes split linearly between ρ bins."""
-    rows, cols = np.nonzero(edges)
-    x, y = cols.astype(np.float64), rows.astype(np.float64)
-    n_rho, rho0 = _rho_grid(edges.shape, rho_step)
+    x, y, gx, gy = _edge_points(edges, image, sigma)
+    return _vote(edges.shape, x, y, gx, gy, theta_bins, rho_step, orientation_window, weighted)
+
+
+def _vote(
+    shape: tuple[int, ...],
+    x: np.ndarray,
+    y: np.ndarray,
+    gx: np.ndarray | None,
+    gy: np.ndarray | None,
+    theta_bins: int,
+    rho_step: float,
+    orientation_window: float,
+    weighted: bool,
+) -> np.ndarray:
+    n_rho, rho0 = _rho_grid(shape, rho_step)
     step = math.pi / theta_bins
     weights = np.ones(len(x))
-    if image is None:
+    if gx is None or gy is None:
         first, width = np.zeros(len(x), dtype=np.intp), theta_bins
     else:
-        dx, dy = gradient_images(image, "gaussian", sigma)
-        gx, gy = dx[rows, cols].astype(np.float64), dy[rows, cols].astype(np.float64)
         if weighted:
             weights = np.hypot(gx, gy)
         centre = np.round(np.mod(np.arctan2(gy, gx), math.pi) / step).astype(np.intp)
@@ -57,6 +81,68 @@ def line_accumulator(
     return vote_lines(x, y, weights, first, width, cos, sin, rho0 / rho_step, n_rho)
 
 
+def _select_lines(
+    extended: np.ndarray,
+    pad: int,
+    shape: tuple[int, ...],
+    points: tuple[np.ndarray, np.ndarray, np.ndarray | None],
+    theta_bins: int,
+    rho_step: float,
+    orientation_window: float,
+    threshold: float,
+    min_distance: int,
+    max_lines: int,
+) -> np.ndarray:
+    """``(ρ, θ, support)`` rows of the lines kept (see :func:`hough_lines`), best first."""
+    from ._kernels import line_support, select_lines
+
+    x, y, orientation = points
+    n_rho = extended.shape[1]
+    peaks = local_maxima(extended, 3, 0.0)  # every peak: one line can mask another's 11×11
+    peaks = peaks[(peaks[:, 0] >= pad) & (peaks[:, 0] < pad + theta_bins)]
+    peaks = peaks[(peaks[:, 1] > 0) & (peaks[:, 1] < n_rho - 1)]
+    if len(peaks) == 0 or len(x) == 0:
+        return np.zeros((0, 3))
+    t, r = peaks[:, 0], peaks[:, 1]
+    d_theta, d_rho = quadratic_peak_2d(extended, t, r).T
+    step = math.pi / theta_bins
+    _, rho0 = _rho_grid(shape, rho_step)
+    theta = (t - pad + d_theta) * step
+    rho = rho0 + (r + d_rho) * rho_step
+    check = orientation is not None
+    angles = np.zeros(len(x))
+    if orientation is not None:  # sorted by orientation, each line scans only its own
+        by_angle = np.argsort(orientation, kind="stable")
+        x, y, angles = x[by_angle], y[by_angle], orientation[by_angle]
+    window = max(SUPPORT_ORIENTATION, math.radians(orientation_window) + 0.5 * step)
+    tolerance = max(1.0, rho_step)
+    extent = math.hypot(shape[0], shape[1]) + 1.0
+    support = line_support(x, y, angles, check, rho, theta, tolerance, window, extent)
+    floor = threshold * float(support.max())
+    if floor <= 0:
+        return np.zeros((0, 3))
+    order = np.lexsort((-extended[t, r], -support))  # most support first, then most votes
+    order = order[support[order] >= floor]
+    lines = select_lines(
+        x,
+        y,
+        angles,
+        check,
+        rho,
+        theta,
+        order,
+        floor,
+        tolerance,
+        window,
+        extent,
+        max_lines,
+        float(min_distance),
+        step,
+        rho_step,
+    )
+    return lines[np.argsort(-lines[:, 2], kind="stable")]
+
+
 def _wrap_theta(accumulator: np.ndarray, pad: int) -> np.ndarray:
     """Extend θ by ``pad`` bins each way: θ + π is the line of θ with ρ negated."""
     return np.concatenate([accumulator[-pad:, ::-1], accumulator, accumulator[:pad, ::-1]], axis=0)
@@ -68,7 +154,7 @@ class HoughLines(NamedTuple):
     accumulator: FloatImage
 
 
-@node("hough.lines", version=1)
+@node("hough.lines", version=2)
 def hough_lines(
     edges: BinaryImage,
     image: GrayImage | None = None,
@@ -81,7 +167,7 @@ def hough_lines(
     vote_sigma: Annotated[float, Field(ge=0, le=20)] = 1.0,
     threshold: Annotated[float, Field(gt=0, le=1)] = 0.5,
     min_distance: Annotated[int, Field(ge=1, le=1000)] = 5,
-    max_lines: Count = 100,
+    max_lines: Count = 1000,
 ) -> HoughLines:
     r"""Lines by voting in (ρ, θ), with the course's improvements.
 
@@ -95,10 +181,27 @@ def hough_lines(
     orientation (the line's normal), with weight the gradient magnitude
     :math:`m(x, y)` when ``weighted``. The accumulator is smoothed by a
     Gaussian of ``vote_sigma`` bins (a vote spread to neighbouring cells; θ
-    wraps with :math:`\rho \to -\rho`), peaks are local maxima of at least
-    ``threshold`` × the strongest, kept ``min_distance`` bins apart
-    (strongest first), and each is refined to a fraction of a bin by a
-    parabola through its neighbours.
+    wraps with :math:`\rho \to -\rho`) and every local maximum (3×3) is a
+    candidate, placed to a fraction of a bin by a quadratic through its 3×3
+    cells.
+
+    Which candidates are lines is decided by their *support*, not by their
+    votes (which grow with contrast, and whose peaks are lower the further a
+    short segment lies from the foot of the normal through the origin, because
+    its ridge in (θ, ρ) is sheared by :math:`d\rho/d\theta` = that distance).
+    A point supports a line when it lies within ``max(1, rho_step)`` pixels of
+    it and, with ``image``, its gradient is within
+    :math:`\max(\pi/16,` ``orientation_window`` + half a bin) of the line's
+    normal; the support is the length of the line its points cover, in 1-px
+    cells along it (so a thick or doubled edge does not count twice).
+    Candidates are taken most supported first; each is refitted twice by total
+    least squares to its free supporting points (a peak's θ is coarse for a
+    short segment), and kept when those still cover at least ``threshold`` ×
+    the largest support of any candidate and it lies ``min_distance`` bins from
+    every line kept; its points are then claimed, so a ridge of the same
+    segment at a neighbouring θ finds them gone. The default 0.5 is
+    scikit-image's rule, threshold = 0.5 × the largest count of its
+    accumulator, applied to what its count measures: edge points along a line.
 
     ρ and θ follow OpenCV's and scikit-image's convention (the course writes
     :math:`x\cos\theta - y\sin\theta = d` with y up): x is the column, y the
@@ -123,15 +226,18 @@ def hough_lines(
     vote_sigma : float
         Standard deviation in bins of the vote spreading (0: none).
     threshold : float
-        Smallest peak, as a fraction of the strongest.
+        Smallest support of a line (length covered by its edge points), as a
+        fraction of the largest support among the candidates.
     min_distance : int
-        Least distance in bins between two peaks.
+        Least distance in bins, :math:`\sqrt{\Delta\theta^2 + \Delta\rho^2}`,
+        between two lines.
     max_lines : int
-        Most lines returned, strongest first.
+        Most lines returned, best supported first.
 
     Returns
     -------
-    lines : Lines, ``(ρ, θ, votes)`` rows, strongest first
+    lines : Lines, ``(ρ, θ, support)`` rows, best supported first; support in
+        pixels of the line covered by its edge points
     count : int
     accumulator : (theta_bins, n_rho) float32, the smoothed votes
 
@@ -139,7 +245,10 @@ def hough_lines(
     ----------
     .. [1] R. O. Duda, P. E. Hart, "Use of the Hough transformation to detect
        lines and curves in pictures", Comm. ACM 15(1), 1972.
-    .. [2] Szeliski (2022), section 7.4.2.
+    .. [2] Szeliski (2022), section 7.4.2 (refining each line by least
+       squares on its edge points).
+    .. [3] scikit-image, ``skimage.transform.hough_line_peaks`` (threshold
+       0.5 × the accumulator's maximum).
     """
     from .._separable import smooth_gaussian
 
@@ -147,28 +256,28 @@ def hough_lines(
         raise ValueError(
             f"edges and image must have the same size, got {edges.shape} and {image.shape}"
         )
-    votes = line_accumulator(
-        edges, image, theta_bins, rho_step, orientation_window, weighted, sigma
-    )
+    x, y, gx, gy = _edge_points(edges, image, sigma)
+    votes = _vote(edges.shape, x, y, gx, gy, theta_bins, rho_step, orientation_window, weighted)
     pad = min(theta_bins, min_distance + 3 * math.ceil(vote_sigma) + 1)
     extended = _wrap_theta(votes, pad)
     if vote_sigma > 0:
         extended = smooth_gaussian(extended, vote_sigma, "nearest")
     smoothed = extended[pad:-pad]
-    strongest = float(smoothed.max(initial=0.0))
-    peaks = local_maxima(extended, 2 * min_distance + 1, threshold * strongest)
-    peaks = peaks[(peaks[:, 0] >= pad) & (peaks[:, 0] < pad + theta_bins)]
-    peaks = peaks[(peaks[:, 1] > 0) & (peaks[:, 1] < votes.shape[1] - 1)]
-    scores = extended[peaks[:, 0], peaks[:, 1]]
-    kept = peaks[suppress_close(peaks.astype(np.float64), scores, min_distance, max_lines)]
-    t, r = kept[:, 0], kept[:, 1]
-    centre = extended[t, r]
-    d_theta, d_rho = quadratic_peak_2d(extended, t, r).T
-    _, rho0 = _rho_grid(edges.shape, rho_step)
-    theta = (t - pad + d_theta) * (math.pi / theta_bins)
-    rho = rho0 + (r + d_rho) * rho_step
-    flip = (theta < 0) | (theta >= math.pi)
-    theta = np.where(flip, np.mod(theta, math.pi), theta)
-    rho = np.where(flip, -rho, rho)
-    lines = np.column_stack([rho, theta, centre]).astype(np.float64).reshape(-1, 3)
+    orientation = None
+    if gx is not None and gy is not None:
+        moving = np.hypot(gx, gy) > 0  # a point without a gradient has no orientation
+        x, y, gx, gy = x[moving], y[moving], gx[moving], gy[moving]
+        orientation = np.mod(np.arctan2(gy, gx), math.pi)
+    lines = _select_lines(
+        extended,
+        pad,
+        edges.shape,
+        (x, y, orientation),
+        theta_bins,
+        rho_step,
+        orientation_window,
+        threshold,
+        min_distance,
+        max_lines,
+    )
     return HoughLines(lines, len(lines), smoothed.astype(np.float32))

@@ -16,8 +16,9 @@ class LinesPort(ArrayPort):
     r"""Lines :math:`x\cos\theta + y\sin\theta = \rho` as ``float64 N×3`` rows ``(ρ, θ, votes)``.
 
     :math:`\theta \in [0, \pi)` in radians, :math:`\rho` in pixels (signed),
-    x the column and y the row; ``votes`` is the accumulator value. No lines
-    is a ``0×3`` array.
+    x the column and y the row; ``votes`` is the line's strength: for
+    ``hough.lines`` its support, the length in pixels of the line covered by
+    its edge points. No lines is a ``0×3`` array.
     """
 
     ndims = (2,)
