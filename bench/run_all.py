@@ -18,6 +18,7 @@ import bench_dask  # noqa: E402
 import bench_detection  # noqa: E402
 import bench_edges  # noqa: E402
 import bench_filters  # noqa: E402
+import bench_held_out_geometry  # noqa: E402
 import bench_homography  # noqa: E402
 import bench_recognition  # noqa: E402
 import bench_scheduler  # noqa: E402
@@ -42,6 +43,10 @@ def main() -> None:
         ("Sweep sharing (issue 15)", bench_sweep.main),
         ("Batch of 200 files (issue 15)", bench_batch.main),
         ("Dask executor overhead (issue 15)", bench_dask.main),
+        (
+            "Held-out geometry: structured light, GHT, templates, lines (issue 24)",
+            bench_held_out_geometry.main,
+        ),
     ]
     lines = [
         f"# graphvision benchmarks — {time.strftime('%Y-%m-%d %H:%M')}",

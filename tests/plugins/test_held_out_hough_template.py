@@ -290,8 +290,9 @@ def arrow_scene(seed: int, ground: str) -> ArrowScene:
 
 @pytest.mark.parametrize("ground", GROUNDS)
 def test_whole_and_partly_hidden_arrows_are_found_with_the_fraction_seen(ground):
-    """Over 12 such scenes (4 seeds a ground) clutter scores at most 0.25, the partly hidden
-    arrow (63 % of its outline visible) 0.48 to 0.66: the default threshold 0.4 lies between."""
+    """Over 24 such scenes (seeds 0–7 a ground, bench/bench_held_out_geometry.py) clutter
+    scores at most 0.25, the partly hidden arrow (63 % of its outline visible) 0.48 to 0.63
+    and the whole one 0.87 to 1: the default threshold 0.4 lies between."""
     scene = arrow_scene(7, ground)
     model, model_edges = shape_model(ARROW, blur=0.6)
     found = hough.generalized_hough(
