@@ -11,6 +11,13 @@ from ._depth import depth_plane
 from ._digit_scenes import Scenes, SceneSet, ScenesPort, digit_scenes, render_digit_scenes
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
+from ._object_scenes import (
+    ObjectScenes,
+    ObjectSceneSet,
+    ObjectScenesPort,
+    object_scenes,
+    render_object_scenes,
+)
 from ._plane_lines import plane_lines
 from ._stereo_pair import stereo_pair
 from ._structured_light import gray_code_stripes, structured_light_scene
@@ -19,6 +26,9 @@ from ._two_view import two_view_scene
 from ._warps import random_homography, random_warp, two_views
 
 __all__ = [
+    "ObjectSceneSet",
+    "ObjectScenes",
+    "ObjectScenesPort",
     "SceneSet",
     "Scenes",
     "ScenesPort",
@@ -30,12 +40,14 @@ __all__ = [
     "gray_code_stripes",
     "impulse_noise",
     "line_points",
+    "object_scenes",
     "plane_lines",
     "plane_view",
     "random_homography",
     "random_warp",
     "render_board",
     "render_digit_scenes",
+    "render_object_scenes",
     "salt_and_pepper",
     "stereo_pair",
     "structured_light_scene",
