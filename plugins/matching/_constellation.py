@@ -60,12 +60,12 @@ __all__ = [
     "InstancesPort",
     "ModelViews",
     "PoseVotes",
-    "binomial_tail",
     "convex_overlap",
     "draw_object_scenes",
     "find_instances",
     "find_instances_in_scenes",
     "locate_instances",
+    "log_binomial_tail",
     "match_instances",
     "match_probability",
     "match_to_model",
@@ -400,28 +400,24 @@ def match_to_model(
     count = len(views)
     if count == 0 or len(scene_descriptors) == 0:
         return np.zeros((0, 2), np.int64)
-    k = min(16, count)
     model = views.descriptors.astype(np.float32)
     model_norm = (model * model).sum(axis=1)
+    from scipy.spatial import cKDTree
+
+    same = np.eye(count, dtype=bool)  # (M, M): features within same_place of each other
+    close = cKDTree(views.xy).query_pairs(same_place, output_type="ndarray")
+    same[close[:, 0], close[:, 1]] = same[close[:, 1], close[:, 0]] = True
     pairs = []
-    for start in range(0, len(scene_descriptors), 2048):
-        block = scene_descriptors[start : start + 2048].astype(np.float32)
+    for start in range(0, len(scene_descriptors), 1024):
+        block = scene_descriptors[start : start + 1024].astype(np.float32)
         squared = (block * block).sum(axis=1)[:, None] + model_norm[None, :] - 2.0 * block @ model.T
-        nearest = (
-            np.argpartition(squared, k - 1, axis=1)[:, :k]
-            if k < count
-            else np.argsort(squared, axis=1)
-        )
-        values = np.take_along_axis(squared, nearest, axis=1)
-        order = np.argsort(values, axis=1)
-        nearest = np.take_along_axis(nearest, order, axis=1)
-        distance = np.sqrt(np.maximum(np.take_along_axis(values, order, axis=1), 0.0))
-        apart = np.linalg.norm(views.xy[nearest] - views.xy[nearest[:, :1]], axis=2) > same_place
-        has_other = apart.any(axis=1)
-        second = np.where(has_other, distance[np.arange(len(block)), apart.argmax(axis=1)], np.inf)
-        keep = distance[:, 0] < ratio * second
-        rows = np.flatnonzero(keep)
-        pairs.append(np.column_stack([rows + start, nearest[rows, 0]]))
+        nearest = np.argmin(squared, axis=1)
+        rows = np.arange(len(block))
+        first = squared[rows, nearest]
+        squared[same[nearest]] = np.inf
+        second = squared.min(axis=1)
+        keep = np.sqrt(np.maximum(first, 0.0)) < ratio * np.sqrt(np.maximum(second, 0.0))
+        pairs.append(np.column_stack([rows[keep] + start, nearest[keep]]))
     return np.concatenate(pairs).astype(np.int64).reshape(-1, 2)
 
 
@@ -558,8 +554,10 @@ def _consistent(
     scene_keypoints: KeypointSet,
     pairs: np.ndarray,
     params: ConstellationParams,
+    threshold: float,
 ) -> np.ndarray:
-    r"""Matches that agree with ``h``: position within ``threshold`` px, orientation within
+    r"""Matches that agree with ``h`` (a homography or an affine map): position within
+    ``threshold`` px, orientation within
     ``orientation_tolerance`` degrees and scale within a factor ``scale_tolerance`` of
     what the local affine map predicts for the model keypoint, :math:`J = J_H(u) F`
     (:math:`J_H` the homography's Jacobian at the keypoint's model position :math:`u`,
@@ -571,7 +569,7 @@ def _consistent(
     mapped = apply_homography(h, points)
     jacobian = (h[None, :2, :2] - mapped[:, :, None] * h[None, 2:3, :2]) / w[:, None, None]
     jacobian = jacobian @ views.frame[model]
-    close = np.linalg.norm(mapped - scene_keypoints.xy[scene], axis=1) < params.threshold
+    close = np.linalg.norm(mapped - scene_keypoints.xy[scene], axis=1) < threshold
     theta = views.keypoints.orientation[model]
     direction = np.einsum("nij,nj->ni", jacobian, np.column_stack([np.cos(theta), np.sin(theta)]))
     predicted = np.arctan2(direction[:, 1], direction[:, 0])
@@ -607,27 +605,25 @@ def _valid_quad(h: np.ndarray, size: tuple[int, int], scene_shape: tuple[int, in
     return bool(0 <= centre[0] < scene_shape[1] and 0 <= centre[1] < scene_shape[0])
 
 
-def binomial_tail(k: int, n: int, p: float) -> float:
-    r""":math:`P(X \ge k)` for :math:`X \sim B(n, p)`, summed in log space
-    (:math:`\log \binom{n}{j}` from ``math.lgamma``) so that tiny terms do not underflow
-    before they are added.
+def log_binomial_tail(k: int, n: int, p: float) -> float:
+    r""":math:`\log P(X \ge k)` for :math:`X \sim B(n, p)`, summed in log space
+    (:math:`\log \binom{n}{j}` from ``math.lgamma``) so that a tail far below the
+    smallest float is still compared rightly with a small prior.
 
-    >>> round(binomial_tail(2, 3, 0.5), 6)
+    >>> round(math.exp(log_binomial_tail(2, 3, 0.5)), 6)
     0.5
     """
-    if k <= 0:
-        return 1.0
-    if k > n or p <= 0.0:
+    if k <= 0 or p >= 1.0:
         return 0.0
-    if p >= 1.0:
-        return 1.0
+    if k > n or p <= 0.0:
+        return -math.inf
     j = np.arange(k, n + 1)
     log_choose = np.array(
         [math.lgamma(n + 1) - math.lgamma(v + 1) - math.lgamma(n - v + 1) for v in j]
     )
     log_terms = log_choose + j * math.log(p) + (n - j) * math.log1p(-p)
     top = float(log_terms.max())
-    return min(math.exp(top) * float(np.exp(log_terms - top).sum()), 1.0)
+    return min(top + math.log(float(np.exp(log_terms - top).sum())), 0.0)
 
 
 def match_probability(
@@ -648,16 +644,17 @@ def match_probability(
     The ``sample`` matches a homography passes through agree by construction, so
     :math:`k` and :math:`n` count the features beyond them.
 
-    >>> round(match_probability(10, 100, 0.01, 0.01), 6)
-    1.0
+    >>> round(match_probability(10, 100, 0.01, 0.01), 4)
+    0.9592
     >>> match_probability(4, 100, 0.01, 0.01) == 0.01
     True
     """
     beyond = inliers - sample
     if beyond <= 0:
         return prior
-    chance = binomial_tail(beyond, max(candidates - sample, beyond), p)
-    return prior / (prior + chance * (1.0 - prior))
+    log_chance = log_binomial_tail(beyond, max(candidates - sample, beyond), p)
+    odds = math.exp(min(log_chance - math.log(prior) + math.log1p(-prior), 700.0))
+    return 1.0 / (1.0 + odds)
 
 
 def _unique_positions(points: np.ndarray) -> int:
@@ -709,7 +706,8 @@ def verify_cluster(
        scene positions, inliers within half a location bin (Lowe: half the error range
        of the Hough bins);
     2. top-down: every match (not only the cluster's) within that distance of the affine
-       prediction joins; least squares again, twice;
+       prediction, and agreeing with it in orientation and scale (:func:`_consistent`),
+       joins; least squares again, twice (a mirroring map is refused);
     3. RANSAC on a homography (normalised DLT on samples of 4) over the gathered
        matches, inliers within ``threshold`` px;
     4. top-down again: all matches consistent with the homography in position,
@@ -741,13 +739,15 @@ def verify_cluster(
         return None
     affine = found.model
     for _ in range(2):
-        members = np.flatnonzero(_residual(affine, src_all, dst_all) < loose)
+        if np.linalg.det(affine[:2, :2]) <= 0:
+            return None  # a mirror image: not a view of the model
+        members = np.flatnonzero(_consistent(affine, views, scene_keypoints, pairs, params, loose))
+        if len(members) < max(params.min_inliers, 5):
+            return None
         refit = _affine(src_all[members], dst_all[members])
         if refit is None:
             return None
         affine = refit
-    if len(members) < max(params.min_inliers, 5):
-        return None
     a, b = src_all[members], dst_all[members]
     fit = ransac(
         len(members),
@@ -757,14 +757,16 @@ def verify_cluster(
         params.threshold,
         refit=lambda i: estimate_homography(a[i], b[i]),
         confidence=0.995,
-        max_iterations=300,
+        max_iterations=200,
         seed=params.seed,
     )
     if fit.model is None:
         return None
     h, inliers = fit.model, members[fit.inliers]
     for _ in range(5):
-        agree = np.flatnonzero(_consistent(h, views, scene_keypoints, pairs, params))
+        agree = np.flatnonzero(
+            _consistent(h, views, scene_keypoints, pairs, params, params.threshold)
+        )
         if len(agree) < 5:
             return None
         refit = estimate_homography(src_all[agree], dst_all[agree])
