@@ -18,6 +18,7 @@ import bench_dask  # noqa: E402
 import bench_detection  # noqa: E402
 import bench_edges  # noqa: E402
 import bench_filters  # noqa: E402
+import bench_find_object  # noqa: E402
 import bench_held_out_geometry  # noqa: E402
 import bench_homography  # noqa: E402
 import bench_recognition  # noqa: E402
@@ -40,6 +41,7 @@ def main() -> None:
         ("Colour, templates, FFT, pyramids (issue 10)", bench_colour_template.main),
         ("Two views and stereo (issue 12)", bench_stereo.main),
         ("Modern detection: CNN, proposals, R-CNN (issue 14)", bench_detection.main),
+        ("Finding every instance of an object (issue 28)", bench_find_object.main),
         ("Sweep sharing (issue 15)", bench_sweep.main),
         ("Batch of 200 files (issue 15)", bench_batch.main),
         ("Dask executor overhead (issue 15)", bench_dask.main),

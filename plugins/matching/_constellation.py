@@ -4,22 +4,30 @@ space, each vote cluster verified by an affine then a homography fit.
 
 The stages, each a function here:
 
-1. **Match** every scene keypoint to its nearest model keypoint with the ratio test
-   (``matching.match(scene, model, symmetric=False)``). The direction matters: with
-   several instances, a model keypoint has several equally good scene neighbours, so
-   the model → scene ratio test (and a symmetric check) would keep at most one of them.
+0. **Model views** (:func:`model_views`): SIFT features of the model and of views of
+   it simulated at larger tilts (:func:`simulate_view`; Morel & Yu's affine
+   simulation, or Lowe's "multiple training views" of an object), each feature
+   knowing its position in the model and its view's map to the model. A SIFT
+   descriptor survives some 30° to 45° out of plane; the views carry the model to 60°.
+1. **Match** (:func:`match_to_model`) every scene feature to its nearest model feature
+   by the ratio test against the nearest one *from another place* of the model (Lowe's
+   rule for several training views of one object). The direction matters: with several
+   instances a model feature has several equally good scene neighbours, so the model →
+   scene ratio test and a symmetric check (``matching.match``, the single-object
+   recipe) would keep at most one of them.
 2. **Vote** (:func:`pose_votes`): each match predicts the model's pose from its two
    keypoints' scales, orientations and positions, and votes in the 2 closest bins of
-   each of the 4 dimensions (16 bins) of a hash table.
+   each of the 4 dimensions (16 bins) of a hash table, one table per view.
 3. **Verify** (:func:`verify_cluster`) each bin with at least ``min_votes`` votes,
    largest first: RANSAC on an affine map, matches gathered top-down from all the
-   matches agreeing with it, then RANSAC on a homography, gathered and refitted (DLT
-   and Levenberg-Marquardt) until the inlier set is stable.
+   matches agreeing with it in position, orientation and scale, then RANSAC on a
+   homography, gathered and refitted (DLT, then Levenberg-Marquardt) until the inlier
+   set is stable.
 4. **Accept** by Lowe's probability that the agreeing matches are not chance
-   (:func:`match_probability`) and suppress overlapping instances (polygon IoU).
+   (:func:`pose_probability`) and suppress overlapping instances (polygon IoU).
 
 Instances are the model's corners mapped by the homography (pixel centres (0, 0),
-(w-1, 0), (w-1, h-1), (0, h-1), as :func:`~graphvision_plugins.synthetic.model_corners`).
+(w-1, 0), (w-1, h-1), (0, h-1), as ``synthetic.object_scenes`` draws them).
 """
 
 from __future__ import annotations

@@ -549,8 +549,9 @@ def object_scenes(
     a random axis, a random rotation in the plane, and is seen in perspective (camera 1.5
     to 3 model diagonals away) with probability ``perspective``, else affinely; a random
     gain (0.7–1.2) and offset (±0.1) change its brightness. Instances do not overlap each
-    other; an occluder (a crop of a photograph) on each one's outline hides a random
-    fraction up to ``occlusion`` of it.
+    other (a pose that finds no free place is drawn again, so large scales are somewhat
+    rarer than log-uniform); an occluder (a crop of a photograph) on each one's outline
+    hides a random fraction up to ``occlusion`` of it.
 
     Parameters
     ----------
