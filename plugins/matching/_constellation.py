@@ -1339,9 +1339,9 @@ def draw_object_scenes(
     for index in shown:
         canvas = colour_canvas(scenes.images[index])
         for quad in scenes.quads_of(index):
-            _outline(canvas, quad, TRUE_COLOUR, 5)
+            _outline(canvas, quad, TRUE_COLOUR, 6)
         for quad in instances.quads[instances.owner == index]:
-            _outline(canvas, quad, FOUND_COLOUR, 1)
+            _outline(canvas, quad, FOUND_COLOUR, 2)
         outlines.append(canvas)
         space = colour_canvas(scenes.images[index]) * 0.35
         if votes is not None:
