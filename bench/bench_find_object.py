@@ -31,7 +31,7 @@ import time
 import numpy as np
 import skimage.data
 
-from graphvision_plugins import color, matching, synthetic
+from graphvision_plugins import colour, matching, synthetic
 
 SEEDS = (101, 102, 103, 104)
 COUNT = 10
@@ -39,7 +39,7 @@ BOX = [130, 270, 330, 430]
 
 
 def scene_sets() -> list[tuple[np.ndarray, synthetic.ObjectSceneSet]]:
-    gray = color.to_gray(skimage.data.astronaut().astype(np.float32) / 255)
+    gray = colour.to_gray(skimage.data.astronaut().astype(np.float32) / 255)
     made = [synthetic.object_scenes(gray, box=BOX, count=COUNT, seed=seed) for seed in SEEDS]
     return [(one.model, one.scenes) for one in made]
 
