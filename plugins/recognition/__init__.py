@@ -2,7 +2,10 @@
 using local features: Bag of words model"): labelled sample sets, PCA and dual PCA,
 1-nearest-neighbour, HOG, integral images and Haar-like features, AdaBoost and the
 Viola–Jones cascade, a linear SVM, sliding-window detection with non-maximum
-suppression, and the bag-of-words model. Trained models are port types.
+suppression, and the bag-of-words model. Trained models are port types, among them
+an LBP cascade read from OpenCV's XML format (the graph input ``cascade:skimage``) and
+evaluated on graphvision's own integral images; face detectors are measured on scenes
+with known faces (``synthetic.face_scenes``).
 """
 
 from ._boost import adaboost, boost_stumps, cascade, cascade_table, train_cascade
@@ -28,9 +31,19 @@ from ._detect import (
     nms,
     non_max_suppression,
 )
+from ._faces import (
+    SceneBoxes,
+    SceneBoxesPort,
+    SceneBoxSet,
+    detect_scenes,
+    draw_scenes,
+    face_scores,
+    lbp_detect_scenes,
+)
 from ._haar import (
     HAAR_TYPES,
     haar,
+    haar_corners,
     haar_feature_table,
     haar_values,
     integral_image,
@@ -38,6 +51,14 @@ from ._haar import (
     sample_haar_features,
 )
 from ._hog import hog, hog_cells, hog_features, hog_picture
+from ._lbp_cascade import (
+    LBPCascade,
+    LBPCascadeModel,
+    LBPCascadePort,
+    lbp_detect,
+    parse_opencv_cascade,
+    read_cascade,
+)
 from ._subspace import fit_pca, nearest_neighbour, pca, project, reconstruction_error, residual
 from ._svm import fit_linear_svm, linear_svm
 from ._types import (
@@ -60,9 +81,15 @@ __all__ = [
     "CascadePort",
     "ClassifierPort",
     "FeaturesPort",
+    "LBPCascade",
+    "LBPCascadeModel",
+    "LBPCascadePort",
     "LinearClassifierPort",
     "NearestClassifierPort",
     "SamplesPort",
+    "SceneBoxSet",
+    "SceneBoxes",
+    "SceneBoxesPort",
     "StumpClassifierPort",
     "SubspacePort",
     "VocabularyPort",
@@ -78,12 +105,16 @@ __all__ = [
     "combine",
     "dense_sift",
     "detect",
+    "detect_scenes",
     "detect_subspace",
     "draw_boxes",
+    "draw_scenes",
+    "face_scores",
     "fit_kmeans",
     "fit_linear_svm",
     "fit_pca",
     "haar",
+    "haar_corners",
     "haar_feature_table",
     "haar_values",
     "hog",
@@ -94,6 +125,8 @@ __all__ = [
     "integral_image_node",
     "iou_matrix",
     "kmeans",
+    "lbp_detect",
+    "lbp_detect_scenes",
     "lfw_faces",
     "linear_svm",
     "mine_negatives",
@@ -103,11 +136,13 @@ __all__ = [
     "negative_patches",
     "nms",
     "non_max_suppression",
+    "parse_opencv_cascade",
     "pca",
     "pixel_features",
     "pixels",
     "predict",
     "project",
+    "read_cascade",
     "reconstruction_error",
     "residual",
     "sample_haar_features",

@@ -26,10 +26,20 @@ from .._checks import ordered
 from .._draw import colour_canvas
 from .._params import Count, Fraction, Positive, ScaleFactor
 from ._data import NON_FACE, FaceFree, face_free_image, pixel_features
-from ._haar import haar_values, integral_image, sample_haar_features
+from ._haar import (
+    SIGMA_FLOOR,
+    haar_corners,
+    haar_values,
+    integral_image,
+    normalised_values,
+    sample_haar_features,
+    signed_areas,
+    window_moments,
+)
 from ._hog import hog_blocks
 from ._subspace import reconstruction_error
 from ._types import (
+    CascadeModel,
     Classifier,
     ClassifierModel,
     Samples,
@@ -109,7 +119,9 @@ def _haar_windows(image: np.ndarray, recipe: dict, step: int) -> Iterator[Window
     table = sample_haar_features(
         (height, width), recipe["count"], recipe["seed"], tuple(recipe["types"])
     )
-    padded = integral_image(image)[None]
+    level = np.asarray(image, np.float64)
+    padded = integral_image(level)[None]
+    squared = integral_image(level**2) if recipe.get("normalise") else None
     ys = np.arange(0, image.shape[0] - height + 1, step)
     xs = np.arange(0, image.shape[1] - width + 1, step)
     for y in ys:  # one row of windows at a time keeps the memory at (columns × features)
@@ -117,6 +129,10 @@ def _haar_windows(image: np.ndarray, recipe: dict, step: int) -> Iterator[Window
         shifted[:, :, 1] += y
         shifted[:, :, 2] += xs[:, None]
         values = haar_values(padded, shifted.reshape(-1, 5)).reshape(len(xs), len(table))
+        if squared is not None:
+            tops = np.full(len(xs), y)
+            mean, sigma = window_moments(padded[0], squared, tops, xs, (height, width))
+            values = normalised_values(values, table, mean, sigma)
         boxes = np.column_stack(
             [xs, np.full(len(xs), y), xs + width, np.full(len(xs), y + height)]
         ).astype(np.float64)
@@ -230,15 +246,66 @@ def sliding_windows(
             f"larger than the image {image.shape[0]}×{image.shape[1]}"
         )
     found_boxes, found_scores = [], []
+    early = isinstance(classifier, CascadeModel) and recipe.get("kind") == "haar"
     for scale, level in _pyramid(image, window, scale_step, min_scale, max_scale):
-        for windows in window_features(level, recipe, step):
-            score = _score(classifier, windows.features)
+        scored = (
+            [_haar_cascade_windows(level, classifier, recipe, step)]  # type: ignore[arg-type]
+            if early
+            else (
+                (windows.boxes, _score(classifier, windows.features))
+                for windows in window_features(level, recipe, step)
+            )
+        )
+        for boxes, score in scored:
             keep = score > threshold
-            found_boxes.append(windows.boxes[keep] * scale)
+            found_boxes.append(boxes[keep] * scale)
             found_scores.append(score[keep])
     if not found_boxes:
         return np.zeros((0, 4)), np.zeros(0)
     return np.concatenate(found_boxes), np.concatenate(found_scores).astype(np.float64)
+
+
+def _haar_cascade_windows(
+    image: np.ndarray, model: CascadeModel, recipe: dict, step: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Boxes (N, 4) and decisions (N,) of every window of one level under a cascade of
+    Haar-like stumps, stage by stage with early rejection: only the features its stumps
+    use are computed, and only until a window fails a stage. Equal to
+    ``model.decision`` of the window's Haar-like features (``_haar_windows``)."""
+    from ._cascade_kernels import scan_haar_cascade
+
+    height, width = recipe["window"]
+    table = sample_haar_features(
+        (height, width), recipe["count"], recipe["seed"], tuple(recipe["types"])
+    )
+    order = np.argsort(model.stage, kind="stable")
+    level = np.asarray(image, np.float64)
+    padded = integral_image(level)
+    normalise = bool(recipe.get("normalise", False))
+    squared = integral_image(level**2) if normalise else np.zeros((1, 1))
+    used = table[model.feature[order]]
+    corners, signs = haar_corners(used, padded.shape[1])
+    stages = len(model.stage_threshold)
+    stage_end = np.cumsum(np.bincount(model.stage, minlength=stages)).astype(np.int64)
+    found, decision = scan_haar_cascade(
+        padded,
+        squared,
+        normalise,
+        SIGMA_FLOOR,
+        height,
+        width,
+        step,
+        corners,
+        signs,
+        signed_areas(used),
+        model.threshold[order],
+        model.polarity[order].astype(np.float64),
+        model.alpha[order].astype(np.float64),
+        stage_end,
+        model.stage_threshold.astype(np.float64),
+    )
+    top, left = found[:, 0].astype(np.float64), found[:, 1].astype(np.float64)
+    return np.column_stack([left, top, left + width, top + height]), decision
 
 
 @node("recognition.mine_negatives", version=1, check=ordered(("min_scale", "max_scale")))

@@ -1,4 +1,5 @@
-"""Synthetic data with known truth: noise, random warps, sampled lines.
+"""Synthetic data with known truth: noise, random warps, sampled lines, scenes of digits
+and photographs with known faces.
 
 Every node here is seeded and returns what a test or a benchmark measures
 against (the homography of a warp, the line the points were drawn from).
@@ -9,6 +10,7 @@ nodes as their ground truth.
 from ._boards import board_object_points, board_views, plane_view, render_board
 from ._depth import depth_plane
 from ._digit_scenes import Scenes, SceneSet, ScenesPort, digit_scenes, render_digit_scenes
+from ._face_collage import face_collage, face_scenes
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
 from ._object_scenes import (
@@ -36,6 +38,8 @@ __all__ = [
     "board_views",
     "depth_plane",
     "digit_scenes",
+    "face_collage",
+    "face_scenes",
     "gaussian_noise",
     "gray_code_stripes",
     "impulse_noise",
