@@ -3,7 +3,7 @@ using local features: Bag of words model"): labelled sample sets, PCA and dual P
 1-nearest-neighbour, HOG, integral images and Haar-like features, AdaBoost and the
 Viola–Jones cascade, a linear SVM, sliding-window detection with non-maximum
 suppression, and the bag-of-words model. Trained models are port types, among them
-an LBP cascade read from OpenCV's XML format (the graph input ``cascade:skimage``) and
+an LBP cascade read from OpenCV's XML format (``recognition.lbp_cascade``) and
 evaluated on graphvision's own integral images; face detectors are measured on scenes
 with known faces (``synthetic.face_scenes``).
 """
@@ -55,9 +55,10 @@ from ._lbp_cascade import (
     LBPCascade,
     LBPCascadeModel,
     LBPCascadePort,
+    lbp_cascade,
     lbp_detect,
     parse_opencv_cascade,
-    read_cascade,
+    read_opencv_cascade,
 )
 from ._subspace import fit_pca, nearest_neighbour, pca, project, reconstruction_error, residual
 from ._svm import fit_linear_svm, linear_svm
@@ -125,6 +126,7 @@ __all__ = [
     "integral_image_node",
     "iou_matrix",
     "kmeans",
+    "lbp_cascade",
     "lbp_detect",
     "lbp_detect_scenes",
     "lfw_faces",
@@ -142,7 +144,7 @@ __all__ = [
     "pixels",
     "predict",
     "project",
-    "read_cascade",
+    "read_opencv_cascade",
     "reconstruction_error",
     "residual",
     "sample_haar_features",

@@ -137,7 +137,7 @@ def lbp_detect_scenes(
     scenes : Scenes
         Gray scenes (``synthetic.face_scenes``).
     cascade : LBPCascade
-        A trained cascade (the graph input ``cascade:skimage``).
+        A trained cascade (``recognition.lbp_cascade``).
     scale_factor, step, min_size, max_size, min_neighbours, eps
         As ``recognition.lbp_detect``.
 

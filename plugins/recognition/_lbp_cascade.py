@@ -5,10 +5,10 @@ with graphvision's own integral images (seed: "Efficient computation - integral 
 The file scikit-image ships, ``skimage.data.lbp_frontal_face_cascade_filename()``, is
 OpenCV's ``lbpcascade_frontalface`` (20 stages, 139 weak classifiers over 136 MB-LBP
 features of a 24 × 24 window, trained on 3,000 faces and 1,500 non-faces). It reaches
-a graph input as ``cascade:skimage`` (``cascade:PATH`` reads another file of the same
-format), parsed here with the standard library's ``xml.etree``; the parsed cascade is
-an :class:`LBPCascadeModel`, a value like any trained model (named arrays plus a JSON
-header, never pickle).
+a graph through ``recognition.lbp_cascade`` (another file of the same format through
+:func:`read_opencv_cascade`, as a graph-input value), parsed with the standard library's
+``xml.etree``; the parsed cascade is an :class:`LBPCascadeModel`, a value like any
+trained model (named arrays plus a JSON header, never pickle).
 
 How a window is classified (OpenCV's ``LBPEvaluator`` and ``predictCategoricalStump``):
 
@@ -30,40 +30,36 @@ pyramid of resampled images). The trained features then run unchanged on it.
 
 from __future__ import annotations
 
-import hashlib
 import xml.etree.ElementTree as ElementTree
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import Field
 
-from graphvision import Boxes, BoxSet, GrayImage, PortValueError, RecordPort, node, source
+from graphvision import Boxes, BoxSet, GrayImage, PortValueError, RecordPort, node
 
 from .._checks import ordered
 from .._params import MAX_SIDE, Fraction
 from ._haar import integral_image
 
 __all__ = [
+    "BuiltinCascade",
     "LBPCascade",
     "LBPCascadeModel",
     "LBPCascadePort",
-    "cascade_file",
-    "cascade_key",
+    "builtin_cascade_file",
     "detect_lbp",
     "group_rectangles",
+    "lbp_cascade",
     "lbp_detect",
     "lbp_windows",
     "parse_opencv_cascade",
-    "read_cascade",
+    "read_opencv_cascade",
     "resampled_integral",
     "window_scales",
 ]
-
-SKIMAGE = "skimage"
-"""The reference ``cascade:skimage``: scikit-image's copy of OpenCV's LBP frontal-face
-cascade."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -287,55 +283,75 @@ def parse_opencv_cascade(text: str | bytes, source: str = "") -> LBPCascadeModel
 MAX_CASCADE_BYTES = 64 * 2**20
 """Largest cascade file read (OpenCV's biggest shipped cascade is under 2 MB)."""
 
-
-def cascade_file(reference: str) -> Path:
-    """The file of ``cascade:<reference>``: scikit-image's LBP frontal-face cascade for
-    ``skimage``, else a path."""
-    if reference == SKIMAGE:
-        from skimage.data import lbp_frontal_face_cascade_filename
-
-        return Path(lbp_frontal_face_cascade_filename())
-    path = Path(reference)
-    if not path.is_file():
-        raise FileNotFoundError(
-            f"no such cascade file: {reference} (give a path to an OpenCV LBP cascade "
-            f"XML file, or '{SKIMAGE}' for scikit-image's frontal-face cascade)"
-        )
-    return path
+BuiltinCascade = Literal["skimage_frontal_face"]
+"""The cascades shipped with the libraries graphvision depends on: scikit-image's copy of
+OpenCV's ``lbpcascade_frontalface.xml``."""
 
 
-def _read_bytes(path: Path) -> bytes:
-    size = path.stat().st_size
-    if size > MAX_CASCADE_BYTES:
-        raise ValueError(
-            f"{path} is {size / 2**20:.0f} MB; a cascade file is at most "
-            f"{MAX_CASCADE_BYTES // 2**20} MB"
-        )
-    return path.read_bytes()
+def builtin_cascade_file(name: str) -> Path:
+    """The file of a built-in cascade (see :data:`BuiltinCascade`)."""
+    from skimage.data import lbp_frontal_face_cascade_filename
+
+    if name != "skimage_frontal_face":
+        raise ValueError(f"unknown built-in cascade '{name}'; built in: skimage_frontal_face")
+    return Path(lbp_frontal_face_cascade_filename())
 
 
-def cascade_key(reference: str) -> str:
-    """What fixes a cascade without parsing it: the digest of its file's bytes."""
-    path = cascade_file(reference)
-    return f"opencv-cascade blake2b {hashlib.blake2b(_read_bytes(path)).hexdigest()}"
+def read_opencv_cascade(path: str | Path) -> LBPCascadeModel:
+    """The LBP cascade in an OpenCV XML file (see :func:`parse_opencv_cascade`).
 
-
-@source("cascade", key=cascade_key)
-def read_cascade(reference: str) -> LBPCascadeModel:
-    """The graph-input value ``cascade:skimage`` (scikit-image's copy of OpenCV's LBP
-    frontal-face cascade) or ``cascade:PATH`` (any OpenCV LBP cascade XML file), parsed.
-
-    scikit-image's copy names one section ``featuhreParams`` (sic); OpenCV refuses the
-    file for it, this reader does not need that section.
+    A cascade other than the built-in one reaches a graph as a graph-input value of type
+    ``LBPCascade``: ``gv.run(graph, inputs={"cascade": read_opencv_cascade(path)})``
+    (keyed by its content), or the ``.npz`` a run wrote of it.
 
     Raises
     ------
     FileNotFoundError, ValueError
         Naming the file and what is wrong with it.
     """
-    path = cascade_file(reference)
-    name = "skimage:" + path.name if reference == SKIMAGE else str(path)
-    return parse_opencv_cascade(_read_bytes(path), name)
+    file = Path(path)
+    if not file.is_file():
+        raise FileNotFoundError(f"no such cascade file: {file}")
+    size = file.stat().st_size
+    if size > MAX_CASCADE_BYTES:
+        raise ValueError(
+            f"{file} is {size / 2**20:.0f} MB; a cascade file is at most "
+            f"{MAX_CASCADE_BYTES // 2**20} MB"
+        )
+    return parse_opencv_cascade(file.read_bytes(), str(file))
+
+
+@node("recognition.lbp_cascade", version=1)
+def lbp_cascade(*, name: BuiltinCascade = "skimage_frontal_face") -> LBPCascade:
+    """A trained cascade of multi-block LBP stumps shipped with scikit-image, read from
+    OpenCV's XML format with the standard library's ``xml.etree``.
+
+    ``skimage_frontal_face`` is ``skimage.data.lbp_frontal_face_cascade_filename()``,
+    OpenCV's ``lbpcascade_frontalface.xml``: 20 stages, 139 weak classifiers over 136
+    MB-LBP features of a 24 × 24 window, trained on 3,000 faces and 1,500 non-faces
+    (GAB boosting, stage hit rate 0.995, false-alarm rate 0.5). scikit-image's copy
+    names one section ``featuhreParams`` (sic), for which OpenCV refuses the file; this
+    reader does not need that section. Any other OpenCV LBP cascade enters a graph as an
+    input value (:func:`read_opencv_cascade`).
+
+    Parameters
+    ----------
+    name : {'skimage_frontal_face'}
+        The built-in cascade.
+
+    Returns
+    -------
+    cascade : LBPCascade
+        Its features, weak classifiers (256-bit subsets, leaf values) and stages.
+
+    References
+    ----------
+    P. Viola and M. Jones, "Rapid object detection using a boosted cascade of simple
+    features", CVPR 2001; S. Liao, X. Zhu, Z. Lei, L. Zhang and S. Z. Li, "Learning
+    multi-scale block local binary patterns for face recognition", ICB 2007.
+    """
+    file = builtin_cascade_file(name)
+    return parse_opencv_cascade(file.read_bytes(), f"skimage:{file.name}")
 
 
 # --- scanning ---------------------------------------------------------------------------
@@ -575,7 +591,7 @@ def lbp_detect(
     ----------
     image : (H, W) gray image
     cascade : LBPCascade
-        A trained cascade, e.g. the graph input ``cascade:skimage``.
+        A trained cascade (``recognition.lbp_cascade``).
     scale_factor : float
         Ratio between successive window sizes.
     step : int
@@ -607,7 +623,7 @@ def lbp_detect(
     --------
     >>> import skimage.data
     >>> gray = skimage.data.astronaut().mean(axis=2).astype(np.float32) / 255
-    >>> faces = lbp_detect(gray, read_cascade("skimage"))
+    >>> faces = lbp_detect(gray, lbp_cascade())
     >>> np.round(faces.xyxy).astype(int).tolist()
     [[177, 67, 273, 163]]
     """
