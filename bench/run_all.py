@@ -17,6 +17,7 @@ import bench_colour_template  # noqa: E402
 import bench_dask  # noqa: E402
 import bench_detection  # noqa: E402
 import bench_edges  # noqa: E402
+import bench_faces  # noqa: E402
 import bench_filters  # noqa: E402
 import bench_find_object  # noqa: E402
 import bench_held_out_geometry  # noqa: E402
@@ -42,6 +43,7 @@ def main() -> None:
         ("Two views and stereo (issue 12)", bench_stereo.main),
         ("Modern detection: CNN, proposals, R-CNN (issue 14)", bench_detection.main),
         ("Finding every instance of an object (issue 28)", bench_find_object.main),
+        ("Faces in photographs: LBP cascade (issue 28)", bench_faces.main),
         ("Sweep sharing (issue 15)", bench_sweep.main),
         ("Batch of 200 files (issue 15)", bench_batch.main),
         ("Dask executor overhead (issue 15)", bench_dask.main),

@@ -99,6 +99,33 @@ def test_a_small_cascade_is_read_field_by_field():
     assert model.stage_end.tolist() == [1, 3]
 
 
+@pytest.mark.parametrize(
+    "change, message",
+    [(("<featureType>LBP", "<featureType>HAAR"), "is a HAAR cascade; graphvision reads LBP"),
+     (("0 -1 1 0 0 0 0 1 0 0 0", "1 -1 1 0 0 0 0 1 0 0 0 7"), "expected a stump"),
+     (("<rect>0 0 3 2</rect>", "<rect>0 0 4 2</rect>"), r"feature 1 .* must lie inside the 9×6"),
+     (("<leafValues>2.0 3.0", "<leafValues>2.0 x"), "expected float values, got '2.0 x'"),
+     (("<stageThreshold>0.5</stageThreshold>", ""), "stage 0 has no <stageThreshold>"),
+     (("</opencv_storage>", ""), "is not XML")],
+)  # fmt: skip
+def test_a_broken_cascade_file_is_refused_with_what_is_wrong(change, message):
+    with pytest.raises(ValueError, match=message):
+        rec.parse_opencv_cascade(TINY.replace(*change), "tiny.xml")
+
+
+def test_a_cascade_round_trips_through_the_array_encoding(cascade, tmp_path):
+    arrays, meta = rec.LBPCascadePort.encode(cascade)
+    assert all(not a.dtype.hasobject for a in arrays.values())
+    back = rec.LBPCascadePort.validate(rec.LBPCascadePort.decode(arrays, meta))
+    for name in arrays:
+        np.testing.assert_array_equal(getattr(back, name), getattr(cascade, name))
+    path = tmp_path / "cascade.xml"
+    path.write_text(TINY)
+    assert rec.read_opencv_cascade(path).source == str(path)
+    with pytest.raises(FileNotFoundError, match="no such cascade file"):
+        rec.read_opencv_cascade(tmp_path / "missing.xml")
+
+
 def tiny_cascade(code: int) -> rec.LBPCascadeModel:
     """One stage, one weak classifier on the 3 × 3 blocks of 3 × 2 pixels filling a 9 × 6
     window: the window passes when its MB-LBP code is ``code``."""
