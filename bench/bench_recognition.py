@@ -159,7 +159,7 @@ def detection_rows(cv2) -> list[str]:
         n.seconds for n in result.record.nodes if n.name in ("gray", "windows", "boxes")
     )
     boxes = result.outputs["boxes"].xyxy
-    rows.append(_detection_row("graphvision HOG + linear SVM (face_detect.yaml)", boxes, detect_ms))
+    rows.append(_detection_row("graphvision LBP cascade (face_detect.yaml)", boxes, detect_ms))
     gray = skimage.data.astronaut().mean(axis=2)
     if hasattr(cv2, "CascadeClassifier"):  # OpenCV 5 moved it to contrib
         cascade = cv2.CascadeClassifier(
