@@ -188,8 +188,11 @@ def detect(
     ``max_scale``; at each level the training window slides by ``step`` pixels and
     the classifier's own features (its recipe: HOG, pixels or Haar-like) are computed
     on every window (HOG once per level and offset, Haar-like from one integral
-    image). A window whose decision value exceeds ``threshold`` becomes a box in
-    input coordinates scored by that value. Follow with ``recognition.nms``.
+    image, each window scaled to zero mean and unit variance when the features were).
+    A cascade of Haar-like stumps runs stage by stage with early rejection: a window
+    costs only the features of the stages it reaches, and its decision is the same.
+    A window whose decision value exceeds ``threshold`` becomes a box in input
+    coordinates scored by that value. Follow with ``recognition.nms``.
 
     Parameters
     ----------

@@ -183,9 +183,9 @@ def face_collage(
     Each pasted face is an lfw crop enlarged bilinearly to a square of side
     :math:`s \\sim \\mathcal{U}\\{s_{min}, \\dots, s_{max}\\}` at a uniformly drawn
     position where its box, grown by :math:`s/4`, meets no other face (fewer faces when
-    100 tries find no such place). The truth of a detector is then known exactly:
-    recall and false positives are counted against these boxes at IoU ≥ 0.5, the
-    PASCAL criterion.
+    100 tries find no such place, or when a drawn side exceeds the photograph's). The
+    truth of a detector is then known exactly: recall and false positives are counted
+    against these boxes at IoU ≥ 0.5, the PASCAL criterion.
 
     Parameters
     ----------
