@@ -102,16 +102,12 @@ def opencv_lbp(cv2, folder: Path) -> Detector | None:
 
 
 def lfw_haar() -> Detector:
-    from graphvision_plugins.synthetic._digit_scenes import SceneSet
-
     graph = gv.load_pipeline(PIPELINES / "faces_cascade.yaml")
     model = gv.run(graph, outputs=["cascade"]).outputs["cascade"]
 
     def detect(gray: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        none = np.zeros(0, np.int64)
-        one = SceneSet(gray[None].astype(np.float32), np.zeros((0, 4)), none, none)
         found = rec.detect_scenes(  # faces_cascade.yaml's settings
-            one, model, scale_step=1.2, min_scale=1.5, max_scale=6.0, step=2,
+            gray[None], model, scale_step=1.2, min_scale=1.5, max_scale=6.0, step=2,
             threshold=0.0, min_neighbours=5,
         )  # fmt: skip
         return found.xyxy, found.score
@@ -119,11 +115,11 @@ def lfw_haar() -> Detector:
     return detect
 
 
-def measure(detect: Detector, scenes) -> tuple[SceneBoxSet, list[float], list[float]]:
+def measure(detect: Detector, images: np.ndarray) -> tuple[SceneBoxSet, list[float], list[float]]:
     """The boxes found in every scene, and the wall and CPU seconds (all threads) of each."""
-    detect(scenes.images[0])  # warm-up (numba's compiled code, OpenCV's buffers)
+    detect(images[0])  # warm-up (numba's compiled code, OpenCV's buffers)
     boxes, scores, owners, seconds, cpu = [], [], [], [], []
-    for index, gray in enumerate(scenes.images):
+    for index, gray in enumerate(images):
         began, began_cpu = time.perf_counter(), time.process_time()
         xyxy, score = detect(gray)
         seconds.append(time.perf_counter() - began)
@@ -135,7 +131,7 @@ def measure(detect: Detector, scenes) -> tuple[SceneBoxSet, list[float], list[fl
         np.concatenate(boxes).reshape(-1, 4),
         np.concatenate(scores).astype(np.float64),
         np.concatenate(owners),
-        len(scenes),
+        len(images),
     )
     return found, seconds, cpu
 
@@ -144,7 +140,7 @@ def detector_rows(cv2) -> list[str]:
     scenes = syn.face_scenes(photos=PHOTOS, seed=SEED)
     astronaut = scenes.images[0]
     rows = [
-        f"{len(scenes)} held-out scenes of 512², {len(scenes.xyxy)} true faces "
+        f"{len(scenes.images)} held-out scenes of 512², {len(scenes.faces)} true faces "
         f"(synthetic.face_scenes seed {SEED}).",
         "",
         "| detector | recall | false positives / image | IoU of hits | ms / scene "
@@ -170,8 +166,8 @@ def detector_rows(cv2) -> list[str]:
                     "moved it to opencv-contrib) | | | | | | |"
                 )
                 continue
-            found, seconds, cpu = measure(detect, scenes)
-            scores = rec.face_scores(found, scenes)
+            found, seconds, cpu = measure(detect, scenes.images)
+            scores = rec.face_scores(found, scenes.faces)
             alone = best(lambda detect=detect: detect(astronaut), repeats=5)
             ours = alone if ours is None else ours
             rows.append(

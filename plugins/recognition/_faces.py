@@ -5,8 +5,13 @@ come out, with a picture.
 
 ::
 
-    SceneBoxes  xyxy (M, 4) float64, score (M,), owner (M,) int64 scene index,
-                scenes (how many scenes were searched)
+    SceneImages  N equally sized gray scenes, float32 (N, H, W) in [0, 1]
+    SceneBoxes   xyxy (M, 4) float64, score (M,), owner (M,) int64 scene index,
+                 scenes (how many scenes): the boxes found in the scenes, or their
+                 true faces (score 1)
+
+The types live here, below the synthetic family (which makes scenes of them), so that
+no family imports one that imports it back.
 """
 
 from __future__ import annotations
@@ -15,15 +20,15 @@ from dataclasses import dataclass
 from typing import Annotated, Any, NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import Field
 
-from graphvision import ColorImage, Float, PortValueError, RecordPort, Table, node
+from graphvision import ArrayPort, ColorImage, Float, PortValueError, RecordPort, Table, node
 
 from .._boxes import check_boxes, iou_matrix, non_max_suppression
 from .._checks import ordered
 from .._draw import colour_canvas
 from .._params import Count, Fraction, ScaleFactor
-from ..synthetic._digit_scenes import Scenes, SceneSet
 from ._detect import sliding_windows
 from ._lbp_cascade import (
     MAX_SIDE,
@@ -41,6 +46,8 @@ __all__ = [
     "SceneBoxSet",
     "SceneBoxes",
     "SceneBoxesPort",
+    "SceneImages",
+    "SceneImagesPort",
     "detect_scenes",
     "draw_scenes",
     "face_scores",
@@ -50,6 +57,29 @@ __all__ = [
 
 TRUE_COLOUR = (0.1, 0.9, 0.1)
 FOUND_COLOUR = (0.95, 0.15, 0.1)
+
+
+class SceneImagesPort(ArrayPort):
+    """N equally sized gray scenes: ``float32`` ``N×H×W`` in [0, 1], N ≥ 1."""
+
+    ndims = (3,)
+    dtypes = (np.float32,)
+    expected = "float32 N×H×W in [0, 1]"
+
+    @classmethod
+    def validate(cls, value: Any) -> np.ndarray:
+        value = super().validate(value)
+        if len(value) == 0 or not (float(value.min()) >= 0.0 and float(value.max()) <= 1.0):
+            raise PortValueError("expected SceneImages: at least one scene, values in [0, 1]")
+        return value
+
+    @classmethod
+    def preview(cls, value: np.ndarray) -> np.ndarray | None:
+        """The first four scenes side by side."""
+        return np.concatenate(list(value[:4]), axis=1)
+
+
+SceneImages = Annotated[NDArray[np.float32], SceneImagesPort]
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,7 +149,7 @@ def _per_scene(found: list[tuple[np.ndarray, np.ndarray]]) -> SceneBoxSet:
 
 @node("recognition.lbp_detect_scenes", version=1, check=ordered(("min_size", "max_size")))
 def lbp_detect_scenes(
-    scenes: Scenes,
+    images: SceneImages,
     cascade: LBPCascade,
     *,
     scale_factor: ScaleStep = 1.1,
@@ -134,7 +164,7 @@ def lbp_detect_scenes(
 
     Parameters
     ----------
-    scenes : Scenes
+    images : SceneImages
         Gray scenes (``synthetic.face_scenes``).
     cascade : LBPCascade
         A trained cascade (``recognition.lbp_cascade``).
@@ -152,7 +182,7 @@ def lbp_detect_scenes(
     binary patterns for face recognition", ICB 2007.
     """
     found = []
-    for image in scenes.images:
+    for image in images:
         boxes = detect_lbp(
             image,
             cascade,
@@ -169,7 +199,7 @@ def lbp_detect_scenes(
 
 @node("recognition.detect_scenes", version=1, check=ordered(("min_scale", "max_scale")))
 def detect_scenes(
-    scenes: Scenes,
+    images: SceneImages,
     classifier: Classifier,
     *,
     scale_step: Annotated[float, Field(gt=1, le=4)] = 1.2,
@@ -189,7 +219,7 @@ def detect_scenes(
 
     Parameters
     ----------
-    scenes : Scenes
+    images : SceneImages
         Gray scenes (``synthetic.face_scenes``).
     classifier : Classifier
         Two-class classifier trained on window features (``recognition.cascade`` over
@@ -213,7 +243,7 @@ def detect_scenes(
     P. Viola and M. Jones, "Robust real-time face detection", IJCV 57(2), 2004.
     """
     found = []
-    for image in scenes.images:
+    for image in images:
         boxes, score = sliding_windows(
             image, classifier, scale_step, min_scale, max_scale, step, threshold
         )
@@ -226,24 +256,25 @@ def detect_scenes(
 
 
 def match_faces(
-    found: SceneBoxSet, scenes: SceneSet, iou: float
+    found: SceneBoxSet, truth: SceneBoxSet, iou: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """PASCAL matching, scene by scene: boxes taken best score first each claim the
     unclaimed true face they overlap most if that IoU reaches ``iou``. Returns per box
     whether it is a true positive and its IoU with the face it claimed (0 otherwise),
     and per true face whether it was found."""
-    if found.scenes != len(scenes):
+    if found.scenes != truth.scenes:
         raise ValueError(
-            f"the boxes were found in {found.scenes} scenes but {len(scenes)} scenes are given"
+            f"the boxes were found in {found.scenes} scenes but the truth covers "
+            f"{truth.scenes} scenes"
         )
     hit = np.zeros(len(found), bool)
     overlap = np.zeros(len(found))
-    claimed = np.zeros(len(scenes.xyxy), bool)
+    claimed = np.zeros(len(truth), bool)
     for index in np.argsort(-found.score, kind="stable"):
-        faces = np.flatnonzero(scenes.owner == found.owner[index])
+        faces = np.flatnonzero(truth.owner == found.owner[index])
         if len(faces) == 0:
             continue
-        ious = iou_matrix(found.xyxy[index : index + 1], scenes.xyxy[faces])[0]
+        ious = iou_matrix(found.xyxy[index : index + 1], truth.xyxy[faces])[0]
         ious[claimed[faces]] = -1.0
         best = int(np.argmax(ious))
         if ious[best] >= iou:
@@ -262,7 +293,7 @@ class FaceScores(NamedTuple):
 
 @node("recognition.face_scores", version=1)
 def face_scores(
-    found: SceneBoxes, scenes: Scenes, *, iou: Annotated[float, Field(gt=0, le=1)] = 0.5
+    found: SceneBoxes, truth: SceneBoxes, *, iou: Annotated[float, Field(gt=0, le=1)] = 0.5
 ) -> FaceScores:
     r"""A face detector against the true faces of its scenes: a box is a true positive
     when it claims an unclaimed true face at IoU ≥ ``iou`` (boxes taken best score
@@ -276,8 +307,8 @@ def face_scores(
     ----------
     found : SceneBoxes
         The detector's boxes in each scene.
-    scenes : Scenes
-        The scenes with their true faces.
+    truth : SceneBoxes
+        The true faces of the same scenes (``synthetic.face_scenes``).
     iou : float
         Overlap of a true positive (0.5: PASCAL's criterion).
 
@@ -297,12 +328,12 @@ def face_scores(
     M. Everingham, L. Van Gool, C. K. I. Williams, J. Winn and A. Zisserman, "The PASCAL
     visual object classes (VOC) challenge", IJCV 88(2), 2010.
     """
-    if len(scenes.xyxy) == 0:
+    if len(truth) == 0:
         raise ValueError("the scenes hold no true face: recall is undefined")
-    hit, overlap, claimed = match_faces(found, scenes, iou)
-    count = len(scenes)
-    faces = np.bincount(scenes.owner, minlength=count)
-    found_faces = np.bincount(scenes.owner[claimed], minlength=count)
+    hit, overlap, claimed = match_faces(found, truth, iou)
+    count = truth.scenes
+    faces = np.bincount(truth.owner, minlength=count)
+    found_faces = np.bincount(truth.owner[claimed], minlength=count)
     false = np.bincount(found.owner[~hit], minlength=count)
     iou_sum = np.bincount(found.owner[hit], weights=overlap[hit], minlength=count)
     hits = np.bincount(found.owner[hit], minlength=count)
@@ -324,7 +355,8 @@ def face_scores(
 
 @node("recognition.draw_scenes", version=1)
 def draw_scenes(
-    scenes: Scenes,
+    images: SceneImages,
+    truth: SceneBoxes,
     found: SceneBoxes,
     *,
     count: Count = 6,
@@ -336,10 +368,12 @@ def draw_scenes(
 
     Parameters
     ----------
-    scenes : Scenes
-        Scenes with their true faces.
+    images : SceneImages
+        The scenes.
+    truth : SceneBoxes
+        Their true faces.
     found : SceneBoxes
-        Boxes found in those scenes.
+        Boxes found in them.
     count : int
         Scenes shown.
     columns : int
@@ -354,25 +388,26 @@ def draw_scenes(
     """
     from skimage.transform import resize
 
-    if found.scenes != len(scenes):
-        raise ValueError(
-            f"the boxes were found in {found.scenes} scenes but {len(scenes)} scenes are given"
-        )
-    shown = min(count, len(scenes))
-    height, width = scenes.images.shape[1:]
+    for what, boxes in (("found", found), ("truth", truth)):
+        if boxes.scenes != len(images):
+            raise ValueError(
+                f"the {what} boxes cover {boxes.scenes} scenes but {len(images)} scenes are given"
+            )
+    shown = min(count, len(images))
+    height, width = images.shape[1:]
     scale = size / max(height, width)
     h, w = max(1, round(height * scale)), max(1, round(width * scale))
     rows = -(-shown // columns)
     gap = 4
     canvas = np.ones((rows * (h + gap) - gap, min(shown, columns) * (w + gap) - gap, 3))
     for scene in range(shown):
-        small = resize(scenes.images[scene], (h, w), order=1, anti_aliasing=scale < 1)
+        small = resize(images[scene], (h, w), order=1, anti_aliasing=scale < 1)
         picture = colour_canvas(small)
-        for boxes, colour in (
-            (scenes.xyxy[scenes.owner == scene], TRUE_COLOUR),
+        for xyxy, colour in (
+            (truth.boxes_of(scene)[0], TRUE_COLOUR),
             (found.boxes_of(scene)[0], FOUND_COLOUR),
         ):
-            for x0, y0, x1, y1 in np.round(boxes * scale).astype(int):
+            for x0, y0, x1, y1 in np.round(xyxy * scale).astype(int):
                 _rectangle(picture, x0, y0, x1, y1, colour)
         r, c = divmod(scene, columns)
         canvas[r * (h + gap) : r * (h + gap) + h, c * (w + gap) : c * (w + gap) + w] = picture

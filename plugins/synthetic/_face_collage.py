@@ -28,12 +28,13 @@ from graphvision import Boxes, BoxSet, ColorImage, node
 
 from .._checks import all_of, ordered, to_float_image
 from .._params import Seed
-from ._digit_scenes import Scenes, SceneSet
+from ..recognition._faces import SceneBoxes, SceneBoxSet, SceneImages
 
 __all__ = [
     "ASTRONAUT_FACE",
     "FaceCollage",
     "FacePhoto",
+    "FaceScenes",
     "face_collage",
     "face_scenes",
     "paste_faces",
@@ -243,6 +244,11 @@ def _fit(image: np.ndarray, boxes: np.ndarray, side: int) -> tuple[np.ndarray, n
     return np.ascontiguousarray(crop, np.float32), clipped[kept]
 
 
+class FaceScenes(NamedTuple):
+    images: SceneImages
+    faces: SceneBoxes
+
+
 DEFAULT_PHOTOS: tuple[FacePhoto, ...] = (
     "astronaut",
     "astronaut_mirrored",
@@ -268,7 +274,7 @@ def face_scenes(
     side: Annotated[int, Field(ge=32, le=1024)] = 512,
     lfw: LfwFaces = "test",
     seed: Seed = 0,
-) -> Scenes:
+) -> FaceScenes:
     """Gray scenes with known faces for measuring a face detector: each photograph scaled
     to cover ``side`` × ``side`` and centre-cropped (the astronaut, 512 × 512, is left as
     it is) and, unless it shows a face of its own (the astronaut), given
@@ -294,8 +300,10 @@ def face_scenes(
 
     Returns
     -------
-    Scenes
-        Images (N, side, side) float32 and every face's box, label 1.
+    images : SceneImages
+        The scenes (N, side, side) float32.
+    faces : SceneBoxes
+        Every face's box, score 1, with the scene it is in.
 
     References
     ----------
@@ -307,14 +315,10 @@ def face_scenes(
     for index, name in enumerate(photos):
         image, known = _fit(*photograph(name), side)
         count = 0 if len(known) else int(rng.integers(min_faces, max_faces + 1))
-        image, truth = paste_faces(image, known, faces, count, (min_side, max_side), rng)
+        image, placed = paste_faces(image, known, faces, count, (min_side, max_side), rng)
         images.append(image.mean(axis=2))
-        boxes.append(truth)
-        owners.append(np.full(len(truth), index, np.int64))
+        boxes.append(placed)
+        owners.append(np.full(len(placed), index, np.int64))
     xyxy = np.concatenate(boxes)
-    return SceneSet(
-        np.asarray(images, np.float32),
-        xyxy,
-        np.ones(len(xyxy), np.int64),
-        np.concatenate(owners),
-    )
+    truth = SceneBoxSet(xyxy, np.ones(len(xyxy)), np.concatenate(owners), len(photos))
+    return FaceScenes(np.asarray(images, np.float32), truth)

@@ -23,7 +23,6 @@ from graphvision_plugins.recognition._lbp_cascade import (
     resampled_integral,
 )
 from graphvision_plugins.recognition._types import SampleSet, recipe_of
-from graphvision_plugins.synthetic._digit_scenes import SceneSet
 from graphvision_plugins.synthetic._face_collage import ASTRONAUT_FACE, photograph
 
 from ..conftest import PIPELINES
@@ -336,18 +335,24 @@ def test_pasted_faces_are_the_ones_lfw_faces_holds_out():
             assert np.sort(distance)[1] > 2 * distance[nearest]
 
 
-def test_face_scenes_keep_the_astronaut_and_move_boxes_with_the_scaling():
+def test_face_scenes_keep_the_astronaut_and_scale_the_others_before_pasting():
+    from skimage.transform import resize
+
     scenes = syn.face_scenes(photos=("astronaut", "astronaut_mirrored", "chelsea"), seed=3)
-    assert scenes.images.shape == (3, 512, 512)
-    np.testing.assert_allclose(scenes.xyxy[scenes.owner == 0], [ASTRONAUT_FACE])
+    assert scenes.images.shape == (3, 512, 512) and scenes.faces.scenes == 3
+    np.testing.assert_allclose(scenes.faces.boxes_of(0)[0], [ASTRONAUT_FACE])
     astronaut = skimage.data.astronaut().mean(axis=2) / 255
     np.testing.assert_allclose(scenes.images[0], astronaut, atol=1e-6)
     np.testing.assert_allclose(scenes.images[1], astronaut[:, ::-1], atol=1e-6)
-    cat = scenes.xyxy[scenes.owner == 2]
-    assert 1 <= len(cat) <= 3 and ((cat[:, 2:] - cat[:, :2]) >= 40).all()
-    for x0, y0, x1, y1 in cat.astype(int):  # pasted after the scaling: gray squares
-        patch = scenes.images[2, y0:y1, x0:x1]
-        assert patch.shape == (y1 - y0, x1 - x0)
+    # chelsea (300 × 451) covers 512 × 770, centre-cropped to columns 129–640
+    cat = skimage.data.chelsea().mean(axis=2) / 255
+    expected = resize(cat, (512, 770), order=1, anti_aliasing=False)[:, 129:641]
+    faces = scenes.faces.boxes_of(2)[0]
+    assert 1 <= len(faces) <= 3 and ((faces[:, 2:] - faces[:, :2]) >= 40).all()
+    outside = np.ones((512, 512), bool)
+    for x0, y0, x1, y1 in faces.astype(int):  # pasted after the scaling, at their sides
+        outside[y0:y1, x0:x1] = False
+    np.testing.assert_allclose(scenes.images[2][outside], expected[outside], atol=1e-5)
 
 
 def test_face_scene_parameters_are_checked_before_anything_runs():
@@ -362,10 +367,9 @@ def test_face_scene_parameters_are_checked_before_anything_runs():
 # --- scoring ---------------------------------------------------------------------------
 
 
-def known_scenes():
+def known_faces():
     faces = np.array([[10, 10, 30, 30], [50, 50, 70, 70], [5, 5, 25, 25]], np.float64)
-    return SceneSet(np.zeros((3, 80, 80), np.float32), faces, np.ones(3, np.int64),
-                    np.array([0, 0, 1], np.int64))  # fmt: skip
+    return SceneBoxSet(faces, np.ones(3), np.array([0, 0, 1], np.int64), 3)
 
 
 def test_face_scores_count_hits_duplicates_and_misses_by_hand():
@@ -379,7 +383,7 @@ def test_face_scores_count_hits_duplicates_and_misses_by_hand():
         np.array([0, 0, 0, 0, 1], np.int64),
         3,
     )  # fmt: skip
-    scores = rec.face_scores(found, known_scenes())
+    scores = rec.face_scores(found, known_faces())
     assert scores.recall == pytest.approx(2 / 3)
     assert scores.false_positives == pytest.approx(3 / 3)  # three false boxes, three scenes
     assert scores.face_iou == pytest.approx((1.0 + 0.6) / 2)
@@ -391,14 +395,14 @@ def test_face_scores_count_hits_duplicates_and_misses_by_hand():
 def test_the_better_scored_box_claims_a_face_first():
     found = SceneBoxSet(np.array([[12, 10, 32, 30], [10, 10, 30, 30]], np.float64),
                         np.array([1.0, 2.0]), np.array([0, 0], np.int64), 3)  # fmt: skip
-    scores = rec.face_scores(found, known_scenes())
+    scores = rec.face_scores(found, known_faces())
     assert scores.face_iou == pytest.approx(1.0) and scores.false_positives == pytest.approx(1 / 3)
 
 
 def test_scores_of_other_scenes_are_refused_with_what_differs():
     found = SceneBoxSet(np.zeros((0, 4)), np.zeros(0), np.zeros(0, np.int64), 2)
-    with pytest.raises(ValueError, match="found in 2 scenes but 3 scenes are given"):
-        rec.face_scores(found, known_scenes())
+    with pytest.raises(ValueError, match="found in 2 scenes but the truth covers 3 scenes"):
+        rec.face_scores(found, known_faces())
     with pytest.raises(gv.PortValueError, match="'owner' must index the 2 scenes"):
         rec.SceneBoxesPort.validate(
             SceneBoxSet(np.array([[0, 0, 1, 1.0]]), np.ones(1), np.array([2]), 2)
@@ -408,7 +412,8 @@ def test_scores_of_other_scenes_are_refused_with_what_differs():
 def test_the_scenes_picture_marks_true_faces_green_and_found_ones_red():
     found = SceneBoxSet(np.array([[50.0, 50.0, 70.0, 70.0]]), np.ones(1),
                         np.array([0], np.int64), 3)  # fmt: skip
-    picture = rec.draw_scenes(known_scenes(), found, count=3, columns=2, size=80)
+    images = np.zeros((3, 80, 80), np.float32)
+    picture = rec.draw_scenes(images, known_faces(), found, count=3, columns=2, size=80)
     assert picture.shape == (80 + 4 + 80, 80 + 4 + 80, 3)
     assert picture[10, 20].tolist() == pytest.approx([0.1, 0.9, 0.1])  # face 0's top side
     assert picture[50, 60].tolist() == pytest.approx([0.95, 0.15, 0.1])  # found over face 1
