@@ -84,7 +84,8 @@ SceneImages = Annotated[NDArray[np.float32], SceneImagesPort]
 
 @dataclass(frozen=True, eq=False)
 class SceneBoxSet:
-    """Boxes found in ``scenes`` scenes: box k lies in scene ``owner[k]``."""
+    """Boxes in ``scenes`` scenes (found by a detector, or the true faces): box k lies in
+    scene ``owner[k]``."""
 
     xyxy: np.ndarray
     score: np.ndarray
