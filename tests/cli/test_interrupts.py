@@ -1,0 +1,126 @@
+"""Dying workers, Ctrl-C and kill -9: one node lost at most, nothing half-written, no traceback."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import graphvision as gv
+
+from ..conftest import TOY
+
+SLOW = """\
+name: slow
+inputs:
+  x: {type: Float, default: 1.0}
+nodes:
+  a: {op: toy.sleep, in: {x: x}, params: {seconds: 30}}
+  b: {op: toy.sleep, in: {x: x}, params: {seconds: 30}}
+outputs: {a: a, b: b}
+"""
+
+
+def _graph(marker: Path, times: int) -> gv.Graph:
+    graph = gv.Graph("dying")
+    x = graph.input("x", "Float", default=1.0)
+    dying = graph.add("dying", "toy.die_once", x=x, params={"marker": str(marker), "times": times})
+    healthy = graph.add("healthy", "toy.sleep", x=x, params={"seconds": 1.0})
+    graph.output("dying", dying)
+    graph.output("healthy", healthy)
+    return graph
+
+
+def test_a_dying_worker_costs_one_retry_and_no_healthy_node(registry, tmp_path):
+    result = gv.run(_graph(tmp_path / "m", 1), registry, executor="processes", workers=2)
+    assert (tmp_path / "m").read_text() == "1"  # it died once
+    assert result.outputs == {"dying": 2.0, "healthy": 1.0}
+
+
+def test_a_worker_that_dies_again_fails_only_its_node(registry, tmp_path):
+    with pytest.raises(gv.RunError) as caught:
+        gv.run(_graph(tmp_path / "m", 5), registry, executor="processes", keep_going=True)
+    assert list(caught.value.failures) == ["dying"]
+    assert "died (killed, or out of memory), and again when retried alone" in str(
+        caught.value.failures["dying"]
+    )
+    assert caught.value.result.outputs["healthy"] == 1.0
+
+
+def _start(tmp_path: Path, executor: str) -> subprocess.Popen:
+    (tmp_path / "slow.yaml").write_text(SLOW)
+    command = [sys.executable, "-m", "graphvision", "run", str(tmp_path / "slow.yaml")]
+    command += ["--plugins", str(TOY), "--executor", executor, "--no-cache", "--progress"]
+    command += ["-d", str(tmp_path / "out")]
+    process = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    assert process.stderr is not None
+    line = process.stderr.readline()  # "running slow: 2 node(s) to compute"
+    assert line.startswith("running slow"), line
+    time.sleep(1.0)  # the nodes are running
+    return process
+
+
+@pytest.mark.parametrize("executor", ["threads", "processes"])
+def test_ctrl_c_exits_130_with_one_line_and_nothing_written(tmp_path, executor):
+    process = _start(tmp_path, executor)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 130
+    assert err.strip().startswith("interrupted after") and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "out").exists()  # the folder made for the run is gone, still empty
+
+
+def test_sigterm_stops_a_run_as_ctrl_c_does_and_exits_143(tmp_path):
+    """kill, timeout, docker stop and batch schedulers send SIGTERM: the run stops as it
+    does on Ctrl-C (one line, nothing half-written) instead of dying mid-write."""
+    process = _start(tmp_path, "threads")
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 143
+    assert err.strip().startswith("terminated after") and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "out").exists()
+
+
+def _children(pid: int) -> set[int]:
+    found = set()
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        with open(task / "children") as stream:
+            found |= {int(child) for child in stream.read().split()}
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="needs Linux /proc")
+def test_worker_processes_exit_when_the_command_is_killed(tmp_path):
+    process = _start(tmp_path, "processes")
+    workers = set()
+    for _ in range(40):
+        workers = {c for c in _children(process.pid) if _is_worker(c)}
+        if workers:
+            break
+        time.sleep(0.25)
+    assert workers, "no worker process found"
+    process.kill()  # kill -9: no chance to clean up
+    process.wait()
+    for _ in range(60):
+        if not any(Path(f"/proc/{w}").exists() and not _is_zombie(w) for w in workers):
+            break
+        time.sleep(0.25)
+    assert not any(Path(f"/proc/{w}").exists() and not _is_zombie(w) for w in workers)
+
+
+def _is_worker(pid: int) -> bool:
+    try:
+        return b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return False
+
+
+def _is_zombie(pid: int) -> bool:
+    try:
+        return " Z " in Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return True

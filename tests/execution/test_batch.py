@@ -1,0 +1,433 @@
+"""Batch runs: one folder per input file whatever the names, recursion, the summary
+table, and the image files that used to be misread (CMYK JPEG, animated GIF)."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+import graphvision as gv
+from graphvision.cli import main
+from graphvision.execution.batch_files import output_folders, pattern_root
+
+from ..conftest import PIPELINES
+
+DEMO = PIPELINES / "denoise.yaml"
+PSNR = "psnr_noisy_gaussian"
+
+
+def photo(path: Path, level: int) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    iio.imwrite(path, np.full((12, 16), level, np.uint8))
+    return path
+
+
+def test_same_file_names_in_different_folders_get_their_own_folders(capsys, tmp_path):
+    photos = tmp_path / "photos"
+    levels = {"a/img.png": 200, "b/img.png": 60, "a/deep/img.png": 120, "img.png": 30}
+    for name, level in levels.items():
+        photo(photos / name, level)
+    out = tmp_path / "out"
+    pattern = f"image={photos}/**/*.png"
+    status = main(
+        ["run", str(DEMO), "--no-cache", "--batch", pattern, "-d", str(out), "-o", "noisy_gaussian"]
+    )
+    assert status == 0, capsys.readouterr().err
+    rows = list(csv.DictReader((out / "batch.csv").open()))
+    assert sorted(Path(r["file"]).relative_to(photos).as_posix() for r in rows) == sorted(levels)
+    assert len({r["output_dir"] for r in rows}) == len(levels)
+    for row in rows:  # each folder holds the output of its own file, not of a namesake
+        level = levels[Path(row["file"]).relative_to(photos).as_posix()]
+        noisy = iio.imread(Path(row["output_dir"]) / "noisy_gaussian.png")
+        assert abs(float(np.median(noisy)) - level) < 8
+        assert row["status"] == "ok" and row["error"] == ""
+    assert (out / "a" / "deep" / "img" / "record.json").is_file()
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_output_folders_are_distinct_for_any_set_of_paths(seed):
+    rng = np.random.default_rng(seed)
+    folders = ["", "a", "b", "a/b", "img", "batch.csv"]
+    stems = ["img", "img_png", "img-2", "batch", "x.y"]
+    suffixes = [".png", ".jpg", ".PNG", ""]
+    chosen = {
+        Path("root", rng.choice(folders), f"{rng.choice(stems)}{rng.choice(suffixes)}")
+        for _ in range(40)
+    }
+    files = sorted(chosen)
+    named = output_folders(files, Path("root"), Path("out"))
+    assert len(set(named)) == len(files)
+    assert Path("out/batch.csv") not in named
+    assert all(".." not in p.parts and p.parts[0] == "out" for p in named)
+
+
+def test_pattern_root_is_the_part_before_the_first_wildcard():
+    assert pattern_root("photos/**/*.png") == Path("photos")
+    assert pattern_root("/data/x/*.jpg") == Path("/data/x")
+    assert pattern_root("*.png") == Path()
+    assert pattern_root("photos/one.png") == Path("photos")
+
+
+def test_batch_csv_names_the_folder_and_the_error(capsys, tmp_path):
+    photo(tmp_path / "in" / "good.png", 100)
+    (tmp_path / "in" / "bad.png").write_text("not an image")
+    out = tmp_path / "out"
+    pattern = f"image={tmp_path}/in/*.png"
+    status = main(["run", str(DEMO), "--no-cache", "--batch", pattern, "-d", str(out), "-o", PSNR])
+    err = capsys.readouterr().err
+    assert status == 1 and "Traceback" not in err
+    rows = {Path(r["file"]).name: r for r in csv.DictReader((out / "batch.csv").open())}
+    assert rows["bad.png"]["status"] == "failed"
+    assert "bad.png is not a readable image" in rows["bad.png"]["error"]
+    assert rows["good.png"]["output_dir"] == str(out / "good")
+    assert float(rows["good.png"][PSNR]) > 15
+
+
+def test_run_batch_from_python(tmp_path):
+    files = [photo(tmp_path / "x" / "img.png", 50), photo(tmp_path / "y" / "img.png", 150)]
+    batch = gv.run_batch(
+        gv.load_pipeline(DEMO),
+        files,
+        input="image",
+        output_dir=tmp_path / "out",
+        outputs=[PSNR],
+    )
+    assert [item.output_dir for item in batch.items] == [
+        tmp_path / "out" / "x" / "img",
+        tmp_path / "out" / "y" / "img",
+    ]
+    assert batch.failed == 0 and all(PSNR in item.scalars for item in batch.items)
+    record = json.loads((tmp_path / "out" / "y" / "img" / "record.json").read_text())
+    assert record["inputs"]["image"]["path"] == str(files[1].resolve())
+
+
+def test_batch_folder_of_a_failed_item_keeps_no_stale_outputs(capsys, tmp_path):
+    image = photo(tmp_path / "in" / "img.png", 100)
+    out = tmp_path / "out"
+    pattern = f"image={image.parent}/*.png"
+    args = ["run", str(DEMO), "--no-cache", "--batch", pattern, "-d", str(out)]
+    assert main([*args, "-o", PSNR]) == 0
+    assert (out / "img" / f"{PSNR}.json").is_file()
+    image.write_text("now broken")
+    assert main([*args, "-o", PSNR]) == 1
+    assert not (out / "img" / f"{PSNR}.json").exists()
+    assert not (out / "img" / "record.json").exists()
+    capsys.readouterr()
+
+
+def test_a_glob_matching_nothing_is_a_usage_error(capsys, tmp_path):
+    status = main(["run", str(DEMO), "--batch", f"image={tmp_path}/*.png", "-d", str(tmp_path)])
+    assert status == 2 and "no file matches" in capsys.readouterr().err
+
+
+# -- image files that were misread -----------------------------------------------------------
+
+
+def resolved_image(path: Path) -> np.ndarray:
+    graph = gv.Graph("identity")
+    graph.input("image", "Image")
+    graph.output("image", "image")
+    return gv.run(graph, inputs={"image": str(path)}).outputs["image"]
+
+
+def test_a_cmyk_jpeg_reads_as_its_rgb_colours(tmp_path):
+    from PIL import Image as PILImage
+
+    rows, cols = np.mgrid[0:32, 0:48]
+    rgb = np.dstack([rows * 8, cols * 5, 255 - rows * 8]).astype(np.uint8)  # smooth: JPEG-friendly
+    PILImage.fromarray(rgb).convert("CMYK").save(tmp_path / "print.jpg", quality=98)
+    image = resolved_image(tmp_path / "print.jpg")
+    assert image.shape == (32, 48, 3)
+    assert np.abs(image * 255 - rgb).mean() < 3  # JPEG loss only; as RGBA it is off by ~100
+
+
+def test_a_cmyk_jpeg_with_a_profile_that_cannot_apply_is_refused_by_name(tmp_path):
+    from PIL import Image as PILImage
+    from PIL import ImageCms
+
+    rgb_profile = ImageCms.ImageCmsProfile(ImageCms.createProfile("sRGB")).tobytes()
+    cmyk = PILImage.fromarray(np.zeros((4, 4, 3), np.uint8)).convert("CMYK")
+    cmyk.save(tmp_path / "print.jpg", icc_profile=rgb_profile)  # an RGB profile on CMYK data
+    with pytest.raises(gv.InputError, match=r"print.jpg is a CMYK image whose embedded colour"):
+        resolved_image(tmp_path / "print.jpg")
+
+
+def test_an_animated_gif_says_what_to_do(tmp_path):
+    from PIL import Image as PILImage
+
+    frames = [PILImage.fromarray(np.full((6, 7, 3), 40 * i, np.uint8)) for i in range(3)]
+    frames[0].save(tmp_path / "anim.gif", save_all=True, append_images=frames[1:])
+    with pytest.raises(gv.InputError, match=r"anim.gif holds 3 frames .* save the frame you want"):
+        resolved_image(tmp_path / "anim.gif")
+
+
+def test_a_file_dropped_from_the_batch_leaves_no_current_looking_folder(capsys, tmp_path):
+    photo(tmp_path / "in" / "a.png", 100)
+    dropped = photo(tmp_path / "in" / "b.png", 50)
+    out = tmp_path / "out"
+    args = ["run", str(DEMO), "--no-cache", "--batch", f"image={tmp_path}/in/*.png", "-d", str(out)]
+    assert main([*args, "-o", PSNR]) == 0
+    (out / "b" / "mine.txt").write_text("kept")
+    dropped.unlink()
+    assert main([*args, "-o", PSNR]) == 0
+    assert {p.name for p in (out / "b").iterdir()} == {"mine.txt"}
+    assert (out / "a" / "record.json").is_file()
+    (out / "batch.csv").write_text("name,score\nx,1\n")  # the user's own table
+    assert main([*args, "-o", PSNR]) == 2
+    assert "is not a graphvision batch summary" in capsys.readouterr().err
+    assert (out / "batch.csv").read_text() == "name,score\nx,1\n"
+
+
+def test_a_batch_never_reads_its_own_outputs(capsys, tmp_path):
+    photo(tmp_path / "photos" / "a.png", 100)
+    out = tmp_path / "photos" / "out"  # inside the searched folders
+    args = ["run", str(DEMO), "--no-cache", "--batch", f"image={tmp_path}/photos/**/*.png"]
+    for _ in range(2):
+        assert main([*args, "-d", str(out), "-o", "noisy_gaussian"]) == 0
+        rows = list(csv.DictReader((out / "batch.csv").open()))
+        assert [Path(r["file"]).name for r in rows] == ["a.png"]
+    capsys.readouterr()
+
+
+COUNTING_PLUGIN = '''
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from graphvision import Float, Image, node
+
+_LOCK = threading.Lock()
+
+
+def _log(path: str, line: str) -> None:
+    with _LOCK, open(path, "a") as handle:
+        handle.write(line + "\\n")
+
+
+@node("counting.model")
+def model(*, log: str = "") -> Float:
+    """A stand-in for a trained model: every file's run needs it.
+
+    Parameters
+    ----------
+    log : a file that gets one line each time this runs
+    """
+    _log(log, "model")
+    return 2.0
+
+
+@node("counting.score")
+def score(image: Image, weight: Float, *, log: str = "") -> Float:
+    """weight × mean(image), slowly, noting when it starts and ends.
+
+    Parameters
+    ----------
+    image : the file's image
+    weight : the shared model
+    log : a file that gets a start and an end line per run
+    """
+    _log(log, f"start {time.monotonic()}")
+    time.sleep(0.3)
+    _log(log, f"end {time.monotonic()}")
+    return float(weight * image.mean())
+'''
+
+
+def _counting_graph(tmp_path: Path):
+    plugin = tmp_path / "counting.py"
+    plugin.write_text(COUNTING_PLUGIN)
+    registry = gv.discover([plugin])
+    log = str(tmp_path / "log.txt")
+    graph = gv.Graph("counting")
+    image = graph.input("image", "Image")
+    weight = graph.add("model", "counting.model", params={"log": log})
+    graph.output(
+        "score",
+        graph.add("score", "counting.score", image=image, weight=weight, params={"log": log}),
+    )
+    return graph, registry, Path(log)
+
+
+def test_a_batch_computes_shared_nodes_once_and_runs_files_at_once(tmp_path):
+    graph, registry, log = _counting_graph(tmp_path)
+    levels = [10, 60, 110, 160, 210, 250]
+    files = [photo(tmp_path / "in" / f"{k}.png", level) for k, level in enumerate(levels)]
+    seen = []
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        cache=gv.Cache.at(tmp_path / "cache"),
+        executor="threads",
+        workers=3,
+        on_item=lambda number, total, item: seen.append((number, total)),
+    )
+    lines = log.read_text().splitlines()
+    assert lines.count("model") == 1  # the shared node ran for the first file only
+    assert [item.status for item in batch.items] == ["ok"] * len(files)
+    for item, level in zip(batch.items, levels, strict=True):  # results in file order
+        assert item.scalars["score"] == pytest.approx(2.0 * level / 255.0, abs=1e-6)
+    assert seen == [(n, len(files)) for n in range(1, len(files) + 1)]
+    running = most = 0
+    for line in lines:  # the log is in time order
+        running += {"start": 1, "end": -1}.get(line.split()[0], 0)
+        most = max(most, running)
+    assert most >= 2  # several files were in flight together
+
+
+def test_files_at_once_1_runs_files_one_after_another(tmp_path):
+    graph, registry, log = _counting_graph(tmp_path)
+    files = [photo(tmp_path / "in" / f"{k}.png", 50 + k) for k in range(3)]
+    gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        cache=None,
+        files_at_once=1,
+    )
+    lines = [x.split()[0] for x in log.read_text().splitlines() if x != "model"]
+    assert lines == ["start", "end"] * 3
+
+
+def test_on_processes_each_further_file_is_one_task_with_the_shared_values_sent(tmp_path):
+    from graphvision.execution.file_task import shared_steps
+
+    graph, registry, log = _counting_graph(tmp_path)
+    compiled = gv.compile_graph(graph, registry, provided={"image"})
+    assert shared_steps(compiled, "image") == ["model"]
+    levels = [10, 60, 110, 160, 210]
+    files = [photo(tmp_path / "in" / f"{k}.png", level) for k, level in enumerate(levels)]
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        cache=None,
+        executor="processes",
+        workers=2,
+    )
+    assert [item.status for item in batch.items] == ["ok"] * len(files), batch.items
+    for item, level in zip(batch.items, levels, strict=True):
+        assert item.scalars["score"] == pytest.approx(2.0 * level / 255.0, abs=1e-6)
+        record = json.loads((item.output_dir / "record.json").read_text())
+        assert record["outputs"]["score"].startswith("Float")
+    assert log.read_text().splitlines().count("model") == 1  # seeded, never recomputed
+    later = json.loads((batch.items[-1].output_dir / "record.json").read_text())
+    assert "one task per file" in later["executor"]
+    statuses = {node["name"]: node["status"] for node in later["nodes"]}
+    assert statuses == {"model": "cached", "score": "computed"}
+
+
+@pytest.mark.parametrize("executor", ["threads", "processes"])
+def test_a_batch_where_every_file_fails_exits_1_and_still_writes_its_pages(
+    capsys, tmp_path, executor
+):
+    for name in ("a.png", "b.png", "c.png"):
+        (tmp_path / "in").mkdir(exist_ok=True)
+        (tmp_path / "in" / name).write_text("not an image")
+    out = tmp_path / "out"
+    pattern = f"image={tmp_path}/in/*.png"
+    args = ["run", str(DEMO), "--no-cache", "--batch", pattern, "-d", str(out), "-o", PSNR]
+    status = main([*args, "--executor", executor, "--workers", "2"])
+    err = capsys.readouterr().err
+    assert status == 1 and "Traceback" not in err and "0 of 3 succeeded" in err
+    rows = list(csv.DictReader((out / "batch.csv").open()))
+    assert [r["status"] for r in rows] == ["failed"] * 3
+    assert all("is not a readable image" in r["error"] for r in rows)
+    assert (out / "batch.html").read_text().count("failed") >= 3
+
+
+def test_a_batch_run_again_on_processes_loads_every_file_from_the_cache(tmp_path):
+    graph, registry, log = _counting_graph(tmp_path)
+    files = [photo(tmp_path / "in" / f"{k}.png", 40 + 50 * k) for k in range(4)]
+    options = {
+        "input": "image",
+        "output_dir": tmp_path / "out",
+        "registry": registry,
+        "cache": gv.Cache.at(tmp_path / "cache"),
+        "executor": "processes",
+        "workers": 2,
+    }
+    first = gv.run_batch(graph, [str(f) for f in files], **options)
+    runs = log.read_text().count("start")
+    assert runs == len(files)
+    later = json.loads((first.items[-1].output_dir / "record.json").read_text())
+    assert later["executor"] == "processes, one task per file"
+    again = gv.run_batch(graph, [str(f) for f in files], **options)
+    assert log.read_text().count("start") == runs  # nothing computed the second time
+    assert [i.scalars for i in again.items] == [i.scalars for i in first.items]
+    for item in again.items:
+        record = json.loads((item.output_dir / "record.json").read_text())
+        assert {n["status"] for n in record["nodes"]} == {"cached"}
+
+
+def test_an_input_given_by_the_batch_and_by_i_is_refused(capsys, tmp_path):
+    photo(tmp_path / "in" / "a.png", 100)
+    args = ["run", str(DEMO), "--batch", f"image={tmp_path}/in/*.png", "-d", str(tmp_path / "out")]
+    assert main([*args, "-i", "image=sample:coins"]) == 2
+    assert "input 'image' is given twice" in capsys.readouterr().err
+    assert not any((tmp_path / "out").rglob("*"))  # nothing ran
+
+
+def test_an_interrupted_batch_still_writes_its_summary(tmp_path):
+    for number in range(4):
+        photo(tmp_path / "in" / f"p{number}.png", 40 * number + 20)
+    out = tmp_path / "out"
+
+    def stop_after_two(done, total, item):
+        if done == 2:
+            raise KeyboardInterrupt
+
+    graph = gv.load_pipeline(DEMO)
+    with pytest.raises(KeyboardInterrupt):
+        gv.run_batch(
+            graph,
+            f"{tmp_path}/in/*.png",
+            input="image",
+            output_dir=out,
+            outputs=[PSNR],
+            executor="sync",
+            on_item=stop_after_two,
+        )
+    rows = list(csv.DictReader((out / "batch.csv").open()))
+    assert [Path(r["file"]).name for r in rows] == [f"p{n}.png" for n in range(4)]
+    assert [r["status"] for r in rows] == ["ok", "ok", "not run", "not run"]
+    assert float(rows[0][PSNR]) > 0 and rows[2][PSNR] == ""
+    assert "not run" in (out / "batch.html").read_text()
+    assert not list(out.glob(".*.tmp"))
+
+
+def test_files_running_when_a_batch_stops_are_interrupted_not_unrun():
+    from graphvision.execution.batch import _not_run
+    from graphvision.execution.batch_files import BatchItem
+
+    paths = [Path(f"p{n}.png") for n in range(3)]
+    folders = [Path(f"out/p{n}") for n in range(3)]
+    done = BatchItem(paths[0], folders[0])
+    marked = _not_run([done, None, None], paths, folders, started={0, 1})
+    assert [item.status for item in marked] == ["ok", "interrupted", "not run"]
+    assert "while this file ran" in marked[1].error and "before this file" in marked[2].error
+
+
+def test_a_file_reached_through_folder_links_is_taken_once(tmp_path):
+    from graphvision.execution.batch_files import batch_files
+
+    photos = tmp_path / "photos"
+    photo(photos / "a.png", 10)
+    photo(photos / "sub" / "b.png", 20)
+    (photos / "sub" / "up").symlink_to(photos, target_is_directory=True)  # a loop
+    (tmp_path / "alias").symlink_to(photos, target_is_directory=True)
+    found = batch_files(f"{photos}/**/*.png")
+    assert found == [photos / "a.png", photos / "sub" / "b.png"]
