@@ -30,5 +30,13 @@ bench: $(STAMP)
 	$(BIN)/python -m pip install --quiet -e ".[dev,bench]"
 	$(BIN)/python bench/run_all.py
 
+# The site is built from real runs: every pipeline runs (values cached in
+# .graphvision-cache/docs, so a second build takes a fraction of the first).
+.PHONY: docs
+docs: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e ".[dev,docs]"
+	NO_MKDOCS_2_WARNING=1 DISABLE_MKDOCS_2_WARNING=true $(BIN)/mkdocs build --strict
+	@echo "site in site/ (open site/index.html in a browser)"
+
 clean:
 	rm -rf $(VENV) out .graphvision-cache

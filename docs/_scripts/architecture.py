@@ -1,0 +1,122 @@
+"""The architecture page's generated half: the layers drawn, the modules listed.
+
+The layers are read from the import-linter ``layers`` contract of pyproject.toml
+(the one ``make lint`` checks), so the drawing is the rule the build enforces.
+Without such a contract the engine's subpackages are drawn in the order the
+layout plans (``PLANNED``). The module table is read from the source files.
+"""
+
+from __future__ import annotations
+
+import ast
+import html
+import tomllib
+from pathlib import Path
+
+import mkdocs_gen_files
+import runs
+
+ENGINE = runs.ROOT / "graphvision"
+# Bottom to top, as the layout plans it; used only when pyproject.toml declares no layers.
+PLANNED = ["errors", "values", "graph", "nodes", "compiler", "cache", "execution", "views", "cli"]
+
+
+def contract_layers() -> tuple[list[list[str]], str]:
+    """Layers from top to bottom (each a list of sibling modules) and where they came from."""
+    config = tomllib.loads((runs.ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    contracts = config.get("tool", {}).get("importlinter", {}).get("contracts", [])
+    for contract in contracts:
+        if contract.get("type") == "layers" and any(
+            "graphvision" in str(layer) for layer in contract.get("layers", [])
+        ):
+            container = (contract.get("containers") or [""])[0]
+            layers = []
+            for layer in contract["layers"]:
+                names = [n.strip().strip("()") for n in str(layer).replace(":", "|").split("|")]
+                layers.append([n.removeprefix(container + ".") for n in names if n])
+            name = contract.get("name", "layers")
+            return layers, f"the import-linter contract “{name}” in pyproject.toml"
+    found = {p.name for p in ENGINE.iterdir() if (p / "__init__.py").exists()}
+    layers = [[name] for name in reversed(PLANNED) if name in found]
+    if layers:
+        return layers, "the engine's subpackages, in the order the layout plans"
+    return [[name] for name in reversed(PLANNED)], "the planned layout (not yet in the tree)"
+
+
+def _modules(package: str) -> list[str]:
+    folder = ENGINE / package.replace(".", "/")
+    if folder.is_dir():
+        return sorted(p.stem for p in folder.glob("*.py") if p.stem != "__init__")
+    return []
+
+
+def layers_svg(layers: list[list[str]]) -> str:
+    width, row, gap, left = 720, 58, 14, 40
+    height = len(layers) * (row + gap) + 30
+    out = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
+        f'viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="13">',
+        '<defs><marker id="a" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="7" '
+        'markerHeight="7" orient="auto"><path d="M0,0 L10,5 L0,10 z" fill="#555"/></marker></defs>',
+        f'<line x1="18" y1="20" x2="18" y2="{height - 20}" stroke="#555" stroke-width="2" '
+        'marker-end="url(#a)"/>',
+        f'<text x="12" y="{height / 2}" transform="rotate(-90 12 {height / 2})" '
+        'text-anchor="middle" fill="#555" font-size="11">imports go down only</text>',
+    ]
+    for i, layer in enumerate(layers):
+        y = 10 + i * (row + gap)
+        box = (width - left - 10 - (len(layer) - 1) * 10) / len(layer)
+        for j, name in enumerate(layer):
+            x = left + j * (box + 10)
+            shade = 0.92 - 0.5 * i / max(1, len(layers) - 1)
+            fill = f"hsl(230, 45%, {shade * 100:.0f}%)"
+            ink = "#fff" if shade < 0.6 else "#111"
+            modules = ", ".join(_modules(name))
+            if len(modules) > 90:
+                modules = modules[:87] + "…"
+            out += [
+                f'<rect x="{x:.0f}" y="{y}" width="{box:.0f}" height="{row}" rx="6" '
+                f'fill="{fill}" stroke="#334"/>',
+                f'<text x="{x + 10:.0f}" y="{y + 22}" font-weight="bold" fill="{ink}">'
+                f"graphvision.{html.escape(name)}</text>",
+                f'<text x="{x + 10:.0f}" y="{y + 42}" font-size="11" fill="{ink}">'
+                f"{html.escape(modules)}</text>",
+            ]
+    out.append("</svg>")
+    return "\n".join(out)
+
+
+def module_rows() -> list[str]:
+    rows = ["| module | lines | what it holds |", "| --- | ---: | --- |"]
+    for path in sorted(ENGINE.rglob("*.py")):
+        source = path.read_text(encoding="utf-8")
+        doc = ast.get_docstring(ast.parse(source)) or ""
+        first = " ".join(doc.strip().split("\n\n")[0].split()).replace("|", "\\|")
+        name = path.relative_to(runs.ROOT).as_posix()
+        rows.append(f"| `{name}` | {len(source.splitlines())} | {first} |")
+    return rows
+
+
+def generate() -> None:
+    layers, origin = contract_layers()
+    with mkdocs_gen_files.open("assets/generated/layers.svg", "w") as out:
+        out.write(layers_svg(layers))
+    text = [
+        "",
+        "## The layers, as checked",
+        "",
+        f"Drawn when this site was built from {origin}; top to bottom, a layer may",
+        "import only the layers below it.",
+        "",
+        "![The engine's layers](assets/generated/layers.svg)",
+        "",
+        "## Every engine module",
+        "",
+        "Listed from the source tree when this site was built, with the first",
+        "paragraph of each module's docstring.",
+        "",
+        *module_rows(),
+        "",
+    ]
+    with mkdocs_gen_files.open("architecture.md", "a") as out:
+        out.write("\n".join(text))
