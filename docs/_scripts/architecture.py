@@ -11,7 +11,6 @@ from __future__ import annotations
 import ast
 import html
 import tomllib
-from pathlib import Path
 
 import mkdocs_gen_files
 import runs
@@ -29,11 +28,10 @@ def contract_layers() -> tuple[list[list[str]], str]:
         if contract.get("type") == "layers" and any(
             "graphvision" in str(layer) for layer in contract.get("layers", [])
         ):
-            container = (contract.get("containers") or [""])[0]
             layers = []
             for layer in contract["layers"]:
                 names = [n.strip().strip("()") for n in str(layer).replace(":", "|").split("|")]
-                layers.append([n.removeprefix(container + ".") for n in names if n])
+                layers.append([n.removeprefix("graphvision.") for n in names if n])
             name = contract.get("name", "layers")
             return layers, f"the import-linter contract “{name}” in pyproject.toml"
     found = {p.name for p in ENGINE.iterdir() if (p / "__init__.py").exists()}
@@ -44,10 +42,11 @@ def contract_layers() -> tuple[list[list[str]], str]:
 
 
 def _modules(package: str) -> list[str]:
+    """The modules of a subpackage (a module layer is its own one)."""
     folder = ENGINE / package.replace(".", "/")
     if folder.is_dir():
         return sorted(p.stem for p in folder.glob("*.py") if p.stem != "__init__")
-    return []
+    return [package] if folder.with_suffix(".py").exists() else []
 
 
 def layers_svg(layers: list[list[str]]) -> str:

@@ -14,7 +14,10 @@ def _help(*args: str) -> str:
     env = {**os.environ, "COLUMNS": "88"}
     done = subprocess.run(
         [sys.executable, "-m", "graphvision", *args, "--help"],
-        capture_output=True, text=True, env=env, check=True,
+        capture_output=True,
+        text=True,
+        env=env,
+        check=True,
     )
     return done.stdout.rstrip()
 
@@ -27,7 +30,13 @@ def commands(top: str) -> list[str]:
 
 def generate() -> None:
     top = _help()
-    lines = ["", "## Every command's help", "", "Printed by the installed command when this site was built.", ""]
+    lines = [
+        "",
+        "## Every command's help",
+        "",
+        "Printed by the installed command when this site was built.",
+        "",
+    ]
     lines += ["### graphvision", "", "```text", top, "```", ""]
     for command in commands(top):
         lines += [f"### graphvision {command}", "", "```text", _help(command), "```", ""]

@@ -11,8 +11,11 @@ import graphvision as gv
 def _tree(cls: type, depth: int = 0) -> list[str]:
     doc = (cls.__doc__ or "").strip().splitlines()
     first = doc[0] if doc and cls is not gv.GraphvisionError else ""
-    lines = [f"{'    ' * depth}- `{cls.__name__}`" + (f": {docstrings.inline(first)}" if first else "")]
-    for sub in sorted(cls.__subclasses__(), key=lambda c: c.__name__):
+    lines = [
+        f"{'    ' * depth}- `{cls.__name__}`" + (f": {docstrings.inline(first)}" if first else "")
+    ]
+    subclasses: list[type] = cls.__subclasses__()
+    for sub in sorted(subclasses, key=lambda c: c.__name__):
         if sub.__module__.split(".")[0] == "graphvision":
             lines += _tree(sub, depth + 1)
     return lines

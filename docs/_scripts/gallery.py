@@ -89,7 +89,7 @@ def page(run: runs.PipelineRun) -> str:
     with mkdocs_gen_files.open(f"gallery/{run.name}/graph.svg", "w") as out:
         out.write(render_svg(graph))
     if run.result is None:
-        lines += ["!!! failure \"This pipeline failed in the documentation build\"", ""]
+        lines += ['!!! failure "This pipeline failed in the documentation build"', ""]
         lines += ["    ```text", *("    " + x for x in run.error.splitlines()), "    ```", ""]
         return "\n".join(lines)
     figures = headline(run)

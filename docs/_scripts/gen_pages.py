@@ -27,14 +27,14 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-import api  # noqa: E402
-import architecture  # noqa: E402
-import benchmarks  # noqa: E402
-import cli_help  # noqa: E402
-import errors_tree  # noqa: E402
-import gallery  # noqa: E402
-import nodes  # noqa: E402
-import pipeline_files  # noqa: E402
+import api
+import architecture
+import benchmarks
+import cli_help
+import errors_tree
+import gallery
+import nodes
+import pipeline_files
 
 log = logging.getLogger("mkdocs.plugins.graphvision")
 for part in (gallery, nodes, api, benchmarks, architecture, cli_help, pipeline_files, errors_tree):

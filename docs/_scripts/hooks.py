@@ -46,4 +46,6 @@ def on_post_build(config, **kwargs) -> None:
             found.append(f"{path.relative_to(site)}: {url}")
     if found:
         listing = "\n  ".join(found[:20])
-        raise PluginError(f"the site would fetch {len(found)} resource(s) from the network:\n  {listing}")
+        raise PluginError(
+            f"the site would fetch {len(found)} resource(s) from the network:\n  {listing}"
+        )

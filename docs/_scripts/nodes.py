@@ -82,7 +82,8 @@ def _cell(text: str) -> str:
 def _pictures(op: str) -> tuple[list[str], list[tuple[str, str, str, str]]]:
     """Pipelines using ``op`` and, from the first whose run gives one, each output's
     picture or value: (pipeline, node, port, "png:FILE" or "text:...")."""
-    used, shown = [], []
+    used: list[str] = []
+    shown: list[tuple[str, str, str, str]] = []
     for run in runs.all_runs():
         users = [name for name, decl in run.graph.nodes.items() if decl.op == op]
         if not users:
@@ -131,7 +132,9 @@ def op_section(spec: gv.NodeSpec) -> str:
     lines += ["| output | port type | description |", "| --- | --- | --- |"]
     for name, kind in described["outputs"].items():
         entry = returns_doc.get(name) or (
-            next(iter(returns_doc.values())) if len(described["outputs"]) == 1 and returns_doc else None
+            next(iter(returns_doc.values()))
+            if len(described["outputs"]) == 1 and returns_doc
+            else None
         )
         text = _cell(" ".join(x for x in (entry.kind, entry.text) if x)) if entry else ""
         lines.append(f"| `{name}` | `{kind}` | {text} |")
@@ -157,7 +160,10 @@ def op_section(spec: gv.NodeSpec) -> str:
     raises = doc.entries("Raises")
     if raises:
         lines += ["**Raises**", ""]
-        lines += [f"- `{', '.join(e.names)}`: {docstrings.inline(' '.join(e.text.split()))}" for e in raises]
+        lines += [
+            f"- `{', '.join(e.names)}`: {docstrings.inline(' '.join(e.text.split()))}"
+            for e in raises
+        ]
         lines.append("")
     for section in ("Notes", "Examples"):
         if section in doc.sections:

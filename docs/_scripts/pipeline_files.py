@@ -35,7 +35,10 @@ def validation_example() -> list[str]:
         Path(folder, "broken.yaml").write_text(BROKEN, encoding="utf-8")
         done = subprocess.run(
             [sys.executable, "-m", "graphvision", "validate", "broken.yaml"],
-            cwd=folder, capture_output=True, text=True, env={**os.environ, "COLUMNS": "100"},
+            cwd=folder,
+            capture_output=True,
+            text=True,
+            env={**os.environ, "COLUMNS": "100"},
         )
     said = (done.stdout + done.stderr).strip()
     return [

@@ -36,7 +36,7 @@ class PipelineRun:
     error: str = ""
     seconds: float = 0.0
     # "node" or "node.port" -> (port type, value), outputs and intermediates alike
-    values: dict[str, tuple[type, Any]] = field(default_factory=dict)
+    values: dict[str, tuple[type[gv.PortType], Any]] = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -78,7 +78,7 @@ def run_pipeline(path: Path, registry: gv.Registry, cache: gv.Cache | None) -> P
     except gv.GraphvisionError as error:  # shown on the page; the build goes on
         return PipelineRun(path, graph, None, str(error), time.perf_counter() - start)
     seconds = time.perf_counter() - start
-    values: dict[str, tuple[type, Any]] = {}
+    values: dict[str, tuple[type[gv.PortType], Any]] = {}
     for name, value in result.outputs.items():
         values[str(full.outputs[name])] = (result.compiled.output_type(name), value)
     result.outputs = {name: v for name, v in result.outputs.items() if name not in extra}
@@ -121,8 +121,10 @@ def png(image: np.ndarray, longest: int = 640, smallest: int = 64) -> bytes:
     pil = Image.fromarray(np.round(data * 255).astype(np.uint8))
     scale = longest / max(pil.size)
     if scale < 1:
-        pil = pil.resize((max(1, round(pil.width * scale)), max(1, round(pil.height * scale))),
-                         Image.Resampling.LANCZOS)
+        pil = pil.resize(
+            (max(1, round(pil.width * scale)), max(1, round(pil.height * scale))),
+            Image.Resampling.LANCZOS,
+        )
     elif min(pil.size) < smallest:
         factor = -(-smallest // min(pil.size))
         pil = pil.resize((pil.width * factor, pil.height * factor), Image.Resampling.NEAREST)
