@@ -49,9 +49,29 @@ def _modules(package: str) -> list[str]:
     return [package] if folder.with_suffix(".py").exists() else []
 
 
+def _wrapped(names: list[str], chars: int) -> list[str]:
+    lines = [""]
+    for name in names:
+        piece = name if not lines[-1] else f", {name}"
+        if lines[-1] and len(lines[-1]) + len(piece) > chars:
+            lines[-1] += ","
+            lines.append(name)
+        else:
+            lines[-1] += piece
+    return lines
+
+
 def layers_svg(layers: list[list[str]]) -> str:
-    width, row, gap, left = 720, 58, 14, 40
-    height = len(layers) * (row + gap) + 30
+    """Boxes stacked top to bottom, siblings side by side, each listing its modules."""
+    width, gap, left = 720, 14, 40
+    boxes = []  # per layer: (box width, [(name, module lines)]), its height
+    for layer in layers:
+        box = (width - left - 10 - (len(layer) - 1) * 10) / len(layer)
+        chars = int(box / 6.4) - 3
+        rows = [(name, _wrapped(_modules(name), chars)) for name in layer]
+        tallest = max(len(lines) for _, lines in rows)
+        boxes.append((box, rows, 34 + 15 * tallest))
+    height = sum(row for _, _, row in boxes) + gap * len(boxes) + 10
     out = [
         f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
         f'viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="13">',
@@ -62,25 +82,25 @@ def layers_svg(layers: list[list[str]]) -> str:
         f'<text x="12" y="{height / 2}" transform="rotate(-90 12 {height / 2})" '
         'text-anchor="middle" fill="#555" font-size="11">imports go down only</text>',
     ]
-    for i, layer in enumerate(layers):
-        y = 10 + i * (row + gap)
-        box = (width - left - 10 - (len(layer) - 1) * 10) / len(layer)
-        for j, name in enumerate(layer):
+    y = 10
+    for i, (box, rows, row) in enumerate(boxes):
+        shade = 0.92 - 0.5 * i / max(1, len(boxes) - 1)
+        fill = f"hsl(230, 45%, {shade * 100:.0f}%)"
+        ink = "#fff" if shade < 0.6 else "#111"
+        for j, (name, lines) in enumerate(rows):
             x = left + j * (box + 10)
-            shade = 0.92 - 0.5 * i / max(1, len(layers) - 1)
-            fill = f"hsl(230, 45%, {shade * 100:.0f}%)"
-            ink = "#fff" if shade < 0.6 else "#111"
-            modules = ", ".join(_modules(name))
-            if len(modules) > 90:
-                modules = modules[:87] + "…"
             out += [
                 f'<rect x="{x:.0f}" y="{y}" width="{box:.0f}" height="{row}" rx="6" '
                 f'fill="{fill}" stroke="#334"/>',
                 f'<text x="{x + 10:.0f}" y="{y + 22}" font-weight="bold" fill="{ink}">'
                 f"graphvision.{html.escape(name)}</text>",
-                f'<text x="{x + 10:.0f}" y="{y + 42}" font-size="11" fill="{ink}">'
-                f"{html.escape(modules)}</text>",
             ]
+            for k, line in enumerate(lines):
+                out.append(
+                    f'<text x="{x + 10:.0f}" y="{y + 40 + 15 * k}" font-size="11" fill="{ink}">'
+                    f"{html.escape(line)}</text>"
+                )
+        y += row + gap
     out.append("</svg>")
     return "\n".join(out)
 
