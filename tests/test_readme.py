@@ -60,6 +60,9 @@ def run_page(page: Path, folder: Path, monkeypatch: pytest.MonkeyPatch) -> dict:
     """Write the page's titled blocks, then run its Python blocks; return the namespace."""
     monkeypatch.chdir(folder)
     monkeypatch.syspath_prepend(str(folder))
+    # A reader's environment: no pixel budget left behind by a command run in-process
+    # earlier (the command line sets GRAPHVISION_MAX_PIXELS for its worker processes).
+    monkeypatch.delenv("GRAPHVISION_MAX_PIXELS", raising=False)
     (folder / "pipelines").symlink_to(ROOT / "pipelines")  # pages run from the repository root
     before = set(sys.modules)
     found = blocks(page)
