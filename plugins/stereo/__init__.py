@@ -17,6 +17,7 @@ from ._rectify import (
     rectify_pair,
     rectify_uncalibrated,
 )
+from ._speckles import filter_speckles
 from ._structured import Stripes, StripesPort, decode_gray_code, depth_from_stripes
 
 __all__ = [
@@ -39,6 +40,7 @@ __all__ = [
     "disparity_error",
     "draw_disparity",
     "draw_point_cloud",
+    "filter_speckles",
     "hartley_homographies",
     "left_right_check",
     "rectification_dy",

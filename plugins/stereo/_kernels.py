@@ -15,9 +15,11 @@ from numba import njit, prange
 
 __all__ = [
     "aggregate_path",
+    "box_sum",
     "census",
     "census_costs",
     "right_disparity",
+    "speckle_filter",
     "winner_take_all",
 ]
 
@@ -76,6 +78,28 @@ def census_costs(
     return cost
 
 
+@njit(cache=True, nogil=True, parallel=True)
+def box_sum(cost: np.ndarray, half: int) -> np.ndarray:  # pragma: no cover
+    """Sum of each disparity's cost over the ``(2 half + 1)²`` block around each pixel,
+    edge pixels repeated, in the cost's own dtype (separable: columns, then rows)."""
+    rows, cols, count = cost.shape
+    across = np.zeros_like(cost)
+    for y in prange(rows):
+        for x in range(cols):
+            for dx in range(-half, half + 1):
+                xx = min(max(x + dx, 0), cols - 1)
+                for k in range(count):
+                    across[y, x, k] += cost[y, xx, k]
+    out = np.zeros_like(cost)
+    for y in prange(rows):
+        for dy in range(-half, half + 1):
+            yy = min(max(y + dy, 0), rows - 1)
+            for x in range(cols):
+                for k in range(count):
+                    out[y, x, k] += across[yy, x, k]
+    return out
+
+
 @njit(cache=True, nogil=True, fastmath=True, inline="always")
 def _path_step(
     cost: np.ndarray,
@@ -132,7 +156,7 @@ def _aggregate_rows(
     total: np.ndarray,
     step_x: int,
     penalty_small: float | np.number,
-    penalty_large: float | np.number,
+    penalty_large: np.ndarray,
 ) -> None:  # pragma: no cover
     """Horizontal paths: every row is one independent path (rows in parallel)."""
     rows, cols, count = cost.shape
@@ -144,7 +168,13 @@ def _aggregate_rows(
         for j in range(1, cols):
             x = j if step_x > 0 else cols - 1 - j
             before_min = _path_step(
-                cost[y, x], before, before_min, current, total[y, x], penalty_small, penalty_large
+                cost[y, x],
+                before,
+                before_min,
+                current,
+                total[y, x],
+                penalty_small,
+                penalty_large[y, x],
             )
             before, current = current, before
 
@@ -156,7 +186,7 @@ def _aggregate_across_rows(
     step_y: int,
     step_x: int,
     penalty_small: float | np.number,
-    penalty_large: float | np.number,
+    penalty_large: np.ndarray,
 ) -> None:  # pragma: no cover
     """Vertical and diagonal paths: row after row, the predecessor in the previous row."""
     rows, cols, count = cost.shape
@@ -181,7 +211,7 @@ def _aggregate_across_rows(
                     current[x],
                     total[y, x],
                     penalty_small,
-                    penalty_large,
+                    penalty_large[y, x],
                 )
         previous, current = current, previous
         previous_min, current_min = current_min, previous_min
@@ -193,7 +223,7 @@ def aggregate_path(
     step_y: int,
     step_x: int,
     penalty_small: float | np.number,
-    penalty_large: float | np.number,
+    penalty_large: float | np.number | np.ndarray,
 ) -> None:
     r"""Add one path's aggregated cost to ``total`` (Hirschmüller 2008, eq. 13).
 
@@ -204,10 +234,11 @@ def aggregate_path(
     The path runs along ``r = (step_y, step_x)`` with steps in {−1, 0, 1};
     it starts afresh (``L_r = C``) where ``p − r`` leaves the image.
     """
+    jumps = np.broadcast_to(np.asarray(penalty_large, dtype=cost.dtype), cost.shape[:2])
     if step_y == 0:
-        _aggregate_rows(cost, total, step_x, penalty_small, penalty_large)
+        _aggregate_rows(cost, total, step_x, penalty_small, jumps)
     else:
-        _aggregate_across_rows(cost, total, step_y, step_x, penalty_small, penalty_large)
+        _aggregate_across_rows(cost, total, step_y, step_x, penalty_small, jumps)
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -284,4 +315,42 @@ def right_disparity(cost: np.ndarray, d_min: int) -> np.ndarray:  # pragma: no c
                     best_d = d_min + k
                     found = True
             out[y, xr] = np.float32(best_d) if found else np.nan
+    return out
+
+
+@njit(cache=True, nogil=True)
+def speckle_filter(
+    disparity: np.ndarray, window: int, tolerance: float
+) -> np.ndarray:  # pragma: no cover
+    """NaN over every 4-connected region of at most ``window`` pixels, neighbours joined
+    when their disparities differ by at most ``tolerance`` (OpenCV's filterSpeckles)."""
+    rows, cols = disparity.shape
+    out = disparity.copy()
+    done = np.zeros((rows, cols), dtype=np.bool_)
+    queue = np.empty(rows * cols, dtype=np.int64)
+    for start in range(rows * cols):
+        y0, x0 = start // cols, start % cols
+        if done[y0, x0] or not np.isfinite(disparity[y0, x0]):
+            continue
+        done[y0, x0] = True
+        queue[0] = start
+        head, tail = 0, 1
+        while head < tail:
+            here = queue[head]
+            head += 1
+            y, x = here // cols, here % cols
+            value = disparity[y, x]
+            for step in range(4):
+                ny = y + (1 if step == 0 else -1 if step == 1 else 0)
+                nx = x + (1 if step == 2 else -1 if step == 3 else 0)
+                if ny < 0 or ny >= rows or nx < 0 or nx >= cols or done[ny, nx]:
+                    continue
+                other = disparity[ny, nx]
+                if np.isfinite(other) and abs(other - value) <= tolerance:
+                    done[ny, nx] = True
+                    queue[tail] = ny * cols + nx
+                    tail += 1
+        if tail <= window:
+            for i in range(tail):
+                out[queue[i] // cols, queue[i] % cols] = np.nan
     return out

@@ -20,6 +20,7 @@ from ._object_scenes import (
     object_scenes,
     render_object_scenes,
 )
+from ._planar_stereo import PHOTOGRAPHS, planar_stereo_scene
 from ._plane_lines import plane_lines
 from ._stereo_pair import stereo_pair
 from ._structured_light import gray_code_stripes, structured_light_scene
@@ -31,6 +32,7 @@ __all__ = [
     "ObjectSceneSet",
     "ObjectScenes",
     "ObjectScenesPort",
+    "PHOTOGRAPHS",
     "SceneSet",
     "Scenes",
     "ScenesPort",
@@ -45,6 +47,7 @@ __all__ = [
     "impulse_noise",
     "line_points",
     "object_scenes",
+    "planar_stereo_scene",
     "plane_lines",
     "plane_view",
     "random_homography",
