@@ -256,8 +256,8 @@ def sgm(
     window: Window = 7,
     block: Window | None = None,
     cost: Cost = "census",
-    p1: Annotated[float, Field(ge=0)] = 24.0,
-    p2: Annotated[float, Field(ge=0)] = 192.0,
+    p1: Annotated[float, Field(ge=0)] = 12.0,
+    p2: Annotated[float, Field(ge=0)] = 128.0,
     edge: Annotated[float, Field(gt=0)] | None = 0.02,
     paths: Literal[4, 8] = 8,
     uniqueness: Annotated[float, Field(ge=0)] = 0.05,
@@ -292,10 +292,11 @@ def sgm(
     volume, and the speckle filter (:func:`filter_speckles`).
 
     The defaults were chosen on rendered piecewise-planar scenes textured
-    with photographs (``synthetic.planar_stereo_scene`` with the camera,
-    clock, coins, grass, moon, page and text images, seeds 100–105, two of
-    them with another exposure of the right camera) and kept the Middlebury
-    Motorcycle pair's figures: see ``bench/bench_stereo.py``.
+    with photographs (``synthetic.planar_stereo_scene``: the camera, clock,
+    coins, grass, moon, page and text images, seeds 100–105, and the
+    default images, seeds 0–3; some with another exposure of the right
+    camera) so as to keep or improve the Middlebury Motorcycle figures, and
+    checked on other scenes: see ``bench/bench_stereo.py``.
 
     Parameters
     ----------
@@ -309,7 +310,7 @@ def sgm(
         Side of the matching-cost neighbourhood (odd; census: at most 7, 48 bits).
     block : int or None
         Side of the square the pixel costs are summed over before the paths
-        (odd; 1 keeps each pixel's own cost). None: 3 for census, 1 for SAD,
+        (odd; 1 keeps each pixel's own cost). None: 5 for census, 1 for SAD,
         SSD and NCC (already means over the window).
     cost : {"census", "sad", "ssd", "zncc"}
         Pixel matching cost; ``p1`` and ``p2`` are in its units per pixel
@@ -350,7 +351,7 @@ def sgm(
     check_pair(left, right, min_disparity, num_disparities, window)
     from ._kernels import aggregate_path
 
-    block = (3 if cost == "census" else 1) if block is None else block
+    block = (5 if cost == "census" else 1) if block is None else block
     volume = _volume(left, right, min_disparity, num_disparities, cost, window, block)
     area = block * block
     scaled_p1, scaled_p2 = p1 * area, p2 * area

@@ -11,6 +11,7 @@ from pydantic import Field
 
 from graphvision import node
 
+from .._checks import ordered
 from .._params import Seed
 from ._stereo_pair import StereoPair
 
@@ -73,19 +74,24 @@ class _Plane:
 
 
 def _photo(name: str) -> np.ndarray:
-    """The photograph as gray float64 in [0, 1]."""
+    """The cubic B-spline coefficients of the photograph, gray in [0, 1] (sampled by
+    ``map_coordinates(..., order=3, mode="mirror", prefilter=False)``)."""
+    from scipy import ndimage
+
     from ..color import to_gray
     from ..io import read_sample
 
     image = read_sample(name)
-    return np.asarray(to_gray(image) if image.ndim == 3 else image, dtype=np.float64)
+    gray = np.asarray(to_gray(image) if image.ndim == 3 else image, dtype=np.float64)
+    coefficients: np.ndarray = ndimage.spline_filter(gray, order=3, mode="mirror")
+    return coefficients
 
 
 def _layout(
-    rng: np.random.Generator, width: int, height: int, photos: list[str], near: float, far: float
+    rng: np.random.Generator, width: int, height: int, photos: list[str], far: float, near: float
 ) -> list[_Plane]:
     """A back wall, a floor, two turned slanted boards, a fronto-parallel disc and a thin
-    pole, placed at random; disparities between ``far`` and ``near``."""
+    pole, placed at random; disparities between ``far`` (the least) and ``near``."""
     span = near - far
 
     def plane(a: float, b: float, c: float, region: tuple[str, tuple[float, ...]]) -> _Plane:
@@ -177,7 +183,7 @@ def _shade(
         dx, dy = column[mine] - plane.origin[0], y[mine] - plane.origin[1]
         u = a11 * dx + a12 * dy + photo.shape[1] / 2
         v = a21 * dx + a22 * dy + photo.shape[0] / 2
-        values = ndimage.map_coordinates(photo, [v, u], order=3, mode="mirror")
+        values = ndimage.map_coordinates(photo, [v, u], order=3, mode="mirror", prefilter=False)
         out[mine] = plane.level + 0.5 + plane.gain * (values - 0.5)
     return out
 
@@ -195,13 +201,17 @@ def _render(
     return total / SUPERSAMPLE**2
 
 
-@node("synthetic.planar_stereo_scene", version=1)
+@node(
+    "synthetic.planar_stereo_scene",
+    version=1,
+    check=ordered(("min_disparity", "max_disparity"), strict=True),
+)
 def planar_stereo_scene(
     *,
     width: Annotated[int, Field(ge=64, le=2048)] = 480,
     height: Annotated[int, Field(ge=48, le=2048)] = 360,
-    far: Annotated[float, Field(ge=1)] = 10.0,
-    near: Annotated[float, Field(ge=2, le=256)] = 45.0,
+    min_disparity: Annotated[float, Field(ge=1, le=256)] = 10.0,
+    max_disparity: Annotated[float, Field(ge=1, le=256)] = 45.0,
     textures: Annotated[tuple[Photograph, ...], Field(min_length=1)] = (
         "astronaut",
         "coffee",
@@ -240,8 +250,8 @@ def planar_stereo_scene(
     ----------
     width, height : int
         Image size.
-    far, near : float
-        Smallest and largest disparities in the scene, pixels (``far < near``).
+    min_disparity, max_disparity : float
+        Disparities of the farthest and nearest points of the scene, pixels.
     textures : tuple of str
         scikit-image photographs the planes are textured with (drawn at random).
     gain, offset : float
@@ -266,11 +276,9 @@ def planar_stereo_scene(
        stereo correspondence algorithms", IJCV 47, 2002 (piecewise-planar scenes with
        photographic textures as stereo ground truth).
     """
-    if far >= near:
-        raise ValueError(f"far ({far:g}) must be less than near ({near:g}) (disparities)")
     rng = np.random.default_rng(seed)
     photos: dict[str, np.ndarray] = {name: _photo(name) for name in dict.fromkeys(textures)}
-    planes = _layout(rng, width, height, list(textures), near, far)
+    planes = _layout(rng, width, height, list(textures), min_disparity, max_disparity)
     images = [_render(planes, photos, width, height, right) for right in (False, True)]
     images[1] = gain * images[1] + offset
     y, x = np.mgrid[0:height, 0:width].astype(np.float64)
