@@ -75,19 +75,15 @@ def left_right_check(
     disparity: np.ndarray, right_disparity: np.ndarray, tolerance: float
 ) -> np.ndarray:
     r"""NaN where the right image's disparity disagrees with the left's by more than
-        ``tolerance`` pixels (occlusions and mismatches; Hirschmüller 2008, section 3.3).
+    ``tolerance`` pixels (occlusions and mismatches; Hirschmüller 2008, section 3.3).
 
-        A sub-pixel disparity :math:`d` points between the right pixels
-        :math:`x - \lfloor d
-    floor` and :math:`x - \lceil d
-    ceil`; the left pixel is
-        kept when either of them that lies inside the image holds a disparity within
-        ``tolerance`` of :math:`\lfloor d
-    floor` (resp. :math:`\lceil d
-    ceil`), as
-        OpenCV's StereoSGBM checks (``disp12MaxDiff``). Comparing :math:`d` with the
-        right pixel nearest to :math:`x - d` instead refuses correct pixels of
-        slanted surfaces whose disparity lies half-way between two integers.
+    A sub-pixel disparity :math:`d` points between the right pixels
+    :math:`x - \lfloor d \rfloor` and :math:`x - \lceil d \rceil`; the left pixel is
+    kept when either of them that lies inside the image holds a disparity within
+    ``tolerance`` of :math:`\lfloor d \rfloor` (resp. :math:`\lceil d \rceil`), as
+    OpenCV's StereoSGBM checks (``disp12MaxDiff``). Comparing :math:`d` with the
+    right pixel nearest to :math:`x - d` instead refuses correct pixels of
+    slanted surfaces whose disparity lies half-way between two integers.
     """
     rows, cols = disparity.shape
     valid = np.isfinite(disparity)
