@@ -29,10 +29,10 @@ from ._two_view import two_view_scene
 from ._warps import random_homography, random_warp, two_views
 
 __all__ = [
+    "PHOTOGRAPHS",
     "ObjectSceneSet",
     "ObjectScenes",
     "ObjectScenesPort",
-    "PHOTOGRAPHS",
     "SceneSet",
     "Scenes",
     "ScenesPort",

@@ -78,7 +78,7 @@ def _photo(name: str) -> np.ndarray:
     ``map_coordinates(..., order=3, mode="mirror", prefilter=False)``)."""
     from scipy import ndimage
 
-    from ..color import to_gray
+    from ..colour import to_gray
     from ..io import read_sample
 
     image = read_sample(name)
