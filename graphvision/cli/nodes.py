@@ -14,14 +14,6 @@ if TYPE_CHECKING:
     pass
 
 
-def plain_text(text: str) -> str:
-    """reStructuredText roles and literals as plain text (``:math:`x``` -> ``x``)."""
-    import re
-
-    text = re.sub(r":[a-z]+:`~?([^`]+)`", lambda m: m.group(1).rsplit(".", 1)[-1], text)
-    return text.replace("``", "")
-
-
 def listed_nodes(args: argparse.Namespace) -> tuple[dict[str, str], Callable[[str], Any]]:
     """Each node's one-line summary by id, and a function giving a node's description.
 
@@ -58,7 +50,7 @@ def cmd_nodes(args: argparse.Namespace) -> int:
         print(f"{family}")
         width = max(len(op) for op in ops)
         for op in ops:
-            print(f"  {op.ljust(width)}  {plain_text(summaries[op])}")
+            print(f"  {op.ljust(width)}  {summaries[op]}")
     return EXIT_OK
 
 
@@ -87,5 +79,5 @@ def cmd_describe(args: argparse.Namespace) -> int:
         print(f"  {name}: {json.dumps(shown)}")
     if not props:
         print("  none")
-    print(f"\n{plain_text(info['doc'])}")
+    print(f"\n{info['text']}")
     return EXIT_OK
