@@ -9,7 +9,7 @@
     graphvision sweep PIPELINE --grid NODE.PARAM=V1,V2,... [--grid ...] -d DIR [--plot OUTPUT]
     graphvision validate PIPELINE...
     graphvision nodes [--json]
-    graphvision describe OP [--json]
+    graphvision describe OP|PIPELINE [--json]
     graphvision schema
     graphvision graph PIPELINE [--format dot|mermaid|svg]
     graphvision cache info|prune|clear [--cache-dir DIR] [--max-bytes SIZE]

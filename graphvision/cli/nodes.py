@@ -55,8 +55,13 @@ def cmd_nodes(args: argparse.Namespace) -> int:
 
 
 def cmd_describe(args: argparse.Namespace) -> int:
+    """``describe OP``, or ``describe PIPELINE.yaml`` (a YAML suffix or an existing file)."""
     import json
 
+    from graphvision.cli.describe_pipeline import cmd_describe_pipeline, names_a_pipeline
+
+    if names_a_pipeline(args.op):
+        return cmd_describe_pipeline(args)
     summaries, describe = listed_nodes(args)
     if args.op not in summaries:
         raise UnknownNameError(f"unknown op '{args.op}'{did_you_mean(args.op, summaries)}")

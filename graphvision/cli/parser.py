@@ -191,8 +191,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="every node's description as JSON")
     p.set_defaults(func=cmd_nodes)
 
-    p = command("describe", "show a node's ports, parameters and documentation")
-    p.add_argument("op", help="the node id, family.name")
+    p = command(
+        "describe",
+        "show a node's ports, parameters and documentation, or a pipeline's inputs, "
+        "parameters, outputs and families",
+    )
+    p.add_argument("op", help="the node id, family.name; or a pipeline file (.yaml)")
     p.add_argument("--json", action="store_true", help="the description as JSON")
     p.set_defaults(func=cmd_describe)
 
