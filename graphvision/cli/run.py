@@ -30,6 +30,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from graphvision.errors import RunError
     from graphvision.execution.folders import check_output_folder, write_run
     from graphvision.execution.run import run
+    from graphvision.execution.sweep import scalar_outputs_of
     from graphvision.views.progress import RunProgress
     from graphvision.views.report import RUN_PAGES
 
@@ -71,6 +72,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     finally:
         if not isinstance(executor, str):
             executor.shutdown()
+    shown = list(result.record.outputs)
     if out_dir is not None:
         files = write_run(result, out_dir, RUN_PAGES)
         print(
@@ -78,9 +80,9 @@ def cmd_run(args: argparse.Namespace) -> int:
             f"and {out_dir / 'report.html'}",
             file=sys.stderr,
         )
-    else:
-        for name, summary in result.record.outputs.items():
-            print(f"{name}: {summary}")
+        shown = scalar_outputs_of(result.compiled, shown)  # the figures; the rest is in files
+    for name in shown:
+        print(f"{name}: {result.record.outputs[name]}")
     if args.record:
         print(result.record.table())
     return status
