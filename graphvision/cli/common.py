@@ -4,9 +4,10 @@ the set-up of a run (plugins, cache, executor, the pipeline with its --set and -
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -120,7 +121,11 @@ def check_overrides(graph: Graph, registry: Registry, overrides: dict[str, Any],
 
 
 def output_folder(text: str | None) -> Path | None:
-    """The output folder, made now: a file or a folder that cannot be made is refused first."""
+    """The output folder, checked now (a file, or a folder that cannot be made, is refused
+    before anything runs) and made when the first file is written into it: a command that
+    fails or is stopped first leaves no folder behind."""
+    from graphvision.execution.folders import missing_folders, remove_empty_folders
+
     if text is None:
         return None
     if not text.strip():
@@ -128,11 +133,28 @@ def output_folder(text: str | None) -> Path | None:
     folder = Path(text)
     if folder.exists() and not folder.is_dir():
         raise UsageError(f"--output-dir {folder}: is a file, not a folder")
-    try:
+    made = missing_folders(folder)
+    try:  # made and removed at once: it can be made
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as error:
         raise UsageError(f"--output-dir {folder}: cannot be made ({error.strerror})") from None
+    finally:
+        remove_empty_folders(made)
     return folder
+
+
+@contextlib.contextmanager
+def folders_kept_only_if_used(*folders: Path | None) -> Iterator[None]:
+    """On a failure or an interruption, remove the folders among ``folders`` and their
+    parents that the command made and left empty (deepest first)."""
+    from graphvision.execution.folders import missing_folders, remove_empty_folders
+
+    made = missing_folders(*[folder for folder in folders if folder is not None])
+    try:
+        yield
+    except BaseException:
+        remove_empty_folders(made)
+        raise
 
 
 # -- shared set-up ---------------------------------------------------------------------

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import sys
 import time
 import traceback
@@ -16,30 +15,31 @@ from graphvision.cli.common import (
     UsageError,
     disk_cache,
     executor_for,
+    folders_kept_only_if_used,
     load_run_arguments,
     named_pairs,
     output_folder,
 )
 
 if TYPE_CHECKING:
+    from graphvision.execution.record import RunResult
     from graphvision.graph.model import Graph
     from graphvision.nodes.registry import Registry
 
 
 def cmd_run(args: argparse.Namespace) -> int:
     from graphvision.errors import RunError
-    from graphvision.execution.folders import check_output_folder, write_run
+    from graphvision.execution.folders import check_output_folder
     from graphvision.execution.run import run
     from graphvision.execution.sweep import scalar_outputs_of
     from graphvision.views.progress import RunProgress
-    from graphvision.views.report import RUN_PAGES
 
     graph, registry, overrides, inputs = load_run_arguments(args)
-    made = args.output_dir is not None and not Path(args.output_dir).exists()
-    out_dir = output_folder(args.output_dir)
+    out_dir = output_folder(args.output_dir)  # checked; made when its first file is written
     progress = args.progress or (args.progress is None and sys.stderr.isatty())
     if args.batch:
-        return run_batch_command(graph, registry, inputs, overrides, args, progress)
+        with folders_kept_only_if_used(out_dir):
+            return run_batch_command(graph, registry, inputs, overrides, args, progress)
     if out_dir is not None:  # refuse before running, not after
         check_output_folder(out_dir, args.output or graph.outputs)
     executor = executor_for(args)
@@ -64,28 +64,46 @@ def cmd_run(args: argparse.Namespace) -> int:
             for failure in error.failures.values():
                 traceback.print_exception(failure.__cause__ or failure, file=sys.stderr)
         status, result = EXIT_FAILED, error.result  # type: ignore[attr-defined]
-    except BaseException:  # interrupted: a folder made for this run goes again, still empty
-        if made and out_dir is not None:
-            with contextlib.suppress(OSError):
-                out_dir.rmdir()
-        raise
     finally:
         if not isinstance(executor, str):
             executor.shutdown()
     shown = list(result.record.outputs)
     if out_dir is not None:
-        files = write_run(result, out_dir, RUN_PAGES)
-        print(
-            f"wrote {len(files)} output(s), record.json, {out_dir / 'report.md'} "
-            f"and {out_dir / 'report.html'}",
-            file=sys.stderr,
-        )
+        status = max(status, _write_folder(result, out_dir, args.debug))
         shown = scalar_outputs_of(result.compiled, shown)  # the figures; the rest is in files
     for name in shown:
         print(f"{name}: {result.record.outputs[name]}")
     if args.record:
         print(result.record.table())
     return status
+
+
+def _write_folder(result: RunResult, out_dir: Path, debug: bool) -> int:
+    """Write the run's folder; a writer that fails (a port type's, a report page's) fails
+    the command (exit 1) with one line naming the folder and the cause."""
+    from graphvision.errors import GraphvisionError
+    from graphvision.execution.folders import write_run
+    from graphvision.views.report import RUN_PAGES
+
+    try:
+        files = write_run(result, out_dir, RUN_PAGES)
+    except (GraphvisionError, OSError):  # the folder, the disk: said as for any command
+        raise
+    except Exception as error:
+        if debug:
+            traceback.print_exc()
+        print(
+            f"error: the run's files could not be written to {out_dir} "
+            f"({type(error).__name__}: {error})",
+            file=sys.stderr,
+        )
+        return EXIT_FAILED
+    print(
+        f"wrote {len(files)} output(s), record.json, {out_dir / 'report.md'} "
+        f"and {out_dir / 'report.html'}",
+        file=sys.stderr,
+    )
+    return EXIT_OK
 
 
 def run_batch_command(
@@ -134,8 +152,11 @@ def run_batch_command(
             keep_going=args.keep_going,
             on_item=report,
         )
-    except InputError as error:
-        raise UsageError(f"--batch {name}={pattern}: {error}") from None
+    except InputError as error:  # before any file ran
+        about_batch = f"input '{name}'" in str(error)
+        raise UsageError(
+            f"--batch {name}={pattern}: {error}" if about_batch else str(error)
+        ) from None
     except KeyboardInterrupt:
         summary = Path(args.output_dir) / "batch.csv"
         if summary.is_file():

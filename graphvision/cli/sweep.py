@@ -14,6 +14,7 @@ from graphvision.cli.common import (
     check_overrides,
     disk_cache,
     executor_for,
+    folders_kept_only_if_used,
     load_run_arguments,
     named_pairs,
     output_folder,
@@ -22,14 +23,14 @@ from graphvision.cli.common import (
 from graphvision.errors import did_you_mean
 
 if TYPE_CHECKING:
-    pass
+    from pathlib import Path
+
+    from graphvision.graph.model import Graph
+    from graphvision.nodes.registry import Registry
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from graphvision.compiler.compile import compile_graph
-    from graphvision.execution.sweep import SweepInterrupted, scalar_outputs_of, sweep
-    from graphvision.views.progress import FileProgress
-    from graphvision.views.sweep_page import check_sweep_folder, write_sweep
+    from graphvision.views.sweep_page import check_sweep_folder
 
     graph, registry, overrides, inputs = load_run_arguments(args)
     grid = {
@@ -42,9 +43,28 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     both = sorted(set(grid) & set(overrides))
     if both:
         raise UsageError(f"{both[0]} is both swept (--grid) and set (--set); give one of them")
-    out_dir = output_folder(args.output_dir)
+    out_dir = output_folder(args.output_dir)  # checked; made when the results are written
     assert out_dir is not None  # the option is required
     check_sweep_folder(out_dir)  # before anything runs
+    with folders_kept_only_if_used(out_dir):
+        return _sweep(args, graph, registry, overrides, inputs, grid, out_dir)
+
+
+def _sweep(
+    args: argparse.Namespace,
+    graph: Graph,
+    registry: Registry,
+    overrides: dict[str, Any],
+    inputs: dict[str, Any],
+    grid: dict[str, Any],
+    out_dir: Path,
+) -> int:
+    """The sweep, once its arguments are checked: run, then write the folder."""
+    from graphvision.compiler.compile import compile_graph
+    from graphvision.execution.sweep import SweepInterrupted, scalar_outputs_of, sweep
+    from graphvision.views.progress import FileProgress
+    from graphvision.views.sweep_page import write_sweep
+
     if overrides:
         graph = graph.with_overrides(overrides)
     if args.plot:
@@ -84,13 +104,14 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             outputs=args.output,
             on_row=None if args.progress is False else report,
         )
-    except SweepInterrupted as stopped:  # what is done is written, then the exit is 130
-        write_sweep(stopped.result, out_dir, graph.name, [])
-        print(
-            f"sweep interrupted; combinations done so far are in {out_dir / 'sweep.csv'}",
-            file=sys.stderr,
-        )
-        raise
+    except SweepInterrupted as stopped:  # what is done is written, then the exit is 130 (143)
+        if stopped.done:
+            write_sweep(stopped.result, out_dir, graph.name, [])
+            print(
+                f"sweep interrupted; combinations done so far are in {out_dir / 'sweep.csv'}",
+                file=sys.stderr,
+            )
+        raise stopped.__cause__ or stopped from None
     finally:
         for bar in shown:
             bar.close()

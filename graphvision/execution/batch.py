@@ -5,8 +5,15 @@ file alone, so that the nodes every file shares (a trained model, a template,
 a vocabulary: nodes upstream of nothing file-specific) are computed once and
 cached, then the others several at a time, as many as the executor runs tasks
 at once (its workers, or a Dask cluster's threads), each reported as it
-completes. A bad file or a failed run is recorded and the batch goes on; on
-Dask a node whose worker died runs again on another worker.
+completes. A bad file or a failed run is recorded and the batch goes on: any
+failure while a file runs or its folder is written (outputs, records, report
+pages) fails that file alone, with its reason in ``batch.csv``, and a path the
+pattern matches that cannot be read (a folder named like a file, a dangling
+or looping symbolic link, a pipe) is listed as failed, saying why. On Dask a
+node whose worker died runs again on another worker. The pipeline is checked
+before anything else: an invalid one makes no folder. Stopped (Ctrl-C,
+SIGTERM), a batch summarises the files it finished, if any, and removes the
+folders it made that hold nothing.
 Each file gets its own folder, named after its path below the pattern's
 fixed part (``photos/a/img.png`` and ``photos/b/img.png`` give
 ``OUT/a/img`` and ``OUT/b/img``), so no two files ever share a folder
@@ -19,7 +26,7 @@ loses its graphvision files: nothing there is left looking current.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
@@ -39,9 +46,16 @@ from graphvision.execution.batch_files import (
     pattern_root,
     previous_folders,
     replace_text,
+    unreadable_reason,
     write_summary,
 )
-from graphvision.execution.batch_items import finish_item, plain_graph, run_file, run_item
+from graphvision.execution.batch_items import (
+    failure_reason,
+    finish_item,
+    plain_graph,
+    run_file,
+    run_item,
+)
 from graphvision.execution.executors import (
     Executor,
     encodes_values,
@@ -54,10 +68,12 @@ from graphvision.execution.file_task import (
 )
 from graphvision.execution.folders import (
     check_output_folder,
+    missing_folders,
     owned_files,
+    remove_empty_folders,
     remove_owned_files,
 )
-from graphvision.execution.record import RunHooks
+from graphvision.execution.record import RunHooks, RunResult
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
 
@@ -149,6 +165,7 @@ def run_batch(
             f"input '{input}' is given twice: once per file by the batch and once as"
             f" {inputs[input]!r}; drop one of them"
         )
+    registry = _checked_pipeline(graph, registry, inputs, input, outputs, overrides)
     out_dir = Path(output_dir)
     if isinstance(files, str):
         paths, root = batch_files(files, exclude=out_dir), pattern_root(files)
@@ -161,19 +178,13 @@ def run_batch(
     names = list(outputs) if outputs is not None else list(graph.outputs)
     for folder in folders:
         check_output_folder(folder, names)
-    current = {folder.resolve() for folder in folders}
-    for folder in previous_folders(out_dir) - current:  # its file is no longer in the batch
-        remove_owned_files(folder, owned_files(folder))
-    if registry is None:  # found once for the batch, not once per file
-        from graphvision.nodes.plugins import discover_for
-
-        registry = discover_for(plain_graph(graph))
+    stale = previous_folders(out_dir) - {folder.resolve() for folder in folders}
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
     if one_task_per_file and cache is None:  # the first file's shared values are sent on
         cache = Cache(MemoryStore())
-    items: list[BatchItem | None] = [None] * len(paths)
-    options: dict[str, Any] = {
+    batch = _Batch(graph, paths, folders, input, inputs or {}, pool, one_task_per_file, pages)
+    batch.options = {
         "registry": registry,
         "outputs": outputs,
         "overrides": overrides,
@@ -182,50 +193,122 @@ def run_batch(
         "keep_going": keep_going,
         "hooks": hooks,
     }
-    seeds: list[Any] = []  # the shared values, or the executor's handle on them
-
-    started: set[int] = set()
-
-    def run_one(index: int) -> BatchItem:
-        started.add(index)
-        item_inputs = {**(inputs or {}), input: str(paths[index])}
-        if index == 0 or not one_task_per_file:
-            item, result = run_item(
-                graph, paths[index], folders[index], {**options, "inputs": item_inputs}
-            )
-            if index == 0 and one_task_per_file and result is not None and cache is not None:
-                values: list[Seed] = shared_seeds(result.compiled, result.record, cache, input)
-                share = getattr(pool, "share", None)  # Dask: sent to the workers once
-                seeds.append(share(values) if share is not None and values else values)
-                compiled.append(result.compiled)
-            return finish_item(item, result, pages.run)
-        item, result = run_file(
-            pool,
-            plain_graph(graph),
-            paths[index],
-            folders[index],
-            compiled[0] if compiled else None,
-            registry,
-            cache,
-            (item_inputs, outputs, overrides, keep_going, seeds[0] if seeds else []),
-        )
-        return finish_item(item, result, pages.run)
-
-    compiled: list[CompiledGraph] = []
+    made = missing_folders(out_dir, *folders)
+    items: list[BatchItem | None] = [None] * len(paths)
     try:
         width = files_at_once or executor_width(pool)
-        for done, (index, item) in enumerate(_stream(run_one, len(paths), width), start=1):
+        for done, (index, item) in enumerate(_stream(batch.run_one, len(paths), width), start=1):
             items[index] = item
             if on_item is not None:
                 on_item(done, len(paths), item)
     except BaseException:  # Ctrl-C or an error: the files done so far are still summarised
-        _summarise(_not_run(items, paths, folders, started), out_dir, pages)
+        batch.stopped = True  # a file still running writes nothing more
+        if isinstance(executor, str):  # nodes still running are not waited for
+            pool.shutdown(wait=False, cancel_futures=True)
+        if any(item is not None for item in items):
+            _summarise(_not_run(items, paths, folders, batch.started), out_dir, pages, stale)
+        remove_empty_folders(made)  # folders made for files that did not finish
         raise
-    finally:
-        if isinstance(executor, str):
-            pool.shutdown()
+    if isinstance(executor, str):
+        pool.shutdown()
     finished = [item for item in items if item is not None]
-    return BatchResult(finished, _summarise(finished, out_dir, pages))
+    return BatchResult(finished, _summarise(finished, out_dir, pages, stale))
+
+
+def _checked_pipeline(
+    graph: Graph | CompiledGraph,
+    registry: Registry | None,
+    inputs: dict[str, Any] | None,
+    input: str,
+    outputs: Sequence[str] | None,
+    overrides: dict[str, Any] | None,
+) -> Registry:
+    """The registry, after checking the pipeline, its overrides, inputs and outputs as each
+    file's run will, and reading the inputs every file shares: an invalid batch stops
+    before any file is looked at or folder made."""
+    from graphvision.execution.inputs import resolve_input
+    from graphvision.execution.run import _compiled, _wanted_outputs
+
+    per_file = {**(inputs or {}), input: ""}
+    compiled, found = _compiled(graph, registry, per_file, overrides or {})
+    _wanted_outputs(compiled, outputs, per_file)
+    for name, value in (inputs or {}).items():  # every file's: one that cannot be read fails all
+        resolve_input(name, compiled.input_types[name], value, found)
+    return found
+
+
+class _Batch:
+    """The files of one batch, run one at a time by :meth:`run_one` (from several threads).
+
+    The first file runs node by node and fills the cache with the nodes every
+    file shares; with ``one_task_per_file``, the others then run as one task each
+    with those values sent along. Any failure while a file runs or its folder is
+    written fails that file alone, with its reason.
+    """
+
+    def __init__(
+        self,
+        graph: Graph | CompiledGraph,
+        paths: list[Path],
+        folders: list[Path],
+        input: str,
+        inputs: dict[str, Any],
+        pool: Executor,
+        one_task_per_file: bool,
+        pages: BatchPages,
+    ) -> None:
+        self.graph, self.paths, self.folders = graph, paths, folders
+        self.input, self.inputs, self.pool = input, inputs, pool
+        self.one_task_per_file, self.pages = one_task_per_file, pages
+        self.options: dict[str, Any] = {}
+        self.seeds: list[Any] = []  # the shared values, or the executor's handle on them
+        self.compiled: list[CompiledGraph] = []
+        self.started: set[int] = set()
+        self.stopped = False
+
+    def run_one(self, index: int) -> BatchItem:
+        self.started.add(index)
+        path, folder = self.paths[index], self.folders[index]
+        reason = unreadable_reason(path)
+        if reason:  # matched by the pattern, but not a file that can be read
+            return BatchItem(path, folder, "failed", error=f"{path} {reason}")
+        try:
+            item, result = self._run(index)
+            if self.stopped:  # the batch was interrupted meanwhile: its folder is not written
+                return item
+            return finish_item(item, result, self.pages.run)
+        except Exception as error:  # whatever it is, it fails this file alone
+            return BatchItem(path, folder, "failed", error=failure_reason(error))
+
+    def _run(self, index: int) -> tuple[BatchItem, RunResult | None]:
+        item_inputs = {**self.inputs, self.input: str(self.paths[index])}
+        path, folder, options = self.paths[index], self.folders[index], self.options
+        if index == 0 or not self.one_task_per_file:
+            item, result = run_item(self.graph, path, folder, {**options, "inputs": item_inputs})
+            cache = options["cache"]
+            if index == 0 and self.one_task_per_file and result is not None and cache is not None:
+                values: list[Seed] = shared_seeds(result.compiled, result.record, cache, self.input)
+                share = getattr(self.pool, "share", None)  # Dask: sent to the workers once
+                self.seeds.append(share(values) if share is not None and values else values)
+                self.compiled.append(result.compiled)
+            return item, result
+        task = (
+            item_inputs,
+            options["outputs"],
+            options["overrides"],
+            options["keep_going"],
+            self.seeds[0] if self.seeds else [],
+        )
+        return run_file(
+            self.pool,
+            plain_graph(self.graph),
+            path,
+            folder,
+            self.compiled[0] if self.compiled else None,
+            options["registry"],
+            options["cache"],
+            task,
+        )
 
 
 def _not_run(
@@ -247,8 +330,13 @@ def _not_run(
     return marked
 
 
-def _summarise(items: list[BatchItem], out_dir: Path, pages: BatchPages) -> Path:
-    """``batch.csv`` for ``items``, and the summary page when there is one."""
+def _summarise(
+    items: list[BatchItem], out_dir: Path, pages: BatchPages, stale: Collection[Path] = ()
+) -> Path:
+    """``batch.csv`` for ``items``, and the summary page when there is one; the folders of
+    files a previous batch listed and this one does not (``stale``) lose their files."""
+    for folder in stale:  # its file is no longer in the batch
+        remove_owned_files(folder, owned_files(folder))
     summary = write_summary(items, out_dir)
     if pages.summary is not None:
         name, text = pages.summary(items, out_dir)
@@ -268,11 +356,12 @@ def _stream(
         for index in range(1, count):
             yield index, run_one(index)
         return
-    with ThreadPoolExecutor(max_workers=at_once, thread_name_prefix="graphvision-file") as files:
-        pending = {files.submit(run_one, index): index for index in range(1, count)}
-        try:
-            for future in as_completed(pending):
-                yield pending[future], future.result()
-        finally:  # Ctrl-C or an error: files not started yet are not started
-            for future in pending:
-                future.cancel()
+    files = ThreadPoolExecutor(max_workers=at_once, thread_name_prefix="graphvision-file")
+    pending = {files.submit(run_one, index): index for index in range(1, count)}
+    try:
+        for future in as_completed(pending):
+            yield pending[future], future.result()
+    except BaseException:  # Ctrl-C or an error: files not started yet are not started, and
+        files.shutdown(wait=False, cancel_futures=True)  # those running are not waited for
+        raise
+    files.shutdown()

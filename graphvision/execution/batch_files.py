@@ -4,9 +4,11 @@ folder per file, the items and their summary (``batch.csv``)."""
 from __future__ import annotations
 
 import csv
+import errno
 import glob
 import io
 import os
+import stat
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,6 +31,7 @@ __all__ = [
     "pattern_root",
     "previous_folders",
     "replace_text",
+    "unreadable_reason",
     "write_summary",
 ]
 
@@ -72,22 +75,53 @@ NO_PAGES = BatchPages()
 
 
 def batch_files(pattern: str, exclude: Path | None = None) -> list[Path]:
-    """The files a glob matches, sorted; ``**`` matches any depth of folders.
+    """The paths a glob matches, sorted; ``**`` matches any depth of folders.
 
     Files under ``exclude`` (the batch's output folder, when it lies inside
     the searched folders) are left out, so a batch never reads its own outputs.
     A file reached by several paths (a folder symlink, a link back up the tree)
-    is taken once, by its shortest path.
+    is taken once, by its shortest path. A match that cannot be read as a file
+    (a dangling or looping symbolic link, a pipe, and a folder when the
+    pattern's last part names a suffix, as ``*.png`` does) is kept, for the
+    batch to list it as failed with :func:`unreadable_reason`; folders matched by
+    a pattern that names no suffix (``photos/*``) are the folders searched.
     """
     skipped = exclude.resolve() if exclude is not None else None
+    folders_are_matches = "." in Path(pattern).name
     found: dict[Path, Path] = {}
     for path in sorted(map(Path, glob.glob(pattern, recursive=True)), key=lambda p: len(p.parts)):
-        if not path.is_file():
+        if path.is_dir() and not folders_are_matches:
             continue
-        real = path.resolve()
+        try:
+            real = path.resolve(strict=path.is_file())
+        except (OSError, RuntimeError):  # a symbolic link loop
+            real = path.absolute()
         if (skipped is None or skipped not in real.parents) and real not in found:
             found[real] = path
     return sorted(found.values())
+
+
+def unreadable_reason(path: Path) -> str:
+    """Why ``path`` cannot be read as an input file (``is a folder, not a file``), or ''."""
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        if path.is_symlink():
+            return f"is a symbolic link to {os.readlink(path)}, which does not exist"
+        return "does not exist (any more)"
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            return "is a symbolic link loop: following it never reaches a file"
+        return f"cannot be read ({error.strerror})"
+    except RuntimeError:  # a symbolic link loop, as some Python versions report it
+        return "is a symbolic link loop: following it never reaches a file"
+    if stat.S_ISDIR(mode):
+        return "is a folder, not a file"
+    if not stat.S_ISREG(mode):
+        return "is not a regular file (a pipe, a socket or a device): give it as a file"
+    if not os.access(path, os.R_OK):
+        return "cannot be read (permission denied)"
+    return ""
 
 
 def pattern_root(pattern: str) -> Path:

@@ -3,6 +3,7 @@ shared values sent along; its folder written from the result."""
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future
@@ -34,6 +35,7 @@ from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
 
 __all__ = [
+    "failure_reason",
     "finish_item",
     "plain_graph",
     "run_file",
@@ -143,7 +145,7 @@ def _from_cache(
             executor=_CacheOnly(name),
             cache=cache,
         )
-    except (RunError, InputError):
+    except Exception:  # anything to compute, or that cannot be read: the file task says
         return None
 
 
@@ -158,6 +160,18 @@ def _store_outputs(result: RunResult, cache: Cache) -> None:
             cache.put(key, step.outputs[port], value)
 
 
+def failure_reason(error: BaseException) -> str:
+    """What ``batch.csv`` says of a file that failed: the error's message, its first line; the
+    exception's type too when it is not one of graphvision's (a library's ValueError)."""
+    text = (str(error).strip().splitlines() or [""])[0]
+    if isinstance(error, GraphvisionError):
+        return text
+    if isinstance(error, OSError) and error.strerror:
+        where = f": {error.filename}" if error.filename else ""
+        return f"{error.strerror}{where}"
+    return f"{type(error).__name__}: {text}" if text else type(error).__name__
+
+
 def finish_item(item: BatchItem, result: RunResult | None, pages: Sequence[RunPage]) -> BatchItem:
     """Write the item's folder from its result (or clear it when there is none)."""
     folder = item.output_dir
@@ -166,8 +180,10 @@ def finish_item(item: BatchItem, result: RunResult | None, pages: Sequence[RunPa
         return item
     try:
         write_run(result, folder, pages)
-    except (GraphvisionError, OSError) as error:
-        item.status, item.error = "failed", f"writing {folder}: {error}"
+    except Exception as error:  # a port type's writer, a report page, the disk: this file fails
+        item.status, item.error = "failed", f"writing {folder}: {failure_reason(error)}"
+        with contextlib.suppress(Exception):  # what an earlier run left must not look current
+            remove_owned_files(folder, owned_files(folder))
     item.scalars = {
         key: value
         for key, value in result.outputs.items()

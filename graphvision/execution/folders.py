@@ -11,6 +11,7 @@ What a report page shows is not decided here: pages are writers passed in
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -31,7 +32,9 @@ __all__ = [
     "REPORT_HTML",
     "RunPage",
     "check_output_folder",
+    "missing_folders",
     "owned_files",
+    "remove_empty_folders",
     "remove_owned_files",
     "write_outputs",
     "write_run",
@@ -122,6 +125,25 @@ def remove_owned_files(directory: Path, names: Iterable[str]) -> None:
             path.unlink()
 
 
+def missing_folders(*folders: Path) -> list[Path]:
+    """The folders among ``folders`` and their parents that do not exist yet, deepest first:
+    what making them creates, so that a command that stops can remove them again."""
+    missing: set[Path] = set()
+    for folder in folders:
+        for path in (folder, *folder.parents):
+            if path in missing or path.exists() or path.is_symlink():
+                break
+            missing.add(path)
+    return sorted(missing, key=lambda path: len(path.absolute().parts), reverse=True)
+
+
+def remove_empty_folders(folders: Iterable[Path]) -> None:
+    """Remove each of ``folders`` (deepest first) that is empty; one holding anything stays."""
+    for folder in folders:
+        with contextlib.suppress(OSError):
+            folder.rmdir()
+
+
 def write_run(
     result: RunResult, directory: Path, pages: Sequence[RunPage] = ()
 ) -> dict[str, list[str]]:
@@ -147,7 +169,21 @@ def write_run(
     ------
     OutputFolderError
         When a file would replace one no graphvision record there lists.
+
+    A folder made for the run (``directory`` and its missing parents) is
+    removed again when writing fails or is interrupted before a file is in it.
     """
+    made = missing_folders(directory)
+    try:
+        return _write_run(result, directory, pages)
+    except BaseException:
+        remove_empty_folders(made)
+        raise
+
+
+def _write_run(
+    result: RunResult, directory: Path, pages: Sequence[RunPage]
+) -> dict[str, list[str]]:
     owned = check_output_folder(directory, result.compiled.outputs)
     directory.mkdir(parents=True, exist_ok=True)
     for left in directory.glob(f"{STAGING}*"):  # from a run killed while writing

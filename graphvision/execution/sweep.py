@@ -26,6 +26,7 @@ from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, compile_graph
 from graphvision.errors import (
     GraphvisionError,
+    InputError,
     PipelineError,
     Problem,
     did_you_mean,
@@ -78,12 +79,14 @@ class SweepResult:
 
 
 class SweepInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a sweep. ``result`` holds the combinations done, the others
-    marked ``not run`` (a re-run through the same cache recomputes only those)."""
+    """Ctrl-C (or SIGTERM) during a sweep. ``result`` holds the ``done`` combinations done,
+    the others marked ``not run`` (a re-run through the same cache recomputes only those);
+    the interruption itself is the ``__cause__``."""
 
-    def __init__(self, result: SweepResult) -> None:
+    def __init__(self, result: SweepResult, done: int = 0) -> None:
         super().__init__("sweep interrupted")
         self.result = result
+        self.done = done
 
 
 def sweep(
@@ -128,8 +131,11 @@ def sweep(
 
     Raises
     ------
+    InputError
+        A graph input cannot be read (nothing is written: no combination could run).
     PipelineError
-        A grid key names no node or parameter, a value is invalid, a
+        A grid key names no node or parameter, an input or output no graph
+        input or output, a value is invalid, a
         ``params.name`` key is shadowed by swept node parameters, the grid is
         empty or has more than :data:`MAX_COMBINATIONS`: nothing ran. Each
         value is checked once; values valid alone but not together fail their
@@ -197,54 +203,86 @@ def sweep(
         for value in options[1:]:
             _compile(graph, registry, {**first, key: value}, inputs)
     wanted = list(outputs) if outputs is not None else list(base.outputs)
-    unknown = [name for name in wanted if name not in base.outputs]
+    listing, names = ", ".join(base.outputs), ", ".join(base.input_types) or "none"
+    unknown = [
+        *(Problem(0, "outputs", f"no output '{name}'; outputs: {listing}") for name in wanted
+          if name not in base.outputs),
+        *(Problem(0, "inputs", f"no input '{name}'; inputs: {names}") for name in inputs or {}
+          if name not in base.input_types),
+    ]  # fmt: skip
     if unknown:
-        listing = ", ".join(base.outputs)
-        raise PipelineError(
-            [Problem(0, "outputs", f"no output '{name}'; outputs: {listing}") for name in unknown],
-            graph.source,
-        )
+        raise PipelineError(unknown, graph.source)
     scalar_outputs = scalar_outputs_of(base, wanted)
-    combinations = (dict(zip(keys, combo, strict=True)) for combo in itertools.product(*values))
     result = SweepResult(keys, scalar_outputs)
     cache = cache if cache is not None else Cache(MemoryStore())
+    combinations = (dict(zip(keys, combo, strict=True)) for combo in itertools.product(*values))
+    own = isinstance(executor, str)
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
+    running: list[dict[str, Any]] = []  # the combination that runs, until its row is in
     try:
         for combo in combinations:
-            row: dict[str, Any] = dict(combo)
-            try:
-                outcome = run(
-                    _compile(graph, registry, combo, inputs),
-                    registry,
-                    inputs=inputs,
-                    outputs=wanted,
-                    executor=pool,
-                    cache=cache,
-                    keep_going=keep_going,
-                )
-                record, produced, row["status"] = outcome.record, outcome.outputs, "ok"
-            except GraphvisionError as error:
-                record = getattr(error, "record", None) or RunRecord(graph.name, "")
-                partial = getattr(error, "result", None)
-                produced = partial.outputs if partial is not None else {}
-                row["status"] = f"failed: {str(error).splitlines()[0]}"
-            row.update({name: produced.get(name, "") for name in scalar_outputs})
-            row["computed"], row["cached"] = record.count("computed"), record.count("cached")
-            row["seconds"] = round(record.seconds, 4)
+            running[:] = [combo]
+            row, record = _run_combination(
+                graph, registry, combo, inputs, (wanted, scalar_outputs), pool, cache, keep_going
+            )
             result.rows.append(row)
             result.records.append(record)
+            running.clear()
             if on_row is not None:
                 on_row(len(result.rows), total, row)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as stop:  # Ctrl-C or SIGTERM (the cause: the exit status)
+        if own:  # the nodes still running are not waited for
+            pool.shutdown(wait=False, cancel_futures=True)
+            own = False
+        done = len(result.rows)
         blank = {name: "" for name in scalar_outputs}
-        for combo in combinations:  # the rest, not run
-            rest = {"status": "not run", "computed": 0, "cached": 0, "seconds": 0.0}
-            result.rows.append({**combo, **blank, **rest})
-        raise SweepInterrupted(result) from None
+        for rest in itertools.chain(running, combinations):  # not run
+            marks = {"status": "not run", "computed": 0, "cached": 0, "seconds": 0.0}
+            result.rows.append({**rest, **blank, **marks})
+        raise SweepInterrupted(result, done) from stop
     finally:
-        if isinstance(executor, str):
+        if own:
             pool.shutdown(wait=True)
     return result
+
+
+def _run_combination(
+    graph: Graph,
+    registry: Registry,
+    combo: dict[str, Any],
+    inputs: dict[str, Any] | None,
+    outputs: tuple[list[str], list[str]],
+    pool: Executor,
+    cache: Cache,
+    keep_going: bool,
+) -> tuple[dict[str, Any], RunRecord]:
+    """One combination's run: its row (the swept values, status, the scalar outputs, nodes
+    computed and cached, seconds) and its record. ``outputs``: wanted, and scalar among them."""
+    wanted, scalar_outputs = outputs
+    row: dict[str, Any] = dict(combo)
+    try:
+        outcome = run(
+            _compile(graph, registry, combo, inputs),
+            registry,
+            inputs=inputs,
+            outputs=wanted,
+            executor=pool,
+            cache=cache,
+            keep_going=keep_going,
+        )
+        record, produced, status = outcome.record, outcome.outputs, "ok"
+    except InputError:  # the inputs are every combination's: none could run
+        raise
+    except GraphvisionError as error:
+        record = getattr(error, "record", None) or RunRecord(graph.name, "")
+        partial = getattr(error, "result", None)
+        produced = partial.outputs if partial is not None else {}
+        status = f"failed: {str(error).splitlines()[0]}"
+    row["status"] = status
+    row.update({name: produced.get(name, "") for name in scalar_outputs})
+    row["computed"], row["cached"] = record.count("computed"), record.count("cached")
+    row["seconds"] = round(record.seconds, 4)
+    return row, record
 
 
 def scalar_outputs_of(compiled: CompiledGraph, names: Sequence[str]) -> list[str]:

@@ -25,7 +25,8 @@ the node first runs. The decorator returns the function wrapped so that a
 direct call (``gaussian(image, sigma=2)`` in a script or a test) takes its
 inputs through the same dtype policy as a run's graph inputs (a ``uint8``
 photo is the image its PNG gives), validates them with the same port types
-and its parameters with the same pydantic model as a run does, and fails with a :class:`~graphvision.PortValueError` or
+and its parameters with the same pydantic model as a run does, and fails
+with a :class:`~graphvision.PortValueError` or
 :class:`~graphvision.ParameterError` naming the node and the port or
 parameter. The engine validates values itself and calls the unchecked
 function (``NodeSpec.func``, also ``checked.__wrapped__``), so nothing is
