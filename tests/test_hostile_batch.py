@@ -212,3 +212,14 @@ def test_a_thin_strip_is_averaged_along_its_length():
     assert small.shape == (1, 512)
     expected = strip.reshape(1, 512, 8).mean(axis=2)
     np.testing.assert_allclose(small, expected, rtol=1e-6)
+
+
+def test_folders_count_as_matches_only_when_the_pattern_names_a_suffix(tmp_path):
+    from graphvision.execution.batch_files import batch_files
+
+    photos = tmp_path / "photos"
+    (photos / "sub").mkdir(parents=True)
+    (photos / "odd.png").mkdir()
+    iio.imwrite(photos / "a.png", GOOD["photo.png"])
+    assert batch_files(f"{photos}/*.png") == [photos / "a.png", photos / "odd.png"]
+    assert batch_files(f"{photos}/*") == [photos / "a.png"]  # folders searched, not files
