@@ -1,7 +1,7 @@
 """A node called as a plain function checks what a run checks (issue 8, item 2).
 
 For each built-in family: a dtype the dtype policy refuses (a ``uint8`` photo
-is taken, as ``gv.run`` takes it: tests/test_direct_call_dtypes.py), a wrong
+is taken, as ``gv.run`` takes it: test_direct_call_dtypes.py), a wrong
 number of channels (or a wrong shape) and a bad parameter on a direct call fail
 with the engine's own error types, naming the node and the port or parameter. A correct call gives
 the same value as the unchecked function.

@@ -22,7 +22,7 @@ import pytest
 
 from graphvision.cli import main
 
-from .conftest import TOY
+from ..conftest import TOY
 
 TOYS = """name: toys
 inputs:

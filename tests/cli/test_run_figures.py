@@ -7,7 +7,7 @@ import numpy as np
 
 from graphvision.cli import main
 
-from .conftest import TOY, write
+from ..conftest import TOY, write
 
 PIPELINE = """name: figures
 inputs:

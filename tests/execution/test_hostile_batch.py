@@ -22,7 +22,7 @@ from PIL import Image
 from graphvision.cli import main
 from graphvision.values.pictures import png_bytes, thumbnail
 
-from .conftest import TOY
+from ..conftest import TOY
 
 PIPELINE = """name: hostile
 inputs:

@@ -11,7 +11,7 @@ import pytest
 
 from graphvision.cli import main
 
-from .conftest import PIPELINES
+from ..conftest import PIPELINES
 
 PLUGIN = '''
 from pathlib import Path
