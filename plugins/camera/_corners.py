@@ -37,8 +37,8 @@ from pydantic import Field
 
 from graphvision import Array, node
 
-from .._params import Positive
 from ..geometry import apply_homography, normalising_transform
+from ..shared.params import Positive
 
 __all__ = [
     "BoardCorners",
@@ -54,7 +54,7 @@ def saddle_candidates(image: np.ndarray, count: int, sigma: float) -> np.ndarray
     """The ``count`` strongest local maxima of :math:`-\\det H` (at scale ``sigma``), ``N×2``."""
     from scipy import ndimage
 
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     smooth = smooth_gaussian(image.astype(np.float64), sigma)
     iy, ix = np.gradient(smooth)
@@ -146,7 +146,7 @@ def find_board(
     """The ``rows·columns`` inner corners in fixed order (module docstring), or None."""
     from scipy.spatial import QhullError
 
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     count = columns * rows
     candidates = saddle_candidates(image, count, sigma)
@@ -207,7 +207,7 @@ def refine_corners(
     """
     from scipy import ndimage
 
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     smooth = smooth_gaussian(image.astype(np.float64), 1.0)
     gy, gx = np.gradient(smooth)

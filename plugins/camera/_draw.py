@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import Array, Camera, ColorImage, Float, FloatImage, Image, node
 
-from .._draw import colour_canvas, draw_circle, draw_segment
+from ..shared.draw import colour_canvas, draw_circle, draw_segment
 from ._model import check_intrinsics
 from ._projection import distort_pixels, undistort_pixels
 

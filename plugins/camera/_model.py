@@ -6,7 +6,7 @@ import numpy as np
 
 from graphvision import Array, Camera, ImageT, PinholeCamera, Points2D, Points3D, node
 
-from .._params import ImageSide, Positive
+from ..shared.params import ImageSide, Positive
 from ._projection import (
     decompose_projection,
     distort_pixels,

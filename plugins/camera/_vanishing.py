@@ -25,8 +25,8 @@ import numpy as np
 
 from graphvision import Array, Camera, ColorImage, Float, Image, node
 
-from .._draw import colour_canvas, draw_segment
 from ..geometry import normalising_transform
+from ..shared.draw import colour_canvas, draw_segment
 from ._model import check_intrinsics
 
 __all__ = [

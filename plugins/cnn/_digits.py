@@ -8,9 +8,9 @@ import numpy as np
 
 from graphvision import node
 
-from .._params import Probability, Seed
 from ..recognition._data import stratified_split
 from ..recognition._types import Samples, SampleSet
+from ..shared.params import Probability, Seed
 
 __all__ = ["digits", "load_digits_images"]
 

@@ -11,8 +11,8 @@ from pydantic import Field
 
 from graphvision import Float, Table, node, one_blas_thread
 
-from .._params import Count, Epochs, Positive, Seed
 from ..recognition._types import Samples, SampleSet
+from ..shared.params import Count, Epochs, Positive, Seed
 from ._network import (
     MAX_BATCH_VALUES,
     Architecture,

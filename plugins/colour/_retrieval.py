@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import Array, Descriptors, Float, node
 
-from .._params import Count, Seed
+from ..shared.params import Count, Seed
 from ._histograms import Bins, Metric, colour_histogram, histogram_distances
 
 __all__ = ["Gallery", "Retrieval", "gallery", "retrieve", "transformed_copies"]

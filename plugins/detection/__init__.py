@@ -4,7 +4,7 @@ search proposals, anchors, recall of proposals, ROI pooling, a detection head
 suppression, mean average precision, and drawings of true and found boxes.
 
 The box maths (IoU, NMS, the (tx, ty, tw, th) coding, anchors) is shared with the
-recognition family in ``graphvision_plugins._boxes``; the network is the ``cnn`` family's.
+recognition family in ``graphvision_plugins.shared.boxes``; the network is the ``cnn`` family's.
 """
 
 from ._draw import draw_boxes, draw_rectangles, draw_scenes

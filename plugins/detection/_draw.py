@@ -9,8 +9,8 @@ from pydantic import Field
 
 from graphvision import Boxes, ColorImage, Image, node
 
-from .._draw import colour_canvas
-from .._params import Count, Fraction
+from ..shared.draw import colour_canvas
+from ..shared.params import Count, Fraction
 from ..synthetic._digit_scenes import Scenes
 from ._types import Detections
 

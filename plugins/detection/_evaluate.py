@@ -10,7 +10,7 @@ from pydantic import Field
 
 from graphvision import Float, node
 
-from .._boxes import iou_matrix
+from ..shared.boxes import iou_matrix
 from ..synthetic._digit_scenes import Scenes, SceneSet
 from ._types import Detections, DetectionSet
 

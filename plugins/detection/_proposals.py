@@ -10,8 +10,8 @@ from pydantic import AfterValidator, Field
 
 from graphvision import Boxes, BoxSet, Float, Image, Table, node
 
-from .._boxes import anchor_boxes, iou_matrix
-from .._params import Count, Positive, Seed
+from ..shared.boxes import anchor_boxes, iou_matrix
+from ..shared.params import Count, Positive, Seed
 from ._selective import SIMILARITIES, ColourSpace, selective_search_boxes
 
 __all__ = [

@@ -22,8 +22,6 @@ from pydantic import Field
 
 from graphvision import node, one_blas_thread
 
-from .._boxes import decode_boxes, encode_boxes, iou_matrix, non_max_suppression
-from .._params import Count, Epochs, Fraction, Positive, Seed
 from ..cnn import (
     Architecture,
     Network,
@@ -33,6 +31,8 @@ from ..cnn import (
     fit_network,
 )
 from ..recognition._types import Samples, SampleSet
+from ..shared.boxes import decode_boxes, encode_boxes, iou_matrix, non_max_suppression
+from ..shared.params import Count, Epochs, Fraction, Positive, Seed
 from ..synthetic._digit_scenes import Scenes, SceneSet
 from ._proposals import ColourSpaces, PositiveList, SimilaritySets
 from ._roi import pool_rois

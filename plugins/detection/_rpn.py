@@ -23,9 +23,9 @@ from pydantic import Field
 
 from graphvision import PortValueError, RecordPort, node, one_blas_thread
 
-from .._boxes import anchor_boxes, decode_boxes, encode_boxes, iou_matrix, non_max_suppression
-from .._params import Count, Epochs, Fraction, Positive, Seed
 from ..cnn import Network, build_architecture, fit_network
+from ..shared.boxes import anchor_boxes, decode_boxes, encode_boxes, iou_matrix, non_max_suppression
+from ..shared.params import Count, Epochs, Fraction, Positive, Seed
 from ..synthetic._digit_scenes import Scenes
 from ._proposals import PositiveList
 from ._rcnn import feature_extractor, feature_map, iou_order

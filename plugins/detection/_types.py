@@ -22,8 +22,8 @@ import numpy as np
 
 from graphvision import PortValueError, RecordPort
 
-from .._boxes import check_boxes
 from ..cnn import build_architecture
+from ..shared.boxes import check_boxes
 
 __all__ = [
     "DetectionSet",

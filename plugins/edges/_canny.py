@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, FloatImage, GrayImage, node
 
-from .._checks import ordered
+from ..shared.checks import ordered
 from ._derivatives import EdgeBoundary, gradient_images
 
 __all__ = ["Canny", "canny", "canny_edges", "hysteresis", "non_maximum_suppression"]

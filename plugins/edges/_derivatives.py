@@ -67,7 +67,7 @@ def derivative_taps(kind: str, sigma: float = 1.0) -> tuple[np.ndarray, np.ndarr
 
 
 def _derivative(image: np.ndarray, axis: str, kind: str, sigma: float, boundary: str) -> np.ndarray:
-    from .._separable import correlate_separable
+    from ..shared.separable import correlate_separable
 
     d, s = derivative_taps(kind, sigma)
     column_taps, row_taps = (s, d) if axis == "x" else (d, s)

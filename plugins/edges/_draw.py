@@ -6,7 +6,7 @@ import numpy as np
 
 from graphvision import BinaryImage, ColorImage, Image, node
 
-from .._draw import colour_canvas
+from ..shared.draw import colour_canvas
 
 __all__ = ["draw_edges"]
 

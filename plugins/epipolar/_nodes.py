@@ -22,10 +22,10 @@ from graphvision import (
     node,
 )
 
-from .._params import Iterations, Positive, Probability, Seed
 from ..camera import normalise_pixels
 from ..fitting import ransac
 from ..geometry import estimate_homography, transfer_error
+from ..shared.params import Iterations, Positive, Probability, Seed
 from ._geometry import (
     eight_point,
     essential_from_fundamental,

@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import GrayImage, Keypoints, KeypointSet, node
 
-from .._params import Positive
+from ..shared.params import Positive
 
 __all__ = ["affine_adapt"]
 
@@ -73,7 +73,7 @@ def affine_adapt(
     """
     import scipy.ndimage as ndi
 
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     count = len(keypoints)
     if count == 0:

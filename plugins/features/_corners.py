@@ -9,8 +9,8 @@ from pydantic import Field
 
 from graphvision import GrayImage, Keypoints, KeypointSet, node
 
-from .._checks import ordered
-from .._params import Count, Fraction
+from ..shared.checks import ordered
+from ..shared.params import Count, Fraction
 
 __all__ = ["harris", "harris_response", "hessian", "log_blobs"]
 
@@ -47,7 +47,7 @@ def _peaks(
 
 def harris_response(image: np.ndarray, sigma_d: float, sigma_i: float, alpha: float) -> np.ndarray:
     r""":math:`R = \det M - \alpha\,\mathrm{tr}^2 M`, M the weighted gradient covariance."""
-    from .._separable import correlate_separable, gaussian_taps, smooth_gaussian
+    from ..shared.separable import correlate_separable, gaussian_taps, smooth_gaussian
 
     data = image.astype(np.float32)
     smooth, slope = gaussian_taps(sigma_d, 3.0), gaussian_taps(sigma_d, 3.0, order=1)
@@ -151,7 +151,7 @@ def hessian(
     ----------
     .. [1] P. R. Beaudet, "Rotationally invariant image operators", ICPR 1978.
     """
-    from .._separable import gaussian_derivative
+    from ..shared.separable import gaussian_derivative
 
     data = image.astype(np.float64)
     ixx = gaussian_derivative(data, sigma, (0, 2))
@@ -204,7 +204,7 @@ def log_blobs(
     """
     import scipy.ndimage as ndi
 
-    from .._separable import gaussian_derivative
+    from ..shared.separable import gaussian_derivative
 
     if max_sigma < min_sigma:
         raise ValueError(f"max_sigma ({max_sigma}) must not be below min_sigma ({min_sigma})")

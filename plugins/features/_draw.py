@@ -6,7 +6,7 @@ import numpy as np
 
 from graphvision import ColorImage, Image, Keypoints, Matches, node
 
-from .._draw import colour_canvas, draw_circle, draw_segment
+from ..shared.draw import colour_canvas, draw_circle, draw_segment
 
 __all__ = ["draw_keypoints", "draw_matches"]
 

@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import Descriptors, GrayImage, Keypoints, node
 
-from .._params import Positive
+from ..shared.params import Positive
 
 __all__ = ["patch_descriptor"]
 
@@ -47,7 +47,7 @@ def patch_descriptor(
     """
     import scipy.ndimage as ndi
 
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     if len(keypoints) == 0:
         return np.zeros((0, size * size), np.float32)

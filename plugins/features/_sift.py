@@ -16,7 +16,7 @@ from pydantic import Field
 
 from graphvision import Descriptors, GrayImage, Keypoints, KeypointSet, node
 
-from .._separable import smooth_gaussian
+from ..shared.separable import smooth_gaussian
 
 # Lowe's parameters, defined once for every SIFT node (defaults as in the paper and OpenCV).
 Intervals = Annotated[int, Field(ge=1, le=8, description="Scales per octave, s.")]

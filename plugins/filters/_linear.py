@@ -10,7 +10,7 @@ from pydantic import Field
 
 from graphvision import FloatImage, Image, ImageT, Kernel, node
 
-from .._checks import check_window
+from ..shared.checks import check_window
 from ._boundary import Boundary, crop_valid, scipy_mode
 
 __all__ = [
@@ -75,7 +75,7 @@ def _correlate_any(image: np.ndarray, kernel: np.ndarray, boundary: str) -> np.n
 
 def _filter(image: np.ndarray, kernel: np.ndarray, boundary: str) -> np.ndarray:
     """Correlate each channel of ``image`` with the 2-D ``kernel`` (factored when separable)."""
-    from .._separable import correlate_separable
+    from ..shared.separable import correlate_separable
 
     if boundary == "crop":
         check_window(image, kernel.shape, "kernel")
@@ -94,7 +94,7 @@ def _filter(image: np.ndarray, kernel: np.ndarray, boundary: str) -> np.ndarray:
 
 def _separable(image: np.ndarray, taps: np.ndarray, boundary: str) -> np.ndarray:
     """Correlate rows then columns with the same 1-D ``taps`` (the compiled separable core)."""
-    from .._separable import correlate_separable
+    from ..shared.separable import correlate_separable
 
     if boundary == "crop":
         check_window(image, (taps.size, taps.size), "filter window")

@@ -9,8 +9,8 @@ from pydantic import AfterValidator, Field
 
 from graphvision import ImageT, node
 
-from .._checks import check_window
-from .._params import odd
+from ..shared.checks import check_window
+from ..shared.params import odd
 from ._boundary import Boundary
 from ._median_network import median_network, sort_network
 

@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from graphvision import Array, ArrayPort, Float, Points2D, PortValueError, node
 
-from .._params import Iterations, Positive, Probability, Seed
+from ..shared.params import Iterations, Positive, Probability, Seed
 from ._ransac import ransac
 
 __all__ = [

@@ -32,7 +32,7 @@ from pydantic import Field
 
 from graphvision import Float, FloatImage, ImageT, node
 
-from .._params import Positive
+from ..shared.params import Positive
 
 __all__ = ["circle_of_confusion", "defocus", "depth_of_field", "field_of_view", "focus_distance"]
 

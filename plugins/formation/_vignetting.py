@@ -27,8 +27,8 @@ from pydantic import Field
 
 from graphvision import Array, ColorImage, GrayImage, ImageT, node
 
-from .._draw import colour_canvas
-from .._params import Positive
+from ..shared.draw import colour_canvas
+from ..shared.params import Positive
 
 __all__ = [
     "correct_vignetting",

@@ -8,8 +8,8 @@ import numpy as np
 
 from graphvision import Float, FloatImage, Homography, Keypoints, Matches, node
 
-from .._params import ImageSide, Iterations, Positive, Probability, Seed
 from ..fitting import ransac
+from ..shared.params import ImageSide, Iterations, Positive, Probability, Seed
 
 __all__ = [
     "apply_homography",

@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, ColorImage, Homography, Image, node
 
-from .._params import MAX_SIDE
+from ..shared.params import MAX_SIDE
 from ._homography import apply_homography
 
 __all__ = ["sample_homography", "stitch", "warp"]

@@ -10,9 +10,9 @@ from pydantic import Field
 
 from graphvision import BinaryImage, FloatImage, GrayImage, Int, node
 
-from .._checks import ordered
-from .._params import Count, Positive
 from ..edges import gradient_images
+from ..shared.checks import ordered
+from ..shared.params import Count, Positive
 from ._peaks import local_maxima, parabolic_offset, suppress_close
 from ._ports import Circles
 
@@ -120,7 +120,7 @@ def hough_circles(
        shapes", Pattern Recognition 13(2), 1981 (gradient-directed voting).
     .. [2] Szeliski (2022), section 7.4.2.
     """
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     if image.shape != edges.shape:
         raise ValueError(

@@ -8,7 +8,7 @@ import numpy as np
 
 from graphvision import ColorImage, Image, node
 
-from .._draw import colour_canvas, plot_points
+from ..shared.draw import colour_canvas, plot_points
 from ._ports import Circles, Lines
 
 __all__ = ["draw_circles", "draw_lines"]

@@ -20,9 +20,9 @@ from graphvision import (
     node,
 )
 
-from .._draw import colour_canvas
-from .._params import Count, Positive
 from ..edges import gradient_images
+from ..shared.draw import colour_canvas
+from ..shared.params import Count, Positive
 from ._peaks import local_maxima, quadratic_peak_2d
 
 __all__ = ["GeneralizedHough", "build_r_table", "draw_instances", "generalized_hough"]
@@ -253,7 +253,7 @@ def _vote_plane(
 
 def _spread(votes: np.ndarray, vote_sigma: float) -> np.ndarray:
     """Each vote spread as a Gaussian of height one (unchanged when ``vote_sigma`` is 0)."""
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     if vote_sigma <= 0:
         return votes

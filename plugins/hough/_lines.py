@@ -10,8 +10,8 @@ from pydantic import Field
 
 from graphvision import BinaryImage, FloatImage, GrayImage, Int, node
 
-from .._params import Count
 from ..edges import gradient_images
+from ..shared.params import Count
 from ._peaks import local_maxima, quadratic_peak_2d
 from ._ports import Lines
 
@@ -250,7 +250,7 @@ def hough_lines(
     .. [3] scikit-image, ``skimage.transform.hough_line_peaks`` (threshold
        0.5 × the accumulator's maximum).
     """
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     if image is not None and image.shape != edges.shape:
         raise ValueError(

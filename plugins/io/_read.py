@@ -12,7 +12,7 @@ import numpy as np
 
 from graphvision import Image, InputError, check_array_file, check_pixels, node, source
 
-from .._checks import to_float_image
+from ..shared.checks import to_float_image
 
 __all__ = ["SAMPLES", "read_array", "read_file", "read_sample", "sample", "sample_array"]
 

@@ -52,11 +52,11 @@ from graphvision import (
     node,
 )
 
-from .._draw import colour_canvas, draw_segment
-from .._params import Fraction, Probability, Seed
 from ..features import sift
 from ..fitting import ransac
 from ..geometry import apply_homography, estimate_homography, refine_homography
+from ..shared.draw import colour_canvas, draw_segment
+from ..shared.params import Fraction, Probability, Seed
 from ..synthetic import ObjectScenes, ObjectSceneSet
 
 __all__ = [
@@ -1251,7 +1251,7 @@ def _outline(
 ) -> None:
     """The quadrilateral ``width`` px wide and a dot on its first corner (the model's top
     left, so that a turned pose shows)."""
-    from .._draw import draw_circle
+    from ..shared.draw import draw_circle
 
     for dx in range(-(width // 2), width - width // 2):
         for dy in range(-(width // 2), width - width // 2):

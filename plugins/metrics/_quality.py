@@ -6,7 +6,7 @@ import numpy as np
 
 from graphvision import Float, Image, node
 
-from .._checks import check_same_shape
+from ..shared.checks import check_same_shape
 
 __all__ = ["mse", "psnr"]
 

@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, GrayImage, node
 
-from .._params import Count
+from ..shared.params import Count
 from ._footprints import Footprint
 from ._packed import MAX_HALF_WIDTH, binary_extreme
 

@@ -31,7 +31,7 @@ Sigma = Annotated[float, Field(gt=0, le=10, description="Gaussian σ before each
 
 def blur(image: np.ndarray, sigma: float) -> np.ndarray:
     """Gaussian smoothing of each channel (mirror boundary), truncated at 3σ, in float32."""
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     return smooth_gaussian(image, sigma, "mirror", truncate=3.0)
 

@@ -10,10 +10,10 @@ from pydantic import Field
 
 from graphvision import Array, ColorImage, Float, FloatImage, GrayImage, Image, Points2D, node
 
-from .._checks import ordered
-from .._draw import colour_canvas
-from .._params import Count, ScaleFactor
 from ..hough import local_maxima, quadratic_peak_2d, suppress_close
+from ..shared.checks import ordered
+from ..shared.draw import colour_canvas
+from ..shared.params import Count, ScaleFactor
 
 __all__ = [
     "MatchError",

@@ -11,7 +11,7 @@ from pydantic import Field
 
 from graphvision import Table, node
 
-from .._params import Iterations, Probability
+from ..shared.params import Iterations, Probability
 from ._subspace import check_classes
 from ._types import (
     Cascade,

@@ -12,9 +12,9 @@ from pydantic import Field
 
 from graphvision import KeypointSet, node
 
-from .._checks import at_most_values
-from .._params import Count, Iterations, Positive, Seed
 from ..features import describe_sift
+from ..shared.checks import at_most_values
+from ..shared.params import Count, Iterations, Positive, Seed
 from ._types import (
     Bags,
     DescriptorBags,

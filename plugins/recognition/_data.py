@@ -10,8 +10,8 @@ from pydantic import Field
 
 from graphvision import node
 
-from .._checks import at_most_values, to_float_image
-from .._params import MAX_SIDE, Probability, Seed
+from ..shared.checks import at_most_values, to_float_image
+from ..shared.params import MAX_SIDE, Probability, Seed
 from ._types import Features, FeatureSet, Samples, SampleSet
 
 __all__ = [

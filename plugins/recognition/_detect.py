@@ -21,10 +21,10 @@ from graphvision import (
     node,
 )
 
-from .._boxes import iou_matrix, non_max_suppression
-from .._checks import ordered
-from .._draw import colour_canvas
-from .._params import Count, Fraction, Positive, ScaleFactor
+from ..shared.boxes import iou_matrix, non_max_suppression
+from ..shared.checks import ordered
+from ..shared.draw import colour_canvas
+from ..shared.params import Count, Fraction, Positive, ScaleFactor
 from ._data import NON_FACE, FaceFree, face_free_image, pixel_features
 from ._haar import (
     SIGMA_FLOOR,

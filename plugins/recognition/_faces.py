@@ -25,10 +25,10 @@ from pydantic import Field
 
 from graphvision import ArrayPort, ColorImage, Float, PortValueError, RecordPort, Table, node
 
-from .._boxes import check_boxes, iou_matrix, non_max_suppression
-from .._checks import ordered
-from .._draw import colour_canvas
-from .._params import Count, Fraction, ScaleFactor
+from ..shared.boxes import check_boxes, iou_matrix, non_max_suppression
+from ..shared.checks import ordered
+from ..shared.draw import colour_canvas
+from ..shared.params import Count, Fraction, ScaleFactor
 from ._detect import sliding_windows
 from ._lbp_cascade import (
     MAX_SIDE,

@@ -13,7 +13,7 @@ from pydantic import Field
 
 from graphvision import Array, GrayImage, node
 
-from .._params import Seed
+from ..shared.params import Seed
 from ._types import Features, FeatureSet, Samples
 
 __all__ = [

@@ -12,7 +12,7 @@ from pydantic import Field
 
 from graphvision import GrayImage, node
 
-from .._params import Count
+from ..shared.params import Count
 from ._types import Features, FeatureSet, Samples
 
 __all__ = [

@@ -40,8 +40,8 @@ from pydantic import Field
 
 from graphvision import Boxes, BoxSet, GrayImage, PortValueError, RecordPort, node
 
-from .._checks import ordered
-from .._params import MAX_SIDE, Fraction
+from ..shared.checks import ordered
+from ..shared.params import MAX_SIDE, Fraction
 from ._haar import integral_image
 
 __all__ = [

@@ -11,7 +11,7 @@ import numpy as np
 
 from graphvision import Array, node
 
-from .._params import Count
+from ..shared.params import Count
 from ._types import (
     Features,
     FeatureSet,

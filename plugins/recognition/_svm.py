@@ -7,7 +7,7 @@ import numpy as np
 
 from graphvision import node
 
-from .._params import Iterations, Positive
+from ..shared.params import Iterations, Positive
 from ._subspace import check_classes
 from ._types import Features, LinearClassifier, LinearModel
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from graphvision import ColorImage, Image, LabelImage, Table, node
 
-from .._draw import colour_canvas
+from ..shared.draw import colour_canvas
 
 __all__ = ["colorize", "overlay"]
 

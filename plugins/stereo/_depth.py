@@ -6,7 +6,7 @@ import numpy as np
 
 from graphvision import Camera, Points3D, node
 
-from .._params import Count, Positive
+from ..shared.params import Count, Positive
 from ._ports import Depth, Disparity
 
 __all__ = ["depth_from_disparity", "depth_points"]

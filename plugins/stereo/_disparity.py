@@ -10,7 +10,7 @@ from pydantic import AfterValidator, Field
 
 from graphvision import GrayImage, node
 
-from .._params import odd
+from ..shared.params import odd
 from ._cost import Cost, cost_volume, maximum_cost
 from ._ports import Disparity
 from ._speckles import SpeckleRange, SpeckleWindow, speckles

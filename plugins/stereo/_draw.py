@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import ColorImage, Points3D, node
 
-from .._checks import ordered
+from ..shared.checks import ordered
 from ._colour_map import colour_map
 from ._ports import Disparity
 

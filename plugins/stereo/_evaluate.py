@@ -8,7 +8,7 @@ import numpy as np
 
 from graphvision import Float, node
 
-from .._params import Positive
+from ..shared.params import Positive
 from ._ports import Depth, Disparity
 
 __all__ = ["DisparityError", "depth_rmse", "disparity_error"]

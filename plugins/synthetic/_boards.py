@@ -17,8 +17,8 @@ from pydantic import Field
 
 from graphvision import Array, Camera, ImageT, PinholeCamera, Points3D, node
 
-from .._params import Fraction, Positive, Seed
 from ..camera import look_at, project_points, undistort_normalised
+from ..shared.params import Fraction, Positive, Seed
 
 __all__ = ["board_object_points", "board_views", "plane_view", "render_board"]
 
@@ -178,7 +178,7 @@ def board_views(
     object_points : (rows·columns, 3) the corners on the board, Z = 0
     camera : the rendering camera (its pose is the first view's)
     """
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     rng = np.random.default_rng(seed)
     K = np.array(

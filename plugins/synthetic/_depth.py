@@ -6,8 +6,8 @@ import numpy as np
 
 from graphvision import FloatImage, Image, node
 
-from .._checks import ordered
-from .._params import Positive
+from ..shared.checks import ordered
+from ..shared.params import Positive
 
 __all__ = ["depth_plane"]
 

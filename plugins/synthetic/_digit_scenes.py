@@ -21,9 +21,9 @@ from pydantic import Field
 
 from graphvision import PortValueError, RecordPort, node
 
-from .._boxes import check_boxes
-from .._checks import all_of, at_most_values, ordered
-from .._params import Seed
+from ..shared.boxes import check_boxes
+from ..shared.checks import all_of, at_most_values, ordered
+from ..shared.params import Seed
 
 __all__ = ["SceneSet", "Scenes", "ScenesPort", "digit_scenes", "render_digit_scenes"]
 

@@ -26,9 +26,9 @@ from pydantic import Field
 
 from graphvision import Boxes, BoxSet, ColorImage, node
 
-from .._checks import all_of, ordered, to_float_image
-from .._params import Seed
 from ..recognition._faces import SceneBoxes, SceneBoxSet, SceneImages
+from ..shared.checks import all_of, ordered, to_float_image
+from ..shared.params import Seed
 
 __all__ = [
     "ASTRONAUT_FACE",

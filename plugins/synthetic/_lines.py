@@ -9,8 +9,8 @@ from pydantic import Field
 
 from graphvision import Points2D, node
 
-from .._params import Seed
 from ..fitting import Line2D
+from ..shared.params import Seed
 
 __all__ = ["line_points"]
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from graphvision import ImageT, node
 
-from .._params import Fraction, Seed
+from ..shared.params import Fraction, Seed
 
 __all__ = ["gaussian_noise", "impulse_noise", "salt_and_pepper"]
 

@@ -45,8 +45,8 @@ from pydantic import Field
 
 from graphvision import GrayImage, PortValueError, RecordPort, node
 
-from .._checks import all_of, at_most_values, ordered
-from .._params import Fraction, Seed
+from ..shared.checks import all_of, at_most_values, ordered
+from ..shared.params import Fraction, Seed
 
 __all__ = [
     "CLUTTER_PHOTOGRAPHS",

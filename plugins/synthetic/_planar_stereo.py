@@ -11,8 +11,8 @@ from pydantic import Field
 
 from graphvision import node
 
-from .._checks import ordered
-from .._params import Seed
+from ..shared.checks import ordered
+from ..shared.params import Seed
 from ._stereo_pair import StereoPair
 
 __all__ = ["PHOTOGRAPHS", "planar_stereo_scene"]

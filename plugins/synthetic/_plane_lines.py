@@ -14,8 +14,8 @@ from pydantic import Field
 
 from graphvision import Array, Camera, GrayImage, PinholeCamera, node
 
-from .._params import Positive, Seed
 from ..camera import look_at, project_points
+from ..shared.params import Positive, Seed
 
 __all__ = ["plane_lines"]
 

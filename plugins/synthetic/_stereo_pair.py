@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import BinaryImage, GrayImage, node
 
-from .._params import Seed
+from ..shared.params import Seed
 from ..stereo._ports import Disparity
 
 __all__ = ["stereo_pair"]
@@ -24,7 +24,7 @@ class StereoPair(NamedTuple):
 
 def _texture(rng: np.random.Generator, rows: int, cols: int) -> np.ndarray:
     """Band-limited noise in [0.1, 0.9] (smooth enough to sample between pixels)."""
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     noise = smooth_gaussian(rng.random((rows, cols)), 1.2)
     noise -= noise.min()

@@ -9,7 +9,7 @@ from pydantic import Field
 
 from graphvision import Camera, PinholeCamera, node
 
-from .._params import Positive, Seed
+from ..shared.params import Positive, Seed
 from ..stereo._ports import Depth, Frames
 
 __all__ = ["gray_code_stripes", "structured_light_scene"]
@@ -117,7 +117,7 @@ def structured_light_scene(
     pixel = np.floor(columns + 0.5)  # projector pixel j lights [j − ½, j + ½) about its centre
     lit &= (pixel >= 0) & (pixel < projector_width)
     planes = gray_code_stripes(np.where(lit, pixel, 0), bits, projector_width)
-    from .._separable import smooth_gaussian
+    from ..shared.separable import smooth_gaussian
 
     albedo = 0.35 + 0.6 * smooth_gaussian(rng.random((height, width)), 2.0)
     albedo = np.clip(albedo, 0.2, 1.0)

@@ -9,8 +9,8 @@ from pydantic import Field
 
 from graphvision import Camera, PinholeCamera, Points2D, Points3D, node
 
-from .._params import Positive, Seed
 from ..camera import look_at, project_points
+from ..shared.params import Positive, Seed
 
 __all__ = ["two_view_scene"]
 

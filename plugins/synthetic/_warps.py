@@ -9,9 +9,9 @@ from pydantic import Field
 
 from graphvision import Homography, ImageT, node
 
-from .._checks import ordered
-from .._params import Fraction, Positive, Seed
 from ..geometry import sample_homography
+from ..shared.checks import ordered
+from ..shared.params import Fraction, Positive, Seed
 
 __all__ = ["random_homography", "random_warp", "two_views"]
 

@@ -9,8 +9,8 @@ from pydantic import Field
 
 from graphvision import Array, BinaryImage, Float, GrayImage, LabelImage, node
 
-from .._checks import ordered
-from .._params import Fraction
+from ..shared.checks import ordered
+from ..shared.params import Fraction
 
 __all__ = ["ght", "histogram", "manual", "multi_otsu", "otsu", "split_scores"]
 

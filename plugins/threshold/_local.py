@@ -9,7 +9,7 @@ from pydantic import AfterValidator, Field
 
 from graphvision import BinaryImage, GrayImage, node
 
-from .._params import odd
+from ..shared.params import odd
 
 __all__ = ["local", "window_mean_std"]
 

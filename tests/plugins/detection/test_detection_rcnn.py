@@ -8,7 +8,7 @@ import pytest
 
 import graphvision as gv
 from graphvision_plugins import cnn, detection
-from graphvision_plugins._boxes import iou_matrix
+from graphvision_plugins.shared.boxes import iou_matrix
 from graphvision_plugins.synthetic import SceneSet, digit_scenes
 
 from ...conftest import PIPELINES

@@ -18,7 +18,7 @@ import skimage.data
 import skimage.draw
 
 from graphvision_plugins import edges, hough, pyramids
-from graphvision_plugins._separable import smooth_gaussian
+from graphvision_plugins.shared.separable import smooth_gaussian
 
 # --- multi-scale template matching (item 6) ---------------------------------------------
 

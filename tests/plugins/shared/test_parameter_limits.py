@@ -15,12 +15,12 @@ import pytest
 
 import graphvision as gv
 from graphvision_plugins import cnn
-from graphvision_plugins._params import MAX_EPOCHS, MAX_ITERATIONS
 from graphvision_plugins.cnn._network import MAX_SAMPLE_VALUES, MAX_WEIGHTS
 from graphvision_plugins.detection._rpn import check_anchors_fit
 from graphvision_plugins.epipolar import pose_error
 from graphvision_plugins.fitting import ransac_iterations
 from graphvision_plugins.recognition._data import stratified_split
+from graphvision_plugins.shared.params import MAX_EPOCHS, MAX_ITERATIONS
 
 from ...conftest import PIPELINES
 

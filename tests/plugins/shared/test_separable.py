@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.ndimage as ndi
 
-from graphvision_plugins._separable import (
+from graphvision_plugins.shared.separable import (
     correlate_separable,
     gaussian_derivative,
     gaussian_taps,

@@ -1,7 +1,7 @@
 """Every family that smooths or differentiates through the compiled core gets scipy's result.
 
 Each case is the ``scipy.ndimage`` call a family made before it moved to
-:mod:`graphvision_plugins._separable`, written beside the call that replaced
+:mod:`graphvision_plugins.shared.separable`, written beside the call that replaced
 it: float32 images agree within 1e-6, float64 ones (accumulators, the
 Hessian, the LoG, board corners) within 1e-12.
 """
@@ -13,8 +13,8 @@ import pytest
 import scipy.ndimage as ndi
 
 from graphvision_plugins import edges, pyramids
-from graphvision_plugins._separable import gaussian_derivative, smooth_gaussian
 from graphvision_plugins.edges import derivative_taps
+from graphvision_plugins.shared.separable import gaussian_derivative, smooth_gaussian
 
 RNG = np.random.default_rng(5)
 IMAGE = RNG.random((41, 57), dtype=np.float32)

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from pydantic import TypeAdapter, ValidationError
 
-from graphvision_plugins._draw import colour_canvas, draw_circle, draw_segment, plot_points
-from graphvision_plugins._params import Count, Fraction, OddSize, Positive, Probability, Seed
+from graphvision_plugins.shared.draw import colour_canvas, draw_circle, draw_segment, plot_points
+from graphvision_plugins.shared.params import Count, Fraction, OddSize, Positive, Probability, Seed
 
 
 @pytest.mark.parametrize(

@@ -110,7 +110,7 @@ def correlate_separable(
             ],
             axis=2,
         )
-    from ._separable_kernels import correlate_both
+    from .separable_kernels import correlate_both
 
     dtype = np.float64 if image.dtype == np.float64 else np.float32
     data = np.ascontiguousarray(image, dtype=dtype)
