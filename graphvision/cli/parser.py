@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from graphvision.cli.cache import cmd_cache
@@ -136,6 +137,15 @@ def build_parser() -> argparse.ArgumentParser:
         global_options(sub, top=False)
         return sub
 
+    for add in (_run, _sweep, _validate, _registry_commands, _graph_and_report, _cache):
+        add(command)
+    return parser
+
+
+Command = Callable[[str, str], argparse.ArgumentParser]
+
+
+def _run(command: Command) -> None:
     p = command("run", "run a pipeline (once, or once per file with --batch)")
     run_options(p)
     p.add_argument(
@@ -163,6 +173,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_run)
 
+
+def _sweep(command: Command) -> None:
     p = command("sweep", "run every combination of parameter values; sweep.csv, plots, page")
     run_options(p)
     p.add_argument(
@@ -183,10 +195,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="OUTPUT", help="plot this scalar output against each param")
     p.set_defaults(func=cmd_sweep)
 
+
+def _validate(command: Command) -> None:
     p = command("validate", "check pipelines without running them")
     p.add_argument("pipelines", nargs="+", metavar="PIPELINE", help="pipeline files")
     p.set_defaults(func=cmd_validate)
 
+
+def _graph_and_report(command: Command) -> None:
+    """``graph`` and ``report``: a pipeline drawn, a run folder's pages written again."""
+    p = command("graph", "draw a pipeline as SVG, DOT or Mermaid")
+    p.add_argument("pipeline", help="the pipeline file (YAML)")
+    p.add_argument(
+        "--format", choices=("svg", "dot", "mermaid"), default="dot", help="the drawing's format"
+    )
+    p.set_defaults(func=cmd_graph)
+
+    p = command("report", "write a run folder's report.md and report.html again from its files")
+    p.add_argument("directory", help="the run's output folder (-d of graphvision run)")
+    p.set_defaults(func=cmd_report)
+
+
+def _registry_commands(command: Command) -> None:
+    """``nodes``, ``describe`` and ``schema``: what the registry and the file format hold."""
     p = command("nodes", "list the nodes by family")
     p.add_argument("--json", action="store_true", help="every node's description as JSON")
     p.set_defaults(func=cmd_nodes)
@@ -203,17 +234,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = command("schema", "print the JSON Schema of pipeline files")
     p.set_defaults(func=cmd_schema)
 
-    p = command("graph", "draw a pipeline as SVG, DOT or Mermaid")
-    p.add_argument("pipeline", help="the pipeline file (YAML)")
-    p.add_argument(
-        "--format", choices=("svg", "dot", "mermaid"), default="dot", help="the drawing's format"
-    )
-    p.set_defaults(func=cmd_graph)
 
-    p = command("report", "write a run folder's report.md and report.html again from its files")
-    p.add_argument("directory", help="the run's output folder (-d of graphvision run)")
-    p.set_defaults(func=cmd_report)
-
+def _cache(command: Command) -> None:
     p = command("cache", "inspect, prune or empty the disk cache")
     p.add_argument("action", choices=("info", "prune", "clear"), help="what to do")
     cache_options(p)
@@ -225,7 +247,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="with prune: size to prune down to",
     )
     p.set_defaults(func=cmd_cache)
-    return parser
 
 
 def version() -> str:

@@ -120,11 +120,7 @@ def run_batch_command(
     from graphvision.views.batch_page import run_batch
     from graphvision.views.progress import FileProgress
 
-    if len(args.batch) > 1:
-        raise UsageError("--batch maps one input; give it once")
-    name, pattern = next(iter(named_pairs(args.batch, "--batch").items()))
-    if not args.output_dir:
-        raise UsageError("--batch needs --output-dir (one folder per input file)")
+    name, pattern = _batch_argument(args)
     shown: list[FileProgress] = []
     began = time.monotonic()
 
@@ -167,8 +163,16 @@ def run_batch_command(
             bar.close()
         if not isinstance(executor, str):
             executor.shutdown()
-    total = len(batch.items)
-    print(
-        f"{total - batch.failed} of {total} succeeded; summary in {batch.summary}", file=sys.stderr
-    )
+    done = f"{len(batch.items) - batch.failed} of {len(batch.items)} succeeded"
+    print(f"{done}; summary in {batch.summary}", file=sys.stderr)
     return EXIT_FAILED if batch.failed else EXIT_OK
+
+
+def _batch_argument(args: argparse.Namespace) -> tuple[str, str]:
+    """The input ``--batch NAME=GLOB`` names, and the pattern; a UsageError when misused."""
+    if len(args.batch) > 1:
+        raise UsageError("--batch maps one input; give it once")
+    name, pattern = next(iter(named_pairs(args.batch, "--batch").items()))
+    if not args.output_dir:
+        raise UsageError("--batch needs --output-dir (one folder per input file)")
+    return name, pattern

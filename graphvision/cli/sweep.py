@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from graphvision.cli.common import (
@@ -25,6 +26,7 @@ from graphvision.errors import did_you_mean
 if TYPE_CHECKING:
     from pathlib import Path
 
+    from graphvision.compiler.compile import CompiledGraph
     from graphvision.graph.model import Graph
     from graphvision.nodes.registry import Registry
 
@@ -61,35 +63,17 @@ def _sweep(
 ) -> int:
     """The sweep, once its arguments are checked: run, then write the folder."""
     from graphvision.compiler.compile import compile_graph
-    from graphvision.execution.sweep import SweepInterrupted, scalar_outputs_of, sweep
+    from graphvision.execution.sweep import SweepInterrupted, sweep
     from graphvision.views.progress import FileProgress
     from graphvision.views.sweep_page import write_sweep
 
     if overrides:
         graph = graph.with_overrides(overrides)
     if args.plot:
-        compiled = compile_graph(graph, registry, provided=set(inputs))
-        unknown = [name for name in args.output or () if name not in compiled.outputs]
-        if unknown:
-            raise UsageError(
-                f"-o {unknown[0]}: no such output; outputs: {', '.join(compiled.outputs)}"
-            )
-        scalars = scalar_outputs_of(compiled, args.output or list(compiled.outputs))
-        if args.plot not in scalars:
-            listing = ", ".join(scalars) or "none"
-            raise UsageError(
-                f"--plot {args.plot}: not a scalar output of the sweep"
-                f"{did_you_mean(args.plot, scalars)}; scalar outputs: {listing}"
-            )
+        _check_plot(args, compile_graph(graph, registry, provided=set(inputs)))
     executor = executor_for(args)
     shown: list[FileProgress] = []
-    began = time.monotonic()
-
-    def report(number: int, total: int, row: dict[str, Any]) -> None:
-        if not shown:  # a bar on a terminal, else a line per combination
-            shown.append(FileProgress(total, "combinations", began=began))
-        combination = ", ".join(f"{key}={row[key]}" for key in grid)
-        shown[0].finished(combination, row["status"] == "ok", row["seconds"])
+    report = _progress(grid, shown, time.monotonic())
 
     try:
         result = sweep(
@@ -125,3 +109,35 @@ def _sweep(
         file=sys.stderr,
     )
     return EXIT_FAILED if failed else EXIT_OK
+
+
+def _check_plot(args: argparse.Namespace, compiled: CompiledGraph) -> None:
+    """``-o`` names outputs and ``--plot`` one of their scalars, or a UsageError says not."""
+    from graphvision.execution.sweep import scalar_outputs_of
+
+    unknown = [name for name in args.output or () if name not in compiled.outputs]
+    if unknown:
+        raise UsageError(f"-o {unknown[0]}: no such output; outputs: {', '.join(compiled.outputs)}")
+    scalars = scalar_outputs_of(compiled, args.output or list(compiled.outputs))
+    if args.plot not in scalars:
+        listing = ", ".join(scalars) or "none"
+        raise UsageError(
+            f"--plot {args.plot}: not a scalar output of the sweep"
+            f"{did_you_mean(args.plot, scalars)}; scalar outputs: {listing}"
+        )
+
+
+def _progress(
+    grid: dict[str, Any], shown: list[Any], began: float
+) -> Callable[[int, int, dict[str, Any]], None]:
+    """A sweep's ``on_row``: a bar on a terminal, else a line per combination (kept in
+    ``shown``, to be closed by the caller)."""
+    from graphvision.views.progress import FileProgress
+
+    def report(number: int, total: int, row: dict[str, Any]) -> None:
+        if not shown:
+            shown.append(FileProgress(total, "combinations", began=began))
+        combination = ", ".join(f"{key}={row[key]}" for key in grid)
+        shown[0].finished(combination, row["status"] == "ok", row["seconds"])
+
+    return report

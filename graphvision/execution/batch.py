@@ -35,6 +35,12 @@ from graphvision.cache.memory_store import MemoryStore
 from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import InputError
+from graphvision.execution.arguments import (
+    graph_argument,
+    mapping_argument,
+    names_argument,
+    run_arguments,
+)
 from graphvision.execution.batch_files import (
     NO_PAGES,
     BatchItem,
@@ -146,13 +152,6 @@ def run_batch(
         ``batch.csv`` is not a graphvision summary (checked before anything
         runs).
     """
-    from graphvision.execution.arguments import (
-        graph_argument,
-        mapping_argument,
-        names_argument,
-        run_arguments,
-    )
-
     run_arguments(cache, executor, workers)
     graph = graph_argument(graph)
     inputs = mapping_argument(inputs, "inputs")
@@ -167,17 +166,10 @@ def run_batch(
         )
     registry = _checked_pipeline(graph, registry, inputs, input, outputs, overrides)
     out_dir = Path(output_dir)
-    if isinstance(files, str):
-        paths, root = batch_files(files, exclude=out_dir), pattern_root(files)
-        if not paths:
-            raise InputError(f"batch input '{input}': no file matches '{files}'")
-    else:
-        paths = [Path(f) for f in files]
-        root = Path(*common_parts([p.parent.parts for p in paths])) if paths else Path()
+    paths, root = _batch_paths(files, out_dir, input)
     folders = output_folders(paths, root, out_dir)
-    names = list(outputs) if outputs is not None else list(graph.outputs)
-    for folder in folders:
-        check_output_folder(folder, names)
+    for folder in folders:  # each refused before anything runs if it holds others' files
+        check_output_folder(folder, outputs if outputs is not None else graph.outputs)
     stale = previous_folders(out_dir) - {folder.resolve() for folder in folders}
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
@@ -194,25 +186,54 @@ def run_batch(
         "hooks": hooks,
     }
     made = missing_folders(out_dir, *folders)
-    items: list[BatchItem | None] = [None] * len(paths)
+    own = isinstance(executor, str)
+    width = files_at_once or executor_width(pool)
+    finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
+    if own:
+        pool.shutdown()
+    return BatchResult(finished, _summarise(finished, out_dir, pages, stale))
+
+
+def _batch_paths(
+    files: str | Sequence[str | Path], out_dir: Path, input: str
+) -> tuple[list[Path], Path]:
+    """The files of a batch and the folder their output folders are named below."""
+    if isinstance(files, str):
+        paths, root = batch_files(files, exclude=out_dir), pattern_root(files)
+        if not paths:
+            raise InputError(f"batch input '{input}': no file matches '{files}'")
+        return paths, root
+    paths = [Path(f) for f in files]
+    return paths, Path(*common_parts([p.parent.parts for p in paths])) if paths else Path()
+
+
+def _run_files(
+    batch: _Batch,
+    width: int,
+    on_item: Callable[[int, int, BatchItem], None] | None,
+    own: bool,
+    where: tuple[Path, set[Path], list[Path]],
+) -> list[BatchItem]:
+    """Every file of ``batch``, ``width`` at once; on Ctrl-C or an error, the files done
+    so far are still summarised and the folders made for unfinished files removed."""
+    out_dir, stale, made = where
+    items: list[BatchItem | None] = [None] * len(batch.paths)
     try:
-        width = files_at_once or executor_width(pool)
-        for done, (index, item) in enumerate(_stream(batch.run_one, len(paths), width), start=1):
+        stream = _stream(batch.run_one, len(batch.paths), width)
+        for done, (index, item) in enumerate(stream, start=1):
             items[index] = item
             if on_item is not None:
-                on_item(done, len(paths), item)
-    except BaseException:  # Ctrl-C or an error: the files done so far are still summarised
+                on_item(done, len(batch.paths), item)
+    except BaseException:
         batch.stopped = True  # a file still running writes nothing more
-        if isinstance(executor, str):  # nodes still running are not waited for
-            pool.shutdown(wait=False, cancel_futures=True)
+        if own:  # nodes still running are not waited for
+            batch.pool.shutdown(wait=False, cancel_futures=True)
         if any(item is not None for item in items):
-            _summarise(_not_run(items, paths, folders, batch.started), out_dir, pages, stale)
-        remove_empty_folders(made)  # folders made for files that did not finish
+            not_run = _not_run(items, batch.paths, batch.folders, batch.started)
+            _summarise(not_run, out_dir, batch.pages, stale)
+        remove_empty_folders(made)
         raise
-    if isinstance(executor, str):
-        pool.shutdown()
-    finished = [item for item in items if item is not None]
-    return BatchResult(finished, _summarise(finished, out_dir, pages, stale))
+    return [item for item in items if item is not None]
 
 
 def _checked_pipeline(

@@ -16,7 +16,7 @@ from __future__ import annotations
 import csv
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -30,6 +30,12 @@ from graphvision.errors import (
     PipelineError,
     Problem,
     did_you_mean,
+)
+from graphvision.execution.arguments import (
+    graph_argument,
+    mapping_argument,
+    names_argument,
+    run_arguments,
 )
 from graphvision.execution.executors import Executor, make_executor
 from graphvision.execution.record import RunRecord
@@ -143,18 +149,10 @@ def sweep(
     SweepInterrupted
         On Ctrl-C (a ``KeyboardInterrupt``), with the rows so far.
     """
-    from graphvision.execution.arguments import (
-        graph_argument,
-        mapping_argument,
-        names_argument,
-        run_arguments,
-    )
-
     run_arguments(cache, executor, workers)
     inputs = mapping_argument(inputs, "inputs")
     outputs = names_argument(outputs, "outputs")
-    given = graph_argument(graph)
-    graph = given.graph if isinstance(given, CompiledGraph) else given
+    graph = _plain_graph(graph_argument(graph))
     if not isinstance(grid, Mapping):
         raise TypeError(f"grid must be a dict from 'node.param' to a list of values, got {grid!r}")
     if registry is None:
@@ -162,56 +160,9 @@ def sweep(
 
         registry = discover_for(graph)
     keys = list(grid)
-    for key in keys:
-        if isinstance(grid[key], (str, bytes)) or not isinstance(grid[key], Sequence):
-            raise PipelineError(
-                [Problem(0, f"grid {key}", f"needs a list of values, got {grid[key]!r}")],
-                graph.source,
-            )
-    values = [list(grid[key]) for key in keys]
-    problems = [
-        Problem(0, f"grid {key}", "has no values")
-        for key, options in zip(keys, values, strict=True)
-        if not options
-    ]
-    for key in keys:
-        target, _, param = key.partition(".")
-        if not param:
-            problems.append(Problem(0, f"grid {key}", "must be node.param or params.name"))
-        elif target != "params" and target not in graph.nodes:
-            hint = did_you_mean(target, graph.nodes)
-            problems.append(Problem(0, f"grid {key}", f"no node '{target}'{hint}"))
-    if not keys:
-        problems.append(Problem(0, "grid", "the grid is empty: give at least one node.param"))
-    problems += _shadowed(graph, keys)
+    values = _grid_values(graph, grid, keys)
+    base, wanted = _checked_combinations(graph, registry, keys, values, inputs, outputs)
     total = math.prod(len(options) for options in values)
-    if total > MAX_COMBINATIONS:
-        sizes = " × ".join(str(len(options)) for options in values)
-        problems.append(
-            Problem(
-                0,
-                "grid",
-                f"{total:,} combinations ({sizes}); at most {MAX_COMBINATIONS:,}: "
-                "sweep fewer values, or one parameter after another",
-            )
-        )
-    if problems:
-        raise PipelineError(problems, graph.source)
-    first = {key: options[0] for key, options in zip(keys, values, strict=True)}
-    base = _compile(graph, registry, first, inputs)
-    for key, options in zip(keys, values, strict=True):  # each value checked once
-        for value in options[1:]:
-            _compile(graph, registry, {**first, key: value}, inputs)
-    wanted = list(outputs) if outputs is not None else list(base.outputs)
-    listing, names = ", ".join(base.outputs), ", ".join(base.input_types) or "none"
-    unknown = [
-        *(Problem(0, "outputs", f"no output '{name}'; outputs: {listing}") for name in wanted
-          if name not in base.outputs),
-        *(Problem(0, "inputs", f"no input '{name}'; inputs: {names}") for name in inputs or {}
-          if name not in base.input_types),
-    ]  # fmt: skip
-    if unknown:
-        raise PipelineError(unknown, graph.source)
     scalar_outputs = scalar_outputs_of(base, wanted)
     result = SweepResult(keys, scalar_outputs)
     cache = cache if cache is not None else Cache(MemoryStore())
@@ -235,10 +186,7 @@ def sweep(
             pool.shutdown(wait=False, cancel_futures=True)
             own = False
         done = len(result.rows)
-        blank = {name: "" for name in scalar_outputs}
-        for rest in itertools.chain(running, combinations):  # not run
-            marks = {"status": "not run", "computed": 0, "cached": 0, "seconds": 0.0}
-            result.rows.append({**rest, **blank, **marks})
+        _not_run(result, itertools.chain(running, combinations), scalar_outputs)
         raise SweepInterrupted(result, done) from stop
     finally:
         if own:
@@ -283,6 +231,90 @@ def _run_combination(
     row["computed"], row["cached"] = record.count("computed"), record.count("cached")
     row["seconds"] = round(record.seconds, 4)
     return row, record
+
+
+def _plain_graph(given: Graph | CompiledGraph) -> Graph:
+    return given.graph if isinstance(given, CompiledGraph) else given
+
+
+def _not_run(
+    result: SweepResult, combinations: Iterable[dict[str, Any]], scalar_outputs: list[str]
+) -> None:
+    """Rows for the combinations an interrupted sweep did not run."""
+    blank = {name: "" for name in scalar_outputs}
+    for rest in combinations:
+        marks = {"status": "not run", "computed": 0, "cached": 0, "seconds": 0.0}
+        result.rows.append({**rest, **blank, **marks})
+
+
+def _grid_values(
+    graph: Graph, grid: Mapping[str, Sequence[Any]], keys: list[str]
+) -> list[list[Any]]:
+    """Each key's values, or every problem of the grid's shape at once (PipelineError)."""
+    for key in keys:
+        if isinstance(grid[key], (str, bytes)) or not isinstance(grid[key], Sequence):
+            raise PipelineError(
+                [Problem(0, f"grid {key}", f"needs a list of values, got {grid[key]!r}")],
+                graph.source,
+            )
+    values = [list(grid[key]) for key in keys]
+    problems = [
+        Problem(0, f"grid {key}", "has no values")
+        for key, options in zip(keys, values, strict=True)
+        if not options
+    ]
+    for key in keys:
+        target, _, param = key.partition(".")
+        if not param:
+            problems.append(Problem(0, f"grid {key}", "must be node.param or params.name"))
+        elif target != "params" and target not in graph.nodes:
+            hint = did_you_mean(target, graph.nodes)
+            problems.append(Problem(0, f"grid {key}", f"no node '{target}'{hint}"))
+    if not keys:
+        problems.append(Problem(0, "grid", "the grid is empty: give at least one node.param"))
+    problems += _shadowed(graph, keys)
+    total = math.prod(len(options) for options in values)
+    if total > MAX_COMBINATIONS:
+        sizes = " × ".join(str(len(options)) for options in values)
+        problems.append(
+            Problem(
+                0,
+                "grid",
+                f"{total:,} combinations ({sizes}); at most {MAX_COMBINATIONS:,}: "
+                "sweep fewer values, or one parameter after another",
+            )
+        )
+    if problems:
+        raise PipelineError(problems, graph.source)
+    return values
+
+
+def _checked_combinations(
+    graph: Graph,
+    registry: Registry,
+    keys: list[str],
+    values: list[list[Any]],
+    inputs: dict[str, Any] | None,
+    outputs: Sequence[str] | None,
+) -> tuple[CompiledGraph, list[str]]:
+    """The first combination compiled, each other value checked once, and the outputs
+    to produce; PipelineError naming unknown outputs and inputs."""
+    first = {key: options[0] for key, options in zip(keys, values, strict=True)}
+    base = _compile(graph, registry, first, inputs)
+    for key, options in zip(keys, values, strict=True):  # each value checked once
+        for value in options[1:]:
+            _compile(graph, registry, {**first, key: value}, inputs)
+    wanted = list(outputs) if outputs is not None else list(base.outputs)
+    listing, names = ", ".join(base.outputs), ", ".join(base.input_types) or "none"
+    unknown = [
+        *(Problem(0, "outputs", f"no output '{name}'; outputs: {listing}") for name in wanted
+          if name not in base.outputs),
+        *(Problem(0, "inputs", f"no input '{name}'; inputs: {names}") for name in inputs or {}
+          if name not in base.input_types),
+    ]  # fmt: skip
+    if unknown:
+        raise PipelineError(unknown, graph.source)
+    return base, wanted
 
 
 def scalar_outputs_of(compiled: CompiledGraph, names: Sequence[str]) -> list[str]:

@@ -182,45 +182,58 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
             f"the pipeline file {source} no longer fits the run in {directory}: {error.args[0]}"
         ) from None
     compiled = compile_graph(graph, registry, provided=set(record.inputs))
-    outputs: dict[str, Any] = {}
-    for name, names in record.files.items():
-        recorded = record.outputs.get(name, "").split(" ", 1)[0]
-        now = compiled.output_type(name).type_name() if name in compiled.outputs else None
-        if now != recorded:
-            change = f"is now {now}" if now else "is no longer an output"
-            raise OutputFolderError(
-                f"the pipeline file {source} no longer fits the run in {directory}: output "
-                f"'{name}' was {recorded or 'not recorded'} and {change}"
-            )
-        paths = [directory / file for file in names]
-        missing = [p.name for p in paths if not p.is_file()]
-        if missing:
-            raise OutputFolderError(
-                f"output '{name}' of the run in {directory} is gone ({', '.join(missing)}): "
-                "run the pipeline again to write it"
-            )
-        edited = [
-            p.name
-            for p in paths
-            if p.name in record.file_sha256 and file_sha256(p) != record.file_sha256[p.name]
-        ]
-        if edited:
-            warnings.warn(
-                f"output '{name}' in {directory} was edited since the run ({', '.join(edited)}): "
-                "the report shows it as it is now",
-                stacklevel=2,
-            )
-        port = compiled.output_type(name)
-        try:
-            outputs[name] = port.validate(port.read(paths))
-        except Exception as error:  # files on disk, edited by anyone: any failure is theirs
-            raise OutputFolderError(
-                f"output '{name}' in {directory} cannot be read back as {port.type_name()} "
-                f"({error})"
-            ) from None
+    outputs = {
+        name: _read_output(name, names, compiled, record, (directory, source))
+        for name, names in record.files.items()
+    }
     written = {name: list(names) for name, names in record.files.items()}
     write_report(compiled, outputs, written, record, directory)
     return write_html_report(compiled, outputs, record, directory)
+
+
+def _read_output(
+    name: str,
+    names: list[str],
+    compiled: CompiledGraph,
+    record: RunRecord,
+    where: tuple[Path, Path],
+) -> Any:
+    """Output ``name`` read back from its files, or OutputFolderError saying why it cannot be
+    (its type changed, a file is gone); a warning when a file was edited since the run."""
+    directory, source = where
+    recorded = record.outputs.get(name, "").split(" ", 1)[0]
+    now = compiled.output_type(name).type_name() if name in compiled.outputs else None
+    if now != recorded:
+        change = f"is now {now}" if now else "is no longer an output"
+        raise OutputFolderError(
+            f"the pipeline file {source} no longer fits the run in {directory}: output "
+            f"'{name}' was {recorded or 'not recorded'} and {change}"
+        )
+    paths = [directory / file for file in names]
+    missing = [p.name for p in paths if not p.is_file()]
+    if missing:
+        raise OutputFolderError(
+            f"output '{name}' of the run in {directory} is gone ({', '.join(missing)}): "
+            "run the pipeline again to write it"
+        )
+    edited = [
+        p.name
+        for p in paths
+        if p.name in record.file_sha256 and file_sha256(p) != record.file_sha256[p.name]
+    ]
+    if edited:
+        warnings.warn(
+            f"output '{name}' in {directory} was edited since the run ({', '.join(edited)}): "
+            "the report shows it as it is now",
+            stacklevel=2,
+        )
+    port = compiled.output_type(name)
+    try:
+        return port.validate(port.read(paths))
+    except Exception as error:  # files on disk, edited by anyone: any failure is theirs
+        raise OutputFolderError(
+            f"output '{name}' in {directory} cannot be read back as {port.type_name()} ({error})"
+        ) from None
 
 
 def markdown_page(result: RunResult, directory: Path) -> list[str]:

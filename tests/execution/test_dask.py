@@ -181,7 +181,7 @@ def test_a_batch_on_dask_survives_a_dying_worker_and_retries_its_file(dask_execu
 def test_a_dask_batch_sends_the_shared_values_once_and_never_recomputes_them(
     dask_executor, tmp_path
 ):
-    from ..test_batch import _counting_graph, photo
+    from .test_batch import _counting_graph, photo
 
     graph, registry, log = _counting_graph(tmp_path)
     levels = [20, 90, 160, 230]

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-from graphvision_plugins import _boxes, detection
+from graphvision_plugins import detection
 from graphvision_plugins.recognition import non_max_suppression as recognition_nms
+from graphvision_plugins.shared import boxes as _boxes
 
 from ...conftest import PIPELINES
 
