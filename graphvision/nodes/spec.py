@@ -87,15 +87,14 @@ class InputPort:
         as a graph input of ``gv.run`` does: a ``uint8`` photo is the image a PNG gives.
         """
         failures: dict[PortClass, str] = {}
-        given = f"the {type(value).__name__} given"
         for choice in self.choices or (self.type,):
             try:
-                return choice.validate(choice.coerce(value, given)), choice
-            except PortValueError as error:
-                failures[choice] = str(error)
+                return choice.validate(choice.coerce(value, where)), choice
+            except PortValueError as error:  # the policy's messages start with ``where``
+                failures[choice] = str(error).removeprefix(where).lstrip()
         # The common type's message covers the choices when it is one of them.
         message = failures.get(self.type) or " or ".join(failures.values())
-        raise PortValueError(f"{where}: {message}")
+        raise PortValueError(f"{where} {message}")
 
     def type_label(self) -> str:
         """The accepted type: the common one when a choice covers the others, else each."""

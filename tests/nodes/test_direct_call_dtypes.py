@@ -80,5 +80,5 @@ def test_a_mask_saved_as_0_255_is_a_mask_in_a_direct_call():
     ],
 )
 def test_what_the_dtype_policy_refuses_is_named_with_node_and_input(array, message):
-    with pytest.raises(gv.PortValueError, match=rf"^filters\.gaussian: input 'image': .*{message}"):
+    with pytest.raises(gv.PortValueError, match=rf"^filters\.gaussian: input 'image' {message}"):
         filters.gaussian(array)

@@ -424,7 +424,7 @@ def test_drawing_outlines_truth_in_green_and_finds_in_red():
 
 def test_direct_calls_check_inputs_and_parameters():
     with pytest.raises(gv.PortValueError, match=r"^matching\.find_instances.*input 'model'"):
-        matching.find_instances(MODEL.astype(np.float64), MODEL)
+        matching.find_instances((MODEL * 255).astype(np.int32), MODEL)  # uint8 would be taken
     with pytest.raises(gv.ParameterError, match="ratio"):
         matching.find_instances(MODEL, MODEL, ratio=2.0)
     with pytest.raises(gv.ParameterError, match="tilts"):
