@@ -433,7 +433,7 @@ def uses_kernel(x: Float) -> Float:
     ----------
     x : the value
     """
-    from .._kernel import scaled
+    from ._kernel import scaled
 
     return scaled(x)
 
