@@ -56,7 +56,14 @@ def _start(tmp_path: Path, executor: str) -> subprocess.Popen:
     command = [sys.executable, "-m", "graphvision", "run", str(tmp_path / "slow.yaml")]
     command += ["--plugins", str(TOY), "--executor", executor, "--no-cache", "--progress"]
     command += ["-d", str(tmp_path / "out")]
-    process = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    # started as a shell starts a command: Ctrl-C delivered (a pytest-xdist worker may run
+    # with SIGINT ignored, and a child would inherit that)
+    process = subprocess.Popen(
+        command,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     assert process.stderr is not None
     line = process.stderr.readline()  # "running slow: 2 node(s) to compute"
     assert line.startswith("running slow"), line
