@@ -129,10 +129,11 @@ def test_a_stopped_command_exits_with_its_signal_and_leaves_no_folder(
     photos(tmp_path)
     yaml = pipeline(tmp_path, seconds="30")
     out = tmp_path / "a" / "b" / "c"
-    process = subprocess.Popen(
+    process = subprocess.Popen(  # as a shell starts it: SIGINT delivered, whatever pytest's
         [sys.executable, "-m", "graphvision", *command(kind, tmp_path, yaml, out)],
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     for _ in range(600):  # a node runs: the run, or the first file or combination, started
         if (tmp_path / "started").exists() or process.poll() is not None:
