@@ -23,9 +23,13 @@ def non_maximum_suppression(
     The two neighbours are the points :math:`p \pm u` with
     :math:`u = \nabla I / \|\nabla I\|_\infty` (on the 3×3 square around the
     pixel), their magnitudes interpolated linearly between the two pixels
-    they fall between (the image edge replicated). A pixel survives when it
-    is at least both of them (both pixels of an exact tie survive). One
-    compiled pass (:mod:`._kernels`).
+    they fall between (the image edge replicated). With u turned towards
+    increasing x (increasing y when u is vertical), a pixel survives when it
+    exceeds the neighbour behind, :math:`m(p) > m(p - u)`, and is at least the
+    one ahead, :math:`m(p) \ge m(p + u)`: of two equal pixels across a step
+    that lies exactly between them, the first survives, so the edge stays one
+    pixel thick (the symmetric test :math:`\ge` on both sides keeps both; the
+    rule is OpenCV's). One compiled pass (:mod:`._kernels`).
     """
     from ._kernels import suppress_non_maxima
 
@@ -74,7 +78,7 @@ class Canny(NamedTuple):
 Threshold = Annotated[float, Field(ge=0, description="Absolute magnitude or quantile in [0, 1].")]
 
 
-@node("edges.canny", version=2, check=ordered(("low", "high")))
+@node("edges.canny", version=3, check=ordered(("low", "high")))
 def canny(
     image: GrayImage,
     *,
@@ -90,7 +94,9 @@ def canny(
        one separable pass): :math:`\nabla (G_\sigma * I) = \nabla G_\sigma * I`.
     2. Gradient magnitude :math:`m = \|\nabla\|` and direction.
     3. Non-maximum suppression: keep pixels whose magnitude is a maximum
-       along the gradient direction, the neighbours' magnitudes interpolated.
+       along the gradient direction, the neighbours' magnitudes interpolated;
+       a tie between two pixels keeps the one at lower x (lower y), so a step
+       lying exactly between two pixels is marked once.
     4. Hysteresis: start tracing an edge only at pixels with
        :math:`m \ge k_\text{high}` and continue while :math:`m \ge k_\text{low}`
        (8-connected).

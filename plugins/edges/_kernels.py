@@ -3,8 +3,11 @@
 One compiled pass over the pixels: the gradient direction picks, for each
 pixel above the low threshold, the two points one step ahead and behind on
 the 3×3 square around it, whose magnitudes are interpolated linearly between
-the two pixels each falls between. No full-size temporaries besides the
-output mask.
+the two pixels each falls between. A pixel must exceed the neighbour on the
+side of decreasing coordinates and at least equal the other one, so of two
+pixels of equal magnitude across an edge (a step exactly between two pixels)
+one survives: the one on the left (or above). No full-size temporaries
+besides the output mask.
 """
 
 from __future__ import annotations
@@ -38,8 +41,9 @@ def _sample(magnitude, y, x, fy, fx):
 
 @numba.njit(cache=True, nogil=True)
 def suppress_non_maxima(dx, dy, magnitude, low):
-    """Mask of pixels with ``magnitude >= low`` (and > 0) that are at least both neighbours
-    along the gradient direction."""
+    """Mask of pixels with ``magnitude >= low`` (and > 0) that are a maximum along the
+    gradient direction: above the neighbour behind, at least the one ahead, "ahead"
+    pointing to increasing x (to increasing y for a vertical gradient)."""
     height, width = magnitude.shape
     keep = np.zeros((height, width), dtype=np.bool_)
     for y in range(height):
@@ -52,6 +56,8 @@ def suppress_non_maxima(dx, dy, magnitude, low):
             scale = max(abs(gx), abs(gy))
             ux = gx / scale
             uy = gy / scale
-            if m >= _sample(magnitude, y, x, uy, ux) and m >= _sample(magnitude, y, x, -uy, -ux):
+            if ux < 0.0 or (ux == 0.0 and uy < 0.0):
+                ux, uy = -ux, -uy  # the same two neighbours, "ahead" towards +x (then +y)
+            if m >= _sample(magnitude, y, x, uy, ux) and m > _sample(magnitude, y, x, -uy, -ux):
                 keep[y, x] = True
     return keep
