@@ -29,7 +29,16 @@ from typing import Annotated, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import Array, Camera, Float, PinholeCamera, Points2D, Points3D, node
+from graphvision import (
+    Array,
+    Camera,
+    Float,
+    GraphvisionError,
+    PinholeCamera,
+    Points2D,
+    Points3D,
+    node,
+)
 
 from ..geometry import estimate_homography, normalising_transform
 from ._projection import (
@@ -41,12 +50,18 @@ from ._projection import (
 )
 
 __all__ = [
+    "CalibrationError",
     "calibrate_board",
     "calibrate_dlt",
     "dlt_projection",
     "focal_error",
     "zhang_intrinsics",
 ]
+
+
+class CalibrationError(GraphvisionError, ValueError):
+    """The correspondences give no usable camera; the message names the cause (points
+    behind the estimated camera, a system without a unique solution, a singular M)."""
 
 
 def _normalising_transform_3d(points: np.ndarray) -> np.ndarray:
@@ -71,7 +86,12 @@ def check_non_coplanar(points: np.ndarray) -> None:
 
 
 def dlt_projection(world: np.ndarray, image: np.ndarray) -> np.ndarray:
-    """Normalised DLT (module docstring): P with :math:`\\|P\\|_F = 1` from ≥ 6 correspondences."""
+    """Normalised DLT (module docstring): P with :math:`\\|P\\|_F = 1` from ≥ 6 correspondences.
+
+    Raises CalibrationError when the system's null space has more than one dimension
+    (the smallest two singular values within 1e-10 of each other, relative to the
+    largest): the correspondences then fit a family of cameras, not one.
+    """
     T = normalising_transform(image)
     U = _normalising_transform_3d(world)
     X = np.column_stack([world, np.ones(len(world))]) @ U.T
@@ -81,9 +101,35 @@ def dlt_projection(world: np.ndarray, image: np.ndarray) -> np.ndarray:
     rows[0::2, 8:] = x[:, 1:2] * X
     rows[1::2, 0:4] = X
     rows[1::2, 8:] = -x[:, 0:1] * X
-    _, _, vt = np.linalg.svd(rows, full_matrices=rows.shape[0] < rows.shape[1])
+    _, singular, vt = np.linalg.svd(rows, full_matrices=rows.shape[0] < rows.shape[1])
+    if len(singular) == 12 and singular[-2] <= 1e-10 * singular[0]:
+        raise CalibrationError(
+            "the correspondences do not determine P: the DLT system has more than one "
+            "solution (a degenerate configuration: points on a plane and on a line through "
+            "the camera centre, or on a twisted cubic through it); add points in general "
+            "position"
+        )
     P = np.linalg.inv(T) @ vt[-1].reshape(3, 4) @ U
     return P / np.linalg.norm(P)
+
+
+def _check_camera(
+    world: np.ndarray, K: np.ndarray, R: np.ndarray, C: np.ndarray, stage: str
+) -> None:
+    """CalibrationError naming ``stage`` when K, R, C̃ are not finite or when a point lies
+    behind the camera (depth :math:`r_3 \\cdot (X - \\tilde C) \\le 0`, where it has no image)."""
+    if not (np.isfinite(K).all() and np.isfinite(R).all() and np.isfinite(C).all()):
+        raise CalibrationError(f"the {stage} camera is not finite (K, R or C has inf or NaN)")
+    depth = (world - C) @ R[2]
+    behind = depth <= 0
+    if behind.any():
+        first = np.flatnonzero(behind)[:5].tolist()
+        raise CalibrationError(
+            f"{int(behind.sum())} of {len(world)} points lie behind the {stage} camera "
+            f"(points {first}): a camera that sees every point does not fit these "
+            "correspondences, too few or too noisy to determine its 11 parameters; use more "
+            "points, spread over more depth, or check the correspondences"
+        )
 
 
 class DltCalibration(NamedTuple):
@@ -126,6 +172,11 @@ def calibrate_dlt(
     ------
     ValueError
         With fewer than 6 correspondences, unequal counts, or coplanar points.
+    CalibrationError
+        (a graphvision error and a ValueError) when the estimate is degenerate,
+        naming the cause: points behind the DLT's (or the refined) camera, which
+        happens with few noisy points (6 points with 0.5–1 px of noise: about 1
+        scene in 70), a DLT system without a unique solution, or a singular M.
     """
     if len(world) != len(image):
         raise ValueError(f"world has {len(world)} points but image has {len(image)}")
@@ -134,7 +185,13 @@ def calibrate_dlt(
     check_non_coplanar(world)
     from scipy.optimize import least_squares
 
-    K, R, C = decompose_projection(dlt_projection(world, image))
+    try:
+        K, R, C = decompose_projection(dlt_projection(world, image))
+    except CalibrationError:
+        raise
+    except ValueError as error:  # M singular: the estimate is a camera at infinity
+        raise CalibrationError(f"the DLT estimate is degenerate: {error}") from None
+    _check_camera(world, K, R, C, "DLT")
     params = np.concatenate(
         [[K[0, 0], K[1, 1], K[0, 1], K[0, 2], K[1, 2]], vector_from_rotation(R), C]
     )
@@ -147,10 +204,14 @@ def calibrate_dlt(
         return (project_points(world, *unpack(p)) - image).ravel()
 
     if refine:
-        params = least_squares(residual, params, method="lm", x_scale="jac").x
+        # a step that puts a point behind the camera costs 1e6 px there, so the
+        # minimiser backs off instead of meeting NaN
+        params = least_squares(
+            lambda p: np.nan_to_num(residual(p), nan=1e6), params, method="lm", x_scale="jac"
+        ).x
+        _check_camera(world, *unpack(params), "refined")
     K, R, C = unpack(params)
-    rms = _rms(np.nan_to_num(residual(params), nan=np.inf))
-    return DltCalibration(PinholeCamera(K, R, C), rms)
+    return DltCalibration(PinholeCamera(K, R, C), _rms(residual(params)))
 
 
 def _v(h: np.ndarray, i: int, j: int) -> np.ndarray:
