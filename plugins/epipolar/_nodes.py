@@ -6,6 +6,7 @@ from typing import Annotated, Any, ClassVar, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic import Field
 
 from graphvision import (
     Array,
@@ -24,6 +25,7 @@ from graphvision import (
 
 from ..camera import normalise_pixels
 from ..fitting import ransac
+from ..fitting._ransac import chance_inlier_rate, log10_nfa, refuse_chance
 from ..geometry import estimate_homography, transfer_error
 from ..shared.params import Iterations, Positive, Probability, Seed
 from ._geometry import (
@@ -118,9 +120,17 @@ class FundamentalFit(NamedTuple):
     sampson_rms: Float
     inliers_a: Points2D
     inliers_b: Points2D
+    log_nfa: Float
 
 
-@node("epipolar.fundamental", version=1)
+MaxNfa = Annotated[
+    float,
+    Field(gt=0, description="Largest number of false alarms accepted (inf: every model)."),
+]
+"""The largest NFA of a model a robust fit returns (1: the a-contrario convention)."""
+
+
+@node("epipolar.fundamental", version=2)
 def fundamental(
     a: Points2D,
     b: Points2D,
@@ -128,9 +138,11 @@ def fundamental(
     threshold: Positive = 1.0,
     confidence: Probability = 0.999,
     max_iterations: Iterations = 2000,
+    max_nfa: MaxNfa = 1.0,
     seed: Seed = 0,
 ) -> FundamentalFit:
-    r"""Robust F: RANSAC over 8-point samples scored by Sampson distance, refit on the inliers.
+    r"""Robust F: RANSAC over 8-point samples scored by Sampson distance, refit on the inliers,
+    refused when chance explains its inliers.
 
     Each sample gives F by the normalised 8-point algorithm with rank 2
     enforced; inliers are within ``threshold`` pixels (Sampson distance);
@@ -138,6 +150,18 @@ def fundamental(
     until stable (the generic :func:`~graphvision_plugins.fitting.ransac`);
     finally the Sampson distances of the inliers are minimised
     (Levenberg-Marquardt over F's 7 degrees of freedom, rank 2 throughout).
+
+    Significance (a-contrario, :mod:`graphvision_plugins.fitting._ransac`): with
+    α the probability that a correspondence of two independent points, uniform
+    over each view's bounding box, is within ``threshold`` of the model, the
+    number of false alarms of k inliers among n is
+
+    .. math::
+
+        \mathrm{NFA} = (n - 8)\binom{n}{8}\, P\bigl(B(n - 8, \alpha) \ge k - 8\bigr),
+
+    how many models this well supported RANSAC would find in correspondences
+    made at random. A model with NFA above ``max_nfa`` is refused.
 
     Parameters
     ----------
@@ -149,8 +173,11 @@ def fundamental(
         Probability of drawing one outlier-free sample; sets the iterations.
     max_iterations : int
         Upper bound on the samples.
+    max_nfa : float
+        Largest number of false alarms accepted (1: at most one such model
+        expected from chance; ``inf`` accepts every model).
     seed : int
-        Seed of the sampler.
+        Seed of the sampler (and of the draws that measure α).
 
     Returns
     -------
@@ -158,11 +185,28 @@ def fundamental(
     inlier_count : int
     sampson_rms : float, pixels over the inliers
     inliers_a, inliers_b : the inlier correspondences
+    log_nfa : float, log10 of the model's NFA (−20: one such model in 1e20 sets of
+        random correspondences)
+
+    Raises
+    ------
+    ValueError
+        When chance explains the best model (NFA above ``max_nfa``), when fewer
+        than 8 correspondences fit it, or when one homography explains them.
+
+    References
+    ----------
+    .. [1] R. Hartley, A. Zisserman, *Multiple View Geometry*, 2nd ed., 2004, §11.
+    .. [2] L. Moisan, B. Stival, "A probabilistic criterion to detect rigid point
+       matches between two images and estimate the fundamental matrix", IJCV
+       57(3), 2004.
     """
     _pairs(a, b, 8, "the fundamental matrix")
-    F, inliers = robust_fundamental(a, b, threshold, confidence, max_iterations, seed)
+    F, inliers, log_nfa = robust_fundamental(
+        a, b, threshold, confidence, max_iterations, seed, max_nfa=max_nfa
+    )
     rms = float(np.sqrt(np.mean(sampson_distance(F, a[inliers], b[inliers]) ** 2)))
-    return FundamentalFit(F, int(inliers.sum()), rms, a[inliers], b[inliers])
+    return FundamentalFit(F, int(inliers.sum()), rms, a[inliers], b[inliers], log_nfa)
 
 
 def robust_fundamental(
@@ -176,11 +220,13 @@ def robust_fundamental(
     *,
     what: str = "the fundamental matrix",
     pixel_threshold: float | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """F and its inlier mask by :func:`fundamental`'s method (``a``, ``b`` in any units;
-    ``homography_threshold`` defaults to twice ``threshold``). ValueError naming ``what``
-    and the threshold (``pixel_threshold`` when given: the user's value before a change of
-    units) when fewer than 8 correspondences are inliers."""
+    max_nfa: float = 1.0,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """F, its inlier mask and log10 NFA by :func:`fundamental`'s method (``a``, ``b`` in any
+    units; ``homography_threshold`` defaults to twice ``threshold``). ValueError naming
+    ``what`` and the threshold (``pixel_threshold`` when given: the user's value before a
+    change of units) when fewer than 8 correspondences are inliers, or when the NFA is
+    above ``max_nfa``."""
     found = ransac(
         len(a),
         8,
@@ -198,10 +244,18 @@ def robust_fundamental(
             "(points on a line or a plane seen without noise)"
         )
     shown = threshold if pixel_threshold is None else pixel_threshold
-    found.require_support(8, shown, what, data=np.hstack([a, b]))
+    data = np.hstack([a, b])
+    found.require_support(8, shown, what, data=data)
+    model = found.model
+    alpha = chance_inlier_rate(
+        lambda pa, pb: sampson_distance(model, pa, pb) < threshold, (a, b), seed=seed
+    )
+    support, count = found.support(data)
+    log_nfa = log10_nfa(count, 8, support, alpha)
+    refuse_chance(log_nfa, max_nfa, what, support, count, alpha)
     inliers = found.inliers
     _refuse_a_homography(a[inliers], b[inliers], threshold, seed)
-    return refine_fundamental(found.model, a[inliers], b[inliers]), inliers
+    return refine_fundamental(model, a[inliers], b[inliers]), inliers, log_nfa
 
 
 class EssentialFit(NamedTuple):
@@ -209,9 +263,10 @@ class EssentialFit(NamedTuple):
     inlier_count: Int
     inliers_a: Points2D
     inliers_b: Points2D
+    log_nfa: Float
 
 
-@node("epipolar.essential_from_points", version=1)
+@node("epipolar.essential_from_points", version=2)
 def essential_from_points(
     a: Points2D,
     b: Points2D,
@@ -221,6 +276,7 @@ def essential_from_points(
     threshold: Positive = 1.0,
     confidence: Probability = 0.999,
     max_iterations: Iterations = 2000,
+    max_nfa: MaxNfa = 1.0,
     seed: Seed = 0,
 ) -> EssentialFit:
     r"""E directly from normalised points: :func:`fundamental`'s robust method on
@@ -230,6 +286,8 @@ def essential_from_points(
     algorithm (with RANSAC, refit and Sampson refinement) gives E up to its
     internal constraint, imposed by :math:`E = U \operatorname{diag}(1, 1, 0) V^T`.
     The pixel threshold is turned into normalised units by the mean focal length.
+    The model's significance is :func:`fundamental`'s (NFA, refused above
+    ``max_nfa``), measured in normalised units.
 
     Parameters
     ----------
@@ -243,6 +301,8 @@ def essential_from_points(
         Probability of drawing one outlier-free sample.
     max_iterations : int
         Upper bound on the samples.
+    max_nfa : float
+        Largest number of false alarms accepted (``inf``: every model).
     seed : int
         Seed of the sampler.
 
@@ -251,16 +311,22 @@ def essential_from_points(
     E : Essential
     inlier_count : int
     inliers_a, inliers_b : Points2D
+    log_nfa : float, log10 of the model's number of false alarms
+
+    References
+    ----------
+    .. [1] R. Hartley, A. Zisserman, *Multiple View Geometry*, 2nd ed., 2004, §9.6.
+    .. [2] L. Moisan, B. Stival, IJCV 57(3), 2004 (the significance).
     """
     _pairs(a, b, 8, "the essential matrix from points")
     focal = float(np.mean([camera_a.K[0, 0], camera_a.K[1, 1], camera_b.K[0, 0], camera_b.K[1, 1]]))
     na, nb = normalise_pixels(a, camera_a.K), normalise_pixels(b, camera_b.K)
-    E, inliers = robust_fundamental(
+    E, inliers, log_nfa = robust_fundamental(
         na, nb, threshold / focal, confidence, max_iterations, seed,
-        what="the essential matrix", pixel_threshold=threshold,
+        what="the essential matrix", pixel_threshold=threshold, max_nfa=max_nfa,
     )  # fmt: skip
     E = essential_from_fundamental(E, np.eye(3), np.eye(3))
-    return EssentialFit(E, int(inliers.sum()), a[inliers], b[inliers])
+    return EssentialFit(E, int(inliers.sum()), a[inliers], b[inliers], log_nfa)
 
 
 @node("epipolar.essential", version=1)

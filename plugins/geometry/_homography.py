@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Annotated, NamedTuple
 
 import numpy as np
+from pydantic import Field
 
 from graphvision import Float, FloatImage, Homography, Keypoints, Matches, node
 
 from ..fitting import ransac
+from ..fitting._ransac import chance_inlier_rate, log10_nfa, refuse_chance
 from ..shared.params import ImageSide, Iterations, Positive, Probability, Seed
 
 __all__ = [
@@ -118,9 +120,10 @@ class HomographyFit(NamedTuple):
     homography: Homography
     inliers: Matches
     inlier_ratio: Float
+    log_nfa: Float
 
 
-@node("geometry.homography_ransac", version=1)
+@node("geometry.homography_ransac", version=2)
 def homography_ransac(
     src: Keypoints,
     dst: Keypoints,
@@ -130,15 +133,29 @@ def homography_ransac(
     confidence: Probability = 0.995,
     max_iterations: Iterations = 5000,
     refine: bool = True,
+    max_nfa: Annotated[float, Field(gt=0)] = 1.0,
     seed: Seed = 0,
 ) -> HomographyFit:
-    """The homography mapping ``src`` keypoints onto their matches in ``dst``, robust to outliers.
+    r"""The homography mapping ``src`` keypoints onto their matches in ``dst``, robust to
+    outliers, refused when chance explains its inliers.
 
     RANSAC (:func:`~graphvision_plugins.fitting.ransac`) over minimal samples
     of 4 matches solved by normalised DLT, inliers within ``threshold`` pixels
     of forward reprojection error, adaptive sample count for ``confidence``;
     then DLT on all inliers and, with ``refine``, Levenberg-Marquardt on their
     reprojection error.
+
+    Significance (a-contrario): with α the probability that a match of two
+    independent points, uniform over each image's keypoint bounding box, is
+    within ``threshold`` of the model (about :math:`\pi t^2` over the area),
+    k inlier matches among n have
+
+    .. math::
+
+        \mathrm{NFA} = (n - 4)\binom{n}{4}\, P\bigl(B(n - 4, \alpha) \ge k - 4\bigr)
+
+    false alarms: how many models this well supported RANSAC would find among
+    random matches. Above ``max_nfa`` the model is refused.
 
     Parameters
     ----------
@@ -155,20 +172,31 @@ def homography_ransac(
         Upper bound on the iterations.
     refine : bool
         Refine the inliers' fit by minimising the geometric error.
+    max_nfa : float
+        Largest number of false alarms accepted (1: the a-contrario convention;
+        ``inf`` accepts every model).
     seed : int
-        Seed of the sample draws.
+        Seed of the sample draws (and of the draws that measure α).
 
     Returns
     -------
     homography : (3, 3) float64, ``dst ~ H src``
     inliers : the inlier matches
     inlier_ratio : float
+    log_nfa : float, log10 of the model's number of false alarms
 
     Raises
     ------
     ValueError
-        With fewer than 4 matches, or when every sample is degenerate (for
-        example all points collinear): no homography is defined.
+        With fewer than 4 matches, when every sample is degenerate (for
+        example all points collinear): no homography is defined; or when
+        chance explains the best model (NFA above ``max_nfa``).
+
+    References
+    ----------
+    .. [1] Hartley & Zisserman, *Multiple View Geometry*, 2nd ed., 2004, §4.7.
+    .. [2] L. Moisan, P. Moulon, P. Monasse, "Automatic homographic registration of a
+       pair of images, with a contrario elimination of outliers", IPOL 2, 2012.
     """
     if len(matches) < 4:
         raise ValueError(f"need at least 4 matches to estimate a homography, got {len(matches)}")
@@ -195,9 +223,17 @@ def homography_ransac(
             f"no homography: all {result.iterations} samples of 4 matches were "
             "degenerate (collinear or coincident points)"
         )
-    result.require_support(4, threshold, "the homography", exact=True, data=np.hstack([a, b]))
+    data = np.hstack([a, b])
+    result.require_support(4, threshold, "the homography", exact=True, data=data)
+    model = result.model
+    alpha = chance_inlier_rate(
+        lambda pa, pb: transfer_error(model, pa, pb) < threshold, (a, b), seed=seed
+    )
+    support, count = result.support(data)
+    log_nfa = log10_nfa(count, 4, support, alpha)
+    refuse_chance(log_nfa, max_nfa, "the homography", support, count, alpha)
     inliers = result.inliers
-    return HomographyFit(result.model, matches.take(inliers), float(inliers.mean()))
+    return HomographyFit(model, matches.take(inliers), float(inliers.mean()), log_nfa)
 
 
 @node("geometry.corner_error", version=2)
