@@ -124,10 +124,11 @@ class FundamentalFit(NamedTuple):
 
 
 MaxNfa = Annotated[
-    float,
-    Field(gt=0, description="Largest number of false alarms accepted (inf: every model)."),
+    float | None,
+    Field(gt=0, description="Largest number of false alarms accepted (null: every model)."),
 ]
-"""The largest NFA of a model a robust fit returns (1: the a-contrario convention)."""
+"""The largest NFA of a model a robust fit returns (1: the a-contrario convention; None
+reports the NFA and refuses nothing)."""
 
 
 @node("epipolar.fundamental", version=2)
@@ -175,7 +176,7 @@ def fundamental(
         Upper bound on the samples.
     max_nfa : float
         Largest number of false alarms accepted (1: at most one such model
-        expected from chance; ``inf`` accepts every model).
+        expected from chance; None accepts every model).
     seed : int
         Seed of the sampler (and of the draws that measure α).
 
@@ -220,13 +221,13 @@ def robust_fundamental(
     *,
     what: str = "the fundamental matrix",
     pixel_threshold: float | None = None,
-    max_nfa: float = 1.0,
+    max_nfa: float | None = 1.0,
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """F, its inlier mask and log10 NFA by :func:`fundamental`'s method (``a``, ``b`` in any
     units; ``homography_threshold`` defaults to twice ``threshold``). ValueError naming
     ``what`` and the threshold (``pixel_threshold`` when given: the user's value before a
     change of units) when fewer than 8 correspondences are inliers, or when the NFA is
-    above ``max_nfa``."""
+    above ``max_nfa`` (None: never)."""
     found = ransac(
         len(a),
         8,
@@ -302,7 +303,7 @@ def essential_from_points(
     max_iterations : int
         Upper bound on the samples.
     max_nfa : float
-        Largest number of false alarms accepted (``inf``: every model).
+        Largest number of false alarms accepted (None: every model).
     seed : int
         Seed of the sampler.
 

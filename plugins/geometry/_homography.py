@@ -133,7 +133,7 @@ def homography_ransac(
     confidence: Probability = 0.995,
     max_iterations: Iterations = 5000,
     refine: bool = True,
-    max_nfa: Annotated[float, Field(gt=0)] = 1.0,
+    max_nfa: Annotated[float | None, Field(gt=0)] = 1.0,
     seed: Seed = 0,
 ) -> HomographyFit:
     r"""The homography mapping ``src`` keypoints onto their matches in ``dst``, robust to
@@ -174,7 +174,7 @@ def homography_ransac(
         Refine the inliers' fit by minimising the geometric error.
     max_nfa : float
         Largest number of false alarms accepted (1: the a-contrario convention;
-        ``inf`` accepts every model).
+        None accepts every model).
     seed : int
         Seed of the sample draws (and of the draws that measure α).
 

@@ -1,0 +1,134 @@
+"""Held-out scenes (issue 24, items 9 and 10): robust fits on correspondences made at
+random and on a wide camera pair the other tests do not use; the significance
+(a-contrario number of false alarms) against its formula."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.special import comb
+from scipy.stats import binom
+
+import graphvision as gv
+from graphvision_plugins import epipolar, geometry
+from graphvision_plugins.camera import pinhole, project
+
+# --- significance of robust fits ------------------------------------------------------
+
+WIDTH, HEIGHT = 1000, 700
+
+
+def random_pairs(count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Correspondences made at random: independent uniform points in two 1000×700 views."""
+    rng = np.random.default_rng(seed)
+    size = np.array([WIDTH, HEIGHT])
+    return rng.uniform(0, 1, (count, 2)) * size, rng.uniform(0, 1, (count, 2)) * size
+
+
+def wide_pair(seed: int, inliers: int = 120, outliers: int = 120) -> tuple[np.ndarray, ...]:
+    """A wide-angle pair (f = 600 px, 1000×700) 1.5 units apart, 0.7 px of noise, points on
+    two walls and a floor, plus ``outliers`` random correspondences; shuffled."""
+    rng = np.random.default_rng(seed)
+    cam_a = pinhole(fx=600, fy=600, cx=500, cy=350, rotation=(0.02, -0.1, 0.0), centre=(0, 0, 0))
+    cam_b = pinhole(
+        fx=600, fy=600, cx=500, cy=350, rotation=(-0.03, 0.2, 0.02), centre=(1.5, 0.1, 0.2)
+    )
+    third = inliers // 3
+    wall = np.column_stack(
+        [rng.uniform(-3, 3, third), rng.uniform(-2, 2, third), np.full(third, 8.0)]
+    )
+    side = np.column_stack(
+        [np.full(third, -3.0), rng.uniform(-2, 2, third), rng.uniform(4, 8, third)]
+    )
+    rest = inliers - 2 * third
+    floor = np.column_stack([rng.uniform(-3, 3, rest), np.full(rest, 2.0), rng.uniform(4, 8, rest)])
+    world = np.vstack([wall, side, floor])
+    a = project(cam_a, world) + rng.normal(0, 0.7, (inliers, 2))
+    b = project(cam_b, world) + rng.normal(0, 0.7, (inliers, 2))
+    noise_a, noise_b = random_pairs(outliers, seed + 1)
+    order = rng.permutation(inliers + outliers)
+    return np.vstack([a, noise_a])[order], np.vstack([b, noise_b])[order]
+
+
+def test_log10_nfa_is_tests_times_the_binomial_tail():
+    from graphvision_plugins.fitting._ransac import log10_binomial_tail, log10_nfa
+
+    # reference: scipy.special.comb(n, s, exact=True) and scipy.stats.binom.sf(k - s - 1,
+    # n - s, alpha), the formula of Moisan & Stival's NFA with the exact binomial tail
+    for n, s, k, alpha in [(200, 8, 20, 0.004), (60, 4, 9, 0.01), (1000, 8, 30, 0.002)]:
+        expected = math.log10((n - s) * comb(n, s, exact=True)) + math.log10(
+            binom.sf(k - s - 1, n - s, alpha)
+        )
+        assert log10_nfa(n, s, k, alpha) == pytest.approx(expected, abs=1e-6)
+    # a tail far below the smallest double, summed in log space, not 0: its first term
+    # C(2000, 1500) 0.001^1500 0.999^500 (the next ones are 3e-4 times smaller)
+    first = (
+        math.lgamma(2001) - math.lgamma(1501) - math.lgamma(501)
+        + 1500 * math.log(0.001) + 500 * math.log(0.999)
+    ) / math.log(10)  # fmt: skip
+    assert log10_binomial_tail(2000, 1500, 0.001) == pytest.approx(first, abs=1e-3)
+
+
+def test_the_chance_inlier_rate_of_a_homography_is_a_disc_over_the_area():
+    """For H = I and threshold t, a uniform pair fits when b lies within t of a: the
+    probability is πt² / area away from the borders (a bit less at them)."""
+    from graphvision_plugins.fitting._ransac import chance_inlier_rate
+
+    a, b = random_pairs(300, seed=5)
+    threshold = 8.0
+    alpha = chance_inlier_rate(
+        lambda pa, pb: geometry.transfer_error(np.eye(3), pa, pb) < threshold, (a, b), seed=1
+    )
+    disc = math.pi * threshold**2 / (np.ptp(b[:, 0]) * np.ptp(b[:, 1]))
+    assert 0.9 * disc < alpha < 1.05 * disc  # measured to about 5 %
+
+
+@pytest.mark.parametrize("seed", [31, 32, 33])
+def test_fundamental_ransac_refuses_random_correspondences(seed):
+    a, b = random_pairs(300, seed)
+    # before: F with 11-13 inliers and no word; cv2.findFundamentalMat(a, b,
+    # cv2.FM_RANSAC, 1.0, 0.999) also returns a matrix (bench_held_out_robust)
+    with pytest.raises(ValueError, match=r"as many as chance gives: NFA = 10\^"):
+        epipolar.fundamental(a, b)
+    chance = epipolar.fundamental(a, b, max_nfa=None)
+    assert chance.log_nfa > 3  # thousands of such models in random data
+
+
+def test_fundamental_ransac_keeps_a_true_model_among_half_outliers():
+    a, b = wide_pair(seed=41)
+    fit = epipolar.fundamental(a, b, threshold=1.5)
+    assert fit.inlier_count >= 100  # of 120 (measured 110)
+    assert fit.log_nfa < -100
+
+
+def keypoints(xy: np.ndarray) -> gv.KeypointSet:
+    n = len(xy)
+    return gv.KeypointSet(np.asarray(xy, float), np.ones(n), np.zeros(n), np.ones(n))
+
+
+def in_order(n: int) -> gv.MatchSet:
+    return gv.MatchSet(np.column_stack([np.arange(n), np.arange(n)]).astype(np.int64), np.zeros(n))
+
+
+def test_essential_and_homography_refuse_random_data():
+    a, b = random_pairs(200, seed=51)
+    camera = gv.PinholeCamera(np.array([[700.0, 0, 500], [0, 700, 350], [0, 0, 1]]))
+    with pytest.raises(ValueError, match=r"the essential matrix: .* as many as chance gives"):
+        epipolar.essential_from_points(a, b, camera, camera)
+    # a homography through 4 random matches always has them, and a few more within 3 px
+    # among 200: before, a model with 5-6 inliers and no word
+    with pytest.raises(ValueError, match=r"the homography: .* as many as chance gives"):
+        geometry.homography_ransac(keypoints(a), keypoints(b), in_order(200))
+
+
+def test_homography_ransac_reports_the_significance_of_a_true_model():
+    rng = np.random.default_rng(61)
+    src = rng.uniform(0, 1, (150, 2)) * np.array([WIDTH, HEIGHT])
+    H = np.array([[0.9, 0.1, 30.0], [-0.05, 1.1, -20.0], [2e-4, -1e-4, 1.0]])
+    dst = geometry.apply_homography(H, src) + rng.normal(0, 0.5, src.shape)
+    dst[100:] = rng.uniform(0, 1, (50, 2)) * np.array([WIDTH, HEIGHT])  # a third outliers
+    fit = geometry.homography_ransac(keypoints(src), keypoints(dst), in_order(150))
+    assert len(fit.inliers) >= 98
+    assert fit.log_nfa < -200
