@@ -1,18 +1,34 @@
-r"""Checkerboard inner corners: saddle detection, grid labelling, sub-pixel refinement.
+r"""Checkerboard inner corners: saddle detection, grid growing, sub-pixel refinement.
 
 1. **Saddles.** The inner corners of a checkerboard are X-junctions, where the
    Gaussian-smoothed intensity is a saddle: the Hessian determinant
    :math:`I_{xx} I_{yy} - I_{xy}^2` is strongly negative. Candidates are the
-   local maxima of :math:`-\det H`; the ``columns·rows`` strongest are kept.
-2. **Labelling.** Four extreme candidates (the largest quadrilateral on the
-   convex hull) are matched to the grid's corners in each of the 8 ways; a
-   homography from grid to image predicts every corner, each prediction
-   takes its nearest candidate and the homography is refitted on all of them.
-   A labelling is accepted when every grid point has its own candidate. The
-   order is then fixed: x along ``columns``, y along ``rows``, handedness
-   of a board seen from its front (image cross product of the axes > 0), and
-   the first square (between corners (0,0) and (1,1)) dark.
-3. **Sub-pixel refinement.** For a corner q and every pixel p around it, the
+   local maxima of :math:`-\det H`, strongest first, several times more than
+   the board has corners: a corner blurred wider than σ splits into two maxima,
+   the response has weaker lobes along a corner's diagonals, and the board's
+   outline (where its squares meet the margin) and the background add their own.
+2. **Growing the grid.** From one of the strongest candidates, a first cell: two
+   neighbours in different directions and the candidate that closes the
+   parallelogram, accepted when every side of the cell crosses an edge (the
+   gradient at its midpoint is at least a tenth of the local contrast: a cell
+   built on a diagonal has a flat square there) and every corner is an
+   X-junction (point symmetric: :math:`|I(p + \rho u) - I(p - \rho u)|` below
+   half the contrast in 8 directions, where an L or T junction of the outline
+   reaches the full contrast). The grid then grows by whole rows or columns:
+   a homography fitted to the 3 nearest rows predicts the next one, each
+   prediction takes the strongest candidate within 0.3 of the spacing, and the
+   row is added when all its corners are found, distinct and X-junctions (the
+   extension that fits best first), as long as the grid fits in the board.
+   The board is found when the grid is ``columns × rows``. The order is then
+   fixed: x along ``columns``, y along ``rows``, handedness of a board seen
+   from its front (image cross product of the axes > 0), and the first square
+   (between corners (0,0) and (1,1)) dark.
+3. **Scale.** With ``sigma=None`` the detector tries σ = 2 px, then larger
+   steps of √2 up to a sixth of the largest square the image can hold, then
+   1.4 and 1 px: the first scale at which the grid is found. A corner blurred
+   over more than σ has a flat-topped response that noise splits; a sixth of
+   the square keeps neighbouring corners apart.
+4. **Sub-pixel refinement.** For a corner q and every pixel p around it, the
    gradient :math:`g_p` is orthogonal to :math:`p - q` (p lies on an edge
    through q, or in a flat region where :math:`g_p = 0`), so q solves
    :math:`\sum_p w_p g_p g_p^T\, q = \sum_p w_p g_p g_p^T\, p` (Förstner),
@@ -24,12 +40,13 @@ References
 .. [1] W. Förstner, E. Gülch, "A fast operator for detection and precise location of
    distinct points, corners and centres of circular features", ISPRS 1987.
 .. [2] A. Geiger et al., "Automatic camera and range sensor calibration using a single
-   shot", ICRA 2012 (saddle-based checkerboard corners).
+   shot", ICRA 2012 (saddle-based checkerboard corners, growing the grid).
 """
 
 from __future__ import annotations
 
-from itertools import combinations
+import math
+import warnings
 from typing import Annotated, NamedTuple
 
 import numpy as np
@@ -47,11 +64,24 @@ __all__ = [
     "grid_spacing",
     "refine_corners",
     "saddle_candidates",
+    "sigma_ladder",
 ]
+
+SEEDS = 8
+"""Strongest candidates tried as the first corner of the grid."""
+TOLERANCE = 0.3
+"""Farthest a candidate may lie from its predicted place, as a fraction of the spacing."""
+MIN_EDGE = 0.1
+"""Least gradient at a cell side's midpoint, as a fraction of the local contrast."""
+MAX_ASYMMETRY = 0.5
+"""Largest :math:`|I(p + \rho u) - I(p - \rho u)|` of an X-junction, as a fraction of
+the contrast around it."""
+_ANGLES = np.linspace(0.0, np.pi, 8, endpoint=False)
 
 
 def saddle_candidates(image: np.ndarray, count: int, sigma: float) -> np.ndarray:
-    """The ``count`` strongest local maxima of :math:`-\\det H` (at scale ``sigma``), ``N×2``."""
+    """The ``count`` strongest local maxima of :math:`-\\det H` (at scale ``sigma``), ``N×2``,
+    strongest first."""
     from scipy import ndimage
 
     from ..shared.separable import smooth_gaussian
@@ -71,28 +101,24 @@ def saddle_candidates(image: np.ndarray, count: int, sigma: float) -> np.ndarray
     return np.column_stack([cols[order], rows[order]]).astype(np.float64)
 
 
-def _largest_quadrilateral(points: np.ndarray) -> np.ndarray:
-    """The 4 hull vertices enclosing the largest area, in hull (counter-clockwise) order."""
-    from scipy.spatial import ConvexHull
-
-    hull = points[ConvexHull(points).vertices]
-    best, best_area = hull[:4], -1.0
-    for quad in combinations(range(len(hull)), 4):
-        q = hull[list(quad)]
-        x, y = q[:, 0], q[:, 1]
-        area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-        if area > best_area:
-            best, best_area = q, area
-    return best
+def sigma_ladder(shape: tuple[int, ...], columns: int, rows: int) -> list[float]:
+    """The scales tried with ``sigma=None`` (module docstring): 2 px, then ×√2 while σ is
+    at most a sixth of the largest square (the image's smaller side over the squares
+    along the board's longer side), then 1.4 and 1 px."""
+    largest_square = min(shape[:2]) / (max(columns, rows) + 1)
+    ladder = [2.0]
+    while ladder[-1] * math.sqrt(2) <= largest_square / 6:
+        ladder.append(ladder[-1] * math.sqrt(2))
+    return [*ladder, 1.4, 1.0]
 
 
 def _grid_homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
-    """Normalised DLT for the grid labelling, solved by the 9×9 normal equations.
+    """Normalised DLT for the grid, solved by the 9×9 normal equations.
 
     The same estimate as :func:`~graphvision_plugins.geometry.estimate_homography`
     (the smallest eigenvector of :math:`A^T A` is the smallest right singular
-    vector of A) without the full SVD of the 2N×9 system, which this loop
-    runs dozens of times per view.
+    vector of A) without the full SVD of the 2N×9 system, which growing the
+    grid runs dozens of times per view.
     """
     t_src, t_dst = normalising_transform(src), normalising_transform(dst)
     a = apply_homography(t_src, src)
@@ -109,26 +135,143 @@ def _grid_homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
     return h / h[2, 2] if abs(h[2, 2]) > 1e-15 else None
 
 
-def _label(
-    candidates: np.ndarray, grid: np.ndarray, quad: np.ndarray, extremes: np.ndarray
-) -> np.ndarray | None:
-    """Candidates in grid order for one quad-to-grid correspondence, or None."""
-    from scipy.spatial import cKDTree
+class _Photo:
+    """The image smoothed by σ = 1 and its gradient, sampled at sub-pixel points."""
 
-    tree = cKDTree(candidates)
-    h = _grid_homography(extremes, quad)
-    for _ in range(3):
+    def __init__(self, image: np.ndarray) -> None:
+        from ..shared.separable import smooth_gaussian
+
+        self.smooth = smooth_gaussian(image.astype(np.float64), 1.0)
+        self.gy, self.gx = np.gradient(self.smooth)
+
+    @staticmethod
+    def _at(values: np.ndarray, points: np.ndarray) -> np.ndarray:
+        from scipy import ndimage
+
+        flat = points.reshape(-1, 2)
+        return ndimage.map_coordinates(values, [flat[:, 1], flat[:, 0]], order=1).reshape(
+            points.shape[:-1]
+        )
+
+    def x_junctions(self, points: np.ndarray, radius: np.ndarray) -> bool:
+        """Every point is point-symmetric at ``radius`` (an X-junction, not an L or T)."""
+        u = np.column_stack([np.cos(_ANGLES), np.sin(_ANGLES)])
+        offset = np.asarray(radius, np.float64).reshape(-1, 1, 1) * u[None]
+        ahead = self._at(self.smooth, points[:, None, :] + offset)
+        behind = self._at(self.smooth, points[:, None, :] - offset)
+        both = np.concatenate([ahead, behind], axis=1)
+        contrast = np.maximum(both.max(axis=1) - both.min(axis=1), 1e-9)
+        return bool((np.abs(ahead - behind).max(axis=1) <= MAX_ASYMMETRY * contrast).all())
+
+    def on_edges(self, a: np.ndarray, b: np.ndarray, contrast: float) -> bool:
+        """Every segment a–b crosses an edge at its midpoint (two neighbouring corners)."""
+        middle = (a + b) / 2
+        gradient = np.hypot(self._at(self.gx, middle), self._at(self.gy, middle))
+        return bool((gradient >= MIN_EDGE * contrast).all())
+
+    def contrast(self, point: np.ndarray) -> float:
+        x, y = int(round(point[0])), int(round(point[1]))
+        window = self.smooth[max(y - 3, 0) : y + 4, max(x - 3, 0) : x + 4]
+        return float(np.ptp(window)) if window.size else 0.0
+
+
+class _Grower:
+    """Growing a grid of candidates (module docstring, step 2)."""
+
+    def __init__(self, candidates: np.ndarray, photo: _Photo, columns: int, rows: int) -> None:
+        from scipy.spatial import cKDTree
+
+        self.candidates = candidates
+        self.photo = photo
+        self.shapes = {(rows, columns), (columns, rows)}
+        self.rows, self.columns = rows, columns
+        self.tree = cKDTree(candidates)
+        self.strong = cKDTree(candidates[: columns * rows])
+
+    def strongest_near(self, point: np.ndarray, radius: float) -> int | None:
+        near = self.tree.query_ball_point(point, radius)
+        return min(near) if near else None  # candidates are sorted strongest first
+
+    def grid(self) -> np.ndarray | None:
+        """Candidate indices ``rows × columns`` (or transposed), or None."""
+        for seed in range(min(SEEDS, len(self.candidates))):
+            cell = self._first_cell(seed)
+            if cell is None:
+                continue
+            grid = self._grow(cell)
+            if grid.shape in self.shapes:
+                return grid if grid.shape == (self.rows, self.columns) else grid.T
+        return None
+
+    def _first_cell(self, seed: int) -> np.ndarray | None:
+        p = self.candidates[seed]
+        _, index = self.strong.query(p, k=min(9, self.strong.n))
+        index = np.atleast_1d(index)[1:]
+        step = self.candidates[index] - p
+        length = np.linalg.norm(step, axis=1)
+        pairs = [
+            (length[i] + length[j], i, j)
+            for i in range(len(index))
+            for j in range(i + 1, len(index))
+            if abs(step[i] @ step[j]) < 0.8 * length[i] * length[j]
+        ]
+        contrast = self.photo.contrast(p)
+        for _, i, j in sorted(pairs):
+            shortest = min(length[i], length[j])
+            diagonal = self.strongest_near(p + step[i] + step[j], TOLERANCE * shortest)
+            cell = np.array([[seed, index[i]], [index[j], diagonal]])
+            if diagonal is None or len(set(cell.ravel().tolist())) != 4:
+                continue
+            quad = self.candidates[[seed, index[i], diagonal, index[j]]]
+            if self.photo.on_edges(
+                quad, np.roll(quad, -1, axis=0), contrast
+            ) and self.photo.x_junctions(quad, np.full(4, TOLERANCE * shortest)):
+                return cell
+        return None
+
+    def _next_row(self, grid: np.ndarray) -> tuple[float, np.ndarray] | None:
+        """The row after the last of ``grid`` (its fit and candidate indices), or None."""
+        height, width = grid.shape
+        near = grid[-3:]
+        j, i = np.mgrid[height - len(near) : height, 0:width]
+        h = _grid_homography(
+            np.column_stack([i.ravel(), j.ravel()]).astype(np.float64),
+            self.candidates[near.ravel()],
+        )
         if h is None:
             return None
-        predicted = apply_homography(h, grid)
+        predicted = apply_homography(h, np.column_stack([np.arange(width), np.full(width, height)]))
         if not np.isfinite(predicted).all():
             return None
-        distance, index = tree.query(predicted)
-        spacing = np.median(np.linalg.norm(np.diff(predicted, axis=0), axis=1))
-        if len(set(index.tolist())) != len(grid) or distance.max() > 0.35 * spacing:
+        spacing = np.linalg.norm(predicted - self.candidates[grid[-1]], axis=1)
+        found = [
+            self.strongest_near(q, TOLERANCE * d) for q, d in zip(predicted, spacing, strict=True)
+        ]
+        if any(f is None for f in found):
             return None
-        h = _grid_homography(grid, candidates[index])
-    return candidates[index]
+        index = np.array(found, np.int64)
+        if len(set(found)) != width or set(found) & set(grid.ravel().tolist()):
+            return None
+        if not self.photo.x_junctions(self.candidates[index], TOLERANCE * spacing):
+            return None
+        fit = float(np.mean(np.linalg.norm(self.candidates[index] - predicted, axis=1) / spacing))
+        return fit, index
+
+    def _grow(self, grid: np.ndarray) -> np.ndarray:
+        while True:
+            best: tuple[float, int, np.ndarray] | None = None
+            for turn in range(4):  # the row after the last of the grid turned by 90° steps
+                turned = np.rot90(grid, turn)
+                size = (turned.shape[0] + 1, turned.shape[1])
+                if not any(size[0] <= a and size[1] <= b for a, b in self.shapes):
+                    continue
+                found = self._next_row(turned)
+                if found is not None and (best is None or found[0] < best[0]):
+                    best = (found[0], turn, found[1])
+            if best is None:
+                return grid
+            _, turn, row = best
+            grid = np.rot90(np.vstack([np.rot90(grid, turn), row[None]]), -turn)
 
 
 def _cell_mean(image: np.ndarray, corners: np.ndarray, columns: int, a: int, b: int) -> float:
@@ -140,48 +283,56 @@ def _cell_mean(image: np.ndarray, corners: np.ndarray, columns: int, a: int, b: 
     return float(ndimage.map_coordinates(image, [[y], [x]], order=1)[0])
 
 
-def find_board(
-    image: np.ndarray, columns: int, rows: int, sigma: float = 2.0, max_window: int = 15
-) -> np.ndarray | None:
-    """The ``rows·columns`` inner corners in fixed order (module docstring), or None."""
-    from scipy.spatial import QhullError
-
-    from ..shared.separable import smooth_gaussian
-
-    count = columns * rows
-    candidates = saddle_candidates(image, count, sigma)
-    if len(candidates) < count:
-        return None
-    try:
-        quad = _largest_quadrilateral(candidates)
-    except QhullError:
-        return None
-    j, i = np.mgrid[0:rows, 0:columns]
-    grid = np.column_stack([i.ravel(), j.ravel()]).astype(np.float64)
-    corners4 = np.array([[0, 0], [columns - 1, 0], [columns - 1, rows - 1], [0, rows - 1]], float)
+def _oriented(grid: np.ndarray, smooth: np.ndarray) -> np.ndarray | None:
+    """The grid's corners (``rows × columns × 2``) in the fixed order (module docstring)."""
+    rows, columns = grid.shape[:2]
+    variants = [grid, grid[::-1], grid[:, ::-1], grid[::-1, ::-1]]
+    if rows == columns:
+        variants += [v.transpose(1, 0, 2) for v in variants]
     accepted = []
-    for start in range(4):
-        for step in (1, -1):
-            order = [(start + step * k) % 4 for k in range(4)]
-            labelled = _label(candidates, grid, quad[order], corners4)
-            if labelled is None:
-                continue
-            ex = labelled[1] - labelled[0]
-            ey = labelled[columns] - labelled[0]
-            if ex[0] * ey[1] - ex[1] * ey[0] > 0:
-                accepted.append(labelled)
+    for v in variants:
+        ex, ey = v[0, 1] - v[0, 0], v[1, 0] - v[0, 0]
+        if ex[0] * ey[1] - ex[1] * ey[0] > 0:
+            accepted.append(v.reshape(-1, 2))
     if not accepted:
         return None
-    smooth = smooth_gaussian(image.astype(np.float64), 1.0)
     # a 180° turn also passes: keep the labelling whose first square is dark
     darkness = [
         _cell_mean(smooth, c, columns, 0, 0) - _cell_mean(smooth, c, columns, columns - 2, rows - 2)
         for c in accepted
     ]
-    best = accepted[int(np.argmin(darkness))]
-    # the window grows with the squares (0.45 of the spacing), within [3, max_window]
-    radius = np.clip(0.45 * grid_spacing(best, columns, rows), 3.0, max_window)
-    return refine_corners(image, best, radius)
+    return accepted[int(np.argmin(darkness))]
+
+
+def find_board(
+    image: np.ndarray,
+    columns: int,
+    rows: int,
+    sigma: float | None = None,
+    max_window: int = 15,
+) -> np.ndarray | None:
+    """The ``rows·columns`` inner corners in fixed order (module docstring), or None.
+
+    ``sigma`` None tries the scales of :func:`sigma_ladder` in turn.
+    """
+    image = image.astype(np.float64)
+    photo = _Photo(image)
+    count = columns * rows
+    scales = sigma_ladder(image.shape, columns, rows) if sigma is None else [sigma]
+    for scale in scales:
+        candidates = saddle_candidates(image, 6 * count + 50, scale)
+        if len(candidates) < count:
+            continue
+        grid = _Grower(candidates, photo, columns, rows).grid()
+        if grid is None:
+            continue
+        best = _oriented(candidates[grid], photo.smooth)
+        if best is None:
+            continue
+        # the window grows with the squares (0.45 of the spacing), within [3, max_window]
+        radius = np.clip(0.45 * grid_spacing(best, columns, rows), 3.0, max_window)
+        return refine_corners(image, best, radius)
+    return None
 
 
 def grid_spacing(corners: np.ndarray, columns: int, rows: int) -> np.ndarray:
@@ -247,22 +398,26 @@ class BoardCorners(NamedTuple):
     found: Array
 
 
-@node("camera.board_corners", version=1)
+@node("camera.board_corners", version=2)
 def board_corners(
     views: Array,
     *,
     columns: Annotated[int, Field(ge=2, le=40)] = 9,
     rows: Annotated[int, Field(ge=2, le=40)] = 6,
-    sigma: Positive = 2.0,
+    sigma: Positive | None = None,
     max_window: Annotated[int, Field(ge=3, le=50)] = 15,
 ) -> BoardCorners:
-    """Inner corners of a checkerboard in each view, sub-pixel, in a fixed order.
+    r"""Inner corners of a checkerboard in each view, sub-pixel, in a fixed order.
 
-    Saddle points of the smoothed image, labelled by a grid homography and
-    refined by Förstner's gradient-orthogonality estimate (module
-    docstring). Corners are listed row by row, x fastest, starting at the
-    corner whose first square is dark, the same order as
-    ``synthetic.board_views``' ``object_points``.
+    Saddle points of the smoothed image (local maxima of
+    :math:`-(I_{xx} I_{yy} - I_{xy}^2)`, several per corner kept), a grid grown
+    from a first cell by rows and columns that a homography predicts, each
+    corner checked to be an X-junction, and Förstner's gradient-orthogonality
+    estimate :math:`q = (\sum_p w_p g_p g_p^T)^{-1} \sum_p w_p g_p g_p^T p`
+    (module docstring). Corners are listed row by row, x fastest, starting at
+    the corner whose first square is dark, the same order as
+    ``synthetic.board_views``' ``object_points``. Views without a board are
+    named in a warning.
 
     Parameters
     ----------
@@ -270,8 +425,10 @@ def board_corners(
         One gray image H×W, or a stack N×H×W, of floats in [0, 1].
     columns, rows : int
         Inner corners along the board's x and y.
-    sigma : float
-        Scale of the saddle detector, pixels (about a sixth of a square).
+    sigma : float, optional
+        Scale of the saddle detector, pixels (about a sixth of a square). None:
+        2 px, then larger scales up to a sixth of the largest square the image
+        can hold, then 1.4 and 1 px, until the board is found.
     max_window : int
         Largest half size of the refinement window, pixels (each corner's
         window is 0.45 of its distance to the nearest corner, at least 3).
@@ -280,6 +437,18 @@ def board_corners(
     -------
     corners : (N, rows·columns, 2) float64, NaN for a view where no board was found
     found : (N,) bool
+
+    Warns
+    -----
+    UserWarning
+        Naming the views where no board was found.
+
+    References
+    ----------
+    .. [1] A. Geiger et al., "Automatic camera and range sensor calibration using a
+       single shot", ICRA 2012.
+    .. [2] W. Förstner, E. Gülch, "A fast operator for detection and precise location of
+       distinct points, corners and centres of circular features", ISPRS 1987.
     """
     stack = views[None] if views.ndim == 2 else views
     if stack.ndim != 3:
@@ -289,4 +458,12 @@ def board_corners(
         found = find_board(np.asarray(image, np.float64), columns, rows, sigma, max_window)
         if found is not None:
             corners[k] = found
-    return BoardCorners(corners, np.isfinite(corners).all(axis=(1, 2)))
+    found_views = np.isfinite(corners).all(axis=(1, 2))
+    missing = np.flatnonzero(~found_views).tolist()
+    if missing:
+        warnings.warn(
+            f"no board of {columns}×{rows} inner corners found in {len(missing)} of "
+            f"{len(stack)} views: {missing} (their corners are NaN)",
+            stacklevel=2,
+        )
+    return BoardCorners(corners, found_views)
