@@ -12,7 +12,7 @@ from graphvision import Boxes, BoxSet, Float, Image, Table, node
 
 from ..shared.boxes import anchor_boxes, iou_matrix
 from ..shared.params import Count, Positive, Seed
-from ._selective import SIMILARITIES, ColourSpace, selective_search_boxes
+from ._selective import SIMILARITIES, ColourSpace, Ranking, selective_search_boxes
 
 __all__ = [
     "SimilarityText",
@@ -63,7 +63,7 @@ COUNTS: list[int] = [10, 20, 50, 100, 200, 500, 1000]
 """The default numbers of proposals of a recall curve."""
 
 
-@node("detection.selective_search", version=1)
+@node("detection.selective_search", version=2)
 def selective_search(
     image: Image,
     *,
@@ -73,17 +73,24 @@ def selective_search(
     sigma: Annotated[float, Field(ge=0)] = 0.8,
     max_area: Annotated[float, Field(gt=0, le=1)] = 0.9,
     max_boxes: Annotated[int, Field(ge=0)] = 1000,
+    ranking: Ranking = "persistence",
     seed: Seed = 0,
 ) -> Boxes:
-    """Selective search: over-segment (Felzenszwalb–Huttenlocher), group the two most
+    r"""Selective search: over-segment (Felzenszwalb–Huttenlocher), group the two most
     similar neighbouring regions until one remains, and give one box per region ever
     formed, over diversified strategies, ranked and de-duplicated.
 
     Similarities of regions i, j (each in [0, 1], summed over the chosen set):
     colour and texture histogram intersection, size ``1 - (|r_i| + |r_j|) / |im|`` and
-    fill ``1 - (|BB_ij| - |r_i| - |r_j|) / |im|``. A box ranks by its position in its
-    hierarchy (1: the last region formed) times a seeded random number; the score is
-    minus that rank (higher first). An image without structure gives no proposal.
+    fill ``1 - (|BB_ij| - |r_i| - |r_j|) / |im|``. Ranking ``"persistence"`` puts
+    first the regions that last longest in their grouping: with :math:`\bar s` the
+    similarity over the number of measures, a region formed at
+    :math:`\bar s_\mathrm{born}` (the initial regions: the largest merge similarity)
+    and absorbed at :math:`\bar s_\mathrm{died}` (the last: 0) has persistence
+    :math:`\bar s_\mathrm{born} - \bar s_\mathrm{died}`, its score. Ranking
+    ``"paper"`` is Uijlings et al.'s: position in the hierarchy (1: the last merge; the
+    initial regions after every merge) times a seeded random number, sorted ascending,
+    score minus that rank. An image without structure gives no proposal.
 
     Parameters
     ----------
@@ -101,8 +108,10 @@ def selective_search(
         Boxes covering more than this fraction of the image (the background) are dropped.
     max_boxes : int
         Keep the first ``max_boxes`` in the ranking (0: all).
+    ranking : {"persistence", "paper"}
+        Order of the proposals (above; module :mod:`._selective`).
     seed : int
-        Seed of the random ranking.
+        Seed of the paper's random ranking.
 
     Returns
     -------
@@ -113,7 +122,9 @@ def selective_search(
     ----------
     J. R. R. Uijlings et al., "Selective search for object recognition", IJCV 104(2),
     2013; P. F. Felzenszwalb and D. P. Huttenlocher, "Efficient graph-based image
-    segmentation", IJCV 59(2), 2004.
+    segmentation", IJCV 59(2), 2004; P. Arbeláez et al., "Contour detection and
+    hierarchical image segmentation", IEEE TPAMI 33(5), 2011 (regions of a hierarchy
+    that live over a range of thresholds).
     """
     return propose(
         image,
@@ -124,6 +135,7 @@ def selective_search(
         max_area=max_area,
         max_boxes=max_boxes,
         seed=seed,
+        ranking=ranking,
     )
 
 
@@ -137,6 +149,7 @@ def propose(
     max_area: float,
     max_boxes: int,
     seed: int,
+    ranking: Ranking = "persistence",
 ) -> BoxSet:
     """Selective search proposals of one image (``detection.selective_search``)."""
     sets = tuple(_similarity_set(text) for text in similarities)
@@ -149,6 +162,7 @@ def propose(
         scales=tuple(scales),
         sigma=sigma,
         seed=seed,
+        ranking=ranking,
     )
     area = np.prod(boxes[:, 2:] - boxes[:, :2], axis=1)
     keep = area <= max_area * image.shape[0] * image.shape[1]

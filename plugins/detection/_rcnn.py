@@ -55,7 +55,12 @@ BACKGROUND = -1
 """The label of background ROIs (below every class label)."""
 
 
-@node("detection.scene_proposals", version=1)
+PIXELS_PER_PROPOSAL = 32
+"""With ``max_boxes=None``, a scene keeps one proposal per this many pixels (200 for the
+80 × 80 scenes R-CNN trains on, 1800 for a 240 × 240 scene of 30 digits)."""
+
+
+@node("detection.scene_proposals", version=2)
 def scene_proposals(
     scenes: Scenes,
     *,
@@ -64,11 +69,11 @@ def scene_proposals(
     scales: PositiveList = [50.0],  # noqa: B006
     sigma: Annotated[float, Field(ge=0)] = 0.8,
     max_area: Annotated[float, Field(gt=0, le=1)] = 0.5,
-    max_boxes: Annotated[int, Field(ge=0)] = 200,
+    max_boxes: Annotated[int, Field(ge=0)] | None = None,
     seed: Seed = 0,
 ) -> Detections:
     """Selective search on every scene (``detection.selective_search`` with these
-    parameters); label -1 (no class yet).
+    parameters, ranked by persistence); label -1 (no class yet).
 
     Parameters
     ----------
@@ -84,8 +89,11 @@ def scene_proposals(
         Smoothing before the over-segmentation.
     max_area : float
         Proposals covering more than this fraction of a scene are dropped.
-    max_boxes : int
-        Most proposals per scene (0: all).
+    max_boxes : int, optional
+        Most proposals per scene (0: all). None: one per ``PIXELS_PER_PROPOSAL``
+        (32) pixels of the scene, so that a larger scene, which holds more objects,
+        keeps more (a fixed 200 kept 0.925 of 30 digits in 240 × 240 scenes where all
+        the proposals, about 470, keep 0.95).
     seed : int
         Seed of the ranking.
 
@@ -105,7 +113,7 @@ def scene_proposals(
             scales=scales,
             sigma=sigma,
             max_area=max_area,
-            max_boxes=max_boxes,
+            max_boxes=image.size // PIXELS_PER_PROPOSAL if max_boxes is None else max_boxes,
             seed=seed,
         )
         pieces.append((boxes.xyxy, boxes.score, np.full(len(boxes), index, np.int64)))

@@ -17,8 +17,26 @@ neighbours are merged greedily by a sum of similarities (Uijlings et al., sectio
 
 The merged region's histograms are the size-weighted means of its parts. Diversified
 strategies (colour spaces × similarity sets × segmentation scales) are run one after
-another; a box's rank is its position in its hierarchy (1 for the last region formed)
-times a seeded random number in [0, 1), boxes are sorted by it and duplicates dropped.
+another, and their boxes ranked in one of two ways, duplicates dropped after ranking:
+
+* ``"persistence"`` (the default): by how long a region lasts in its hierarchy. With
+  :math:`\\bar s` a similarity divided by the number of measures summed (so in [0, 1]
+  for every set), region r is formed by a merge at :math:`\\bar s_\\mathrm{born}(r)` (the
+  initial regions: the hierarchy's largest merge similarity, since they exist from the
+  start) and absorbed at :math:`\\bar s_\\mathrm{died}(r)` (the last region: 0); its
+  persistence is :math:`\\bar s_\\mathrm{born} - \\bar s_\\mathrm{died}`, the range of
+  similarity over which it is a region of the grouping, as a region of an ultrametric
+  contour map lives over a range of thresholds (Arbeláez et al. 2011). A region whose
+  parts are alike and which is unlike everything around it, an object, lasts long;
+  a patch of an object, or a union of unrelated regions, does not. Boxes are sorted by
+  persistence, highest first; the score is the persistence.
+* ``"paper"``: the paper's pseudo-random ranking (section 3.4), as the authors' code
+  does it (``Image2HierarchicalGrouping.m``): in each hierarchy the region formed by
+  the last merge has position 1, the one before 2, and so on, and the initial regions
+  (counted once per segmentation) position M + 1 after M merges; each box's rank is its
+  position times a seeded random number in [0, 1), sorted ascending; the score is
+  minus the rank. It favours the large regions at the top of every hierarchy: on
+  scenes of many objects, the first proposals miss most of them (issue 24).
 """
 
 from __future__ import annotations
@@ -30,13 +48,19 @@ from typing import Literal
 import numpy as np
 
 __all__ = [
+    "RANKINGS",
     "SIMILARITIES",
     "ColourSpace",
+    "Hierarchy",
+    "Ranking",
+    "grouping_hierarchy",
     "hierarchical_grouping",
     "selective_search_boxes",
 ]
 
 ColourSpace = Literal["rgb", "hsv", "lab", "gray"]
+Ranking = Literal["persistence", "paper"]
+RANKINGS: tuple[str, ...] = ("persistence", "paper")
 SIMILARITIES = ("colour", "texture", "size", "fill")
 COLOUR_BINS = 25
 ORIENTATION_BINS = 8
@@ -139,11 +163,23 @@ def _similarity(
     return total
 
 
-def hierarchical_grouping(
+@dataclass(frozen=True)
+class Hierarchy:
+    """The regions one grouping forms: ``boxes`` (x0, y0, x1, y1) in creation order (the
+    ``initial`` regions of the over-segmentation first, then one per merge) and the
+    ``persistence`` of each (module docstring)."""
+
+    boxes: np.ndarray
+    persistence: np.ndarray
+    initial: int
+
+
+def grouping_hierarchy(
     labels: np.ndarray, channels: np.ndarray, measures: tuple[str, ...]
-) -> np.ndarray:
-    """Boxes (x0, y0, x1, y1) of every region the grouping forms, in creation order: the
-    initial regions, then each merge (the last is the whole connected image)."""
+) -> Hierarchy:
+    """Greedy grouping of an over-segmentation: merge the two most similar neighbours
+    until one region remains (module docstring), recording every region's box and the
+    (mean) similarities at which it is formed and absorbed."""
     count = int(labels.max()) + 1
     colour, texture = _region_features(labels, channels, count)
     rows, cols = np.indices(labels.shape)
@@ -160,6 +196,9 @@ def hierarchical_grouping(
     sizes = np.bincount(flat, minlength=count).astype(np.float64)
     regions = _Regions(list(colour), list(texture), sizes.tolist(), list(boxes))
     image_size = float(labels.size)
+    scale = float(len(measures))
+    born = [np.nan] * count  # the initial regions': the largest merge similarity, below
+    died = [0.0] * count
     neighbours: dict[int, set[int]] = {r: set() for r in range(count)}
     heap: list[tuple[float, int, int]] = []
     for i, j in _neighbour_pairs(labels).tolist():
@@ -169,7 +208,7 @@ def hierarchical_grouping(
     heapq.heapify(heap)
     alive = set(range(count))
     while heap:
-        _, i, j = heapq.heappop(heap)
+        negative, i, j = heapq.heappop(heap)
         if i not in alive or j not in alive:
             continue  # a pair whose region was merged away since it was pushed
         t = len(regions.size)
@@ -178,6 +217,9 @@ def hierarchical_grouping(
         regions.texture.append((si * regions.texture[i] + sj * regions.texture[j]) / (si + sj))
         regions.size.append(si + sj)
         regions.box.append(_union(regions.box[i], regions.box[j]))
+        born.append(-negative / scale)
+        died.append(0.0)
+        died[i] = died[j] = -negative / scale
         alive -= {i, j}
         around = (neighbours.pop(i) | neighbours.pop(j)) - {i, j}
         neighbours[t] = around
@@ -186,7 +228,31 @@ def hierarchical_grouping(
             neighbours[k].add(t)
             heapq.heappush(heap, (-_similarity(regions, t, k, measures, image_size), k, t))
         alive.add(t)
-    return np.array(regions.box, np.float64).reshape(-1, 4)
+    formed = np.array(born, np.float64)
+    first = float(np.nanmax(formed)) if len(formed) > count else 1.0
+    formed[:count] = first
+    persistence = formed - np.array(died, np.float64)
+    return Hierarchy(np.array(regions.box, np.float64).reshape(-1, 4), persistence, count)
+
+
+def hierarchical_grouping(
+    labels: np.ndarray, channels: np.ndarray, measures: tuple[str, ...]
+) -> np.ndarray:
+    """Boxes (x0, y0, x1, y1) of every region the grouping forms, in creation order: the
+    initial regions, then each merge (the last is the whole connected image)."""
+    return grouping_hierarchy(labels, channels, measures).boxes
+
+
+def _paper_ranks(hierarchy: Hierarchy, with_initial: bool, rng: np.random.Generator) -> np.ndarray:
+    """The paper's ranks of one hierarchy's boxes (module docstring); inf drops a box."""
+    merges = len(hierarchy.boxes) - hierarchy.initial
+    position = np.concatenate(
+        [np.full(hierarchy.initial, merges + 1.0), np.arange(merges, 0, -1, dtype=np.float64)]
+    )
+    ranks = position * rng.random(len(position))
+    if not with_initial:
+        ranks[: hierarchy.initial] = np.inf  # the segmentation's regions count once
+    return ranks
 
 
 def selective_search_boxes(
@@ -197,26 +263,31 @@ def selective_search_boxes(
     scales: tuple[float, ...],
     sigma: float,
     seed: int,
+    ranking: Ranking = "persistence",
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Boxes of every diversified strategy, ranked and de-duplicated, with their scores
-    (higher is earlier in the ranking): ((P, 4), (P,))."""
+    """Boxes of every diversified strategy, ranked (module docstring) and de-duplicated,
+    with their scores (higher is earlier in the ranking): ((P, 4), (P,))."""
     from skimage.segmentation import felzenszwalb
 
     rng = np.random.default_rng(seed)
-    all_boxes, all_ranks = [], []
+    all_boxes, all_keys = [], []
     for space in colour_spaces:
         channels = _channels(image, space)
         for scale in scales:
             labels = felzenszwalb(channels, scale=scale, sigma=sigma, min_size=int(scale))
-            for measures in similarity_sets:
-                boxes = hierarchical_grouping(labels, channels, measures)
-                position = np.arange(len(boxes), 0, -1, dtype=np.float64)
-                all_boxes.append(boxes)
-                all_ranks.append(position * rng.random(len(boxes)))
+            for number, measures in enumerate(similarity_sets):
+                hierarchy = grouping_hierarchy(labels, channels, measures)
+                all_boxes.append(hierarchy.boxes)
+                if ranking == "paper":
+                    all_keys.append(_paper_ranks(hierarchy, number == 0, rng))
+                else:
+                    all_keys.append(-hierarchy.persistence)
     boxes = np.concatenate(all_boxes)
-    ranks = np.concatenate(all_ranks)
-    order = np.argsort(ranks, kind="stable")
-    boxes, ranks = boxes[order], ranks[order]
+    keys = np.concatenate(all_keys)
+    order = np.argsort(keys, kind="stable")
+    boxes, keys = boxes[order], keys[order]
+    kept = np.isfinite(keys)
+    boxes, keys = boxes[kept], keys[kept]
     _, first = np.unique(boxes, axis=0, return_index=True)
     first = np.sort(first)
-    return boxes[first], -ranks[first]
+    return boxes[first], -keys[first]

@@ -224,9 +224,11 @@ def test_rcnn_pipeline_meets_the_issue_truths():
     assert out["map50"] >= 0.8
     assert out["tp_iou"] > out["tp_iou_without_regression"]
     assert out["drawing"].shape == (2 * 82, 4 * 82, 3)
-    # the region proposal network finds with 10 boxes per scene what selective search
-    # needs about 50 for (measured 0.94 against 0.52 at 10)
-    assert out["rpn_recall_10"] >= 0.9 > out["selective_search_recall_10"] + 0.2
+    # the region proposal network's first 10 boxes per scene find more digits than
+    # selective search's (measured 0.92 against 0.79; 0.52 before selective search
+    # ranked its proposals by persistence, issue 24)
+    assert out["rpn_recall_10"] >= 0.9
+    assert out["rpn_recall_10"] > out["selective_search_recall_10"] >= 0.7
 
 
 def test_box_regression_ridge_in_the_dual_equals_the_primal_and_pool_is_bounded():
