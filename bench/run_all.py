@@ -21,6 +21,7 @@ import bench_faces  # noqa: E402
 import bench_filters  # noqa: E402
 import bench_find_object  # noqa: E402
 import bench_held_out_geometry  # noqa: E402
+import bench_held_out_robust  # noqa: E402
 import bench_homography  # noqa: E402
 import bench_recognition  # noqa: E402
 import bench_scheduler  # noqa: E402
@@ -44,6 +45,10 @@ def main() -> None:
         ("Modern detection: CNN, proposals, R-CNN (issue 14)", bench_detection.main),
         ("Finding every instance of an object (issue 28)", bench_find_object.main),
         ("Faces in photographs: LBP cascade (issue 28)", bench_faces.main),
+        (
+            "Held-out scenes: corners, Canny, DLT, proposals, significance (issue 24)",
+            bench_held_out_robust.main,
+        ),
         ("Sweep sharing (issue 15)", bench_sweep.main),
         ("Batch of 200 files (issue 15)", bench_batch.main),
         ("Dask executor overhead (issue 15)", bench_dask.main),

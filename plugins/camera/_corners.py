@@ -74,7 +74,7 @@ TOLERANCE = 0.3
 MIN_EDGE = 0.1
 """Least gradient at a cell side's midpoint, as a fraction of the local contrast."""
 MAX_ASYMMETRY = 0.5
-"""Largest :math:`|I(p + \rho u) - I(p - \rho u)|` of an X-junction, as a fraction of
+"""Largest :math:`|I(p + \\rho u) - I(p - \\rho u)|` of an X-junction, as a fraction of
 the contrast around it."""
 _ANGLES = np.linspace(0.0, np.pi, 8, endpoint=False)
 

@@ -9,17 +9,17 @@ independent and uniform over their domain (each view's points over the bounding 
 of that view's points, since the nodes do not see the image), so a datum fits a given
 model with a probability α, the *chance inlier rate*; of the n − s data outside a
 minimal sample, the number that fit is binomial. With :math:`N_\mathrm{tests} =
-(n - s)inom{n}{s}` (every minimal sample, with every inlier count k), the number of
+(n - s)\binom{n}{s}` (every minimal sample, with every inlier count k), the number of
 false alarms of a model with k inliers is
 
 .. math::
 
-    \mathrm{NFA}(k) = (n - s)inom{n}{s}
-        \sum_{j = k - s}^{n - s} inom{n - s}{j} lpha^j (1 - lpha)^{n - s - j},
+    \mathrm{NFA}(k) = (n - s)\binom{n}{s}
+        \sum_{j = k - s}^{n - s} \binom{n - s}{j} \alpha^j (1 - \alpha)^{n - s - j},
 
 the expected number of models at least this well supported in data without any
 model. NFA ≤ 1 is meaningful; NFA > 1 is what chance produces (Moisan & Stival bound
-the tail by :math:`inom{n - s}{k - s}lpha^{k - s}`; the sum is exact). α is
+the tail by :math:`\binom{n - s}{k - s}\alpha^{k - s}`; the sum is exact). α is
 measured for the model's own residual and threshold by drawing pairs of points
 uniformly over the domains (:func:`chance_inlier_rate`, a scrambled Sobol sequence:
 seeded, and of smaller error than independent draws).

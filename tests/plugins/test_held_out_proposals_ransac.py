@@ -151,14 +151,15 @@ def fractal(rng: np.random.Generator, shape: tuple[int, int], slope: float) -> n
 
 
 def object_scene(
-    seed: int, size: tuple[int, int] = (160, 160), count: int = 12
+    seed: int, size: tuple[int, int] = (160, 160), count: int = 12, colour: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
     """``count`` ellipses, rectangles and diamonds (12-40 px, 3 px apart at least), each
-    of a seeded grey filled with its own fine texture, on a cloudy background; noise
-    0.02. Returns the gray image and the objects' boxes (x0, y0, x1, y1)."""
+    of a seeded grey (or colour) filled with its own fine texture, on a cloudy background;
+    noise 0.02. Returns the image and the objects' boxes (x0, y0, x1, y1)."""
     rng = np.random.default_rng(seed)
     height, width = size
-    image = rng.uniform(0.3, 0.7) * (0.7 + 0.6 * fractal(rng, size, 1.6))
+    tint = rng.uniform(0.3, 0.7, 3 if colour else 1)
+    image = tint * (0.7 + 0.6 * fractal(rng, size, 1.6))[..., None]
     occupied = np.zeros(size, bool)
     y, x = np.mgrid[0:height, 0:width]
     boxes: list[list[int]] = []
@@ -174,12 +175,12 @@ def object_scene(
             rng.integers(3)
         ]
         texture = 0.8 + 0.4 * fractal(rng, size, 2.5)
-        image[mask] = rng.uniform(0, 1) * texture[mask]
+        image[mask] = rng.uniform(0, 1, len(tint)) * texture[mask][:, None]
         occupied |= mask
         ys, xs = np.nonzero(mask)
         boxes.append([xs.min(), ys.min(), xs.max() + 1, ys.max() + 1])
-    image = np.clip(image + rng.normal(0, 0.02, size), 0, 1).astype(np.float32)
-    return image, np.array(boxes, np.float64)
+    image = np.clip(image + rng.normal(0, 0.02, image.shape), 0, 1).astype(np.float32)
+    return (image if colour else image[..., 0]), np.array(boxes, np.float64)
 
 
 def test_selective_search_puts_the_objects_first():
