@@ -165,7 +165,7 @@ def board_photo(
     import skimage.data
     import skimage.transform
 
-    from graphvision_plugins._separable import smooth_gaussian
+    from graphvision_plugins.shared.separable import smooth_gaussian
 
     rng = np.random.default_rng(seed)
     height, width = size
