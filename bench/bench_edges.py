@@ -97,7 +97,7 @@ def canny_rows(cv2) -> list[str]:
 
 
 def board_truth(angle: float) -> np.ndarray:
-    from tests.plugins.test_hough import board_truth as truth
+    from tests.plugins.hough.test_hough import board_truth as truth
 
     return truth(angle)
 

@@ -43,8 +43,8 @@ sys.path.insert(0, str(Path(__file__).parent.parent))
 
 from graphvision_plugins import edges, hough, pyramids
 from graphvision_plugins.hough import quadratic_peak_2d
-from tests.plugins import test_held_out_hough_template as scenes
-from tests.plugins import test_held_out_structured_light as light
+from tests.plugins.hough import test_held_out_hough_template as scenes
+from tests.plugins.stereo import test_held_out_structured_light as light
 
 
 def _cv2():

@@ -79,7 +79,7 @@ def _corner_row(name: str, scene: str, corners: np.ndarray, truth: np.ndarray) -
 
 
 def board_rows(cv2) -> list[str]:
-    from tests.plugins.test_held_out_camera_edges import board_photo
+    from tests.plugins.camera.test_held_out_camera_edges import board_photo
 
     scenes = {
         "defocused, blur 6 px": board_photo(
@@ -113,7 +113,7 @@ def board_rows(cv2) -> list[str]:
 
 
 def canny_rows(cv2) -> list[str]:
-    from tests.plugins.test_held_out_camera_edges import mondrian, step_boundaries
+    from tests.plugins.camera.test_held_out_camera_edges import mondrian, step_boundaries
 
     ours, theirs = [], []
     for seed in range(11, 16):
@@ -135,7 +135,7 @@ def canny_rows(cv2) -> list[str]:
 
 
 def dlt_rows() -> list[str]:
-    from tests.plugins.test_held_out_camera_edges import six_points
+    from tests.plugins.camera.test_held_out_camera_edges import six_points
 
     rows = [
         "| DLT, 6 points (240 seeds) | refine | finite camera | refused, named | other |",
@@ -171,7 +171,7 @@ def _ximgproc_boxes(cv2, image: np.ndarray) -> np.ndarray:
 
 
 def proposal_rows(cv2) -> list[str]:
-    from tests.plugins.test_held_out_proposals_ransac import object_scene
+    from tests.plugins.geometry.test_held_out_proposals_ransac import object_scene
 
     counts = (10, 20, 50)
     results: dict[str, list[list[float]]] = {"persistence": [], "paper": [], "opencv": []}
@@ -254,7 +254,7 @@ def rcnn_rows() -> list[str]:
 
 
 def significance_rows(cv2) -> list[str]:
-    from tests.plugins.test_held_out_proposals_ransac import (
+    from tests.plugins.geometry.test_held_out_proposals_ransac import (
         in_order,
         keypoints,
         random_pairs,
