@@ -8,6 +8,7 @@ in [16, 240].
 
 from __future__ import annotations
 
+from functools import cache
 from typing import Literal
 
 import numpy as np
@@ -37,42 +38,12 @@ LAB_EPSILON = 0.008856  # (6/29)³ rounded, as CIE publishes it
 LAB_SLOPE = 7.787  # 1 / (3 (6/29)²) rounded
 
 
-def _rgb_to_hsv(rgb: np.ndarray) -> np.ndarray:
-    value = rgb.max(axis=-1)
-    chroma = value - rgb.min(axis=-1)
-    safe_chroma = np.where(chroma > 0, chroma, 1.0)
-    saturation = np.where(value > 0, chroma / np.where(value > 0, value, 1.0), 0.0)
-    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
-    hue = np.where(
-        value == r,
-        ((g - b) / safe_chroma) % 6.0,
-        np.where(value == g, (b - r) / safe_chroma + 2.0, (r - g) / safe_chroma + 4.0),
-    )
-    hue = np.where(chroma > 0, hue / 6.0, 0.0)
-    return np.stack([hue, saturation, value], axis=-1)
-
-
 def _hsv_to_rgb(hsv: np.ndarray) -> np.ndarray:
     h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
     sector = h * 6.0
     k = np.stack([(5.0 + sector) % 6.0, (3.0 + sector) % 6.0, (1.0 + sector) % 6.0], axis=-1)
     ramp = np.clip(np.minimum(k, 4.0 - k), 0.0, 1.0)
     return v[..., None] - (v * s)[..., None] * ramp
-
-
-def _rgb_to_lab(rgb: np.ndarray) -> np.ndarray:
-    linear = rgb / 12.92
-    curved = rgb > 0.04045
-    linear[curved] = ((rgb[curved] + 0.055) / 1.055) ** 2.4
-    xyz = _linear(linear, XYZ_FROM_RGB / D65_WHITE[:, None], np.zeros(3))
-    f = LAB_SLOPE * xyz + 16.0 / 116.0
-    above = xyz > LAB_EPSILON
-    f[above] = np.cbrt(xyz[above])
-    lab = np.empty_like(f)
-    lab[..., 0] = 116.0 * f[..., 1] - 16.0
-    lab[..., 1] = 500.0 * (f[..., 0] - f[..., 1])
-    lab[..., 2] = 200.0 * (f[..., 1] - f[..., 2])
-    return lab
 
 
 def _lab_to_rgb(lab: np.ndarray) -> np.ndarray:
@@ -85,34 +56,52 @@ def _lab_to_rgb(lab: np.ndarray) -> np.ndarray:
     return np.where(linear > 0.0031308, 1.055 * linear ** (1 / 2.4) - 0.055, 12.92 * linear)
 
 
-def _linear(image: np.ndarray, matrix: np.ndarray, offset: np.ndarray) -> np.ndarray:
-    """``matrix @ pixel + offset`` for every pixel, channel plane by plane, in the input's float."""
-    out = np.empty_like(image)
-    for row in range(3):
-        plane = out[..., row]
-        plane[...] = offset[row]
-        for col in range(3):
-            plane += image.dtype.type(matrix[row, col]) * image[..., col]
-    return out
+@cache
+def _srgb_levels(dtype: np.dtype) -> tuple[np.ndarray, np.ndarray]:
+    """The 256 levels of an 8-bit channel in ``dtype`` and their linear sRGB values (float64)."""
+    levels = (np.arange(256) / 255.0).astype(dtype)
+    wide = levels.astype(np.float64)
+    linear = wide / 12.92
+    curved = wide > 0.04045
+    linear[curved] = ((wide[curved] + 0.055) / 1.055) ** 2.4
+    return levels, linear
 
 
-def _rgb_to_ycbcr(rgb: np.ndarray) -> np.ndarray:
-    return _linear(rgb, YCBCR_FROM_RGB, YCBCR_OFFSET)
+def _forward(rgb: np.ndarray, space: str, dtype: type) -> np.ndarray:
+    """RGB to ``space`` by the compiled kernels, computed in float64 (YCbCr: in ``dtype``)
+    and stored as ``dtype``."""
+    from ._spaces_kernels import rgb_to_hsv, rgb_to_lab, rgb_to_linear
+
+    work = dtype if space == "ycbcr" else np.float64
+    if space != "ycbcr" and np.asarray(rgb).dtype == np.float32:
+        work = np.float32  # read as it is, each value widened to float64 in the kernel
+    pixels = np.ascontiguousarray(rgb, dtype=work).reshape(-1, 3)
+    out = np.empty(pixels.shape, dtype=dtype)
+    if space == "hsv":
+        rgb_to_hsv(pixels, out)
+    elif space == "lab":
+        levels, linear = _srgb_levels(pixels.dtype)
+        matrix = XYZ_FROM_RGB / D65_WHITE[:, None]
+        rgb_to_lab(pixels, matrix, LAB_EPSILON, LAB_SLOPE, levels, linear, out)
+    else:
+        rgb_to_linear(pixels, YCBCR_FROM_RGB.astype(work), YCBCR_OFFSET.astype(work), out)
+    return out.reshape(np.shape(rgb))
 
 
 def _ycbcr_to_rgb(ycbcr: np.ndarray) -> np.ndarray:
     return (ycbcr - YCBCR_OFFSET) @ np.linalg.inv(YCBCR_FROM_RGB).T
 
 
-_FORWARD = {"hsv": _rgb_to_hsv, "lab": _rgb_to_lab, "ycbcr": _rgb_to_ycbcr}
 _BACKWARD = {"hsv": _hsv_to_rgb, "lab": _lab_to_rgb, "ycbcr": _ycbcr_to_rgb}
 
 
 def rgb_to(rgb: np.ndarray, space: str) -> np.ndarray:
     """RGB in [0, 1] to ``space``, computed in float64 (YCbCr, linear, in the input's float)."""
-    if space == "ycbcr" and np.asarray(rgb).dtype == np.float32:
-        return _rgb_to_ycbcr(rgb).astype(np.float32)
-    return _FORWARD[space](np.asarray(rgb, dtype=np.float64))
+    rgb = np.asarray(rgb)
+    if rgb.shape[-1:] != (3,):
+        raise ValueError(f"rgb must have 3 channels in its last axis, got shape {rgb.shape}")
+    dtype = np.float32 if space == "ycbcr" and rgb.dtype == np.float32 else np.float64
+    return _forward(rgb, space, dtype)
 
 
 def to_rgb_from(values: np.ndarray, space: str) -> np.ndarray:
@@ -149,7 +138,7 @@ def from_rgb(image: ColorImage, *, space: Space = "lab") -> FloatImage:
     ----------
     .. [1] Szeliski (2022), section 2.3.2; CIE 15:2004, *Colorimetry*.
     """
-    return rgb_to(image, space).astype(np.float32)
+    return _forward(image, space, np.float32)
 
 
 @node("colour.to_rgb", version=1)
