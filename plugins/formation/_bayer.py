@@ -24,6 +24,7 @@ References
 
 from __future__ import annotations
 
+from functools import cache
 from typing import Literal
 
 import numpy as np
@@ -69,20 +70,47 @@ def bayer_masks(shape: tuple[int, int], pattern: str) -> np.ndarray:
     return masks
 
 
-def _convolve(image: np.ndarray, kernel: np.ndarray) -> np.ndarray:
-    """Correlate with a small sparse kernel as a sum of shifted views, one per non-zero tap.
+def _kernel_at(method: str, channel: int, letter: str, row_letters: str) -> np.ndarray | None:
+    """The kernel giving ``channel`` at a tile place sampling ``letter`` (None: the sample)."""
+    if "RGB"[channel] == letter:
+        return None
+    if method == "bilinear":
+        cross = np.array([[0, 1, 0], [1, 4, 1], [0, 1, 0]]) / 4.0
+        box = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]]) / 4.0
+        return cross if channel == 1 else box
+    if channel == 1:
+        return _G_AT_RB
+    if letter != "G":
+        return _RB_AT_BR
+    return _RB_AT_G_ROW if "RGB"[channel] in row_letters else _RB_AT_G_COLUMN
 
-    The image is padded by reflection about its edge pixel (``numpy.pad``'s
-    ``reflect``), so the 2×2 colour pattern continues past the border. The
-    kernels here are symmetric, so correlation equals convolution.
-    """
-    half = kernel.shape[0] // 2
-    padded = np.pad(image, half, mode="reflect")
-    rows, cols = image.shape
-    out = np.zeros_like(image)
-    for dy, dx in zip(*np.nonzero(kernel), strict=True):
-        out += kernel[dy, dx] * padded[dy : dy + rows, dx : dx + cols]
-    return out
+
+@cache
+def _tap_lists(pattern: str, method: str) -> tuple[np.ndarray, np.ndarray]:
+    """Taps ``(dy, dx, weight)`` per channel and tile place, in the order the array formulas
+    added them (row-major over the kernel), and their counts (−1: copy the sample).
+
+    Bilinear keeps only the taps on samples of the channel's colour (the others read a
+    masked zero)."""
+    taps = np.zeros((3, 4, 25, 3))
+    counts = np.full((3, 4), -1, dtype=np.int64)
+    for tile, letter in enumerate(pattern):
+        ty, tx = divmod(tile, 2)
+        row_letters = pattern[2 * ty : 2 * ty + 2]
+        for channel in range(3):
+            kernel = _kernel_at(method, channel, letter, row_letters)
+            if kernel is None:
+                continue
+            half = kernel.shape[0] // 2
+            kept = [
+                (dy - half, dx - half, kernel[dy, dx])
+                for dy, dx in zip(*np.nonzero(kernel), strict=True)
+                if method != "bilinear"
+                or pattern[2 * ((ty + dy - half) % 2) + (tx + dx - half) % 2] == "RGB"[channel]
+            ]
+            counts[channel, tile] = len(kept)
+            taps[channel, tile, : len(kept)] = kept
+    return taps, counts
 
 
 @node("formation.mosaic", version=1)
@@ -126,31 +154,10 @@ def demosaic(
     """
     if min(raw.shape) < 5:
         raise ValueError(f"raw must be at least 5×5 to demosaic, got {raw.shape}")
-    data = raw.astype(np.float32)
-    red, green, blue = bayer_masks(raw.shape, pattern)
-    if method == "bilinear":
-        cross = np.array([[0, 1, 0], [1, 4, 1], [0, 1, 0]]) / 4.0
-        box = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]]) / 4.0
-        out = np.stack(
-            [
-                _convolve(data * red, box),
-                _convolve(data * green, cross),
-                _convolve(data * blue, box),
-            ],
-            axis=-1,
-        )
-        return np.clip(out, 0, 1).astype(np.float32)
-    green_at_rb = _convolve(data, _G_AT_RB)
-    at_g_row = _convolve(data, _RB_AT_G_ROW)
-    at_g_column = _convolve(data, _RB_AT_G_COLUMN)
-    at_opposite = _convolve(data, _RB_AT_BR)
-    rows_with_red = np.broadcast_to(red.any(axis=1, keepdims=True), raw.shape)
-    out = np.empty((*raw.shape, 3))
-    out[..., 1] = np.where(green, data, green_at_rb)
-    for channel, own, other, own_rows in (
-        (0, red, blue, rows_with_red),
-        (2, blue, red, ~rows_with_red),
-    ):
-        at_green = np.where(own_rows, at_g_row, at_g_column)
-        out[..., channel] = np.where(own, data, np.where(other, at_opposite, at_green))
-    return np.clip(out, 0, 1).astype(np.float32)
+    from ._bayer_kernels import demosaic_taps, split_padded
+
+    taps, counts = _tap_lists(pattern, method)
+    out = np.empty((*raw.shape, 3), dtype=np.float32)
+    even, odd = split_padded(np.ascontiguousarray(raw, dtype=np.float32))
+    demosaic_taps(even, odd, taps, counts, out)
+    return out

@@ -1,0 +1,73 @@
+"""The compiled demosaicking equals, to the bit, the array formulas it replaced (kept here as
+the reference, as they were in ``formation/_bayer.py``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import skimage.data
+
+from graphvision_plugins.formation import bayer_masks, demosaic, mosaic
+from graphvision_plugins.formation._bayer import (
+    _G_AT_RB,
+    _RB_AT_BR,
+    _RB_AT_G_COLUMN,
+    _RB_AT_G_ROW,
+)
+
+
+def _convolve(image: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    half = kernel.shape[0] // 2
+    padded = np.pad(image, half, mode="reflect")
+    rows, cols = image.shape
+    out = np.zeros_like(image)
+    for dy, dx in zip(*np.nonzero(kernel), strict=True):
+        out += kernel[dy, dx] * padded[dy : dy + rows, dx : dx + cols]
+    return out
+
+
+def _reference(raw: np.ndarray, pattern: str, method: str) -> np.ndarray:
+    data = raw.astype(np.float32)
+    red, green, blue = bayer_masks(raw.shape, pattern)
+    if method == "bilinear":
+        cross = np.array([[0, 1, 0], [1, 4, 1], [0, 1, 0]]) / 4.0
+        box = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]]) / 4.0
+        out = np.stack(
+            [
+                _convolve(data * red, box),
+                _convolve(data * green, cross),
+                _convolve(data * blue, box),
+            ],
+            axis=-1,
+        )
+        return np.clip(out, 0, 1).astype(np.float32)
+    green_at_rb = _convolve(data, _G_AT_RB)
+    at_g_row = _convolve(data, _RB_AT_G_ROW)
+    at_g_column = _convolve(data, _RB_AT_G_COLUMN)
+    at_opposite = _convolve(data, _RB_AT_BR)
+    rows_with_red = np.broadcast_to(red.any(axis=1, keepdims=True), raw.shape)
+    out = np.empty((*raw.shape, 3))
+    out[..., 1] = np.where(green, data, green_at_rb)
+    for channel, own, other, own_rows in (
+        (0, red, blue, rows_with_red),
+        (2, blue, red, ~rows_with_red),
+    ):
+        at_green = np.where(own_rows, at_g_row, at_g_column)
+        out[..., channel] = np.where(own, data, np.where(other, at_opposite, at_green))
+    return np.clip(out, 0, 1).astype(np.float32)
+
+
+@pytest.mark.parametrize("method", ["bilinear", "malvar"])
+@pytest.mark.parametrize("pattern", ["RGGB", "BGGR", "GRBG", "GBRG"])
+def test_compiled_demosaic_equals_the_array_formulas(pattern, method):
+    rng = np.random.default_rng(3)
+    scenes = [
+        (skimage.data.astronaut()[::5, ::5] / 255.0).astype(np.float32),
+        rng.random((23, 30, 3)).astype(np.float32),  # odd height: the tile cut at the border
+        rng.random((5, 6, 3)).astype(np.float32),  # the smallest mosaic accepted
+    ]
+    for image in scenes:
+        raw = mosaic(image, pattern=pattern)
+        np.testing.assert_array_equal(
+            demosaic(raw, pattern=pattern, method=method), _reference(raw, pattern, method)
+        )
