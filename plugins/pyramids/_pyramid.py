@@ -45,11 +45,14 @@ def expand(coarse: np.ndarray, shape: tuple[int, ...], sigma: float) -> np.ndarr
 
 
 def gaussian_levels(image: np.ndarray, levels: int, sigma: float) -> list[np.ndarray]:
+    """``blur(level, sigma)[::2, ::2]`` level after level, only the kept pixels computed."""
+    from ..shared.separable import smooth_gaussian_halved
+
     result = [image.astype(np.float32)]
     for _ in range(levels - 1):
         if min(result[-1].shape[:2]) < 2:
             break
-        result.append(np.ascontiguousarray(blur(result[-1], sigma)[::2, ::2]))
+        result.append(smooth_gaussian_halved(result[-1], sigma, "mirror", truncate=3.0))
     return result
 
 

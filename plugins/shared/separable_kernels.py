@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["correlate_both"]
+__all__ = ["correlate_both", "correlate_both_halved"]
 
 
 @njit(cache=True, fastmath=True, nogil=True)
@@ -111,3 +111,64 @@ def correlate_both(
             _accumulate(
                 row, line[far : far + cols], line[j : j + cols], row_taps[far], row_symmetry
             )
+
+
+@njit(cache=True, fastmath=True, nogil=True)
+def correlate_both_halved(
+    image: np.ndarray,
+    column_taps: np.ndarray,
+    column_symmetry: int,
+    row_index: np.ndarray,
+    row_taps: np.ndarray,
+    row_symmetry: int,
+    column_index: np.ndarray,
+    out: np.ndarray,
+) -> None:  # pragma: no cover
+    """:func:`correlate_both` at the even rows and columns only (``out`` is half the size).
+
+    Each value kept is computed as :func:`correlate_both` computes it (the column pass
+    over the whole padded line, the row pass's terms in the same order), the rows and
+    columns a halving drops are not computed at all.
+    """
+    cols = image.shape[1]
+    size = row_taps.size
+    half = size // 2
+    line = np.zeros(cols + 2 * half, out.dtype)
+    even = np.empty((line.size + 1) // 2, out.dtype)
+    odd = np.empty(line.size // 2, out.dtype)
+    zero = np.zeros(cols, out.dtype)
+    for r in range(out.shape[0]):
+        centre = line[half : half + cols]
+        _pass(centre, image, row_index, 2 * r, column_taps, column_symmetry, zero)
+        for k in range(half):
+            left, right = column_index[k], column_index[half + cols + k]
+            line[k] = centre[left] if left >= 0 else 0.0
+            line[half + cols + k] = centre[right] if right >= 0 else 0.0
+        for k in range(line.size):  # the line's even and odd positions, each contiguous
+            if k % 2 == 0:
+                even[k // 2] = line[k]
+            else:
+                odd[k // 2] = line[k]
+        row = out[r]
+        n = row.size
+        if row_symmetry == 0:
+            row[:] = 0.0
+            for j in range(size):
+                part = even[j // 2 : j // 2 + n] if j % 2 == 0 else odd[j // 2 : j // 2 + n]
+                for c in range(n):
+                    row[c] += row_taps[j] * part[c]
+            continue
+        mid = even[half // 2 : half // 2 + n] if half % 2 == 0 else odd[half // 2 : half // 2 + n]
+        for c in range(n):
+            row[c] = row_taps[half] * mid[c]
+        for j in range(half):
+            far = size - 1 - j
+            weight = row_taps[far]
+            first = even[far // 2 : far // 2 + n] if far % 2 == 0 else odd[far // 2 : far // 2 + n]
+            last = even[j // 2 : j // 2 + n] if j % 2 == 0 else odd[j // 2 : j // 2 + n]
+            if row_symmetry == 1:
+                for c in range(n):
+                    row[c] += weight * (first[c] + last[c])
+            else:
+                for c in range(n):
+                    row[c] += weight * (first[c] - last[c])
