@@ -32,14 +32,6 @@ __all__ = [
 Method = Literal["correlation", "zero_mean", "ncc"]
 
 
-def _window_sums(image: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """Sum of every ``shape`` window (valid positions) from an integral image."""
-    h, w = shape
-    integral = np.zeros((image.shape[0] + 1, image.shape[1] + 1))
-    integral[1:, 1:] = image.cumsum(axis=0).cumsum(axis=1)
-    return integral[h:, w:] - integral[:-h, w:] - integral[h:, :-w] + integral[:-h, :-w]
-
-
 def correlation_map(image: np.ndarray, template: np.ndarray, method: str) -> np.ndarray:
     """Correlation of every valid template placement, float64 ``(H - h + 1, W - w + 1)``."""
     from scipy.signal import fftconvolve
@@ -56,12 +48,11 @@ def correlation_map(image: np.ndarray, template: np.ndarray, method: str) -> np.
     response = fftconvolve(data, kernel[::-1, ::-1], mode="valid")
     if method != "ncc":
         return response
-    count = kernel.size
-    sums = _window_sums(data, kernel.shape)
-    spread = np.maximum(_window_sums(data * data, kernel.shape) - sums * sums / count, 0.0)
-    denominator = np.sqrt(spread * np.sum(kernel * kernel))
-    tiny = np.finfo(np.float32).eps
-    return np.where(denominator > tiny, response / np.maximum(denominator, tiny), 0.0)
+    from ._template_kernels import normalise_response
+
+    tiny = float(np.finfo(np.float32).eps)
+    energy = float(np.sum(kernel * kernel))
+    return normalise_response(data, response, *kernel.shape, energy, tiny)
 
 
 @node("pyramids.match_template", version=1)
