@@ -23,6 +23,7 @@ import bench_find_object  # noqa: E402
 import bench_held_out_geometry  # noqa: E402
 import bench_held_out_robust  # noqa: E402
 import bench_homography  # noqa: E402
+import bench_kernels_vs_opencv  # noqa: E402
 import bench_recognition  # noqa: E402
 import bench_scheduler  # noqa: E402
 import bench_segmentation  # noqa: E402
@@ -49,6 +50,7 @@ def main() -> None:
             "Held-out scenes: corners, Canny, DLT, proposals, significance (issue 24)",
             bench_held_out_robust.main,
         ),
+        ("Own kernels against OpenCV, single-threaded (issue 26)", bench_kernels_vs_opencv.main),
         ("Sweep sharing (issue 15)", bench_sweep.main),
         ("Batch of 200 files (issue 15)", bench_batch.main),
         ("Dask executor overhead (issue 15)", bench_dask.main),

@@ -1,0 +1,241 @@
+"""Every own kernel beside its OpenCV counterpart, single-threaded on both sides (issue 26 item 3).
+
+Each row is graphvision's time over OpenCV's, measured in the same run one after the
+other (best of a few calls after a warm-up, ``bench/timing.py``), with the 1-minute load
+average of the machine beside it: the target is at most 3 (aim 1.5; SGM at most 1.5 of
+SGBM). OpenCV runs with ``cv2.setNumThreads(1)``, numba with one thread and BLAS with one
+thread (``threadpoolctl``). Inputs are scikit-image's astronaut and camera resized to
+512² and 2048² and rounded to 8-bit levels, as an image read from a file is (float32 in
+[0, 1] for graphvision; the dtype OpenCV's call takes, noted in the row, for OpenCV).
+graphvision is called as a user calls a node directly, its port checks included. The calls compared:
+
+* colour: ``colour.from_rgb`` against ``cv2.cvtColor`` (RGB2HSV, RGB2Lab, RGB2YCrCb) on float32;
+* median 3/5/7: ``filters.median`` against ``cv2.medianBlur`` (float32 for 3 and 5; uint8
+  for 7, the only type OpenCV filters with a window above 5);
+* correlation 5×5: ``filters.correlate`` against ``cv2.filter2D``;
+* Gaussian pyramid of 4 levels: ``pyramids.gaussian`` against ``cv2.pyrDown`` ×3;
+* demosaicing (RGGB): ``formation.demosaic`` bilinear and Malvar against ``cv2.cvtColor``
+  ``COLOR_BayerBG2RGB`` and ``_EA`` on uint16;
+* NCC of a 40×60 template: ``pyramids.match_template`` against ``cv2.matchTemplate``
+  (``TM_CCOEFF_NORMED``);
+* Canny: ``edges.canny`` against ``cv2.GaussianBlur`` + ``cv2.Canny(L2gradient=True)``;
+* Hough lines on Canny's edges: ``hough.lines`` against ``cv2.HoughLines``;
+* Hough circles on coins: ``hough.circles`` against ``cv2.HoughCircles``;
+* block matching and SGM on the Motorcycle pair: ``stereo.block_match`` against
+  ``cv2.StereoBM`` and ``stereo.sgm`` against ``cv2.StereoSGBM`` (MODE_HH).
+
+Run: ``python bench/bench_kernels_vs_opencv.py`` (``make bench`` runs it too).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+
+import numpy as np
+import skimage.data
+import skimage.transform
+from timing import best
+
+SIZES = (512, 2048)
+Row = tuple[str, str, Callable[[], object], Callable[[], object]]
+
+
+def _resized(image: np.ndarray, size: int) -> np.ndarray:
+    shape = (size, size, *image.shape[2:])
+    resized = skimage.transform.resize(image, shape, anti_aliasing=False)
+    return (np.round(resized * 255) / 255).astype(np.float32)  # 8-bit levels, as a file has
+
+
+def _image_rows(cv2, size: int) -> list[Row]:
+    from graphvision_plugins import colour, edges, filters, formation, pyramids
+
+    rgb = _resized(skimage.data.astronaut() / 255.0, size)
+    gray = _resized(skimage.data.camera() / 255.0, size)
+    gray8 = np.round(gray * 255).astype(np.uint8)
+    rows: list[Row] = []
+    for space, code in (("hsv", "RGB2HSV"), ("lab", "RGB2Lab"), ("ycbcr", "RGB2YCrCb")):
+        flag = getattr(cv2, f"COLOR_{code}")
+        rows.append(
+            (
+                f"RGB → {space}",
+                f"`cv2.cvtColor({code})` float32",
+                lambda space=space: colour.from_rgb(rgb, space=space),
+                lambda flag=flag: cv2.cvtColor(rgb, flag),
+            )
+        )
+    for k in (3, 5, 7):
+        src = gray if k < 7 else gray8
+        rows.append(
+            (
+                f"median {k}×{k}",
+                f"`cv2.medianBlur` {src.dtype}",
+                lambda k=k: filters.median(gray, size=k),
+                lambda k=k, src=src: cv2.medianBlur(src, k),
+            )
+        )
+    kernel = np.random.default_rng(0).random((5, 5)).astype(np.float32)
+    rows.append(
+        (
+            "correlate 5×5",
+            "`cv2.filter2D` float32",
+            lambda: filters.correlate(gray, kernel),
+            lambda: cv2.filter2D(gray, -1, kernel, borderType=cv2.BORDER_REFLECT_101),
+        )
+    )
+
+    def pyr_down() -> list[np.ndarray]:
+        levels = [gray]
+        for _ in range(3):
+            levels.append(cv2.pyrDown(levels[-1]))
+        return levels
+
+    rows.append(
+        (
+            "Gaussian pyramid, 4 levels",
+            "`cv2.pyrDown` ×3 float32",
+            lambda: pyramids.gaussian_pyramid(gray, levels=4),
+            pyr_down,
+        )
+    )
+    raw = formation.mosaic(rgb, pattern="RGGB")
+    raw16 = np.round(raw * 65535).astype(np.uint16)
+    for method, code in (("bilinear", "BayerBG2RGB"), ("malvar", "BayerBG2RGB_EA")):
+        flag = getattr(cv2, f"COLOR_{code}")
+        rows.append(
+            (
+                f"demosaic {method}",
+                f"`cv2.cvtColor({code})` uint16",
+                lambda method=method: formation.demosaic(raw, method=method),
+                lambda flag=flag: cv2.cvtColor(raw16, flag),
+            )
+        )
+    top = size * 200 // 512
+    patch = gray[top : top + size * 40 // 512, top : top + size * 60 // 512].copy()
+    rows.append(
+        (
+            f"NCC {patch.shape[0]}×{patch.shape[1]}",
+            "`cv2.matchTemplate(TM_CCOEFF_NORMED)` float32",
+            lambda: pyramids.match_template(gray, patch),
+            lambda: cv2.matchTemplate(gray, patch, cv2.TM_CCOEFF_NORMED),
+        )
+    )
+    rows.append(
+        (
+            "Canny σ=1",
+            "`cv2.GaussianBlur` + `cv2.Canny(L2gradient)` uint8",
+            lambda: edges.canny(gray, sigma=1.0, low=0.1, high=0.2),
+            lambda: cv2.Canny(cv2.GaussianBlur(gray8, (0, 0), 1.0), 25, 50, L2gradient=True),
+        )
+    )
+    return rows
+
+
+def _hough_rows(cv2) -> list[Row]:
+    from graphvision_plugins import edges, hough
+
+    gray = (skimage.data.camera() / 255.0).astype(np.float32)
+    found = edges.canny(gray, sigma=2.0, low=0.1, high=0.2).edges
+    mask = found.astype(np.uint8) * 255
+    coins = (skimage.data.coins() / 255.0).astype(np.float32)
+    coin_edges = edges.canny(coins, sigma=2.0, low=0.1, high=0.2).edges
+    coins8 = skimage.data.coins()
+    return [
+        (
+            "Hough lines (camera edges)",
+            "`cv2.HoughLines(1, π/180, 100)`",
+            lambda: hough.hough_lines(found),
+            lambda: cv2.HoughLines(mask, 1, math.pi / 180, 100),
+        ),
+        (
+            "Hough circles (coins, r 15–35)",
+            "`cv2.HoughCircles(HOUGH_GRADIENT)` uint8",
+            lambda: hough.hough_circles(coin_edges, coins, min_radius=15, max_radius=35),
+            lambda: cv2.HoughCircles(
+                coins8, cv2.HOUGH_GRADIENT, 1, 30, param1=100, param2=25, minRadius=15, maxRadius=35
+            ),
+        ),
+    ]
+
+
+def _stereo_rows(cv2) -> list[Row]:
+    from graphvision_plugins import colour, stereo
+    from graphvision_plugins.io import read_sample
+
+    left = colour.to_gray(read_sample("motorcycle_left"))
+    right = colour.to_gray(read_sample("motorcycle_right"))
+    left8, right8 = np.round(left * 255).astype(np.uint8), np.round(right * 255).astype(np.uint8)
+    sgbm = cv2.StereoSGBM_create(
+        minDisparity=0,
+        numDisparities=64,
+        blockSize=5,
+        P1=8 * 25,
+        P2=32 * 25,
+        mode=cv2.STEREO_SGBM_MODE_HH,
+    )
+    bm = cv2.StereoBM_create(numDisparities=64, blockSize=15)
+    return [
+        (
+            "block matching, 64 disparities",
+            "`cv2.StereoBM(block 15)` uint8",
+            lambda: stereo.block_match(left, right, num_disparities=64),
+            lambda: bm.compute(left8, right8),
+        ),
+        (
+            "SGM, 64 disparities (target 1.5)",
+            "`cv2.StereoSGBM(MODE_HH)` uint8",
+            lambda: stereo.sgm(left, right, num_disparities=64),
+            lambda: sgbm.compute(left8, right8),
+        ),
+    ]
+
+
+def _single_threaded(cv2) -> None:
+    cv2.setNumThreads(1)
+    import numba
+
+    numba.set_num_threads(1)
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)
+
+
+def _row(kernel: str, size: str, ours: Callable[[], object], call: str, theirs) -> str:
+    repeats = 5 if size != "2048²" else 3
+    t_ours = best(ours, repeats)
+    t_ref = best(theirs, repeats)
+    load = os.getloadavg()[0]
+    return (
+        f"| {kernel} | {size} | {t_ours * 1e3:.2f} | {call} | {t_ref * 1e3:.2f} "
+        f"| {t_ours / t_ref:.2f} | {load:.1f} |"
+    )
+
+
+def main() -> list[str]:
+    try:
+        import cv2
+    except ImportError:
+        return ["OpenCV is not installed (`pip install -e .[bench]`): kernel ratios skipped"]
+    _single_threaded(cv2)
+    rows = [
+        "| kernel | size | graphvision ms | OpenCV call | OpenCV ms | graphvision / OpenCV "
+        "| load (1 min) |",
+        "| --- | --- | ---: | --- | ---: | ---: | ---: |",
+    ]
+    for size in SIZES:
+        for kernel, call, ours, theirs in _image_rows(cv2, size):
+            rows.append(_row(kernel, f"{size}²", ours, call, theirs))
+    for group in (_hough_rows, _stereo_rows):
+        for kernel, call, ours, theirs in group(cv2):
+            rows.append(_row(kernel, "sample", ours, call, theirs))
+    rows.append("")
+    rows.append(
+        "Target (issue 26 item 3): graphvision / OpenCV at most 3 (aim 1.5), SGM at most 1.5; "
+        "all single-threaded."
+    )
+    return rows
+
+
+if __name__ == "__main__":
+    print("\n".join(main()))
