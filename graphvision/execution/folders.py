@@ -1,6 +1,7 @@
 """A run's output folder: which files there are graphvision's, and writing a run into it.
 
-A folder holds one run. Its ``record.json`` lists the files the run wrote;
+A folder holds one run and keeps its predecessors in ``history/``
+(:mod:`graphvision.execution.history`). Its ``record.json`` lists the files the run wrote;
 that list is how the next run knows what is its to replace, and a file that
 no record lists is never replaced (the run is refused before it starts).
 Files are written to a hidden staging folder and moved into place, the
@@ -22,6 +23,7 @@ from typing import Any
 
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import OutputFolderError
+from graphvision.execution.history import keep_previous_run
 from graphvision.execution.provenance import file_sha256
 from graphvision.execution.record import RunResult
 from graphvision.graph.model import NAME, output_name_problem
@@ -31,11 +33,13 @@ __all__ = [
     "REPORT",
     "REPORT_HTML",
     "RunPage",
+    "STAGING",
     "check_output_folder",
     "missing_folders",
     "owned_files",
     "remove_empty_folders",
     "remove_owned_files",
+    "run_folder",
     "write_outputs",
     "write_run",
 ]
@@ -46,6 +50,12 @@ OUTPUT_SUFFIXES = (".png", ".npy", ".npz", ".json", ".csv", ".ply")  # the built
 
 RunPage = Callable[[RunResult, Path], list[str]]
 """A report page writer: given a run and a folder, writes its files there and names them."""
+
+
+def run_folder(directory: Path) -> Path:
+    """The output folder a page writer is writing for: ``directory`` itself, or the folder
+    that holds it when it is the hidden staging folder of :func:`write_run`."""
+    return directory.parent if directory.name.startswith(STAGING) else directory
 
 
 def owned_files(directory: Path) -> set[str]:
@@ -149,8 +159,9 @@ def write_run(
 ) -> dict[str, list[str]]:
     """Write outputs, ``record.json`` and ``pages``, replacing the last run's files.
 
-    Everything is written to a hidden staging folder first, then moved into
-    place, the record last. Returns output name -> file names. The record
+    The previous run's files are kept first in ``history/`` (see
+    :mod:`graphvision.execution.history`). Everything is written to a hidden
+    staging folder first, then moved into place, the record last. Returns output name -> file names. The record
     lists the files (``record.files``), which is how the next run knows what
     is its to remove.
 
@@ -188,6 +199,8 @@ def _write_run(
     directory.mkdir(parents=True, exist_ok=True)
     for left in directory.glob(f"{STAGING}*"):  # from a run killed while writing
         shutil.rmtree(left, ignore_errors=True)
+    if owned:  # the run now in the folder stays readable, its report and its files
+        keep_previous_run(directory, owned)
     kept = _unchanged_outputs(result, directory, owned)
     staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=directory))
     try:

@@ -1,88 +1,59 @@
 """``report.html``: one self-contained page to look at a run.
 
-The page holds the graph drawn as SVG (each node coloured by what happened to
-it, with its time), a picture of every output (each port type's
-``preview``: images as images, masks and labels coloured, point sets drawn),
-tables as tables and scalars as numbers, the node table (time, computed or
-cached, bytes) and the run's provenance. Pictures are inline PNG
-(``data:`` URLs) and the page loads nothing from the network, so the one
-file can be mailed, archived or opened offline.
+The page holds the graph drawn as SVG, scaled to fit the page with zoom and
+pan (each node coloured by what happened to it, with its time), every
+output shown by its viewer (:mod:`graphvision.views.viewers`: float maps
+with a colour bar, label maps in distinct colours, point clouds coloured by
+depth, a classifier's confusion matrix) with links to its files, the
+intermediate values when they were kept, the node table (time, computed or
+cached, bytes), the run's provenance and the folder's earlier runs, newest
+first. Pictures are inline PNG (``data:`` URLs) and the page loads nothing
+from the network, so the one file can be mailed, archived or opened offline.
 """
 
 from __future__ import annotations
 
-import base64
 import dataclasses
 import json
 from collections.abc import Mapping, Sequence
 from html import escape
 from pathlib import Path
 from typing import Any
-
-import numpy as np
+from urllib.parse import quote
 
 from graphvision.compiler.compile import CompiledGraph
+from graphvision.execution.history import Earlier
 from graphvision.execution.record import RunRecord
 from graphvision.values.ports import PortType
-from graphvision.values.scalars import TablePort, _ScalarPort
+from graphvision.values.scalars import TablePort
+from graphvision.views.graph_view import GRAPH_SCRIPT, GRAPH_STYLE, graph_html
+from graphvision.views.viewers import picture_html, value_html
 
-__all__ = ["batch_page", "html_report", "picture_html", "value_html", "write_html_report"]
+__all__ = ["html_report", "picture_html", "value_html", "write_html_report"]
 
-_TABLE_ROWS = 50
-_STYLE = """
-body { font-family: sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
+_STYLE = (
+    """
+body { font-family: sans-serif; margin: 2em auto; max-width: 1100px; color: #222;
+       padding: 0 1em; }
 h1 { margin-bottom: 0.2em; } h2 { border-bottom: 1px solid #ccc; padding-bottom: 0.2em; }
 .summary { color: #555; } .failed { color: #b71c1c; }
-.graph { overflow-x: auto; border: 1px solid #eee; padding: 0.5em; }
 .outputs { display: flex; flex-wrap: wrap; gap: 1.5em; }
 .output { max-width: 520px; overflow-x: auto; }
 .output.wide { flex-basis: 100%; max-width: none; }
-.output img { max-width: 512px; image-rendering: pixelated; }
+.output img { max-width: 100%; image-rendering: pixelated; }
+.files { font-size: 0.85em; } .files a { margin-right: 0.6em; }
+.colourbar { margin: 0.3em 0; } .colourbar figcaption { font-size: 0.8em; color: #555; }
+.range { font-size: 0.8em; color: #555; }
 table { border-collapse: collapse; font-size: 0.9em; }
 td, th { border: 1px solid #ddd; padding: 0.2em 0.6em; text-align: right; }
 th { background: #f5f5f5; } td.text { text-align: left; }
+table.confusion { margin-bottom: 0.8em; }
+table.confusion td.right { background: rgba(46, 125, 50, calc(var(--share) * 0.6)); }
+table.confusion td.wrong { background: rgba(183, 28, 28, calc(var(--share) * 0.6)); }
 .value { font-size: 1.6em; font-weight: bold; }
 """
-
-
-def picture_html(picture: np.ndarray, alt: str) -> str:
-    """An ``<img>`` holding ``picture`` (a [0, 1] array) as an inline PNG thumbnail."""
-    from graphvision.values.pictures import png_bytes, thumbnail
-
-    data = base64.b64encode(png_bytes(thumbnail(picture))).decode("ascii")
-    return f'<img alt="{escape(alt)}" src="data:image/png;base64,{data}">'
-
-
-def value_html(kind: type[PortType], value: Any, name: str) -> str:
-    """How a value of port type ``kind`` is shown: a picture, a table, a number or its summary."""
-    if issubclass(kind, _ScalarPort):
-        shown = f"{value:.6g}" if isinstance(value, float) else str(value)
-        return f'<div class="value">{escape(shown)}</div>'
-    if issubclass(kind, TablePort):
-        return _table_html(value)
-    parts = [f"<p>{escape(kind.summary(value))}</p>"]
-    picture = kind.preview(value)
-    if picture is not None:
-        parts.append(picture_html(picture, name))
-    elif isinstance(value, np.ndarray) and value.size <= 16:  # a homography, a camera matrix
-        parts.append(f"<pre>{escape(np.array2string(value, precision=6))}</pre>")
-    return "".join(parts)
-
-
-def _table_html(table: Mapping[str, np.ndarray]) -> str:
-    columns = list(table)
-    count = len(next(iter(table.values()))) if columns else 0
-    head = "".join(f"<th>{escape(c)}</th>" for c in columns)
-    rows = []
-    for i in range(min(count, _TABLE_ROWS)):
-        cells = []
-        for column in columns:
-            item = table[column][i]
-            text = f"{item:.4g}" if isinstance(item, float | np.floating) else str(item)
-            cells.append(f"<td>{escape(text)}</td>")
-        rows.append(f"<tr>{''.join(cells)}</tr>")
-    more = f"<p>{count - _TABLE_ROWS} more rows in the CSV</p>" if count > _TABLE_ROWS else ""
-    return f"<table><tr>{head}</tr>{''.join(rows)}</table>{more}"
+    + GRAPH_STYLE
+)
 
 
 def html_report(
@@ -92,6 +63,7 @@ def html_report(
     *,
     intermediates: Mapping[str, tuple[type[PortType], Any]] | None = None,
     failures: Mapping[str, str] | None = None,
+    earlier: Sequence[Earlier] = (),
 ) -> str:
     """The report page as a string.
 
@@ -102,12 +74,15 @@ def html_report(
     outputs : mapping
         Output name → value (outputs that were not produced are listed as such).
     record : RunRecord
-        What happened to each node, and the run's provenance.
+        What happened to each node, and the run's provenance; its ``files``
+        (output name → file names in the run's folder) are linked.
     intermediates : mapping, optional
-        Node output (``node`` or ``node.port``) → (port type, value): shown as
-        thumbnails when their type has a picture.
+        Node output (``node`` or ``node.port``) → (port type, value): each
+        shown by its viewer, as outputs are.
     failures : mapping, optional
         Node name → error message.
+    earlier : sequence of Earlier, optional
+        The folder's earlier runs, newest first (linked to their kept reports).
     """
     from graphvision.graph.svg import graph_svg
 
@@ -116,25 +91,63 @@ def html_report(
     seconds = {node.name: node.seconds for node in record.nodes if node.status == "computed"}
     failures = dict(failures or {})
     failures.update({node.name: node.error for node in record.nodes if node.error})
-    counts = ", ".join(
-        f"{record.count(s)} {s}"
-        for s in ("computed", "cached", "failed", "skipped")
-        if record.count(s)
-    )
-    body = [
-        f"<h1>{escape(graph.name)}</h1>",
-        f"<p>{escape(graph.description.strip())}</p>" if graph.description else "",
-        f'<p class="summary">{escape(counts or "nothing ran")} in {record.seconds:.3f} s '
-        f"({escape(record.executor)})</p>",
-    ]
+    body = [_header_html(compiled, record)]
     if failures:
         items = "".join(
             f"<li><b>{escape(name)}</b>: {escape(message)}</li>"
             for name, message in failures.items()
         )
         body.append(f'<ul class="failed">{items}</ul>')
-    body += ["<h2>Graph</h2>", f'<div class="graph">{graph_svg(graph, status, seconds)}</div>']
-    body.append("<h2>Outputs</h2>")
+    body += ["<h2>Graph</h2>", graph_html(graph_svg(graph, status, seconds))]
+    body += ["<h2>Outputs</h2>", _outputs_html(compiled, outputs, record.files)]
+    if intermediates:
+        shown = [
+            f'<div class="output"><h3>{escape(where)}</h3>{value_html(kind, value, where)}</div>'
+            for where, (kind, value) in intermediates.items()
+        ]
+        body += ["<h2>Intermediate values</h2>", f'<div class="outputs">{"".join(shown)}</div>']
+    body += ["<h2>Nodes</h2>", _nodes_html(record), "<h2>Provenance</h2>", _provenance_html(record)]
+    if earlier:
+        body += ["<h2>Earlier runs (newest first)</h2>", _earlier_html(earlier)]
+    return (
+        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">'
+        f"<title>{escape(graph.name)}: graphvision report</title><style>{_STYLE}</style></head>"
+        f"<body>{''.join(body)}{GRAPH_SCRIPT}</body></html>\n"
+    )
+
+
+def _header_html(compiled: CompiledGraph, record: RunRecord) -> str:
+    """Title, description, what ran, and links to the run's own files when it has a folder."""
+    graph = compiled.graph
+    counts = ", ".join(
+        f"{record.count(s)} {s}"
+        for s in ("computed", "cached", "failed", "skipped")
+        if record.count(s)
+    )
+    own = ""
+    if record.files:
+        own = '<p class="files">' + "".join(
+            _file_link(name) for name in ("record.json", "report.md")
+        ) + "</p>"
+    return (
+        f"<h1>{escape(graph.name)}</h1>"
+        + (f"<p>{escape(graph.description.strip())}</p>" if graph.description else "")
+        + f'<p class="summary">{escape(counts or "nothing ran")} in {record.seconds:.3f} s '
+        f"({escape(record.executor)}){', ' + escape(record.date) if record.date else ''}</p>"
+        + own
+    )
+
+
+def _file_link(name: str, prefix: str = "") -> str:
+    """A link to file ``name`` of the run's folder: relative, percent-encoded, so that
+    no file name can become a scheme, a query or a fragment."""
+    return f'<a href="./{escape(quote(prefix + name, safe="/"))}">{escape(name)}</a>'
+
+
+def _outputs_html(
+    compiled: CompiledGraph, outputs: Mapping[str, Any], files: Mapping[str, list[str]]
+) -> str:
     sections = []
     for name in compiled.outputs:
         kind = compiled.output_type(name)
@@ -143,23 +156,37 @@ def html_report(
             if name in outputs
             else '<p class="failed">not produced</p>'
         )
+        links = "".join(_file_link(file) for file in files.get(name, []))
+        if links:
+            shown += f'<p class="files">files: {links}</p>'
         wide = " wide" if issubclass(kind, TablePort) else ""
         title = f"{escape(name)} <small>{escape(kind.type_name())}</small>"
         sections.append(f'<div class="output{wide}"><h3>{title}</h3>{shown}</div>')
-    body.append(f'<div class="outputs">{"".join(sections)}</div>')
-    if intermediates:
-        thumbs = [
-            f'<div class="output"><h3>{escape(where)}</h3>{picture_html(picture, where)}</div>'
-            for where, (kind, value) in intermediates.items()
-            if (picture := kind.preview(value)) is not None
-        ]
-        body += ["<h2>Intermediate values</h2>", f'<div class="outputs">{"".join(thumbs)}</div>']
-    body += ["<h2>Nodes</h2>", _nodes_html(record), "<h2>Provenance</h2>", _provenance_html(record)]
-    return (
-        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
-        f"<title>{escape(graph.name)}: graphvision report</title><style>{_STYLE}</style></head>"
-        f"<body>{''.join(body)}</body></html>\n"
-    )
+    return f'<div class="outputs">{"".join(sections)}</div>'
+
+
+def _earlier_html(earlier: Sequence[Earlier]) -> str:
+    """One row per earlier run: when, what ran, its overrides, links to its kept report."""
+    rows = []
+    for run in earlier:
+        nodes = run.record.get("nodes") or []
+        states = [n.get("status", "") for n in nodes if isinstance(n, dict)]
+        ran = ", ".join(
+            f"{states.count(s)} {s}" for s in ("computed", "cached", "failed") if states.count(s)
+        )
+        seconds = run.record.get("seconds")
+        took = f"{seconds:.3f} s" if isinstance(seconds, int | float) else ""
+        overrides = json.dumps(run.record.get("overrides") or {}, default=str)
+        links = "".join(
+            _file_link(name, run.folder + "/") for name in ("report.html", "record.json")
+        )
+        rows.append(
+            f'<tr><td class="text">{escape(run.date or "?")}</td><td class="text">'
+            f"{escape(ran)}</td><td>{took}</td><td class=\"text\"><code>{escape(overrides)}"
+            f'</code></td><td class="text files">{links}</td></tr>'
+        )
+    head = "".join(f"<th>{h}</th>" for h in ("date", "nodes", "time", "overrides", "kept"))
+    return f'<table class="earlier"><tr>{head}</tr>{"".join(rows)}</table>'
 
 
 def _nodes_html(record: RunRecord) -> str:
@@ -200,57 +227,3 @@ def write_html_report(
     path = directory / "report.html"
     path.write_text(html_report(compiled, outputs, record, **options), encoding="utf-8")
     return path
-
-
-def batch_page(items: Sequence[Any], out_dir: Path) -> str:
-    """``batch.html``: one card per file, with its first picture, status, time and error.
-
-    Pictures are linked from the item folders (a batch of thousands stays a
-    small page); each card links to that item's own ``report.html``.
-    """
-    cards = []
-    for item in items:
-        folder = Path(item.output_dir)
-        pictures = sorted(folder.glob("*.png")) if folder.is_dir() else []
-        page = folder / "report.html"
-        image = (
-            f'<img loading="lazy" alt="{escape(pictures[0].name)}" '
-            f'src="{escape(_relative(pictures[0], out_dir))}">'
-            if pictures
-            else '<div class="none">no picture</div>'
-        )
-        error = f'<div class="failed">{escape(item.error)}</div>' if item.error else ""
-        body = (
-            f"{image}<div>{escape(Path(item.file).name)}</div>"
-            f"<small>{escape(item.status)}, {item.seconds:.2f} s</small>{error}"
-        )
-        kind = "ok" if item.status == "ok" else "bad"
-        if page.is_file():  # a failed or interrupted file has no page to link to
-            href = escape(_relative(page, out_dir))
-            cards.append(f'<a class="card {kind}" href="{href}">{body}</a>')
-        else:
-            cards.append(f'<div class="card {kind}">{body}</div>')
-    failed = sum(item.status != "ok" for item in items)
-    style = (
-        "body{font-family:sans-serif;margin:2em} .grid{display:flex;flex-wrap:wrap;gap:1em}"
-        ".card{width:180px;color:inherit;text-decoration:none;border:1px solid #ddd;"
-        "padding:.4em} .card img{width:100%} .card.bad{border-color:#b71c1c}"
-        ".failed{color:#b71c1c;font-size:.8em} .none{height:120px;background:#eee}"
-    )
-    return (
-        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
-        f"<title>batch: {len(items)} files</title><style>{style}</style></head><body>"
-        f"<h1>{len(items) - failed} of {len(items)} files succeeded</h1>"
-        f'<div class="grid">{"".join(cards)}</div></body></html>\n'
-    )
-
-
-def _relative(path: Path, start: Path) -> str:
-    """``path`` as a relative URL from ``start``: percent-encoded, starting ``./`` or
-    ``../``, so no file name can become a scheme (``javascript:``), a query or a fragment."""
-    import os
-    from urllib.parse import quote
-
-    relative = Path(os.path.relpath(path, start)).as_posix()
-    url = quote(relative, safe="/")
-    return url if url.startswith("../") else f"./{url}"

@@ -8,7 +8,8 @@ A folder holds one run. graphvision owns exactly the files its
 ``record.json`` lists (``files``, plus the record and the report): writing a
 new run removes those of the previous run, so no output of an earlier run
 (an output this run did not produce, or could not because a node failed) is
-left looking current; any other file is the user's and is never removed nor
+left looking current (the previous run's files are kept, with its report, in
+``history/``, and the new report links them, newest first); any other file is the user's and is never removed nor
 overwritten: a run whose files would replace one is refused
 (:class:`~graphvision.OutputFolderError`), before it runs when the CLI can
 tell. The new files are written to a hidden staging folder first and moved
@@ -27,7 +28,8 @@ import numpy as np
 
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import OutputFolderError
-from graphvision.execution.folders import RECORD, REPORT, REPORT_HTML, RunPage
+from graphvision.execution.folders import RECORD, REPORT, REPORT_HTML, RunPage, run_folder
+from graphvision.execution.history import earlier_runs
 from graphvision.execution.provenance import file_sha256
 from graphvision.execution.record import RunRecord, RunResult
 from graphvision.nodes.registry import Registry
@@ -188,7 +190,9 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
     }
     written = {name: list(names) for name, names in record.files.items()}
     write_report(compiled, outputs, written, record, directory)
-    return write_html_report(compiled, outputs, record, directory)
+    return write_html_report(
+        compiled, outputs, record, directory, earlier=earlier_runs(directory)
+    )
 
 
 def _read_output(
@@ -252,6 +256,7 @@ def html_page(result: RunResult, directory: Path) -> list[str]:
         directory,
         failures={name: str(error) for name, error in result.failures.items()},
         intermediates=result.intermediates,
+        earlier=earlier_runs(run_folder(directory)),
     )
     return [REPORT_HTML]
 

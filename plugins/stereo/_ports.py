@@ -22,6 +22,7 @@ class DisparityPort(ArrayPort):
     ndims: ClassVar[tuple[int, ...]] = (2,)
     dtypes = (np.float32,)
     expected = "float32 H×W, NaN where invalid"
+    units: ClassVar[str] = "disparity, pixels"  # shown with the map's colour bar
 
     @classmethod
     def validate(cls, value: Any) -> np.ndarray:
@@ -43,6 +44,7 @@ class DepthPort(DisparityPort):
     """A depth map: ``float32`` ``H×W``, distance along the optical axis (> 0), NaN if invalid."""
 
     expected = "float32 H×W, > 0, NaN where invalid"
+    units: ClassVar[str] = "depth, in the unit of the baseline"
 
     @classmethod
     def validate(cls, value: Any) -> np.ndarray:

@@ -126,7 +126,7 @@ STAGES = {  # where a failure is injected: module, function
     "writing the outputs": ("graphvision.execution.folders", "write_outputs"),
     "writing the record": ("graphvision.execution.folders", "file_sha256"),
     "writing a report page": ("graphvision.views.report", "write_report"),
-    "drawing a thumbnail": ("graphvision.views.html", "picture_html"),
+    "drawing a thumbnail": ("graphvision.views.viewers", "picture_html"),
 }
 
 

@@ -1,0 +1,116 @@
+"""The earlier runs of an output folder, kept in its ``history/`` subfolder.
+
+Before a run replaces the files of the previous one, those files (its
+``record.json``, ``report.md``, ``report.html`` and every output file its
+record lists) are kept in ``history/<date>-<digest>/``: hard links where the
+file system allows it (no copy of the bytes; a run never writes into a file,
+it replaces it, so the kept file stays as it was), copies otherwise. A warm
+re-run therefore no longer replaces the cold run's report: the folder shows
+the newest run and links its predecessors, newest first.
+
+``history/`` is graphvision's when it holds the marker file
+:data:`MARKER`; a ``history`` file or folder that someone else made is left
+alone (nothing is kept there). The newest :data:`KEPT_RUNS` runs are kept,
+older ones removed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import re
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+__all__ = ["HISTORY", "KEPT_RUNS", "MARKER", "Earlier", "earlier_runs", "keep_previous_run"]
+
+HISTORY = "history"
+MARKER = ".graphvision-history"
+KEPT_RUNS = 20
+_ENTRY = re.compile(r"^\d{8}T\d{6}(\.\d+)?Z?-[0-9a-f]{8}$")
+
+
+@dataclass(frozen=True)
+class Earlier:
+    """One earlier run of a folder: its subfolder (relative to the run's folder, POSIX),
+    when it ran, and its record read back as JSON (``{}`` when unreadable)."""
+
+    folder: str
+    date: str
+    record: dict[str, Any]
+
+
+def _history(directory: Path) -> Path | None:
+    """``directory/history`` when it is graphvision's (or free to become so), else None."""
+    folder = directory / HISTORY
+    if folder.is_symlink() or (folder.exists() and not (folder / MARKER).is_file()):
+        return None
+    return folder
+
+
+def keep_previous_run(directory: Path, owned: set[str]) -> Path | None:
+    """Keep the files of the run now in ``directory`` (``owned``, its record's list) in
+    ``history/``; return the entry's folder, or None when there was no run to keep or
+    ``history`` is not graphvision's. Keeping the same run twice keeps it once."""
+    record = directory / "record.json"
+    history = _history(directory)
+    if history is None or not record.is_file() or record.is_symlink():
+        return None
+    raw = record.read_bytes()
+    try:
+        date = str(json.loads(raw).get("date", ""))
+    except (ValueError, AttributeError):
+        date = ""
+    stamp = re.sub(r"[^0-9T.Z]", "", date.replace("+00:00", "Z")) or "00000000T000000"
+    entry = history / f"{stamp}-{hashlib.sha256(raw).hexdigest()[:8]}"
+    if not _ENTRY.match(entry.name):
+        entry = history / f"00000000T000000-{hashlib.sha256(raw).hexdigest()[:8]}"
+    if entry.is_dir():
+        return entry
+    history.mkdir(exist_ok=True)
+    (history / MARKER).touch()
+    staging = history / f".{entry.name}.writing"
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir()
+    for name in sorted(owned):
+        source = directory / name
+        if source.is_file() and not source.is_symlink():
+            try:
+                os.link(source, staging / name)
+            except OSError:
+                shutil.copy2(source, staging / name)
+    os.replace(staging, entry)
+    _prune(history)
+    return entry
+
+
+def _entries(history: Path) -> list[Path]:
+    """The kept runs, newest first (their names start with the run's UTC date)."""
+    if not history.is_dir():
+        return []
+    found = [p for p in history.iterdir() if p.is_dir() and _ENTRY.match(p.name)]
+    return sorted(found, key=lambda p: p.name, reverse=True)
+
+
+def _prune(history: Path) -> None:
+    for old in _entries(history)[KEPT_RUNS:]:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def earlier_runs(directory: Path) -> list[Earlier]:
+    """The runs kept in ``directory``'s history, newest first."""
+    history = _history(directory)
+    if history is None:
+        return []
+    runs = []
+    for entry in _entries(history):
+        record: dict[str, Any] = {}
+        with contextlib.suppress(OSError, ValueError):
+            content = json.loads((entry / "record.json").read_text(encoding="utf-8"))
+            record = content if isinstance(content, dict) else {}
+        runs.append(Earlier(f"{HISTORY}/{entry.name}", str(record.get("date", "")), record))
+    return runs

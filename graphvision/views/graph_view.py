@@ -1,0 +1,65 @@
+"""The graph in a page: its SVG scaled to fit the page's width, with zoom and pan.
+
+The drawing (:func:`graphvision.graph.svg.graph_svg`) keeps its ``viewBox``
+and loses its fixed size, so that it scales to its container (never wider
+than the page). A few lines of script, inline, zoom with the wheel or the
+``+``/``−`` buttons, pan by dragging, and ``fit`` shows the whole graph
+again; without script the graph still fits.
+"""
+
+from __future__ import annotations
+
+import re
+
+__all__ = ["GRAPH_SCRIPT", "GRAPH_STYLE", "graph_html"]
+
+GRAPH_STYLE = """
+.graph { border: 1px solid #eee; padding: 0.5em; position: relative; }
+.graph svg { display: block; width: 100%; height: auto; max-height: 75vh; cursor: grab; }
+.graph .zoom { position: absolute; top: 0.4em; right: 0.4em; }
+.graph .zoom button { min-width: 2.2em; margin-left: 0.2em; }
+"""
+
+GRAPH_SCRIPT = """<script>
+document.querySelectorAll(".graph").forEach(box => {
+  const svg = box.querySelector("svg");
+  if (!svg) return;
+  const whole = svg.viewBox.baseVal;
+  const home = [whole.x, whole.y, whole.width, whole.height];
+  let view = home.slice();
+  const show = () => svg.setAttribute("viewBox", view.join(" "));
+  const zoom = (factor, cx, cy) => {
+    const w = view[2] * factor, h = view[3] * factor;
+    if (w < home[2] / 20 || w > home[2] * 4) return;
+    cx = cx ?? view[0] + view[2] / 2; cy = cy ?? view[1] + view[3] / 2;
+    view = [cx - (cx - view[0]) * factor, cy - (cy - view[1]) * factor, w, h];
+    show();
+  };
+  const point = e => {
+    const r = svg.getBoundingClientRect();
+    return [view[0] + (e.clientX - r.left) / r.width * view[2],
+            view[1] + (e.clientY - r.top) / r.height * view[3]];
+  };
+  svg.addEventListener("wheel", e => {
+    e.preventDefault(); zoom(e.deltaY < 0 ? 0.8 : 1.25, ...point(e));
+  }, {passive: false});
+  let drag = null;
+  svg.addEventListener("pointerdown", e => { drag = point(e); svg.setPointerCapture(e.pointerId); });
+  svg.addEventListener("pointermove", e => {
+    if (!drag) return;
+    const [x, y] = point(e);
+    view[0] -= x - drag[0]; view[1] -= y - drag[1]; show();
+  });
+  svg.addEventListener("pointerup", () => { drag = null; });
+  const act = {"+": () => zoom(0.8), "\u2212": () => zoom(1.25), "fit": () => { view = home.slice(); show(); }};
+  box.querySelectorAll(".zoom button").forEach(b => b.addEventListener("click", act[b.textContent]));
+});
+</script>"""
+
+
+def graph_html(svg: str) -> str:
+    """``svg`` (a graph drawing) made to scale to its container, with zoom buttons."""
+    fitted = re.sub(r'(<svg[^>]*?) width="[\d.]+" height="[\d.]+"', r"\1", svg, count=1)
+    fitted = fitted.replace("<svg ", '<svg preserveAspectRatio="xMidYMid meet" ', 1)
+    buttons = "".join(f'<button type="button">{b}</button>' for b in ("+", "\u2212", "fit"))
+    return f'<div class="graph"><div class="zoom">{buttons}</div>{fitted}</div>'

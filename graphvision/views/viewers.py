@@ -1,0 +1,223 @@
+"""How each kind of value is shown in a page: one viewer per port type family.
+
+- scalars as numbers, tables as tables (a table with ``label`` and
+  ``predicted`` columns, a classifier's results, also as a confusion matrix);
+- float maps (disparity, depth, filter responses, kernels) in colour, with a
+  colour bar giving the range and the units (the port type's ``units``, when
+  it declares them);
+- label maps with a distinct colour per label, the background black;
+- 3-D points seen from the camera, coloured by depth, with their colour bar;
+- anything else through its port type's ``preview`` picture.
+
+Pictures are inline PNG (``data:`` URLs); bars are inline SVG. Nothing is
+fetched from the network.
+"""
+
+from __future__ import annotations
+
+import base64
+from collections.abc import Mapping
+from html import escape
+from typing import Any
+
+import numpy as np
+
+from graphvision.values.geometry import Points3DPort
+from graphvision.values.images import FloatImagePort, ImagePort, KernelPort, LabelImagePort
+from graphvision.values.ports import PortType
+from graphvision.values.scalars import TablePort, _ScalarPort
+
+__all__ = ["colour_scale", "float_map_range", "picture_html", "value_html"]
+
+_TABLE_ROWS = 50
+# viridis (van der Walt and Smith, matplotlib 2.0) at nine even stops: perceptually
+# uniform and readable in gray and by colour-blind readers
+_STOPS = ("#440154", "#482878", "#3e4989", "#31688e", "#26828e", "#1f9e89", "#35b779",
+          "#6ece58", "#fde725")  # fmt: skip
+_ANCHORS = np.array([[int(h[i : i + 2], 16) / 255 for i in (1, 3, 5)] for h in _STOPS])
+
+
+def picture_html(picture: np.ndarray, alt: str) -> str:
+    """An ``<img>`` holding ``picture`` (a [0, 1] array) as an inline PNG thumbnail."""
+    from graphvision.values.pictures import png_bytes, thumbnail
+
+    data = base64.b64encode(png_bytes(thumbnail(picture))).decode("ascii")
+    return f'<img alt="{escape(alt)}" src="data:image/png;base64,{data}">'
+
+
+def colour_scale(values: np.ndarray, low: float, high: float) -> np.ndarray:
+    """``values`` as viridis colours, ``low`` dark violet to ``high`` yellow; NaN black."""
+    values = np.asarray(values, np.float64)
+    rgb = np.zeros((*values.shape, 3), np.float32)
+    finite = np.isfinite(values)
+    t = np.clip((values[finite] - low) / max(high - low, 1e-300), 0.0, 1.0) * (len(_STOPS) - 1)
+    index = np.minimum(t.astype(np.int64), len(_STOPS) - 2)
+    fraction = (t - index)[:, None]
+    rgb[finite] = (1 - fraction) * _ANCHORS[index] + fraction * _ANCHORS[index + 1]
+    return rgb
+
+
+def float_map_range(values: np.ndarray) -> tuple[float, float] | None:
+    """The range a float map is coloured over: its finite values' 1st to 99th percentile
+    (widened to their minimum and maximum when those two are equal); None if none is finite."""
+    finite = np.asarray(values, np.float64)[np.isfinite(values)]
+    if finite.size == 0:
+        return None
+    low, high = (float(v) for v in np.percentile(finite, [1, 99]))
+    if high <= low:
+        low, high = float(finite.min()), float(finite.max())
+    return low, high
+
+
+def _colour_bar(low: float, high: float, units: str) -> str:
+    """An SVG bar of the colour scale, with its ends, middle and units written under it."""
+    stops = "".join(
+        f'<stop offset="{i / (len(_STOPS) - 1):.3f}" stop-color="{c}"/>' for i, c in enumerate(_STOPS)
+    )
+    ticks = "".join(
+        f'<text x="{x}" y="30" text-anchor="{anchor}">{value:.4g}</text>'
+        for x, anchor, value in (
+            (0, "start", low), (130, "middle", (low + high) / 2), (260, "end", high)
+        )
+    )  # fmt: skip
+    return (
+        f'<figure class="colourbar"><svg width="260" height="34" viewBox="0 0 260 34" '
+        f'font-size="11" role="img" aria-label="colour bar {low:.4g} to {high:.4g} {escape(units)}">'
+        f'<defs><linearGradient id="viridis">{stops}</linearGradient></defs>'
+        f'<rect x="0" y="0" width="260" height="16" fill="url(#viridis)" stroke="#999"/>{ticks}'
+        f"</svg><figcaption>{escape(units)}</figcaption></figure>"
+    )
+
+
+def _float_map_html(kind: type[PortType], value: np.ndarray, name: str) -> str:
+    units = getattr(kind, "units", "") or "no unit (a filter response)"
+    span = float_map_range(value)
+    invalid = int(np.count_nonzero(~np.isfinite(value)))
+    note = f", {invalid} invalid pixels (NaN) drawn black" if invalid else ""
+    if span is None:
+        return f"<p>no finite value{note}</p>"
+    low, high = span
+    finite = value[np.isfinite(value)]
+    return (
+        picture_html(colour_scale(value, low, high), name)
+        + _colour_bar(low, high, units)
+        + f'<p class="range">coloured over the 1st–99th percentile [{low:.4g}, {high:.4g}]; '
+        f"values {float(finite.min()):.4g} to {float(finite.max()):.4g}{escape(note)}</p>"
+    )
+
+
+def _labels_html(value: np.ndarray, name: str) -> str:
+    from graphvision.values.pictures import label_colours
+
+    count = len(np.unique(value[value > 0]))
+    return picture_html(label_colours(value), name) + (
+        f'<p class="range">{count} labels, each its own colour; background (0) black</p>'
+    )
+
+
+def _points3d_html(value: np.ndarray, name: str, side: int = 384) -> str:
+    """The points seen along the camera's axis (x right, y down), each coloured by its
+    depth Z, nearer points drawn over farther ones."""
+    if len(value) == 0:
+        return ""
+    low_xy, high_xy = np.percentile(value[:, :2], [0.5, 99.5], axis=0)
+    scale = (side - 8) / max(float((high_xy - low_xy).max()), 1e-12)
+    cols, rows = np.round((value[:, :2] - low_xy) * scale + 4).astype(np.int64).T
+    inside = (rows >= 0) & (rows < side) & (cols >= 0) & (cols < side)
+    depth = value[inside, 2]
+    span = float_map_range(depth) or (0.0, 1.0)
+    order = np.argsort(-depth)  # far first: the nearest is written last
+    canvas = np.ones((side, side, 3), np.float32)
+    colours = colour_scale(depth, *span)[order]
+    rows, cols = rows[inside][order], cols[inside][order]
+    radius = 1 if len(rows) < 20_000 else 0
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            canvas[np.clip(rows + dy, 0, side - 1), np.clip(cols + dx, 0, side - 1)] = colours
+    units = getattr(Points3DPort, "units", "") or "Z, units of the points"
+    return (
+        picture_html(canvas, name)
+        + _colour_bar(*span, f"depth {units}")
+        + '<p class="range">seen from the camera (x right, y down), coloured by depth</p>'
+    )
+
+
+def _confusion_html(labels: np.ndarray, predicted: np.ndarray) -> str:
+    """The confusion matrix of a classifier's results: rows the true class, columns the
+    predicted one, cells shaded by their share of the row; the diagonal is right."""
+    classes = np.unique(np.concatenate([labels, predicted]))
+    index = {value: i for i, value in enumerate(classes.tolist())}
+    counts = np.zeros((len(classes), len(classes)), np.int64)
+    for truth, guess in zip(labels.tolist(), predicted.tolist(), strict=True):
+        counts[index[truth], index[guess]] += 1
+    head = "".join(f"<th>{escape(str(c))}</th>" for c in classes.tolist())
+    rows = []
+    for i, truth in enumerate(classes.tolist()):
+        total = max(int(counts[i].sum()), 1)
+        cells = "".join(
+            f'<td class="{"right" if i == j else "wrong"}" '
+            f'style="--share:{counts[i, j] / total:.3f}">{counts[i, j]}</td>'
+            for j in range(len(classes))
+        )
+        rows.append(f"<tr><th>{escape(str(truth))}</th>{cells}</tr>")
+    right = int(np.trace(counts))
+    return (
+        f'<table class="confusion"><caption>confusion matrix: {right} of {len(labels)} right '
+        f"({right / max(len(labels), 1):.1%}); rows true, columns predicted</caption>"
+        f"<tr><th>true \\ predicted</th>{head}</tr>{''.join(rows)}</table>"
+    )
+
+
+def table_html(table: Mapping[str, np.ndarray]) -> str:
+    """A column table as an HTML table (its first rows), with a confusion matrix first
+    when it holds a classifier's results (integer ``label`` and ``predicted`` columns)."""
+    columns = list(table)
+    count = len(next(iter(table.values()))) if columns else 0
+    confusion = ""
+    if {"label", "predicted"} <= set(columns) and all(
+        np.issubdtype(np.asarray(table[c]).dtype, np.integer) for c in ("label", "predicted")
+    ):
+        confusion = _confusion_html(np.asarray(table["label"]), np.asarray(table["predicted"]))
+    head = "".join(f"<th>{escape(c)}</th>" for c in columns)
+    rows = []
+    for i in range(min(count, _TABLE_ROWS)):
+        cells = []
+        for column in columns:
+            item = table[column][i]
+            text = f"{item:.4g}" if isinstance(item, float | np.floating) else str(item)
+            cells.append(f"<td>{escape(text)}</td>")
+        rows.append(f"<tr>{''.join(cells)}</tr>")
+    more = f"<p>{count - _TABLE_ROWS} more rows in the CSV</p>" if count > _TABLE_ROWS else ""
+    return f"{confusion}<table><tr>{head}</tr>{''.join(rows)}</table>{more}"
+
+
+def is_float_map(kind: type[PortType], value: Any) -> bool:
+    """A single-channel map of real values with no fixed range: coloured with a colour bar."""
+    if not (isinstance(value, np.ndarray) and value.ndim == 2 and value.size):
+        return False
+    if not np.issubdtype(value.dtype, np.floating):
+        return False
+    declared = issubclass(kind, FloatImagePort | KernelPort) or hasattr(kind, "units")
+    return declared and not issubclass(kind, ImagePort)
+
+
+def value_html(kind: type[PortType], value: Any, name: str) -> str:
+    """How a value of port type ``kind`` is shown: a picture, a table, a number or its summary."""
+    if issubclass(kind, _ScalarPort):
+        shown = f"{value:.6g}" if isinstance(value, float) else str(value)
+        return f'<div class="value">{escape(shown)}</div>'
+    if issubclass(kind, TablePort):
+        return table_html(value)
+    parts = [f"<p>{escape(kind.summary(value))}</p>"]
+    if is_float_map(kind, value):
+        return parts[0] + _float_map_html(kind, value, name)
+    if issubclass(kind, LabelImagePort):
+        return parts[0] + _labels_html(value, name)
+    if issubclass(kind, Points3DPort):
+        return parts[0] + _points3d_html(value, name)
+    picture = kind.preview(value)
+    if picture is not None:
+        parts.append(picture_html(picture, name))
+    elif isinstance(value, np.ndarray) and value.size <= 16:  # a homography, a camera matrix
+        parts.append(f"<pre>{escape(np.array2string(value, precision=6))}</pre>")
+    return "".join(parts)
