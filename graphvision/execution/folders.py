@@ -32,8 +32,8 @@ __all__ = [
     "RECORD",
     "REPORT",
     "REPORT_HTML",
-    "RunPage",
     "STAGING",
+    "RunPage",
     "check_output_folder",
     "missing_folders",
     "owned_files",
@@ -161,9 +161,9 @@ def write_run(
 
     The previous run's files are kept first in ``history/`` (see
     :mod:`graphvision.execution.history`). Everything is written to a hidden
-    staging folder first, then moved into place, the record last. Returns output name -> file names. The record
-    lists the files (``record.files``), which is how the next run knows what
-    is its to remove.
+    staging folder first, then moved into place, the record last. Returns
+    output name -> file names. The record lists the files (``record.files``),
+    which is how the next run knows what is its to remove.
 
     Parameters
     ----------

@@ -12,7 +12,10 @@ Toda 1981), kept small:
    neighbours in the previous layer (the barycentre heuristic), sweeping
    right then left a few times to remove crossings;
 4. **coordinates**: layers are columns as wide as their widest box, vertices
-   are stacked in their order, each column centred vertically.
+   are stacked in their order, each column centred vertically. A box is tall
+   enough for its incoming edges to enter at least :data:`_LABEL_PITCH` apart,
+   and the gap before a column wide enough for the longest edge label
+   entering it, so that no two edge labels overlap, nor a label a box.
 
 Boxes are coloured by a node's status when one is given (``computed``,
 ``cached``, ``failed``, ``skipped``, ``running``), with its time in the label.
@@ -84,6 +87,8 @@ _ROW_GAP = 18.0
 _COLUMN_GAP = 60.0
 _MARGIN = 12.0
 _SWEEPS = 4
+_LABEL_CHAR = 6.2  # px per character at the 10 px font of edge labels
+_LABEL_PITCH = 13.0  # px between the ends of edges entering one side of a box
 
 
 @dataclass
@@ -100,6 +105,7 @@ class _Vertex:
     width: float = 0.0
     height: float = 0.0
     preds: list[str] = field(default_factory=list)
+    label_width: float = 0.0  # of the longest label of an edge entering it
 
 
 def graph_svg(
@@ -127,6 +133,7 @@ def graph_svg(
     status, seconds = status or {}, seconds or {}
     vertices = _vertices(graph, status, seconds)
     edges = _edges(graph, vertices)
+    _make_room_for_labels(vertices, edges)
     _assign_layers(vertices)
     routed = _split_long_edges(vertices, edges)
     layers = _order_layers(vertices)
@@ -190,6 +197,21 @@ def _edges(graph: Drawable, vertices: dict[str, _Vertex]) -> list[tuple[str, str
     for source, target, _ in edges:
         vertices[target].preds.append(source)
     return edges
+
+
+def _make_room_for_labels(vertices: dict[str, _Vertex], edges: list[tuple[str, str, str]]) -> None:
+    """Each box tall enough for its edges to meet each side :data:`_LABEL_PITCH` apart (a
+    label sits just above its edge's end), and knowing how wide its entering labels are."""
+    entering: dict[str, int] = {}
+    leaving: dict[str, int] = {}
+    for source, target, label in edges:
+        entering[target] = entering.get(target, 0) + 1
+        leaving[source] = leaving.get(source, 0) + 1
+        width = len(label) * _LABEL_CHAR if label else 0.0
+        vertices[target].label_width = max(vertices[target].label_width, width)
+    for key, vertex in vertices.items():
+        ends = max(entering.get(key, 0), leaving.get(key, 0))
+        vertex.height = max(vertex.height, _LABEL_PITCH * (ends + 1) + 12)
 
 
 def _assign_layers(vertices: dict[str, _Vertex]) -> None:
@@ -268,16 +290,18 @@ def _place(vertices: dict[str, _Vertex], layers: list[list[_Vertex]]) -> tuple[f
     """Column and row coordinates (box centres); the drawing's width and height."""
     heights = [sum(v.height + _ROW_GAP for v in layer) - _ROW_GAP for layer in layers]
     total_height = max(heights, default=0.0) + 2 * _MARGIN
-    x = _MARGIN
+    x = _MARGIN - _COLUMN_GAP
     for layer, height in zip(layers, heights, strict=True):
+        labels = max((v.label_width for v in layer), default=0.0)
+        x += _COLUMN_GAP if x < _MARGIN else max(_COLUMN_GAP, labels + 16)
         column = max((v.width for v in layer), default=0.0)
         y = (total_height - height) / 2
         for vertex in layer:
             vertex.x = x + column / 2
             vertex.y = y + vertex.height / 2
             y += vertex.height + _ROW_GAP
-        x += column + _COLUMN_GAP
-    return x - _COLUMN_GAP + _MARGIN, total_height
+        x += column
+    return x + _MARGIN, total_height
 
 
 def _edge_ends(
@@ -319,9 +343,8 @@ def _edge_path(
     for (x0, y0), (x1, y1) in pairwise(points):
         middle = (x0 + x1) / 2
         path += f" C{middle:.1f},{y0:.1f} {middle:.1f},{y1:.1f} {x1:.1f},{y1:.1f}"
-    crowded = len(vertices[chain[-1]].preds) > 3
     text = ""
-    if label and not crowded:
+    if label:
         lx, ly = points[-1][0] - 6, points[-1][1] - 4
         text = (
             f'<text x="{lx:.1f}" y="{ly:.1f}" text-anchor="end" font-size="10" '

@@ -89,7 +89,7 @@ def batch_page(items: Sequence[BatchItem], out_dir: Path) -> str:
     failed = sum(item.status != "ok" for item in items)
     name, source = _pipeline(items)
     title = f"{name}: " if name else ""
-    origin = f'<p>pipeline <code>{escape(source)}</code></p>' if source else ""
+    origin = f"<p>pipeline <code>{escape(source)}</code></p>" if source else ""
     return (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         f"<title>{escape(title)}batch of {len(items)} files</title><style>{_STYLE}</style>"

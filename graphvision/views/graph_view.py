@@ -44,15 +44,19 @@ document.querySelectorAll(".graph").forEach(box => {
     e.preventDefault(); zoom(e.deltaY < 0 ? 0.8 : 1.25, ...point(e));
   }, {passive: false});
   let drag = null;
-  svg.addEventListener("pointerdown", e => { drag = point(e); svg.setPointerCapture(e.pointerId); });
+  svg.addEventListener("pointerdown", e => {
+    drag = point(e); svg.setPointerCapture(e.pointerId);
+  });
   svg.addEventListener("pointermove", e => {
     if (!drag) return;
     const [x, y] = point(e);
     view[0] -= x - drag[0]; view[1] -= y - drag[1]; show();
   });
   svg.addEventListener("pointerup", () => { drag = null; });
-  const act = {"+": () => zoom(0.8), "\u2212": () => zoom(1.25), "fit": () => { view = home.slice(); show(); }};
-  box.querySelectorAll(".zoom button").forEach(b => b.addEventListener("click", act[b.textContent]));
+  const act = {"+": () => zoom(0.8), "\u2212": () => zoom(1.25),
+               "fit": () => { view = home.slice(); show(); }};
+  box.querySelectorAll(".zoom button").forEach(
+    b => b.addEventListener("click", act[b.textContent]));
 });
 </script>"""
 

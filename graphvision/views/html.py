@@ -127,15 +127,16 @@ def _header_html(compiled: CompiledGraph, record: RunRecord) -> str:
     )
     own = ""
     if record.files:
-        own = '<p class="files">' + "".join(
-            _file_link(name) for name in ("record.json", "report.md")
-        ) + "</p>"
+        own = (
+            '<p class="files">'
+            + "".join(_file_link(name) for name in ("record.json", "report.md"))
+            + "</p>"
+        )
     return (
         f"<h1>{escape(graph.name)}</h1>"
         + (f"<p>{escape(graph.description.strip())}</p>" if graph.description else "")
         + f'<p class="summary">{escape(counts or "nothing ran")} in {record.seconds:.3f} s '
-        f"({escape(record.executor)}){', ' + escape(record.date) if record.date else ''}</p>"
-        + own
+        f"({escape(record.executor)}){', ' + escape(record.date) if record.date else ''}</p>" + own
     )
 
 
@@ -182,7 +183,7 @@ def _earlier_html(earlier: Sequence[Earlier]) -> str:
         )
         rows.append(
             f'<tr><td class="text">{escape(run.date or "?")}</td><td class="text">'
-            f"{escape(ran)}</td><td>{took}</td><td class=\"text\"><code>{escape(overrides)}"
+            f'{escape(ran)}</td><td>{took}</td><td class="text"><code>{escape(overrides)}'
             f'</code></td><td class="text files">{links}</td></tr>'
         )
     head = "".join(f"<th>{h}</th>" for h in ("date", "nodes", "time", "overrides", "kept"))

@@ -9,8 +9,8 @@ A folder holds one run. graphvision owns exactly the files its
 new run removes those of the previous run, so no output of an earlier run
 (an output this run did not produce, or could not because a node failed) is
 left looking current (the previous run's files are kept, with its report, in
-``history/``, and the new report links them, newest first); any other file is the user's and is never removed nor
-overwritten: a run whose files would replace one is refused
+``history/``, and the new report links them, newest first); any other file is
+the user's and is never removed nor overwritten: a run whose files would replace one is refused
 (:class:`~graphvision.OutputFolderError`), before it runs when the CLI can
 tell. The new files are written to a hidden staging folder first and moved
 in, ``record.json`` last.
@@ -190,9 +190,7 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
     }
     written = {name: list(names) for name, names in record.files.items()}
     write_report(compiled, outputs, written, record, directory)
-    return write_html_report(
-        compiled, outputs, record, directory, earlier=earlier_runs(directory)
-    )
+    return write_html_report(compiled, outputs, record, directory, earlier=earlier_runs(directory))
 
 
 def _read_output(

@@ -1,6 +1,6 @@
-"""A sweep's folder: ``sweep.csv``, ``sweep.html`` and an SVG chart per plotted output,
-listed in ``sweep.json`` so that the next sweep there replaces its own files and refuses
-anyone else's."""
+"""A sweep's folder: ``sweep.csv``, ``sweep.html``, a page per run, an SVG chart per
+plotted output, listed in ``sweep.json`` so that the next sweep there replaces its own
+files and refuses anyone else's."""
 
 from __future__ import annotations
 
@@ -9,9 +9,11 @@ import math
 from collections.abc import Sequence
 from html import escape
 from pathlib import Path
+from typing import Any
 
 from graphvision.errors import OutputFolderError, PipelineError, Problem, did_you_mean
 from graphvision.execution.sweep import SweepResult
+from graphvision.views.sweep_runs import run_page, run_page_name
 
 __all__ = ["check_sweep_folder", "sweep_html", "sweep_plot_svg", "write_sweep"]
 
@@ -21,16 +23,21 @@ MANIFEST = "sweep.json"
 def sweep_plot_svg(result: SweepResult, output: str) -> str:
     """``output`` against each swept parameter, one small chart per parameter, as SVG.
 
-    Each chart has the parameter's values on x and ``output`` on y; one line
-    per combination of the other parameters, so interactions show as lines
-    that are not parallel. Values that are not numbers are placed evenly.
+    Each chart has the parameter's values on x (its axis labelled with the
+    parameter) and ``output`` on y (labelled, with ticks); one line per
+    combination of the other parameters, so interactions show as lines that
+    are not parallel, named in the chart's legend. Values that are not
+    numbers are placed evenly.
     """
     if output not in result.outputs:
         listing = ", ".join(result.outputs) or "none"
         message = f"no scalar output '{output}'{did_you_mean(output, result.outputs)}; "
         raise PipelineError([Problem(0, "plot", message + f"outputs: {listing}")])
-    width, height, pad = 320.0, 220.0, 48.0
-    charts = [_chart(result, output, key, width, height, pad) for key in result.keys]
+    entries = max((len(_groups(result, key)) for key in result.keys), default=0)
+    legend = min(entries, _LEGEND_ROWS + 1) if entries > 1 else 0
+    width, pad = 340.0, 56.0
+    height = 230.0 + _LEGEND_PITCH * legend
+    charts = [_chart(result, output, key, (width, 230.0), pad) for key in result.keys]
     total = width * len(charts)
     body = "".join(
         f'<g transform="translate({i * width:.0f},0)">{chart}</g>' for i, chart in enumerate(charts)
@@ -43,11 +50,20 @@ def sweep_plot_svg(result: SweepResult, output: str) -> str:
 
 
 _PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2")
+_LEGEND_ROWS = 12  # legend entries shown under a chart; more are summed up in one line
+_LEGEND_PITCH = 15.0
+
+
+def _groups(result: SweepResult, key: str) -> list[tuple[Any, ...]]:
+    """The combinations of the parameters other than ``key``: one line each."""
+    others = [k for k in result.keys if k != key]
+    return sorted({tuple(row[k] for k in others) for row in result.rows}, key=str)
 
 
 def _chart(
-    result: SweepResult, output: str, key: str, width: float, height: float, pad: float
+    result: SweepResult, output: str, key: str, size: tuple[float, float], pad: float
 ) -> str:
+    width, height = size
     levels = list(dict.fromkeys(row[key] for row in result.rows))
     numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in levels)
     position = {v: float(v) if numeric else float(i) for i, v in enumerate(levels)}
@@ -71,8 +87,10 @@ def _chart(
     parts = [
         _line(pad, height - pad, width - pad / 2, height - pad),
         _line(pad, pad * 0.7, pad, height - pad),
-        f'<text x="{width / 2:.0f}" y="{height - 8}" text-anchor="middle">{escape(key)}</text>',
-        f'<text x="{pad}" y="{pad * 0.5:.0f}">{escape(output)}</text>',
+        f'<text class="x-label" x="{(width + pad / 2) / 2:.0f}" y="{height - pad + 32:.0f}" '
+        f'text-anchor="middle" font-weight="bold">{escape(key)}</text>',
+        f'<text class="y-label" transform="translate(12,{(height - pad / 3) / 2:.0f}) '
+        f'rotate(-90)" text-anchor="middle" font-weight="bold">{escape(output)}</text>',
     ]
     for level in levels:
         x = sx(position[level])
@@ -80,26 +98,40 @@ def _chart(
         parts.append(
             f'<text x="{x:.1f}" y="{height - pad + 14}" text-anchor="middle">{tick}</text>'
         )
-    for y, label in ((y0, f"{y0:.3g}"), (y1, f"{y1:.3g}")):
-        parts.append(f'<text x="{pad - 4}" y="{sy(y) + 4:.1f}" text-anchor="end">{label}</text>')
+    for step in range(5):
+        y = y0 + (y1 - y0) * step / 4
+        parts.append(_line(pad - 3, sy(y), pad, sy(y)))
+        parts.append(f'<text x="{pad - 5}" y="{sy(y) + 4:.1f}" text-anchor="end">{y:.3g}</text>')
     groups: dict[tuple, list[tuple[float, float]]] = {}
     for x, y, group in points:
         groups.setdefault(group, []).append((x, y))
+    others = [k for k in result.keys if k != key]
     for number, (group, line) in enumerate(sorted(groups.items(), key=lambda g: str(g[0]))):
         colour = _PALETTE[number % len(_PALETTE)]
         line.sort()
         path = " ".join(f"{sx(x):.1f},{sy(y):.1f}" for x, y in line)
-        others = ", ".join(
-            f"{k}={v}" for k, v in zip([k for k in result.keys if k != key], group, strict=True)
-        )
+        named = ", ".join(f"{k}={v}" for k, v in zip(others, group, strict=True))
         parts.append(
             f'<polyline points="{path}" fill="none" stroke="{colour}">'
-            f"<title>{escape(others)}</title></polyline>"
+            f"<title>{escape(named)}</title></polyline>"
         )
         parts += [
             f'<circle cx="{sx(x):.1f}" cy="{sy(y):.1f}" r="3" fill="{colour}"/>' for x, y in line
         ]
+        if others and number < _LEGEND_ROWS:
+            parts.append(_legend_entry(number, colour, named, height))
+    if others and len(groups) > _LEGEND_ROWS:
+        y = height + _LEGEND_PITCH * _LEGEND_ROWS
+        parts.append(f'<text x="12" y="{y:.0f}">and {len(groups) - _LEGEND_ROWS} more lines</text>')
     return "".join(parts)
+
+
+def _legend_entry(number: int, colour: str, named: str, top: float) -> str:
+    y = top + _LEGEND_PITCH * number
+    return (
+        f'<g class="legend"><line x1="12" y1="{y - 4:.0f}" x2="32" y2="{y - 4:.0f}" '
+        f'stroke="{colour}" stroke-width="2"/><text x="38" y="{y:.0f}">{escape(named)}</text></g>'
+    )
 
 
 def _line(x1: float, y1: float, x2: float, y2: float) -> str:
@@ -107,11 +139,16 @@ def _line(x1: float, y1: float, x2: float, y2: float) -> str:
 
 
 def sweep_html(result: SweepResult, title: str, plots: Sequence[str] = ()) -> str:
-    """``sweep.html``: the sweep's table (failures in red) and a chart per plotted output."""
-    head = "".join(f"<th>{escape(column)}</th>" for column in result.columns)
+    """``sweep.html``: the sweep's table (failures in red), each row linking the page of
+    its run (:mod:`graphvision.views.sweep_runs`), and a chart per plotted output."""
+    head = "<th>run</th>" + "".join(f"<th>{escape(column)}</th>" for column in result.columns)
     rows = []
-    for row in result.rows:
-        cells = []
+    for number, row in enumerate(result.rows, start=1):
+        cells = [
+            f'<td><a href="./{run_page_name(number)}">{number}</a></td>'
+            if number <= len(result.records)
+            else f"<td>{number}</td>"
+        ]
         for column in result.columns:
             value = row.get(column, "")
             text = f"{value:.6g}" if isinstance(value, float) else str(value)
@@ -124,15 +161,19 @@ def sweep_html(result: SweepResult, title: str, plots: Sequence[str] = ()) -> st
         f"<title>{escape(title)}: sweep</title><style>"
         "body{font-family:sans-serif;margin:2em} table{border-collapse:collapse}"
         "td,th{border:1px solid #ddd;padding:.2em .6em;text-align:right}"
-        "tr.failed td{color:#b71c1c}</style></head>"
+        "tr.failed td{color:#b71c1c} svg{max-width:100%;height:auto}</style></head>"
         f"<body><h1>{escape(title)}: {len(result.rows)} combinations</h1>"
         f"<table><tr>{head}</tr>{''.join(rows)}</table>{charts}</body></html>\n"
     )
 
 
 def _is_sweep_file(name: str) -> bool:
-    return name in ("sweep.csv", "sweep.html", MANIFEST) or (
-        name.startswith("sweep_") and name.endswith(".svg")
+    if name in ("sweep.csv", "sweep.html", MANIFEST):
+        return True
+    return (
+        (name.startswith("sweep_")
+        and name.endswith(".svg"))
+        or (name.startswith("sweep_run_") and name.endswith(".html"))
     )
 
 
@@ -196,6 +237,10 @@ def write_sweep(
     for output in plots:
         path = directory / f"sweep_{output}.svg"
         path.write_text(sweep_plot_svg(result, output), encoding="utf-8")
+        written.append(path)
+    for number in range(1, len(result.records) + 1):
+        path = directory / run_page_name(number)
+        path.write_text(run_page(result, number, name), encoding="utf-8")
         written.append(path)
     page = directory / "sweep.html"
     page.write_text(sweep_html(result, name, list(plots)), encoding="utf-8")

@@ -72,7 +72,8 @@ def float_map_range(values: np.ndarray) -> tuple[float, float] | None:
 def _colour_bar(low: float, high: float, units: str) -> str:
     """An SVG bar of the colour scale, with its ends, middle and units written under it."""
     stops = "".join(
-        f'<stop offset="{i / (len(_STOPS) - 1):.3f}" stop-color="{c}"/>' for i, c in enumerate(_STOPS)
+        f'<stop offset="{i / (len(_STOPS) - 1):.3f}" stop-color="{c}"/>'
+        for i, c in enumerate(_STOPS)
     )
     ticks = "".join(
         f'<text x="{x}" y="30" text-anchor="{anchor}">{value:.4g}</text>'
@@ -82,7 +83,8 @@ def _colour_bar(low: float, high: float, units: str) -> str:
     )  # fmt: skip
     return (
         f'<figure class="colourbar"><svg width="260" height="34" viewBox="0 0 260 34" '
-        f'font-size="11" role="img" aria-label="colour bar {low:.4g} to {high:.4g} {escape(units)}">'
+        f'font-size="11" role="img" '
+        f'aria-label="colour bar {low:.4g} to {high:.4g} {escape(units)}">'
         f'<defs><linearGradient id="viridis">{stops}</linearGradient></defs>'
         f'<rect x="0" y="0" width="260" height="16" fill="url(#viridis)" stroke="#999"/>{ticks}'
         f"</svg><figcaption>{escape(units)}</figcaption></figure>"
