@@ -14,9 +14,9 @@ import re
 __all__ = ["GRAPH_SCRIPT", "GRAPH_STYLE", "graph_html"]
 
 GRAPH_STYLE = """
-.graph { border: 1px solid #eee; padding: 0.5em; position: relative; }
+.graph { border: 1px solid #eee; padding: 0.5em; }
 .graph svg { display: block; width: 100%; height: auto; max-height: 75vh; cursor: grab; }
-.graph .zoom { position: absolute; top: 0.4em; right: 0.4em; }
+.graph .zoom { text-align: right; }
 .graph .zoom button { min-width: 2.2em; margin-left: 0.2em; }
 """
 

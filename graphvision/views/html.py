@@ -47,7 +47,7 @@ h1 { margin-bottom: 0.2em; } h2 { border-bottom: 1px solid #ccc; padding-bottom:
 table { border-collapse: collapse; font-size: 0.9em; }
 td, th { border: 1px solid #ddd; padding: 0.2em 0.6em; text-align: right; }
 th { background: #f5f5f5; } td.text { text-align: left; }
-table.confusion { margin-bottom: 0.8em; }
+table.confusion { margin-bottom: 0.8em; } table.confusion caption { text-align: left; }
 table.confusion td.right { background: rgba(46, 125, 50, calc(var(--share) * 0.6)); }
 table.confusion td.wrong { background: rgba(183, 28, 28, calc(var(--share) * 0.6)); }
 .value { font-size: 1.6em; font-weight: bold; }

@@ -190,7 +190,10 @@ def table_html(table: Mapping[str, np.ndarray]) -> str:
             cells.append(f"<td>{escape(text)}</td>")
         rows.append(f"<tr>{''.join(cells)}</tr>")
     more = f"<p>{count - _TABLE_ROWS} more rows in the CSV</p>" if count > _TABLE_ROWS else ""
-    return f"{confusion}<table><tr>{head}</tr>{''.join(rows)}</table>{more}"
+    shown = f"<table><tr>{head}</tr>{''.join(rows)}</table>{more}"
+    if confusion:  # the rows behind the matrix, on demand
+        return f"{confusion}<details><summary>the {count} rows</summary>{shown}</details>"
+    return shown
 
 
 def is_float_map(kind: type[PortType], value: Any) -> bool:

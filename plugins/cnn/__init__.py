@@ -6,6 +6,7 @@ processes; ``cnn.digits`` gives scikit-learn's 8×8 digits.
 """
 
 from ._digits import digits, load_digits_images
+from ._draw import draw_predictions
 from ._layers import Layer, parse_layer, softmax_cross_entropy
 from ._network import (
     Architecture,
@@ -27,6 +28,7 @@ __all__ = [
     "build_architecture",
     "check_layer_texts",
     "digits",
+    "draw_predictions",
     "fit_network",
     "initial_weights",
     "load_digits_images",

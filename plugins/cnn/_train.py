@@ -234,7 +234,7 @@ def train(
     return NetworkModel(spec, weights, classes.astype(np.int64), history)
 
 
-def _predicted(network: NetworkModel, samples: SampleSet) -> tuple[np.ndarray, np.ndarray]:
+def predicted_labels(network: NetworkModel, samples: SampleSet) -> tuple[np.ndarray, np.ndarray]:
     scores = network.scores(samples.images)
     shifted = np.exp(scores - scores.max(axis=1, keepdims=True))
     probability = shifted / shifted.sum(axis=1, keepdims=True)
@@ -258,7 +258,7 @@ def predict(network: Network, samples: Samples) -> Table:
     Table
         Columns ``label`` (the samples' own), ``predicted``, ``probability``.
     """
-    predicted, probability = _predicted(network, samples)
+    predicted, probability = predicted_labels(network, samples)
     return {"label": samples.labels, "predicted": predicted, "probability": probability}
 
 
@@ -278,5 +278,5 @@ def accuracy(network: Network, samples: Samples) -> Float:
     float
         Accuracy in [0, 1].
     """
-    predicted, _ = _predicted(network, samples)
+    predicted, _ = predicted_labels(network, samples)
     return float(np.mean(predicted == samples.labels))

@@ -31,6 +31,7 @@ from ._detect import (
     nms,
     non_max_suppression,
 )
+from ._draw import draw_predictions, prediction_mosaic, predictions
 from ._faces import (
     SceneBoxes,
     SceneBoxesPort,
@@ -113,6 +114,7 @@ __all__ = [
     "detect_scenes",
     "detect_subspace",
     "draw_boxes",
+    "draw_predictions",
     "draw_scenes",
     "face_scores",
     "fit_kmeans",
@@ -147,6 +149,8 @@ __all__ = [
     "pixel_features",
     "pixels",
     "predict",
+    "prediction_mosaic",
+    "predictions",
     "project",
     "read_opencv_cascade",
     "reconstruction_error",
