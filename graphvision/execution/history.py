@@ -2,7 +2,7 @@
 
 Before a run replaces the files of the previous one, those files (its
 ``record.json``, ``report.md``, ``report.html`` and every output file its
-record lists) are kept in ``history/<date>-<digest>/``: hard links where the
+record lists) are kept in ``history/<number>-<date>-<digest>/`` (numbered in the order they were kept): hard links where the
 file system allows it (no copy of the bytes; a run never writes into a file,
 it replaces it, so the kept file stays as it was), copies otherwise. A warm
 re-run therefore no longer replaces the cold run's report: the folder shows
@@ -31,7 +31,7 @@ __all__ = ["HISTORY", "KEPT_RUNS", "MARKER", "Earlier", "earlier_runs", "keep_pr
 HISTORY = "history"
 MARKER = ".graphvision-history"
 KEPT_RUNS = 20
-_ENTRY = re.compile(r"^\d{8}T\d{6}(\.\d+)?Z?-[0-9a-f]{8}$")
+_ENTRY = re.compile(r"^(\d{6})-[0-9TZ.]*-([0-9a-f]{8})$")
 
 
 @dataclass(frozen=True)
@@ -65,12 +65,14 @@ def keep_previous_run(directory: Path, owned: set[str]) -> Path | None:
         date = str(json.loads(raw).get("date", ""))
     except (ValueError, AttributeError):
         date = ""
-    stamp = re.sub(r"[^0-9T.Z]", "", date.replace("+00:00", "Z")) or "00000000T000000"
-    entry = history / f"{stamp}-{hashlib.sha256(raw).hexdigest()[:8]}"
-    if not _ENTRY.match(entry.name):
-        entry = history / f"00000000T000000-{hashlib.sha256(raw).hexdigest()[:8]}"
-    if entry.is_dir():
-        return entry
+    stamp = re.sub(r"[^0-9TZ.]", "", date.replace("+00:00", "Z"))
+    digest = hashlib.sha256(raw).hexdigest()[:8]
+    entries = _entries(history)
+    same = [entry for entry in entries if entry.name.endswith(f"-{digest}")]
+    if same:
+        return same[0]
+    number = 1 + max((int(e.name[:6]) for e in entries), default=0)
+    entry = history / f"{number:06d}-{stamp}-{digest}"
     history.mkdir(exist_ok=True)
     (history / MARKER).touch()
     staging = history / f".{entry.name}.writing"
@@ -89,7 +91,7 @@ def keep_previous_run(directory: Path, owned: set[str]) -> Path | None:
 
 
 def _entries(history: Path) -> list[Path]:
-    """The kept runs, newest first (their names start with the run's UTC date)."""
+    """The kept runs, newest first (their names start with the order they were kept in)."""
     if not history.is_dir():
         return []
     found = [p for p in history.iterdir() if p.is_dir() and _ENTRY.match(p.name)]

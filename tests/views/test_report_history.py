@@ -1,0 +1,75 @@
+"""An output folder keeps its earlier runs: a warm re-run no longer replaces the cold run's
+report, and --keep-intermediates shows the values of cached nodes too."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from graphvision.cli import main
+from graphvision.execution import history
+
+PIPELINES = Path(__file__).parents[2] / "pipelines"
+
+
+def _run(folder: Path, cache: Path, *extra: str) -> None:
+    command = ["run", str(PIPELINES / "line_fit.yaml"), "-d", str(folder)]
+    assert main([*command, "--cache-dir", str(cache), "--executor", "sync", *extra]) == 0
+
+
+def _statuses(record: Path) -> set[str]:
+    return {node["status"] for node in json.loads(record.read_text())["nodes"]}
+
+
+def test_a_warm_rerun_keeps_the_cold_runs_report_and_files(tmp_path):
+    folder, cache = tmp_path / "out", tmp_path / "cache"
+    _run(folder, cache)
+    cold = (folder / "report.html").read_text()
+    _run(folder, cache)
+    assert _statuses(folder / "record.json") == {"cached"}
+    (entry,) = [p for p in (folder / "history").iterdir() if p.is_dir()]
+    assert (entry / "report.html").read_text() == cold  # the cold run's page, as it was
+    assert _statuses(entry / "record.json") == {"computed"}
+    kept = json.loads((entry / "record.json").read_text())["files"]
+    assert all((entry / name).is_file() for names in kept.values() for name in names)
+    page = (folder / "report.html").read_text()
+    assert f'href="./history/{entry.name}/report.html"' in page
+    assert "Earlier runs (newest first)" in page and "Earlier runs" not in cold
+
+
+def test_history_is_newest_first_and_bounded(tmp_path, monkeypatch):
+    monkeypatch.setattr(history, "KEPT_RUNS", 2)
+    folder, cache = tmp_path / "out", tmp_path / "cache"
+    for threshold in (1.0, 2.0, 3.0, 4.0):
+        _run(folder, cache, "--set", f"robust.threshold={threshold}")
+    runs = history.earlier_runs(folder)
+    assert [run.record["overrides"]["robust.threshold"] for run in runs] == [3.0, 2.0]
+    page = (folder / "report.html").read_text()
+    linked = re.findall(r'href="\./(history/[^"]+)/report\.html"', page)
+    assert linked == [run.folder for run in runs]
+
+
+def test_a_history_folder_that_is_not_graphvisions_is_left_alone(tmp_path):
+    folder, cache = tmp_path / "out", tmp_path / "cache"
+    (folder / "history").mkdir(parents=True)
+    (folder / "history" / "notes.txt").write_text("mine")
+    _run(folder, cache)
+    _run(folder, cache)
+    assert sorted(p.name for p in (folder / "history").iterdir()) == ["notes.txt"]
+    assert "Earlier runs" not in (folder / "report.html").read_text()
+
+
+@pytest.mark.parametrize("warm", [False, True])
+def test_keep_intermediates_shows_cached_nodes_too(tmp_path, warm):
+    folder, cache = tmp_path / "out", tmp_path / "cache"
+    if warm:
+        _run(tmp_path / "first", cache)  # every node cached
+    _run(folder, cache, "--keep-intermediates")
+    if warm:
+        assert _statuses(folder / "record.json") == {"cached"}
+    page = (folder / "report.html").read_text()
+    headings = re.findall(r"<h3>([^<]+)</h3>", page.split("Intermediate values")[-1])
+    assert {"lstsq", "total", "points.truth"} <= set(headings)
