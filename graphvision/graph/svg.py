@@ -88,7 +88,7 @@ _COLUMN_GAP = 60.0
 _MARGIN = 12.0
 _SWEEPS = 4
 _LABEL_CHAR = 6.2  # px per character at the 10 px font of edge labels
-_LABEL_PITCH = 13.0  # px between the ends of edges entering one side of a box
+_LABEL_PITCH = 15.0  # px between the ends of edges entering one side of a box (a label: 13)
 
 
 @dataclass
