@@ -2,9 +2,10 @@
 
 Before a run replaces the files of the previous one, those files (its
 ``record.json``, ``report.md``, ``report.html`` and every output file its
-record lists) are kept in ``history/<number>-<date>-<digest>/`` (numbered in the order they were kept): hard links where the
-file system allows it (no copy of the bytes; a run never writes into a file,
-it replaces it, so the kept file stays as it was), copies otherwise. A warm
+record lists) are kept in ``history/<number>-<date>-<digest>/`` (numbered in
+the order they were kept): hard links where the file system allows it (no
+copy of the bytes; a run never writes into a file, it replaces it, so the
+kept file stays as it was), copies otherwise. A warm
 re-run therefore no longer replaces the cold run's report: the folder shows
 the newest run and links its predecessors, newest first.
 

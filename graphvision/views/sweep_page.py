@@ -84,24 +84,12 @@ def _chart(
     def sy(y: float) -> float:
         return height - pad - (y - y0) / (y1 - y0) * (height - 1.7 * pad)
 
-    parts = [
-        _line(pad, height - pad, width - pad / 2, height - pad),
-        _line(pad, pad * 0.7, pad, height - pad),
-        f'<text class="x-label" x="{(width + pad / 2) / 2:.0f}" y="{height - pad + 32:.0f}" '
-        f'text-anchor="middle" font-weight="bold">{escape(key)}</text>',
-        f'<text class="y-label" transform="translate(12,{(height - pad / 3) / 2:.0f}) '
-        f'rotate(-90)" text-anchor="middle" font-weight="bold">{escape(output)}</text>',
+    parts = _axes((key, output), (width, height, pad), [sx(position[v]) for v in levels], levels)
+    parts += [
+        _line(pad - 3, sy(y), pad, sy(y))
+        + f'<text x="{pad - 5}" y="{sy(y) + 4:.1f}" text-anchor="end">{y:.3g}</text>'
+        for y in (y0 + (y1 - y0) * step / 4 for step in range(5))
     ]
-    for level in levels:
-        x = sx(position[level])
-        tick = escape(str(level))
-        parts.append(
-            f'<text x="{x:.1f}" y="{height - pad + 14}" text-anchor="middle">{tick}</text>'
-        )
-    for step in range(5):
-        y = y0 + (y1 - y0) * step / 4
-        parts.append(_line(pad - 3, sy(y), pad, sy(y)))
-        parts.append(f'<text x="{pad - 5}" y="{sy(y) + 4:.1f}" text-anchor="end">{y:.3g}</text>')
     groups: dict[tuple, list[tuple[float, float]]] = {}
     for x, y, group in points:
         groups.setdefault(group, []).append((x, y))
@@ -124,6 +112,27 @@ def _chart(
         y = height + _LEGEND_PITCH * _LEGEND_ROWS
         parts.append(f'<text x="12" y="{y:.0f}">and {len(groups) - _LEGEND_ROWS} more lines</text>')
     return "".join(parts)
+
+
+def _axes(
+    names: tuple[str, str], box: tuple[float, float, float], xs: list[float], levels: list[Any]
+) -> list[str]:
+    """The axes of a chart, labelled with the parameter (x) and the output (y), and the
+    parameter's values under the x axis."""
+    (key, output), (width, height, pad) = names, box
+    parts = [
+        _line(pad, height - pad, width - pad / 2, height - pad),
+        _line(pad, pad * 0.7, pad, height - pad),
+        f'<text class="x-label" x="{(width + pad / 2) / 2:.0f}" y="{height - pad + 32:.0f}" '
+        f'text-anchor="middle" font-weight="bold">{escape(key)}</text>',
+        f'<text class="y-label" transform="translate(12,{(height - pad / 3) / 2:.0f}) '
+        f'rotate(-90)" text-anchor="middle" font-weight="bold">{escape(output)}</text>',
+    ]
+    parts += [
+        f'<text x="{x:.1f}" y="{height - pad + 14}" text-anchor="middle">{escape(str(v))}</text>'
+        for x, v in zip(xs, levels, strict=True)
+    ]
+    return parts
 
 
 def _legend_entry(number: int, colour: str, named: str, top: float) -> str:
@@ -170,10 +179,8 @@ def sweep_html(result: SweepResult, title: str, plots: Sequence[str] = ()) -> st
 def _is_sweep_file(name: str) -> bool:
     if name in ("sweep.csv", "sweep.html", MANIFEST):
         return True
-    return (
-        (name.startswith("sweep_")
-        and name.endswith(".svg"))
-        or (name.startswith("sweep_run_") and name.endswith(".html"))
+    return (name.startswith("sweep_") and name.endswith(".svg")) or (
+        name.startswith("sweep_run_") and name.endswith(".html")
     )
 
 

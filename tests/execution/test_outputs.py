@@ -241,7 +241,10 @@ def test_a_rerun_removes_the_previous_runs_outputs_and_only_those(capsys, tmp_pa
         "report.html",
         "notes.txt",
         "sub",
+        "history",  # the previous run, kept whole in history/<entry>/
     }
+    (kept,) = [p for p in (out / "history").iterdir() if p.is_dir()]
+    assert {p.name for p in kept.iterdir()} == first
     assert (out / "sub" / "median_on_salt_pepper.png").read_text() == "mine too"
     record = json.loads((out / "record.json").read_text())
     assert record["files"] == {"psnr_noisy_gaussian": ["psnr_noisy_gaussian.json"]}

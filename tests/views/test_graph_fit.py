@@ -57,7 +57,8 @@ window.addEventListener("load", () => {
   const graphs = [...document.querySelectorAll(".graph svg")].map(svg => {
     const r = svg.getBoundingClientRect();
     const labels = [...svg.querySelectorAll("g.edge text")].map(t => t.getBoundingClientRect());
-    const boxes = [...svg.querySelectorAll("g:not(.edge) > rect")].map(b => b.getBoundingClientRect());
+    const boxes = [...svg.querySelectorAll("g:not(.edge) > rect")]
+      .map(b => b.getBoundingClientRect());
     let clashes = 0;
     labels.forEach((a, i) => {
       clashes += labels.slice(i + 1).filter(b => inside(a, b)).length;
