@@ -75,8 +75,8 @@ def _forward(rgb: np.ndarray, space: str, dtype: type) -> np.ndarray:
     work = dtype if space == "ycbcr" else np.float64
     if space != "ycbcr" and np.asarray(rgb).dtype == np.float32:
         work = np.float32  # read as it is, each value widened to float64 in the kernel
-    pixels = np.ascontiguousarray(rgb, dtype=work).reshape(-1, 3)
-    out = np.empty(pixels.shape, dtype=dtype)
+    pixels: np.ndarray = np.ascontiguousarray(rgb, dtype=work).reshape(-1, 3)
+    out: np.ndarray = np.empty(pixels.shape, dtype=dtype)
     if space == "hsv":
         rgb_to_hsv(pixels, out)
     elif space == "lab":

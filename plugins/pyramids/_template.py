@@ -52,7 +52,8 @@ def correlation_map(image: np.ndarray, template: np.ndarray, method: str) -> np.
 
     tiny = float(np.finfo(np.float32).eps)
     energy = float(np.sum(kernel * kernel))
-    return normalise_response(data, response, *kernel.shape, energy, tiny)
+    kernel_rows, kernel_columns = kernel.shape
+    return normalise_response(data, response, kernel_rows, kernel_columns, energy, tiny)
 
 
 @node("pyramids.match_template", version=1)
