@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, NamedTuple
+from typing import Annotated, Any, Literal, NamedTuple
 
 import numpy as np
 from pydantic import Field
 
 from graphvision import BinaryImage, FloatImage, GrayImage, node
 
-from ..shared.checks import ordered
+from ..shared.checks import all_of, ordered
 from ._derivatives import EdgeBoundary, gradient_images
 
 __all__ = ["Canny", "canny", "canny_edges", "hysteresis", "non_maximum_suppression"]
@@ -78,7 +78,13 @@ class Canny(NamedTuple):
 Threshold = Annotated[float, Field(ge=0, description="Absolute magnitude or quantile in [0, 1].")]
 
 
-@node("edges.canny", version=3, check=ordered(("low", "high")))
+def _quantiles(**params: Any) -> None:
+    """Quantile thresholds lie in [0, 1] (``low`` is at most ``high``, checked apart)."""
+    if params["thresholds"] == "quantile" and params["high"] > 1:
+        raise ValueError(f"quantile thresholds lie in [0, 1], got high={params['high']:g}")
+
+
+@node("edges.canny", version=3, check=all_of(ordered(("low", "high")), _quantiles))
 def canny(
     image: GrayImage,
     *,
@@ -132,7 +138,5 @@ def canny(
        TPAMI 8(6), 1986.
     .. [2] Szeliski (2022), section 7.2.1.
     """
-    if thresholds == "quantile" and high > 1:
-        raise ValueError(f"quantile thresholds lie in [0, 1], got high={high}")
     edges, magnitude = canny_edges(image, sigma, low, high, thresholds, boundary)
     return Canny(edges, magnitude)

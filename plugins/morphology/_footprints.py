@@ -6,9 +6,11 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field
+from pydantic import AfterValidator, Field
 
 from graphvision import ArrayPort, BinaryImage, PortValueError, node
+
+from ..shared.params import odd
 
 __all__ = ["Footprint", "FootprintPort", "footprint", "footprint_from_mask"]
 
@@ -36,12 +38,8 @@ class FootprintPort(ArrayPort):
 Footprint = Annotated[NDArray[np.bool_], FootprintPort]
 """The annotation of a structuring element (see :class:`FootprintPort`)."""
 
-Side = Annotated[int, Field(ge=1, le=501, description="Side in pixels (odd).")]
-
-
-def _odd(name: str, value: int) -> None:
-    if value % 2 == 0:
-        raise ValueError(f"{name} must be odd so the element has a centre, got {value}")
+Side = Annotated[int, Field(ge=1, le=501, description="Side in pixels (odd)."), AfterValidator(odd)]
+"""An element's side: odd so that it has a centre, refused at validation otherwise."""
 
 
 @node("morphology.footprint", version=1)
@@ -74,10 +72,7 @@ def footprint(
     footprint : bool ndarray
     """
     if shape == "rectangle":
-        _odd("height", height)
-        _odd("width", width)
         return np.ones((height, width), dtype=bool)
-    _odd("size", size)
     r = size // 2
     v, u = np.mgrid[-r : r + 1, -r : r + 1]
     if shape == "square":

@@ -6,7 +6,7 @@ import json
 from typing import Annotated, Literal, NamedTuple
 
 import numpy as np
-from pydantic import Field
+from pydantic import AfterValidator, Field
 
 from graphvision import node
 
@@ -126,10 +126,21 @@ def _patches(image: np.ndarray, size: int, stride: int) -> np.ndarray:
     return sliding_window_view(image, (size, size))[::stride, ::stride].reshape(-1, size, size)
 
 
+def _distinct(textures: tuple[str, ...]) -> tuple[str, ...]:
+    """``textures`` itself when it names two or more distinct textures (two classes)."""
+    if len(set(textures)) < 2:
+        raise ValueError(f"needs two or more distinct textures, got {list(textures)}")
+    return textures
+
+
+Textures = Annotated[tuple[Texture, ...], Field(min_length=1), AfterValidator(_distinct)]
+"""Two or more distinct textures, one class each."""
+
+
 @node("recognition.texture_patches", version=1)
 def texture_patches(
     *,
-    textures: Annotated[tuple[Texture, ...], Field(min_length=1)] = ("brick", "grass", "gravel"),
+    textures: Textures = ("brick", "grass", "gravel"),
     size: Annotated[int, Field(ge=8, le=256)] = 64,
     stride: Annotated[int, Field(ge=1, le=MAX_SIDE)] = 32,
 ) -> Split:
@@ -148,8 +159,6 @@ def texture_patches(
     """
     import skimage.data
 
-    if len(set(textures)) < 2:
-        raise ValueError(f"texture_patches needs two or more distinct textures, got {textures}")
     sides: dict[str, list[np.ndarray]] = {"train": [], "test": []}
     labels: dict[str, list[np.ndarray]] = {"train": [], "test": []}
     for label, name in enumerate(textures):

@@ -8,7 +8,7 @@ from collections.abc import Iterator
 from typing import Annotated, NamedTuple
 
 import numpy as np
-from pydantic import Field
+from pydantic import AfterValidator, Field
 
 from graphvision import (
     Boxes,
@@ -457,10 +457,19 @@ def box_count(boxes: Boxes) -> Int:
     return len(boxes)
 
 
+def _corners_ordered(box: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    """``box`` itself when it is (x0, y0, x1, y1) with x0 < x1 and y0 < y1, else ValueError."""
+    if not box[0] < box[2] or not box[1] < box[3]:
+        raise ValueError(f"must be (x0, y0, x1, y1) with x0 < x1 and y0 < y1, got {list(box)}")
+    return box
+
+
+TrueBox = Annotated[tuple[float, float, float, float], AfterValidator(_corners_ordered)]
+"""A box (x0, y0, x1, y1) with its corners in order, refused at validation otherwise."""
+
+
 @node("recognition.box_iou", version=1)
-def box_iou(
-    boxes: Boxes, *, truth: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0)
-) -> Float:
+def box_iou(boxes: Boxes, *, truth: TrueBox = (0.0, 0.0, 1.0, 1.0)) -> Float:
     """The best intersection over union of any box with a known box (x0, y0, x1, y1).
 
     Parameters
@@ -472,8 +481,6 @@ def box_iou(
     -------
     iou : float in [0, 1] (0 when there is no box)
     """
-    if not truth[0] < truth[2] or not truth[1] < truth[3]:
-        raise ValueError(f"truth must be (x0, y0, x1, y1) with x0 < x1 and y0 < y1, got {truth}")
     if len(boxes) == 0:
         return 0.0
     return float(iou_matrix(boxes.xyxy, np.array([truth], np.float64)).max())

@@ -175,12 +175,22 @@ Digit = Annotated[int, Field(ge=0, le=9)]
 """A digit class."""
 
 
+def _digit_fits(**params: Any) -> None:
+    """A digit is pasted whole: its largest side is at most the scene's."""
+    if params["max_scale"] > params["size"]:
+        raise ValueError(
+            f"max_scale ({params['max_scale']}) must be at most the scene's size "
+            f"({params['size']}): a digit is pasted whole"
+        )
+
+
 @node(
     "synthetic.digit_scenes",
     version=1,
     check=all_of(
         ordered(("min_objects", "max_objects"), ("min_scale", "max_scale")),
         at_most_values("count", "size", "size"),
+        _digit_fits,
     ),
 )
 def digit_scenes(
@@ -228,11 +238,6 @@ def digit_scenes(
     from ..cnn._digits import load_digits_images
     from ..recognition._data import stratified_split
 
-    if max_scale > size:
-        raise ValueError(
-            f"max_scale ({max_scale}) must be at most the scene's size ({size}): a digit is "
-            "pasted whole"
-        )
     images, labels = load_digits_images()
     train, test = stratified_split(labels, 0.2, 0)
     chosen = train if split == "train" else test
