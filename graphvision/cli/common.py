@@ -95,6 +95,16 @@ def byte_size(text: str) -> int:
     return size
 
 
+def positive_seconds(text: str) -> float:
+    try:
+        seconds = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: '{text}'") from None
+    if not seconds > 0 or seconds == float("inf"):
+        raise argparse.ArgumentTypeError(f"seconds must be positive, got '{text}'")
+    return seconds
+
+
 def check_overrides(graph: Graph, registry: Registry, overrides: dict[str, Any], flag: str) -> None:
     """Refuse, naming the command line, an override of a node or parameter that does not exist."""
     for key, value in overrides.items():
@@ -213,6 +223,7 @@ def load_run_arguments(
 
     if args.max_pixels is not None:  # in the environment: worker processes read it too
         os.environ[ENVIRONMENT_VARIABLE] = str(args.max_pixels)
+    node_limit_options(args)
     graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
     registry = registry_for(args, graph)
     overrides = {
@@ -221,6 +232,25 @@ def load_run_arguments(
     }
     check_overrides(graph, registry, overrides, "--set")
     return graph, registry, overrides, dict(named_pairs(args.input, "--input"))
+
+
+def node_limit_options(args: argparse.Namespace) -> None:
+    """``--node-timeout`` and ``--node-memory`` for every run the command makes (through the
+    environment, as ``--max-pixels``), refused where they cannot be kept."""
+    from graphvision.execution.limits import MEMORY_VARIABLE, TIMEOUT_VARIABLE
+
+    if args.node_memory is not None and args.executor != "processes":
+        raise UsageError(
+            "--node-memory needs --executor processes (nodes in one process share its memory)"
+        )
+    if args.executor == "dask" and args.node_timeout is not None:
+        raise UsageError("--node-timeout applies on sync, threads and processes, not dask")
+    for variable, value in (
+        (TIMEOUT_VARIABLE, args.node_timeout),
+        (MEMORY_VARIABLE, args.node_memory),
+    ):
+        if value is not None:
+            os.environ[variable] = str(value)
 
 
 def note_unread_plugins(graph: Graph) -> None:

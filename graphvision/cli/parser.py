@@ -14,6 +14,7 @@ from graphvision.cli.common import (
     byte_size,
     pixel_count,
     positive_int,
+    positive_seconds,
 )
 from graphvision.cli.graph import cmd_graph
 from graphvision.cli.nodes import cmd_describe, cmd_nodes
@@ -74,6 +75,19 @@ def run_options(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help="pixel budget of every image and array read (default 100000000; files that "
         "declare more are refused before they are decoded)",
+    )
+    parser.add_argument(
+        "--node-timeout",
+        type=positive_seconds,
+        metavar="SECONDS",
+        help="a node running longer fails alone (a node's own timeout: may be lower)",
+    )
+    parser.add_argument(
+        "--node-memory",
+        type=byte_size,
+        metavar="SIZE",
+        help="with --executor processes: memory a node may allocate in its worker, e.g. 2G; "
+        "a node over it fails alone",
     )
     parser.add_argument(
         "--input",

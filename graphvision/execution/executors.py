@@ -27,6 +27,7 @@ from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
+from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.warnings import running, show_warning
 from graphvision.nodes.spec import FunctionRef
 from graphvision.values.ports import PortType, freeze
@@ -176,7 +177,11 @@ class _Processes:
         def settle(done: Future) -> None:
             if isinstance(done.exception(), BrokenProcessPool):
                 self._replace(pool)
-                self._retry_alone(outer, fn, args)
+                ended = ended_by_limit(fn, args)  # a node past its limit is not retried
+                if ended is not None:
+                    outer.set_exception(ended)
+                else:
+                    self._retry_alone(outer, fn, args)
             else:
                 _copy(done, outer)
 
@@ -197,7 +202,8 @@ class _Processes:
             alone.shutdown(wait=False)
             if isinstance(done.exception(), BrokenProcessPool):
                 outer.set_exception(
-                    WorkerDiedError(
+                    ended_by_limit(fn, args)
+                    or WorkerDiedError(
                         "the worker process running this node died (killed, or out of "
                         "memory), and again when retried alone"
                     )

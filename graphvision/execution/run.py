@@ -60,6 +60,7 @@ from graphvision.execution.executors import (
     make_executor,
 )
 from graphvision.execution.inputs import resolve_input
+from graphvision.execution.limits import current_limits, node_limits
 from graphvision.execution.provenance import describe_run
 from graphvision.execution.record import RunHooks, RunRecord, RunResult
 from graphvision.execution.scheduler import run_tasks
@@ -86,6 +87,8 @@ def run(
     hooks: Sequence[RunHooks] = (),
     keep_intermediates: bool = False,
     max_pixels: int | None = None,
+    node_timeout: float | None = None,
+    node_memory: int | None = None,
 ) -> RunResult:
     """Run a pipeline and return its outputs and run record.
 
@@ -116,6 +119,12 @@ def run(
         The pixel budget of every image and array the run reads (default: the
         ``GRAPHVISION_MAX_PIXELS`` environment variable, else 100 megapixels);
         a file declaring more is refused before it is decoded.
+    node_timeout : float, optional
+        Seconds any node may run (default: ``GRAPHVISION_NODE_TIMEOUT``); a node's own
+        ``timeout:`` lower than this applies to it. A node past its limit fails alone.
+    node_memory : int, optional
+        Bytes a worker process may allocate while it runs a node (``executor="processes"``
+        only; default: ``GRAPHVISION_NODE_MEMORY``). See :mod:`graphvision.execution.limits`.
 
     Raises
     ------
@@ -135,7 +144,9 @@ def run(
     schedule = compiled.schedule_for(wanted)
     given = _given_inputs(compiled, schedule, inputs)
     reference_keys = _referenced_inputs(compiled, given, registry)
-    with pixel_budget(max_pixels):
+    with pixel_budget(max_pixels), node_limits(node_timeout, node_memory):
+        timed = any(node.timeout for node in compiled.graph.nodes.values())
+        current_limits().check_executor(executor_name(executor), timed)
         values = {
             name: partial(resolve_input, name, compiled.input_types[name], value, registry)
             if name in reference_keys

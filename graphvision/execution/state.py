@@ -62,6 +62,7 @@ from graphvision.execution.executors import (
     encodes_values,
 )
 from graphvision.execution.inputs import freeze_value, value_bytes
+from graphvision.execution.limits import current_limits, start_on_own_thread
 from graphvision.execution.plan import plan_steps
 from graphvision.execution.record import NodeRecord, RunHooks, RunRecord, RunResult
 from graphvision.execution.warnings import running
@@ -106,6 +107,11 @@ class RunState:
         # With a chaining executor, its futures (each with a ``task``) of the steps not finished.
         self.in_flight: dict[str, Any] = {}
         self.quick_ops: set[str] = set()  # ops whose last call here took under _QUICK_SECONDS
+        self.limits = current_limits()  # time and memory per node (execution.limits)
+
+    def seconds_for(self, name: str) -> float | None:
+        """The node's time limit: its own ``timeout:`` or the run's, the lower."""
+        return self.limits.seconds_for(self.compiled.graph.nodes[name].timeout)
 
     def release_inputs(self, step: Step) -> None:
         consumers = self.consumers
@@ -221,11 +227,18 @@ class RunState:
         if self.encoded:
             return self._submit_encoded(name, step)
         inputs = {port: self.values[source] for port, source in step.inputs.items()}
+        seconds, label = self.seconds_for(name), f"node '{name}' ({step.spec.id})"
+        if seconds is not None:  # on a thread of its own, left to itself at the limit
+            return start_on_own_thread(
+                call_node, (step.spec.func, step.params, inputs), seconds, label
+            )
         return self.executor.submit(call_node, step.spec.func, step.params, inputs)
 
     def is_quick(self, name: str) -> bool:
-        """Whether the step's op last ran here faster than a hand-off to a thread costs."""
-        return self.compiled.steps[name].spec.id in self.quick_ops
+        """Whether the step's op last ran here faster than a hand-off to a thread costs
+        (a node with a time limit never runs here: it could not be left at its limit)."""
+        quick = self.compiled.steps[name].spec.id in self.quick_ops
+        return quick and self.seconds_for(name) is None
 
     def run_here(self, name: str) -> bool:
         """Run a step in this thread and finish it (the scheduler does for a quick one);
@@ -266,7 +279,9 @@ class RunState:
                 payload[port] = (kind, *kind.encode(self.values[source]))
             else:  # submitted ahead: the producer's task stands for its result
                 upstream[port] = (self.in_flight[source[0]].task, source[1])
+        call = self.limits.worker_call(self.seconds_for(name), f"node '{name}' ({step.spec.id})")
         future = self.executor.submit(
+            *call,
             call_node_encoded,
             step.spec.ref,
             step.params,

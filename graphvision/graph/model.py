@@ -92,12 +92,14 @@ class InputDecl:
 
 @dataclass
 class NodeDecl:
-    """One node of a graph: the op it runs, where its inputs come from, its parameters."""
+    """One node of a graph: the op it runs, where its inputs come from, its parameters,
+    and its time limit in seconds (``timeout:``; None: the run's, if any)."""
 
     op: str
     inputs: dict[str, Ref] = field(default_factory=dict)
     params: dict[str, Any] = field(default_factory=dict)
     description: str = ""
+    timeout: float | None = None
 
 
 @dataclass

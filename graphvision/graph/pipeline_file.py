@@ -137,6 +137,7 @@ def _graph_from_model(model: PipelineModel, file: str, lines: dict[str, int]) ->
             {port: Ref.parse(ref) for port, ref in decl.in_.items()},
             dict(decl.params),
             decl.description,
+            decl.timeout,
         )
         for name, decl in model.nodes.items()
     }
@@ -234,6 +235,8 @@ def graph_to_dict(graph: Graph) -> dict[str, Any]:
             entry["params"] = dict(node.params)
         if node.description:
             entry["description"] = node.description
+        if node.timeout is not None:
+            entry["timeout"] = node.timeout
         nodes[name] = entry
     data["nodes"] = nodes
     data["outputs"] = {name: str(ref) for name, ref in graph.outputs.items()}

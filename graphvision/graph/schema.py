@@ -70,6 +70,12 @@ class NodeModel(_Section):
         description="Node parameters; '${params.NAME}' substitutes a pipeline param.",
     )
     description: str = Field("", description="What this step does in the pipeline.")
+    timeout: float | None = Field(
+        None,
+        gt=0,
+        description="Seconds the node may run before it fails alone (the lower of this and "
+        "--node-timeout applies).",
+    )
 
 
 class PipelineModel(_Section):

@@ -24,7 +24,7 @@ def test_footprints():
     np.testing.assert_array_equal(morph.footprint(shape="diamond", size=5)[2], [1, 1, 1, 1, 1])
     disk = morph.footprint(shape="disk", size=7)
     assert disk.sum() == 29 and disk[3].all() and not disk[0, 0]  # 29 lattice points in r=3
-    with pytest.raises(ValueError, match="parameter .size. of morphology.footprint: must be odd"):
+    with pytest.raises(ValueError, match=r"parameter 'size' of morphology\.footprint: must be odd"):
         morph.footprint(shape="disk", size=4)
 
 
