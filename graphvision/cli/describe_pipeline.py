@@ -66,7 +66,12 @@ def pipeline_description(graph: Graph, registry: Registry) -> dict[str, Any]:
         "file": graph.source,
         "description": " ".join(graph.description.split()),
         "inputs": {
-            name: {"type": decl.type, "default": decl.default, "description": decl.description}
+            name: {
+                "type": decl.type,
+                "default": decl.default,
+                "description": decl.description,
+                "truth_of": list(decl.truth_of),
+            }
             for name, decl in graph.inputs.items()
         },
         "params": {
@@ -164,7 +169,9 @@ def _text(info: dict[str, Any]) -> list[str]:
     lines += ["", "inputs (-i NAME=VALUE):"]
     for name, entry in info["inputs"].items():
         default = "required" if entry["default"] is None else f"default {entry['default']}"
-        lines.append(f"  {name}: {entry['type']}, {default}")
+        truth = entry["truth_of"]
+        truth_note = f", ground truth of {', '.join(truth)} (give it with them)" if truth else ""
+        lines.append(f"  {name}: {entry['type']}, {default}{truth_note}")
     lines += [*([] if info["inputs"] else ["  none"]), "", "parameters (-s params.NAME=VALUE):"]
     for name, entry in info["params"].items():
         lines.append(f"  {name}: default {json.dumps(entry['default'], default=str)}")

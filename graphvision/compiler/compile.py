@@ -335,10 +335,23 @@ class _Checker:
                 outputs[out_name] = found[0]
 
         self.check_unused(used_params)
+        self.check_truth()
 
         if self.problems:
             raise PipelineError(self.problems, graph.source)
         return CompiledGraph(graph, {n: steps[n] for n in order or []}, input_types, outputs)
+
+    def check_truth(self) -> None:
+        """``truth_of`` names other inputs of the pipeline."""
+        for name, decl in self.graph.inputs.items():
+            others = [other for other in self.graph.inputs if other != name]
+            for subject in decl.truth_of:
+                if subject not in others:
+                    self.report(
+                        f"inputs.{name}.truth_of",
+                        f"'{subject}' is not another input of the pipeline"
+                        f"{did_you_mean(subject, others)}; inputs: {', '.join(others) or 'none'}",
+                    )
 
     def check_unused(self, used_params: set[str]) -> None:
         """Inputs nothing reads and pipeline params no node refers to."""

@@ -65,6 +65,7 @@ from graphvision.execution.provenance import describe_run
 from graphvision.execution.record import RunHooks, RunRecord, RunResult
 from graphvision.execution.scheduler import run_tasks
 from graphvision.execution.state import RunState
+from graphvision.execution.truth import outputs_with_truth
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
 from graphvision.values.budget import pixel_budget
@@ -141,6 +142,7 @@ def run(
     )
     compiled, registry = _compiled(graph, registry, inputs, overrides)
     wanted = _wanted_outputs(compiled, outputs, inputs)
+    wanted = outputs_with_truth(compiled, wanted, set(inputs), asked=outputs is not None)
     schedule = compiled.schedule_for(wanted)
     given = _given_inputs(compiled, schedule, inputs)
     reference_keys = _referenced_inputs(compiled, given, registry)

@@ -83,11 +83,13 @@ class Ref:
 
 @dataclass
 class InputDecl:
-    """A graph input: its port type name, an optional default and a description."""
+    """A graph input: its port type name, an optional default, a description, and the
+    inputs it is the ground truth of (``truth_of``: see :mod:`graphvision.execution.truth`)."""
 
     type: str
     default: Any = None
     description: str = ""
+    truth_of: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -123,10 +125,18 @@ class Graph:
 
     # -- builder ------------------------------------------------------------------
 
-    def input(self, name: str, type: str, default: Any = None, description: str = "") -> Ref:
-        """Declare a graph input and return a reference to it."""
+    def input(
+        self,
+        name: str,
+        type: str,
+        default: Any = None,
+        description: str = "",
+        truth_of: list[str] | None = None,
+    ) -> Ref:
+        """Declare a graph input and return a reference to it; ``truth_of`` names the inputs
+        it is the ground truth of (its default holds for their defaults only)."""
         self._check_new_name(name)
-        self.inputs[name] = InputDecl(type, default, description)
+        self.inputs[name] = InputDecl(type, default, description, list(truth_of or []))
         return Ref(name)
 
     def add(

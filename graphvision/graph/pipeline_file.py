@@ -128,7 +128,7 @@ def _parse(text: str, file: str) -> Graph:
 
 def _graph_from_model(model: PipelineModel, file: str, lines: dict[str, int]) -> Graph:
     inputs = {
-        name: InputDecl(decl.type, decl.default, decl.description)
+        name: InputDecl(decl.type, decl.default, decl.description, list(decl.truth_of))
         for name, decl in model.inputs.items()
     }
     nodes = {
@@ -222,6 +222,8 @@ def graph_to_dict(graph: Graph) -> dict[str, Any]:
             entry["default"] = decl.default
         if decl.description:
             entry["description"] = decl.description
+        if decl.truth_of:
+            entry["truth_of"] = list(decl.truth_of)
         inputs[name] = entry
     data["inputs"] = inputs
     if graph.params:

@@ -46,6 +46,12 @@ class InputModel(_Section):
         None, description="Value used when the run gives none: a literal, a path, or 'sample:NAME'."
     )
     description: str = Field("", description="What the input is for.")
+    truth_of: list[Name] = Field(
+        default_factory=list,
+        description="Inputs this one is the ground truth of: its default holds for their "
+        "defaults only, so when one of them is given and this one is not, the outputs that "
+        "read it are skipped (one line says why).",
+    )
 
 
 def _type_shorthand(value: Any) -> Any:

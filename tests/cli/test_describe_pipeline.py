@@ -114,7 +114,12 @@ def test_describe_json_holds_the_same_description(capsys, tmp_path):
     assert [p.split(": ", 1)[1] for p in info["problems"]] == [
         "unused pipeline param 'spare': no node refers to ${params.spare}"
     ]
-    assert info["inputs"]["x"] == {"type": "Float", "default": 2.5, "description": ""}
+    assert info["inputs"]["x"] == {
+        "type": "Float",
+        "default": 2.5,
+        "description": "",
+        "truth_of": [],
+    }
     assert info["params"]["factor"]["used_by"] == [
         {"param": "big.factor", "op": "shapes.scale", "accepts": "integer from 3 to 99"}
     ]
