@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -30,6 +32,25 @@ def cache(tmp_path: Path) -> gv.Cache:
 def isolated_cache_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The CLI's default disk cache goes to a per-test folder."""
     monkeypatch.setenv("GRAPHVISION_CACHE_DIR", str(tmp_path / "default-cache"))
+
+
+@pytest.fixture(autouse=True)
+def restored_run_limits() -> Iterator[None]:
+    """Limits the command line hands to a run through the environment (``--max-pixels``,
+    ``--max-memory``, ``--node-timeout``, ``--node-memory``) end with the test that set them."""
+    names = [
+        "GRAPHVISION_MAX_PIXELS",
+        "GRAPHVISION_MAX_MEMORY",
+        "GRAPHVISION_NODE_TIMEOUT",
+        "GRAPHVISION_NODE_MEMORY",
+    ]
+    saved = {name: os.environ.get(name) for name in names}
+    yield
+    for name, value in saved.items():
+        if value is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = value
 
 
 def write(tmp_path: Path, name: str, text: str) -> Path:

@@ -235,9 +235,10 @@ def load_run_arguments(
 
 
 def node_limit_options(args: argparse.Namespace) -> None:
-    """``--node-timeout`` and ``--node-memory`` for every run the command makes (through the
-    environment, as ``--max-pixels``), refused where they cannot be kept."""
+    """``--node-timeout``, ``--node-memory`` and ``--max-memory`` for every run the command
+    makes (through the environment, as ``--max-pixels``), refused where they cannot be kept."""
     from graphvision.execution.limits import MEMORY_VARIABLE, TIMEOUT_VARIABLE
+    from graphvision.execution.peak_memory import MEMORY_VARIABLE as RUN_MEMORY_VARIABLE
 
     if args.node_memory is not None and args.executor != "processes":
         raise UsageError(
@@ -248,6 +249,7 @@ def node_limit_options(args: argparse.Namespace) -> None:
     for variable, value in (
         (TIMEOUT_VARIABLE, args.node_timeout),
         (MEMORY_VARIABLE, args.node_memory),
+        (RUN_MEMORY_VARIABLE, args.max_memory),
     ):
         if value is not None:
             os.environ[variable] = str(value)

@@ -77,6 +77,13 @@ def run_options(parser: argparse.ArgumentParser) -> None:
         "declare more are refused before they are decoded)",
     )
     parser.add_argument(
+        "--max-memory",
+        type=byte_size,
+        metavar="SIZE",
+        help="memory a run may take, e.g. 8G (default: what is available); a run whose peak, "
+        "estimated from its inputs before it starts, exceeds it is refused",
+    )
+    parser.add_argument(
         "--node-timeout",
         type=positive_seconds,
         metavar="SECONDS",

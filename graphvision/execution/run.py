@@ -61,6 +61,7 @@ from graphvision.execution.executors import (
 )
 from graphvision.execution.inputs import resolve_input
 from graphvision.execution.limits import current_limits, node_limits
+from graphvision.execution.peak_memory import check_peak_memory, running_at_once
 from graphvision.execution.provenance import describe_run
 from graphvision.execution.record import RunHooks, RunRecord, RunResult
 from graphvision.execution.scheduler import run_tasks
@@ -90,6 +91,7 @@ def run(
     max_pixels: int | None = None,
     node_timeout: float | None = None,
     node_memory: int | None = None,
+    max_memory: int | None = None,
 ) -> RunResult:
     """Run a pipeline and return its outputs and run record.
 
@@ -126,13 +128,18 @@ def run(
     node_memory : int, optional
         Bytes a worker process may allocate while it runs a node (``executor="processes"``
         only; default: ``GRAPHVISION_NODE_MEMORY``). See :mod:`graphvision.execution.limits`.
+    max_memory : int, optional
+        Bytes the run may take (default: ``GRAPHVISION_MAX_MEMORY``, else the memory
+        available): a run whose peak, estimated from its inputs' shapes before it
+        starts, exceeds it is refused (:mod:`graphvision.execution.peak_memory`).
 
     Raises
     ------
     PipelineError
         The graph is invalid (nothing ran).
     InputError
-        A graph input could not be resolved (nothing ran).
+        A graph input could not be resolved, or the run would not fit in memory
+        (nothing ran).
     RunError
         Nodes failed; ``error.failures`` names them, ``error.result`` holds
         the outputs that were produced and the record.
@@ -155,6 +162,8 @@ def run(
             else resolve_input(name, compiled.input_types[name], value, registry)
             for name, value in given.items()
         }
+        width = running_at_once(executor, workers)
+        check_peak_memory(compiled, schedule, values, width, max_memory)
         state = _execute(
             compiled,
             values,

@@ -1,0 +1,170 @@
+"""What a run must hold at least, estimated from its inputs' shapes before it starts
+(issue 29 item 2).
+
+The pixel budget (:mod:`graphvision.values.budget`) bounds each image a run reads;
+this refuses a run that cannot fit as a whole, before its first node runs, instead of
+letting it run out of memory minutes later. The run is played in its order without
+computing anything: every value is alive from the step that makes it until its last
+reader has run (outputs to the end), as the run keeps them. Each value is priced at
+what it takes at least when nodes keep the size of their input:
+
+* a graph input at its own size, once read;
+* a node output of an array type (images, masks, labels, disparities...) at the pixels
+  of the largest array input × its type's narrowest dtype, × the input's channels for
+  a type that is ``H×W×C`` only (a colour image); nodes that shrink an image (a
+  downsampled pyramid level, a crop) are the exception to "at least";
+* records, tables and scalars as nothing.
+
+With several nodes running at once, each of the others adds the widest output. The
+estimate leaves out what nodes take while they run (their temporaries: 2 to 20 times
+their input on the shipped pipelines), so a run refused cannot fit, and a run accepted
+may still need more. The limit is ``max_memory`` (``--max-memory``, the
+``GRAPHVISION_MAX_MEMORY`` environment variable), else the memory the system says is
+available (``MemAvailable`` in ``/proc/meminfo``; no check where it cannot be read).
+Inputs given as ``sample:NAME`` are loaded only when a node reads them: they are not
+counted (scikit-image's samples are small).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from graphvision.compiler.compile import CompiledGraph, Schedule
+from graphvision.errors import InputError
+from graphvision.values.budget import pixels_of
+from graphvision.values.ports import ArrayPort, PortType
+
+__all__ = [
+    "MEMORY_VARIABLE",
+    "Estimate",
+    "check_peak_memory",
+    "estimate_peak",
+    "memory_allowed",
+    "running_at_once",
+]
+
+MEMORY_VARIABLE = "GRAPHVISION_MAX_MEMORY"
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """What a run holds at least at its peak (bytes), and what that was derived from."""
+
+    peak: int
+    largest_input: str
+    largest_bytes: int
+    live: int
+    running: int
+
+
+def _array_bytes(value: Any) -> int:
+    arrays = [value] if isinstance(value, np.ndarray) else []
+    return sum(a.nbytes for a in arrays)
+
+
+def _output_bytes(kind: type[PortType], pixels: int, channels: int) -> int:
+    """An upper bound of a node output of type ``kind`` from inputs of ``pixels``."""
+    if not issubclass(kind, ArrayPort):
+        return 0
+    narrowest = min((np.dtype(t).itemsize for t in kind.dtypes), default=1)
+    depth = channels if kind.ndims == (3,) else 1
+    return pixels * depth * narrowest
+
+
+def estimate_peak(
+    compiled: CompiledGraph, schedule: Schedule, values: dict[str, Any], running: int
+) -> Estimate | None:
+    """What the run holds at least at its peak (None when no input is an array)."""
+    shapes = {n: v.shape for n, v in values.items() if isinstance(v, np.ndarray) and v.ndim}
+    if not shapes:
+        return None
+    largest = max(shapes, key=lambda n: pixels_of(shapes[n]))
+    pixels, shape = pixels_of(shapes[largest]), shapes[largest]
+    channels = shape[2] if len(shape) == 3 and 1 <= shape[2] <= 4 else 1
+    sizes: dict[tuple[str, str], int] = {
+        (n, ""): _array_bytes(values[n]) for n in schedule.inputs if n in values
+    }
+    left = dict(schedule.readers)
+    pinned = set(compiled.outputs.values())
+    live = sum(sizes.values())
+    peak, widest = live, 0
+    for name in schedule.steps:
+        step = compiled.steps[name]
+        made = {(name, p): _output_bytes(k, pixels, channels) for p, k in step.outputs.items()}
+        sizes.update(made)
+        live += sum(made.values())
+        widest = max([widest, *made.values()])
+        peak = max(peak, live)
+        for source in set(step.inputs.values()):
+            left[source] = left.get(source, 1) - 1
+            if left[source] <= 0 and source not in pinned:
+                live -= sizes.pop(source, 0)
+    steps = min(running, len(schedule.steps))
+    total = peak + (steps - 1) * widest if steps else peak
+    return Estimate(total, largest, _array_bytes(values[largest]), peak, steps)
+
+
+def running_at_once(executor: Any, workers: int | None) -> int:
+    """Nodes the executor may run at once: 1 on ``sync``, else its workers."""
+    from graphvision.execution.executors import executor_width
+
+    if isinstance(executor, str):
+        return 1 if executor == "sync" else workers or os.cpu_count() or 1
+    return executor_width(executor)
+
+
+def memory_allowed(max_memory: int | None = None) -> tuple[int | None, str]:
+    """Bytes a run may take (``max_memory``, the environment's, else what is available;
+    None when unknown) and where that figure comes from."""
+    if max_memory is not None:
+        return max_memory, "allowed (max_memory)"
+    text = os.environ.get(MEMORY_VARIABLE, "")
+    if text:
+        try:
+            return int(float(text)), "allowed (--max-memory)"
+        except ValueError:
+            raise InputError(f"{MEMORY_VARIABLE}={text!r} is not a number of bytes") from None
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024, "available"
+    except OSError:
+        pass
+    return None, ""
+
+
+def check_peak_memory(
+    compiled: CompiledGraph,
+    schedule: Schedule,
+    values: dict[str, Any],
+    running: int,
+    max_memory: int | None = None,
+) -> Estimate | None:
+    """Refuse a run that must hold more than :func:`memory_allowed`, before it starts.
+
+    Raises
+    ------
+    InputError
+        Naming the estimate, what it comes from, what is allowed and what to do.
+    """
+    estimate = estimate_peak(compiled, schedule, values, running)
+    allowed, where = memory_allowed(max_memory)
+    if estimate is None or allowed is None or estimate.peak <= allowed:
+        return estimate
+    shape = " × ".join(str(n) for n in values[estimate.largest_input].shape)
+    raise InputError(
+        f"this run cannot fit: it must hold at least {_gib(estimate.peak)} at once "
+        f"(estimated before it starts from input '{estimate.largest_input}', {shape}, "
+        f"{_gib(estimate.largest_bytes)}: the values alive at once with "
+        f"{estimate.running} node(s) running), and {_gib(allowed)} is {where}. Use a "
+        "smaller input, fewer --workers, or --max-memory SIZE (max_memory= in Python)"
+    )
+
+
+def _gib(count: int) -> str:
+    return f"{count / 2**30:.2f} GiB" if count >= 2**28 else f"{count / 2**20:.1f} MiB"

@@ -1,0 +1,83 @@
+"""A run that cannot fit in memory is refused before it starts (issue 29 item 2): what it
+must hold at least is estimated from its inputs' shapes (values alive at once), and the
+estimate is a lower bound of what shipped pipelines really take."""
+
+from __future__ import annotations
+
+import tracemalloc
+
+import numpy as np
+import pytest
+
+import graphvision as gv
+from graphvision.cli import main
+from graphvision.execution.peak_memory import estimate_peak
+
+from ..conftest import PIPELINES
+
+REGISTRY = gv.discover()
+
+
+def _image(shape: tuple[int, ...]) -> np.ndarray:
+    return np.random.default_rng(0).random(shape).astype(np.float32)
+
+
+def _estimate(name: str, inputs: dict, running: int = 1) -> int:
+    compiled = gv.compile_graph(gv.load_pipeline(PIPELINES / f"{name}.yaml"), REGISTRY)
+    schedule = compiled.schedule_for(list(compiled.outputs))
+    estimate = estimate_peak(compiled, schedule, inputs, running)
+    assert estimate is not None
+    return estimate.peak
+
+
+@pytest.mark.parametrize("name", ["edges", "denoise", "pyramid"])
+def test_the_estimate_is_at_most_what_the_run_takes(name):
+    inputs = {"image": _image((192, 256, 3))}
+    graph = gv.load_pipeline(PIPELINES / f"{name}.yaml")
+    gv.run(graph, inputs=inputs, executor="sync", cache=None)  # imports and first-use caches
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        gv.run(graph, inputs=inputs, executor="sync", cache=None)
+        taken = tracemalloc.get_traced_memory()[1] - before
+    finally:
+        tracemalloc.stop()
+    estimate = _estimate(name, inputs)
+    assert inputs["image"].nbytes < estimate <= taken
+
+
+def test_the_estimate_scales_with_the_input_and_the_nodes_running_at_once():
+    small = _estimate("edges", {"image": _image((100, 100, 3))})
+    large = _estimate("edges", {"image": _image((200, 200, 3))})
+    assert large == pytest.approx(4 * small, rel=0.01)
+    assert _estimate("edges", {"image": _image((100, 100, 3))}, running=4) > small
+
+
+def test_a_run_that_cannot_fit_is_refused_before_anything_runs():
+    graph = gv.load_pipeline(PIPELINES / "edges.yaml")
+    started = []
+
+    class Watch(gv.RunHooks):
+        def node_started(self, **info):
+            started.append(info["name"])
+
+    with pytest.raises(gv.InputError, match=r"this run cannot fit: it must hold at least "):
+        gv.run(graph, inputs={"image": _image((300, 400, 3))}, max_memory=2**20, hooks=[Watch()])
+    assert started == []
+    result = gv.run(graph, inputs={"image": _image((30, 40, 3))}, max_memory=2**30, cache=None)
+    assert result.outputs
+
+
+def test_the_command_line_refuses_with_exit_2_and_creates_nothing(tmp_path, capsys):
+    image = tmp_path / "big.npy"
+    np.save(image, _image((300, 400, 3)))
+    out = tmp_path / "out"
+    status = main(
+        ["run", str(PIPELINES / "edges.yaml"), "-i", f"image={image}", "--max-memory", "1M",
+         "-d", str(out), "--no-cache"]
+    )  # fmt: skip
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert "this run cannot fit: it must hold at least" in err
+    assert "1.0 MiB is allowed (--max-memory)" in err
+    assert not out.exists()
