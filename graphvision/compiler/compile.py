@@ -14,6 +14,7 @@ problem, each with its YAML file and line:
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -122,6 +123,7 @@ class _Checker:
         self.problems: list[Problem] = []
         self.resolved: dict[str, dict[str, type[PortType]]] = {}
         self.untyped: set[str] = set()  # generic nodes whose input's type is unknown
+        self.unresolved: set[str] = set()  # parameters naming an unknown ${params.NAME}
 
     def report(self, where: str, message: str) -> None:
         self.problems.append(Problem(self.graph.line_of(where), where, message, self.graph.source))
@@ -139,6 +141,9 @@ class _Checker:
                         f"unknown pipeline param '${{params.{name}}}'"
                         f"{did_you_mean(name, self.graph.params)}",
                     )
+                    # one problem: not the value's type too, nor the param it misspells unused
+                    self.unresolved.add(where)
+                    used.update(difflib.get_close_matches(name, list(self.graph.params), n=1))
                     return value
             whole = PARAM_REFERENCE.fullmatch(value)
             if whole:
@@ -171,6 +176,10 @@ class _Checker:
         except pydantic.ValidationError as error:
             overrides = self.graph.overrides_applied
             for param, message in spec.param_problems(error):
+                spot = f"nodes.{name}.params.{param.split('.')[0]}"
+                typo = any(w == spot or w.startswith(f"{spot}.") for w in self.unresolved)
+                if param and typo and not message.startswith("unknown parameter"):
+                    continue  # its unknown ${params.NAME} is the problem, reported once
                 keys = self.overrides_behind(name, param)
                 if keys:  # the file is fine: the command line set these values
                     where = ", ".join(f"--set {key}={overrides[key]!r}" for key in keys)
@@ -345,13 +354,9 @@ class _Checker:
         """``truth_of`` names other inputs of the pipeline."""
         for name, decl in self.graph.inputs.items():
             others = [other for other in self.graph.inputs if other != name]
-            for subject in decl.truth_of:
-                if subject not in others:
-                    self.report(
-                        f"inputs.{name}.truth_of",
-                        f"'{subject}' is not another input of the pipeline"
-                        f"{did_you_mean(subject, others)}; inputs: {', '.join(others) or 'none'}",
-                    )
+            for subject in (s for s in decl.truth_of if s not in others):
+                listed = f"{did_you_mean(subject, others)}; inputs: {', '.join(others) or 'none'}"
+                self.report(f"inputs.{name}.truth_of", f"'{subject}' is not another input{listed}")
 
     def check_unused(self, used_params: set[str]) -> None:
         """Inputs nothing reads and pipeline params no node refers to."""

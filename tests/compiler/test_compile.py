@@ -264,3 +264,39 @@ def test_a_misspelt_op_upstream_of_a_generic_node_is_the_only_problem():
         gv.compile_graph(graph, gv.discover())
     messages = [p.message for p in info.value.problems]
     assert len(messages) == 1 and "unknown op 'morphology.fill_hole'" in messages[0], messages
+
+
+@pytest.mark.parametrize(
+    ("params", "where"),
+    [
+        ("{size: '${params.windw}'}", "nodes.blur.params.size"),
+        ("{size: 3, boundary: '${params.windw}'}", "nodes.blur.params.boundary"),
+        ("{size: '${params.windw}', nope: 1}", None),
+    ],
+)
+def test_a_mistyped_param_reference_is_one_problem(params, where):
+    """Not also the value's type (a string where an integer goes), nor the param it
+    misspells reported unused (issue 29 item 12)."""
+    text = f"""\
+version: 1
+name: typo
+inputs:
+  image: {{type: GrayImage, default: "sample:camera"}}
+params:
+  window: 5
+nodes:
+  blur: {{op: filters.median, in: {{image: image}}, params: {params}}}
+outputs:
+  blur: blur
+"""
+    with pytest.raises(gv.PipelineError) as caught:
+        gv.compile_graph(gv.parse_pipeline(text, "typo.yaml"), gv.discover())
+    messages = [str(problem) for problem in caught.value.problems]
+    typo = [m for m in messages if "unknown pipeline param '${params.windw}'" in m]
+    assert len(typo) == 1 and "(did you mean 'window'?)" in typo[0]
+    assert not any("unused pipeline param" in m or "valid integer" in m for m in messages)
+    if where is not None:
+        assert messages == typo and typo[0].startswith(f"{where} at typo.yaml:8")
+    else:  # a real second problem is still reported
+        assert len(messages) == 2
+        assert any("unknown parameter 'nope' of filters.median" in m for m in messages)
