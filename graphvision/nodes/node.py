@@ -45,8 +45,22 @@ from graphvision.nodes.spec import NodeSpec
 
 __all__ = [
     "node",
+    "script_nodes",
     "source",
 ]
+
+_SCRIPT_NODES: dict[str, Callable] = {}
+"""Nodes defined in ``__main__`` (a script, a notebook), by id: the last definition wins,
+as when a notebook cell is run again."""
+
+
+def script_nodes() -> dict[str, Callable]:
+    """The nodes defined so far in ``__main__`` (a script or a notebook), by id.
+
+    ``gv.run(graph)`` without a registry adds those the graph uses to the registry it
+    discovers, so a node written in a notebook runs without a registry call.
+    """
+    return dict(_SCRIPT_NODES)
 
 
 def node(
@@ -79,7 +93,10 @@ def node(
 
     def mark(func: Callable) -> Callable:
         func.__graphvision_node__ = NodeMark(id, version, cache, overrides, check)  # type: ignore[attr-defined]
-        return _checked_call(func)
+        checked = _checked_call(func)
+        if func.__module__ == "__main__":
+            _SCRIPT_NODES[id] = checked
+        return checked
 
     return mark
 

@@ -24,6 +24,7 @@ from graphvision.errors import GraphvisionError, PluginLoadError
 from graphvision.graph.model import Graph
 from graphvision.nodes.fingerprint import note_distribution
 from graphvision.nodes.loading import import_file
+from graphvision.nodes.node import script_nodes
 from graphvision.nodes.plugin_index import (
     ENTRY_POINT_GROUP,
     environment_key,
@@ -168,5 +169,16 @@ def discover(
 
 def discover_for(graph: Graph, paths: Iterable[str | Path] = ()) -> Registry:
     """The registry a run of ``graph`` needs: the local plugins at ``paths`` and of its
-    ``plugins:``, and the installed families of its ops and input types."""
-    return discover([*paths, *graph.plugins], needs=Needs.of(graph))
+    ``plugins:``, the installed families of its ops and input types, and the nodes it
+    uses that were defined in ``__main__`` (a script or a notebook) and no plugin has."""
+    needs = Needs.of(graph)
+    registry = discover([*paths, *graph.plugins], needs=needs)
+    known = {spec.id for specs in registry.families().values() for spec in specs}
+    mine = [f for op, f in script_nodes().items() if op in needs.ops and op not in known]
+    if mine:
+        module = types.ModuleType("__main__")
+        module.__all__ = [f"node_{i}" for i in range(len(mine))]  # type: ignore[attr-defined]
+        for index, func in enumerate(mine):
+            setattr(module, f"node_{index}", func)
+        registry.add_plugin(module, "__main__", "defined in __main__ (a script or a notebook)")
+    return registry
