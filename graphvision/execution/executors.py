@@ -27,6 +27,7 @@ from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
+from graphvision.execution.crash_note import call_named
 from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.warnings import running, show_warning
 from graphvision.nodes.spec import FunctionRef
@@ -294,7 +295,7 @@ def make_executor(name: str = "threads", workers: int | None = None) -> Executor
 
 
 def call_node(
-    func: Callable[..., Any], params: dict[str, Any], inputs: dict[str, Any]
+    func: Callable[..., Any], params: dict[str, Any], inputs: dict[str, Any], name: str = ""
 ) -> tuple[Any, float]:
     """Call a node function; return its result and wall time in seconds.
 
@@ -302,14 +303,16 @@ def call_node(
     returns here would have the child go on running the graph (on ``sync`` it
     wrote the output folder a second time; on threads its idle pool kept the
     command's pipes open, so the run never ended): the child is ended here,
-    with one line naming the node.
+    with one line naming the node. The node runs in a frame named after it
+    (:mod:`~graphvision.execution.crash_note`: a fault handler's traceback names it).
     """
     mark = getattr(func, "__graphvision_node__", None)
     running.op = mark.id if mark is not None else getattr(func, "__qualname__", "")
     parent = os.getpid()
     began = time.perf_counter()
     try:
-        result = func(**inputs, **params)
+        label = f"node '{name}' ({running.op})" if name else f"node {running.op}"
+        result = call_named(label, func, {**inputs, **params})
     finally:
         if os.getpid() != parent:
             _end_forked_child(running.op)

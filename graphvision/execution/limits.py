@@ -43,6 +43,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from graphvision.execution.crash_note import real_exit
+
 __all__ = [
     "MEMORY_VARIABLE",
     "TIMEOUT_VARIABLE",
@@ -242,7 +244,7 @@ def _end_worker(note: str, message: str) -> None:
     with contextlib.suppress(OSError):
         Path(note).parent.mkdir(mode=0o700, exist_ok=True)
         Path(note).write_text(message)
-    os._exit(124)  # as timeout(1) does
+    real_exit(124)  # as timeout(1) does (no note of the running node: the parent says it)
 
 
 def ended_by_limit(fn: Callable, args: tuple[Any, ...]) -> NodeLimitError | None:

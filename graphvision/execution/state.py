@@ -53,6 +53,7 @@ from graphvision.errors import (
     NodeExecutionError,
     PortValueError,
 )
+from graphvision.execution.crash_note import call_named
 from graphvision.execution.executors import (
     NODE_ERRORS,
     Executor,
@@ -230,9 +231,9 @@ class RunState:
         seconds, label = self.seconds_for(name), f"node '{name}' ({step.spec.id})"
         if seconds is not None:  # on a thread of its own, left to itself at the limit
             return start_on_own_thread(
-                call_node, (step.spec.func, step.params, inputs), seconds, label
+                call_node, (step.spec.func, step.params, inputs, name), seconds, label
             )
-        return self.executor.submit(call_node, step.spec.func, step.params, inputs)
+        return self.executor.submit(call_node, step.spec.func, step.params, inputs, name)
 
     def is_quick(self, name: str) -> bool:
         """Whether the step's op last ran here faster than a hand-off to a thread costs
@@ -251,7 +252,8 @@ class RunState:
         running.op = spec.id  # warnings name the node (as call_node does on a worker)
         began = time.perf_counter()
         try:
-            result = spec.func(**inputs, **step.params)
+            label = f"node '{name}' ({spec.id})"  # named in a fault handler's traceback
+            result = call_named(label, spec.func, {**inputs, **step.params})
             seconds = time.perf_counter() - began
             outputs = self.accept(step, result)
         except NODE_ERRORS as error:
