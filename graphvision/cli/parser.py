@@ -66,16 +66,8 @@ def cache_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def run_options(parser: argparse.ArgumentParser) -> None:
-    """Options shared by ``run`` and ``sweep``."""
-    parser.add_argument("pipeline", help="the pipeline file (YAML)")
-    parser.add_argument(
-        "--max-pixels",
-        type=pixel_count,
-        metavar="N",
-        help="pixel budget of every image and array read (default 100000000; files that "
-        "declare more are refused before they are decoded)",
-    )
+def limit_options(parser: argparse.ArgumentParser) -> None:
+    """``--max-memory``, ``--node-timeout``, ``--node-memory`` (shared by ``run`` and ``sweep``)."""
     parser.add_argument(
         "--max-memory",
         type=byte_size,
@@ -96,6 +88,19 @@ def run_options(parser: argparse.ArgumentParser) -> None:
         help="with --executor processes: memory a node may allocate in its worker, e.g. 2G; "
         "a node over it fails alone",
     )
+
+
+def run_options(parser: argparse.ArgumentParser) -> None:
+    """Options shared by ``run`` and ``sweep``."""
+    parser.add_argument("pipeline", help="the pipeline file (YAML)")
+    parser.add_argument(
+        "--max-pixels",
+        type=pixel_count,
+        metavar="N",
+        help="pixel budget of every image and array read (default 100000000; files that "
+        "declare more are refused before they are decoded)",
+    )
+    limit_options(parser)
     parser.add_argument(
         "--input",
         "-i",
