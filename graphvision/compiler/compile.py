@@ -344,19 +344,12 @@ class _Checker:
                 outputs[out_name] = found[0]
 
         self.check_unused(used_params)
-        self.check_truth()
+        for where, message in graph.truth_problems():
+            self.report(where, message)
 
         if self.problems:
             raise PipelineError(self.problems, graph.source)
         return CompiledGraph(graph, {n: steps[n] for n in order or []}, input_types, outputs)
-
-    def check_truth(self) -> None:
-        """``truth_of`` names other inputs of the pipeline."""
-        for name, decl in self.graph.inputs.items():
-            others = [other for other in self.graph.inputs if other != name]
-            for subject in (s for s in decl.truth_of if s not in others):
-                listed = f"{did_you_mean(subject, others)}; inputs: {', '.join(others) or 'none'}"
-                self.report(f"inputs.{name}.truth_of", f"'{subject}' is not another input{listed}")
 
     def check_unused(self, used_params: set[str]) -> None:
         """Inputs nothing reads and pipeline params no node refers to."""

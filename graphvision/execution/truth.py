@@ -25,10 +25,12 @@ class MissingTruthWarning(UserWarning):
 
 
 def missing_truth(compiled: CompiledGraph, given: set[str]) -> dict[str, list[str]]:
-    """Truth input -> the inputs given without it, for each truth input that is missing."""
-    missing = {}
-    for name, decl in compiled.graph.inputs.items():
-        subjects = [subject for subject in decl.truth_of if subject in given]
+    """Truth input or marked node -> the inputs given without it, for each one missing (a
+    node's truth, written into the pipeline, is missing whenever one of them is given)."""
+    graph, missing = compiled.graph, {}
+    marked = [(n, d.truth_of) for n, d in graph.inputs.items()]
+    for name, truth_of in marked + [(n, d.truth_of) for n, d in graph.nodes.items()]:
+        subjects = [subject for subject in truth_of if subject in given]
         if subjects and name not in given:
             missing[name] = subjects
     return missing
@@ -44,15 +46,23 @@ def outputs_with_truth(
         return wanted
     kept = list(wanted)
     for truth, subjects in missing.items():
-        needing = [o for o in wanted if truth in compiled.schedule_for([o]).inputs]
+        node = truth in compiled.graph.nodes
+        needing = [o for o in wanted if _reads(compiled, o, truth, node)]
         if not needing:
             continue
+        what = (
+            f"node '{truth}', whose truth" if node else f"the ground truth '{truth}': its default"
+        )
         why = (
-            f"need{'s' if len(needing) == 1 else ''} the ground truth '{truth}': its default "
+            f"need{'s' if len(needing) == 1 else ''} {what} "
             f"goes with the default {', '.join(subjects)} only, and "
             f"{'it was' if len(subjects) == 1 else 'they were'} given"
         )
-        how = f"give input {truth} (--input {truth}=FILE) to compute"
+        how = (
+            "the pipeline holds no truth for yours, so nothing can"
+            if node
+            else f"give input {truth} (--input {truth}=FILE) to"
+        ) + " compute"
         one = len(needing) == 1
         listed = f"output{'' if one else 's'} {', '.join(needing)}"
         if asked:
@@ -64,3 +74,9 @@ def outputs_with_truth(
         )
         kept = [o for o in kept if o not in needing]
     return kept
+
+
+def _reads(compiled: CompiledGraph, output: str, truth: str, node: bool) -> bool:
+    """Whether ``output`` reads the truth input or the marked node ``truth``."""
+    schedule = compiled.schedule_for([output])
+    return truth in (schedule.steps if node else schedule.inputs)

@@ -95,13 +95,15 @@ class InputDecl:
 @dataclass
 class NodeDecl:
     """One node of a graph: the op it runs, where its inputs come from, its parameters,
-    and its time limit in seconds (``timeout:``; None: the run's, if any)."""
+    its time limit in seconds (``timeout:``; None: the run's, if any), and the inputs
+    whose defaults its truth goes with (``truth_of``: :mod:`graphvision.execution.truth`)."""
 
     op: str
     inputs: dict[str, Ref] = field(default_factory=dict)
     params: dict[str, Any] = field(default_factory=dict)
     description: str = ""
     timeout: float | None = None
+    truth_of: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -220,6 +222,20 @@ class Graph:
                     f"override '{key}': no node '{target}'{did_you_mean(target, graph.nodes)}"
                 )
         return graph
+
+    def truth_problems(self) -> list[tuple[str, str]]:
+        """(where, message) for each ``truth_of`` name that is not an input of the
+        pipeline (not the input itself, on an input)."""
+        marked = [(f"inputs.{n}", n, d.truth_of) for n, d in self.inputs.items()] + [
+            (f"nodes.{n}", n, d.truth_of) for n, d in self.nodes.items()
+        ]
+        problems = []
+        for where, name, subjects in marked:
+            others = [other for other in self.inputs if other != name]
+            for subject in (s for s in subjects if s not in others):
+                listed = f"{did_you_mean(subject, others)}; inputs: {', '.join(others) or 'none'}"
+                problems.append((f"{where}.truth_of", f"'{subject}' is not another input{listed}"))
+        return problems
 
     def line_of(self, where: str) -> int:
         """The YAML line of the dotted location ``where`` (or of its closest parent)."""

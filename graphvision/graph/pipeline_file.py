@@ -138,6 +138,7 @@ def _graph_from_model(model: PipelineModel, file: str, lines: dict[str, int]) ->
             dict(decl.params),
             decl.description,
             decl.timeout,
+            list(decl.truth_of),
         )
         for name, decl in model.nodes.items()
     }
@@ -239,6 +240,8 @@ def graph_to_dict(graph: Graph) -> dict[str, Any]:
             entry["description"] = node.description
         if node.timeout is not None:
             entry["timeout"] = node.timeout
+        if node.truth_of:
+            entry["truth_of"] = list(node.truth_of)
         nodes[name] = entry
     data["nodes"] = nodes
     data["outputs"] = {name: str(ref) for name, ref in graph.outputs.items()}

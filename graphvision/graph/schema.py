@@ -82,6 +82,12 @@ class NodeModel(_Section):
         description="Seconds the node may run before it fails alone (the lower of this and "
         "--node-timeout applies).",
     )
+    truth_of: list[Name] = Field(
+        default_factory=list,
+        description="Inputs whose defaults this node measures against a truth written into "
+        "the pipeline: when one of them is given, the outputs that read this node are "
+        "skipped (one line says why).",
+    )
 
 
 class PipelineModel(_Section):

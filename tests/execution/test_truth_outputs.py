@@ -101,6 +101,23 @@ def test_the_command_line_prints_the_skip_as_one_line_and_exits_0(tmp_path, caps
     assert "output error needs the ground truth 'truth'" in capsys.readouterr().err
 
 
+def test_a_node_measuring_against_a_truth_in_the_pipeline_is_skipped_on_other_inputs(tmp_path):
+    text = PIPELINE.replace("    truth_of: [image]\n", "").replace(
+        "b: truth}}", "b: truth}, truth_of: [image]}"
+    )
+    (tmp_path / "n.yaml").write_text(text)
+    graph = gv.load_pipeline(tmp_path / "n.yaml")
+    assert graph.nodes["error"].truth_of == ["image"]
+    with pytest.warns(MissingTruthWarning) as caught:
+        result = gv.run(graph, inputs={"image": _image(0), "truth": _image(1)}, cache=None)
+    assert set(result.outputs) == {"blur", "truth_blur"}
+    assert str(caught[0].message) == (
+        "skipped output error: it needs node 'error', whose truth goes with the default image "
+        "only, and it was given; the pipeline holds no truth for yours, so nothing can compute it"
+    )
+    assert gv.parse_pipeline(gv.dump_pipeline(graph), "x.yaml").nodes["error"].truth_of == ["image"]
+
+
 def test_every_shipped_pipeline_marks_the_truth_inputs_it_has():
     for path in sorted(PIPELINES.glob("*.yaml")):
         graph = gv.load_pipeline(path)
@@ -111,3 +128,5 @@ def test_every_shipped_pipeline_marks_the_truth_inputs_it_has():
         "left",
         "right",
     ]
+    reconstruct = gv.load_pipeline(PIPELINES / "reconstruct.yaml")
+    assert reconstruct.nodes["errors"].truth_of == ["left", "right"]
