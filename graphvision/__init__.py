@@ -44,9 +44,11 @@ if TYPE_CHECKING:
     from graphvision.execution.blas import one_blas_thread
     from graphvision.execution.dask import DaskExecutor
     from graphvision.execution.executors import SyncExecutor, make_executor
+    from graphvision.execution.limits import NodeLimitError
     from graphvision.execution.record import NodeRecord, RunHooks, RunRecord, RunResult
     from graphvision.execution.run import run
     from graphvision.execution.sweep import SweepInterrupted, SweepResult, sweep
+    from graphvision.execution.truth import MissingTruthWarning
     from graphvision.graph.model import NAME_PATTERN, REF_PATTERN, Graph, Ref
     from graphvision.graph.pipeline_file import dump_pipeline, load_pipeline, parse_pipeline
     from graphvision.graph.schema import pipeline_json_schema
@@ -204,8 +206,10 @@ __all__ = [
     "Matches",
     "MatchesPort",
     "MemoryStore",
+    "MissingTruthWarning",
     "Needs",
     "NodeExecutionError",
+    "NodeLimitError",
     "NodeRecord",
     "NodeSpec",
     "NotACacheError",

@@ -11,7 +11,6 @@ import pytest
 
 import graphvision as gv
 from graphvision.cli import main
-from graphvision.execution.truth import MissingTruthWarning
 
 from ..conftest import PIPELINES
 
@@ -49,7 +48,7 @@ def test_given_images_without_their_truth_skip_what_reads_it_with_one_line(graph
         warnings.simplefilter("always")
         result = gv.run(graph, inputs={"image": _image(0)}, cache=None)
     assert set(result.outputs) == {"blur"}  # error and truth_blur read the truth
-    [warning] = [w for w in caught if issubclass(w.category, MissingTruthWarning)]
+    [warning] = [w for w in caught if issubclass(w.category, gv.MissingTruthWarning)]
     assert str(warning.message) == (
         "skipped outputs error, truth_blur: they need the ground truth 'truth': its default "
         "goes with the default image only, and it was given; give input truth "
@@ -64,7 +63,7 @@ def test_with_their_truth_or_all_defaults_every_output_runs(graph):
     expected = np.mean((result.outputs["blur"].astype(np.float64) - truth) ** 2)
     assert result.outputs["error"] == pytest.approx(expected, rel=1e-5)
     with warnings.catch_warnings():
-        warnings.simplefilter("error", MissingTruthWarning)
+        warnings.simplefilter("error", gv.MissingTruthWarning)
         assert set(gv.run(graph, cache=None).outputs) == {"blur", "error", "truth_blur"}
 
 
@@ -108,7 +107,7 @@ def test_a_node_measuring_against_a_truth_in_the_pipeline_is_skipped_on_other_in
     (tmp_path / "n.yaml").write_text(text)
     graph = gv.load_pipeline(tmp_path / "n.yaml")
     assert graph.nodes["error"].truth_of == ["image"]
-    with pytest.warns(MissingTruthWarning) as caught:
+    with pytest.warns(gv.MissingTruthWarning) as caught:
         result = gv.run(graph, inputs={"image": _image(0), "truth": _image(1)}, cache=None)
     assert set(result.outputs) == {"blur", "truth_blur"}
     assert str(caught[0].message) == (
