@@ -53,6 +53,8 @@ if TYPE_CHECKING:
     from graphvision.graph.pipeline_file import dump_pipeline, load_pipeline, parse_pipeline
     from graphvision.graph.schema import pipeline_json_schema
     from graphvision.locations import default_cache_dir
+    from graphvision.nodes.backends import implements
+    from graphvision.nodes.marks import Conformance
     from graphvision.nodes.node import node, source
     from graphvision.nodes.plugins import Needs, discover
     from graphvision.nodes.registry import Registry
@@ -174,6 +176,7 @@ __all__ = [
     "ColorImage",
     "ColorImagePort",
     "CompiledGraph",
+    "Conformance",
     "DaskExecutor",
     "Descriptors",
     "DescriptorsPort",
@@ -247,6 +250,7 @@ __all__ = [
     "default_cache_dir",
     "discover",
     "dump_pipeline",
+    "implements",
     "load_pipeline",
     "make_executor",
     "max_pixels",

@@ -225,6 +225,7 @@ def load_run_arguments(
         os.environ[ENVIRONMENT_VARIABLE] = str(args.max_pixels)
     node_limit_options(args)
     graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
+    graph = graph.with_backends(getattr(args, "backend", None))  # --backend: the run's order
     registry = registry_for(args, graph)
     overrides = {
         key: yaml_value(value, f"--set {key}={value}")

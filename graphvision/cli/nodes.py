@@ -14,8 +14,11 @@ if TYPE_CHECKING:
     pass
 
 
-def listed_nodes(args: argparse.Namespace) -> tuple[dict[str, str], Callable[[str], Any]]:
-    """Each node's one-line summary by id, and a function giving a node's description.
+def listed_nodes(
+    args: argparse.Namespace,
+) -> tuple[dict[str, str], Callable[[str], Any], dict[str, list[str]]]:
+    """Each node's one-line summary by id, a function giving a node's description, and
+    the backends other than the reference that implement each op.
 
     From the plugin index when it matches the installed plugins and no local
     plugin is asked for (no plugin is imported then), else by discovering them.
@@ -30,16 +33,28 @@ def listed_nodes(args: argparse.Namespace) -> tuple[dict[str, str], Callable[[st
         indexed = read_index(environment_key(installed_entry_points()))
         if indexed is not None:
             summaries = {op: str(entry["summary"]) for op, entry in indexed.items()}
-            return summaries, lambda op: indexed[op]["description"]
+            others = {
+                op: [b for b in entry["description"].get("backends", {}) if b != "numpy"]
+                for op, entry in indexed.items()
+            }
+            return summaries, lambda op: indexed[op]["description"], others
     registry = registry_for(args)
     summaries = {op: spec.summary for op, spec in registry.nodes.items()}
-    return summaries, lambda op: registry.nodes[op].describe()
+    others = {op: [b for b in registry.backends_of(op) if b != "numpy"] for op in summaries}
+    return summaries, registry.describe, others
+
+
+def backends_text(backends: dict[str, bool]) -> str:
+    """``numpy, opencv`` with each backend whose library is missing marked."""
+    if not backends:
+        return "numpy"
+    return ", ".join(f"{b}{'' if ok else ' (not installed)'}" for b, ok in backends.items())
 
 
 def cmd_nodes(args: argparse.Namespace) -> int:
     import json
 
-    summaries, describe = listed_nodes(args)
+    summaries, describe, others = listed_nodes(args)
     if args.json:
         print(json.dumps({op: describe(op) for op in sorted(summaries)}, indent=2))
         return EXIT_OK
@@ -50,7 +65,8 @@ def cmd_nodes(args: argparse.Namespace) -> int:
         print(f"{family}")
         width = max(len(op) for op in ops)
         for op in ops:
-            print(f"  {op.ljust(width)}  {summaries[op]}")
+            extra = f"  [+{', '.join(others[op])}]" if others.get(op) else ""
+            print(f"  {op.ljust(width)}  {summaries[op]}{extra}")
     return EXIT_OK
 
 
@@ -62,7 +78,7 @@ def cmd_describe(args: argparse.Namespace) -> int:
 
     if names_a_pipeline(args.op):
         return cmd_describe_pipeline(args)
-    summaries, describe = listed_nodes(args)
+    summaries, describe, _ = listed_nodes(args)
     if args.op not in summaries:
         raise UnknownNameError(f"unknown op '{args.op}'{did_you_mean(args.op, summaries)}")
     info = describe(args.op)
@@ -71,6 +87,7 @@ def cmd_describe(args: argparse.Namespace) -> int:
         return EXIT_OK
     where = f"version {info['version']}, plugin {info['plugin']}, {info['function']}"
     print(f"{info['id']} ({where})\n")
+    print(f"backends: {backends_text(info.get('backends', {}))}")
     print("inputs:")
     for name, port in info["inputs"].items():
         print(f"  {name}: {port['type']}{' (optional)' if port['optional'] else ''}")

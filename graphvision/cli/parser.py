@@ -136,6 +136,12 @@ def run_options(parser: argparse.ArgumentParser) -> None:
         help="with --executor dask: an existing scheduler, tcp://HOST:PORT "
         "(default $GRAPHVISION_DASK_SCHEDULER, else a local cluster)",
     )
+    parser.add_argument(
+        "--backend",
+        metavar="NAMES",
+        help="backend lookup order, e.g. opencv,numpy: each node runs the first implementation "
+        "of its op found (default: the pipeline's backends:, else numpy, the reference)",
+    )
     parser.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
     parser.add_argument(
         "--progress",

@@ -9,18 +9,22 @@ problem, each with its YAML file and line:
 * missing required input port, type mismatch naming both ends and both types,
 * invalid parameter (type, range, unknown name), unknown ``${params.x}``,
 * cycles, printed as ``a -> b -> a``,
-* graph inputs that are unused, of unknown type, or missing a value.
+* graph inputs that are unused, of unknown type, or missing a value,
+* an unknown backend, a node pinned to a backend its op lacks or that is not installed
+  (each node's implementation is chosen here: :mod:`.backends`).
 """
 
 from __future__ import annotations
 
 import difflib
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
 import pydantic
 
+from graphvision.compiler.backends import BackendChooser
 from graphvision.errors import PipelineError, Problem, UnknownNameError, did_you_mean
 from graphvision.graph.collector import collector_paused
 from graphvision.graph.model import NAME, PARAM_REFERENCE, Graph, Ref, output_name_problem
@@ -51,7 +55,7 @@ class Step:
     def fingerprint(self) -> str:
         """What the node is (id, version, code, parameters), for its cache keys."""
         spec = self.spec
-        return node_fingerprint(spec.id, spec.version, spec.source_hash, self.params)
+        return node_fingerprint(spec.key_id, spec.version, spec.source_hash, self.params)
 
 
 @dataclass(frozen=True)
@@ -118,8 +122,8 @@ class CompiledGraph:
 
 
 class _Checker:
-    def __init__(self, graph: Graph, registry: Registry) -> None:
-        self.graph, self.registry = graph, registry
+    def __init__(self, graph: Graph, registry: Registry, chooser: BackendChooser) -> None:
+        self.graph, self.registry, self.chooser = graph, registry, chooser
         self.problems: list[Problem] = []
         self.resolved: dict[str, dict[str, type[PortType]]] = {}
         self.untyped: set[str] = set()  # generic nodes whose input's type is unknown
@@ -330,6 +334,9 @@ class _Checker:
             params = self.substitute(decl.params, f"nodes.{name}.params", used_params)
             checked = self.check_params(name, spec, params)
             wired = self.check_inputs(name, spec)
+            spec, problem = self.chooser.choose(spec, decl.backend)
+            if problem:
+                self.report(f"nodes.{name}.backend", problem)
             steps[name] = Step(name, spec, checked, wired, self.resolved[name])
 
         outputs: dict[str, tuple[str, str]] = {}
@@ -368,7 +375,11 @@ class _Checker:
 
 
 def compile_graph(
-    graph: Graph, registry: Registry, *, provided: set[str] | None = None
+    graph: Graph,
+    registry: Registry,
+    *,
+    provided: set[str] | None = None,
+    backends: Sequence[str] | None = None,
 ) -> CompiledGraph:
     """Validate ``graph`` against ``registry`` and resolve it for running.
 
@@ -381,11 +392,18 @@ def compile_graph(
     provided : set of str, optional
         Names of graph inputs given values for a run; inputs neither provided
         nor defaulted are then reported. None skips that check (``validate``).
+    backends : sequence of str, optional
+        The backend lookup order (``["opencv", "numpy"]``); None takes the graph's
+        ``backends:``, and the reference ``numpy`` ends every order (:mod:`.backends`).
 
     Raises
     ------
     PipelineError
         Listing every problem found, sorted by line.
     """
+    chooser = BackendChooser(registry, graph.backends if backends is None else backends)
     with collector_paused():
-        return _Checker(graph, registry).run(provided)
+        checker = _Checker(graph, registry, chooser)
+        for problem in chooser.order_problems():  # the file's line, or the command line's
+            checker.report("backends" if backends is None else "--backend", problem)
+        return checker.run(provided)

@@ -107,6 +107,7 @@ def run_batch(
     files_at_once: int | None = None,
     one_task_per_file: bool | None = None,
     pages: BatchPages = NO_PAGES,
+    backends: Sequence[str] | str | None = None,
 ) -> BatchResult:
     """Run ``graph`` once per file, giving the file to graph input ``input``.
 
@@ -137,6 +138,8 @@ def run_batch(
         Report pages to write besides outputs, records and ``batch.csv``
         (``graphvision.run_batch`` writes ``report.md``, ``report.html`` and
         ``batch.html``: :data:`graphvision.views.batch_page.BATCH_PAGES`).
+    backends : sequence of str, optional
+        The backend lookup order of every file's run, as for :func:`graphvision.run`.
 
     Returns
     -------
@@ -154,6 +157,8 @@ def run_batch(
     """
     run_arguments(cache, executor, workers)
     graph = graph_argument(graph)
+    if backends is not None:  # an order of its own: the graph compiled again with it
+        graph = (graph.graph if isinstance(graph, CompiledGraph) else graph).with_backends(backends)
     inputs = mapping_argument(inputs, "inputs")
     outputs = names_argument(outputs, "outputs")
     overrides = mapping_argument(overrides, "overrides")

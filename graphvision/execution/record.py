@@ -36,6 +36,8 @@ class NodeRecord:
     error: str = ""
     params: dict[str, Any] = field(default_factory=dict)
     keys: dict[str, str] = field(default_factory=dict)
+    backend: str = "numpy"
+    """The backend whose implementation of the op ran (or would run) the node."""
 
 
 @dataclass
@@ -78,15 +80,15 @@ class RunRecord:
 
     def table(self) -> str:
         """The record as an aligned text table."""
-        rows = [("node", "op", "status", "ms", "bytes")]
+        rows = [("node", "op", "backend", "status", "ms", "bytes")]
         rows += [
-            (n.name, n.op, n.status, f"{n.seconds * 1e3:.1f}", str(n.output_bytes))
+            (n.name, n.op, n.backend, n.status, f"{n.seconds * 1e3:.1f}", str(n.output_bytes))
             for n in self.nodes
         ]
-        widths = [max(len(r[i]) for r in rows) for i in range(5)]
+        widths = [max(len(r[i]) for r in rows) for i in range(6)]
         lines = [
             "  ".join(
-                c.ljust(w) if i < 3 else c.rjust(w)
+                c.ljust(w) if i < 4 else c.rjust(w)
                 for i, (c, w) in enumerate(zip(row, widths, strict=True))
             )
             for row in rows

@@ -46,6 +46,7 @@ from functools import partial
 from typing import Any
 
 from graphvision.cache.store import Cache
+from graphvision.compiler.backends import parse_backends
 from graphvision.compiler.compile import CompiledGraph, Schedule, compile_graph
 from graphvision.errors import (
     RunError,
@@ -92,6 +93,7 @@ def run(
     node_timeout: float | None = None,
     node_memory: int | None = None,
     max_memory: int | None = None,
+    backends: Sequence[str] | str | None = None,
 ) -> RunResult:
     """Run a pipeline and return its outputs and run record.
 
@@ -132,6 +134,11 @@ def run(
         Bytes the run may take (default: ``GRAPHVISION_MAX_MEMORY``, else the memory
         available): a run whose peak, estimated from its inputs' shapes before it
         starts, exceeds it is refused (:mod:`graphvision.execution.peak_memory`).
+    backends : sequence of str, optional
+        The backend lookup order (``["opencv", "numpy"]`` or ``"opencv,numpy"``): each
+        node runs the first implementation of its op found along it (a node's
+        ``backend:`` pins one). None takes the pipeline's ``backends:``, else the
+        reference, ``numpy``. A CompiledGraph is compiled again for another order.
 
     Raises
     ------
@@ -147,7 +154,7 @@ def run(
     graph, inputs, outputs, overrides = _checked_arguments(
         graph, inputs, outputs, overrides, cache, executor, workers
     )
-    compiled, registry = _compiled(graph, registry, inputs, overrides)
+    compiled, registry = _compiled(graph, registry, inputs, overrides, backends)
     wanted = _wanted_outputs(compiled, outputs, inputs)
     wanted = outputs_with_truth(compiled, wanted, set(inputs), asked=outputs is not None)
     schedule = compiled.schedule_for(wanted)
@@ -211,19 +218,21 @@ def _compiled(
     registry: Registry | None,
     inputs: dict[str, Any],
     overrides: dict[str, Any],
+    backends: Sequence[str] | str | None = None,
 ) -> tuple[CompiledGraph, Registry]:
     """The graph, overrides applied, compiled (step 1); the registry it was checked against."""
+    order = None if backends is None else parse_backends(backends)
     if isinstance(graph, CompiledGraph):
-        if not overrides:
+        if not overrides and order is None:
             return graph, registry or _discover_for(graph.graph)
-        graph = graph.graph  # overrides change parameters: compile again
+        graph = graph.graph  # overrides change parameters, an order the implementations
     registry = registry or _discover_for(graph)
     if overrides:
         try:
             graph = graph.with_overrides(overrides)
         except KeyError as error:
             raise UnknownNameError(str(error.args[0])) from None
-    return compile_graph(graph, registry, provided=set(inputs)), registry
+    return compile_graph(graph, registry, provided=set(inputs), backends=order), registry
 
 
 def _discover_for(graph: Graph) -> Registry:

@@ -214,6 +214,7 @@ class RunState:
             status,
             params=dict(step.params),
             keys={port: keys[(name, port)] for port in step.outputs},
+            backend=step.spec.backend,
         )
 
     # -- execution --------------------------------------------------------------------

@@ -107,6 +107,7 @@ def sweep(
     keep_going: bool = False,
     outputs: Sequence[str] | None = None,
     on_row: Callable[[int, int, dict[str, Any]], None] | None = None,
+    backends: Sequence[str] | str | None = None,
 ) -> SweepResult:
     """Run ``graph`` for every combination of ``grid``'s values.
 
@@ -129,6 +130,8 @@ def sweep(
     on_row : callable, optional
         Called as ``on_row(number, total, row)`` as each combination finishes
         (``number`` is 1-based).
+    backends : sequence of str, optional
+        The backend lookup order of every run, as for :func:`graphvision.run`.
 
     Returns
     -------
@@ -152,7 +155,7 @@ def sweep(
     run_arguments(cache, executor, workers)
     inputs = mapping_argument(inputs, "inputs")
     outputs = names_argument(outputs, "outputs")
-    graph = _plain_graph(graph_argument(graph))
+    graph = _plain_graph(graph_argument(graph)).with_backends(backends)
     if not isinstance(grid, Mapping):
         raise TypeError(f"grid must be a dict from 'node.param' to a list of values, got {grid!r}")
     if registry is None:

@@ -104,6 +104,8 @@ class NodeDecl:
     description: str = ""
     timeout: float | None = None
     truth_of: list[str] = field(default_factory=list)
+    backend: str = ""
+    """The backend this node must run with ('' follows the run's lookup order)."""
 
 
 @dataclass
@@ -117,6 +119,8 @@ class Graph:
     nodes: dict[str, NodeDecl] = field(default_factory=dict)
     outputs: dict[str, Ref] = field(default_factory=dict)
     plugins: list[str] = field(default_factory=list)
+    backends: list[str] = field(default_factory=list)
+    """The backend lookup order of the pipeline (empty: the reference, ``numpy``)."""
     # Where the graph came from, for error messages; not part of equality.
     source: str = field(default="", compare=False)
     # Pipeline params whose ${params.NAME} references an override replaced: not "unused".
@@ -147,14 +151,16 @@ class Graph:
         op: str,
         /,
         params: dict[str, Any] | None = None,
+        backend: str = "",
         **inputs: Ref | str,
     ) -> Ref:
-        """Add node ``name`` running ``op``; keyword arguments connect its input ports."""
+        """Add node ``name`` running ``op``; keyword arguments connect its input ports;
+        ``backend`` pins the implementation it runs (see :mod:`graphvision.nodes.backends`)."""
         self._check_new_name(name)
         refs = {
             port: ref if isinstance(ref, Ref) else Ref.parse(ref) for port, ref in inputs.items()
         }
-        self.nodes[name] = NodeDecl(op, refs, dict(params or {}))
+        self.nodes[name] = NodeDecl(op, refs, dict(params or {}), backend=backend)
         return Ref(name)
 
     def output(self, name: str, ref: Ref | str) -> None:
@@ -236,6 +242,17 @@ class Graph:
                 listed = f"{did_you_mean(subject, others)}; inputs: {', '.join(others) or 'none'}"
                 problems.append((f"{where}.truth_of", f"'{subject}' is not another input{listed}"))
         return problems
+    def with_backends(self, backends: list[str] | str | None) -> Graph:
+        """A copy whose backend lookup order is ``backends`` (``"opencv,numpy"`` or a list;
+        None: this graph itself). The order given for a run replaces the file's
+        ``backends:``, so a problem with it is not placed at that line."""
+        if backends is None:
+            return self
+        graph = copy.deepcopy(self)
+        items = backends.split(",") if isinstance(backends, str) else list(backends)
+        graph.backends = [str(b).strip() for b in items if str(b).strip()]
+        graph.lines = {k: v for k, v in graph.lines.items() if k.partition(".")[0] != "backends"}
+        return graph
 
     def line_of(self, where: str) -> int:
         """The YAML line of the dotted location ``where`` (or of its closest parent)."""

@@ -139,6 +139,7 @@ def _graph_from_model(model: PipelineModel, file: str, lines: dict[str, int]) ->
             decl.description,
             decl.timeout,
             list(decl.truth_of),
+            decl.backend or "",
         )
         for name, decl in model.nodes.items()
     }
@@ -150,6 +151,7 @@ def _graph_from_model(model: PipelineModel, file: str, lines: dict[str, int]) ->
         nodes=nodes,
         outputs={name: Ref.parse(ref) for name, ref in model.outputs.items()},
         plugins=list(model.plugins),
+        backends=list(model.backends),
         source=file,
         lines=lines,
     )
@@ -216,6 +218,8 @@ def graph_to_dict(graph: Graph) -> dict[str, Any]:
         data["description"] = graph.description
     if graph.plugins:
         data["plugins"] = list(graph.plugins)
+    if graph.backends:
+        data["backends"] = list(graph.backends)
     inputs = {}
     for name, decl in graph.inputs.items():
         entry: dict[str, Any] = {"type": decl.type}
@@ -242,6 +246,8 @@ def graph_to_dict(graph: Graph) -> dict[str, Any]:
             entry["timeout"] = node.timeout
         if node.truth_of:
             entry["truth_of"] = list(node.truth_of)
+        if node.backend:
+            entry["backend"] = node.backend
         nodes[name] = entry
     data["nodes"] = nodes
     data["outputs"] = {name: str(ref) for name, ref in graph.outputs.items()}

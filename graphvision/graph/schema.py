@@ -88,6 +88,11 @@ class NodeModel(_Section):
         "the pipeline: when one of them is given, the outputs that read this node are "
         "skipped (one line says why).",
     )
+    backend: str | None = Field(
+        None,
+        description="Pin the backend that runs this node ('numpy', 'opencv', ...), "
+        "whatever the run's lookup order.",
+    )
 
 
 class PipelineModel(_Section):
@@ -96,6 +101,11 @@ class PipelineModel(_Section):
     description: str = Field("", description="What the pipeline does.")
     plugins: list[str] = Field(
         default_factory=list, description="Local plugin files or folders, relative to this file."
+    )
+    backends: list[str] = Field(
+        default_factory=list,
+        description="Backend lookup order, e.g. [opencv, numpy]: each node runs with the "
+        "first that implements its op (the reference, numpy, last). --backend overrides it.",
     )
     inputs: dict[Name, Input] = Field(
         default_factory=dict,

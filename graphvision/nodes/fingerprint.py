@@ -49,6 +49,7 @@ if TYPE_CHECKING:
 __all__ = [
     "code_fingerprint",
     "distributions_of",
+    "library_version",
     "node_fingerprint",
     "note_distribution",
     "top_level_distributions",
@@ -121,6 +122,13 @@ def _distribution_version(project: str) -> str:
 
     names = distributions_of(project)
     return ";".join(f"{name}=={version(name)}" for name in sorted(set(names)))
+
+
+def library_version(module: str) -> str:
+    """``name==version`` of the distributions providing top-level module ``module``
+    (``cv2`` -> ``opencv-python-headless==4.10.0.84``), or ``module==?`` when none is
+    found; read from the installed metadata, without importing the module."""
+    return _distribution_version(module) or f"{module}==?"
 
 
 class _Walker:

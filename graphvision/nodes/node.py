@@ -39,7 +39,7 @@ import functools
 from collections.abc import Callable
 from typing import Any
 
-from graphvision.nodes.marks import NodeMark, SourceMark
+from graphvision.nodes.marks import Conformance, NodeMark, SourceMark
 from graphvision.nodes.signature import build_spec
 from graphvision.nodes.spec import NodeSpec
 
@@ -70,6 +70,7 @@ def node(
     cache: bool = True,
     overrides: bool = False,
     check: Callable[..., None] | None = None,
+    conformance: Conformance | None = None,
 ) -> Callable[[Callable], Callable]:
     """Mark a function as the graphvision node ``id`` (``family.name``).
 
@@ -89,10 +90,13 @@ def node(
         each valid but not together (``p2 < p1``, an even window): it runs with
         the parameter model, so a pipeline is refused before anything runs and a
         direct call before the body, naming the node.
+    conformance : Conformance, optional
+        How far another backend's implementation may differ from this one (the
+        reference) on the conformance suite's inputs (see :mod:`.backends`).
     """
 
     def mark(func: Callable) -> Callable:
-        func.__graphvision_node__ = NodeMark(id, version, cache, overrides, check)  # type: ignore[attr-defined]
+        func.__graphvision_node__ = NodeMark(id, version, cache, overrides, check, conformance)  # type: ignore[attr-defined]
         checked = _checked_call(func)
         if func.__module__ == "__main__":
             _SCRIPT_NODES[id] = checked

@@ -65,7 +65,7 @@ __all__ = [
 ]
 
 ENTRY_POINT_GROUP = "graphvision.plugins"
-FORMAT = 3  # bump when what an index holds changes
+FORMAT = 4  # bump when what an index holds changes
 
 
 def installed_entry_points() -> list[EntryPoint]:
@@ -191,7 +191,8 @@ def read_index(key: str) -> dict[str, Any] | None:
 
 def read_providers(key: str) -> dict[str, dict[str, list[str]]] | None:
     """For each entry-point plugin of the index under ``key``, the node ids, port type
-    names and input-source schemes it registers; None without a sound index."""
+    names, input-source schemes and implementations (``op@backend``) it registers; None
+    without a sound index."""
     index = _read(key)
     return index["plugins"] if index is not None else None
 
@@ -200,7 +201,7 @@ def write_index(key: str, registry: Registry) -> None:
     """Record ``registry``'s nodes under ``key`` and remove this environment's older indexes
     (quietly nothing if the files cannot be written)."""
     nodes = {
-        op: {"summary": spec.summary, "description": spec.describe()}
+        op: {"summary": spec.summary, "description": registry.describe(op)}
         for op, spec in sorted(registry.nodes.items())
     }
     plugins = {
@@ -208,6 +209,7 @@ def write_index(key: str, registry: Registry) -> None:
             "nodes": sorted(status.nodes),
             "port_types": sorted(status.port_types),
             "sources": sorted(status.sources),
+            "implementations": sorted(status.implementations),
         }
         for name, status in sorted(registry.plugins.items())
     }

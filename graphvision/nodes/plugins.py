@@ -129,6 +129,9 @@ def _providers(
             if not providers:
                 return None
             wanted |= providers
+    for plugin, entry in plugins.items():  # other backends' implementations of the ops
+        if {i.partition("@")[0] for i in entry.get("implementations", [])} & needs.ops:
+            wanted.add(plugin)
     return wanted
 
 

@@ -17,6 +17,14 @@ import types
 from dataclasses import dataclass, field
 
 from graphvision.errors import DuplicateNodeError, RegistrationError, UnknownNameError, did_you_mean
+from graphvision.nodes.backends import (
+    REFERENCE,
+    Implementation,
+    implementation_of,
+    implementation_problem,
+    implementation_spec,
+    installed,
+)
 from graphvision.nodes.signature import build_spec
 from graphvision.nodes.spec import NodeSpec, SourceSpec
 from graphvision.values.builtin import builtin_port_types
@@ -35,6 +43,8 @@ class PluginStatus:
     error: str = ""
     port_types: list[str] = field(default_factory=list)
     sources: list[str] = field(default_factory=list)
+    implementations: list[str] = field(default_factory=list)
+    """``op@backend`` of each implementation the plugin adds to an op."""
 
 
 class Registry:
@@ -47,6 +57,9 @@ class Registry:
         }
         self.sources: dict[str, SourceSpec] = {}
         self.plugins: dict[str, PluginStatus] = {}
+        self._implementation_specs: dict[tuple[str, str], NodeSpec] = {}
+        self.implementations: dict[str, dict[str, Implementation]] = {}
+        """Op id -> backend -> implementation (the reference, ``numpy``, is the op's node)."""
         self.renamed: dict[str, str] = {}
         """Old op id -> new one, from the plugins' ``RENAMED_OPS`` (a pipeline using an old
         id is told the new one)."""
@@ -105,8 +118,11 @@ class Registry:
             port_types += [c for port in spec.inputs.values() for c in port.choices]
             port_types += list(spec.outputs.values())
         kept = self._check_new_nodes(specs)
+        impls = self._check_implementations(members, name, kept)
         for spec in kept:
             self.nodes[spec.id] = spec
+        for impl in impls:
+            self.implementations.setdefault(impl.op, {})[impl.backend] = impl
         self.renamed.update(getattr(module, "RENAMED_OPS", {}))
         for source_spec in sources:
             self.sources[source_spec.scheme] = source_spec
@@ -118,6 +134,7 @@ class Registry:
             [s.id for s in kept],
             port_types=sorted({t.type_name() for t in port_types}),
             sources=[s.scheme for s in sources],
+            implementations=[f"{i.op}@{i.backend}" for i in impls],
         )
         self.plugins[name] = status
         return status
@@ -145,6 +162,57 @@ class Registry:
                     "replacement with @node(..., overrides=True)"
                 )
         return kept
+
+    def _check_implementations(
+        self, members: list, plugin: str, kept: list[NodeSpec]
+    ) -> list[Implementation]:
+        """The plugin's implementations, each checked against its op when the op is known
+        (here or registered before); one of an op registered later is checked on use."""
+        impls = [
+            implementation_of(m, plugin)
+            for m in members
+            if hasattr(m, "__graphvision_implementation__")
+        ]
+        ops = {**self.nodes, **{spec.id: spec for spec in kept}}
+        problems = [implementation_problem(ops[i.op], i) for i in impls if i.op in ops]
+        problems = [p for p in problems if p]
+        if problems:
+            raise RegistrationError("\n".join(problems))
+        return impls
+
+    def backends_of(self, op: str) -> dict[str, bool]:
+        """The backends implementing ``op`` (the reference first), each with whether the
+        modules it requires are installed."""
+        found = {REFERENCE: True}
+        for backend, impl in sorted(self.implementations.get(op, {}).items()):
+            found[backend] = installed(impl)
+        return found
+
+    def describe(self, op: str) -> dict:
+        """The op's description (:meth:`NodeSpec.describe`) with its ``backends``
+        (name -> installed), as ``graphvision describe`` and ``nodes --json`` show it."""
+        return {**self.node(op).describe(), "backends": self.backends_of(op)}
+
+    def backends(self) -> set[str]:
+        """Every backend some op has an implementation of (the reference included)."""
+        return {REFERENCE} | {b for impls in self.implementations.values() for b in impls}
+
+    def implementation(self, op: str, backend: str) -> NodeSpec | None:
+        """The spec of ``op`` run by ``backend`` (None when it has none or the op is
+        unknown); a RegistrationError when the implementation does not fit the op."""
+        spec = self.nodes.get(op)
+        if spec is None or backend == REFERENCE:
+            return spec
+        impl = self.implementations.get(op, {}).get(backend)
+        if impl is None:
+            return None
+        key = (op, backend)
+        if key not in self._implementation_specs:
+            problem = implementation_problem(spec, impl)
+            if problem:
+                raise RegistrationError(problem)
+            self._implementation_specs[key] = implementation_spec(spec, impl)
+        return self._implementation_specs[key]
 
     def record_failure(self, name: str, origin: str, error: str) -> None:
         self.plugins[name] = PluginStatus(name, origin, error=error)

@@ -139,6 +139,7 @@ def _build_spec(func: Callable, plugin: str, params_checked: bool) -> NodeSpec:
         output_tuple=output_tuple,
         output_vars=output_vars,
         check=mark.check,
+        conformance=mark.conformance,
     )
     if not params_checked:
         try:

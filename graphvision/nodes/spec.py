@@ -6,7 +6,6 @@ from __future__ import annotations
 import copy
 import importlib
 import inspect
-import re
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -16,8 +15,9 @@ from typing import Any
 import pydantic
 
 from graphvision.errors import ParameterError, PortValueError, did_you_mean
-from graphvision.nodes.fingerprint import code_fingerprint
-from graphvision.nodes.marks import SINGLE_OUTPUT, unchecked
+from graphvision.nodes.doc_text import doc_summary, math_text, plain_text
+from graphvision.nodes.fingerprint import code_fingerprint, library_version
+from graphvision.nodes.marks import SINGLE_OUTPUT, Conformance, unchecked
 from graphvision.values.ports import PortType
 
 __all__ = [
@@ -26,6 +26,7 @@ __all__ = [
     "NodeSpec",
     "SourceSpec",
     "doc_summary",
+    "math_text",
     "params_model",
     "plain_text",
 ]
@@ -129,6 +130,16 @@ class NodeSpec:
     output_tuple: type | None = field(default=None, repr=False)
     output_vars: dict[str, str] = field(default_factory=dict)
     check: Callable[..., None] | None = field(default=None, repr=False)
+    conformance: Conformance | None = field(default=None, repr=False)
+    backend: str = "numpy"
+    """The backend of this implementation (``numpy``: the op's own function, the reference)."""
+    requires: tuple[str, ...] = ()
+    """Modules the implementation imports when it runs (their versions are in its key)."""
+
+    @property
+    def key_id(self) -> str:
+        """The op id as cache keys know it: ``op`` for the reference, ``op@backend`` else."""
+        return self.id if self.backend == "numpy" else f"{self.id}@{self.backend}"
 
     @property
     def family(self) -> str:
@@ -141,8 +152,12 @@ class NodeSpec:
 
     @cached_property
     def source_hash(self) -> str:
-        """Digest of the code the node runs, from the loaded code (see ``_fingerprint``)."""
-        return code_fingerprint(self.func)
+        """Digest of the code the node runs, from the loaded code (see ``_fingerprint``),
+        and of the versions of the libraries an implementation requires."""
+        digest = code_fingerprint(self.func)
+        if self.requires:
+            digest += "+" + ",".join(library_version(m) for m in self.requires)
+        return digest
 
     @cached_property
     def params_model(self) -> type[pydantic.BaseModel]:
@@ -271,6 +286,7 @@ class NodeSpec:
             "outputs": {k: self._output_label(k) for k in self.outputs},
             "params": self.params_schema(),
             "cache": self.cache,
+            "conformance": self.conformance.describe() if self.conformance else None,
             "summary": self.summary,
             "doc": inspect.cleandoc(self.doc),  # reStructuredText, as written
             "text": plain_text(inspect.cleandoc(self.doc)),  # as `graphvision describe` shows it
@@ -297,103 +313,3 @@ def params_model(
         __validators__=validators,
         **fields,
     )
-
-
-# -- a docstring's summary as plain text ---------------------------------------------------
-
-_SYMBOLS = {
-    "times": "×", "cdot": "·", "pm": "±", "mid": "|", "|": "‖", "lceil": "⌈", "rceil": "⌉",
-    "lfloor": "⌊", "rfloor": "⌋", "sum": " Σ", "prod": " Π", "int": "∫", "sqrt": "√",
-    "le": "≤", "leq": "≤", "ge": "≥", "geq": "≥", "neq": "≠", "ne": "≠", "approx": "≈",
-    "infty": "∞", "in": "∈", "to": "→", "rightarrow": "→", "leftarrow": "←", "nabla": "∇",
-    "partial": "∂", "circ": "∘", "star": "⋆", "ast": "∗", "propto": "∝", "sim": "∼",
-    "alpha": "α", "beta": "β", "gamma": "γ", "delta": "δ", "epsilon": "ε", "varepsilon": "ε",
-    "zeta": "ζ", "eta": "η", "theta": "θ", "kappa": "κ", "lambda": "λ", "mu": "μ", "nu": "ν",
-    "xi": "ξ", "pi": "π", "rho": "ρ", "sigma": "σ", "tau": "τ", "phi": "φ", "varphi": "φ",
-    "chi": "χ", "psi": "ψ", "omega": "ω", "Gamma": "Γ", "Delta": "Δ", "Theta": "Θ",
-    "Lambda": "Λ", "Sigma": "Σ", "Phi": "Φ", "Psi": "Ψ", "Omega": "Ω", "ell": "ℓ",
-    ",": " ", ";": " ", ":": " ", "!": "", " ": " ", "quad": " ", "qquad": " ",
-    "left": "", "right": "", "big": "", "Big": "", "{": "(", "}": ")", "_": "_", "%": "%",
-}  # fmt: skip
-_ACCENTS = {"tilde": "\u0303", "hat": "\u0302", "bar": "\u0304", "dot": "\u0307", "vec": "\u20d7"}
-_SUPERSCRIPTS = dict(zip("0123456789+-=()nTi", "⁰¹²³⁴⁵⁶⁷⁸⁹⁺⁻⁼⁽⁾ⁿᵀⁱ", strict=True))
-_SUBSCRIPTS = dict(zip("0123456789+-=()aehijklmnoprstuvx", "₀₁₂₃₄₅₆₇₈₉₊₋₌₍₎ₐₑₕᵢⱼₖₗₘₙₒₚᵣₛₜᵤᵥₓ"))  # noqa: B905
-_GROUP = r"\{([^{}]*)\}"
-_ABBREVIATIONS = ("e.g.", "i.e.", "cf.", "vs.", "etc.", "al.", "Fig.", "Eq.", "approx.", "resp.")
-
-
-def math_text(tex: str) -> str:
-    """Inline LaTeX as Unicode text: ``l = v_1 \\times v_2`` -> ``l = v₁ × v₂``."""
-    part = lambda t: t if re.fullmatch(r"\w+", t.strip()) else f"({t})"  # noqa: E731
-    text = re.sub(rf"\\frac\s*{_GROUP}\s*{_GROUP}", lambda m: f"{part(m[1])}/{part(m[2])}", tex)
-    text = re.sub(rf"\\(?:mathrm|text|operatorname|math[a-z]+|boldsymbol)\s*{_GROUP}", r"\1", text)
-    accents = "|".join(_ACCENTS)
-    text = re.sub(
-        rf"\\({accents})\s*(?:{_GROUP}|(\\?[A-Za-z]))",
-        lambda m: (m[2] or m[3]) + _ACCENTS[m[1]],
-        text,
-    )
-    text = re.sub(r"\\([A-Za-z]+|.)", lambda m: _SYMBOLS.get(m[1], m[1]), text)
-    text = re.sub(rf"\^\s*(?:{_GROUP}|(.))", lambda m: _script(m, _SUPERSCRIPTS, "^"), text)
-    text = re.sub(rf"_\s*(?:{_GROUP}|(.))", lambda m: _script(m, _SUBSCRIPTS, "_"), text)
-    text = text.replace("{", "").replace("}", "").replace("'", "′")
-    return re.sub(r" {2,}", " ", text).strip()
-
-
-def _script(match: re.Match[str], table: dict[str, str], mark: str) -> str:
-    """A super- or subscript in Unicode when every character has one, else ``^(…)``/``_…``."""
-    body = match[1] if match[1] is not None else match[2]
-    if body and all(c in table for c in body):
-        return "".join(table[c] for c in body)
-    return f"{mark}{body}" if len(body) == 1 else f"{mark}({body})"
-
-
-def plain_text(text: str) -> str:
-    """reStructuredText as plain text: inline math as Unicode (:func:`math_text`), roles as
-    their target's last name (``:func:`~a.b``` -> ``b``), literals and emphasis unmarked."""
-    last = lambda t: t.rsplit(".", 1)[-1] if re.fullmatch(r"[\w.]+", t) else t  # noqa: E731
-    text = re.sub(r":math:`([^`]*)`", lambda m: math_text(m[1]), text)
-    text = re.sub(r":[a-z]+:`~?([^`<]*?)(?:\s*<[^`]*>)?`", lambda m: last(m[1]), text)
-    text = text.replace("``", "")
-    return re.sub(r"(?<![\w*])\*{1,2}(\S(?:[^*]*\S)?)\*{1,2}(?![\w*])", r"\1", text)
-
-
-def doc_summary(doc: str) -> str:
-    """The first sentence of a docstring's first paragraph, whole, as plain text.
-
-    The paragraph's lines are joined (a sentence wrapped over lines is not cut),
-    reStructuredText and inline LaTeX become text (:func:`plain_text`), and a
-    pointer to the source ("(module docstring)", "(see the module docstring)",
-    "(module ``_projection``)") is dropped: a summary is read in a listing.
-    """
-    paragraph = inspect.cleandoc(doc or "").split("\n\n", 1)[0]
-    text = " ".join(plain_text(" ".join(paragraph.split())).split())
-    text = _without_source_pointers(text)
-    sentence = _first_sentence(text)
-    if sentence and sentence[-1] not in ".!?":
-        sentence += "."
-    return sentence
-
-
-def _without_source_pointers(text: str) -> str:
-    pointer = r"(?:see )?(?:the )?module(?: docstring| _?\w+)?"
-
-    def keep(match: re.Match[str]) -> str:
-        parts = [p for p in match.group(1).split(",") if not re.fullmatch(pointer, p.strip())]
-        if len(parts) == match.group(1).count(",") + 1:
-            return match.group(0)
-        return f" ({','.join(parts).strip()})" if parts else ""
-
-    return re.sub(r"\s*\(([^()]*)\)", keep, text)
-
-
-def _first_sentence(text: str) -> str:
-    """Up to the first full stop followed by a capital, outside brackets and abbreviations."""
-    depth = 0
-    for index, char in enumerate(text):
-        depth += (char in "([") - (char in ")]")
-        before, after = text[: index + 1], text[index + 1 : index + 3]
-        ends = char in ".!?" and not depth and re.fullmatch(r" [A-Z]", after)
-        if ends and not before.endswith(_ABBREVIATIONS):
-            return before
-    return text

@@ -1,0 +1,82 @@
+"""Choosing each node's implementation: the backend lookup order of a run.
+
+The order comes from, first found: ``backends=`` of :func:`~graphvision.run` (the
+command line's ``--backend opencv,numpy``), the pipeline file's ``backends:``, else
+the reference alone (``numpy``). Each node runs with the first backend of the order
+that implements its op and is installed; the reference, which implements every op,
+ends every order, so an op no backend of the order has runs as it always did. A node's
+``backend:`` pins it: an op the backend lacks, or a backend whose library is not
+installed, is then a validation problem at the node's line (naming the extra to
+install), never a silent fallback. A backend name no plugin provides is a problem too
+(with a close match): a typo must not silently run the reference.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from graphvision.errors import RegistrationError, did_you_mean
+from graphvision.nodes.backends import REFERENCE
+from graphvision.nodes.registry import Registry
+from graphvision.nodes.spec import NodeSpec
+
+__all__ = ["BackendChooser", "parse_backends"]
+
+
+def parse_backends(text: str | Sequence[str] | None) -> list[str]:
+    """``"opencv,numpy"`` or ``["opencv", "numpy"]`` as a list of names (None: empty)."""
+    if text is None:
+        return []
+    items = text.split(",") if isinstance(text, str) else list(text)
+    return [str(item).strip() for item in items if str(item).strip()]
+
+
+class BackendChooser:
+    """The implementation of each node, for one lookup order against one registry."""
+
+    def __init__(self, registry: Registry, order: Sequence[str]) -> None:
+        self.registry = registry
+        self.order = [*dict.fromkeys(order)]
+        if REFERENCE not in self.order:
+            self.order.append(REFERENCE)
+
+    def order_problems(self) -> list[str]:
+        """One message per name of the order that no loaded plugin provides."""
+        known = self.registry.backends()
+        return [
+            f"unknown backend '{name}'{did_you_mean(name, known)}; "
+            f"backends: {', '.join(sorted(known))}"
+            for name in self.order
+            if name not in known
+        ]
+
+    def choose(self, spec: NodeSpec, pinned: str) -> tuple[NodeSpec, str]:
+        """(the implementation to run, '') or (the reference, the problem with the pin)."""
+        try:
+            if pinned:
+                return self._pinned(spec, pinned)
+            for backend in self.order:
+                impl = self.registry.implementation(spec.id, backend)
+                if impl is not None and self.registry.backends_of(spec.id).get(backend):
+                    return impl, ""
+        except RegistrationError as error:
+            return spec, str(error)
+        return spec, ""  # pragma: no cover - the reference ends every order
+
+    def _pinned(self, spec: NodeSpec, backend: str) -> tuple[NodeSpec, str]:
+        available = self.registry.backends_of(spec.id)
+        if backend not in available:
+            return spec, (
+                f"{spec.id} has no '{backend}' implementation"
+                f"{did_you_mean(backend, available)}; backends: {', '.join(available)}"
+            )
+        impl = self.registry.implementation(spec.id, backend)
+        if impl is None:  # pragma: no cover - backends_of lists only registered ones
+            return spec, f"{spec.id} has no '{backend}' implementation"
+        if not available[backend]:
+            hint = self.registry.implementations[spec.id][backend].install_hint
+            return spec, (
+                f"backend '{backend}' of {spec.id} is not installed "
+                f"({', '.join(impl.requires)} not found): {hint}"
+            )
+        return impl, ""

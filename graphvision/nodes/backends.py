@@ -1,0 +1,191 @@
+"""Backends (kernel packages): one op, several implementations.
+
+An op is declared once, by its ``@node`` function: id, ports, parameters,
+documentation. That function is the op's **reference** implementation, of the
+backend ``numpy``. Any plugin may add an implementation of an op for another
+backend (``opencv``, or its own), with :func:`implements`::
+
+    @implements("filters.gaussian", backend="opencv", requires=("cv2",), extra="opencv")
+    def gaussian(image, *, sigma=1.0, truncate=4.0, mode="reflect", cval=0.0):
+        ...
+
+The implementation takes the op's inputs (positional, same names) and every
+parameter of the op (keyword-only, same names); the engine validates values and
+parameters with the op's port types and parameter model, so an implementation
+never sees a value the reference would refuse. It returns what the op returns.
+
+``requires`` names the modules the implementation imports when it runs; an
+implementation whose modules are not installed is listed but not chosen, and
+pinning it is a validation error naming ``extra`` (``pip install
+'graphvision[opencv]'``). Those modules are found with ``importlib.util.find_spec``
+(not imported) until a run uses the implementation, so listing the ops of a
+backend does not import its library.
+
+Each implementation has its own ``version``, and its code fingerprint covers its
+own source and helpers, and the version of the libraries in ``requires``: the cache
+key of a node names the backend that ran it (see :meth:`NodeSpec.key_id`), so the
+results of two backends never stand in for each other.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cache
+from importlib.util import find_spec
+
+from graphvision.errors import RegistrationError
+from graphvision.nodes.marks import unchecked
+from graphvision.nodes.spec import FunctionRef, NodeSpec
+
+__all__ = [
+    "REFERENCE",
+    "Implementation",
+    "ImplementationMark",
+    "implementation_problem",
+    "implementation_spec",
+    "implements",
+    "installed",
+]
+
+REFERENCE = "numpy"
+"""The backend of every op's declaring function: always installed, the default."""
+
+
+@dataclass(frozen=True)
+class ImplementationMark:
+    op: str
+    backend: str
+    version: int
+    requires: tuple[str, ...]
+    extra: str
+
+
+@dataclass(frozen=True)
+class Implementation:
+    """An implementation as registered: which op, which backend, the function, its plugin."""
+
+    mark: ImplementationMark
+    func: Callable
+    ref: FunctionRef
+    plugin: str
+
+    @property
+    def op(self) -> str:
+        return self.mark.op
+
+    @property
+    def backend(self) -> str:
+        return self.mark.backend
+
+    @property
+    def install_hint(self) -> str:
+        extra = self.mark.extra
+        modules = ", ".join(self.mark.requires)
+        if extra:
+            return f"pip install 'graphvision[{extra}]'"
+        return f"install {modules}"
+
+
+def implements(
+    op: str,
+    *,
+    backend: str,
+    version: int = 1,
+    requires: tuple[str, ...] = (),
+    extra: str = "",
+) -> Callable[[Callable], Callable]:
+    """Mark a function as the ``backend`` implementation of the op ``op``.
+
+    Parameters
+    ----------
+    op : str
+        The id of the op (declared by some plugin's ``@node`` function).
+    backend : str
+        The backend's name (lower snake case; ``numpy`` is the reference's).
+    version : int
+        Bump it when the implementation's results change for reasons its source
+        does not show; it is part of the cache key of every result it computes.
+    requires : tuple of str
+        Modules the implementation imports when it runs (``("cv2",)``).
+    extra : str
+        The ``graphvision`` extra that installs them, named by errors.
+    """
+
+    def mark(func: Callable) -> Callable:
+        func.__graphvision_implementation__ = ImplementationMark(  # type: ignore[attr-defined]
+            op, backend, version, tuple(requires), extra
+        )
+        return func
+
+    return mark
+
+
+def implementation_of(func: Callable, plugin: str) -> Implementation:
+    """The registered form of a marked function, or a RegistrationError naming it."""
+    mark: ImplementationMark = func.__graphvision_implementation__  # type: ignore[attr-defined]
+    where = f"plugin '{plugin}', function {func.__qualname__}"
+    if mark.backend == REFERENCE or not mark.backend.isidentifier() or not mark.backend.islower():
+        raise RegistrationError(
+            f"{where}: backend must be a lower-case name other than '{REFERENCE}' "
+            f"(the op's own function is its {REFERENCE} implementation), got {mark.backend!r}"
+        )
+    if not isinstance(mark.version, int) or isinstance(mark.version, bool) or mark.version < 1:
+        raise RegistrationError(f"{where}: version must be a positive integer")
+    func = unchecked(func)
+    module = sys.modules.get(func.__module__)
+    path = getattr(module, "__graphvision_path__", "") if module else ""
+    return Implementation(mark, func, FunctionRef(func.__module__, func.__qualname__, path), plugin)
+
+
+def implementation_problem(spec: NodeSpec, impl: Implementation) -> str:
+    """Why ``impl`` cannot implement ``spec`` ('' when it can): its inputs must be the op's
+    inputs in order, and its keyword-only parameters the op's parameters."""
+    parameters = inspect.signature(impl.func).parameters.values()
+    inputs = [p.name for p in parameters if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    params = {p.name for p in parameters if p.kind == p.KEYWORD_ONLY}
+    where = f"plugin '{impl.plugin}', function {impl.func.__qualname__}"
+    if inputs != list(spec.inputs):
+        return (
+            f"{where}: the {impl.backend} implementation of {spec.id} takes inputs "
+            f"({', '.join(inputs)}) but the op's are ({', '.join(spec.inputs)})"
+        )
+    if params != set(spec.param_fields):
+        missing = sorted(set(spec.param_fields) - params)
+        extra = sorted(params - set(spec.param_fields))
+        return (
+            f"{where}: the {impl.backend} implementation of {spec.id} must take the op's "
+            f"parameters; missing: {', '.join(missing) or 'none'}; "
+            f"not the op's: {', '.join(extra) or 'none'}"
+        )
+    return ""
+
+
+def installed(impl: Implementation) -> bool:
+    """True when every module ``impl`` requires can be imported (found, not imported)."""
+    return all(_found(module) for module in impl.mark.requires)
+
+
+@cache
+def _found(module: str) -> bool:
+    try:
+        return find_spec(module) is not None
+    except (ImportError, ValueError):
+        return False
+
+
+def implementation_spec(spec: NodeSpec, impl: Implementation) -> NodeSpec:
+    """The op's spec running ``impl``: same ports, parameters and documentation; the
+    implementation's function, version, plugin and backend."""
+    return dataclasses.replace(
+        spec,
+        version=impl.mark.version,
+        func=impl.func,
+        ref=impl.ref,
+        plugin=impl.plugin,
+        backend=impl.backend,
+        requires=impl.mark.requires,
+    )

@@ -1,0 +1,18 @@
+"""The ``opencv`` backend: OpenCV implementations of the ops other families declare.
+
+Installed with the extra ``graphvision[opencv]`` (opencv-python-headless); OpenCV is
+imported only when a run chooses an implementation of this backend
+(``--backend opencv,numpy``, ``backends=[...]``, ``backends:`` or a node's
+``backend: opencv``). The conventions that differ between the two libraries are
+converted in one module, :mod:`.convert`; each op's remaining differences are stated
+with its conformance tolerance (``graphvision describe OP``) and checked by
+``tests/conformance``.
+
+One package for the whole backend (not an ``opencv.py`` in each family): the extra,
+the conversions and the import of ``cv2`` stay in one place, the families' reference
+code is untouched by it, and the backend is one entry point that a user can leave out.
+"""
+
+from .filters import cv_box, cv_convolve, cv_correlate, cv_gaussian, cv_median
+
+__all__ = ["cv_box", "cv_convolve", "cv_correlate", "cv_gaussian", "cv_median"]
