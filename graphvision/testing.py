@@ -26,12 +26,13 @@ import re
 import textwrap
 import types
 import typing
+from typing import Any
 
 from graphvision.errors import GraphvisionError
 from graphvision.nodes.registry import Registry
 from graphvision.values.ports import PortType
 
-__all__ = ["PluginCheckError", "check_plugin", "documented_parameters"]
+__all__ = ["PluginCheckError", "check_conformance", "check_plugin", "documented_parameters"]
 
 
 class PluginCheckError(GraphvisionError):
@@ -40,6 +41,35 @@ class PluginCheckError(GraphvisionError):
     def __init__(self, plugin: str, problems: list[str]) -> None:
         self.problems = problems
         super().__init__(f"plugin '{plugin}':\n" + "\n".join(f"  - {p}" for p in problems))
+
+
+def check_conformance(
+    op: str,
+    backend: str,
+    inputs: dict[str, Any],
+    params: dict[str, Any] | None = None,
+    *,
+    registry: Registry | None = None,
+) -> None:
+    """Run ``op``'s reference and its ``backend`` implementation on ``inputs`` (by port
+    name) and ``params``, and compare them by the tolerance the op declares.
+
+    ``registry`` defaults to the installed plugins. A backend implementation comes with
+    a test of this kind on inputs that exercise it (every parameter value it treats
+    differently), the same inputs for both implementations.
+
+    Raises
+    ------
+    PluginCheckError
+        Listing every output that differs beyond the op's tolerance.
+    """
+    from graphvision.nodes.conformance import conformance_problems
+    from graphvision.nodes.plugins import discover
+
+    registry = registry or discover()
+    problems = conformance_problems(registry, op, backend, inputs, dict(params or {}))
+    if problems:
+        raise PluginCheckError(f"{op}@{backend}", problems)
 
 
 def check_plugin(module: str | types.ModuleType) -> Registry:

@@ -25,27 +25,36 @@ class NodeMark:
 
 @dataclass(frozen=True)
 class Conformance:
-    """How far two implementations of an op may differ on the conformance suite's inputs.
+    """How far another backend's implementation of an op may be from the reference's,
+    on the conformance suite's inputs (:func:`graphvision.testing.check_conformance`).
 
-    ``metric`` names the comparison (``max_abs``: largest pixel difference;
-    ``mismatch``: fraction of differing pixels; ``corner_error``: mean corner
-    distance of two homographies, in pixels; ``recall``: share of the reference's
-    detections the other finds within ``radius`` pixels, at least ``tolerance``);
+    ``metric``:
+
+    * ``max_abs``: every float output (arrays, scalars, pyramid levels) within
+      ``tolerance`` of the reference's, ``margin`` border pixels left out; boolean and
+      integer arrays differ in at most a ``mismatch`` fraction of pixels;
+    * ``corner_error``: the mean distance, in pixels, between the corners of a
+      ``radius × radius`` square mapped by the two homographies, at most ``tolerance``;
+    * ``recall``: at least a ``tolerance`` share of the reference's detections (mask
+      pixels, keypoint positions, match pairs) have one of the other's within
+      ``radius`` pixels, and the other way round.
+
     ``note`` states the differences of convention that remain (an integer Otsu level,
-    an accumulator tie, a border mode a library lacks), shown by ``describe``.
+    a border mode a library lacks), shown by ``graphvision describe``.
     """
 
     metric: str
     tolerance: float
-    note: str = ""
+    mismatch: float = 0.0
     radius: float = 0.0
+    margin: int = 0
+    note: str = ""
 
     def describe(self) -> dict[str, object]:
         shown: dict[str, object] = {"metric": self.metric, "tolerance": self.tolerance}
-        if self.radius:
-            shown["radius"] = self.radius
-        if self.note:
-            shown["note"] = self.note
+        for name in ("mismatch", "radius", "margin", "note"):
+            if getattr(self, name):
+                shown[name] = getattr(self, name)
         return shown
 
 

@@ -11,7 +11,7 @@ from typing import Literal
 
 import numpy as np
 
-from graphvision import ColorImage, GrayImage, Image, node
+from graphvision import ColorImage, Conformance, GrayImage, Image, node
 
 __all__ = ["LUMINANCE_WEIGHTS", "chromaticity", "to_gray"]
 
@@ -19,7 +19,11 @@ __all__ = ["LUMINANCE_WEIGHTS", "chromaticity", "to_gray"]
 LUMINANCE_WEIGHTS = np.array([0.299, 0.587, 0.114], dtype=np.float32)
 
 
-@node("colour.to_gray", version=1)
+@node(
+    "colour.to_gray",
+    version=1,
+    conformance=Conformance("max_abs", 1e-5),
+)
 def to_gray(image: Image, *, method: Literal["mean", "luminance"] = "mean") -> GrayImage:
     r"""Convert an RGB image to gray; a gray image passes through unchanged.
 

@@ -17,7 +17,7 @@ from typing import Annotated, Literal, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import FloatImage, GrayImage, Kernel, node
+from graphvision import Conformance, FloatImage, GrayImage, Kernel, node
 
 from ..filters._boundary import scipy_mode
 
@@ -121,7 +121,11 @@ def derivative_kernel(
     return kernel if axis == "x" else np.ascontiguousarray(kernel.T)
 
 
-@node("edges.derivative", version=1)
+@node(
+    "edges.derivative",
+    version=1,
+    conformance=Conformance("max_abs", 1e-5),
+)
 def derivative(
     image: GrayImage,
     *,

@@ -14,7 +14,7 @@ from typing import Annotated, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import Descriptors, GrayImage, Keypoints, KeypointSet, node
+from graphvision import Conformance, Descriptors, GrayImage, Keypoints, KeypointSet, node
 
 from ..shared.separable import smooth_gaussian
 
@@ -373,7 +373,19 @@ class SiftFeatures(NamedTuple):
     descriptors: Descriptors
 
 
-@node("features.sift", version=1)
+@node(
+    "features.sift",
+    version=1,
+    conformance=Conformance(
+        "recall",
+        0.8,
+        radius=1.5,
+        note=(
+            "OpenCV detects on the 8-bit image and always doubles it first; its descriptors are "
+            "renormalised to unit length"
+        ),
+    ),
+)
 def sift(
     image: GrayImage,
     *,

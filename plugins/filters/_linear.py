@@ -8,7 +8,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field
 
-from graphvision import FloatImage, Image, ImageT, Kernel, node
+from graphvision import Conformance, FloatImage, Image, ImageT, Kernel, node
 
 from ..shared.checks import check_window
 from ._boundary import Boundary, crop_valid, scipy_mode
@@ -102,7 +102,11 @@ def _separable(image: np.ndarray, taps: np.ndarray, boundary: str) -> np.ndarray
     return crop_valid(out, (taps.size, taps.size)) if boundary == "crop" else out
 
 
-@node("filters.correlate", version=1)
+@node(
+    "filters.correlate",
+    version=1,
+    conformance=Conformance("max_abs", 1e-5),
+)
 def correlate(image: FloatImage, kernel: Kernel, *, boundary: Boundary = "mirror") -> FloatImage:
     r"""Cross-correlation: each pixel becomes the kernel-weighted sum of its window.
 
@@ -136,7 +140,11 @@ def correlate(image: FloatImage, kernel: Kernel, *, boundary: Boundary = "mirror
     return _filter(image, kernel, boundary)
 
 
-@node("filters.convolve", version=1)
+@node(
+    "filters.convolve",
+    version=1,
+    conformance=Conformance("max_abs", 1e-5),
+)
 def convolve(image: FloatImage, kernel: Kernel, *, boundary: Boundary = "mirror") -> FloatImage:
     r"""Convolution: correlation with the kernel flipped in both dimensions.
 
@@ -220,7 +228,11 @@ def box_kernel(*, size: Size = 3) -> Kernel:
     return np.full((size, size), 1.0 / (size * size))
 
 
-@node("filters.gaussian", version=1)
+@node(
+    "filters.gaussian",
+    version=1,
+    conformance=Conformance("max_abs", 1e-5),
+)
 def gaussian(image: ImageT, *, sigma: Sigma = 1.0, boundary: Boundary = "mirror") -> ImageT:
     r"""Gaussian smoothing, separably: rows then columns with the 1-D Gaussian.
 
@@ -251,7 +263,11 @@ def gaussian(image: ImageT, *, sigma: Sigma = 1.0, boundary: Boundary = "mirror"
     return np.clip(out, 0.0, 1.0, out=out)
 
 
-@node("filters.box", version=1)
+@node(
+    "filters.box",
+    version=1,
+    conformance=Conformance("max_abs", 1e-5),
+)
 def box(image: ImageT, *, size: Size = 3, boundary: Boundary = "mirror") -> ImageT:
     """Moving average over a ``size × size`` window (separable, like :func:`gaussian`).
 

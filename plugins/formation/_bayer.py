@@ -29,7 +29,7 @@ from typing import Literal
 
 import numpy as np
 
-from graphvision import ColorImage, GrayImage, node
+from graphvision import ColorImage, Conformance, GrayImage, node
 
 __all__ = ["bayer_masks", "demosaic", "mosaic"]
 
@@ -128,7 +128,19 @@ def mosaic(image: ColorImage, *, pattern: Pattern = "RGGB") -> GrayImage:
     return (np.moveaxis(image, 2, 0) * masks).sum(axis=0).astype(np.float32)
 
 
-@node("formation.demosaic", version=1)
+@node(
+    "formation.demosaic",
+    version=1,
+    conformance=Conformance(
+        "max_abs",
+        1e-4,
+        margin=2,
+        note=(
+            "OpenCV's bilinear demosaicing copies the outermost two rows and columns from their "
+            "neighbours; malvar has no OpenCV counterpart and runs the reference"
+        ),
+    ),
+)
 def demosaic(
     raw: GrayImage,
     *,

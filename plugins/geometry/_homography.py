@@ -7,7 +7,7 @@ from typing import Annotated, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import Float, FloatImage, Homography, Keypoints, Matches, node
+from graphvision import Conformance, Float, FloatImage, Homography, Keypoints, Matches, node
 
 from ..fitting import ransac
 from ..fitting._ransac import chance_inlier_rate, log10_nfa, refuse_chance
@@ -123,7 +123,19 @@ class HomographyFit(NamedTuple):
     log_nfa: Float
 
 
-@node("geometry.homography_ransac", version=2)
+@node(
+    "geometry.homography_ransac",
+    version=2,
+    conformance=Conformance(
+        "corner_error",
+        0.5,
+        radius=256.0,
+        note=(
+            "OpenCV thresholds the forward error and always refines the inliers' fit "
+            "(refine is the reference's alone)"
+        ),
+    ),
+)
 def homography_ransac(
     src: Keypoints,
     dst: Keypoints,

@@ -7,7 +7,7 @@ from typing import Annotated, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import BinaryImage, ColorImage, Homography, Image, node
+from graphvision import BinaryImage, ColorImage, Conformance, Homography, Image, node
 
 from ..shared.params import MAX_SIDE
 from ._homography import apply_homography
@@ -55,7 +55,7 @@ class Warped(NamedTuple):
     valid: BinaryImage
 
 
-@node("geometry.warp", version=1)
+@node("geometry.warp", version=1, conformance=Conformance("max_abs", 1e-4))
 def warp(
     image: Image,
     homography: Homography,

@@ -7,7 +7,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field
 
-from graphvision import Descriptors, Matches, MatchSet, node
+from graphvision import Conformance, Descriptors, Matches, MatchSet, node
 
 __all__ = ["match", "nearest_two"]
 
@@ -51,7 +51,7 @@ def nearest_two(
     return index, distance
 
 
-@node("matching.match", version=1)
+@node("matching.match", version=1, conformance=Conformance("recall", 1.0))
 def match(
     a: Descriptors,
     b: Descriptors,

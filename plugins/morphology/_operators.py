@@ -7,7 +7,7 @@ from typing import Annotated, Literal, TypeVar
 import numpy as np
 from pydantic import Field
 
-from graphvision import BinaryImage, GrayImage, node
+from graphvision import BinaryImage, Conformance, GrayImage, node
 
 from ..shared.params import Count
 from ._footprints import Footprint
@@ -51,7 +51,7 @@ def _extreme(image: np.ndarray, footprint: np.ndarray, kind: str) -> np.ndarray:
     return out.view(np.bool_) if boolean else out
 
 
-@node("morphology.erode", version=1)
+@node("morphology.erode", version=1, conformance=Conformance("max_abs", 0.0))
 def erode(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     r"""Erosion: a pixel stays foreground only where the element *fits*.
 
@@ -76,7 +76,7 @@ def erode(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     return _extreme(image, footprint, "erode")
 
 
-@node("morphology.dilate", version=1)
+@node("morphology.dilate", version=1, conformance=Conformance("max_abs", 0.0))
 def dilate(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     r"""Dilation: a pixel becomes foreground where the element *hits* :math:`f`.
 
@@ -97,7 +97,7 @@ def dilate(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     return _extreme(image, footprint, "dilate")
 
 
-@node("morphology.open", version=1)
+@node("morphology.open", version=1, conformance=Conformance("max_abs", 0.0))
 def open(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     """Opening: erosion then dilation. Removes objects smaller than the element, keeps rough shape.
 
@@ -116,7 +116,7 @@ def open(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     return _extreme(_extreme(image, footprint, "erode"), footprint, "dilate")
 
 
-@node("morphology.close", version=1)
+@node("morphology.close", version=1, conformance=Conformance("max_abs", 0.0))
 def close(image: MaskOrGray, footprint: Footprint) -> MaskOrGray:
     """Closing: dilation then erosion. Fills holes and gaps smaller than the element.
 

@@ -14,5 +14,49 @@ code is untouched by it, and the backend is one entry point that a user can leav
 """
 
 from .filters import cv_box, cv_convolve, cv_correlate, cv_gaussian, cv_median
+from .geometry import (
+    cv_demosaic,
+    cv_gaussian_pyramid,
+    cv_homography_ransac,
+    cv_match,
+    cv_match_template,
+    cv_sift,
+    cv_warp,
+)
+from .pixels import (
+    cv_canny,
+    cv_close,
+    cv_derivative,
+    cv_dilate,
+    cv_erode,
+    cv_from_rgb,
+    cv_label,
+    cv_open,
+    cv_otsu,
+    cv_to_gray,
+)
 
-__all__ = ["cv_box", "cv_convolve", "cv_correlate", "cv_gaussian", "cv_median"]
+__all__ = [
+    "cv_box",
+    "cv_canny",
+    "cv_close",
+    "cv_convolve",
+    "cv_correlate",
+    "cv_demosaic",
+    "cv_derivative",
+    "cv_dilate",
+    "cv_erode",
+    "cv_from_rgb",
+    "cv_gaussian",
+    "cv_gaussian_pyramid",
+    "cv_homography_ransac",
+    "cv_label",
+    "cv_match",
+    "cv_match_template",
+    "cv_median",
+    "cv_open",
+    "cv_otsu",
+    "cv_sift",
+    "cv_to_gray",
+    "cv_warp",
+]

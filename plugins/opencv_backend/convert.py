@@ -144,7 +144,11 @@ def keypoints_to_cv(keypoints: KeypointSet) -> list[Any]:
     cv2 = cv()
     return [
         cv2.KeyPoint(
-            float(x), float(y), float(SIFT_SIZE_PER_SIGMA * s), float(np.degrees(o) % 360.0), float(r)
+            float(x),
+            float(y),
+            float(SIFT_SIZE_PER_SIGMA * s),
+            float(np.degrees(o) % 360.0),
+            float(r),
         )
         for (x, y), s, o, r in zip(
             keypoints.xy, keypoints.scale, keypoints.orientation, keypoints.response, strict=True

@@ -8,7 +8,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from graphvision import ColorImage, FloatImage, GrayImage, Image, node
+from graphvision import ColorImage, Conformance, FloatImage, GrayImage, Image, node
 
 from ._ports import ImagePyramid, Pyramid
 
@@ -56,7 +56,7 @@ def gaussian_levels(image: np.ndarray, levels: int, sigma: float) -> list[np.nda
     return result
 
 
-@node("pyramids.gaussian", version=1)
+@node("pyramids.gaussian", version=1, conformance=Conformance("max_abs", 1e-5))
 def gaussian_pyramid(image: Image, *, levels: Levels = 4, sigma: Sigma = 1.0) -> Pyramid:
     r"""Gaussian pyramid: blur, then keep every second row and column, ``levels - 1`` times.
 

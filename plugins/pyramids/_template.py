@@ -8,7 +8,17 @@ from typing import Annotated, Literal, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import Array, ColorImage, Float, FloatImage, GrayImage, Image, Points2D, node
+from graphvision import (
+    Array,
+    ColorImage,
+    Conformance,
+    Float,
+    FloatImage,
+    GrayImage,
+    Image,
+    Points2D,
+    node,
+)
 
 from ..hough import local_maxima, quadratic_peak_2d, suppress_close
 from ..shared.checks import ordered
@@ -56,7 +66,13 @@ def correlation_map(image: np.ndarray, template: np.ndarray, method: str) -> np.
     return normalise_response(data, response, kernel_rows, kernel_columns, energy, tiny)
 
 
-@node("pyramids.match_template", version=1)
+@node(
+    "pyramids.match_template",
+    version=1,
+    conformance=Conformance(
+        "max_abs", 1e-4, note="OpenCV correlates in float32 (by DFT for large templates)"
+    ),
+)
 def match_template(image: GrayImage, template: GrayImage, *, method: Method = "ncc") -> FloatImage:
     r"""Correlation map of a template over every position where it fits inside the image.
 

@@ -6,7 +6,7 @@ from typing import Literal
 
 import numpy as np
 
-from graphvision import BinaryImage, LabelImage, node
+from graphvision import BinaryImage, Conformance, LabelImage, node
 
 __all__ = ["MAX_LABEL", "check_label_count", "label", "label_components", "relabel"]
 
@@ -28,7 +28,7 @@ def label_components(mask: np.ndarray, *, connectivity: int = 8) -> np.ndarray:
     return labels
 
 
-@node("regions.label", version=1)
+@node("regions.label", version=1, conformance=Conformance("max_abs", 0.0))
 def label(mask: BinaryImage, *, connectivity: Literal[4, 8] = 8) -> LabelImage:
     """Connected components by the sequential two-pass algorithm with an equivalence table.
 

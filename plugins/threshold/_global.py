@@ -7,7 +7,7 @@ from typing import Annotated, Literal, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import Array, BinaryImage, Float, GrayImage, LabelImage, node
+from graphvision import Array, BinaryImage, Conformance, Float, GrayImage, LabelImage, node
 
 from ..shared.checks import ordered
 from ..shared.params import Fraction
@@ -127,7 +127,20 @@ def manual(
     return mask & (image <= high) if high is not None else mask
 
 
-@node("threshold.otsu", version=1)
+@node(
+    "threshold.otsu",
+    version=1,
+    conformance=Conformance(
+        "max_abs",
+        0.004,
+        mismatch=0.001,
+        note=(
+            "OpenCV splits 256 integer levels of the image's range whatever bins is; its level "
+            "maps "
+            "back to the middle of two levels"
+        ),
+    ),
+)
 def otsu(image: GrayImage, *, bins: Bins = 256, foreground: Foreground = "bright") -> Thresholded:
     r"""Otsu's threshold: the split of the histogram that maximises the between-class variance.
 

@@ -1,0 +1,127 @@
+"""Comparing two implementations of an op by the tolerance the op declares.
+
+:func:`conformance_problems` runs the reference and another backend's implementation
+of one op on the same inputs and parameters (both validated by the op's port types
+and parameter model, as a run does) and compares what they return by the op's
+:class:`~graphvision.nodes.marks.Conformance`. Values are compared field by field:
+named tuples and dataclasses (keypoint and match sets, pyramids) by their fields,
+arrays and numbers by the metric.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from graphvision.nodes.marks import Conformance
+from graphvision.nodes.registry import Registry
+
+__all__ = ["conformance_problems", "flatten"]
+
+
+def flatten(value: Any, where: str = "out") -> dict[str, Any]:
+    """Leaves (arrays and numbers) of a node's result, by dotted path."""
+    if isinstance(value, tuple) and hasattr(value, "_fields"):
+        items = {f"{where}.{k}": getattr(value, k) for k in value._fields}
+    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+        items = {f"{where}.{f.name}": getattr(value, f.name) for f in dataclasses.fields(value)}
+    elif isinstance(value, tuple | list) and not isinstance(value, str):
+        items = {f"{where}[{i}]": v for i, v in enumerate(value)}
+    else:
+        return {where: value}
+    leaves: dict[str, Any] = {}
+    for path, item in items.items():
+        leaves.update(flatten(item, path))
+    return leaves
+
+
+def conformance_problems(
+    registry: Registry, op: str, backend: str, inputs: dict[str, Any], params: dict[str, Any]
+) -> list[str]:
+    """What differs beyond the op's tolerance between the reference and ``backend`` on
+    ``inputs`` and ``params`` (empty: they conform). An op without a declared
+    tolerance is a problem itself."""
+    spec = registry.node(op)
+    other = registry.implementation(op, backend)
+    if other is None:
+        return [f"{op} has no '{backend}' implementation"]
+    if spec.conformance is None:
+        return [f"{op} declares no conformance tolerance (@node(..., conformance=...))"]
+    values, checked = spec.check_call((), {**inputs, **params})
+    arguments = dict(zip(spec.inputs, values, strict=True))
+    reference = spec.func(**arguments, **checked)
+    candidate = other.func(**arguments, **checked)
+    return _compare(spec.conformance, reference, candidate, f"{op} ({backend} vs numpy)")
+
+
+def _compare(rule: Conformance, reference: Any, candidate: Any, label: str) -> list[str]:
+    if rule.metric == "corner_error":
+        error = _corner_error(_homography(reference), _homography(candidate), rule.radius)
+        ok = error <= rule.tolerance
+        return [] if ok else [f"{label}: corner error {error:.3g} px > {rule.tolerance}"]
+    ours, theirs = flatten(reference), flatten(candidate)
+    if ours.keys() != theirs.keys():
+        return [f"{label}: outputs {sorted(theirs)} are not the reference's {sorted(ours)}"]
+    problems = []
+    for path, expected in ours.items():
+        problem = _leaf(rule, np.asarray(expected), np.asarray(theirs[path]))
+        if problem:
+            problems.append(f"{label}: {path}: {problem}")
+    return problems
+
+
+def _leaf(rule: Conformance, expected: np.ndarray, got: np.ndarray) -> str:
+    if expected.dtype.kind in "OUS":  # text (a pyramid's kind): equal
+        return "" if np.array_equal(expected, got) else f"{got!r} != {expected!r}"
+    if rule.metric == "recall":
+        return _recall_problem(rule, expected, got)
+    if expected.shape != got.shape:
+        return f"shape {got.shape} != {expected.shape}"
+    if rule.margin and expected.ndim >= 2 and min(expected.shape[:2]) > 2 * rule.margin:
+        m = rule.margin
+        expected, got = expected[m:-m, m:-m], got[m:-m, m:-m]
+    if expected.dtype.kind in "biu" and expected.ndim:
+        share = float(np.mean(expected != got)) if expected.size else 0.0
+        return "" if share <= rule.mismatch else f"{share:.3%} differ > {rule.mismatch:.3%}"
+    if expected.size == 0:
+        return ""
+    difference = float(np.max(np.abs(expected.astype(np.float64) - got.astype(np.float64))))
+    return "" if difference <= rule.tolerance else f"max |diff| {difference:.3g} > {rule.tolerance}"
+
+
+def _recall_problem(rule: Conformance, expected: np.ndarray, got: np.ndarray) -> str:
+    """Detections as points: a boolean mask's pixels, an ``N×2`` array's rows (positions
+    or index pairs); other leaves (scales, descriptors, magnitudes) are not compared."""
+    if expected.dtype == np.bool_ and expected.ndim == 2:
+        a, b = np.argwhere(expected).astype(float), np.argwhere(got).astype(float)
+    elif expected.ndim == 2 and expected.shape[1] == 2:
+        a, b = expected.astype(float), got.astype(float)
+    else:
+        return ""
+    worst = min(_share_near(a, b, rule.radius), _share_near(b, a, rule.radius))
+    return "" if worst >= rule.tolerance else f"recall {worst:.3f} < {rule.tolerance}"
+
+
+def _share_near(a: np.ndarray, b: np.ndarray, radius: float) -> float:
+    """The share of the points of ``a`` with a point of ``b`` within ``radius``."""
+    if len(a) == 0:
+        return 1.0
+    if len(b) == 0:
+        return 0.0
+    from scipy.spatial import cKDTree
+
+    distance, _ = cKDTree(b).query(a, k=1)
+    return float(np.mean(distance <= radius + 1e-9))
+
+
+def _homography(value: Any) -> np.ndarray:
+    matrix = value[0] if isinstance(value, tuple) else value
+    return np.asarray(matrix, dtype=np.float64)
+
+
+def _corner_error(h1: np.ndarray, h2: np.ndarray, side: float) -> float:
+    corners = np.array([[0, 0, 1], [side, 0, 1], [side, side, 1], [0, side, 1]], dtype=float)
+    p1, p2 = corners @ h1.T, corners @ h2.T
+    return float(np.mean(np.linalg.norm(p1[:, :2] / p1[:, 2:] - p2[:, :2] / p2[:, 2:], axis=1)))

@@ -1,0 +1,147 @@
+"""Shared inputs of the conformance suite: for each op with more than one implementation,
+the cases (inputs by port, parameters) every implementation runs on. Everything is
+built here, seeded; the comparison is by the op's declared tolerance."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import cache
+from typing import Any
+
+import numpy as np
+
+import graphvision as gv
+
+Case = tuple[dict[str, Any], dict[str, Any]]
+
+
+@cache
+def scene(rows: int = 72, cols: int = 96) -> np.ndarray:
+    """A gray float32 scene: smooth shading, a bright rectangle, a dark disk, mild noise."""
+    rng = np.random.default_rng(7)
+    y, x = np.mgrid[0:rows, 0:cols]
+    image = 0.3 + 0.2 * np.sin(x / 9.0) * np.cos(y / 13.0)
+    image[15:40, 10:45] = 0.85
+    image[(y - 45) ** 2 + (x - 70) ** 2 < 14**2] = 0.1
+    image += rng.normal(0, 0.02, image.shape)
+    return np.clip(image, 0, 1).astype(np.float32)
+
+
+@cache
+def colour_scene() -> np.ndarray:
+    gray = scene()
+    rng = np.random.default_rng(3)
+    tint = rng.uniform(0.2, 1.0, (1, 1, 3))
+    noise = rng.uniform(0, 1, (*gray.shape, 3))
+    return np.clip(gray[..., None] * tint + 0.2 * noise, 0, 1).astype(np.float32)
+
+
+@cache
+def textured(rows: int = 64, cols: int = 64) -> np.ndarray:
+    """Blurred noise: a texture with no flat window (well-conditioned correlation)."""
+    import scipy.ndimage as ndi
+
+    rng = np.random.default_rng(11)
+    texture = ndi.gaussian_filter(rng.uniform(0, 1, (rows, cols)), 1.5)
+    texture = (texture - texture.min()) / (texture.max() - texture.min())
+    return texture.astype(np.float32)
+
+
+def _kernel() -> np.ndarray:
+    return np.array([[0.0, 1.0, 0.5], [-1.0, 2.0, 0.0], [0.25, 0.0, -0.75], [0.1, 0.2, 0.3]])
+
+
+_BOUNDARIES = ("mirror", "replicate", "wrap", "zero", "crop")
+
+
+def _filters() -> dict[str, list[Case]]:
+    image, rgb = scene(), colour_scene()
+    return {
+        "filters.gaussian": [({"image": image}, {"sigma": s, "boundary": b})
+                             for s in (0.8, 2.5) for b in _BOUNDARIES]
+        + [({"image": rgb}, {"sigma": 1.5})],
+        "filters.box": [({"image": image}, {"size": n, "boundary": b})
+                        for n in (3, 9) for b in _BOUNDARIES] + [({"image": rgb}, {"size": 5})],
+        "filters.median": [({"image": image}, {"size": n, "boundary": b})
+                           for n in (1, 3, 5, 7) for b in _BOUNDARIES],
+        "filters.correlate": [({"image": image, "kernel": _kernel()}, {"boundary": b})
+                              for b in _BOUNDARIES],
+        "filters.convolve": [({"image": image, "kernel": _kernel()}, {"boundary": b})
+                             for b in _BOUNDARIES],
+    }  # fmt: skip
+
+
+def _pixels() -> dict[str, list[Case]]:
+    image, rgb = scene(), colour_scene()
+    mask = image > 0.5
+    footprints = [np.ones((3, 5), bool), np.array([[1, 1, 0], [0, 1, 0], [0, 1, 1]], bool)]
+    morphology = [({"image": i, "footprint": f}, {}) for i in (mask, image) for f in footprints]
+    return {
+        "colour.to_gray": [({"image": rgb}, {"method": m}) for m in ("mean", "luminance")],
+        "colour.from_rgb": [({"image": rgb}, {"space": s}) for s in ("hsv", "lab", "ycbcr")],
+        "edges.derivative": [({"image": image}, {"axis": a, "kind": k, "boundary": b})
+                             for a in ("x", "y")
+                             for k in ("forward", "central", "sobel", "prewitt", "gaussian")
+                             for b in ("mirror", "replicate", "wrap", "zero")],
+        "edges.canny": [({"image": image}, {"sigma": s}) for s in (1.0, 2.0)]
+        + [({"image": image}, {"thresholds": "quantile", "low": 0.8, "high": 0.9})],
+        "morphology.erode": morphology,
+        "morphology.dilate": morphology,
+        "morphology.open": morphology,
+        "morphology.close": morphology,
+        "threshold.otsu": [({"image": image}, {"foreground": f}) for f in ("bright", "dark")],
+        "regions.label": [({"mask": mask | (textured(72, 96) > 0.7)}, {"connectivity": c})
+                          for c in (4, 8)],
+    }  # fmt: skip
+
+
+def _homography_case() -> Case:
+    rng = np.random.default_rng(5)
+    truth = np.array([[1.05, 0.04, 6.0], [-0.03, 0.97, -4.0], [2e-4, -1e-4, 1.0]])
+    src = rng.uniform(0, 256, (80, 2))
+    mapped = np.c_[src, np.ones(80)] @ truth.T
+    dst = mapped[:, :2] / mapped[:, 2:] + rng.normal(0, 0.3, (80, 2))
+    dst[:16] = rng.uniform(0, 256, (16, 2))  # 20 % outliers
+    zero = np.zeros(80)
+    keys = [gv.KeypointSet(p, zero + 1, zero, zero + 1) for p in (src, dst)]
+    matches = gv.MatchSet(np.c_[np.arange(80), np.arange(80)], zero)
+    return {"src": keys[0], "dst": keys[1], "matches": matches}, {"threshold": 2.0}
+
+
+def _descriptors() -> Case:
+    rng = np.random.default_rng(9)
+    a = rng.normal(size=(120, 128))
+    b = np.vstack([a[::-1] + rng.normal(0, 0.3, a.shape), rng.normal(size=(40, 128))])
+    unit = lambda d: (d / np.linalg.norm(d, axis=1, keepdims=True)).astype(np.float32)  # noqa: E731
+    return {"a": unit(a), "b": unit(b)}, {}
+
+
+def _geometry() -> dict[str, list[Case]]:
+    image = scene()
+    tilt = np.array([[0.9, 0.1, 5.0], [-0.05, 1.1, 3.0], [1e-4, 2e-4, 1.0]])
+    raw = colour_scene()[..., 1]
+    inputs, _ = _descriptors()
+    return {
+        "pyramids.gaussian": [({"image": image}, {"levels": 4, "sigma": s}) for s in (1.0, 1.6)],
+        "pyramids.match_template": [({"image": textured(), "template": textured()[20:35, 12:30]},
+                                     {"method": m}) for m in ("correlation", "zero_mean", "ncc")],
+        "features.sift": [({"image": scene(144, 192)}, {})],
+        "matching.match": [(inputs, {"ratio": r, "symmetric": s})
+                           for r in (0.8, 1.0) for s in (True, False)],
+        "geometry.homography_ransac": [_homography_case()],
+        "geometry.warp": [({"image": image, "homography": tilt}, {}),
+                          ({"image": image, "homography": tilt}, {"width": 80, "height": 50})],
+        "formation.demosaic": [({"raw": raw}, {"pattern": p, "method": m})
+                               for p in ("RGGB", "BGGR", "GRBG", "GBRG")
+                               for m in ("bilinear", "malvar")],
+    }  # fmt: skip
+
+
+CASE_BUILDERS: list[Callable[[], dict[str, list[Case]]]] = [_filters, _pixels, _geometry]
+
+
+def all_cases() -> dict[str, list[Case]]:
+    cases: dict[str, list[Case]] = {}
+    for builder in CASE_BUILDERS:
+        cases.update(builder())
+    return cases

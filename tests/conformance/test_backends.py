@@ -1,0 +1,59 @@
+"""Every op with more than one implementation, run by each on shared inputs
+(:mod:`.cases`), agrees with the reference within the tolerance the op declares.
+
+Skipped, with the reason, when OpenCV is not installed; the ``dev`` extra installs it,
+so CI runs it. An implementation added without a case here, or an op without a
+declared tolerance, fails the build.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+import graphvision as gv
+from graphvision.testing import PluginCheckError, check_conformance
+
+from .cases import all_cases
+
+pytest.importorskip("cv2", reason="the opencv backend needs opencv-python-headless (dev extra)")
+
+REGISTRY = gv.discover()
+CASES = all_cases()
+IMPLEMENTED = sorted(
+    (op, backend)
+    for op, backends in REGISTRY.implementations.items()
+    for backend in backends
+    if op in REGISTRY.nodes
+)
+
+
+def test_every_implementation_has_cases_and_every_op_a_tolerance() -> None:
+    missing = [f"{op}@{backend}" for op, backend in IMPLEMENTED if op not in CASES]
+    undeclared = [op for op, _ in IMPLEMENTED if REGISTRY.node(op).conformance is None]
+    assert not missing, f"implementations without conformance cases: {missing}"
+    assert not undeclared, f"ops with implementations but no declared tolerance: {undeclared}"
+    assert len(IMPLEMENTED) >= 20
+
+
+@pytest.mark.parametrize(
+    ("op", "backend", "number"),
+    [(op, b, n) for op, b in IMPLEMENTED for n in range(len(CASES.get(op, [])))],
+)
+def test_implementation_conforms(op: str, backend: str, number: int) -> None:
+    inputs, params = CASES[op][number]
+    check_conformance(op, backend, inputs, params, registry=REGISTRY)
+
+
+def test_a_difference_beyond_the_tolerance_fails() -> None:
+    """The comparison can fail: a Gaussian of another σ is refused, naming the output."""
+    registry = gv.discover()
+    inputs, _ = CASES["filters.gaussian"][0]
+    spec = registry.implementation("filters.gaussian", "opencv")
+    assert spec is not None
+    wrong = registry.implementations["filters.gaussian"]["opencv"]
+    shifted = type(wrong)(wrong.mark, lambda image, *, sigma, boundary: spec.func(
+        image, sigma=sigma * 1.1, boundary=boundary), wrong.ref, wrong.plugin)  # fmt: skip
+    registry.implementations["filters.gaussian"]["opencv"] = shifted
+    registry._implementation_specs.clear()
+    with pytest.raises(PluginCheckError, match=r"filters.gaussian \(opencv vs numpy\): out: max"):
+        check_conformance("filters.gaussian", "opencv", inputs, {"sigma": 2.0}, registry=registry)
