@@ -90,6 +90,15 @@ def limit_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def backend_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--backend",
+        metavar="NAMES",
+        help="backend lookup order, e.g. opencv,numpy: each node runs the first implementation "
+        "of its op found (default: the pipeline's backends:, else numpy, the reference)",
+    )
+
+
 def run_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``run`` and ``sweep``."""
     parser.add_argument("pipeline", help="the pipeline file (YAML)")
@@ -136,12 +145,7 @@ def run_options(parser: argparse.ArgumentParser) -> None:
         help="with --executor dask: an existing scheduler, tcp://HOST:PORT "
         "(default $GRAPHVISION_DASK_SCHEDULER, else a local cluster)",
     )
-    parser.add_argument(
-        "--backend",
-        metavar="NAMES",
-        help="backend lookup order, e.g. opencv,numpy: each node runs the first implementation "
-        "of its op found (default: the pipeline's backends:, else numpy, the reference)",
-    )
+    backend_option(parser)
     parser.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
     parser.add_argument(
         "--progress",

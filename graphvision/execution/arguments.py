@@ -19,11 +19,16 @@ if TYPE_CHECKING:
 __all__ = ["graph_argument", "mapping_argument", "names_argument", "run_arguments"]
 
 
-def graph_argument(graph: Any) -> Graph | CompiledGraph:
-    """A ``Graph`` or ``CompiledGraph`` as given, or the pipeline file a path names."""
+def graph_argument(graph: Any, backends: Any = None) -> Graph | CompiledGraph:
+    """A ``Graph`` or ``CompiledGraph`` as given, or the pipeline file a path names; with
+    ``backends`` (a lookup order), the graph with that order, to be compiled with it."""
     from graphvision.compiler.compile import CompiledGraph
     from graphvision.graph.model import Graph
 
+    if backends is not None:
+        given = graph_argument(graph)
+        plain = given.graph if isinstance(given, CompiledGraph) else given
+        return plain.with_backends(backends)
     if isinstance(graph, (Graph, CompiledGraph)):
         return graph
     if isinstance(graph, (str, os.PathLike)):

@@ -156,11 +156,8 @@ def run_batch(
         runs).
     """
     run_arguments(cache, executor, workers)
-    graph = graph_argument(graph)
-    if backends is not None:  # an order of its own: the graph compiled again with it
-        graph = (graph.graph if isinstance(graph, CompiledGraph) else graph).with_backends(backends)
-    inputs = mapping_argument(inputs, "inputs")
-    outputs = names_argument(outputs, "outputs")
+    graph = graph_argument(graph, backends)  # another order: compiled again with it
+    inputs, outputs = mapping_argument(inputs, "inputs"), names_argument(outputs, "outputs")
     overrides = mapping_argument(overrides, "overrides")
     if not isinstance(output_dir, (str, os.PathLike)):
         raise TypeError(f"output_dir must be a folder's path, got {output_dir!r}")

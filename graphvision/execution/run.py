@@ -221,18 +221,19 @@ def _compiled(
     backends: Sequence[str] | str | None = None,
 ) -> tuple[CompiledGraph, Registry]:
     """The graph, overrides applied, compiled (step 1); the registry it was checked against."""
-    order = None if backends is None else parse_backends(backends)
     if isinstance(graph, CompiledGraph):
-        if not overrides and order is None:
+        if not overrides and backends is None:
             return graph, registry or _discover_for(graph.graph)
         graph = graph.graph  # overrides change parameters, an order the implementations
+    if backends is not None:  # the run's order replaces the file's
+        graph = graph.with_backends(parse_backends(backends))
     registry = registry or _discover_for(graph)
     if overrides:
         try:
             graph = graph.with_overrides(overrides)
         except KeyError as error:
             raise UnknownNameError(str(error.args[0])) from None
-    return compile_graph(graph, registry, provided=set(inputs), backends=order), registry
+    return compile_graph(graph, registry, provided=set(inputs)), registry
 
 
 def _discover_for(graph: Graph) -> Registry:

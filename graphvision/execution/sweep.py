@@ -155,7 +155,7 @@ def sweep(
     run_arguments(cache, executor, workers)
     inputs = mapping_argument(inputs, "inputs")
     outputs = names_argument(outputs, "outputs")
-    graph = _plain_graph(graph_argument(graph)).with_backends(backends)
+    graph = _plain_graph(graph_argument(graph, backends))
     if not isinstance(grid, Mapping):
         raise TypeError(f"grid must be a dict from 'node.param' to a list of values, got {grid!r}")
     if registry is None:

@@ -98,18 +98,24 @@ class Needs:
 
     >>> graph = Graph("g"); image = graph.input("image", "Image")
     >>> graph.output("smooth", graph.add("smooth", "filters.gaussian", image=image))
-    >>> Needs.of(graph)
-    Needs(ops=frozenset({'filters.gaussian'}), port_types=frozenset({'Image'}))
+    >>> needs = Needs.of(graph)
+    >>> needs.ops, needs.port_types, needs.backends
+    (frozenset({'filters.gaussian'}), frozenset({'Image'}), frozenset())
+
+    ``backends`` are those its lookup order and its nodes' pins name: the plugins adding
+    implementations of its ops for those backends are imported too.
     """
 
     ops: frozenset[str]
     port_types: frozenset[str] = frozenset()
+    backends: frozenset[str] = frozenset()
 
     @classmethod
     def of(cls, graph: Graph) -> Needs:
         return cls(
             frozenset(decl.op for decl in graph.nodes.values()),
             frozenset(decl.type for decl in graph.inputs.values()),
+            frozenset(graph.backends) | {d.backend for d in graph.nodes.values() if d.backend},
         )
 
 
@@ -129,8 +135,9 @@ def _providers(
             if not providers:
                 return None
             wanted |= providers
-    for plugin, entry in plugins.items():  # other backends' implementations of the ops
-        if {i.partition("@")[0] for i in entry.get("implementations", [])} & needs.ops:
+    for plugin, entry in plugins.items():  # the chosen backends' implementations of the ops
+        provided = [i.partition("@") for i in entry.get("implementations", [])]
+        if any(op in needs.ops and backend in needs.backends for op, _, backend in provided):
             wanted.add(plugin)
     return wanted
 

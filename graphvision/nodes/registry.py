@@ -121,8 +121,7 @@ class Registry:
         impls = self._check_implementations(members, name, kept)
         for spec in kept:
             self.nodes[spec.id] = spec
-        for impl in impls:
-            self.implementations.setdefault(impl.op, {})[impl.backend] = impl
+        self._add_implementations(impls)
         self.renamed.update(getattr(module, "RENAMED_OPS", {}))
         for source_spec in sources:
             self.sources[source_spec.scheme] = source_spec
@@ -179,6 +178,11 @@ class Registry:
         if problems:
             raise RegistrationError("\n".join(problems))
         return impls
+
+    def _add_implementations(self, impls: list[Implementation]) -> None:
+        for impl in impls:
+            self.implementations.setdefault(impl.op, {})[impl.backend] = impl
+            self._implementation_specs.pop((impl.op, impl.backend), None)
 
     def backends_of(self, op: str) -> dict[str, bool]:
         """The backends implementing ``op`` (the reference first), each with whether the
