@@ -80,15 +80,15 @@ class RunRecord:
 
     def table(self) -> str:
         """The record as an aligned text table."""
-        rows = [("node", "op", "backend", "status", "ms", "bytes")]
+        rows = [("node", "op", "status", "ms", "bytes", "backend")]
         rows += [
-            (n.name, n.op, n.backend, n.status, f"{n.seconds * 1e3:.1f}", str(n.output_bytes))
+            (n.name, n.op, n.status, f"{n.seconds * 1e3:.1f}", str(n.output_bytes), n.backend)
             for n in self.nodes
         ]
         widths = [max(len(r[i]) for r in rows) for i in range(6)]
         lines = [
             "  ".join(
-                c.ljust(w) if i < 4 else c.rjust(w)
+                c.ljust(w) if i < 3 or i == 5 else c.rjust(w)
                 for i, (c, w) in enumerate(zip(row, widths, strict=True))
             )
             for row in rows

@@ -193,12 +193,11 @@ def _earlier_html(earlier: Sequence[Earlier]) -> str:
 def _nodes_html(record: RunRecord) -> str:
     rows = "".join(
         f'<tr><td class="text">{escape(n.name)}</td><td class="text">{escape(n.op)}</td>'
-        f'<td class="text">{escape(n.backend)}</td><td class="text">{escape(n.status)}</td>'
-        f"<td>{n.seconds * 1e3:.1f}</td>"
-        f"<td>{n.output_bytes}</td></tr>"
+        f'<td class="text">{escape(n.status)}</td><td>{n.seconds * 1e3:.1f}</td>'
+        f'<td>{n.output_bytes}</td><td class="text">{escape(n.backend)}</td></tr>'
         for n in record.nodes
     )
-    head = "".join(f"<th>{h}</th>" for h in ("node", "op", "backend", "status", "ms", "bytes"))
+    head = "".join(f"<th>{h}</th>" for h in ("node", "op", "status", "ms", "bytes", "backend"))
     return f"<table><tr>{head}</tr>{rows}</table>"
 
 

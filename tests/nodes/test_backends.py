@@ -157,3 +157,10 @@ def test_the_opencv_backend_runs_a_shipped_pipeline() -> None:
     reference = gv.run(graph, executor="sync")
     for name, value in reference.outputs.items():
         assert np.allclose(result.outputs[name], value, atol=0.05), name
+
+
+def test_a_sweep_takes_the_order_too(plugin: Path, tmp_path: Path) -> None:
+    graph = gv.load_pipeline(pipeline(tmp_path))
+    result = gv.sweep(graph, {"v.gain": [1.0, 3.0]}, backends=["fast"], executor="sync")
+    assert [row["v"] for row in result.rows] == [1.5, 3.5]
+    assert {n.backend for record in result.records for n in record.nodes} == {"fast"}
