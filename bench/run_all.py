@@ -10,6 +10,7 @@ from pathlib import Path
 HERE = Path(__file__).parent
 sys.path.insert(0, str(HERE))
 
+import bench_backends  # noqa: E402
 import bench_batch  # noqa: E402
 import bench_cache  # noqa: E402
 import bench_camera  # noqa: E402

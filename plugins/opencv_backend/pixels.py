@@ -222,8 +222,12 @@ def cv_label(mask: np.ndarray, *, connectivity: int = 8) -> np.ndarray:
     if count <= 1:
         return labels.astype(np.int32)
     flat = labels.ravel()
-    _, first = np.unique(flat, return_index=True)  # first raster position of each label
-    order = np.argsort(first[1:]) + 1  # OpenCV labels, in order of first appearance
+    where = np.flatnonzero(flat)
+    first = np.full(count, flat.size, dtype=np.int64)
+    first[flat[where[::-1]]] = where[::-1]  # repeated labels: the last write, the first pixel
+    order = np.argsort(first[1:], kind="stable") + 1  # OpenCV's labels, by first appearance
+    if np.array_equal(order, np.arange(1, count)):
+        return labels
     renumber = np.zeros(count, dtype=np.int32)
     renumber[order] = np.arange(1, count, dtype=np.int32)
     return renumber[labels]

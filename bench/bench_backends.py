@@ -1,0 +1,106 @@
+"""Backends side by side (issue 25): every shipped pipeline with the reference and with
+the OpenCV backend, and the engine's cost on top of OpenCV against a plain script.
+
+1. Each pipeline in ``pipelines/`` runs once per backend order (``numpy``, then
+   ``opencv,numpy``), no cache, default executor; reported: wall time, how many nodes
+   the OpenCV backend ran, and the pipeline's headline figure (its first scalar
+   output: corner error, coin count, PSNR, ...) under each backend.
+2. ``homography.yaml`` and ``coins.yaml`` with ``--backend opencv,numpy`` against a
+   plain script making the same calls: the implementation each node ran, called in
+   the same order on the same inputs, without the engine (no validation, keys,
+   scheduling or record). Best of 5 after a warm-up; the engine's overhead is
+   ``engine / script - 1`` (the issue's bar: at most 10 %).
+
+Run: ``python bench/bench_backends.py [PIPELINE.yaml ...]`` (all pipelines by default).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from timing import best
+
+import graphvision as gv
+from graphvision.execution.inputs import resolve_input
+from graphvision.execution.sweep import scalar_outputs_of
+
+PIPELINES = Path(__file__).parent.parent / "pipelines"
+ORDERS = {"numpy": ["numpy"], "opencv": ["opencv", "numpy"]}
+
+
+def _headline(result: gv.RunResult) -> tuple[str, str]:
+    scalars = scalar_outputs_of(result.compiled, list(result.outputs))
+    if not scalars:
+        return "", ""
+    value = result.outputs[scalars[0]]
+    return scalars[0], f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
+def pipeline_rows(names: list[str]) -> list[str]:
+    rows = [
+        "| pipeline | numpy s | opencv s | speed-up | nodes on opencv | figure | numpy | opencv |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name in names:
+        graph = gv.load_pipeline(PIPELINES / name)
+        timed: dict[str, tuple[float, gv.RunResult]] = {}
+        for label, order in ORDERS.items():
+            began = time.perf_counter()
+            result = gv.run(graph, backends=order)
+            timed[label] = (time.perf_counter() - began, result)
+        (t0, r0), (t1, r1) = timed["numpy"], timed["opencv"]
+        on_cv = sum(n.backend == "opencv" for n in r1.record.nodes)
+        figure, first = _headline(r0)
+        _, second = _headline(r1)
+        rows.append(
+            f"| {name} | {t0:.2f} | {t1:.2f} | {t0 / t1:.1f}× | {on_cv}/{len(r1.record.nodes)} "
+            f"| {figure} | {first} | {second} |"
+        )
+    return rows
+
+
+def _plain_script(compiled: gv.CompiledGraph, inputs: dict[str, Any]) -> Any:
+    """The calls a run makes, in order, without the engine: one function per step."""
+    values: dict[tuple[str, str], Any] = {(name, ""): value for name, value in inputs.items()}
+
+    def script() -> None:
+        for name, step in compiled.steps.items():
+            args = {port: values[source] for port, source in step.inputs.items()}
+            out = step.spec.func(**args, **step.params)
+            for port, value in step.spec.split_outputs(out).items():
+                values[(name, port)] = value
+
+    return script
+
+
+def overhead_rows() -> list[str]:
+    rows = ["| pipeline | engine ms | plain script ms | overhead |", "|---|---|---|---|"]
+    registry = gv.discover()
+    for name in ("homography.yaml", "coins.yaml"):
+        graph = gv.load_pipeline(PIPELINES / name).with_backends(["opencv", "numpy"])
+        compiled = gv.compile_graph(graph, registry)
+        inputs = {  # resolved once: both sides start from the same arrays
+            n: resolve_input(n, compiled.input_types[n], graph.inputs[n].default, registry)
+            for n in compiled.input_types
+        }
+        engine = best(lambda: gv.run(compiled, registry, inputs=inputs, executor="sync"))
+        plain = best(_plain_script(compiled, inputs))
+        rows.append(
+            f"| {name} | {engine * 1e3:.1f} | {plain * 1e3:.1f} | {engine / plain - 1:+.1%} |"
+        )
+    return rows
+
+
+def main(names: list[str] | None = None) -> list[str]:
+    names = names or sorted(p.name for p in PIPELINES.glob("*.yaml"))
+    rows = ["Each pipeline with each backend (one cold run, no cache):", ""]
+    rows += pipeline_rows(names)
+    rows += ["", "The engine with the OpenCV backend against the same calls in a script:", ""]
+    return rows + overhead_rows()
+
+
+if __name__ == "__main__":
+    print("\n".join(main(sys.argv[1:] or None)))
