@@ -59,6 +59,7 @@ def main() -> None:
             "Held-out geometry: structured light, GHT, templates, lines (issue 24)",
             bench_held_out_geometry.main,
         ),
+        ("Backends: the reference and OpenCV (issue 25)", bench_backends.main),
     ]
     lines = [
         f"# graphvision benchmarks — {time.strftime('%Y-%m-%d %H:%M')}",

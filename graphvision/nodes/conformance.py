@@ -57,6 +57,10 @@ def conformance_problems(
 
 
 def _compare(rule: Conformance, reference: Any, candidate: Any, label: str) -> list[str]:
+    if rule.metric == "sampson":
+        error = _sampson_rms(candidate[0], reference[3], reference[4])
+        ok = error <= rule.tolerance
+        return [] if ok else [f"{label}: Sampson RMS {error:.3g} px > {rule.tolerance}"]
     if rule.metric == "corner_error":
         error = _corner_error(_homography(reference), _homography(candidate), rule.radius)
         ok = error <= rule.tolerance
@@ -114,6 +118,15 @@ def _share_near(a: np.ndarray, b: np.ndarray, radius: float) -> float:
 
     distance, _ = cKDTree(b).query(a, k=1)
     return float(np.mean(distance <= radius + 1e-9))
+
+
+def _sampson_rms(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """RMS Sampson distance, pixels, of the reference's inlier pairs to the other's F."""
+    ha, hb = np.c_[a, np.ones(len(a))], np.c_[b, np.ones(len(b))]
+    fa, fb = ha @ np.asarray(F).T, hb @ np.asarray(F)
+    algebraic = np.einsum("ni,ni->n", hb, fa)
+    denominator = fa[:, 0] ** 2 + fa[:, 1] ** 2 + fb[:, 0] ** 2 + fb[:, 1] ** 2
+    return float(np.sqrt(np.mean(algebraic**2 / np.maximum(denominator, 1e-300))))
 
 
 def _homography(value: Any) -> np.ndarray:

@@ -35,6 +35,8 @@ class Conformance:
       integer arrays differ in at most a ``mismatch`` fraction of pixels;
     * ``corner_error``: the mean distance, in pixels, between the corners of a
       ``radius × radius`` square mapped by the two homographies, at most ``tolerance``;
+    * ``sampson``: the RMS Sampson distance of the reference's inlier pairs (its 4th and
+      5th outputs) to the other's fundamental matrix (its first), at most ``tolerance``;
     * ``recall``: at least a ``tolerance`` share of the reference's detections (mask
       pixels, keypoint positions, match pairs) have one of the other's within
       ``radius`` pixels, and the other way round.

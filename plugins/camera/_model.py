@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from graphvision import Array, Camera, ImageT, PinholeCamera, Points2D, Points3D, node
+from graphvision import Array, Camera, Conformance, ImageT, PinholeCamera, Points2D, Points3D, node
 
 from ..shared.params import ImageSide, Positive
 from ._projection import (
@@ -238,7 +238,7 @@ def _pixel_grid(shape: tuple[int, ...]) -> np.ndarray:
     return np.column_stack([u.ravel(), v.ravel()])
 
 
-@node("camera.undistort_image", version=1)
+@node("camera.undistort_image", version=1, conformance=Conformance("max_abs", 1e-4))
 def undistort_image(image: ImageT, camera: Camera) -> ImageT:
     """The image an ideal pinhole with the same K would have taken (cf. ``cv2.undistort``).
 

@@ -35,6 +35,7 @@ from .pixels import (
     cv_otsu,
     cv_to_gray,
 )
+from .views import cv_fundamental, cv_undistort_image
 
 __all__ = [
     "cv_box",
@@ -47,6 +48,7 @@ __all__ = [
     "cv_dilate",
     "cv_erode",
     "cv_from_rgb",
+    "cv_fundamental",
     "cv_gaussian",
     "cv_gaussian_pyramid",
     "cv_homography_ransac",
@@ -58,5 +60,6 @@ __all__ = [
     "cv_otsu",
     "cv_sift",
     "cv_to_gray",
+    "cv_undistort_image",
     "cv_warp",
 ]

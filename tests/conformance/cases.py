@@ -137,7 +137,24 @@ def _geometry() -> dict[str, list[Case]]:
     }  # fmt: skip
 
 
-CASE_BUILDERS: list[Callable[[], dict[str, list[Case]]]] = [_filters, _pixels, _geometry]
+def _two_views() -> dict[str, list[Case]]:
+    from graphvision_plugins.synthetic import two_view_scene
+
+    scene_ = two_view_scene(count=150, noise=0.5, seed=4)
+    a, b = scene_.a.copy(), scene_.b.copy()
+    rng = np.random.default_rng(6)
+    b[:20] = rng.uniform([0, 0], [640, 480], (20, 2))  # outliers
+    K = np.array([[90.0, 0.0, 47.5], [0.0, 90.0, 35.5], [0.0, 0.0, 1.0]])
+    lens = gv.PinholeCamera(K, distortion=np.array([-0.25, 0.06, 0.002, -0.001, 0.0]))
+    return {
+        "epipolar.fundamental": [({"a": a, "b": b}, {"threshold": 1.5})],
+        "camera.undistort_image": [({"image": scene(), "camera": lens}, {}),
+                                   ({"image": colour_scene(), "camera": lens}, {})],
+    }  # fmt: skip
+
+
+Builder = Callable[[], dict[str, list[Case]]]
+CASE_BUILDERS: list[Builder] = [_filters, _pixels, _geometry, _two_views]
 
 
 def all_cases() -> dict[str, list[Case]]:
