@@ -39,6 +39,7 @@ __all__ = [
     "keypoints_to_cv",
     "matches_from_cv",
     "points_to_cv",
+    "significance",
     "to_bgr",
     "to_u8",
 ]
@@ -165,6 +166,29 @@ def keypoints_from_cv(points: Any) -> KeypointSet:
     orientation = np.radians(np.array([p.angle for p in points], dtype=np.float64))
     response = np.array([p.response for p in points], dtype=np.float64)
     return KeypointSet(xy, scale, orientation, response)
+
+
+def significance(
+    inliers: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    fits: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    sample_size: int,
+    max_nfa: float | None,
+    what: str,
+    seed: int,
+) -> float:
+    """log10 NFA of a model OpenCV fitted, by the reference's a-contrario test (the same
+    chance rate, counts of distinct pairs, refusal above ``max_nfa``): OpenCV has none."""
+    from ..fitting._ransac import chance_inlier_rate, log10_nfa, refuse_chance
+
+    data = np.hstack([a, b])
+    count = len(np.unique(data, axis=0))
+    support = len(np.unique(data[inliers], axis=0)) if inliers.any() else 0
+    alpha = chance_inlier_rate(fits, (a, b), seed=seed)
+    log_nfa = log10_nfa(count, sample_size, support, alpha)
+    refuse_chance(log_nfa, max_nfa, what, support, count, alpha)
+    return log_nfa
 
 
 def matches_from_cv(matches: Any) -> MatchSet:

@@ -14,6 +14,7 @@ from .convert import (
     keypoints_from_cv,
     matches_from_cv,
     points_to_cv,
+    significance,
     to_u8,
 )
 
@@ -146,12 +147,14 @@ def cv_homography_ransac(
     confidence: float = 0.995,
     max_iterations: int = 5000,
     refine: bool = True,
+    max_nfa: float | None = 1.0,
     seed: int = 0,
-) -> tuple[np.ndarray, MatchSet, float]:
+) -> tuple[np.ndarray, MatchSet, float, float]:
     """``cv2.findHomography(RANSAC)`` on the matched points, OpenCV's random generator
     seeded with ``seed``. OpenCV measures the forward error ``‖dst − H src‖`` and always
-    refines the inliers' fit by Levenberg-Marquardt (``refine`` is the reference's)."""
-    from ..geometry._homography import HomographyFit
+    refines the inliers' fit by Levenberg-Marquardt (``refine`` is the reference's). The
+    significance (``log_nfa``, ``max_nfa``) is the reference's test on OpenCV's inliers."""
+    from ..geometry._homography import HomographyFit, transfer_error
 
     cv2 = cv()
     if len(matches) < 4:
@@ -165,8 +168,14 @@ def cv_homography_ransac(
     if homography is None:
         raise ValueError("no homography: OpenCV found no consensus of 4 or more matches")
     inliers = mask.ravel().astype(bool)
-    homography = homography / homography[2, 2]
-    return HomographyFit(homography, matches.take(inliers), float(inliers.mean()))
+    model = homography / homography[2, 2]
+    pa, pb = src.xy[matches.pairs[:, 0]], dst.xy[matches.pairs[:, 1]]
+
+    def fits(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return transfer_error(model, x, y) < threshold
+
+    log_nfa = significance(inliers, pa, pb, fits, 4, max_nfa, "the homography", seed)
+    return HomographyFit(model, matches.take(inliers), float(inliers.mean()), log_nfa)
 
 
 @implements("geometry.warp", backend="opencv", requires=REQUIRES, extra=EXTRA)

@@ -7,7 +7,7 @@ import numpy as np
 
 from graphvision import PinholeCamera, implements
 
-from .convert import EXTRA, REQUIRES, cv, points_to_cv
+from .convert import EXTRA, REQUIRES, cv, points_to_cv, significance
 
 __all__ = ["cv_fundamental", "cv_undistort_image"]
 
@@ -44,11 +44,13 @@ def cv_fundamental(
     threshold: float = 1.0,
     confidence: float = 0.999,
     max_iterations: int = 2000,
+    max_nfa: float | None = 1.0,
     seed: int = 0,
-) -> tuple[np.ndarray, int, float, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, int, float, np.ndarray, np.ndarray, float]:
     """``cv2.findFundamentalMat(FM_RANSAC)``, OpenCV's generator seeded with ``seed``,
     scaled to unit Frobenius norm. OpenCV thresholds the distance to the epipolar line
-    and refits on the inliers without the reference's Levenberg-Marquardt step."""
+    and refits on the inliers without the reference's Levenberg-Marquardt step. The
+    significance (``log_nfa``, ``max_nfa``) is the reference's test on OpenCV's inliers."""
     from ..epipolar._geometry import sampson_distance
     from ..epipolar._nodes import FundamentalFit
 
@@ -66,4 +68,10 @@ def cv_fundamental(
     F = F / np.linalg.norm(F)
     inliers = mask.ravel().astype(bool)
     rms = float(np.sqrt(np.mean(sampson_distance(F, a[inliers], b[inliers]) ** 2)))
-    return FundamentalFit(F, int(inliers.sum()), rms, a[inliers], b[inliers])
+
+    def fits(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return sampson_distance(F, x, y) < threshold
+
+    what = "the fundamental matrix"
+    log_nfa = significance(inliers, a, b, fits, 8, max_nfa, what, seed)
+    return FundamentalFit(F, int(inliers.sum()), rms, a[inliers], b[inliers], log_nfa)
