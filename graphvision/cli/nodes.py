@@ -88,6 +88,9 @@ def cmd_describe(args: argparse.Namespace) -> int:
     where = f"version {info['version']}, plugin {info['plugin']}, {info['function']}"
     print(f"{info['id']} ({where})\n")
     print(f"backends: {backends_text(info.get('backends', {}))}")
+    if info.get("conformance"):  # how far another backend may be from the reference
+        rule = info["conformance"]
+        print(f"conformance: {rule['metric']} {rule['tolerance']}. {rule.get('note', '')}".strip())
     print("inputs:")
     for name, port in info["inputs"].items():
         print(f"  {name}: {port['type']}{' (optional)' if port['optional'] else ''}")

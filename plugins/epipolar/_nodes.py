@@ -459,7 +459,19 @@ def relative_pose(
     return RelativePose(reference, moved)
 
 
-@node("epipolar.triangulate", version=2)
+@node(
+    "epipolar.triangulate",
+    version=2,
+    conformance=Conformance(
+        "max_abs",
+        0.01,
+        note=(
+            "OpenCV's linear DLT is not Hartley-normalised: on the conformance scene (points "
+            "6 m away, 0.5 px noise) its points are up to 3 mm from the reference's; "
+            "nonlinear refines both to the same points"
+        ),
+    ),
+)
 def triangulate(
     a: Points2D,
     b: Points2D,

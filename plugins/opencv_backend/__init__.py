@@ -35,7 +35,7 @@ from .pixels import (
     cv_otsu,
     cv_to_gray,
 )
-from .views import cv_fundamental, cv_undistort_image
+from .views import cv_fundamental, cv_triangulate, cv_undistort_image
 
 __all__ = [
     "cv_box",
@@ -60,6 +60,7 @@ __all__ = [
     "cv_otsu",
     "cv_sift",
     "cv_to_gray",
+    "cv_triangulate",
     "cv_undistort_image",
     "cv_warp",
 ]

@@ -9,7 +9,7 @@ from graphvision import PinholeCamera, implements
 
 from .convert import EXTRA, REQUIRES, cv, points_to_cv, significance
 
-__all__ = ["cv_fundamental", "cv_undistort_image"]
+__all__ = ["cv_fundamental", "cv_triangulate", "cv_undistort_image"]
 
 
 @implements("camera.undistort_image", backend="opencv", requires=REQUIRES, extra=EXTRA)
@@ -75,3 +75,42 @@ def cv_fundamental(
     what = "the fundamental matrix"
     log_nfa = significance(inliers, a, b, fits, 8, max_nfa, what, seed)
     return FundamentalFit(F, int(inliers.sum()), rms, a[inliers], b[inliers], log_nfa)
+
+
+@implements("epipolar.triangulate", backend="opencv", requires=REQUIRES, extra=EXTRA)
+def cv_triangulate(
+    a: np.ndarray,
+    b: np.ndarray,
+    camera_a: PinholeCamera,
+    camera_b: PinholeCamera,
+    *,
+    method: str = "nonlinear",
+) -> np.ndarray:
+    """``cv2.triangulatePoints`` (the linear DLT); ``nonlinear`` then refines the points
+    by the reference's Levenberg-Marquardt, which OpenCV has no counterpart of."""
+    from ..epipolar._geometry import triangulate_nonlinear
+
+    cv2 = cv()
+    if len(a) != len(b):
+        raise ValueError(f"triangulation: {len(a)} points in view a but {len(b)} in view b")
+    if len(a) < 1:
+        raise ValueError("triangulation needs at least 1 correspondences, got 0")
+    if np.linalg.norm(camera_a.C - camera_b.C) < 1e-12:
+        raise ValueError(
+            "the two cameras have the same centre: a zero baseline triangulates nothing"
+        )
+    homogeneous = cv2.triangulatePoints(
+        camera_a.P.astype(np.float64), camera_b.P.astype(np.float64),
+        a.T.astype(np.float64), b.T.astype(np.float64),
+    )  # fmt: skip
+    with np.errstate(divide="ignore", invalid="ignore"):
+        points = (homogeneous[:3] / homogeneous[3]).T
+    if not np.isfinite(points).all():
+        bad = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
+        raise ValueError(
+            f"correspondence {bad} triangulates to a point at infinity (parallel rays: "
+            "a zero baseline or a mismatch)"
+        )
+    if method == "nonlinear":
+        points = triangulate_nonlinear(camera_a.P, camera_b.P, a, b, points)
+    return points

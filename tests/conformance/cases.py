@@ -148,6 +148,9 @@ def _two_views() -> dict[str, list[Case]]:
     lens = gv.PinholeCamera(K, distortion=np.array([-0.25, 0.06, 0.002, -0.001, 0.0]))
     return {
         "epipolar.fundamental": [({"a": a, "b": b}, {"threshold": 1.5})],
+        "epipolar.triangulate": [({"a": scene_.a, "b": scene_.b, "camera_a": scene_.camera_a,
+                                   "camera_b": scene_.camera_b}, {"method": m})
+                                 for m in ("linear", "nonlinear")],
         "camera.undistort_image": [({"image": scene(), "camera": lens}, {}),
                                    ({"image": colour_scene(), "camera": lens}, {})],
     }  # fmt: skip

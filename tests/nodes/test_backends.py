@@ -143,6 +143,8 @@ def test_the_cli_takes_an_order_and_lists_backends(plugin: Path, tmp_path: Path,
     assert "unknown backend 'fats'" in capsys.readouterr().err
     assert main(["describe", "twice.value", "--plugins", str(plugin)]) == 0
     assert "backends: numpy, fast, gpu (not installed)" in capsys.readouterr().out
+    assert main(["describe", "threshold.otsu"]) == 0
+    assert "conformance: max_abs 0.004. OpenCV splits 256" in capsys.readouterr().out
     assert main(["nodes", "--plugins", str(plugin)]) == 0
     assert "[+fast, gpu]" in capsys.readouterr().out
 
