@@ -166,3 +166,19 @@ def test_a_sweep_takes_the_order_too(plugin: Path, tmp_path: Path) -> None:
     result = gv.sweep(graph, {"v.gain": [1.0, 3.0]}, backends=["fast"], executor="sync")
     assert [row["v"] for row in result.rows] == [1.5, 3.5]
     assert {n.backend for record in result.records for n in record.nodes} == {"fast"}
+
+
+def test_opencv_is_imported_only_when_chosen_and_its_version_keys_results() -> None:
+    pytest.importorskip("cv2", reason="needs opencv-python-headless (dev extra)")
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, graphvision as gv; r = gv.discover(); "
+        "assert 'filters.gaussian' in r.implementations; print('cv2' in sys.modules)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "False"
+    spec = gv.discover().implementation("filters.gaussian", "opencv")
+    assert spec is not None and spec.key_id == "filters.gaussian@opencv"
+    assert "+opencv-python-headless==" in spec.source_hash
