@@ -111,7 +111,7 @@ def _pictures(op: str) -> tuple[list[str], list[tuple[str, str, str, str]]]:
     return used, shown
 
 
-def op_section(spec: gv.NodeSpec) -> str:
+def op_section(spec: gv.NodeSpec, backends: dict[str, bool] | None = None) -> str:
     described = spec.describe()
     doc = docstrings.parse(described["doc"])
     params_doc = _described(doc, "Parameters")
@@ -121,6 +121,11 @@ def op_section(spec: gv.NodeSpec) -> str:
         lines += [docstrings.blocks(doc.body), ""]
     flags = f"version {spec.version}" + ("" if spec.cache else ", not cached")
     lines += [f"`{described['function']}` · plugin `{spec.plugin}` · {flags}", ""]
+    if backends and len(backends) > 1:  # more implementations than the reference
+        names = ", ".join(f"`{b}`" for b in backends)
+        rule = spec.conformance
+        agree = f"; they agree by {rule.metric} within {rule.tolerance:g}" if rule else ""
+        lines += [f"Backends: {names}{agree}. {rule.note if rule else ''}".rstrip(), ""]
     if described["inputs"]:
         lines += ["| input | port type | description |", "| --- | --- | --- |"]
         for name, port in described["inputs"].items():
@@ -225,7 +230,7 @@ def generate() -> None:
         page += ["| op | summary |", "| --- | --- |"]
         page += [f"| [`{s.id}`](#{anchor(s.id)}) | {_cell(s.summary)} |" for s in specs]
         page.append("")
-        page += [op_section(spec) for spec in specs]
+        page += [op_section(spec, registry.backends_of(spec.id)) for spec in specs]
         with mkdocs_gen_files.open(f"reference/nodes/{family}.md", "w") as out:
             out.write("\n".join(page))
         first = _cell(first_sentence(docstrings.parse(intro).summary)) if intro else ""
