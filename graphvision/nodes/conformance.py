@@ -61,6 +61,10 @@ def _compare(rule: Conformance, reference: Any, candidate: Any, label: str) -> l
         error = _sampson_rms(candidate[0], reference[3], reference[4])
         ok = error <= rule.tolerance
         return [] if ok else [f"{label}: Sampson RMS {error:.3g} px > {rule.tolerance}"]
+    if rule.metric == "rotation_error":
+        worst = max(_pose_angles(reference, candidate), default=0.0)
+        ok = worst <= rule.tolerance
+        return [] if ok else [f"{label}: pose differs by {worst:.3g}° > {rule.tolerance}°"]
     if rule.metric == "corner_error":
         error = _corner_error(_homography(reference), _homography(candidate), rule.radius)
         ok = error <= rule.tolerance
@@ -127,6 +131,23 @@ def _sampson_rms(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     algebraic = np.einsum("ni,ni->n", hb, fa)
     denominator = fa[:, 0] ** 2 + fa[:, 1] ** 2 + fb[:, 0] ** 2 + fb[:, 1] ** 2
     return float(np.sqrt(np.mean(algebraic**2 / np.maximum(denominator, 1e-300))))
+
+
+def _pose_angles(reference: Any, candidate: Any) -> list[float]:
+    """Degrees between the rotations, and between the centres' directions, of each pair of
+    cameras (values with ``R`` and ``C``) among the outputs."""
+    angles = []
+    for ours, theirs in zip(reference, candidate, strict=True):
+        if not (hasattr(ours, "R") and hasattr(ours, "C")):
+            continue
+        relative = np.asarray(ours.R).T @ np.asarray(theirs.R)
+        cosine = np.clip((np.trace(relative) - 1) / 2, -1.0, 1.0)
+        angles.append(float(np.degrees(np.arccos(cosine))))
+        c1, c2 = np.asarray(ours.C, float), np.asarray(theirs.C, float)
+        if np.linalg.norm(c1) > 0 and np.linalg.norm(c2) > 0:
+            dot = np.clip(c1 @ c2 / np.linalg.norm(c1) / np.linalg.norm(c2), -1.0, 1.0)
+            angles.append(float(np.degrees(np.arccos(dot))))
+    return angles
 
 
 def _homography(value: Any) -> np.ndarray:

@@ -37,6 +37,8 @@ class Conformance:
       ``radius × radius`` square mapped by the two homographies, at most ``tolerance``;
     * ``sampson``: the RMS Sampson distance of the reference's inlier pairs (its 4th and
       5th outputs) to the other's fundamental matrix (its first), at most ``tolerance``;
+    * ``rotation_error``: the rotations of the cameras among the outputs, and the
+      directions of their centres, within ``tolerance`` degrees;
     * ``recall``: at least a ``tolerance`` share of the reference's detections (mask
       pixels, keypoint positions, match pairs) have one of the other's within
       ``radius`` pixels, and the other way round.

@@ -398,7 +398,15 @@ class RelativePose(NamedTuple):
     moved: Camera
 
 
-@node("epipolar.relative_pose", version=1)
+@node(
+    "epipolar.relative_pose",
+    version=1,
+    conformance=Conformance(
+        "rotation_error",
+        1.0,
+        note="OpenCV does not refine the pose over the pairs within inlier_threshold",
+    ),
+)
 def relative_pose(
     E: Essential,
     a: Points2D,

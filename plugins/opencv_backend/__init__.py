@@ -35,7 +35,7 @@ from .pixels import (
     cv_otsu,
     cv_to_gray,
 )
-from .views import cv_fundamental, cv_triangulate, cv_undistort_image
+from .views import cv_fundamental, cv_relative_pose, cv_triangulate, cv_undistort_image
 
 __all__ = [
     "cv_box",
@@ -58,6 +58,7 @@ __all__ = [
     "cv_median",
     "cv_open",
     "cv_otsu",
+    "cv_relative_pose",
     "cv_sift",
     "cv_to_gray",
     "cv_triangulate",

@@ -9,7 +9,7 @@ from graphvision import PinholeCamera, implements
 
 from .convert import EXTRA, REQUIRES, cv, points_to_cv, significance
 
-__all__ = ["cv_fundamental", "cv_triangulate", "cv_undistort_image"]
+__all__ = ["cv_fundamental", "cv_relative_pose", "cv_triangulate", "cv_undistort_image"]
 
 
 @implements("camera.undistort_image", backend="opencv", requires=REQUIRES, extra=EXTRA)
@@ -114,3 +114,32 @@ def cv_triangulate(
     if method == "nonlinear":
         points = triangulate_nonlinear(camera_a.P, camera_b.P, a, b, points)
     return points
+
+
+@implements("epipolar.relative_pose", backend="opencv", requires=REQUIRES, extra=EXTRA)
+def cv_relative_pose(
+    E: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    camera_a: PinholeCamera,
+    camera_b: PinholeCamera,
+    *,
+    inlier_threshold: float = 1.5,
+) -> tuple[PinholeCamera, PinholeCamera]:
+    """``cv2.recoverPose`` (cheirality of the four decompositions) on the points
+    normalised by each camera's K (OpenCV's takes one K); OpenCV does not refine the
+    pose, which the reference does on the pairs within ``inlier_threshold`` pixels."""
+    from ..epipolar._nodes import RelativePose
+
+    cv2 = cv()
+    if len(a) != len(b) or len(a) < 5:
+        raise ValueError(f"the relative pose needs at least 5 pairs, got {len(a)} and {len(b)}")
+    na = cv2.undistortPoints(points_to_cv(a).astype(np.float64), camera_a.K, None)
+    nb = cv2.undistortPoints(points_to_cv(b).astype(np.float64), camera_b.K, None)
+    front, R, t, _ = cv2.recoverPose(np.asarray(E, dtype=np.float64), na, nb, np.eye(3))
+    if front == 0:
+        raise ValueError("no pose puts the points in front of both cameras (E is wrong for them)")
+    t = t.ravel() / np.linalg.norm(t)
+    reference = PinholeCamera(camera_a.K.copy(), size=camera_a.size.copy())
+    moved = PinholeCamera(camera_b.K.copy(), R, -R.T @ t, size=camera_b.size.copy())
+    return RelativePose(reference, moved)

@@ -137,6 +137,15 @@ def _geometry() -> dict[str, list[Case]]:
     }  # fmt: skip
 
 
+def _essential(scene_: Any) -> np.ndarray:
+    """E of the scene's true cameras, ``[t]× R`` of b relative to a (a at the origin)."""
+    ca, cb = scene_.camera_a, scene_.camera_b
+    R = cb.R @ ca.R.T
+    t = cb.R @ (ca.C - cb.C)
+    cross = np.array([[0, -t[2], t[1]], [t[2], 0, -t[0]], [-t[1], t[0], 0]])
+    return cross @ R
+
+
 def _two_views() -> dict[str, list[Case]]:
     from graphvision_plugins.synthetic import two_view_scene
 
@@ -151,6 +160,9 @@ def _two_views() -> dict[str, list[Case]]:
         "epipolar.triangulate": [({"a": scene_.a, "b": scene_.b, "camera_a": scene_.camera_a,
                                    "camera_b": scene_.camera_b}, {"method": m})
                                  for m in ("linear", "nonlinear")],
+        "epipolar.relative_pose": [({"E": _essential(scene_), "a": scene_.a, "b": scene_.b,
+                                     "camera_a": scene_.camera_a, "camera_b": scene_.camera_b},
+                                    {})],
         "camera.undistort_image": [({"image": scene(), "camera": lens}, {}),
                                    ({"image": colour_scene(), "camera": lens}, {})],
     }  # fmt: skip
