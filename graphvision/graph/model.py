@@ -242,6 +242,7 @@ class Graph:
                 listed = f"{did_you_mean(subject, others)}; inputs: {', '.join(others) or 'none'}"
                 problems.append((f"{where}.truth_of", f"'{subject}' is not another input{listed}"))
         return problems
+
     def with_backends(self, backends: list[str] | str | None) -> Graph:
         """A copy whose backend lookup order is ``backends`` (``"opencv,numpy"`` or a list;
         None: this graph itself). The order given for a run replaces the file's
