@@ -50,6 +50,10 @@ def _median_2d(plane: np.ndarray, size: int, boundary: str, out: np.ndarray) -> 
         out[:] = image
     elif size == 3:
         median_3x3(image, rows, columns, out)
+    elif size == 5:
+        from ._median_select5 import median_5x5
+
+        median_5x5(image, rows, columns, sort_network(5), out, _BLOCK)
     else:
         selection, median_wire = median_network(size)
         median_by_network(
