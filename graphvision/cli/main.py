@@ -7,6 +7,8 @@
                              [--scheduler ADDRESS] [--no-cache | --cache-dir DIR]
                              [--keep-going] [--record] [--[no-]progress]
     graphvision sweep PIPELINE --grid NODE.PARAM=V1,V2,... [--grid ...] -d DIR [--plot OUTPUT]
+    graphvision studio PIPELINE [-i NAME=VALUE]... [-s NODE.PARAM=VALUE]... [--no-browser]
+                                [--port N] [--host ADDRESS]
     graphvision validate PIPELINE...
     graphvision nodes [--json]
     graphvision describe OP|PIPELINE [--json]

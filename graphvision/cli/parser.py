@@ -21,6 +21,7 @@ from graphvision.cli.nodes import cmd_describe, cmd_nodes
 from graphvision.cli.report import cmd_report
 from graphvision.cli.run import cmd_run
 from graphvision.cli.schema import cmd_schema
+from graphvision.cli.studio import cmd_studio, studio_options
 from graphvision.cli.sweep import cmd_sweep
 from graphvision.cli.validate import cmd_validate
 
@@ -173,7 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
         global_options(sub, top=False)
         return sub
 
-    for add in (_run, _sweep, _validate, _registry_commands, _graph_and_report, _cache):
+    for add in (_run, _sweep, _studio, _validate, _registry_commands, _graph_and_report, _cache):
         add(command)
     return parser
 
@@ -230,6 +231,13 @@ def _sweep(command: Command) -> None:
     p.add_argument("--output-dir", "-d", metavar="DIR", required=True, help="where to write")
     p.add_argument("--plot", metavar="OUTPUT", help="plot this scalar output against each param")
     p.set_defaults(func=cmd_sweep)
+
+
+def _studio(command: Command) -> None:
+    p = command("studio", "tune a pipeline live in the browser (needs graphvision[studio])")
+    run_options(p)
+    studio_options(p)
+    p.set_defaults(func=cmd_studio)
 
 
 def _validate(command: Command) -> None:

@@ -1,0 +1,182 @@
+"""What the page's viewers receive for a value: a description (JSON) and its bytes.
+
+Each value is described by ``describe_value`` as one *view*, chosen from its port type
+(by the engine's types, and by type name for the families' own types, which the engine
+does not import):
+
+``image``     an intensity image: PNG, and the float values (``.f32``) for the cursor;
+``floatmap``  any other float map (disparity, depth, responses): raw ``float32`` with its
+              range; the page draws it through a colour map with a colour bar;
+``labels``    a label image: a PNG in distinct colours, the labels (``.f32``) for the cursor;
+``mask``      a binary image: PNG;
+``keypoints``, ``boxes``, ``lines``, ``circles``  drawn over the image they were found in
+              (``over``: the producing node's image input), and listed as a table;
+``points3d``  an N×3 point cloud (at most 20 000 points sent), for the 3-D view;
+``scalar``, ``table``, ``matrix``, ``text`` and ``summary`` for the rest (a ``png`` too when
+              the port type has a preview picture).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from graphvision.compiler.compile import CompiledGraph
+from graphvision.values.images import (
+    BinaryImagePort,
+    FloatImagePort,
+    ImagePort,
+    LabelImagePort,
+)
+from graphvision.values.ports import ArrayPort, PortType
+from graphvision.values.records import BoxesPort, KeypointsPort, MatchesPort
+from graphvision.values.scalars import TablePort, _ScalarPort
+
+__all__ = ["describe_value", "png_of", "raw_of"]
+
+MAX_POINTS = 20_000
+MAX_ROWS = 200
+
+
+def _finite_range(array: np.ndarray) -> tuple[float, float]:
+    finite = array[np.isfinite(array)]
+    if finite.size == 0:
+        return 0.0, 1.0
+    return float(finite.min()), float(finite.max())
+
+
+def view_of(kind: type[PortType], value: Any) -> str:
+    """The viewer of a value of port type ``kind`` (see the module docstring)."""
+    name = kind.type_name()
+    if issubclass(kind, LabelImagePort):
+        return "labels"
+    if issubclass(kind, BinaryImagePort):
+        return "mask"
+    if issubclass(kind, ImagePort):
+        return "image"
+    special = {"Lines": "lines", "Circles": "circles", "Points3D": "points3d"}
+    if name in special:
+        return special[name]
+    if issubclass(kind, KeypointsPort):
+        return "keypoints"
+    if issubclass(kind, BoxesPort):
+        return "boxes"
+    if issubclass(kind, MatchesPort):
+        return "matches"
+    if issubclass(kind, _ScalarPort):
+        return "text" if isinstance(value, str) else "scalar"
+    if issubclass(kind, TablePort):
+        return "table"
+    if isinstance(value, np.ndarray) and value.dtype.kind == "f" and value.ndim == 2:
+        if min(value.shape) >= 8 and (issubclass(kind, FloatImagePort) or name != "Array"):
+            return "floatmap"
+        return "matrix" if value.size <= 64 else "summary"
+    return "summary"
+
+
+def describe_value(
+    kind: type[PortType], value: Any, compiled: CompiledGraph, node: str, port: str
+) -> dict[str, Any]:
+    """The JSON a viewer starts from: view, type, summary, shape, range, overlay data."""
+    view = view_of(kind, value)
+    found: dict[str, Any] = {
+        "view": view,
+        "type": kind.type_name(),
+        "summary": kind.summary(value),
+        "node": node,
+        "port": port,
+    }
+    if isinstance(value, np.ndarray):
+        found.update(shape=list(value.shape), dtype=str(value.dtype))
+    if view in ("image", "floatmap", "labels", "mask"):
+        found["range"] = _finite_range(np.asarray(value, np.float64))
+        found["png"] = view != "floatmap"
+    elif view in ("keypoints", "boxes", "lines", "circles", "matches"):
+        found.update(_features(view, value))
+        found["over"] = _image_input(compiled, node)
+    elif view == "points3d":
+        points = np.asarray(value, np.float64)
+        step = max(1, math.ceil(len(points) / MAX_POINTS))
+        found["points"] = np.round(points[::step], 4).tolist()
+    elif view == "scalar":
+        found["value"] = value.item() if hasattr(value, "item") else value
+    elif view == "text":
+        found["value"] = str(value)
+    elif view == "table":
+        found["columns"] = {k: _list(np.asarray(v)[:MAX_ROWS]) for k, v in value.items()}
+        found["rows"] = int(len(next(iter(value.values()), [])))
+    elif view == "matrix":
+        found["value"] = _list(value)
+    else:
+        found["png"] = _preview(kind, value) is not None
+    return found
+
+
+def _features(view: str, value: Any) -> dict[str, Any]:
+    """Overlay geometry and a table for what a node found (at most MAX_POINTS rows)."""
+    if view == "keypoints":
+        columns = {
+            "x": value.xy[:, 0], "y": value.xy[:, 1], "scale": value.scale,
+            "orientation": value.orientation, "response": value.response,
+        }  # fmt: skip
+    elif view == "boxes":
+        box = value.xyxy
+        columns = {"x0": box[:, 0], "y0": box[:, 1], "x1": box[:, 2], "y1": box[:, 3],
+                   "score": value.score}  # fmt: skip
+    elif view == "matches":
+        columns = {"a": value.pairs[:, 0], "b": value.pairs[:, 1], "distance": value.distance}
+    elif view == "lines":
+        columns = {"rho": value[:, 0], "theta": value[:, 1], "votes": value[:, 2]}
+    else:
+        columns = {"x": value[:, 0], "y": value[:, 1], "radius": value[:, 2], "score": value[:, 3]}
+    count = len(next(iter(columns.values())))
+    return {
+        "count": count,
+        "columns": {k: _list(np.asarray(v)[:MAX_POINTS]) for k, v in columns.items()},
+    }
+
+
+def _image_input(compiled: CompiledGraph, node: str) -> list[str] | None:
+    """``[node, port]`` of the image the producing node read (what its finds are drawn on)."""
+    step = compiled.steps.get(node)
+    if step is None:
+        return None
+    for port, (source, source_port) in step.inputs.items():
+        kind = step.spec.inputs[port].type
+        if isinstance(kind, type) and issubclass(kind, ImagePort):
+            return [source, source_port]
+    return None
+
+
+def _list(array: Any) -> Any:
+    array = np.asarray(array)
+    if array.dtype.kind == "f":
+        return [None if not math.isfinite(v) else round(v, 6) for v in array.ravel().tolist()]
+    return array.tolist()
+
+
+def _preview(kind: type[PortType], value: Any) -> np.ndarray | None:
+    try:
+        return kind.preview(value)
+    except Exception:  # a preview is a nicety: a value without one is described in words
+        return None
+
+
+def png_of(kind: type[PortType], value: Any) -> bytes | None:
+    """The PNG of a value's picture at full size, or None when its type has none."""
+    from graphvision.values.pictures import png_bytes
+
+    picture = _preview(kind, value)
+    if picture is None:
+        return None
+    return png_bytes(picture, smallest=1, longest=16384)
+
+
+def raw_of(kind: type[PortType], value: Any) -> tuple[bytes, list[int]] | None:
+    """The values of an image or map as little-endian ``float32`` (channels last), with shape."""
+    if not isinstance(value, np.ndarray) or not issubclass(kind, ArrayPort) or value.ndim > 3:
+        return None
+    array = np.ascontiguousarray(value, dtype="<f4")
+    return array.tobytes(), list(array.shape)
