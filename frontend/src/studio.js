@@ -1,0 +1,359 @@
+// graphvision studio: the page. Graph, inspector with parameter widgets, outputs, runs.
+import { GraphView } from "./graphview.js";
+import { downstream } from "./layout.js";
+import { docHtml } from "./tex.js";
+import { el, floatMapViewer, ImageViewer, pointCloudViewer, scalarViewer, tableViewer } from "./viewers.js";
+import { readValue, widgetSpec } from "./widgets.js";
+
+const S = { graph: null, view: null, selected: null, latest: 0, shown: 0, runs: {}, states: {},
+  timers: {}, showing: new Set() };
+const $ = (sel) => document.querySelector(sel);
+
+async function api(path, body) {
+  const init = body === undefined ? {} : { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) };
+  const response = await fetch(path, init);
+  const data = response.headers.get("content-type")?.includes("json") ? await response.json() : null;
+  return { ok: response.ok, status: response.status, data };
+}
+
+function setNodeState(id, state, seconds) {
+  S.states[id] = { state, seconds, since: state === "running" ? performance.now() : null };
+  const text = seconds !== undefined && (state === "computed" || state === "cached" || state === "failed")
+    ? `${state} ${(seconds).toFixed(seconds < 10 ? 2 : 1)} s` : state;
+  S.view.setState(id, state, text);
+  clearInterval(S.timers[id]);
+  if (state === "running") {
+    S.timers[id] = setInterval(() => {
+      const s = (performance.now() - S.states[id].since) / 1000;
+      S.view.setState(id, "running", `running ${s.toFixed(1)} s`);
+    }, 100);
+  }
+}
+
+function onEvent(event) {
+  if (event.event === "run") {
+    S.runs[event.run] = { ...(S.runs[event.run] || {}), ...event };
+    if (event.status === "running") {
+      S.latest = Math.max(S.latest, event.run);
+      $("#run-status").textContent = `run ${event.run} running`;
+      $("#cancel").disabled = false;
+    } else if (event.run === S.latest) {
+      $("#run-status").textContent = `run ${event.run} ${event.status}` +
+        (event.seconds ? ` in ${(event.seconds * 1000).toFixed(0)} ms` : "") + (event.error ? ": see failed nodes" : "");
+      $("#cancel").disabled = true;
+      if (event.status === "done" || event.status === "failed") showRun(event.run);
+      if (event.status === "cancelled") for (const [id, s] of Object.entries(S.states)) if (s.state === "running" || s.state === "queued") setNodeState(id, "stale");
+      refreshRuns();
+    }
+    return;
+  }
+  if (event.run < S.latest) return; // a superseded run: never mixed with the newer one
+  if (event.event === "queued") for (const id of event.nodes) setNodeState(id, "queued");
+  if (event.event === "node") setNodeState(event.node, event.status, event.seconds);
+}
+
+async function showRun(id) {
+  const found = await api("api/runs");
+  if (!found.ok) return;
+  for (const r of found.data) S.runs[r.id] = r;
+  const run = S.runs[id];
+  if (!run || !run.kept) return;
+  if (id <= S.shown || S.showing.has(id)) return;
+  S.showing.add(id);
+  S.shown = id;
+  for (const [name, n] of Object.entries(run.nodes)) setNodeState(name, n.status, n.seconds);
+  document.body.dataset.shownRun = String(id);
+  await Promise.all([renderOutputs(), S.selected ? renderInspector(S.selected) : null]);
+  document.body.dataset.paintedRun = String(id);
+  window.dispatchEvent(new CustomEvent("gv-painted", { detail: { run: id } }));
+}
+
+function history(node, port) {
+  return Object.values(S.runs).filter((r) => r.metrics).map((r) => {
+    const name = Object.entries(S.graph.outputs).find(([, src]) => src[0] === node && src[1] === port)?.[0];
+    return { run: r.id, value: name ? r.metrics[name] : undefined };
+  }).filter((h) => h.value !== undefined);
+}
+
+async function renderValue(container, run, node, port) {
+  const found = await api(`api/value/${run}/${node}/${port}`);
+  if (!found.ok) { container.append(el("div", { class: "gv-error" }, found.data?.error || "no value")); return null; }
+  const d = found.data;
+  const base = `${run}/${node}/${port}`;
+  container.append(el("div", { class: "gv-caption" }, d.summary));
+  if (["image", "labels", "mask"].includes(d.view) || (d.view === "summary" && d.png && d.shape?.length >= 2 && d.shape[0] > 8)) {
+    const [h, w] = d.shape;
+    const viewer = new ImageViewer(container, { width: w, height: h, label: "" });
+    const img = new Image();
+    img.onload = () => viewer.setSource(img);
+    img.src = `api/png/${base}`;
+    img.dataset.value = base;
+    viewer.canvas.dataset.value = base;
+    let asked = false;
+    viewer.canvas.addEventListener("mouseenter", async () => {
+      if (asked) return;
+      asked = true;
+      const r = await fetch(`api/raw/${base}`);
+      if (r.ok) viewer.setValues(new Float32Array(await r.arrayBuffer()), r.headers.get("X-Shape").split(",").map(Number));
+    });
+    await addOverlays(viewer, run, node, port);
+    await new Promise((resolve) => { if (img.complete) resolve(); else { img.addEventListener("load", resolve); img.addEventListener("error", resolve); } });
+  } else if (d.view === "floatmap") {
+    const r = await fetch(`api/raw/${base}`);
+    const values = new Float32Array(await r.arrayBuffer());
+    const viewer = floatMapViewer(container, d, values);
+    viewer.canvas.dataset.value = base;
+    await addOverlays(viewer, run, node, port);
+  } else if (d.view === "scalar" || d.view === "text") {
+    scalarViewer(container, d.value, history(node, port));
+  } else if (d.view === "points3d") {
+    pointCloudViewer(container, d.points);
+  } else if (["table", "keypoints", "boxes", "matches", "lines", "circles"].includes(d.view)) {
+    if (d.over) container.append(el("div", { class: "gv-caption" }, `drawn over ${d.over[0]} (toggle it there)`));
+    tableViewer(container, d.columns, d.count ?? d.rows);
+  } else if (d.view === "matrix") {
+    const rows = d.shape.length === 2 ? d.shape[0] : 1, cols = d.value.length / rows;
+    const columns = {};
+    for (let j = 0; j < cols; j++) columns[`[${j}]`] = Array.from({ length: rows }, (_, i) => d.value[i * cols + j]);
+    tableViewer(container, columns);
+  } else if (d.png) {
+    container.append(el("img", { src: `api/png/${base}`, class: "gv-preview" }));
+  }
+  return d;
+}
+
+// Keypoints, boxes, lines and circles found in this image are drawn over it.
+async function addOverlays(viewer, run, node, port) {
+  const readers = S.graph.edges.filter((e) => e.from === node && (e.from_port || "out") === (port || "out"));
+  for (const e of readers) {
+    const target = S.graph.nodes.find((n) => n.id === e.to);
+    for (const [out, type] of Object.entries(target.outputs || {})) {
+      if (!["Keypoints", "Boxes", "Lines", "Circles"].includes(type)) continue;
+      const found = await api(`api/value/${run}/${target.id}/${out}`);
+      if (found.ok && found.data.over && found.data.over[0] === node) {
+        viewer.addOverlay(`${target.id}.${out}`, found.data.view, found.data.columns);
+      }
+    }
+  }
+}
+
+async function renderOutputs() {
+  const box = $("#outputs");
+  const run = S.shown;
+  const fresh = el("div");
+  for (const [name, [node, port]] of Object.entries(S.graph.outputs)) {
+    const card = el("div", { class: "gv-output", "data-output": name }, el("h4", {}, name));
+    fresh.append(card);
+    await renderValue(card, run, node, port || "out");
+  }
+  if (run === S.shown) box.replaceChildren(fresh);
+}
+
+function widget(param) {
+  const spec = widgetSpec(param.schema, param.value);
+  const message = el("div", { class: "gv-invalid" });
+  const send = async (value) => {
+    message.textContent = "";
+    markStale(S.selected);
+    const result = await api("api/change", { overrides: { [param.key]: value } });
+    if (!result.ok) {
+      message.textContent = (result.data?.problems || []).map((p) => p.message).join("; ") || "refused";
+      refreshStates();
+    }
+  };
+  let control;
+  if (spec.kind === "menu") {
+    control = el("select", {}, ...spec.options.map((o) => el("option", { value: o }, String(o))));
+    control.value = param.value;
+    control.addEventListener("change", () => send(control.value));
+  } else if (spec.kind === "switch") {
+    control = el("input", { type: "checkbox", class: "gv-switch" });
+    control.checked = Boolean(param.value);
+    control.addEventListener("change", () => send(control.checked));
+  } else if (spec.kind === "slider") {
+    const range = el("input", { type: "range", min: spec.min, max: spec.max, step: spec.step || "any" });
+    const number = el("input", { type: "number", step: spec.integer ? spec.step : "any", class: "gv-number" });
+    range.value = number.value = param.value;
+    const go = (text) => {
+      const read = readValue(spec, text);
+      if (read.error) { message.textContent = read.error; return; }
+      range.value = number.value = read.value;
+      send(read.value);
+    };
+    range.addEventListener("input", () => go(range.value));
+    number.addEventListener("change", () => go(number.value));
+    control = el("span", { class: "gv-slider" }, range, number);
+  } else {
+    const json = spec.kind === "json";
+    control = el("input", { type: "text", class: "gv-text" });
+    control.value = json ? JSON.stringify(param.value) : param.value ?? "";
+    control.addEventListener("change", () => {
+      const read = readValue(spec, control.value);
+      if (read.error) message.textContent = read.error; else send(read.value);
+    });
+  }
+  control.dataset.param = param.name;
+  const title = param.schema.description || param.schema.title || param.name;
+  return el("div", { class: "gv-param", "data-param": param.name },
+    el("label", { title }, param.name + (param.key.startsWith("params.") ? ` (${param.key})` : "")), control, message);
+}
+
+function markStale(id) {
+  if (!id) return;
+  for (const n of downstream(S.graph, id)) setNodeState(n, "stale");
+}
+
+async function refreshStates() {
+  const run = S.runs[S.shown];
+  if (run) for (const [name, n] of Object.entries(run.nodes)) setNodeState(name, n.status, n.seconds);
+}
+
+async function renderInspector(id) {
+  const node = S.graph.nodes.find((n) => n.id === id);
+  const panel = el("div", { "data-inspect": id });
+  const run = S.runs[S.shown];
+  const record = run?.nodes?.[id] || {};
+  if (node.kind === "input") {
+    const box = el("input", { type: "text", class: "gv-text", "data-input": id });
+    box.value = node.value ?? "";
+    const message = el("div", { class: "gv-invalid" });
+    box.addEventListener("change", async () => {
+      markStale(id);
+      const r = await api("api/change", { inputs: { [id]: box.value } });
+      if (!r.ok) message.textContent = (r.data?.problems || []).map((p) => p.message).join("; ");
+    });
+    panel.append(el("h3", {}, id), el("div", { class: "gv-op" }, `input · ${node.type}`),
+      el("label", {}, "value (path, sample:NAME or a literal)"), box, message);
+  } else {
+    const doc = el("div", { class: "gv-doc" });
+    doc.innerHTML = docHtml(node.doc);
+    const summary = el("div", { class: "gv-summary" });
+    summary.innerHTML = docHtml(node.summary);
+    panel.append(el("h3", {}, id), el("div", { class: "gv-op" }, `${node.op} · version ${node.version}`), summary,
+      el("details", {}, el("summary", {}, "documentation"), doc));
+    const ports = el("table", { class: "gv-ports" }, el("tr", {}, el("th", {}, "port"), el("th", {}, "type"), el("th", {}, "shape")));
+    for (const [p, t] of Object.entries(node.inputs)) ports.append(el("tr", {}, el("td", {}, "in " + p), el("td", {}, t), el("td", {}, "")));
+    const shapes = {};
+    for (const [p, t] of Object.entries(node.outputs)) {
+      shapes[p] = el("td", {}, "");
+      ports.append(el("tr", {}, el("td", {}, "out " + p), el("td", {}, t), shapes[p]));
+    }
+    panel.append(ports);
+    const keys = Object.entries(record.keys || {}).map(([p, k]) => `${p}: ${k}`).join("\n");
+    panel.append(el("div", { class: "gv-meta" }, `status ${record.status || "–"} · ${record.seconds !== undefined ? (record.seconds * 1000).toFixed(1) + " ms" : "–"}`),
+      el("pre", { class: "gv-key", title: "cache key" }, keys || "cache key: –"));
+    if (record.error) panel.append(el("pre", { class: "gv-error", "data-error": id }, record.error));
+    if (node.params.length) {
+      panel.append(el("h4", {}, "parameters"));
+      for (const p of node.params) panel.append(widget(p));
+    }
+    const values = el("div", { class: "gv-values" });
+    panel.append(el("h4", {}, "outputs"), values);
+    $("#inspector").replaceChildren(panel);
+    for (const port of Object.keys(node.outputs)) {
+      const box = el("div", { class: "gv-output", "data-port": `${id}.${port}` }, el("h4", {}, port));
+      values.append(box);
+      if (S.shown) {
+        const d = await renderValue(box, S.shown, id, port);
+        if (d && d.shape) shapes[port].textContent = d.shape.join("×");
+      }
+    }
+    return;
+  }
+  $("#inspector").replaceChildren(panel);
+}
+
+async function select(id) {
+  S.selected = id;
+  S.view.select(id);
+  await renderInspector(id);
+}
+
+async function refreshRuns() {
+  const found = await api("api/runs");
+  if (!found.ok) return;
+  const table = el("table", { class: "gv-runs" }, el("tr", {}, ...["A", "B", "run", "status", "ms", "changes", "metrics"].map((h) => el("th", {}, h))));
+  for (const r of found.data.slice().reverse()) {
+    S.runs[r.id] = { ...S.runs[r.id], ...r };
+    const a = el("input", { type: "radio", name: "cmp-a", value: r.id });
+    const b = el("input", { type: "radio", name: "cmp-b", value: r.id });
+    if (!r.kept) { a.disabled = b.disabled = true; }
+    const diff = Object.entries(r.diff).map(([k, [o, n]]) => `${k}: ${o ?? "file"} → ${n ?? "file"}`).join("; ");
+    const metrics = Object.entries(r.metrics).map(([k, v]) => `${k} ${typeof v === "number" ? Number(v.toPrecision(4)) : v}`).join(", ");
+    if (r.kept && r.id === S.latest && r.status !== "running" && r.id > S.shown) showRun(r.id);
+    table.append(el("tr", { "data-run": r.id }, el("td", {}, a), el("td", {}, b), el("td", {}, String(r.id)), el("td", {}, r.status),
+      el("td", {}, (r.seconds * 1000).toFixed(0)), el("td", {}, diff || "–"), el("td", {}, metrics || "–")));
+  }
+  $("#runs").replaceChildren(table);
+}
+
+async function compare() {
+  const a = Number(document.querySelector("input[name=cmp-a]:checked")?.value);
+  const b = Number(document.querySelector("input[name=cmp-b]:checked")?.value);
+  const box = $("#compare");
+  box.replaceChildren();
+  if (!a || !b) { box.append("pick run A and run B in the table"); return; }
+  const ra = S.runs[a], rb = S.runs[b];
+  const metrics = el("table", { class: "gv-runs" }, el("tr", {}, el("th", {}, "metric"), el("th", {}, `run ${a}`), el("th", {}, `run ${b}`)));
+  for (const k of new Set([...Object.keys(ra.metrics), ...Object.keys(rb.metrics)])) {
+    metrics.append(el("tr", {}, el("td", {}, k), el("td", {}, String(ra.metrics[k] ?? "–")), el("td", {}, String(rb.metrics[k] ?? "–"))));
+  }
+  box.append(metrics);
+  const node = S.graph.nodes.find((n) => n.id === S.selected && n.kind === "node") ||
+    S.graph.nodes.find((n) => Object.values(n.outputs || {}).some((t) => /Image/.test(t)));
+  const port = Object.keys(node.outputs).find((p) => /Image/.test(node.outputs[p])) || Object.keys(node.outputs)[0];
+  const src = (run) => `api/png/${run}/${node.id}/${port}`;
+  const side = el("div", { class: "gv-side" }, el("figure", {}, el("img", { src: src(a) }), el("figcaption", {}, `run ${a}`)),
+    el("figure", {}, el("img", { src: src(b) }), el("figcaption", {}, `run ${b}`)));
+  const top = el("img", { src: src(b), class: "gv-top" });
+  const slider = el("input", { type: "range", min: 0, max: 100, value: 50 });
+  slider.addEventListener("input", () => { top.style.clipPath = `inset(0 0 0 ${slider.value}%)`; });
+  top.style.clipPath = "inset(0 0 0 50%)";
+  const swipe = el("div", { class: "gv-swipe" }, el("img", { src: src(a) }), top);
+  box.append(el("h4", {}, `${node.id}.${port}: side by side`), side, el("h4", {}, `swipe (run ${a} left, run ${b} right)`), swipe, slider);
+}
+
+async function main() {
+  const found = await api("api/graph");
+  S.graph = found.data;
+  document.title = `${S.graph.name} · graphvision studio`;
+  $("#title").textContent = S.graph.name;
+  S.view = new GraphView($("#graph"), S.graph, { onSelect: select });
+  S.view.fit();
+  for (const n of S.graph.nodes) if (n.kind === "node") setNodeState(n.id, "queued");
+  for (const r of S.graph.runs) S.runs[r.id] = r;
+  $("#fit").addEventListener("click", () => S.view.fit());
+  $("#search").addEventListener("change", (e) => S.view.search(e.target.value));
+  $("#cancel").addEventListener("click", () => api("api/cancel", {}));
+  $("#compare-go").addEventListener("click", compare);
+  $("#save").addEventListener("click", async () => {
+    const r = await api("api/save", {});
+    $("#notice").textContent = r.ok ? `saved to ${r.data.saved}` : r.data.error;
+  });
+  $("#save-as").addEventListener("click", async () => {
+    const path = prompt("save the parameters into a new pipeline file:", S.graph.source.replace(/\.ya?ml$/, "") + "-tuned.yaml");
+    if (!path) return;
+    const r = await api("api/save", { path });
+    $("#notice").textContent = r.ok ? `saved to ${r.data.saved}` : r.data.error;
+  });
+  $("#command").addEventListener("click", async () => {
+    const r = await api("api/command");
+    $("#notice").textContent = r.data.command;
+    try { await navigator.clipboard.writeText(r.data.command); } catch (e) { /* shown instead */ }
+  });
+  const events = new EventSource("api/events");
+  events.onmessage = (m) => onEvent(JSON.parse(m.data));
+  events.onerror = () => { $("#run-status").textContent = "connection lost: reconnecting…"; };
+  events.onopen = () => { refreshRuns(); };
+  const last = S.graph.runs[S.graph.runs.length - 1];
+  if (last) {
+    S.latest = last.id;
+    if (last.status !== "running") showRun(last.id);
+  }
+  const first = Object.values(S.graph.outputs)[0];
+  if (first) select(first[0]);
+  refreshRuns();
+  document.body.dataset.ready = "1";
+}
+
+main();

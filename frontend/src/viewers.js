@@ -1,0 +1,291 @@
+// Viewers for values, one per kind of port (shared by the studio and report.html).
+// Each takes a container element and a description (see graphvision/studio/payload.py).
+import { colourise, finiteRange, ticks, viridis } from "./colormap.js";
+
+const el = (tag, attrs = {}, ...children) => {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === "class") e.className = v;
+    else if (k.startsWith("on")) e.addEventListener(k.slice(2), v);
+    else e.setAttribute(k, v);
+  }
+  for (const c of children) e.append(c);
+  return e;
+};
+export { el };
+
+const OVERLAY_COLOURS = { keypoints: "#ffd000", boxes: "#00e5ff", lines: "#ff4d4d",
+  circles: "#7CFC00", matches: "#ff66ff" };
+
+// An image with zoom (wheel), pan (drag), fit (double click), the value under the cursor,
+// and overlays drawn in image coordinates.
+export class ImageViewer {
+  constructor(container, { width, height, label = "" }) {
+    this.width = width;
+    this.height = height;
+    this.canvas = el("canvas", { class: "gv-canvas" });
+    this.status = el("div", { class: "gv-status" }, label);
+    this.tools = el("div", { class: "gv-tools" });
+    this.root = el("div", { class: "gv-image" }, this.tools, this.canvas, this.status);
+    container.append(this.root);
+    this.overlays = [];
+    this.values = null;
+    this.scale = 1;
+    this.tx = 0;
+    this.ty = 0;
+    this.source = null;
+    this._events();
+    new ResizeObserver(() => this.resize()).observe(this.root);
+  }
+
+  setSource(source) {
+    this.source = source;
+    this.redraw();
+  }
+
+  setValues(values, shape) {
+    this.values = values;
+    this.shape = shape;
+  }
+
+  addOverlay(name, kind, columns) {
+    const entry = { name, kind, columns, visible: true };
+    this.overlays.push(entry);
+    const box = el("input", { type: "checkbox", "data-overlay": name });
+    box.checked = true;
+    box.addEventListener("change", () => { entry.visible = box.checked; this.redraw(); });
+    this.tools.append(el("label", { class: "gv-toggle" }, box, " " + name));
+    this.redraw();
+  }
+
+  resize() {
+    const w = this.root.clientWidth || 400;
+    const h = Math.max(200, Math.min(600, Math.round((w * this.height) / this.width)));
+    this.canvas.width = w;
+    this.canvas.height = h;
+    if (!this.fitted) this.fit();
+    this.redraw();
+  }
+
+  fit() {
+    const w = this.canvas.width || 400, h = this.canvas.height || 300;
+    this.scale = Math.min(w / this.width, h / this.height);
+    this.tx = (w - this.width * this.scale) / 2;
+    this.ty = (h - this.height * this.scale) / 2;
+    this.fitted = true;
+    this.redraw();
+  }
+
+  redraw() {
+    const ctx = this.canvas.getContext("2d");
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
+    ctx.fillStyle = "#222";
+    ctx.fillRect(0, 0, this.canvas.width, this.canvas.height);
+    ctx.setTransform(this.scale, 0, 0, this.scale, this.tx, this.ty);
+    ctx.imageSmoothingEnabled = this.scale < 1;
+    if (this.source) ctx.drawImage(this.source, 0, 0, this.width, this.height);
+    for (const o of this.overlays) if (o.visible) drawOverlay(ctx, o, this.scale);
+  }
+
+  _events() {
+    const c = this.canvas;
+    c.addEventListener("wheel", (ev) => {
+      ev.preventDefault();
+      const f = Math.exp(-ev.deltaY * 0.0015);
+      const r = c.getBoundingClientRect();
+      const x = ev.clientX - r.left, y = ev.clientY - r.top;
+      this.tx = x - (x - this.tx) * f;
+      this.ty = y - (y - this.ty) * f;
+      this.scale *= f;
+      this.redraw();
+    }, { passive: false });
+    let drag = null;
+    c.addEventListener("mousedown", (ev) => { drag = [ev.clientX, ev.clientY]; });
+    window.addEventListener("mouseup", () => { drag = null; });
+    c.addEventListener("mousemove", (ev) => {
+      if (drag) {
+        this.tx += ev.clientX - drag[0];
+        this.ty += ev.clientY - drag[1];
+        drag = [ev.clientX, ev.clientY];
+        this.redraw();
+      }
+      const r = c.getBoundingClientRect();
+      const x = Math.floor((ev.clientX - r.left - this.tx) / this.scale);
+      const y = Math.floor((ev.clientY - r.top - this.ty) / this.scale);
+      this.status.textContent = this.describe(x, y);
+    });
+    c.addEventListener("dblclick", () => this.fit());
+  }
+
+  describe(x, y) {
+    if (x < 0 || y < 0 || x >= this.width || y >= this.height) return "";
+    let text = `x ${x}, y ${y}`;
+    if (this.values && this.shape) {
+      const ch = this.shape.length === 3 ? this.shape[2] : 1;
+      const i = (y * this.width + x) * ch;
+      const v = Array.from(this.values.subarray(i, i + ch), (a) => fmt(a));
+      text += ` · value ${ch > 1 ? "(" + v.join(", ") + ")" : v[0]}`;
+    }
+    return text;
+  }
+}
+
+function fmt(v) {
+  if (!Number.isFinite(v)) return String(v);
+  return Number.isInteger(v) ? String(v) : v.toPrecision(4);
+}
+
+export function drawOverlay(ctx, overlay, scale) {
+  const c = overlay.columns;
+  ctx.strokeStyle = OVERLAY_COLOURS[overlay.kind] || "#ff0";
+  ctx.lineWidth = 1.5 / scale;
+  ctx.beginPath();
+  if (overlay.kind === "keypoints") {
+    c.x.forEach((x, i) => {
+      const r = Math.max(2 / scale, (c.scale[i] || 1) * 1.5);
+      ctx.moveTo(x + r, c.y[i]);
+      ctx.arc(x, c.y[i], r, 0, 2 * Math.PI);
+    });
+  } else if (overlay.kind === "boxes") {
+    c.x0.forEach((x0, i) => ctx.rect(x0, c.y0[i], c.x1[i] - x0, c.y1[i] - c.y0[i]));
+  } else if (overlay.kind === "circles") {
+    c.x.forEach((x, i) => { ctx.moveTo(x + c.radius[i], c.y[i]); ctx.arc(x, c.y[i], c.radius[i], 0, 2 * Math.PI); });
+  } else if (overlay.kind === "lines") {
+    const big = 1e5;
+    c.rho.forEach((rho, i) => {
+      const t = c.theta[i], x0 = rho * Math.cos(t), y0 = rho * Math.sin(t);
+      ctx.moveTo(x0 + big * Math.sin(t), y0 - big * Math.cos(t));
+      ctx.lineTo(x0 - big * Math.sin(t), y0 + big * Math.cos(t));
+    });
+  }
+  ctx.stroke();
+  if (overlay.kind === "boxes" && c.score) {
+    ctx.fillStyle = OVERLAY_COLOURS.boxes;
+    ctx.font = `${12 / scale}px monospace`;
+    c.x0.forEach((x0, i) => ctx.fillText(fmt(c.score[i]), x0, c.y0[i] - 2 / scale));
+  }
+}
+
+// A float map through viridis with its colour bar, auto range or a fixed one.
+export function floatMapViewer(container, desc, values) {
+  const [h, w] = desc.shape;
+  const viewer = new ImageViewer(container, { width: w, height: h, label: desc.summary });
+  viewer.setValues(values, desc.shape);
+  const bar = el("div", { class: "gv-colourbar" });
+  const lo = el("input", { type: "number", step: "any", class: "gv-range", title: "low end" });
+  const hi = el("input", { type: "number", step: "any", class: "gv-range", title: "high end" });
+  const auto = el("button", { type: "button" }, "auto range");
+  viewer.root.append(bar, el("div", { class: "gv-rangebox" }, "range ", lo, " – ", hi, " ", auto));
+  const paint = (a, b) => {
+    const canvas = document.createElement("canvas");
+    canvas.width = w;
+    canvas.height = h;
+    canvas.getContext("2d").putImageData(new ImageData(colourise(values, a, b), w, h), 0, 0);
+    viewer.setSource(canvas);
+    drawColourBar(bar, a, b, `${desc.type}${desc.units ? " (" + desc.units + ")" : ""}`);
+    lo.value = fmt(a);
+    hi.value = fmt(b);
+  };
+  const [a, b] = finiteRange(values);
+  paint(a, b);
+  const fixed = () => paint(Number(lo.value), Number(hi.value));
+  lo.addEventListener("change", fixed);
+  hi.addEventListener("change", fixed);
+  auto.addEventListener("click", () => paint(a, b));
+  return viewer;
+}
+
+export function drawColourBar(container, lo, hi, title) {
+  container.replaceChildren();
+  const canvas = el("canvas", { width: 256, height: 12, class: "gv-bar" });
+  const ctx = canvas.getContext("2d");
+  for (let i = 0; i < 256; i++) {
+    const [r, g, b] = viridis(i / 255);
+    ctx.fillStyle = `rgb(${r},${g},${b})`;
+    ctx.fillRect(i, 0, 1, 12);
+  }
+  const scale = el("div", { class: "gv-ticks" });
+  for (const t of ticks(lo, hi)) scale.append(el("span", {}, t.text));
+  container.append(el("div", { class: "gv-bartitle" }, title), canvas, scale);
+}
+
+// A point cloud, turned by dragging, coloured by depth (or by `colours`, 0-255 RGB).
+export function pointCloudViewer(container, points, colours = null) {
+  const canvas = el("canvas", { width: 480, height: 360, class: "gv-cloud" });
+  container.append(canvas, el("div", { class: "gv-status" },
+    `${points.length} points · drag to turn, wheel to zoom`));
+  const n = points.length;
+  const mean = [0, 1, 2].map((k) => points.reduce((s, p) => s + (p[k] || 0), 0) / (n || 1));
+  const radius = Math.max(1e-9, ...points.map((p) => Math.hypot(p[0] - mean[0], p[1] - mean[1], p[2] - mean[2])));
+  const [zlo, zhi] = finiteRange(points.map((p) => p[2]));
+  let yaw = 0.5, pitch = 0.3, zoom = 1;
+  const draw = () => {
+    const ctx = canvas.getContext("2d");
+    ctx.fillStyle = "#111";
+    ctx.fillRect(0, 0, canvas.width, canvas.height);
+    const s = (Math.min(canvas.width, canvas.height) / 2.2 / radius) * zoom;
+    const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
+    const order = points.map((p, i) => {
+      const x = p[0] - mean[0], y = p[1] - mean[1], z = p[2] - mean[2];
+      const x1 = cy * x + sy * z, z1 = -sy * x + cy * z;
+      const y1 = cp * y - sp * z1, z2 = sp * y + cp * z1;
+      return [x1, y1, z2, i];
+    }).sort((a, b) => b[2] - a[2]);
+    for (const [x, y, , i] of order) {
+      const c = colours ? colours[i] : viridis((points[i][2] - zlo) / (zhi - zlo || 1));
+      ctx.fillStyle = `rgb(${c[0]},${c[1]},${c[2]})`;
+      ctx.fillRect(canvas.width / 2 + x * s, canvas.height / 2 + y * s, 2, 2);
+    }
+  };
+  let drag = null;
+  canvas.addEventListener("mousedown", (e) => { drag = [e.clientX, e.clientY]; });
+  window.addEventListener("mouseup", () => { drag = null; });
+  canvas.addEventListener("mousemove", (e) => {
+    if (!drag) return;
+    yaw += (e.clientX - drag[0]) * 0.01;
+    pitch += (e.clientY - drag[1]) * 0.01;
+    drag = [e.clientX, e.clientY];
+    draw();
+  });
+  canvas.addEventListener("wheel", (e) => { e.preventDefault(); zoom *= Math.exp(-e.deltaY * 0.0015); draw(); }, { passive: false });
+  draw();
+}
+
+// A number with its history across runs, as a small line chart.
+export function scalarViewer(container, value, history = []) {
+  const shown = typeof value === "number" ? fmt(value) : String(value);
+  container.append(el("div", { class: "gv-scalar" }, shown));
+  const numbers = history.filter((h) => typeof h.value === "number");
+  if (numbers.length < 2) return;
+  const [lo, hi] = finiteRange(numbers.map((h) => h.value));
+  const W = 240, H = 60;
+  const pts = numbers.map((h, i) => {
+    const x = 6 + (i * (W - 12)) / (numbers.length - 1);
+    const y = H - 6 - ((h.value - lo) / (hi - lo || 1)) * (H - 12);
+    return `${x.toFixed(1)},${y.toFixed(1)}`;
+  });
+  const svg = `<svg class="gv-history" width="${W}" height="${H}"><polyline fill="none" stroke="#3b82f6" stroke-width="1.5" points="${pts.join(" ")}"/>` +
+    numbers.map((h, i) => `<circle cx="${pts[i].split(",")[0]}" cy="${pts[i].split(",")[1]}" r="2.5" fill="#3b82f6"><title>run ${h.run}: ${fmt(h.value)}</title></circle>`).join("") + "</svg>";
+  const holder = el("div", { class: "gv-historybox" });
+  holder.innerHTML = svg;
+  container.append(el("div", { class: "gv-caption" }, `history over ${numbers.length} runs (${fmt(lo)} – ${fmt(hi)})`), holder);
+}
+
+// A table of columns (the first 200 rows).
+export function tableViewer(container, columns, total) {
+  const names = Object.keys(columns);
+  const rows = names.length ? columns[names[0]].length : 0;
+  const table = el("table", { class: "gv-table" });
+  table.append(el("tr", {}, ...names.map((n) => el("th", {}, n))));
+  for (let i = 0; i < Math.min(rows, 200); i++) {
+    table.append(el("tr", {}, ...names.map((n) => el("td", {}, cell(columns[n][i])))));
+  }
+  const note = total !== undefined && total > rows ? `${rows} of ${total} rows` : `${rows} rows`;
+  container.append(el("div", { class: "gv-caption" }, note), el("div", { class: "gv-tablebox" }, table));
+}
+
+function cell(v) {
+  if (v === null || v === undefined) return "–";
+  if (typeof v === "number") return fmt(v);
+  return Array.isArray(v) ? JSON.stringify(v) : String(v);
+}
