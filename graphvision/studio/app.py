@@ -133,6 +133,8 @@ class _Api:
                     except TimeoutError:
                         yield ": keep-alive\n\n"
                         continue
+                    if event.get("event") == "closed":  # the server stops
+                        return
                     yield f"data: {json.dumps(event, default=str)}\n\n"
             finally:  # the tab closed: forget it (the run goes on for the other tabs)
                 self.session.listeners.remove(listener)

@@ -46,6 +46,7 @@ class StudioServer:
 
     def stop(self) -> None:
         """Stop serving (the runs in flight are left to finish in their threads)."""
+        self.session.emit({"event": "closed"})  # event streams end, so shutting down is quick
         if self.server is not None:
             self.server.should_exit = True
         if self.thread is not None:

@@ -1,0 +1,143 @@
+"""The studio's session and server, without a browser: changes, superseding, token, saving."""
+
+from __future__ import annotations
+
+import json
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("starlette")
+pytest.importorskip("uvicorn")
+
+import graphvision as gv  # noqa: E402
+from graphvision.errors import PipelineError  # noqa: E402
+from graphvision.studio.payload import describe_value, view_of  # noqa: E402
+from graphvision.studio.saving import command_line, save_parameters  # noqa: E402
+from graphvision.studio.server import studio  # noqa: E402
+from graphvision.studio.session import Session  # noqa: E402
+
+PIPELINES = Path(__file__).parents[2] / "pipelines"
+
+
+@pytest.fixture(scope="module")
+def coins() -> Session:
+    graph = gv.load_pipeline(PIPELINES / "coins.yaml")
+    session = Session(graph, gv.discover())
+    session.start()
+    session.wait()
+    return session
+
+
+def _statuses(run) -> dict[str, str]:
+    return {node.name: node.status for node in run.record.nodes}
+
+
+def test_a_change_recomputes_only_what_is_downstream(coins: Session) -> None:
+    coins.change({"binary.k": -0.3})
+    coins.wait()
+    run = coins.runs[-1]
+    assert run.status == "done"
+    statuses = _statuses(run)
+    assert statuses["gray"] == "cached" and statuses["disk"] == "cached"
+    downstream = ["binary", "closed", "filled", "opened", "labels", "measured", "coins", "overlay"]
+    assert all(statuses[name] == "computed" for name in downstream)
+    assert run.metrics["count"] == 23  # one coin lost to the lower threshold (24 before)
+    assert run.diff == {"binary.k": [None, -0.3]}
+    assert ("labels", "out") in run.values and ("gray", "out") in run.values  # every node's value
+
+
+def test_an_invalid_value_is_refused_before_anything_runs(coins: Session) -> None:
+    runs = len(coins.runs)
+    with pytest.raises(PipelineError, match="must be odd"):
+        coins.change({"params.window": 50})
+    with pytest.raises(PipelineError, match="less than or equal to 1"):
+        coins.change({"binary.k": 3})
+    with pytest.raises(PipelineError, match="no node 'binarry'"):
+        coins.change({"binarry.k": 0.1})
+    assert len(coins.runs) == runs
+
+
+def test_a_newer_change_supersedes_the_run_in_flight() -> None:
+    graph = gv.load_pipeline(PIPELINES / "coins.yaml")
+    session = Session(graph, gv.discover())  # a cold cache: the first run takes seconds
+    first = session.start()
+    second = session.change({"binary.k": -0.3})
+    session.wait()
+    assert first.status == "superseded" and first.values == {}  # nothing of it is shown
+    assert second.status == "done" and second.metrics["count"] == 23
+    third = session.change({"binary.k": None})  # back to the file's value
+    session.wait()
+    assert third.metrics["count"] == 24 and _statuses(third)["gray"] == "cached"
+    fourth = session.change({"binary.k": -0.3})  # the cache holds what the second run made
+    session.wait()
+    assert fourth.metrics["count"] == 23 and set(_statuses(fourth).values()) == {"cached"}
+
+
+def test_the_server_refuses_requests_without_the_token() -> None:
+    server = studio(PIPELINES / "coins.yaml", run=False)
+    try:
+        base = f"http://127.0.0.1:{server.port}"
+        for url in (f"{base}/", f"{base}/api/graph", f"{base}/static/studio.js",
+                    f"{base}/api/graph?token=wrong"):  # fmt: skip
+            with pytest.raises(urllib.error.HTTPError) as refused:
+                urllib.request.urlopen(url, timeout=10)
+            assert refused.value.code == 403
+        with urllib.request.urlopen(f"{base}/api/graph?token={server.token}", timeout=10) as ok:
+            graph = json.load(ok)
+        assert server.host == "127.0.0.1"
+        binary = next(n for n in graph["nodes"] if n["id"] == "binary")
+        window = next(p for p in binary["params"] if p["name"] == "window")
+        assert window["key"] == "params.window"  # written as ${params.window} in the file
+        assert window["schema"]["x-odd"] is True
+        assert (window["schema"]["minimum"], window["schema"]["maximum"]) == (3, 1001)
+    finally:
+        server.stop()
+
+
+def test_parameters_are_saved_back_with_the_comments(tmp_path: Path) -> None:
+    source = tmp_path / "coins.yaml"
+    text = (PIPELINES / "coins.yaml").read_text().replace(
+        "params:\n", "# tuned in the studio\nparams:\n"
+    )
+    source.write_text(text)
+    save_parameters(source, {"binary.k": -0.3, "params.window": 41})
+    saved = source.read_text()
+    assert "# tuned in the studio" in saved and "window: 41" in saved
+    graph = gv.load_pipeline(source)
+    assert graph.nodes["binary"].params["k"] == -0.3 and graph.params["window"] == 41
+    copy = save_parameters(source, {"binary.k": -0.2}, tmp_path / "copy.yaml")
+    assert gv.load_pipeline(copy).nodes["binary"].params["k"] == -0.2
+    with pytest.raises(KeyError, match="no node 'nope'"):
+        save_parameters(source, {"nope.k": 1})
+
+
+def test_the_command_line_reruns_the_tuned_values() -> None:
+    text = command_line("pipelines/coins.yaml", {"binary.k": -0.3, "binary.method": "sauvola"},
+                        {"image": "coins.png"})  # fmt: skip
+    assert text == (
+        "graphvision run pipelines/coins.yaml -i image=coins.png "
+        "--set binary.k=-0.3 --set binary.method=sauvola"
+    )
+
+
+def test_each_port_type_gets_its_viewer(coins: Session) -> None:
+    run = coins.latest_with_values()
+    assert run is not None and run.compiled is not None
+    steps = run.compiled.steps
+    views = {
+        (node, port): view_of(steps[node].outputs[port], value)
+        for (node, port), value in run.values.items()
+    }
+    assert views[("labels", "out")] == "labels"
+    assert views[("gray", "out")] == "image"
+    assert views[("binary", "out")] == "mask"
+    assert views[("coins", "count")] == "scalar"
+    assert views[("measured", "out")] == "table"
+    depth = np.linspace(0.5, 4.0, 64 * 48, dtype=np.float32).reshape(48, 64)
+    described = describe_value(gv.FloatImagePort, depth, run.compiled, "x", "out")
+    assert described["view"] == "floatmap"
+    assert described["range"] == pytest.approx([0.5, 4.0])
