@@ -29,6 +29,7 @@ import bench_recognition  # noqa: E402
 import bench_scheduler  # noqa: E402
 import bench_segmentation  # noqa: E402
 import bench_stereo  # noqa: E402
+import bench_studio  # noqa: E402
 import bench_sweep  # noqa: E402
 
 
@@ -53,6 +54,7 @@ def main() -> None:
         ),
         ("Own kernels against OpenCV, single-threaded (issue 26)", bench_kernels_vs_opencv.main),
         ("Sweep sharing (issue 15)", bench_sweep.main),
+        ("Studio: a change until the picture repaints (issue 27)", bench_studio.main),
         ("Batch of 200 files (issue 15)", bench_batch.main),
         ("Dask executor overhead (issue 15)", bench_dask.main),
         (

@@ -59,6 +59,7 @@ if TYPE_CHECKING:
     from graphvision.nodes.plugins import Needs, discover
     from graphvision.nodes.registry import Registry
     from graphvision.nodes.spec import NodeSpec
+    from graphvision.studio.server import StudioServer, studio  # the package, callable
     from graphvision.types import (
         AnyImageT,
         Array,
@@ -236,6 +237,7 @@ __all__ = [
     "RunHooks",
     "RunRecord",
     "RunResult",
+    "StudioServer",
     "SweepInterrupted",
     "SweepResult",
     "SyncExecutor",
@@ -263,6 +265,7 @@ __all__ = [
     "run",
     "run_batch",
     "source",
+    "studio",
     "sweep",
     "to_float_image",
 ]

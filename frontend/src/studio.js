@@ -53,9 +53,11 @@ function onEvent(event) {
 }
 
 async function showRun(id) {
-  const found = await api("api/runs");
-  if (!found.ok) return;
-  for (const r of found.data) S.runs[r.id] = r;
+  if (!S.runs[id]?.nodes || S.runs[id].kept === undefined) {
+    const found = await api("api/runs");
+    if (!found.ok) return;
+    for (const r of found.data) S.runs[r.id] = r;
+  }
   const run = S.runs[id];
   if (!run || !run.kept) return;
   if (id <= S.shown || S.showing.has(id)) return;
@@ -63,7 +65,7 @@ async function showRun(id) {
   S.shown = id;
   for (const [name, n] of Object.entries(run.nodes)) setNodeState(name, n.status, n.seconds);
   document.body.dataset.shownRun = String(id);
-  await Promise.all([renderOutputs(), S.selected ? renderInspector(S.selected) : null]);
+  await Promise.all([renderOutputs(), S.selected ? renderInspector(S.selected, false) : null]);
   document.body.dataset.paintedRun = String(id);
   window.dispatchEvent(new CustomEvent("gv-painted", { detail: { run: id } }));
 }
@@ -84,10 +86,6 @@ async function renderValue(container, run, node, port) {
   if (["image", "labels", "mask"].includes(d.view) || (d.view === "summary" && d.png && d.shape?.length >= 2 && d.shape[0] > 8)) {
     const [h, w] = d.shape;
     const viewer = new ImageViewer(container, { width: w, height: h, label: "" });
-    const img = new Image();
-    img.onload = () => viewer.setSource(img);
-    img.src = `api/png/${base}`;
-    img.dataset.value = base;
     viewer.canvas.dataset.value = base;
     let asked = false;
     viewer.canvas.addEventListener("mouseenter", async () => {
@@ -97,7 +95,15 @@ async function renderValue(container, run, node, port) {
       if (r.ok) viewer.setValues(new Float32Array(await r.arrayBuffer()), r.headers.get("X-Shape").split(",").map(Number));
     });
     await addOverlays(viewer, run, node, port);
-    await new Promise((resolve) => { if (img.complete) resolve(); else { img.addEventListener("load", resolve); img.addEventListener("error", resolve); } });
+    const r = await fetch(`api/rgba/${base}`);  // raw bytes: no PNG to encode or decode
+    if (r.ok) {
+      const [ph, pw] = r.headers.get("X-Shape").split(",").map(Number);
+      const canvas = document.createElement("canvas");
+      canvas.width = pw;
+      canvas.height = ph;
+      canvas.getContext("2d").putImageData(new ImageData(new Uint8ClampedArray(await r.arrayBuffer()), pw, ph), 0, 0);
+      viewer.setSource(canvas);
+    }
   } else if (d.view === "floatmap") {
     const r = await fetch(`api/raw/${base}`);
     const values = new Float32Array(await r.arrayBuffer());
@@ -137,16 +143,24 @@ async function addOverlays(viewer, run, node, port) {
   }
 }
 
+function keyOf(run, node, port) {
+  return JSON.stringify(S.runs[run]?.nodes?.[node]?.keys?.[port] ?? `${run}`);
+}
+
+// Outputs whose cache key is unchanged keep their viewer (same value); the others are
+// fetched and drawn at once, in parallel, then swapped in together.
 async function renderOutputs() {
   const box = $("#outputs");
   const run = S.shown;
-  const fresh = el("div");
-  for (const [name, [node, port]] of Object.entries(S.graph.outputs)) {
-    const card = el("div", { class: "gv-output", "data-output": name }, el("h4", {}, name));
-    fresh.append(card);
+  const cards = await Promise.all(Object.entries(S.graph.outputs).map(async ([name, [node, port]]) => {
+    const key = keyOf(run, node, port || "out");
+    const old = box.querySelector(`[data-output="${name}"]`);
+    if (old && old.dataset.key === key) return old;
+    const card = el("div", { class: "gv-output", "data-output": name, "data-key": key }, el("h4", {}, name));
     await renderValue(card, run, node, port || "out");
-  }
-  if (run === S.shown) box.replaceChildren(fresh);
+    return card;
+  }));
+  if (run === S.shown) box.replaceChildren(...cards);
 }
 
 function widget(param) {
@@ -208,9 +222,12 @@ async function refreshStates() {
   if (run) for (const [name, n] of Object.entries(run.nodes)) setNodeState(name, n.status, n.seconds);
 }
 
-async function renderInspector(id) {
+async function renderInspector(id, force = true) {
   const node = S.graph.nodes.find((n) => n.id === id);
-  const panel = el("div", { "data-inspect": id });
+  const keys = JSON.stringify(S.runs[S.shown]?.nodes?.[id] ?? {});
+  const current = $("#inspector").firstElementChild;
+  if (!force && current && current.dataset.inspect === id && current.dataset.keys === keys) return;
+  const panel = el("div", { "data-inspect": id, "data-keys": keys });
   const run = S.runs[S.shown];
   const record = run?.nodes?.[id] || {};
   if (node.kind === "input") {
@@ -250,14 +267,14 @@ async function renderInspector(id) {
     const values = el("div", { class: "gv-values" });
     panel.append(el("h4", {}, "outputs"), values);
     $("#inspector").replaceChildren(panel);
-    for (const port of Object.keys(node.outputs)) {
+    await Promise.all(Object.keys(node.outputs).map(async (port) => {
       const box = el("div", { class: "gv-output", "data-port": `${id}.${port}` }, el("h4", {}, port));
       values.append(box);
       if (S.shown) {
         const d = await renderValue(box, S.shown, id, port);
         if (d && d.shape) shapes[port].textContent = d.shape.join("×");
       }
-    }
+    }));
     return;
   }
   $("#inspector").replaceChildren(panel);

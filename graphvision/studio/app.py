@@ -13,7 +13,8 @@ other request gets 403. Routes:
 ``POST /api/cancel``                    stop the run in flight
 ``GET /api/runs``                       every run of the session: diff, metrics, states
 ``GET /api/value/RUN/NODE/PORT``        a value's description (:mod:`.payload`)
-``GET /api/png/RUN/NODE/PORT``          its picture; ``/api/raw/...`` its float32 values
+``GET /api/png/RUN/NODE/PORT``          its picture; ``/api/raw/...`` its float32 values;
+                                        ``/api/rgba/...`` its picture as RGBA bytes
 ``POST /api/save``                      ``{"path": optional new file}``: save parameters
 ``GET /api/command``                    the equivalent ``graphvision run`` command
 """
@@ -23,6 +24,7 @@ from __future__ import annotations
 import asyncio
 import hmac
 import json
+import time
 from collections import OrderedDict
 from collections.abc import AsyncIterator
 from pathlib import Path
@@ -38,7 +40,7 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 
 from graphvision.errors import PipelineError
 from graphvision.studio.describe import describe_graph
-from graphvision.studio.payload import describe_value, png_of, raw_of
+from graphvision.studio.payload import describe_value, png_of, raw_of, rgba_of
 from graphvision.studio.saving import command_line, save_parameters
 from graphvision.studio.session import Session, StudioRun
 
@@ -92,6 +94,7 @@ def make_app(session: Session, token: str) -> ASGIApp:
         Route("/api/value/{run:int}/{node}/{port}", api.value),
         Route("/api/png/{run:int}/{node}/{port}", api.png),
         Route("/api/raw/{run:int}/{node}/{port}", api.raw),
+        Route("/api/rgba/{run:int}/{node}/{port}", api.rgba),
         Route("/api/save", api.save, methods=["POST"]),
         Route("/api/command", api.command),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
@@ -191,9 +194,10 @@ class _Api:
         found = self._value(request)
         if isinstance(found, Response):
             return found
-        studio_run, node, port, kind, value = found
+        _, node, port, kind, value = found
         key = (id(value), node, port)
         data = self.pngs.get(key)
+        began = time.perf_counter()
         if data is None:
             data = await run_in_threadpool(png_of, kind, value)
             if data is None:
@@ -201,7 +205,9 @@ class _Api:
             self.pngs[key] = data
             while len(self.pngs) > 64:
                 self.pngs.popitem(last=False)
-        return Response(data, media_type="image/png", headers={"Cache-Control": "no-store"})
+        timing = f"encode;dur={(time.perf_counter() - began) * 1e3:.1f}"
+        headers = {"Cache-Control": "no-store", "Server-Timing": timing}
+        return Response(data, media_type="image/png", headers=headers)
 
     async def raw(self, request: Request) -> Response:
         found = self._value(request)
@@ -213,6 +219,22 @@ class _Api:
             return JSONResponse({"error": "no array values for this type"}, 404)
         data, shape = raw
         headers = {"X-Shape": ",".join(map(str, shape)), "Cache-Control": "no-store"}
+        return Response(data, media_type="application/octet-stream", headers=headers)
+
+    async def rgba(self, request: Request) -> Response:
+        found = self._value(request)
+        if isinstance(found, Response):
+            return found
+        began = time.perf_counter()
+        picture = await run_in_threadpool(rgba_of, found[3], found[4])
+        if picture is None:
+            return JSONResponse({"error": "no picture for this type"}, 404)
+        data, shape = picture
+        headers = {
+            "X-Shape": ",".join(map(str, shape)),
+            "Cache-Control": "no-store",
+            "Server-Timing": f"encode;dur={(time.perf_counter() - began) * 1e3:.1f}",
+        }
         return Response(data, media_type="application/octet-stream", headers=headers)
 
     async def save(self, request: Request) -> JSONResponse:

@@ -38,7 +38,7 @@ KEPT_RUNS = 12  # runs whose values stay in memory (for the viewers and comparis
 _PREFIX = "studio__"
 
 
-class Superseded(BaseException):  # noqa: N818  # not an error: the control flow of a cancel
+class Superseded(BaseException):  # not an error: the control flow of a cancel
     """Raised by a run's hooks to stop it: a newer change was made, or the page cancelled it."""
 
 
@@ -238,7 +238,8 @@ class Session:
         self.emit(
             {"event": "run", "run": studio_run.id, "status": studio_run.status,
              "error": studio_run.error, "seconds": studio_run.seconds,
-             "metrics": studio_run.metrics}
+             "metrics": studio_run.metrics, "nodes": studio_run.nodes,
+             "kept": bool(studio_run.values)}
         )  # fmt: skip
 
     def _keep(self, studio_run: StudioRun, outputs: dict[str, Any], record: RunRecord) -> None:
@@ -249,11 +250,11 @@ class Session:
                 studio_run.values[(node, port)] = value
             elif _is_scalar(value):
                 studio_run.metrics[name] = _plain(value)
-        for node in record.nodes:
-            entry = studio_run.nodes.setdefault(node.name, {})
-            entry.update(status=node.status, seconds=node.seconds, keys=node.keys)
-            if node.error:
-                entry.setdefault("error", node.error)
+        for done in record.nodes:
+            entry = studio_run.nodes.setdefault(done.name, {})
+            entry.update(status=done.status, seconds=done.seconds, keys=done.keys)
+            if done.error:
+                entry.setdefault("error", done.error)
 
     # -- reading ----------------------------------------------------------------------
 

@@ -89,8 +89,9 @@ def _overlapping(boxes: list[tuple[str, dict]]) -> list[tuple[str, str]]:
     found = []
     for i, (a, p) in enumerate(boxes):
         for b, q in boxes[i + 1 :]:
-            if (p["x"] < q["x"] + q["width"] - 0.5 and q["x"] < p["x"] + p["width"] - 0.5
-                    and p["y"] < q["y"] + q["height"] - 0.5 and q["y"] < p["y"] + p["height"] - 0.5):  # fmt: skip
+            apart_x = p["x"] + p["width"] <= q["x"] + 0.5 or q["x"] + q["width"] <= p["x"] + 0.5
+            apart_y = p["y"] + p["height"] <= q["y"] + 0.5 or q["y"] + q["height"] <= p["y"] + 0.5
+            if not (apart_x or apart_y):
                 found.append((a, b))
     return found
 

@@ -13,12 +13,12 @@ import pytest
 pytest.importorskip("starlette")
 pytest.importorskip("uvicorn")
 
-import graphvision as gv  # noqa: E402
-from graphvision.errors import PipelineError  # noqa: E402
-from graphvision.studio.payload import describe_value, view_of  # noqa: E402
-from graphvision.studio.saving import command_line, save_parameters  # noqa: E402
-from graphvision.studio.server import studio  # noqa: E402
-from graphvision.studio.session import Session  # noqa: E402
+import graphvision as gv
+from graphvision.errors import PipelineError
+from graphvision.studio.payload import describe_value, view_of
+from graphvision.studio.saving import command_line, save_parameters
+from graphvision.studio.server import studio
+from graphvision.studio.session import Session
 
 PIPELINES = Path(__file__).parents[2] / "pipelines"
 
@@ -78,7 +78,7 @@ def test_a_newer_change_supersedes_the_run_in_flight() -> None:
 
 
 def test_the_server_refuses_requests_without_the_token() -> None:
-    server = studio(PIPELINES / "coins.yaml", run=False)
+    server = gv.studio(PIPELINES / "coins.yaml", run=False)  # the package takes the call
     try:
         base = f"http://127.0.0.1:{server.port}"
         for url in (f"{base}/", f"{base}/api/graph", f"{base}/static/studio.js",
@@ -100,8 +100,10 @@ def test_the_server_refuses_requests_without_the_token() -> None:
 
 def test_parameters_are_saved_back_with_the_comments(tmp_path: Path) -> None:
     source = tmp_path / "coins.yaml"
-    text = (PIPELINES / "coins.yaml").read_text().replace(
-        "params:\n", "# tuned in the studio\nparams:\n"
+    text = (
+        (PIPELINES / "coins.yaml")
+        .read_text()
+        .replace("params:\n", "# tuned in the studio\nparams:\n")
     )
     source.write_text(text)
     save_parameters(source, {"binary.k": -0.3, "params.window": 41})

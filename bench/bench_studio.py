@@ -1,0 +1,98 @@
+"""graphvision studio: from a change of RANSAC's threshold to the matches picture repainted.
+
+Opens the studio on ``homography.yaml`` in Debian's Chromium (Playwright), lets the
+first run finish, then changes ``fit.threshold`` 20 times (a new value each time, so
+every change computes ``fit``, ``error`` and ``drawing`` and loads the rest from the
+cache). Each change is timed in the page, from the request to the ``gv-painted``
+event (every output of the new run shown, the matches picture decoded), and split into:
+
+``server``   the change request answered (validation, the run started)
+``compute``  the run's wall time on the server (nodes, cache look-ups, hooks)
+``encode``   the matches picture as RGBA bytes (``Server-Timing`` of its response)
+``transfer`` the rest of that picture's request (Resource Timing) minus ``encode``
+``paint``    everything else in the page: events, fetching the values, drawing
+
+Aim (issue 27): median under 150 ms. Run: ``python bench/bench_studio.py``.
+"""
+
+from __future__ import annotations
+
+import shutil
+import statistics
+from pathlib import Path
+
+PIPELINE = Path(__file__).parent.parent / "pipelines" / "homography.yaml"
+CHANGES = 20
+
+_CHANGE = """async (value) => {
+  const t0 = performance.now();
+  performance.clearResourceTimings();
+  const painted = new Promise((resolve) => window.addEventListener("gv-painted",
+      (e) => resolve(e.detail.run), { once: true }));
+  const r = await fetch("api/change", { method: "POST", headers: {"Content-Type": "application/json"},
+      body: JSON.stringify({ overrides: { "fit.threshold": value } }) });
+  const t1 = performance.now();
+  const run = (await r.json()).run;
+  while ((await painted) < run) { /* an older run's paint */ }
+  const t2 = performance.now();
+  const png = performance.getEntriesByType("resource").find((e) => e.name.includes("/api/rgba/") && e.name.includes("/drawing/"));
+  const encode = png && png.serverTiming.length ? png.serverTiming[0].duration : 0;
+  return { total: t2 - t0, server: t1 - t0, run,
+           png: png ? png.responseEnd - png.requestStart : 0, encode };
+}"""
+
+
+def main() -> list[str]:
+    from playwright.sync_api import sync_playwright
+
+    import graphvision as gv
+
+    browser_path = shutil.which("chromium") or shutil.which("chromium-browser")
+    if browser_path is None:
+        return ["no Chromium installed: skipped"]
+    server = gv.studio(PIPELINE)
+    rows = []
+    try:
+        with sync_playwright() as playwright:
+            browser = playwright.chromium.launch(
+                executable_path=browser_path, args=["--no-sandbox"]
+            )
+            page = browser.new_page(viewport={"width": 1500, "height": 950})
+            page.goto(server.url)
+            page.wait_for_selector("body[data-painted-run='1']", timeout=300_000)
+            for i in range(CHANGES):
+                found = page.evaluate(_CHANGE, 2.0 + 0.05 * i)
+                studio_run = server.session.find_run(found["run"])
+                computed = [n for n, v in studio_run.nodes.items() if v.get("status") == "computed"]
+                found["compute"] = studio_run.seconds * 1e3
+                found["computed"] = sorted(computed)
+                rows.append(found)
+            browser.close()
+    finally:
+        server.stop()
+    return _table(rows)
+
+
+def _table(rows: list[dict]) -> list[str]:
+    def stats(key: str) -> tuple[float, float]:
+        values = sorted(r[key] for r in rows)
+        return statistics.median(values), values[int(0.9 * (len(values) - 1) + 0.5)]
+
+    for r in rows:
+        r["transfer"] = max(0.0, r["png"] - r["encode"])
+        r["paint"] = max(0.0, r["total"] - r["server"] - r["compute"] - r["png"])
+    lines = [
+        f"{len(rows)} changes of fit.threshold on homography.yaml; recomputed each time: "
+        f"{', '.join(rows[-1]['computed'])}",
+        "",
+        "| part | median ms | p90 ms |",
+        "| --- | ---: | ---: |",
+    ]
+    for key in ("server", "compute", "encode", "transfer", "paint", "total"):
+        median, p90 = stats(key)
+        lines.append(f"| {key} | {median:.1f} | {p90:.1f} |")
+    return lines
+
+
+if __name__ == "__main__":
+    print("\n".join(main()))
