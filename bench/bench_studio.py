@@ -27,15 +27,17 @@ CHANGES = 20
 _CHANGE = """async (value) => {
   const t0 = performance.now();
   performance.clearResourceTimings();
-  const painted = new Promise((resolve) => window.addEventListener("gv-painted",
-      (e) => resolve(e.detail.run), { once: true }));
-  const r = await fetch("api/change", { method: "POST", headers: {"Content-Type": "application/json"},
-      body: JSON.stringify({ overrides: { "fit.threshold": value } }) });
+  const painted = new Promise((resolve) =>
+    window.addEventListener("gv-painted", (e) => resolve(e.detail.run), { once: true }));
+  const r = await fetch("api/change", { method: "POST",
+    headers: {"Content-Type": "application/json"},
+    body: JSON.stringify({ overrides: { "fit.threshold": value } }) });
   const t1 = performance.now();
   const run = (await r.json()).run;
   while ((await painted) < run) { /* an older run's paint */ }
   const t2 = performance.now();
-  const png = performance.getEntriesByType("resource").find((e) => e.name.includes("/api/rgba/") && e.name.includes("/drawing/"));
+  const png = performance.getEntriesByType("resource")
+    .find((e) => e.name.includes("/api/rgba/") && e.name.includes("/drawing/"));
   const encode = png && png.serverTiming.length ? png.serverTiming[0].duration : 0;
   return { total: t2 - t0, server: t1 - t0, run,
            png: png ? png.responseEnd - png.requestStart : 0, encode };

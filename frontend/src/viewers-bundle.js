@@ -5,3 +5,4 @@ export { layoutGraph, overlaps, downstream } from "./layout.js";
 export { colourise, finiteRange, labelColour, ticks, viridis } from "./colormap.js";
 export { docHtml } from "./tex.js";
 export { drawColourBar, floatMapViewer, ImageViewer, pointCloudViewer, scalarViewer, tableViewer } from "./viewers.js";
+export { readValue, widgetSpec } from "./widgets.js";

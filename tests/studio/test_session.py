@@ -17,7 +17,6 @@ import graphvision as gv
 from graphvision.errors import PipelineError
 from graphvision.studio.payload import describe_value, view_of
 from graphvision.studio.saving import command_line, save_parameters
-from graphvision.studio.server import studio
 from graphvision.studio.session import Session
 
 PIPELINES = Path(__file__).parents[2] / "pipelines"

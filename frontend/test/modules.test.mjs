@@ -1,0 +1,76 @@
+// The page's pure modules, tested on the built bundle (what ships): node --test test/
+import { test } from "node:test";
+import assert from "node:assert/strict";
+import { readFileSync } from "node:fs";
+
+const bundle = readFileSync(new URL("../../graphvision/studio/static/viewers.js", import.meta.url), "utf8");
+// eslint-disable-next-line no-new-func -- the bundle is an IIFE script defining one global
+const V = new Function(`${bundle}\nreturn GraphvisionViewers;`)();
+
+const chain = {
+  nodes: [{ id: "image", kind: "input", type: "Image" }, { id: "gray", op: "colour.to_gray" },
+    { id: "blur", op: "filters.gaussian" }, { id: "edges", op: "edges.canny" }],
+  edges: [{ from: "image", from_port: "", to: "gray", port: "image" },
+    { from: "gray", from_port: "out", to: "blur", port: "image" },
+    { from: "blur", from_port: "out", to: "edges", port: "image" },
+    { from: "gray", from_port: "out", to: "edges", port: "mask" }],
+};
+
+test("layout: ranks follow the edges and no two boxes or labels overlap", () => {
+  const laid = V.layoutGraph(chain);
+  assert.ok(laid.nodes.image.x < laid.nodes.gray.x && laid.nodes.gray.x < laid.nodes.blur.x);
+  const boxes = { ...laid.nodes };
+  laid.edges.forEach((e, i) => { boxes["label" + i] = e.label; });
+  assert.deepEqual(V.overlaps(boxes), []);
+  assert.equal(laid.edges[3].label.text, "mask");
+});
+
+test("overlaps finds two boxes that share area, and not two that touch", () => {
+  const found = V.overlaps({ a: { x: 0, y: 0, width: 10, height: 10 }, b: { x: 5, y: 5, width: 10, height: 10 },
+    c: { x: 15, y: 0, width: 5, height: 5 } });
+  assert.deepEqual(found.map((p) => [p.a, p.b]), [["a", "b"]]);
+});
+
+test("downstream of a node: itself and every reader, transitively", () => {
+  assert.deepEqual([...V.downstream(chain, "blur")].sort(), ["blur", "edges"]);
+  assert.deepEqual([...V.downstream(chain, "gray")].sort(), ["blur", "edges", "gray"]);
+});
+
+test("widgets: bounds, odd sizes step by two, enums, booleans, open ends", () => {
+  const window = V.widgetSpec({ type: "integer", minimum: 3, maximum: 1001, "x-odd": true }, 51);
+  assert.equal(window.kind, "slider");
+  assert.equal(window.step, 2);
+  assert.equal(window.min, 3);
+  assert.equal(window.max, 1001);
+  assert.equal(V.widgetSpec({ enum: ["a", "b"] }, "a").kind, "menu");
+  assert.equal(V.widgetSpec({ type: "boolean" }, true).kind, "switch");
+  const open = V.widgetSpec({ type: "number", exclusiveMinimum: 0 }, 3.0);
+  assert.equal(open.min, 0);
+  assert.equal(open.max, 12);
+  assert.ok(open.soft);
+  assert.equal(V.widgetSpec({ type: "object" }, {}).kind, "json");
+});
+
+test("widgets read what is typed, and refuse what is not a value", () => {
+  const spec = V.widgetSpec({ type: "integer", minimum: 1 }, 5);
+  assert.equal(V.readValue(spec, "7").value, 7);
+  assert.match(V.readValue(spec, "7.5").error, /not a whole number/);
+  assert.match(V.readValue(spec, "x").error, /not a number/);
+  assert.deepEqual({ ...V.readValue({ kind: "json" }, "[1, 2]") }.value.length, 2);
+});
+
+test("viridis runs dark purple to yellow; NaN is transparent", () => {
+  assert.deepEqual(V.viridis(0), [68, 1, 84]);
+  assert.deepEqual(V.viridis(1), [253, 231, 37]);
+  const rgba = V.colourise(new Float32Array([0, NaN, 1]), 0, 1);
+  assert.deepEqual([...rgba.slice(0, 4)], [68, 1, 84, 255]);
+  assert.deepEqual([...rgba.slice(4, 8)], [0, 0, 0, 0]);
+  assert.deepEqual(V.finiteRange([NaN, 2, -1, Infinity]), [-1, 2]);
+  assert.deepEqual(V.ticks(0, 1, 3).map((t) => t.text), ["0", "0.5", "1"]);
+});
+
+test("label colours are distinct and the background is black", () => {
+  assert.deepEqual(V.labelColour(0), [0, 0, 0]);
+  const colours = new Set(Array.from({ length: 50 }, (_, i) => V.labelColour(i + 1).join(",")));
+  assert.equal(colours.size, 50);
+});
