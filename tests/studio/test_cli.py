@@ -16,7 +16,7 @@ import pytest
 
 pytest.importorskip("uvicorn")
 
-from graphvision.cli.main import main  # noqa: E402
+from graphvision.cli.main import main
 
 PIPELINES = Path(__file__).parents[2] / "pipelines"
 

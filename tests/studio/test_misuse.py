@@ -12,8 +12,8 @@ import pytest
 
 pytest.importorskip("starlette")
 
-import graphvision as gv  # noqa: E402
-from graphvision.studio.session import Session  # noqa: E402
+import graphvision as gv
+from graphvision.studio.session import Session
 
 
 def test_a_node_that_raises_is_reported_and_the_rest_is_kept(registry) -> None:
