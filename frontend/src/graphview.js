@@ -14,10 +14,18 @@ const svgEl = (tag, attrs = {}) => {
   return e;
 };
 
+// Left to right or top to bottom: whichever the container shows larger when fitted.
+function bestLayout(graph, container) {
+  const w = container.clientWidth || 800, h = container.clientHeight || 600;
+  const scale = (l) => Math.min(w / l.width, h / l.height);
+  const across = layoutGraph(graph, { rankdir: "LR" }), down = layoutGraph(graph, { rankdir: "TB" });
+  return scale(down) > scale(across) * 1.15 ? down : across;
+}
+
 export class GraphView {
-  constructor(container, graph, { onSelect = () => {} } = {}) {
+  constructor(container, graph, { onSelect = () => {}, rankdir = "auto" } = {}) {
     this.graph = graph;
-    this.layout = layoutGraph(graph);
+    this.layout = rankdir === "auto" ? bestLayout(graph, container) : layoutGraph(graph, { rankdir });
     this.onSelect = onSelect;
     this.svg = svgEl("svg", { class: "gv-graph", width: "100%", height: "100%" });
     this.view = svgEl("g");
@@ -28,6 +36,8 @@ export class GraphView {
     this._events();
     this.view.setAttribute("transform", "translate(0,0) scale(1)");
     this.t = { x: 0, y: 0, k: 1 };
+    this.touched = false; // fitted again when its box changes, until the user pans or zooms
+    new ResizeObserver(() => { if (!this.touched) this.fit(); }).observe(this.svg);
   }
 
   _draw() {
@@ -114,6 +124,7 @@ export class GraphView {
       ev.preventDefault();
       const r = this.svg.getBoundingClientRect();
       const f = Math.exp(-ev.deltaY * 0.0015), x = ev.clientX - r.left, y = ev.clientY - r.top;
+      this.touched = true;
       this.t = { k: this.t.k * f, x: x - (x - this.t.x) * f, y: y - (y - this.t.y) * f };
       this._apply();
     }, { passive: false });
@@ -122,6 +133,7 @@ export class GraphView {
     window.addEventListener("mouseup", () => { drag = null; });
     window.addEventListener("mousemove", (ev) => {
       if (!drag) return;
+      this.touched = true;
       this.t.x += ev.clientX - drag[0];
       this.t.y += ev.clientY - drag[1];
       drag = [ev.clientX, ev.clientY];

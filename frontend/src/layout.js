@@ -36,6 +36,7 @@ export function layoutGraph(graph, options = {}) {
       width: Math.ceil(text.length * 6.2 + 6),
       height: 14,
       labelpos: "c",
+      minlen: 1,
       text,
     }, "e" + i);
   });

@@ -81,6 +81,7 @@ def test_tuning_the_threshold_repaints_the_count_and_labels(browser, coins) -> N
     assert "greater than or equal to 3" in message.inner_text()
     assert len(coins.session.runs) == 2
     SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
+    page.evaluate("document.querySelector('#side').scrollTop = 0")
     page.screenshot(path=str(SCREENSHOT))
     assert errors == []
 
