@@ -3,8 +3,9 @@
 Opens the studio on ``homography.yaml`` in Debian's Chromium (Playwright), lets the
 first run finish, then changes ``fit.threshold`` 20 times (a new value each time, so
 every change computes ``fit``, ``error`` and ``drawing`` and loads the rest from the
-cache). Each change is timed in the page, from the request to the ``gv-painted``
-event (every output of the new run shown, the matches picture decoded), and split into:
+cache). Each change is timed in the page, from the request to the matches picture of the
+new run drawn (its ``gv-node-painted`` event, sent as soon as the ``drawing`` node has
+finished and its picture is on the canvas), and split into:
 
 ``server``   the change request answered (validation, the run started)
 ``compute``  the run's wall time on the server (nodes, cache look-ups, hooks)
@@ -27,19 +28,22 @@ CHANGES = 20
 _CHANGE = """async (value) => {
   const t0 = performance.now();
   performance.clearResourceTimings();
-  const painted = new Promise((resolve) =>
-    window.addEventListener("gv-painted", (e) => resolve(e.detail.run), { once: true }));
+  let resolvePaint;
+  const painted = new Promise((resolve) => { resolvePaint = resolve; });
+  const listen = (e) => { if (e.detail.node === "drawing") resolvePaint(e.detail.run); };
+  window.addEventListener("gv-node-painted", listen);
   const r = await fetch("api/change", { method: "POST",
     headers: {"Content-Type": "application/json"},
     body: JSON.stringify({ overrides: { "fit.threshold": value } }) });
   const t1 = performance.now();
   const run = (await r.json()).run;
-  while ((await painted) < run) { /* an older run's paint */ }
+  const seen = await painted;
   const t2 = performance.now();
+  window.removeEventListener("gv-node-painted", listen);
   const png = performance.getEntriesByType("resource")
     .find((e) => e.name.includes("/api/rgba/") && e.name.includes("/drawing/"));
   const encode = png && png.serverTiming.length ? png.serverTiming[0].duration : 0;
-  return { total: t2 - t0, server: t1 - t0, run,
+  return { total: t2 - t0, server: t1 - t0, run, seen,
            png: png ? png.responseEnd - png.requestStart : 0, encode };
 }"""
 

@@ -48,8 +48,16 @@ function onEvent(event) {
     return;
   }
   if (event.run < S.latest) return; // a superseded run: never mixed with the newer one
-  if (event.event === "queued") for (const id of event.nodes) setNodeState(id, "queued");
-  if (event.event === "node") setNodeState(event.node, event.status, event.seconds);
+  if (event.event === "queued") {
+    for (const id of event.nodes) setNodeState(id, "queued");
+    for (const card of document.querySelectorAll("[data-producer]")) {
+      if (event.nodes.includes(card.dataset.producer)) card.classList.add("gv-stale");
+    }
+  }
+  if (event.event === "node") {
+    setNodeState(event.node, event.status, event.seconds);
+    if (event.value) repaintNode(event.run, event.node);
+  }
 }
 
 async function showRun(id) {
@@ -143,6 +151,20 @@ async function addOverlays(viewer, run, node, port) {
   }
 }
 
+// A node's outputs repainted as soon as it finishes (before its run ends).
+async function repaintNode(run, node) {
+  const cards = [...document.querySelectorAll(`[data-producer="${node}"]`)];
+  await Promise.all(cards.map(async (card) => {
+    const fresh = card.cloneNode(false);
+    fresh.classList.remove("gv-stale");
+    fresh.dataset.streamed = String(run);
+    fresh.append(card.querySelector("h4").cloneNode(true));
+    await renderValue(fresh, run, node, card.dataset.portName);
+    if (run === S.latest) card.replaceWith(fresh);
+  }));
+  window.dispatchEvent(new CustomEvent("gv-node-painted", { detail: { run, node } }));
+}
+
 function keyOf(run, node, port) {
   return JSON.stringify(S.runs[run]?.nodes?.[node]?.keys?.[port] ?? `${run}`);
 }
@@ -155,8 +177,13 @@ async function renderOutputs() {
   const cards = await Promise.all(Object.entries(S.graph.outputs).map(async ([name, [node, port]]) => {
     const key = keyOf(run, node, port || "out");
     const old = box.querySelector(`[data-output="${name}"]`);
-    if (old && old.dataset.key === key) return old;
-    const card = el("div", { class: "gv-output", "data-output": name, "data-key": key }, el("h4", {}, name));
+    if (old && (old.dataset.key === key || old.dataset.streamed === String(run))) {
+      old.dataset.key = key;
+      old.classList.remove("gv-stale");
+      return old;
+    }
+    const card = el("div", { class: "gv-output", "data-output": name, "data-key": key,
+      "data-producer": node, "data-port-name": port || "out" }, el("h4", {}, name));
     await renderValue(card, run, node, port || "out");
     return card;
   }));
@@ -268,7 +295,8 @@ async function renderInspector(id, force = true) {
     panel.append(el("h4", {}, "outputs"), values);
     $("#inspector").replaceChildren(panel);
     await Promise.all(Object.keys(node.outputs).map(async (port) => {
-      const box = el("div", { class: "gv-output", "data-port": `${id}.${port}` }, el("h4", {}, port));
+      const box = el("div", { class: "gv-output", "data-port": `${id}.${port}`, "data-producer": id,
+        "data-port-name": port }, el("h4", {}, port));
       values.append(box);
       if (S.shown) {
         const d = await renderValue(box, S.shown, id, port);

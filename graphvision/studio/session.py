@@ -38,6 +38,26 @@ KEPT_RUNS = 12  # runs whose values stay in memory (for the viewers and comparis
 _PREFIX = "studio__"
 
 
+class _TapCache(Cache):
+    """The session's cache, noting in each thread the values a node stores, so that the
+    node's hook can hand its outputs to the page as soon as it finishes."""
+
+    def __init__(self, inner: Cache) -> None:
+        super().__init__(inner.memory, inner.disk)
+        self.local = threading.local()
+
+    def put(self, key: str, port_type: Any, value: Any) -> int:
+        size = super().put(key, port_type, value)
+        self.taken().append(value)
+        return size
+
+    def taken(self) -> list[Any]:
+        if not hasattr(self.local, "values"):
+            self.local.values = []
+        values: list[Any] = self.local.values
+        return values
+
+
 class Superseded(BaseException):  # not an error: the control flow of a cancel
     """Raised by a run's hooks to stop it: a newer change was made, or the page cancelled it."""
 
@@ -100,9 +120,17 @@ class _Hooks(RunHooks):
 
     def node_finished(self, *, name: str, op: str, status: str, seconds: float) -> None:
         self.run.nodes[name] = {"status": status, "seconds": seconds}
+        stored = self.session.cache.taken()
+        streamed = False
+        if status == "computed" and self.run.compiled is not None and not self.run.stop:
+            ports = list(self.run.compiled.steps[name].outputs)
+            if len(stored) == len(ports):  # its outputs, stored just now by this thread
+                self.run.values.update({(name, p): v for p, v in zip(ports, stored, strict=True)})
+                streamed = True
+        stored.clear()
         self.session.emit(
             {"event": "node", "run": self.run.id, "node": name, "status": status,
-             "seconds": seconds}
+             "seconds": seconds, "value": streamed}
         )  # fmt: skip
         self._check()
 
@@ -135,7 +163,7 @@ class Session:
         self.graph, self.registry, self.executor = graph, registry, executor
         self.inputs = dict(inputs or {})
         self.overrides = dict(overrides or {})
-        self.cache = cache or Cache(MemoryStore(2**30))
+        self.cache = _TapCache(cache or Cache(MemoryStore(2**30)))
         self.studio_graph = _every_port_an_output(graph, registry)
         self.compiled = self.check(self.overrides)
         self.runs: list[StudioRun] = []
@@ -231,7 +259,9 @@ class Session:
         except Exception as error:  # a worker that died, a bug: the server keeps serving
             studio_run.error = f"{type(error).__name__}: {error}"
         studio_run.seconds = time.perf_counter() - began
-        if result is not None and not studio_run.stop:
+        if studio_run.stop:  # superseded or cancelled: none of its values are shown
+            studio_run.values.clear()
+        elif result is not None:
             self._keep(studio_run, result.outputs, result.record)
         if studio_run.status == "running":
             studio_run.status = "failed" if studio_run.error else "done"

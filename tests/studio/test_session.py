@@ -142,3 +142,23 @@ def test_each_port_type_gets_its_viewer(coins: Session) -> None:
     described = describe_value(gv.FloatImagePort, depth, run.compiled, "x", "out")
     assert described["view"] == "floatmap"
     assert described["range"] == pytest.approx([0.5, 4.0])
+
+
+def test_a_node_value_is_at_hand_as_soon_as_the_node_finishes(coins: Session) -> None:
+    seen: dict[str, bool] = {}
+
+    def listener(event: dict) -> None:
+        if event.get("event") == "node" and event["status"] == "computed":
+            run, node = coins.find_run(event["run"]), event["node"]
+            ports = run.compiled.steps[node].outputs
+            held = all((node, port) in run.values for port in ports)
+            seen[node] = event["value"] and held and run.status == "running"  # before its end
+
+    coins.listeners.append(listener)
+    try:
+        coins.change({"binary.k": -0.25})
+        coins.wait()
+    finally:
+        coins.listeners.remove(listener)
+    downstream = ["binary", "closed", "filled", "opened", "labels", "measured", "coins", "overlay"]
+    assert seen == dict.fromkeys(downstream, True)
