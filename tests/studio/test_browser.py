@@ -59,6 +59,9 @@ def test_tuning_the_threshold_repaints_the_count_and_labels(browser, coins, tmp_
     _painted(page, 1)
     assert page.inner_text("[data-output=count] .gv-scalar") == "24"
     before = _labels_png(page, coins)
+    other = browser.new_page()  # a second tab on the same session
+    other.goto(coins.url)
+    _painted(other, 1)
     page.click("[data-node=binary]")
     box = page.locator("[data-inspect=binary] [data-param=k] input.gv-number")
     box.fill("-0.3")
@@ -66,6 +69,9 @@ def test_tuning_the_threshold_repaints_the_count_and_labels(browser, coins, tmp_
     _painted(page, 2)
     assert page.inner_text("[data-output=count] .gv-scalar") == "23"
     assert _labels_png(page, coins) != before
+    _painted(other, 2)  # the other tab follows the session
+    assert other.inner_text("[data-output=count] .gv-scalar") == "23"
+    other.close()
     assert page.get_attribute("[data-node=gray]", "data-state") == "cached"
     assert page.get_attribute("[data-node=overlay]", "data-state") == "computed"
     run = coins.session.runs[-1]  # the run record says what ran, not the page
@@ -83,6 +89,22 @@ def test_tuning_the_threshold_repaints_the_count_and_labels(browser, coins, tmp_
     message.wait_for(state="visible")
     assert "greater than or equal to 3" in message.inner_text()
     assert len(coins.session.runs) == 2
+    # a tab that goes away in the middle of a run: the run finishes, the server serves on
+    leaving = browser.new_page()
+    leaving.goto(coins.url)
+    _painted(leaving, 2)
+    leaving.evaluate(
+        "fetch('api/change', {method: 'POST', headers: {'Content-Type': 'application/json'},"
+        " body: JSON.stringify({overrides: {'binary.k': -0.2}})})"
+    )
+    leaving.close()
+    for _ in range(300):
+        if len(coins.session.runs) == 3:
+            break
+        page.wait_for_timeout(20)
+    coins.session.wait()
+    assert coins.session.runs[-1].status == "done"
+    _painted(page, 3)
     page.evaluate("document.querySelector('#side').scrollTop = 0")
     update = os.environ.get("GRAPHVISION_UPDATE_SCREENSHOT") == "1"
     shot = SCREENSHOT if update else tmp_path / "studio.png"
