@@ -11,6 +11,7 @@ from ._boards import board_object_points, board_views, plane_view, render_board
 from ._depth import depth_plane
 from ._digit_scenes import Scenes, SceneSet, ScenesPort, digit_scenes, render_digit_scenes
 from ._face_collage import face_collage, face_scenes
+from ._instance_scenes import InstanceScenes, instance_scenes, render_instance_scenes
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
 from ._object_scenes import (
@@ -30,6 +31,7 @@ from ._warps import random_homography, random_warp, two_views
 
 __all__ = [
     "PHOTOGRAPHS",
+    "InstanceScenes",
     "ObjectSceneSet",
     "ObjectScenes",
     "ObjectScenesPort",
@@ -45,6 +47,7 @@ __all__ = [
     "gaussian_noise",
     "gray_code_stripes",
     "impulse_noise",
+    "instance_scenes",
     "line_points",
     "object_scenes",
     "planar_stereo_scene",
@@ -54,6 +57,7 @@ __all__ = [
     "random_warp",
     "render_board",
     "render_digit_scenes",
+    "render_instance_scenes",
     "render_object_scenes",
     "salt_and_pepper",
     "stereo_pair",
