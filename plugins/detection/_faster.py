@@ -6,6 +6,7 @@ RPN's proposals."""
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from typing import Annotated, Any, NamedTuple
 
 import numpy as np
@@ -226,7 +227,7 @@ def _classified(
     return moved[sound], probability[roi, k + 1][sound], model.classes[k][sound]
 
 
-def _joined(pieces: list[tuple[np.ndarray, ...]], scenes: int) -> DetectionSet:
+def _joined(pieces: Sequence[tuple[np.ndarray, ...]], scenes: int) -> DetectionSet:
     if not pieces:
         empty = np.zeros(0, np.int64)
         return DetectionSet(np.zeros((0, 4)), np.zeros(0), empty, empty.copy(), scenes)
