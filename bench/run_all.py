@@ -19,6 +19,7 @@ import bench_dask  # noqa: E402
 import bench_detection  # noqa: E402
 import bench_edges  # noqa: E402
 import bench_faces  # noqa: E402
+import bench_faster_rcnn  # noqa: E402
 import bench_filters  # noqa: E402
 import bench_find_object  # noqa: E402
 import bench_held_out_geometry  # noqa: E402
@@ -46,6 +47,7 @@ def main() -> None:
         ("Colour, templates, FFT, pyramids (issue 10)", bench_colour_template.main),
         ("Two views and stereo (issue 12)", bench_stereo.main),
         ("Modern detection: CNN, proposals, R-CNN (issue 14)", bench_detection.main),
+        ("Faster R-CNN and Mask R-CNN (issue 28)", bench_faster_rcnn.main),
         ("Finding every instance of an object (issue 28)", bench_find_object.main),
         ("Faces in photographs: LBP cascade (issue 28)", bench_faces.main),
         (
