@@ -19,7 +19,13 @@ from ._faster import FasterRcnnResult, faster_rcnn, train_faster_rcnn
 from ._faster_draw import draw_proposals, faster_rcnn_loss
 from ._faster_types import FasterRcnn, FasterRcnnModel, FasterRcnnPort
 from ._mask import mask_inputs, predict_masks, train_mask_head
-from ._mask_eval import coco_average_precision, draw_instances, mask_average_precision, mask_iou
+from ._mask_eval import (
+    coco_average_precision,
+    draw_instances,
+    draw_true_instances,
+    mask_average_precision,
+    mask_iou,
+)
 from ._mask_head import MaskHead, MaskHeadModel, MaskHeadPort, mask_targets, paste_mask, roi_align
 from ._proposals import (
     anchors,
@@ -92,6 +98,7 @@ __all__ = [
     "draw_proposals",
     "draw_rectangles",
     "draw_scenes",
+    "draw_true_instances",
     "faster_rcnn",
     "faster_rcnn_loss",
     "feature_extractor",

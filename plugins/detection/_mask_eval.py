@@ -17,7 +17,13 @@ from ._draw import draw_rectangles
 from ._mask import check_masks
 from ._types import Detections, DetectionSet
 
-__all__ = ["coco_average_precision", "draw_instances", "mask_average_precision", "mask_iou"]
+__all__ = [
+    "coco_average_precision",
+    "draw_instances",
+    "draw_true_instances",
+    "mask_average_precision",
+    "mask_iou",
+]
 
 RECALL_POINTS = np.linspace(0, 1, 101)
 """COCO's 101 recall thresholds."""
@@ -190,3 +196,34 @@ def draw_instances(
         top, left = r * (height + 2), c * (width + 2)
         canvas[top : top + height, left : left + width] = picture
     return canvas
+
+
+@node("detection.draw_true_instances", version=1)
+def draw_true_instances(
+    scenes: Scenes, masks: Array, *, count: Count = 8, columns: Count = 4
+) -> ColorImage:
+    """The first ``count`` scenes in a grid with their true instances (e.g. of
+    ``synthetic.instance_scenes``), each mask blended in its own colour and its box
+    outlined, as ``detection.draw_instances`` draws detections.
+
+    Parameters
+    ----------
+    scenes : Scenes
+        Scenes with their true boxes.
+    masks : Array
+        (M, H, W) bool, the true mask of each true box.
+    count : int
+        Scenes shown.
+    columns : int
+        Scenes per row.
+
+    Returns
+    -------
+    ColorImage
+        The grid, scenes two pixels apart.
+    """
+    check_masks(scenes, masks)
+    truth = DetectionSet(
+        scenes.xyxy, np.ones(len(scenes.xyxy)), scenes.label, scenes.owner, len(scenes)
+    )
+    return draw_instances(scenes, truth, masks, count=count, columns=columns, min_score=0.0)

@@ -153,3 +153,14 @@ def test_a_small_mask_branch_segments_held_out_instances(instances):
         detection.train_mask_head(model, scenes, masks[:-1])
     with pytest.raises(ValueError, match=r"keep the size \(no pooling"):
         detection.train_mask_head(model, scenes, masks, layers=["conv 4x3 pad 0"], epochs=1)
+
+
+def test_true_instances_are_drawn_in_colour_over_their_masks(instances):
+    scenes, masks = instances
+    picture = detection.draw_true_instances(scenes, masks, count=1, columns=1)
+    assert picture.shape == (50, 50, 3)  # the scene and a 2-pixel margin
+    coloured = np.ptp(picture[:48, :48], axis=2) > 0.01  # gray scene pixels have R = G = B
+    inside = masks[scenes.owner == 0].any(axis=0)
+    assert coloured[inside].all()
+    with pytest.raises(ValueError, match=r"masks must hold one 48×48 mask per true box"):
+        detection.draw_true_instances(scenes, masks[1:])
