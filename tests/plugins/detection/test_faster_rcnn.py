@@ -184,10 +184,10 @@ def test_bad_settings_are_refused_naming_them(small_model):
         detection.train_faster_rcnn(backbone, scenes, **{**train, "frozen_layers": 5})
     with pytest.raises(ValueError, match=r"anchor size 90 with ratio 1 is a 90×90 box, larger"):
         detection.train_faster_rcnn(backbone, scenes, **{**train, "sizes": [90.0]})
-    with pytest.raises(ValueError, match=r"the proposals cover 40 scenes but 2 scenes are given"):
-        detection.draw_proposals(scenes.__class__(scenes.images[:2], scenes.xyxy[:0],
-                                 scenes.label[:0], scenes.owner[:0]),
-                                 detection.faster_rcnn(model, scenes).proposals)  # fmt: skip
+    three = digit_scenes(count=3, size=48, min_scale=14, max_scale=20, classes=[0, 1], seed=8)
+    two = digit_scenes(count=2, size=48, min_scale=14, max_scale=20, classes=[0, 1], seed=8)
+    with pytest.raises(ValueError, match=r"the proposals cover 3 scenes but 2 scenes are given"):
+        detection.draw_proposals(two, detection.faster_rcnn(model, three).proposals)
     graph = gv.load_pipeline(PIPELINES / "faster_rcnn.yaml").with_overrides({"found.proposals": 0})
     with pytest.raises(
         gv.PipelineError, match=r"--set found\.proposals=0: .*greater than or equal to 1"
@@ -196,7 +196,8 @@ def test_bad_settings_are_refused_naming_them(small_model):
 
 
 def test_drawings_and_loss_curve(small_model):
-    _, scenes, _, model = small_model
+    _, _, _, model = small_model
+    scenes = digit_scenes(count=4, size=48, min_scale=14, max_scale=20, classes=[0, 1], seed=8)
     found = detection.faster_rcnn(model, scenes, proposals=10)
     picture = detection.draw_proposals(scenes, found.proposals, count=4, columns=2, per_scene=3)
     assert picture.shape == (2 * 50, 2 * 50, 3)
