@@ -120,7 +120,7 @@ def test_backward_with_input_gives_the_inputs_gradient():
 # --- a small detector trained here -----------------------------------------------------
 
 
-def small_backbone(scenes, epochs=3):
+def small_backbone(scenes, epochs=3, learning_rate=0.05):
     """A backbone trained on crops of seeded random boxes of the scenes (no selective
     search: fast), labelled by their overlap with the true boxes."""
     rng = np.random.default_rng(0)
@@ -134,7 +134,7 @@ def small_backbone(scenes, epochs=3):
     outputs = f"dense {len(np.unique(crops.labels))}"
     return cnn.train(
         crops, layers=["conv 8x3", "relu", "maxpool 2", "conv 8x3", "relu", outputs],
-        epochs=epochs, batch_size=32, learning_rate=0.02, seed=0,
+        epochs=epochs, batch_size=32, learning_rate=learning_rate, seed=0,
     )  # fmt: skip
 
 

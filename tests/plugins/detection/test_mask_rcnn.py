@@ -117,7 +117,7 @@ def test_a_small_mask_branch_segments_held_out_instances(instances):
     """The branch, trained on a small Faster R-CNN's features, segments the true boxes of
     held-out scenes (the detector's own quality is tested in test_faster_rcnn.py)."""
     scenes, masks = instances
-    backbone = small_backbone(scenes, epochs=8)
+    backbone = small_backbone(scenes, epochs=8, learning_rate=0.02)
     model = detection.train_faster_rcnn(
         backbone,
         scenes,
