@@ -23,7 +23,8 @@ GRAPH_STYLE = """
 GRAPH_SCRIPT = """<script>
 document.querySelectorAll(".graph").forEach(box => {
   const svg = box.querySelector("svg");
-  if (!svg) return;
+  if (!svg || box.dataset.zoom) return;  // (a notebook runs this once per shown page)
+  box.dataset.zoom = "on";
   const whole = svg.viewBox.baseVal;
   const home = [whole.x, whole.y, whole.width, whole.height];
   let view = home.slice();

@@ -101,11 +101,7 @@ def html_report(
     body += ["<h2>Graph</h2>", graph_html(graph_svg(graph, status, seconds))]
     body += ["<h2>Outputs</h2>", _outputs_html(compiled, outputs, record.files)]
     if intermediates:
-        shown = [
-            f'<div class="output"><h3>{escape(where)}</h3>{value_html(kind, value, where)}</div>'
-            for where, (kind, value) in intermediates.items()
-        ]
-        body += ["<h2>Intermediate values</h2>", f'<div class="outputs">{"".join(shown)}</div>']
+        body += ["<h2>Intermediate values</h2>", _intermediates_html(intermediates)]
     body += ["<h2>Nodes</h2>", _nodes_html(record), "<h2>Provenance</h2>", _provenance_html(record)]
     if earlier:
         body += ["<h2>Earlier runs (newest first)</h2>", _earlier_html(earlier)]
@@ -115,6 +111,17 @@ def html_report(
         f"<title>{escape(graph.name)}: graphvision report</title><style>{_STYLE}</style></head>"
         f"<body>{''.join(body)}{GRAPH_SCRIPT}</body></html>\n"
     )
+
+
+def _intermediates_html(intermediates: Mapping[str, tuple[type[PortType], Any]]) -> str:
+    """Each intermediate value by its viewer; a table folded (its summary shows)."""
+    shown = []
+    for where, (kind, value) in intermediates.items():
+        view = value_html(kind, value, where)
+        if issubclass(kind, TablePort):
+            view = f"<details><summary>{escape(kind.summary(value))}</summary>{view}</details>"
+        shown.append(f'<div class="output"><h3>{escape(where)}</h3>{view}</div>')
+    return f'<div class="outputs">{"".join(shown)}</div>'
 
 
 def _header_html(compiled: CompiledGraph, record: RunRecord) -> str:

@@ -125,7 +125,7 @@ def _axes(
         _line(pad, pad * 0.7, pad, height - pad),
         f'<text class="x-label" x="{(width + pad / 2) / 2:.0f}" y="{height - pad + 32:.0f}" '
         f'text-anchor="middle" font-weight="bold">{escape(key)}</text>',
-        f'<text class="y-label" transform="translate(12,{(height - pad / 3) / 2:.0f}) '
+        f'<text class="y-label" transform="translate(9,{(height - pad / 3) / 2:.0f}) '
         f'rotate(-90)" text-anchor="middle" font-weight="bold">{escape(output)}</text>',
     ]
     parts += [
