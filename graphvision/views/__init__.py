@@ -1,3 +1,5 @@
 """What people look at: ``report.html`` and ``report.md``, batch and sweep pages, progress
 on a terminal, and results inline in a notebook. Each subscribes to or is handed what
-the execution layer produces."""
+the execution layer produces. How each kind of value is shown (colour bars, label
+colours, point clouds, confusion matrices) is :mod:`graphvision.views.viewers`; the
+graph's fit, zoom and pan :mod:`graphvision.views.graph_view`."""
