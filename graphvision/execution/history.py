@@ -5,7 +5,8 @@ Before a run replaces the files of the previous one, those files (its
 record lists) are kept in ``history/<number>-<date>-<digest>/`` (numbered in
 the order they were kept): hard links where the file system allows it (no
 copy of the bytes; a run never writes into a file, it replaces it, so the
-kept file stays as it was), copies otherwise. A warm
+kept file stays as it was; a file that someone edits in place changes in both),
+copies otherwise. A warm
 re-run therefore no longer replaces the cold run's report: the folder shows
 the newest run and links its predecessors, newest first.
 

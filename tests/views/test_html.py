@@ -96,8 +96,10 @@ console.error = (...args) => { __errors.push(args.join(" ")); original(...args);
 window.addEventListener("load", () => {
   const images = [...document.images];
   const broken = images.filter(i => !(i.complete && i.naturalWidth > 0)).length;
+  const graph = document.querySelector(".graph svg").getBoundingClientRect();
+  const fits = graph.left >= 0 && graph.right <= window.innerWidth && graph.width > 100;
   document.documentElement.setAttribute(
-    "data-check", JSON.stringify({images: images.length, broken, errors: __errors}));
+    "data-check", JSON.stringify({images: images.length, broken, errors: __errors, fits}));
 });
 </script>"""
 
@@ -117,6 +119,7 @@ def test_a_real_browser_loads_the_report_without_errors(coins_report: Path, tmp_
         "--no-first-run",
         f"--user-data-dir={tmp_path / 'profile'}",
         "--virtual-time-budget=5000",
+        "--window-size=800,600",  # narrower than the coins graph is wide
         "--dump-dom",
         checked.as_uri(),
     ]
@@ -124,7 +127,7 @@ def test_a_real_browser_loads_the_report_without_errors(coins_report: Path, tmp_
     found = re.search(r'data-check="([^"]*)"', dom)
     assert found, "the page's load handler did not run"
     check = json.loads(html.unescape(found.group(1)))
-    assert check == {"images": 2, "broken": 0, "errors": []}
+    assert check == {"images": 2, "broken": 0, "errors": [], "fits": True}
 
 
 def test_a_run_result_shows_as_its_report_in_a_notebook(monkeypatch):
