@@ -57,7 +57,7 @@ def write_report(
     record: RunRecord,
     directory: Path,
 ) -> Path:
-    """``report.md`` in ``directory``; returns its path."""
+    """``report.md`` in ``directory`` (with the folder's earlier runs); returns its path."""
     graph = compiled.graph
     lines = [f"# {_plain_text(graph.name)}", ""]
     if graph.description:  # written by whoever wrote the pipeline: text, never markup
@@ -75,9 +75,27 @@ def write_report(
         lines += ["", *[f"![{f}]({f})" for f in images]]
     lines += ["", "## Provenance", "", *_provenance_lines(record)]
     lines += ["", "## Run record", "", "```", record.table(), "```", ""]
+    earlier = earlier_runs(run_folder(directory))
+    if earlier:
+        lines += ["## Earlier runs (newest first)", ""]
+        lines += [
+            f"- [{run.date or run.folder}]({run.folder}/report.md): {_computed(run.record)} "
+            f"computed, overrides `{json.dumps(run.record.get('overrides') or {}, default=str)}`"
+            for run in earlier
+        ]
+        lines.append("")
     path = directory / "report.md"
     path.write_text("\n".join(lines))
     return path
+
+
+def _computed(record: dict[str, Any]) -> int:
+    """How many nodes an earlier run's record (JSON, as read back) says it computed."""
+    nodes = record.get("nodes")
+    return sum(
+        isinstance(node, dict) and node.get("status") == "computed"
+        for node in (nodes if isinstance(nodes, list) else [])
+    )
 
 
 def _plain_text(text: str) -> str:

@@ -38,6 +38,7 @@ def test_a_warm_rerun_keeps_the_cold_runs_report_and_files(tmp_path):
     page = (folder / "report.html").read_text()
     assert f'href="./history/{entry.name}/report.html"' in page
     assert "Earlier runs (newest first)" in page and "Earlier runs" not in cold
+    assert f"](history/{entry.name}/report.md): 7 computed" in (folder / "report.md").read_text()
 
 
 def test_history_is_newest_first_and_bounded(tmp_path, monkeypatch):
