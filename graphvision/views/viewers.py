@@ -92,7 +92,8 @@ def _colour_bar(low: float, high: float, units: str) -> str:
 
 
 def _float_map_html(kind: type[PortType], value: np.ndarray, name: str) -> str:
-    units = getattr(kind, "units", "") or "no unit (a filter response)"
+    kernel = issubclass(kind, KernelPort)
+    units = getattr(kind, "units", "") or ("weights" if kernel else "no unit (a filter response)")
     span = float_map_range(value)
     invalid = int(np.count_nonzero(~np.isfinite(value)))
     note = f", {invalid} invalid pixels (NaN) drawn black" if invalid else ""
