@@ -15,7 +15,8 @@ __all__ = ["GRAPH_SCRIPT", "GRAPH_STYLE", "graph_html"]
 
 GRAPH_STYLE = """
 .graph { border: 1px solid #eee; padding: 0.5em; }
-.graph svg { display: block; width: 100%; height: auto; max-height: 75vh; cursor: grab; }
+.graph svg { display: block; width: 100%; height: auto; max-height: 75vh; cursor: grab;
+             margin: 0 auto; }
 .graph .zoom { text-align: right; }
 .graph .zoom button { min-width: 2.2em; margin-left: 0.2em; }
 """
@@ -63,8 +64,11 @@ document.querySelectorAll(".graph").forEach(box => {
 
 
 def graph_html(svg: str) -> str:
-    """``svg`` (a graph drawing) made to scale to its container, with zoom buttons."""
+    """``svg`` (a graph drawing) made to shrink to its container (never enlarged beyond
+    its own size), with zoom buttons."""
+    size = re.search(r'<svg[^>]*? width="([\d.]+)" height="[\d.]+"', svg)
     fitted = re.sub(r'(<svg[^>]*?) width="[\d.]+" height="[\d.]+"', r"\1", svg, count=1)
-    fitted = fitted.replace("<svg ", '<svg preserveAspectRatio="xMidYMid meet" ', 1)
+    largest = f' style="max-width: {size.group(1)}px"' if size else ""
+    fitted = fitted.replace("<svg ", f'<svg preserveAspectRatio="xMidYMid meet"{largest} ', 1)
     buttons = "".join(f'<button type="button">{b}</button>' for b in ("+", "\u2212", "fit"))
     return f'<div class="graph"><div class="zoom">{buttons}</div>{fitted}</div>'

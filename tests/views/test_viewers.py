@@ -113,4 +113,6 @@ def test_the_graph_scales_to_the_page_with_zoom_buttons(line_fit_folder):
     page = (line_fit_folder / "report.html").read_text()
     svg = re.search(r"<svg [^>]*>", page.split('<div class="graph">')[1]).group(0)
     assert "viewBox=" in svg and "width=" not in svg and "height=" not in svg
+    drawn = re.search(r'viewBox="0 0 ([\d.]+) ', svg).group(1)
+    assert f'style="max-width: {drawn}px"' in svg  # shrinks to fit, never enlarged
     assert re.findall(r'<button type="button">([^<]+)</button>', page) == ["+", "\u2212", "fit"]
