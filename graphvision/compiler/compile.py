@@ -18,107 +18,21 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Sequence
-from dataclasses import dataclass
-from functools import cached_property
 from typing import Any
 
 import pydantic
 
 from graphvision.compiler.backends import BackendChooser
+from graphvision.compiler.compiled import CompiledGraph, Schedule, Step
 from graphvision.errors import PipelineError, Problem, UnknownNameError, did_you_mean
 from graphvision.graph.collector import collector_paused
 from graphvision.graph.model import NAME, PARAM_REFERENCE, Graph, Ref, output_name_problem
 from graphvision.graph.order import CycleError, topological_order
-from graphvision.nodes.fingerprint import node_fingerprint
 from graphvision.nodes.registry import Registry
 from graphvision.nodes.spec import NodeSpec
 from graphvision.values.ports import PortType
 
 __all__ = ["CompiledGraph", "Schedule", "Step", "compile_graph"]
-
-
-@dataclass(frozen=True)
-class Step:
-    """A node ready to run: its spec, validated parameters and where each input comes from.
-
-    ``inputs`` maps port -> (producer, output port); the output port is '' for a graph
-    input. ``outputs`` are the output types with the node's type variables bound.
-    """
-
-    name: str
-    spec: NodeSpec
-    params: dict[str, Any]
-    inputs: dict[str, tuple[str, str]]
-    outputs: dict[str, type[PortType]]
-
-    @cached_property
-    def fingerprint(self) -> str:
-        """What the node is (id, version, code, parameters), for its cache keys."""
-        spec = self.spec
-        return node_fingerprint(spec.key_id, spec.version, spec.source_hash, self.params)
-
-
-@dataclass(frozen=True)
-class Schedule:
-    """What computing some outputs from nothing involves, fixed by the graph alone.
-
-    ``steps`` in topological order; ``inputs`` the graph inputs they (or the
-    outputs themselves) read; ``dependencies`` each step's producers among the
-    steps; ``readers`` how many of the steps read each value (``(node, port)``,
-    port ``''`` for a graph input). A run reads it and changes nothing in it.
-    """
-
-    steps: list[str]
-    inputs: frozenset[str]
-    dependencies: dict[str, frozenset[str]]
-    readers: dict[tuple[str, str], int]
-
-
-@dataclass(frozen=True)
-class CompiledGraph:
-    """A validated graph: steps in topological order, typed inputs and outputs."""
-
-    graph: Graph
-    steps: dict[str, Step]
-    input_types: dict[str, type[PortType]]
-    outputs: dict[str, tuple[str, str]]
-
-    def output_type(self, name: str) -> type[PortType]:
-        producer, port = self.outputs[name]
-        if producer in self.input_types:
-            return self.input_types[producer]
-        return self.steps[producer].outputs[port]
-
-    def schedule_for(self, outputs: list[str]) -> Schedule:
-        """What computing ``outputs`` from nothing involves (see :class:`Schedule`); the
-        one for all outputs is made once per compiled graph and shared by its runs."""
-        if len(outputs) == len(self.outputs) and set(outputs) == self.outputs.keys():
-            return self.full_schedule
-        return self._schedule(outputs)
-
-    @cached_property
-    def full_schedule(self) -> Schedule:
-        return self._schedule(list(self.outputs))
-
-    def _schedule(self, outputs: list[str]) -> Schedule:
-        """One pass over the steps from the last (they are in topological order, so
-        every reader of a step comes after it), one from the first."""
-        wanted = {self.outputs[o][0] for o in outputs}
-        needed = []
-        for name, step in reversed(self.steps.items()):
-            if name in wanted:
-                needed.append(name)
-                wanted.update([src for src, _ in step.inputs.values()])
-        needed.reverse()
-        dependencies: dict[str, frozenset[str]] = {}
-        readers: dict[tuple[str, str], int] = {}
-        for name in needed:
-            sources = self.steps[name].inputs.values()
-            dependencies[name] = frozenset([src for src, _ in sources if src in dependencies])
-            for source in sources:
-                readers[source] = readers.get(source, 0) + 1
-        inputs = frozenset(name for name in self.input_types if name in wanted)
-        return Schedule(needed, inputs, dependencies, readers)
 
 
 class _Checker:
