@@ -26,7 +26,7 @@ from graphvision import (
 
 from ..camera import normalise_pixels
 from ..fitting import ransac
-from ..fitting._ransac import chance_inlier_rate, log10_nfa, refuse_chance
+from ..fitting._ransac import model_significance, refuse_chance
 from ..geometry import estimate_homography, transfer_error
 from ..shared.params import Iterations, Positive, Probability, Seed
 from ._geometry import (
@@ -261,11 +261,16 @@ def robust_fundamental(
     data = np.hstack([a, b])
     found.require_support(8, shown, what, data=data)
     model = found.model
-    alpha = chance_inlier_rate(
-        lambda pa, pb: sampson_distance(model, pa, pb) < threshold, (a, b), seed=seed
-    )
     support, count = found.support(data)
-    log_nfa = log10_nfa(count, 8, support, alpha)
+    log_nfa, alpha = model_significance(
+        lambda pa, pb: sampson_distance(model, pa, pb) < threshold,
+        (a, b),
+        count,
+        8,
+        support,
+        max_nfa=max_nfa,
+        seed=seed,
+    )
     refuse_chance(log_nfa, max_nfa, what, support, count, alpha)
     inliers = found.inliers
     _refuse_a_homography(a[inliers], b[inliers], threshold, seed)

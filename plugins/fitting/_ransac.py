@@ -36,7 +36,7 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -47,6 +47,7 @@ __all__ = [
     "chance_inlier_rate",
     "log10_binomial_tail",
     "log10_nfa",
+    "model_significance",
     "ransac",
     "ransac_iterations",
     "refuse_chance",
@@ -56,6 +57,8 @@ CHANCE_HITS = 400
 """Fitting draws that end the measure of a chance inlier rate α (about 5 % of error)."""
 MAX_CHANCE_DRAWS = 2**21
 """Most draws for α (a 3 px disc in a 1000 × 700 view fits one in 10,000)."""
+SETTLED = 20.0
+"""Orders of magnitude below ``max_nfa`` at which α's upper bound settles a model."""
 
 
 def ransac_iterations(outlier_ratio: float, sample_size: int, confidence: float) -> int:
@@ -270,6 +273,26 @@ def log10_nfa(count: int, sample_size: int, inliers: int, alpha: float) -> float
     return log_tests + log10_binomial_tail(count - sample_size, inliers - sample_size, alpha)
 
 
+def _chance_counts(
+    fits: Callable[..., np.ndarray], views: tuple[np.ndarray, ...], seed: int
+) -> Iterator[tuple[int, int]]:
+    """(fitting, drawn) after each batch of pairs drawn uniformly over the views' bounding
+    boxes (a scrambled Sobol sequence seeded by ``seed``): 2^14 draws, then doubling."""
+    from scipy.stats import qmc
+
+    sobol = qmc.Sobol(2 * len(views), scramble=True, seed=seed)
+    low = [points.min(axis=0) for points in views]
+    span = [np.maximum(points.max(axis=0) - points.min(axis=0), 1e-12) for points in views]
+    fitting, drawn, batch = 0, 0, 2**14
+    while True:
+        unit = sobol.random(batch)
+        drawn_points = [low[v] + unit[:, 2 * v : 2 * v + 2] * span[v] for v in range(len(views))]
+        fitting += int(np.count_nonzero(fits(*drawn_points)))
+        drawn += batch
+        yield fitting, drawn
+        batch = drawn  # Sobol points come in powers of two
+
+
 def chance_inlier_rate(
     fits: Callable[..., np.ndarray],
     views: tuple[np.ndarray, ...],
@@ -286,20 +309,46 @@ def chance_inlier_rate(
     draws double from 2^14 until ``hits`` of them fit (a relative error of about
     1/√hits) or ``max_draws`` are drawn. Returns (fitting + 1) / (draws + 1), never 0.
     """
-    from scipy.stats import qmc
-
-    sobol = qmc.Sobol(2 * len(views), scramble=True, seed=seed)
-    low = [points.min(axis=0) for points in views]
-    span = [np.maximum(points.max(axis=0) - points.min(axis=0), 1e-12) for points in views]
-    fitting, drawn, batch = 0, 0, 2**14
-    while True:
-        unit = sobol.random(batch)
-        drawn_points = [low[v] + unit[:, 2 * v : 2 * v + 2] * span[v] for v in range(len(views))]
-        fitting += int(np.count_nonzero(fits(*drawn_points)))
-        drawn += batch
+    for fitting, drawn in _chance_counts(fits, views, seed):
         if fitting >= hits or drawn >= max_draws:
             return (fitting + 1) / (drawn + 1)
-        batch = drawn  # Sobol points come in powers of two
+    raise AssertionError("unreachable: the draws never end")  # pragma: no cover
+
+
+def _upper_rate(fitting: int, drawn: int) -> float:
+    """About a 97.5 % upper bound of a rate from a Poisson count: (h + 2√(h+1) + 2) / n."""
+    return (fitting + 2.0 * math.sqrt(fitting + 1.0) + 2.0) / drawn
+
+
+def model_significance(
+    fits: Callable[..., np.ndarray],
+    views: tuple[np.ndarray, ...],
+    count: int,
+    sample_size: int,
+    inliers: int,
+    *,
+    max_nfa: float | None = 1.0,
+    seed: int = 0,
+) -> tuple[float, float]:
+    """(log10 NFA, α) of a model with ``inliers`` of ``count`` data fitting it.
+
+    α is measured as :func:`chance_inlier_rate` does, but the draws stop as soon as
+    even α's upper bound (:func:`_upper_rate`) makes the model significant by
+    :data:`SETTLED` orders of magnitude beyond ``max_nfa``: a model that hundreds of
+    inliers support is settled by the first 2^14 draws, where measuring its tiny α
+    to 5 % took up to 2^21. Such a model is reported with that bound (an upper bound
+    of its NFA); any other with α measured as :func:`chance_inlier_rate` measures it.
+    """
+    line = min(0.0, math.log10(max_nfa) if max_nfa is not None else 0.0) - SETTLED
+    for fitting, drawn in _chance_counts(fits, views, seed):
+        upper = _upper_rate(fitting, drawn)
+        bound = log10_nfa(count, sample_size, inliers, min(upper, 1.0))
+        if bound <= line:
+            return bound, upper
+        if fitting >= CHANCE_HITS or drawn >= MAX_CHANCE_DRAWS:
+            alpha = (fitting + 1) / (drawn + 1)
+            return log10_nfa(count, sample_size, inliers, alpha), alpha
+    raise AssertionError("unreachable: the draws never end")  # pragma: no cover
 
 
 def refuse_chance(

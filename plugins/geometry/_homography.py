@@ -10,7 +10,7 @@ from pydantic import Field
 from graphvision import Conformance, Float, FloatImage, Homography, Keypoints, Matches, node
 
 from ..fitting import ransac
-from ..fitting._ransac import chance_inlier_rate, log10_nfa, refuse_chance
+from ..fitting._ransac import model_significance, refuse_chance
 from ..shared.params import ImageSide, Iterations, Positive, Probability, Seed
 
 __all__ = [
@@ -238,11 +238,16 @@ def homography_ransac(
     data = np.hstack([a, b])
     result.require_support(4, threshold, "the homography", exact=True, data=data)
     model = result.model
-    alpha = chance_inlier_rate(
-        lambda pa, pb: transfer_error(model, pa, pb) < threshold, (a, b), seed=seed
-    )
     support, count = result.support(data)
-    log_nfa = log10_nfa(count, 4, support, alpha)
+    log_nfa, alpha = model_significance(
+        lambda pa, pb: transfer_error(model, pa, pb) < threshold,
+        (a, b),
+        count,
+        4,
+        support,
+        max_nfa=max_nfa,
+        seed=seed,
+    )
     refuse_chance(log_nfa, max_nfa, "the homography", support, count, alpha)
     inliers = result.inliers
     return HomographyFit(model, matches.take(inliers), float(inliers.mean()), log_nfa)

@@ -180,13 +180,14 @@ def significance(
 ) -> float:
     """log10 NFA of a model OpenCV fitted, by the reference's a-contrario test (the same
     chance rate, counts of distinct pairs, refusal above ``max_nfa``): OpenCV has none."""
-    from ..fitting._ransac import chance_inlier_rate, log10_nfa, refuse_chance
+    from ..fitting._ransac import model_significance, refuse_chance
 
     data = np.hstack([a, b])
     count = len(np.unique(data, axis=0))
     support = len(np.unique(data[inliers], axis=0)) if inliers.any() else 0
-    alpha = chance_inlier_rate(fits, (a, b), seed=seed)
-    log_nfa = log10_nfa(count, sample_size, support, alpha)
+    log_nfa, alpha = model_significance(
+        fits, (a, b), count, sample_size, support, max_nfa=max_nfa, seed=seed
+    )
     refuse_chance(log_nfa, max_nfa, what, support, count, alpha)
     return log_nfa
 

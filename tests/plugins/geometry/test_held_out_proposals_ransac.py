@@ -233,3 +233,42 @@ def test_scene_proposals_keep_more_boxes_in_a_larger_scene():
     assert detection.scene_recall(default, scenes) == detection.scene_recall(every, scenes)
     small = digit_scenes(count=2, seed=3)  # 80 × 80: at most 200 each, as before
     assert np.bincount(detection.scene_proposals(small, max_boxes=None).owner).max() <= 200
+
+
+def test_a_model_that_many_inliers_support_is_settled_by_the_first_draws():
+    """500 inliers of 800 under a 3 px disc: even α's upper bound after 2^14 draws makes
+    the NFA astronomically small, so measuring α to 5 % (2^21 draws, seconds) is skipped
+    and the bound, an upper bound of the NFA, is reported."""
+    from graphvision_plugins.fitting._ransac import (
+        chance_inlier_rate,
+        log10_nfa,
+        model_significance,
+    )
+
+    a, b = random_pairs(800, seed=7)
+    drawn: list[int] = []
+
+    def fits(pa, pb):
+        drawn.append(len(pa))
+        return geometry.transfer_error(np.eye(3), pa, pb) < 3.0
+
+    log_nfa, alpha = model_significance(fits, (a, b), 800, 4, 500)
+    assert sum(drawn) == 2**14
+    measured = chance_inlier_rate(fits, (a, b))
+    assert alpha > measured  # the bound
+    assert log10_nfa(800, 4, 500, measured) < log_nfa < -200
+
+
+def test_a_model_near_the_line_is_measured_in_full():
+    a, b = random_pairs(300, seed=8)
+    drawn: list[int] = []
+
+    def fits(pa, pb):
+        drawn.append(len(pa))
+        return geometry.transfer_error(np.eye(3), pa, pb) < 3.0
+
+    from graphvision_plugins.fitting._ransac import chance_inlier_rate, model_significance
+
+    _log_nfa, alpha = model_significance(fits, (a, b), 300, 4, 8)
+    assert sum(drawn) > 2**14
+    assert alpha == chance_inlier_rate(lambda pa, pb: fits(pa, pb), (a, b))
