@@ -19,16 +19,21 @@ backbone: 11.7 s with OpenBLAS's threads, 2.5 s with one).
 
 How
 ---
-threadpoolctl's limit is process-wide and costs about 1 ms to set, so
-:func:`one_blas_thread` counts its users under a lock: the first applies the
-limit, the last restores the original, and a run inside a batch or a node
-inside a run only counts. The limit is set and lifted from a helper thread
+threadpoolctl's limit is process-wide, so :func:`one_blas_thread` counts its
+users under a lock: the first applies the limit, the last restores the
+original, and a run inside a batch or a node inside a run only counts.
+Finding the loaded BLAS libraries takes milliseconds (threadpoolctl walks
+every loaded shared library; 3-8 ms, two walks per run, were most of the
+engine's cost on a 35 ms pipeline), so the controller that found them is kept
+and found again only when a module has been imported since; setting and
+lifting the limit through it takes about 0.05 ms. The limit is set and lifted from a helper thread
 of its own, whatever thread the user is in: once the main thread has lowered
 OpenBLAS's thread count, a call from another thread cannot raise it again.
 """
 
 from __future__ import annotations
 
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -45,14 +50,24 @@ class _SharedLimit:
         self.users = 0
         self.limiter: Any = None
         self.held_for_good = False
+        self.controller: Any = None
+        self.modules_seen = 0
+
+    def _controller(self) -> Any:
+        """threadpoolctl's view of the loaded libraries, found again after an import."""
+        from threadpoolctl import ThreadpoolController  # type: ignore[import-untyped]  # no types
+
+        if self.controller is None or len(sys.modules) != self.modules_seen:
+            self.modules_seen = len(sys.modules)
+            self.controller = ThreadpoolController()
+        return self.controller
 
     def enter(self) -> None:
-        from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]  # no types
-
         with self.lock:
             if self.users == 0:
+                controller = self._controller()
                 self.limiter = _in_a_helper_thread(
-                    lambda: threadpool_limits(limits=1, user_api="blas")
+                    lambda: controller.limit(limits=1, user_api="blas")
                 )
             self.users += 1
 
