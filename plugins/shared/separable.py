@@ -100,7 +100,9 @@ def correlate_separable(
     ----------
     image : (H, W) or (H, W, C) ndarray
         ``float64`` is filtered in ``float64``, anything else in ``float32``.
-    column_taps, row_taps : 1-D float ndarray of odd length, centred
+    column_taps, row_taps : 1-D float ndarray
+        Centred at element ``size // 2``; an even-length one is given a zero tap at its
+        end, so the compiled passes (which take odd lengths) see the same window.
     mode : str
         scipy's boundary name (see the module docstring).
 
@@ -120,8 +122,8 @@ def correlate_separable(
 
     dtype = np.float64 if image.dtype == np.float64 else np.float32
     data = np.ascontiguousarray(image, dtype=dtype)
-    column = np.asarray(column_taps, dtype=dtype)
-    row = np.asarray(row_taps, dtype=dtype)
+    column = _odd_length(np.asarray(column_taps, dtype=dtype))
+    row = _odd_length(np.asarray(row_taps, dtype=dtype))
     out = np.empty_like(data)
     correlate_both(
         data,
@@ -134,6 +136,12 @@ def correlate_separable(
         out,
     )
     return out
+
+
+def _odd_length(taps: np.ndarray) -> np.ndarray:
+    """``taps`` with a zero appended when its length is even (the centre stays at
+    ``size // 2``: taps ``[a, b, c, d]`` cover offsets −2 … 1, as ``[a, b, c, d, 0]``)."""
+    return np.append(taps, taps.dtype.type(0)) if taps.size % 2 == 0 else taps
 
 
 def smooth_gaussian(
