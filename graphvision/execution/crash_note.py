@@ -9,7 +9,7 @@ things then name it on stderr:
   enables (``python -X faulthandler`` or :func:`faulthandler.enable` in a script or
   notebook), prints each thread's frames on a segfault, an abort, a bus error or an
   illegal instruction, so the running nodes appear by name in its traceback;
-* ``os._exit`` called while nodes run first writes one line naming them (the process
+* ``os._exit`` called by a running node first writes one line naming them (the process
   that calls it ends at once, with no traceback and no ``atexit``).
 
 A C library that calls ``exit()`` itself is not seen. The ``processes`` executor
@@ -56,7 +56,9 @@ def running_nodes() -> list[str]:
 
 
 def _exit_noting(status: int) -> NoReturn:
-    if _RUNNING and [os.getpid()] == _INSTALLED_IN:
+    """The note, when a node's own thread calls ``os._exit`` (the command line's exit after
+    Ctrl-C, from the main thread while nodes run on threads, is the engine's, not theirs)."""
+    if threading.get_ident() in _RUNNING and [os.getpid()] == _INSTALLED_IN:
         listed = "; ".join(sorted(_RUNNING.values()))
         os.write(2, f"graphvision: os._exit({status}) while running {listed}\n".encode())
     real_exit(status)
