@@ -29,6 +29,7 @@ import bench_kernels_vs_opencv  # noqa: E402
 import bench_recognition  # noqa: E402
 import bench_scheduler  # noqa: E402
 import bench_segmentation  # noqa: E402
+import bench_semantic_segmentation  # noqa: E402
 import bench_stereo  # noqa: E402
 import bench_studio  # noqa: E402
 import bench_sweep  # noqa: E402
@@ -55,6 +56,10 @@ def main() -> None:
             bench_held_out_robust.main,
         ),
         ("Own kernels against OpenCV, single-threaded (issue 26)", bench_kernels_vs_opencv.main),
+        (
+            "Semantic segmentation: U-Net and per-pixel classifiers (issue 28)",
+            bench_semantic_segmentation.main,
+        ),
         ("Sweep sharing (issue 15)", bench_sweep.main),
         ("Studio: a change until the picture repaints (issue 27)", bench_studio.main),
         ("Batch of 200 files (issue 15)", bench_batch.main),

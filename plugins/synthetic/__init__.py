@@ -1,5 +1,5 @@
-"""Synthetic data with known truth: noise, random warps, sampled lines, scenes of digits
-and photographs with known faces.
+"""Synthetic data with known truth: noise, random warps, sampled lines, scenes of digits,
+shapes with a class at every pixel, and photographs with known faces.
 
 Every node here is seeded and returns what a test or a benchmark measures
 against (the homography of a warp, the line the points were drawn from).
@@ -23,6 +23,12 @@ from ._object_scenes import (
 )
 from ._planar_stereo import PHOTOGRAPHS, planar_stereo_scene
 from ._plane_lines import plane_lines
+from ._shape_scenes import (
+    LabelledScenes,
+    LabelledSceneSet,
+    LabelledScenesPort,
+    shape_scenes,
+)
 from ._stereo_pair import stereo_pair
 from ._structured_light import gray_code_stripes, structured_light_scene
 from ._turned_view import turned_view
@@ -32,6 +38,9 @@ from ._warps import random_homography, random_warp, two_views
 __all__ = [
     "PHOTOGRAPHS",
     "InstanceScenes",
+    "LabelledSceneSet",
+    "LabelledScenes",
+    "LabelledScenesPort",
     "ObjectSceneSet",
     "ObjectScenes",
     "ObjectScenesPort",
@@ -60,6 +69,7 @@ __all__ = [
     "render_instance_scenes",
     "render_object_scenes",
     "salt_and_pepper",
+    "shape_scenes",
     "stereo_pair",
     "structured_light_scene",
     "turned_view",
