@@ -82,27 +82,35 @@ def fit_unet(
     augment: bool,
     seed: int,
     crop: int = 0,
+    cosine: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     r"""Minimise the pixel cross-entropy over ``images`` (N, H, W) with ``labels`` by Adam
-    on mini-batches of a seeded permutation, in float32:
+    on mini-batches of a seeded permutation (each scene cut to a random ``crop`` × ``crop``
+    window when ``crop`` is not 0), in float32:
 
     .. math::
         m \leftarrow \beta_1 m + (1 - \beta_1) g,\quad
         v \leftarrow \beta_2 v + (1 - \beta_2) g^2,\quad
-        w \leftarrow w - \eta\,\frac{m / (1 - \beta_1^t)}{\sqrt{v / (1 - \beta_2^t)} + \epsilon}
+        w \leftarrow w - \eta_t\,\frac{m / (1 - \beta_1^t)}{\sqrt{v / (1 - \beta_2^t)} + \epsilon}
+
+    with the step size annealed on a cosine, :math:`\eta_t = \eta\,\tfrac12(1 + \cos(\pi
+    (t - 1) / T))` over the T steps (constant when ``cosine`` is off).
 
     Returns the weights (float64), the mean loss and the training pixel accuracy of each
     epoch; ValueError naming the learning rate when the loss is not finite.
 
     References
     ----------
-    D. P. Kingma, J. Ba, "Adam: a method for stochastic optimization", ICLR 2015.
+    D. P. Kingma, J. Ba, "Adam: a method for stochastic optimization", ICLR 2015;
+    I. Loshchilov, F. Hutter, "SGDR: stochastic gradient descent with warm restarts",
+    ICLR 2017 (the cosine schedule).
     """
     rng = np.random.default_rng(seed)
     weights = net.initial_weights(seed).astype(np.float32)
     first, second = np.zeros_like(weights), np.zeros_like(weights)
     x_all = np.asarray(images, np.float32)
     history, accuracy, t = [], [], 0
+    steps = epochs * -(-len(x_all) // batch_size)
     with one_blas_thread():
         for epoch in range(epochs):
             order = rng.permutation(len(x_all))
@@ -121,10 +129,15 @@ def fit_unet(
                     )
                 g = net.backward(weights, grad.astype(np.float32), saved)
                 t += 1
-                first = BETAS[0] * first + (1 - BETAS[0]) * g
-                second = BETAS[1] * second + (1 - BETAS[1]) * g * g
+                first *= BETAS[0]
+                first += (1 - BETAS[0]) * g
+                second *= BETAS[1]
+                second += (1 - BETAS[1]) * g * g
+                rate = learning_rate * (
+                    0.5 + 0.5 * np.cos(np.pi * (t - 1) / steps) if cosine else 1
+                )
                 step = first / (1 - BETAS[0] ** t)
-                weights -= learning_rate * step / (np.sqrt(second / (1 - BETAS[1] ** t)) + EPSILON)
+                weights -= rate * step / (np.sqrt(second / (1 - BETAS[1] ** t)) + EPSILON)
                 losses += loss * len(batch)
                 correct += int((scores.argmax(axis=3) == y).sum())
             history.append(losses / len(order))
@@ -147,9 +160,10 @@ def train(
     *,
     widths: Annotated[list[Width], Field(min_length=2, max_length=MAX_LEVELS)] = [8, 16, 32],  # noqa: B006
     convs: Annotated[int, Field(ge=1, le=4)] = 2,
-    epochs: Epochs = 20,
-    batch_size: Count = 8,
-    learning_rate: Annotated[Positive, Field(le=1)] = 0.005,
+    epochs: Epochs = 80,
+    batch_size: Count = 4,
+    crop: Annotated[int, Field(ge=0, le=512)] = 32,
+    learning_rate: Annotated[Positive, Field(le=1)] = 0.004,
     weighting: Literal["none", "median_frequency"] = "median_frequency",
     augment: bool = True,
     seed: Seed = 0,
@@ -162,8 +176,11 @@ def train(
     2×2 transposed convolutions of stride 2, concatenates the encoder's activation of the
     same level (the skip connection that brings back the detail pooling lost), and
     applies ``convs`` 3×3 convolutions with ReLU; a 1×1 convolution scores the classes at
-    every pixel. Each batch is turned by a random multiple of 90° and mirrored at random
-    when ``augment`` is set.
+    every pixel. Each scene of a batch is cut to a random ``crop`` × ``crop`` window (the
+    U-Net authors' tiles: many more steps for the same work; the network is fully
+    convolutional, so it labels whole scenes after), and the batch is turned by a random
+    multiple of 90° and mirrored at random when ``augment`` is set. Adam's step size is
+    annealed on a cosine to 0.
 
     Parameters
     ----------
@@ -176,7 +193,10 @@ def train(
     epochs : int
         Passes over the training scenes.
     batch_size : int
-        Scenes per step.
+        Scenes (windows) per step.
+    crop : int
+        Side of the window each training scene is cut to, a multiple of 2^(levels - 1)
+        no larger than the scenes; 0 takes whole scenes.
     learning_rate : float
         Adam's step size η.
     weighting : {'none', 'median_frequency'}
@@ -209,17 +229,24 @@ def train(
             f"the scenes are {side[0]}×{side[1]} but a {len(widths)}-level network needs "
             f"sides that are multiples of {multiple}: use fewer widths or other scenes"
         )
-    batch = min(batch_size, len(train))
-    if batch * side[0] * side[1] > MAX_BATCH_PIXELS:
+    if crop % multiple or crop > min(side):
         raise ValueError(
-            f"a batch of {batch} scenes of {side[0]}×{side[1]} holds {batch * side[0] * side[1]:,} "
+            f"crop {crop} must be a multiple of {multiple} (the network has {len(widths)} "
+            f"levels) no larger than the {side[0]}×{side[1]} scenes, or 0 for whole scenes"
+        )
+    window = (crop, crop) if crop else side
+    batch = min(batch_size, len(train))
+    if batch * window[0] * window[1] > MAX_BATCH_PIXELS:
+        raise ValueError(
+            f"a batch of {batch} windows of {window[0]}×{window[1]} holds "
+            f"{batch * window[0] * window[1]:,} "
             f"pixels, at most {MAX_BATCH_PIXELS:,}: lower batch_size"
         )
     weights, history, accuracy = fit_unet(
         net, train.images, train.labels,
         weights_per_class=class_weights(train.labels, len(names), weighting),
         epochs=epochs, batch_size=batch, learning_rate=learning_rate,
-        augment=augment, seed=seed,
+        augment=augment, seed=seed, crop=crop,
     )  # fmt: skip
     spec = json.dumps({"widths": list(widths), "convs": convs})
     return SegmenterModel(spec, weights, train.names, history, accuracy)

@@ -35,6 +35,8 @@ __all__ = [
 ]
 
 Params = list[np.ndarray]
+INPUT_MEAN = 0.5
+"""Subtracted from the images (in [0, 1]) before the first layer, so they are centred."""
 
 
 @dataclass(frozen=True)
@@ -239,9 +241,9 @@ class UNet:
     def forward(
         self, weights: np.ndarray, x: np.ndarray, keep: bool = False
     ) -> tuple[np.ndarray, list[Any]]:
-        """Scores (N, H, W, K) for images ``x`` (N, H, W, 1); with ``keep``, what the
-        backward pass needs."""
-        values = {"input": x}
+        """Scores (N, H, W, K) for images ``x`` (N, H, W, 1) in [0, 1] (centred by
+        ``INPUT_MEAN`` first); with ``keep``, what the backward pass needs."""
+        values = {"input": x - INPUT_MEAN}
         saved: list[Any] = []
         for step, params in zip(self.steps, self.split(weights), strict=True):
             inputs = [values[name] for name in step.inputs]

@@ -30,6 +30,7 @@ sub-range of ``min_background`` .. ``max_background``; Gaussian noise comes last
 
 from __future__ import annotations
 
+import functools
 import json
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal
@@ -254,13 +255,17 @@ def render_shape_scenes(
     return images, labels
 
 
+@functools.lru_cache(maxsize=16)
 def _photograph(name: str) -> np.ndarray:
+    """A bundled scikit-image photograph as gray float64 in [0, 1], read once (read-only)."""
     from skimage import data
 
     image = np.asarray(getattr(data, name)(), np.float64)
     if image.ndim == 3:
         image = image[..., :3].mean(axis=2)
-    return image / 255.0
+    image /= 255.0
+    image.flags.writeable = False
+    return image
 
 
 def _check_shapes(classes: list[str], max_size: float, side: int, **_: object) -> None:
@@ -301,7 +306,7 @@ def shape_scenes(
     max_level: Annotated[float, Field(ge=0, le=1)] = 1.0,
     min_background: Annotated[float, Field(ge=0, le=1)] = 0.0,
     max_background: Annotated[float, Field(ge=0, le=1)] = 0.45,
-    textures: Annotated[list[Texture], Field(min_length=1)] = ["brick", "grass", "gravel"],  # type: ignore[arg-type]  # noqa: B006
+    textures: Annotated[list[Texture], Field(min_length=1)] = ["brick", "grass", "gravel"],  # noqa: B006
     noise: Annotated[float, Field(ge=0, le=0.5)] = 0.02,
     surfaces: bool = True,
     seed: Seed = 0,

@@ -251,8 +251,14 @@ def test_direct_calls_check_inputs_and_parameters():
         segmentation.train(scenes, widths=[2, 2, 2, 2, 2], epochs=1)
     with pytest.raises(ValueError, match="lower batch_size"):
         big = synthetic.shape_scenes(count=80, side=64, classes=["disc"], seed=1)
-        segmentation.train(big, batch_size=80, epochs=1)
-    network = segmentation.train(scenes, widths=[2, 2], convs=1, epochs=1)
+        segmentation.train(big, batch_size=80, epochs=1, crop=0)
+    with pytest.raises(ValueError, match="crop 12 must be a multiple of 8"):
+        segmentation.train(scenes, widths=[2, 2, 2, 2], crop=12)
+    with pytest.raises(
+        ValueError, match="crop 32 must be a multiple of 2 .* no larger than the 24×24"
+    ):
+        segmentation.train(scenes, widths=[2, 2])
+    network = segmentation.train(scenes, widths=[2, 2], convs=1, epochs=1, crop=0)
     other = synthetic.shape_scenes(count=1, side=24, max_size=6, classes=["square"])
     with pytest.raises(ValueError, match="the network labels"):
         segmentation.predict(network, other)
@@ -264,7 +270,7 @@ def test_direct_calls_check_inputs_and_parameters():
 
 def test_predict_refuses_sides_the_levels_do_not_divide():
     scenes = synthetic.shape_scenes(count=2, side=24, max_size=6, classes=["disc"], seed=1)
-    network = segmentation.train(scenes, widths=[2, 2], convs=1, epochs=1)
+    network = segmentation.train(scenes, widths=[2, 2], convs=1, epochs=1, crop=0)
     odd = LabelledSceneSet(np.zeros((1, 9, 10), np.float32), np.zeros((1, 9, 10), np.int32),
                            scenes.names)  # fmt: skip
     with pytest.raises(ValueError, match="sides must be multiples of 2; got 9×10"):
@@ -293,7 +299,7 @@ def test_label_picture_shows_scenes_truth_prediction_and_legend():
 
 def test_training_curve_draws_loss_and_accuracy():
     scenes = synthetic.shape_scenes(count=2, side=24, max_size=6, classes=["disc"], seed=1)
-    network = segmentation.train(scenes, widths=[2, 2], convs=1, epochs=3)
+    network = segmentation.train(scenes, widths=[2, 2], convs=1, epochs=3, crop=8)
     picture = segmentation.draw_curve(network, width=200, height=120)
     assert picture.shape == (120, 200, 3)
     red = (picture[..., 0] > 0.7) & (picture[..., 1] < 0.3)
