@@ -102,7 +102,7 @@ def draw_labels(
     Returns
     -------
     image : (H, W, 3) float32 ndarray
-        Rows: scenes, truth, prediction, legend.
+        Rows: scenes, truth, prediction, legend (and a line naming the rows).
 
     References
     ----------
@@ -132,6 +132,9 @@ def draw_labels(
             canvas[top : top + height, left : left + width] = panel
     keys = np.vstack([colours[: len(names)], np.ones((1, 3), np.float32)])
     legend = _legend([*names, "wrong (outline)"], keys, canvas.shape[1])
+    note = np.ones((16, canvas.shape[1], 3), np.float32)
+    _text(note, (4, 2), "rows: scene, true labels, predicted labels")
+    legend = np.concatenate([legend, note], axis=0)
     return np.concatenate([canvas, legend], axis=0)
 
 

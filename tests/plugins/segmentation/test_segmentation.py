@@ -255,7 +255,7 @@ def test_direct_calls_check_inputs_and_parameters():
     with pytest.raises(ValueError, match="crop 12 must be a multiple of 8"):
         segmentation.train(scenes, widths=[2, 2, 2, 2], crop=12)
     with pytest.raises(
-        ValueError, match="crop 32 must be a multiple of 2 .* no larger than the 24×24"
+        ValueError, match=r"crop 32 must be a multiple of 2 .* no larger than the 24×24"
     ):
         segmentation.train(scenes, widths=[2, 2])
     network = segmentation.train(scenes, widths=[2, 2], convs=1, epochs=1, crop=0)
