@@ -160,7 +160,7 @@ def train(
     *,
     widths: Annotated[list[Width], Field(min_length=2, max_length=MAX_LEVELS)] = [8, 16, 32],  # noqa: B006
     convs: Annotated[int, Field(ge=1, le=4)] = 2,
-    epochs: Epochs = 80,
+    epochs: Epochs = 120,
     batch_size: Count = 4,
     crop: Annotated[int, Field(ge=0, le=512)] = 32,
     learning_rate: Annotated[Positive, Field(le=1)] = 0.004,
