@@ -21,7 +21,9 @@ BUILT_IN = sorted(
 
 @pytest.mark.parametrize("module", BUILT_IN)
 def test_built_in_plugins_conform(module):
-    assert check_plugin(module).nodes
+    registry = check_plugin(module)
+    status = registry.plugins[module]
+    assert status.nodes or status.implementations  # a backend only implements others' ops
 
 
 class ImagePort(gv.ArrayPort):

@@ -104,7 +104,12 @@ def train_mask_head(
     masks: Array,
     *,
     resolution: Annotated[int, Field(ge=4, le=56)] = 14,
-    layers: list[str] = ["conv 16x3", "relu", "conv 16x3", "relu"],  # noqa: B006
+    layers: Annotated[list[str], Field(min_length=1)] = [  # noqa: B006
+        "conv 16x3",
+        "relu",
+        "conv 16x3",
+        "relu",
+    ],
     jitter: Annotated[int, Field(ge=0, le=32)] = 4,
     epochs: Epochs = 10,
     batch_size: Annotated[int, Field(ge=1, le=1024)] = 32,

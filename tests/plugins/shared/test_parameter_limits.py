@@ -159,6 +159,7 @@ def test_an_empty_or_unknown_list_is_refused_before_the_run(pipeline, overrides,
 
 MAY_BE_EMPTY = {
     "detection.train_head.hidden",  # no hidden layer: a linear head
+    "detection.train_faster_rcnn.hidden",  # the same head, trained jointly with the RPN
     "matching.find_instances.tilts",  # no simulated view: Lowe's single training image
     "matching.find_instances_in_scenes.tilts",
 }
