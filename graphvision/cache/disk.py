@@ -52,6 +52,7 @@ import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from graphvision.cache.entries import CacheWarning, Encoded, NotACacheError
 from graphvision.cache.format import decode_blob, encode_blob
@@ -112,6 +113,11 @@ class DiskStore:
         self._since_check = 0
         self._lock = threading.Lock()
         self._check_ownership()
+
+    def __reduce__(self) -> tuple[Any, tuple[str, int, bool]]:
+        """A store travels to another process as its location: the folder is opened there
+        (a batch's workers write their values into the cache the client reads)."""
+        return (_reopened, (str(self.directory.absolute()), self.max_bytes, self.read_only))
 
     def _check_ownership(self) -> None:
         """Refuse a folder that holds files this cache did not write (see the module docs)."""
@@ -277,6 +283,13 @@ class DiskStore:
             path.unlink(missing_ok=True)
             removed += not path.name.startswith(".")
         return removed
+
+
+def _reopened(directory: str, max_bytes: int, read_only: bool) -> DiskStore:
+    """The store at ``directory`` in this process (see :meth:`DiskStore.__reduce__`)."""
+    store = DiskStore(directory, max_bytes)
+    store.read_only = read_only
+    return store
 
 
 def _owner_only_folder(folder: Path, parents: bool = False) -> None:

@@ -52,25 +52,14 @@ from graphvision.execution.batch_files import (
     pattern_root,
     previous_folders,
     replace_text,
-    unreadable_reason,
     write_summary,
 )
-from graphvision.execution.batch_items import (
-    failure_reason,
-    finish_item,
-    plain_graph,
-    run_file,
-    run_item,
-)
+from graphvision.execution.batch_run import BatchRun
 from graphvision.execution.executors import (
     Executor,
     encodes_values,
     executor_width,
     make_executor,
-)
-from graphvision.execution.file_task import (
-    Seed,
-    shared_seeds,
 )
 from graphvision.execution.folders import (
     check_output_folder,
@@ -79,7 +68,7 @@ from graphvision.execution.folders import (
     remove_empty_folders,
     remove_owned_files,
 )
-from graphvision.execution.record import RunHooks, RunResult
+from graphvision.execution.record import RunHooks
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
 
@@ -177,7 +166,7 @@ def run_batch(
     one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
     if one_task_per_file and cache is None:  # the first file's shared values are sent on
         cache = Cache(MemoryStore())
-    batch = _Batch(graph, paths, folders, input, inputs or {}, pool, one_task_per_file, pages)
+    batch = BatchRun(graph, paths, folders, input, inputs or {}, pool, one_task_per_file, pages)
     batch.options = {
         "registry": registry,
         "outputs": outputs,
@@ -190,6 +179,7 @@ def run_batch(
     made = missing_folders(out_dir, *folders)
     own = isinstance(executor, str)
     width = files_at_once or executor_width(pool)
+    batch.file_threads = width > 1 and not one_task_per_file and not encodes_values(pool)
     finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
     if own:
         pool.shutdown()
@@ -210,7 +200,7 @@ def _batch_paths(
 
 
 def _run_files(
-    batch: _Batch,
+    batch: BatchRun,
     width: int,
     on_item: Callable[[int, int, BatchItem], None] | None,
     own: bool,
@@ -258,80 +248,6 @@ def _checked_pipeline(
     for name, value in (inputs or {}).items():  # every file's: one that cannot be read fails all
         resolve_input(name, compiled.input_types[name], value, found)
     return found
-
-
-class _Batch:
-    """The files of one batch, run one at a time by :meth:`run_one` (from several threads).
-
-    The first file runs node by node and fills the cache with the nodes every
-    file shares; with ``one_task_per_file``, the others then run as one task each
-    with those values sent along. Any failure while a file runs or its folder is
-    written fails that file alone, with its reason.
-    """
-
-    def __init__(
-        self,
-        graph: Graph | CompiledGraph,
-        paths: list[Path],
-        folders: list[Path],
-        input: str,
-        inputs: dict[str, Any],
-        pool: Executor,
-        one_task_per_file: bool,
-        pages: BatchPages,
-    ) -> None:
-        self.graph, self.paths, self.folders = graph, paths, folders
-        self.input, self.inputs, self.pool = input, inputs, pool
-        self.one_task_per_file, self.pages = one_task_per_file, pages
-        self.options: dict[str, Any] = {}
-        self.seeds: list[Any] = []  # the shared values, or the executor's handle on them
-        self.compiled: list[CompiledGraph] = []
-        self.started: set[int] = set()
-        self.stopped = False
-
-    def run_one(self, index: int) -> BatchItem:
-        self.started.add(index)
-        path, folder = self.paths[index], self.folders[index]
-        reason = unreadable_reason(path)
-        if reason:  # matched by the pattern, but not a file that can be read
-            return BatchItem(path, folder, "failed", error=f"{path} {reason}")
-        try:
-            item, result = self._run(index)
-            if self.stopped:  # the batch was interrupted meanwhile: its folder is not written
-                return item
-            return finish_item(item, result, self.pages.run)
-        except Exception as error:  # whatever it is, it fails this file alone
-            return BatchItem(path, folder, "failed", error=failure_reason(error))
-
-    def _run(self, index: int) -> tuple[BatchItem, RunResult | None]:
-        item_inputs = {**self.inputs, self.input: str(self.paths[index])}
-        path, folder, options = self.paths[index], self.folders[index], self.options
-        if index == 0 or not self.one_task_per_file:
-            item, result = run_item(self.graph, path, folder, {**options, "inputs": item_inputs})
-            cache = options["cache"]
-            if index == 0 and self.one_task_per_file and result is not None and cache is not None:
-                values: list[Seed] = shared_seeds(result.compiled, result.record, cache, self.input)
-                share = getattr(self.pool, "share", None)  # Dask: sent to the workers once
-                self.seeds.append(share(values) if share is not None and values else values)
-                self.compiled.append(result.compiled)
-            return item, result
-        task = (
-            item_inputs,
-            options["outputs"],
-            options["overrides"],
-            options["keep_going"],
-            self.seeds[0] if self.seeds else [],
-        )
-        return run_file(
-            self.pool,
-            plain_graph(self.graph),
-            path,
-            folder,
-            self.compiled[0] if self.compiled else None,
-            options["registry"],
-            options["cache"],
-            task,
-        )
 
 
 def _not_run(

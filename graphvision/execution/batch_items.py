@@ -1,38 +1,21 @@
-"""One file of a batch: run in this process, or as one task of the executor with the
-shared values sent along; its folder written from the result."""
+"""One file of a batch: run in this process (its folder written here), or as one task of
+the executor that does the whole file there (:mod:`graphvision.execution.file_task`)."""
 
 from __future__ import annotations
 
-import contextlib
 import time
-from collections.abc import Callable, Sequence
-from concurrent.futures import Future
 from pathlib import Path
 from typing import Any
 
-from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph
-from graphvision.errors import GraphvisionError, InputError, RunError
+from graphvision.errors import InputError, RunError
 from graphvision.execution.batch_files import BatchItem
-from graphvision.execution.executors import (
-    Executor,
-    executor_name,
-)
-from graphvision.execution.file_task import (
-    file_outcome,
-    local_plugin_paths,
-    run_file_task,
-)
-from graphvision.execution.folders import (
-    RunPage,
-    owned_files,
-    remove_owned_files,
-    write_run,
-)
+from graphvision.execution.batch_write import failure_reason, finish_item
+from graphvision.execution.executors import Executor
+from graphvision.execution.file_task import FileOutcome, run_file_task
 from graphvision.execution.record import RunResult
 from graphvision.execution.run import run
 from graphvision.graph.model import Graph
-from graphvision.nodes.registry import Registry
 
 __all__ = [
     "failure_reason",
@@ -66,127 +49,13 @@ def run_item(
     return item, result
 
 
-def run_file(
-    pool: Executor,
-    graph: Graph,
-    path: Path,
-    folder: Path,
-    compiled: CompiledGraph | None,
-    registry: Registry,
-    cache: Cache | None,
-    task: tuple[Any, ...],
-) -> tuple[BatchItem, RunResult | None]:
-    """One file as one task of the executor (``file_task.run_file_task``)."""
-    item = BatchItem(path, folder)
-    began = time.perf_counter()
-    result: RunResult | None
-    result = _from_cache(graph, registry, cache, task, f"{executor_name(pool)}, from the cache")
-    if result is not None:  # every output of this file is in the cache: nothing to send
-        item.seconds = time.perf_counter() - began
-        return item, result
+def run_file(pool: Executor, job: Any, path: Path, folder: Path) -> FileOutcome:
+    """One file as one task of the executor, which writes the file's folder there
+    (:func:`~graphvision.execution.file_task.run_file_task`); ``job`` is the batch's
+    :class:`~graphvision.execution.file_task.FileJob`, or the executor's handle on it."""
     try:
-        plugins = local_plugin_paths(registry)
-        outcome = pool.submit(run_file_task, graph, plugins, *task).result()
+        outcome: FileOutcome = pool.submit(run_file_task, job, str(path), str(folder)).result()
     except Exception as error:  # the task itself failed (a worker that died twice, ...)
-        item.status, item.error = "failed", f"{type(error).__name__}: {error}"
-    else:
-        if compiled is None:  # the first file could not be compiled or read
-            from graphvision.compiler.compile import compile_graph
-
-            overrides = task[2]
-            plain = graph.with_overrides(overrides) if overrides else graph
-            compiled = compile_graph(plain, registry, provided=set(task[0]))
-        executor = f"{executor_name(pool)}, one task per file"
-        result, error_text = file_outcome(outcome, compiled, registry, executor)
-        if error_text:
-            item.status, item.error = "failed", error_text
-        if result is not None and cache is not None:
-            _store_outputs(result, cache)
-    item.seconds = time.perf_counter() - began
-    return item, result
-
-
-class _NotCachedError(Exception):
-    """Raised by :class:`_CacheOnly` for the first node that is not in the cache."""
-
-
-class _CacheOnly:
-    """An executor that runs nothing: a run on it succeeds only if the cache has it all."""
-
-    encodes_values = True  # so the scheduler never runs a node in the calling thread
-
-    def __init__(self, name: str) -> None:
-        self.name = name
-
-    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
-        refused: Future = Future()
-        refused.set_exception(_NotCachedError())
-        return refused
-
-    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
-        return None
-
-
-def _from_cache(
-    graph: Graph, registry: Registry, cache: Cache | None, task: tuple[Any, ...], name: str
-) -> RunResult | None:
-    """The file's run, if the cache holds every output it asks for (a batch run again);
-    None when anything must be computed (or the file cannot be read: the task says why)."""
-    if cache is None:
-        return None
-    inputs, outputs, overrides = task[0], task[1], task[2]
-    try:
-        return run(
-            graph,
-            registry,
-            inputs=inputs,
-            outputs=outputs,
-            overrides=overrides,
-            executor=_CacheOnly(name),
-            cache=cache,
-        )
-    except Exception:  # anything to compute, or that cannot be read: the file task says
-        return None
-
-
-def _store_outputs(result: RunResult, cache: Cache) -> None:
-    """Keep a file task's outputs in the client's cache under the keys the worker gave them."""
-    keys = {node.name: node.keys for node in result.record.nodes}
-    for name, value in result.outputs.items():
-        producer, port = result.compiled.outputs[name]
-        step = result.compiled.steps.get(producer)
-        key = keys.get(producer, {}).get(port)
-        if step is not None and step.spec.cache and key:
-            cache.put(key, step.outputs[port], value)
-
-
-def failure_reason(error: BaseException) -> str:
-    """What ``batch.csv`` says of a file that failed: the error's message, its first line; the
-    exception's type too when it is not one of graphvision's (a library's ValueError)."""
-    text = (str(error).strip().splitlines() or [""])[0]
-    if isinstance(error, GraphvisionError):
-        return text
-    if isinstance(error, OSError) and error.strerror:
-        where = f": {error.filename}" if error.filename else ""
-        return f"{error.strerror}{where}"
-    return f"{type(error).__name__}: {text}" if text else type(error).__name__
-
-
-def finish_item(item: BatchItem, result: RunResult | None, pages: Sequence[RunPage]) -> BatchItem:
-    """Write the item's folder from its result (or clear it when there is none)."""
-    folder = item.output_dir
-    if result is None:  # nothing produced: what a previous run left there must not look current
-        remove_owned_files(folder, owned_files(folder))
-        return item
-    try:
-        write_run(result, folder, pages)
-    except Exception as error:  # a port type's writer, a report page, the disk: this file fails
-        item.status, item.error = "failed", f"writing {folder}: {failure_reason(error)}"
-        with contextlib.suppress(Exception):  # what an earlier run left must not look current
-            remove_owned_files(folder, owned_files(folder))
-    item.scalars = {
-        key: value
-        for key, value in result.outputs.items()
-        if isinstance(value, int | float | str | bool)
-    }
-    return item
+        item = BatchItem(path, folder, "failed", error=f"{type(error).__name__}: {error}")
+        return FileOutcome(item)
+    return outcome

@@ -1,56 +1,108 @@
-"""One file of a batch as one task: the whole pipeline run where the executor runs tasks.
+"""One file of a batch as one task: the whole file done where the executor runs tasks.
 
 On an executor whose nodes run in other processes (the process pool, Dask),
 a batch that sent every node of every file as a task would pay the
-executor's per-task cost (milliseconds on Dask) for each of them. Instead,
-after the first file has run node by node (filling the cache with the nodes
-every file shares), each further file becomes one task: the worker runs the
-pipeline in its own thread (``sync``), with a memory cache seeded with the
-shared nodes' values, so they are reused, not recomputed. Values travel in
-their port types' array encoding both ways; the record and the messages of
-failed nodes come back with them, and the client writes the file's folder.
+executor's per-task cost (milliseconds on Dask) for each of them, and one
+that brought every value back to write the file's folder would make the
+client the bottleneck (and, on a cluster, its network link). Instead, after
+the first file has run node by node (filling the cache with the nodes every
+file shares), each further file becomes one task that does the whole file
+on the worker: it runs the pipeline in the worker's own thread (``sync``),
+with a memory cache seeded with the shared nodes' values, and writes the
+file's folder there (outputs, ``record.json``, report pages and their
+thumbnails). The client receives the file's :class:`FileOutcome`: status,
+seconds, scalar outputs, the cache keys of the outputs and the bytes of the
+values computed; no value travels back.
 
-The worker must be able to read the file (the same machine, or storage the
-workers share) and import the plugins (see :class:`~graphvision.DaskExecutor`).
+What every task of a batch shares is a :class:`FileJob`, prepared once per
+worker process (:func:`run_file_task` keeps the last few): the plugin
+registry (loading the plugins took seconds per task when each task loaded
+them), the compiled graph, and the shared values decoded. On Dask the job is
+sent to every worker once.
+
+With a cache whose store the workers can open (a disk cache, or an object
+store through fsspec: :mod:`graphvision.cache.shared`), the job carries the
+store's location and every worker writes the values it computes there, with
+the store's guarantees (whole-entry digest, atomic publish, only its own
+files touched); a batch run again is then served from that store on the
+workers.
+
+The worker must be able to read the file and write its folder (the same
+machine, or storage the workers share) and import the plugins (see
+:class:`~graphvision.DaskExecutor`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import threading
+import time
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from graphvision.cache.entries import Store
 from graphvision.cache.memory_store import MemoryStore
 from graphvision.cache.store import Cache
-from graphvision.compiler.compile import CompiledGraph
-from graphvision.errors import GraphvisionError, InputError, RunError
-from graphvision.execution.record import RunRecord, RunResult
+from graphvision.compiler.compile import CompiledGraph, compile_graph
+from graphvision.errors import InputError, RunError
+from graphvision.execution.batch_files import BatchItem
+from graphvision.execution.batch_write import finish_item
+from graphvision.execution.folders import RunPage
+from graphvision.execution.record import RunRecord
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
 
 __all__ = [
+    "FileJob",
     "FileOutcome",
     "Seed",
-    "file_outcome",
     "local_plugin_paths",
     "run_file_task",
     "shared_seeds",
     "shared_steps",
+    "warm_worker",
 ]
 
 Seed = tuple[str, str, dict[str, Any], dict[str, Any]]
 """A cache entry sent to workers: key, port type name, arrays, JSON metadata."""
 
 
+@dataclass(frozen=True)
+class FileJob:
+    """What every file task of one batch shares (sent to each Dask worker once).
+
+    ``token`` names the batch (a worker prepares each job once); ``graph`` has
+    the overrides applied; ``inputs`` are the graph inputs every file shares;
+    ``store`` is the cache store the workers write values to (None: memory
+    only); ``executor`` is what the records call the executor.
+    """
+
+    token: str
+    graph: Graph
+    plugin_paths: tuple[str, ...]
+    input: str
+    inputs: dict[str, Any]
+    outputs: list[str] | None
+    keep_going: bool
+    seeds: list[Seed]
+    pages: tuple[RunPage, ...]
+    store: Store | None
+    executor: str
+
+
 @dataclass
 class FileOutcome:
-    """What a worker sends back for one file (encoded outputs, never pickled values)."""
+    """What a worker sends back for one file: small metadata, never a value.
 
-    outputs: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = field(default_factory=dict)
-    record: RunRecord | None = None
-    failures: dict[str, str] = field(default_factory=dict)
-    input_error: str = ""
+    ``keys`` are the cache keys of the file's outputs (where the store holds
+    them, when there is one); ``value_bytes`` the encoded size of the values
+    its nodes computed (what would have travelled had they come back).
+    """
+
+    item: BatchItem
+    keys: dict[str, str] = field(default_factory=dict)
+    value_bytes: int = 0
 
 
 def shared_steps(compiled: CompiledGraph, per_file_input: str) -> list[str]:
@@ -90,68 +142,107 @@ def local_plugin_paths(registry: Registry) -> list[str]:
     ]
 
 
-def run_file_task(
-    graph: Graph,
-    plugin_paths: list[str],
-    inputs: dict[str, Any],
-    outputs: Sequence[str] | None,
-    overrides: dict[str, Any] | None,
-    keep_going: bool,
-    seeds: list[Seed],
-) -> FileOutcome:
-    """On a worker: run ``graph`` for one file, the shared values taken from ``seeds``;
-    ``plugin_paths`` are the local plugins the client's registry loaded."""
-    from graphvision.execution.run import run
-    from graphvision.nodes.plugins import discover
+@dataclass
+class _Prepared:
+    """A job as a worker process uses it: registry, compiled graph, decoded shared values."""
 
-    registry = discover([*plugin_paths, *graph.plugins])
+    registry: Registry
+    compiled: CompiledGraph
+    seeds: list[tuple[str, Any, int]]
+
+
+_PREPARED: OrderedDict[str, _Prepared] = OrderedDict()
+_REGISTRIES: dict[tuple[tuple[str, ...], frozenset[str], frozenset[str]], Registry] = {}
+_PREPARED_LOCK = threading.Lock()
+_KEEP_JOBS = 4
+
+
+def _registry(graph: Graph, plugin_paths: tuple[str, ...]) -> Registry:
+    """The plugins ``graph`` needs, loaded once per process (call with the lock held)."""
+    from graphvision.nodes.plugins import Needs, discover_for
+
+    needs = Needs.of(graph)
+    key = ((*plugin_paths, *graph.plugins), needs.ops, needs.port_types)
+    found = _REGISTRIES.get(key)
+    if found is None:
+        found = _REGISTRIES[key] = discover_for(graph, plugin_paths)
+    return found
+
+
+def warm_worker(graph: Graph, plugin_paths: tuple[str, ...]) -> int:
+    """Load the plugins ``graph`` needs in this worker process ahead of its first file
+    (a batch sends one per worker while its first file runs in the client); its pid."""
+    import os
+
+    with _PREPARED_LOCK:
+        _registry(graph, plugin_paths)
+    return os.getpid()
+
+
+def _prepared(job: FileJob) -> _Prepared:
+    """The job prepared in this process (once per job and process; the last few are kept)."""
+    with _PREPARED_LOCK:
+        found = _PREPARED.get(job.token)
+        if found is not None:
+            _PREPARED.move_to_end(job.token)
+            return found
+        registry = _registry(job.graph, job.plugin_paths)
+        provided = {*job.inputs, job.input}
+        compiled = compile_graph(job.graph, registry, provided=provided)
+        seeds = []
+        for key, type_name, arrays, meta in job.seeds:
+            value = registry.port_type(type_name).decode(arrays, meta)
+            seeds.append((key, value, sum(int(getattr(a, "nbytes", 0)) for a in arrays.values())))
+        found = _PREPARED[job.token] = _Prepared(registry, compiled, seeds)
+        while len(_PREPARED) > _KEEP_JOBS:
+            _PREPARED.popitem(last=False)
+        return found
+
+
+def run_file_task(job: FileJob, path: str, folder: str) -> FileOutcome:
+    """On a worker: run the job's pipeline for the file at ``path`` (the shared values from
+    the job's seeds, the values computed written to the job's store) and write ``folder``."""
+    from graphvision.execution.run import run
+
+    prepared = _prepared(job)
     memory = MemoryStore(max_bytes=2**40)
-    cache = Cache(memory)
-    for key, type_name, arrays, meta in seeds:
-        value = registry.port_type(type_name).decode(arrays, meta)
-        memory.put(key, value, sum(int(getattr(a, "nbytes", 0)) for a in arrays.values()))
-    outcome = FileOutcome()
+    for key, value, nbytes in prepared.seeds:
+        memory.put(key, value, nbytes)
+    item = BatchItem(Path(path), Path(folder))
+    began = time.perf_counter()
+    result = None
     try:
         result = run(
-            graph,
-            registry,
-            inputs=inputs,
-            outputs=outputs,
-            overrides=overrides,
+            prepared.compiled,
+            prepared.registry,
+            inputs={**job.inputs, job.input: path},
+            outputs=job.outputs,
             executor="sync",
-            cache=cache,
-            keep_going=keep_going,
+            cache=Cache(memory, job.store),
+            keep_going=job.keep_going,
         )
     except RunError as error:
-        partial = getattr(error, "result", None)
-        outcome.failures = {name: str(e) for name, e in error.failures.items()}
-        if partial is None:
-            return outcome
-        result = partial
-    except InputError as error:
-        outcome.input_error = str(error)
-        return outcome
-    outcome.record = result.record
-    for name, value in result.outputs.items():
-        port_type = result.compiled.output_type(name)
-        arrays, meta = port_type.encode(value)
-        outcome.outputs[name] = (port_type.type_name(), arrays, meta)
+        item.status = "failed"
+        item.error = "; ".join(str(e).splitlines()[0] for e in error.failures.values())
+        result = getattr(error, "result", None)
+    except InputError as error:  # this file cannot be read; the others may
+        item.status, item.error = "failed", str(error)
+    item.seconds = time.perf_counter() - began
+    if result is not None:
+        result.record.executor = job.executor
+    outcome = FileOutcome(finish_item(item, result, job.pages))
+    if result is not None:
+        outcome.keys, outcome.value_bytes = _output_keys(result.record, result.compiled)
     return outcome
 
 
-def file_outcome(
-    outcome: FileOutcome, compiled: CompiledGraph, registry: Registry, executor: str
-) -> tuple[RunResult | None, str]:
-    """The client's view of a worker's outcome: a result to write (or None), and the error."""
-    if outcome.input_error:
-        return None, outcome.input_error
-    failures = {name: GraphvisionError(message) for name, message in outcome.failures.items()}
-    error = "; ".join(m.splitlines()[0] for m in outcome.failures.values())
-    if outcome.record is None:
-        return None, error
-    outputs = {
-        name: registry.port_type(type_name).decode(arrays, meta)
-        for name, (type_name, arrays, meta) in outcome.outputs.items()
-    }
-    outcome.record.executor = executor
-    return RunResult(outputs, outcome.record, compiled, failures), error
+def _output_keys(record: RunRecord, compiled: CompiledGraph) -> tuple[dict[str, str], int]:
+    """The cache keys of the run's outputs, and the bytes of the values it computed."""
+    keys = {node.name: node.keys for node in record.nodes}
+    found = {}
+    for name, (producer, port) in compiled.outputs.items():
+        key = keys.get(producer, {}).get(port)
+        if key:
+            found[name] = key
+    computed = sum(node.output_bytes for node in record.nodes if node.status == "computed")
+    return found, computed

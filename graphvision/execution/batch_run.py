@@ -1,0 +1,136 @@
+"""The files of one batch as they run (:class:`BatchRun`): the first in this process, the
+others in this process's threads or as one task each of the executor
+(:mod:`graphvision.execution.file_task`)."""
+
+from __future__ import annotations
+
+import uuid
+from pathlib import Path
+from typing import Any
+
+from graphvision.compiler.compile import CompiledGraph
+from graphvision.execution.batch_files import BatchItem, BatchPages, unreadable_reason
+from graphvision.execution.batch_items import plain_graph, run_file, run_item
+from graphvision.execution.batch_write import failure_reason, finish_item
+from graphvision.execution.executors import (
+    Executor,
+    SyncExecutor,
+    executor_name,
+    executor_width,
+)
+from graphvision.execution.file_task import (
+    FileJob,
+    FileOutcome,
+    Seed,
+    local_plugin_paths,
+    shared_seeds,
+    warm_worker,
+)
+from graphvision.execution.record import RunResult
+from graphvision.graph.model import Graph
+
+__all__ = ["BatchRun"]
+
+
+class BatchRun:
+    """The files of one batch, run one at a time by :meth:`run_one` (from several threads).
+
+    The first file runs node by node and fills the cache with the nodes every
+    file shares; with ``one_task_per_file``, the others then run as one task each
+    with those values sent along. Any failure while a file runs or its folder is
+    written fails that file alone, with its reason.
+    """
+
+    def __init__(
+        self,
+        graph: Graph | CompiledGraph,
+        paths: list[Path],
+        folders: list[Path],
+        input: str,
+        inputs: dict[str, Any],
+        pool: Executor,
+        one_task_per_file: bool,
+        pages: BatchPages,
+    ) -> None:
+        self.graph, self.paths, self.folders = graph, paths, folders
+        self.input, self.inputs, self.pool = input, inputs, pool
+        self.one_task_per_file, self.pages = one_task_per_file, pages
+        self.options: dict[str, Any] = {}
+        self.compiled: CompiledGraph | None = None
+        self.file_threads = False  # files at once in this process: each one runs on ``sync``
+        self.job: Any = None  # the FileJob of further files, or the executor's handle on it
+        self.outcomes: list[FileOutcome] = []  # what the file tasks sent back
+        self.started: set[int] = set()
+        self.stopped = False
+
+    def run_one(self, index: int) -> BatchItem:
+        self.started.add(index)
+        path, folder = self.paths[index], self.folders[index]
+        reason = unreadable_reason(path)
+        if reason:  # matched by the pattern, but not a file that can be read
+            return BatchItem(path, folder, "failed", error=f"{path} {reason}")
+        try:
+            if index > 0 and self.one_task_per_file:  # the worker writes the folder
+                outcome = run_file(self.pool, self.job, path, folder)
+                self.outcomes.append(outcome)
+                return outcome.item
+            item, result = self._run(index)
+            if self.stopped:  # the batch was interrupted meanwhile: its folder is not written
+                return item
+            return finish_item(item, result, self.pages.run)
+        except Exception as error:  # whatever it is, it fails this file alone
+            return BatchItem(path, folder, "failed", error=failure_reason(error))
+
+    def _run(self, index: int) -> tuple[BatchItem, RunResult | None]:
+        """A file run in this process (the first one; all of them without one task per file)."""
+        item_inputs = {**self.inputs, self.input: str(self.paths[index])}
+        path, folder, options = self.paths[index], self.folders[index], self.options
+        options = {**options, "inputs": item_inputs}
+        if index == 0 and self.one_task_per_file:  # here, while the workers load the plugins
+            self._warm_workers()
+            options["executor"] = SyncExecutor()
+            options["executor"].name = f"{executor_name(self.pool)}, first file in this process"
+        elif index > 0 and self.file_threads:  # each file in its thread, one node at a time
+            options["executor"] = SyncExecutor()
+            options["executor"].name = f"{executor_name(self.pool)}, one file per thread"
+        graph = self.graph
+        if self.compiled is not None and not options["overrides"]:
+            graph = self.compiled  # compiled once, by the first file's run
+        item, result = run_item(graph, path, folder, options)
+        if index == 0 and result is not None:
+            self.compiled = result.compiled
+        if index == 0 and self.one_task_per_file:
+            self.job = self._share(self._file_job(result))
+        return item, result
+
+    def _file_job(self, first: RunResult | None) -> FileJob:
+        """What each further file's task needs, with the shared values the first file cached."""
+        options, cache = self.options, self.options["cache"]
+        seeds: list[Seed] = []
+        if first is not None and cache is not None:
+            seeds = shared_seeds(first.compiled, first.record, cache, self.input)
+        graph, overrides = plain_graph(self.graph), options["overrides"]
+        return FileJob(
+            token=uuid.uuid4().hex,
+            graph=graph.with_overrides(overrides) if overrides else graph,
+            plugin_paths=tuple(local_plugin_paths(options["registry"])),
+            input=self.input,
+            inputs=self.inputs,
+            outputs=None if options["outputs"] is None else list(options["outputs"]),
+            keep_going=options["keep_going"],
+            seeds=seeds,
+            pages=tuple(self.pages.run),
+            store=cache.disk if cache is not None else None,
+            executor=f"{executor_name(self.pool)}, one task per file",
+        )
+
+    def _warm_workers(self) -> None:
+        """Have each worker load the plugins now, while the first file runs here."""
+        paths = tuple(local_plugin_paths(self.options["registry"]))
+        for _ in range(executor_width(self.pool)):
+            self.pool.submit(warm_worker, plain_graph(self.graph), paths)
+
+    def _share(self, job: FileJob) -> Any:
+        """The job, or the executor's handle on it once sent to every worker (Dask)."""
+        share = getattr(self.pool, "share", None)
+        return share(job) if share is not None else job

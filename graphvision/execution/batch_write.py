@@ -1,0 +1,51 @@
+"""Writing one batch file's folder from its result, wherever the file ran (this process,
+or a worker: a file task writes its own folder); a failure there fails that file alone."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Sequence
+
+from graphvision.errors import GraphvisionError
+from graphvision.execution.batch_files import BatchItem
+from graphvision.execution.folders import (
+    RunPage,
+    owned_files,
+    remove_owned_files,
+    write_run,
+)
+from graphvision.execution.record import RunResult
+
+__all__ = ["failure_reason", "finish_item"]
+
+
+def failure_reason(error: BaseException) -> str:
+    """What ``batch.csv`` says of a file that failed: the error's message, its first line; the
+    exception's type too when it is not one of graphvision's (a library's ValueError)."""
+    text = (str(error).strip().splitlines() or [""])[0]
+    if isinstance(error, GraphvisionError):
+        return text
+    if isinstance(error, OSError) and error.strerror:
+        where = f": {error.filename}" if error.filename else ""
+        return f"{error.strerror}{where}"
+    return f"{type(error).__name__}: {text}" if text else type(error).__name__
+
+
+def finish_item(item: BatchItem, result: RunResult | None, pages: Sequence[RunPage]) -> BatchItem:
+    """Write the item's folder from its result (or clear it when there is none)."""
+    folder = item.output_dir
+    if result is None:  # nothing produced: what a previous run left there must not look current
+        remove_owned_files(folder, owned_files(folder))
+        return item
+    try:
+        write_run(result, folder, pages)
+    except Exception as error:  # a port type's writer, a report page, the disk: this file fails
+        item.status, item.error = "failed", f"writing {folder}: {failure_reason(error)}"
+        with contextlib.suppress(Exception):  # what an earlier run left must not look current
+            remove_owned_files(folder, owned_files(folder))
+    item.scalars = {
+        key: value
+        for key, value in result.outputs.items()
+        if isinstance(value, int | float | str | bool)
+    }
+    return item
