@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from graphvision.cache.disk import DiskStore
     from graphvision.cache.entries import CacheWarning, NotACacheError
     from graphvision.cache.memory_store import MemoryStore
+    from graphvision.cache.shared import FsspecStore
     from graphvision.cache.store import Cache
     from graphvision.compiler.compile import CompiledGraph, compile_graph
     from graphvision.errors import (
@@ -187,6 +188,7 @@ __all__ = [
     "FloatImage",
     "FloatImagePort",
     "FloatPort",
+    "FsspecStore",
     "Graph",
     "GraphvisionError",
     "GrayImage",

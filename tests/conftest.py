@@ -64,3 +64,29 @@ def pytest_configure(config: pytest.Config) -> None:
     from .file_summary import FileSummary
 
     config.pluginmanager.register(FileSummary(config), "graphvision-file-summary")
+
+
+@pytest.fixture(scope="session")
+def s3_options():
+    """An S3-compatible server (moto's, in a thread of this process) and the fsspec options
+    that reach it: a bucket ``gv-tests`` to put stores in. Skipped without moto and s3fs."""
+    pytest.importorskip("s3fs", reason="the S3 store's tests need s3fs (graphvision[dev])")
+    server_module = pytest.importorskip("moto.server", reason="needs moto[server] (dev extra)")
+    server = server_module.ThreadedMotoServer(ip_address="127.0.0.1", port=0, verbose=False)
+    server.start()
+    host, port = server.get_host_and_port()
+    options = {
+        "key": "testing",
+        "secret": "testing",
+        "client_kwargs": {"endpoint_url": f"http://{host}:{port}", "region_name": "us-east-1"},
+    }
+    import boto3
+
+    boto3.client(
+        "s3",
+        aws_access_key_id="testing",
+        aws_secret_access_key="testing",
+        **options["client_kwargs"],
+    ).create_bucket(Bucket="gv-tests")
+    yield options
+    server.stop()

@@ -7,7 +7,6 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-from graphvision.cache.disk import DiskStore
 from graphvision.cache.entries import CacheWarning, Encoded, Store
 from graphvision.cache.memory_store import MemoryStore
 from graphvision.values.ports import PortType
@@ -40,15 +39,22 @@ class Cache:
         self.disk = disk
 
     @classmethod
-    def at(cls, directory: str | Path, max_bytes: int = 4 * 2**30) -> Cache:
-        """Memory in front of the disk cache in ``directory``, bounded to ``max_bytes``.
+    def at(cls, directory: str | Path, max_bytes: int = 4 * 2**30, **storage_options: Any) -> Cache:
+        """Memory in front of the store at ``directory``, bounded to ``max_bytes``.
+
+        ``directory`` is a folder (a :class:`DiskStore`), or the URL of a folder
+        on a filesystem fsspec reaches (``s3://bucket/cache``: an
+        :class:`~graphvision.cache.shared.FsspecStore`, ``storage_options``
+        passed to it), which the workers of a cluster can share.
 
         Raises
         ------
         NotACacheError
             When ``directory`` holds files that are not a graphvision cache.
         """
-        return cls(MemoryStore(), DiskStore.open(directory, max_bytes))
+        from graphvision.cache.shared import open_store
+
+        return cls(MemoryStore(), open_store(str(directory), max_bytes, **storage_options))
 
     def get(self, key: str, port_type: type[PortType]) -> tuple[bool, Any]:
         """(True, value) on a hit, (False, None) on a miss or an unusable entry."""

@@ -183,7 +183,8 @@ def run_batch(
     finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
     if own:
         pool.shutdown()
-    return BatchResult(finished, _summarise(finished, out_dir, pages, stale))
+    summary = _summarise(finished, out_dir, pages, stale)
+    return BatchResult(finished, summary, *batch.transferred())
 
 
 def _batch_paths(

@@ -52,10 +52,19 @@ class BatchItem:
 
 @dataclass
 class BatchResult:
-    """Every item, and the summary table written to ``summary``."""
+    """Every item, and the summary table written to ``summary``.
+
+    With one task per file (processes, Dask), ``value_bytes`` counts the
+    encoded values the workers computed for the files after the first, and
+    ``client_bytes`` what passed through the client for them (the batch's job
+    sent once, each task's file and folder, each file's outcome; as pickled):
+    the values stay on the workers.
+    """
 
     items: list[BatchItem]
     summary: Path
+    value_bytes: int = 0
+    client_bytes: int = 0
 
     @property
     def failed(self) -> int:

@@ -4,6 +4,7 @@ others in this process's threads or as one task each of the executor
 
 from __future__ import annotations
 
+import pickle
 import uuid
 from pathlib import Path
 from typing import Any
@@ -58,6 +59,7 @@ class BatchRun:
         self.options: dict[str, Any] = {}
         self.compiled: CompiledGraph | None = None
         self.file_threads = False  # files at once in this process: each one runs on ``sync``
+        self.job_sent: FileJob | None = None
         self.job: Any = None  # the FileJob of further files, or the executor's handle on it
         self.outcomes: list[FileOutcome] = []  # what the file tasks sent back
         self.started: set[int] = set()
@@ -100,7 +102,8 @@ class BatchRun:
         if index == 0 and result is not None:
             self.compiled = result.compiled
         if index == 0 and self.one_task_per_file:
-            self.job = self._share(self._file_job(result))
+            self.job_sent = self._file_job(result)
+            self.job = self._share(self.job_sent)
         return item, result
 
     def _file_job(self, first: RunResult | None) -> FileJob:
@@ -123,6 +126,17 @@ class BatchRun:
             store=cache.disk if cache is not None else None,
             executor=f"{executor_name(self.pool)}, one task per file",
         )
+
+    def transferred(self) -> tuple[int, int]:
+        """The bytes of the values the file tasks computed, and of what passed through the
+        client for them (see :class:`~graphvision.execution.batch_files.BatchResult`)."""
+        if not self.outcomes:
+            return 0, 0
+        sent = len(pickle.dumps(self.job_sent)) + sum(
+            len(pickle.dumps((str(o.item.file), str(o.item.output_dir)))) for o in self.outcomes
+        )
+        received = sum(len(pickle.dumps(outcome)) for outcome in self.outcomes)
+        return sum(o.value_bytes for o in self.outcomes), sent + received
 
     def _warm_workers(self) -> None:
         """Have each worker load the plugins now, while the first file runs here."""
