@@ -91,7 +91,7 @@ def _load() -> str:
 def main() -> list[str]:
     graph = gv.load_pipeline(PIPELINE)
     rows = [
-        f"| {FILES} coins images | seconds | images/s | sync / this | counts of 24 | load (1 min) |",
+        f"| {FILES} coins images | seconds | images/s | sync / this | counts of 24 | load 1 min |",
         "| --- | --- | --- | --- | --- | --- |",
     ]
     with tempfile.TemporaryDirectory() as scratch:

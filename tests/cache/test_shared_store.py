@@ -46,7 +46,7 @@ def test_an_altered_entry_is_dropped_with_a_warning_and_removed(store):
     blob = bytearray(store.fs.cat_file(store.path(KEY)))
     blob[-1] ^= 0xFF  # one bit of the payload
     store.fs.pipe_file(store.path(KEY), bytes(blob))
-    with pytest.warns(CacheWarning, match="is corrupt .digest mismatch"):
+    with pytest.warns(CacheWarning, match=r"is corrupt \(digest mismatch"):
         assert store.get(KEY) is None
     assert not store.fs.exists(store.path(KEY))
 
@@ -72,9 +72,8 @@ def test_a_folder_holding_other_files_is_refused_and_left_alone(s3_options):
     fs = s3fs.S3FileSystem(**s3_options)
     folder = f"gv-tests/{uuid.uuid4().hex}"
     fs.pipe_file(f"{folder}/thesis.tex", b"\\documentclass{article}")
-    with pytest.raises(
-        gv.NotACacheError, match="is not a graphvision cache: it holds 'thesis.tex'"
-    ):
+    refused = r"is not a graphvision cache: it holds 'thesis\.tex'"
+    with pytest.raises(gv.NotACacheError, match=refused):
         gv.FsspecStore(f"s3://{folder}", storage_options=s3_options)
     assert fs.cat_file(f"{folder}/thesis.tex").startswith(b"\\document")
 
