@@ -12,6 +12,10 @@ functions on each file, writing nothing, shows what the engine adds. No
 cache, so every file is computed. The machine's load (1-minute average)
 is printed beside each row.
 
+:func:`scaling` runs the batch on processes over 50, 200 and 1,000 files:
+time per file and the client's peak traced memory (``tracemalloc``) should
+stay flat.
+
 Run: ``python bench/bench_batch.py`` (``make bench`` runs every benchmark).
 """
 
@@ -137,5 +141,74 @@ def main() -> list[str]:
     return rows
 
 
+def scaling(sizes: tuple[int, ...] = (50, 200, 1000)) -> list[str]:
+    """The batch on processes for growing numbers of files: seconds per file should stay
+    flat (time linear in files), and so should the client's peak traced memory."""
+    import tracemalloc
+
+    global FILES
+    graph = gv.load_pipeline(PIPELINE)
+    rows = [
+        "| files (processes, 2) | seconds | ms per file | client peak traced MB | load 1 min |",
+        "| ---: | ---: | ---: | ---: | ---: |",
+    ]
+    saved = FILES
+    try:
+        for files in sizes:
+            FILES = files
+            with tempfile.TemporaryDirectory() as scratch:
+                paths = _write_images(Path(scratch) / "in")
+                tracemalloc.start()
+                seconds, good = _batch(graph, paths, Path(scratch) / "out", "processes")
+                peak = tracemalloc.get_traced_memory()[1]
+                tracemalloc.stop()
+                assert good == files, f"{files - good} files did not count 24 coins"
+            rows.append(
+                f"| {files} | {seconds:.1f} | {seconds / files * 1e3:.1f} | {peak / 2**20:.1f} | "
+                f"{_load()} |"
+            )
+    finally:
+        FILES = saved
+    return rows
+
+
+def client_bytes(files: int = 200) -> list[str]:
+    """A batch on a Dask LocalCluster (2 worker processes) with a disk cache the workers
+    share: the bytes of the values they computed against what passed through the client."""
+    try:
+        import distributed
+    except ImportError:
+        return ["(Dask not installed: pip install 'graphvision[dask]')"]
+    global FILES
+    graph, saved, FILES = gv.load_pipeline(PIPELINE), FILES, files
+    try:
+        with (
+            tempfile.TemporaryDirectory() as scratch,
+            distributed.LocalCluster(
+                n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+            ) as cluster,
+            distributed.Client(cluster) as client,
+        ):
+            paths = _write_images(Path(scratch) / "in")
+            batch = gv.run_batch(
+                graph,
+                [str(p) for p in paths],
+                input="image",
+                output_dir=Path(scratch) / "out",
+                executor=gv.DaskExecutor(client),
+                cache=gv.Cache.at(Path(scratch) / "cache"),
+            )
+    finally:
+        FILES = saved
+    share = batch.client_bytes / max(batch.value_bytes, 1)
+    return [
+        f"| {files} files on Dask (2 workers), disk cache shared | bytes |",
+        "| --- | ---: |",
+        f"| values the workers computed (files 2 to {files}, encoded) | {batch.value_bytes:,} |",
+        f"| through the client (job once, file and folder per task, outcomes) | "
+        f"{batch.client_bytes:,} ({share:.2%}) |",
+    ]
+
+
 if __name__ == "__main__":
-    print("\n".join(main()))
+    print("\n".join([*main(), "", *client_bytes(), "", *scaling()]))

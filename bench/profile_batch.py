@@ -68,6 +68,9 @@ def profile(files: int) -> list[str]:
     graph = gv.load_pipeline(PIPELINE)
     with tempfile.TemporaryDirectory() as scratch:
         paths = _write_images(Path(scratch) / "in")
+        gv.run_batch(  # plugins loaded, kernels compiled: what follows is per file
+            graph, [str(paths[0])], input="image", output_dir=Path(scratch) / "warm", cache=None
+        )
         profiler = cProfile.Profile()
         began = time.perf_counter()
         profiler.enable()
@@ -76,7 +79,6 @@ def profile(files: int) -> list[str]:
             [str(p) for p in paths],
             input="image",
             output_dir=Path(scratch) / "out",
-            outputs=["count"],
             executor="sync",
             cache=None,
         )
@@ -92,6 +94,10 @@ def profile(files: int) -> list[str]:
         seconds = sum(_cumulative(stats, f, name) for f, name in functions)
         rows.append(f"| {part} | {seconds / files * 1e3:.1f} |")
     return rows
+
+
+def main() -> list[str]:
+    return profile(50)
 
 
 if __name__ == "__main__":

@@ -33,6 +33,7 @@ import bench_semantic_segmentation  # noqa: E402
 import bench_stereo  # noqa: E402
 import bench_studio  # noqa: E402
 import bench_sweep  # noqa: E402
+import profile_batch  # noqa: E402
 
 
 def main() -> None:
@@ -62,7 +63,10 @@ def main() -> None:
         ),
         ("Sweep sharing (issue 15)", bench_sweep.main),
         ("Studio: a change until the picture repaints (issue 27)", bench_studio.main),
-        ("Batch of 200 files (issue 15)", bench_batch.main),
+        ("Batch of 200 files against sync (issue 26)", bench_batch.main),
+        ("Batch on processes: 50, 200, 1,000 files (issue 26)", bench_batch.scaling),
+        ("Batch on Dask: bytes through the client (issue 26)", bench_batch.client_bytes),
+        ("Where a batch file's time goes (issue 26)", profile_batch.main),
         ("Dask executor overhead (issue 15)", bench_dask.main),
         (
             "Held-out geometry: structured light, GHT, templates, lines (issue 24)",
