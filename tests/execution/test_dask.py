@@ -172,7 +172,7 @@ def test_a_batch_on_dask_survives_a_dying_worker_and_retries_its_file(dask_execu
         cache=None,
     )
     assert (tmp_path / "died").exists()  # a worker did die, on file 1
-    assert [item.status for item in batch.items] == ["ok"] * len(levels)
+    assert [item.status for item in batch.items] == ["ok"] * len(levels), batch.items
     for item, level in zip(batch.items, levels, strict=True):
         assert item.scalars["mean"] == pytest.approx(level / 255.0, abs=1e-6)
     assert (tmp_path / "out" / "batch.csv").is_file()
