@@ -131,9 +131,14 @@ class DaskExecutor:
         return max(1, sum(self.client.nthreads().values()))
 
     def share(self, value: Any) -> Any:
-        """``value`` placed on every worker once; the handle stands for it in :meth:`submit`'s
-        arguments (a batch's shared values, sent once rather than with every file)."""
-        return self.client.scatter(value, broadcast=True, hash=False)
+        """``value`` sent to the cluster once; the handle stands for it in :meth:`submit`'s
+        arguments (a batch's job, sent once rather than with every file).
+
+        It is the result of a task that returns it, not scattered data: a worker
+        that dies holding it loses nothing, the scheduler runs the task again
+        (scattered data lost with its worker failed every file still to run).
+        """
+        return self.client.submit(_shared, value, pure=False, retries=self.retries)
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         """Run ``fn(*args)`` as a Dask task; a ``concurrent.futures`` future of its result.
@@ -190,6 +195,11 @@ def _settle(task: Any, future: Future) -> None:
         future.set_result(task.result())
     except BaseException as error:
         future.set_exception(error)
+
+
+def _shared(value: Any) -> Any:
+    """The value a task was given (see :meth:`DaskExecutor.share`)."""
+    return value
 
 
 def _on_worker(fn: Callable[..., Any], *args: Any) -> Any:
