@@ -164,8 +164,7 @@ def run_batch(
     stale = previous_folders(out_dir) - {folder.resolve() for folder in folders}
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
-    if one_task_per_file and cache is None:  # the first file's shared values are sent on
-        cache = Cache(MemoryStore())
+    cache = Cache(MemoryStore()) if one_task_per_file and cache is None else cache  # for seeds
     batch = BatchRun(graph, paths, folders, input, inputs or {}, pool, one_task_per_file, pages)
     batch.options = {
         "registry": registry,
@@ -183,8 +182,7 @@ def run_batch(
     finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
     if own:
         pool.shutdown()
-    summary = _summarise(finished, out_dir, pages, stale)
-    return BatchResult(finished, summary, *batch.transferred())
+    return BatchResult(finished, _summarise(finished, out_dir, pages, stale), *batch.transferred())
 
 
 def _batch_paths(
