@@ -47,7 +47,7 @@ PARTS: dict[str, list[tuple[str, str]]] = {
     "transport": [("/values/", "encode"), ("/values/", "decode")],
     "record": [("provenance.py", "describe_run"), ("record.py", "to_json")],
     "report": [("report.py", "markdown_page"), ("report.py", "html_page")],
-    "thumbnails": [("html.py", "picture_html")],
+    "thumbnails": [("pictures.py", "png_bytes"), ("pictures.py", "thumbnail")],
     "outputs": [("folders.py", "write_outputs")],
 }
 
