@@ -117,7 +117,8 @@ def run_batch(
         (``number`` counts completed items, 1-based).
     files_at_once : int, optional
         Files in flight after the first; default: the tasks the executor runs
-        at once (1 for ``sync``), twice that with one task per file.
+        at once (1 for ``sync``), twice that with one task per file (a task
+        queued behind each running one: a worker never waits for the client).
     one_task_per_file : bool, optional
         After the first file, run each file's whole pipeline as one task of the
         executor, the shared nodes' values sent along (see
@@ -177,7 +178,6 @@ def run_batch(
     }
     made = missing_folders(out_dir, *folders)
     own = isinstance(executor, str)
-    # a file task queued behind each running one: a worker never waits for the client's turn
     width = files_at_once or executor_width(pool) * (2 if one_task_per_file else 1)
     batch.file_threads = width > 1 and not one_task_per_file and not encodes_values(pool)
     finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
