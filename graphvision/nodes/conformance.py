@@ -101,15 +101,31 @@ def _leaf(rule: Conformance, expected: np.ndarray, got: np.ndarray) -> str:
 
 def _recall_problem(rule: Conformance, expected: np.ndarray, got: np.ndarray) -> str:
     """Detections as points: a boolean mask's pixels, an ``N×2`` array's rows (positions
-    or index pairs); other leaves (scales, descriptors, magnitudes) are not compared."""
+    or index pairs), lines ``(ρ, θ, strength)`` as ``(ρ px, θ degrees)`` (θ wrapping at
+    180° with ρ → −ρ), circles ``(x, y, r, score)`` as ``(x, y, r)``; other leaves
+    (scales, descriptors, magnitudes) are not compared."""
     if expected.dtype == np.bool_ and expected.ndim == 2:
         a, b = np.argwhere(expected).astype(float), np.argwhere(got).astype(float)
     elif expected.ndim == 2 and expected.shape[1] == 2:
         a, b = expected.astype(float), got.astype(float)
+    elif expected.ndim == 2 and expected.shape[1] == 3 and got.ndim == 2:
+        a, b = _line_points(expected), _line_points(got)
+        worst = min(_share_near(a[: len(expected)], b, rule.radius),
+                    _share_near(b[: len(got)], a, rule.radius))  # fmt: skip
+        return "" if worst >= rule.tolerance else f"recall {worst:.3f} < {rule.tolerance}"
+    elif expected.ndim == 2 and expected.shape[1] == 4 and got.ndim == 2:
+        a, b = expected[:, :3].astype(float), got[:, :3].astype(float)
     else:
         return ""
     worst = min(_share_near(a, b, rule.radius), _share_near(b, a, rule.radius))
     return "" if worst >= rule.tolerance else f"recall {worst:.3f} < {rule.tolerance}"
+
+
+def _line_points(lines: np.ndarray) -> np.ndarray:
+    """Lines ``(ρ, θ, …)`` as points ``(ρ, θ°)``, then the same lines written with
+    ``θ ∓ 180°`` and ``−ρ`` (the first ``N`` rows are the lines themselves)."""
+    rho, degrees = lines[:, 0].astype(float), np.degrees(lines[:, 1].astype(float))
+    return np.vstack([np.c_[rho, degrees], np.c_[-rho, degrees - 180], np.c_[-rho, degrees + 180]])
 
 
 def _share_near(a: np.ndarray, b: np.ndarray, radius: float) -> float:

@@ -8,7 +8,7 @@ from typing import Annotated, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import BinaryImage, FloatImage, GrayImage, Int, node
+from graphvision import BinaryImage, Conformance, FloatImage, GrayImage, Int, node
 
 from ..edges import gradient_images
 from ..shared.params import Count
@@ -154,7 +154,22 @@ class HoughLines(NamedTuple):
     accumulator: FloatImage
 
 
-@node("hough.lines", version=2)
+@node(
+    "hough.lines",
+    version=2,
+    conformance=Conformance(
+        "recall",
+        0.9,
+        radius=1.5,
+        note=(
+            "lines compared by (ρ in pixels, θ in degrees) within 1.5 of each other; OpenCV's "
+            "θ is the bin's (no sub-bin placement, no refit to the edge points), its votes are "
+            "unweighted and unspread (image, orientation_window, weighted, vote_sigma are the "
+            "reference's), ties of equal counts keep OpenCV's order, and its third column "
+            "counts edge points where the reference's measures the length they cover"
+        ),
+    ),
+)
 def hough_lines(
     edges: BinaryImage,
     image: GrayImage | None = None,

@@ -37,6 +37,7 @@ __all__ = [
     "from_u8",
     "keypoints_from_cv",
     "keypoints_to_cv",
+    "lines_from_cv",
     "matches_from_cv",
     "points_to_cv",
     "significance",
@@ -197,3 +198,13 @@ def matches_from_cv(matches: Any) -> MatchSet:
     pairs = np.array([(m.queryIdx, m.trainIdx) for m in matches], dtype=np.int64).reshape(-1, 2)
     distance = np.array([m.distance for m in matches], dtype=np.float64)
     return MatchSet(pairs, distance)
+
+
+def lines_from_cv(lines: Any) -> np.ndarray:
+    """``cv2.HoughLinesWithAccumulator``'s ``(ρ, θ, votes)`` (``N×1×3`` float32, or
+    ``None``) as ``float64 N×3``, strongest first, ``θ ∈ [0, π)`` (OpenCV's ρ and θ are
+    graphvision's: x the column, y the row, ρ signed)."""
+    if lines is None:
+        return np.zeros((0, 3), dtype=np.float64)
+    rows = np.asarray(lines, dtype=np.float64).reshape(-1, 3)
+    return rows[np.argsort(-rows[:, 2], kind="stable")]

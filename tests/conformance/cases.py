@@ -168,8 +168,28 @@ def _two_views() -> dict[str, list[Case]]:
     }  # fmt: skip
 
 
+def _segments(rows: int = 90, cols: int = 120) -> np.ndarray:
+    """An edge mask of four 1-px segments at different angles (rasterised by hand)."""
+    edges = np.zeros((rows, cols), bool)
+    for (x0, y0), (x1, y1) in [((5, 10), (110, 30)), ((20, 80), (100, 60)),
+                               ((60, 5), (60, 85)), ((10, 50), (115, 52))]:  # fmt: skip
+        steps = max(abs(x1 - x0), abs(y1 - y0)) + 1
+        xs = np.rint(np.linspace(x0, x1, steps)).astype(int)
+        ys = np.rint(np.linspace(y0, y1, steps)).astype(int)
+        edges[ys, xs] = True
+    return edges
+
+
+def _hough() -> dict[str, list[Case]]:
+    return {
+        "hough.lines": [({"edges": _segments()}, {}),
+                        ({"edges": _segments()}, {"theta_bins": 360, "rho_step": 0.5,
+                                                  "min_distance": 10})],
+    }  # fmt: skip
+
+
 Builder = Callable[[], dict[str, list[Case]]]
-CASE_BUILDERS: list[Builder] = [_filters, _pixels, _geometry, _two_views]
+CASE_BUILDERS: list[Builder] = [_filters, _pixels, _geometry, _two_views, _hough]
 
 
 def all_cases() -> dict[str, list[Case]]:

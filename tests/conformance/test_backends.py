@@ -8,6 +8,7 @@ declared tolerance, fails the build.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import graphvision as gv
@@ -57,3 +58,22 @@ def test_a_difference_beyond_the_tolerance_fails() -> None:
     registry._implementation_specs.clear()
     with pytest.raises(PluginCheckError, match=r"filters.gaussian \(opencv vs numpy\): out: max"):
         check_conformance("filters.gaussian", "opencv", inputs, {"sigma": 2.0}, registry=registry)
+
+
+def test_lines_and_circles_are_compared_by_position() -> None:
+    """Lines match by (ρ px, θ°) with θ wrapping at 180° (ρ → −ρ), circles by (x, y, r);
+    the strength column is not compared, and a line 3 px away is refused."""
+    from graphvision.nodes.conformance import _recall_problem
+
+    rule = gv.Conformance("recall", 1.0, radius=1.5)
+    lines = np.array([[40.0, np.radians(0.5), 90.0], [10.0, np.radians(60.0), 50.0]])
+    wrapped = np.array([[-40.0, np.radians(179.8), 3.0], [10.5, np.radians(61.0), 7.0]])
+    assert _recall_problem(rule, lines, wrapped) == ""
+    shifted = wrapped + np.array([[0.0, 0.0, 0.0], [3.0, 0.0, 0.0]])
+    assert _recall_problem(rule, lines, shifted) == "recall 0.500 < 1.0"
+    circles = np.array([[30.0, 20.0, 12.0, 0.9]])
+    assert _recall_problem(rule, circles, circles + np.array([0.5, -0.5, 0.5, -0.4])) == ""
+    assert (
+        _recall_problem(rule, circles, circles + np.array([0.0, 0.0, 2.0, 0.0]))
+        == "recall 0.000 < 1.0"
+    )
