@@ -8,7 +8,7 @@ from typing import Annotated, Literal, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from graphvision import BinaryImage, FloatImage, GrayImage, Int, node
+from graphvision import BinaryImage, Conformance, FloatImage, GrayImage, Int, node
 
 from ..edges import gradient_images
 from ..shared.checks import ordered
@@ -55,7 +55,23 @@ class HoughCircles(NamedTuple):
     accumulator: FloatImage
 
 
-@node("hough.circles", version=1, check=ordered(("min_radius", "max_radius")))
+@node(
+    "hough.circles",
+    version=1,
+    check=ordered(("min_radius", "max_radius")),
+    conformance=Conformance(
+        "recall",
+        1.0,
+        radius=1.5,
+        note=(
+            "circles compared by (x, y, r) within 1.5 px; OpenCV votes from its own Canny "
+            "edges of the 8-bit image on a 1-px grid (centres at half pixels, no sub-pixel "
+            "peak), and its score is the share of the circumference on `edges` (about 1 for "
+            "a whole circle, where the reference's fraction that voted is about 0.5), so one "
+            "threshold keeps more circles; polarity is judged by the mean inside against a ring"
+        ),
+    ),
+)
 def hough_circles(
     edges: BinaryImage,
     image: GrayImage,

@@ -23,7 +23,7 @@ from .geometry import (
     cv_sift,
     cv_warp,
 )
-from .hough import cv_hough_lines
+from .hough import cv_hough_circles, cv_hough_lines
 from .pixels import (
     cv_canny,
     cv_close,
@@ -53,6 +53,7 @@ __all__ = [
     "cv_gaussian",
     "cv_gaussian_pyramid",
     "cv_homography_ransac",
+    "cv_hough_circles",
     "cv_hough_lines",
     "cv_label",
     "cv_match",

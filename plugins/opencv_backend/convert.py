@@ -31,6 +31,7 @@ __all__ = [
     "EXTRA",
     "REQUIRES",
     "border",
+    "circles_from_cv",
     "cv",
     "filtered",
     "from_bgr",
@@ -208,3 +209,11 @@ def lines_from_cv(lines: Any) -> np.ndarray:
         return np.zeros((0, 3), dtype=np.float64)
     rows = np.asarray(lines, dtype=np.float64).reshape(-1, 3)
     return rows[np.argsort(-rows[:, 2], kind="stable")]
+
+
+def circles_from_cv(circles: Any) -> np.ndarray:
+    """``cv2.HoughCirclesWithAccumulator``'s ``(x, y, r, votes)`` (float32, or ``None``)
+    as ``float64 N×4`` (OpenCV's x, y are graphvision's: column and row of the centre)."""
+    if circles is None:
+        return np.zeros((0, 4), dtype=np.float64)
+    return np.asarray(circles, dtype=np.float64).reshape(-1, 4)

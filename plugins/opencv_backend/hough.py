@@ -6,9 +6,9 @@ import numpy as np
 
 from graphvision import implements
 
-from .convert import EXTRA, REQUIRES, cv, lines_from_cv, to_u8
+from .convert import EXTRA, REQUIRES, circles_from_cv, cv, lines_from_cv, to_u8
 
-__all__ = ["cv_hough_lines"]
+__all__ = ["cv_hough_circles", "cv_hough_lines"]
 
 
 def _keep_apart(lines: np.ndarray, theta_step: float, rho_step: float, apart: float) -> np.ndarray:
@@ -66,3 +66,83 @@ def cv_hough_lines(
         lines = _keep_apart(lines, theta_step, rho_step, min_distance)[:max_lines]
     votes = line_accumulator(edges, None, theta_bins, rho_step, orientation_window, False, sigma)
     return HoughLines(lines, len(lines), votes.astype(np.float32))
+
+
+def _coverage(edges: np.ndarray, circles: np.ndarray) -> np.ndarray:
+    """The share of each circle's circumference, in 1-px steps, with an edge point
+    within one pixel (8-neighbourhood) of it."""
+    import scipy.ndimage as ndi
+
+    near = ndi.binary_dilation(edges, ndi.generate_binary_structure(2, 1))
+    rows, cols = edges.shape
+    shares = np.zeros(len(circles))
+    for i, (x, y, r) in enumerate(circles[:, :3]):
+        angles = np.linspace(0.0, 2.0 * np.pi, max(8, int(np.ceil(2.0 * np.pi * r))), False)
+        px = np.rint(x + r * np.cos(angles)).astype(int)
+        py = np.rint(y + r * np.sin(angles)).astype(int)
+        inside = (px >= 0) & (px < cols) & (py >= 0) & (py < rows)
+        shares[i] = near[py[inside], px[inside]].sum() / len(angles)
+    return shares
+
+
+def _polarity(image: np.ndarray, circles: np.ndarray, polarity: str) -> np.ndarray:
+    """Which circles are brighter (``bright``) or darker (``dark``) inside, by the mean
+    inside ``0.7 r`` against the ring ``[1.2 r, 1.5 r]``; all with ``both``."""
+    if polarity == "both" or not len(circles):
+        return np.ones(len(circles), bool)
+    y, x = np.mgrid[0 : image.shape[0], 0 : image.shape[1]]
+    keep = np.zeros(len(circles), bool)
+    for i, (cx, cy, r) in enumerate(circles[:, :3]):
+        d = np.hypot(x - cx, y - cy)
+        inner, ring = image[d < 0.7 * r], image[(d >= 1.2 * r) & (d <= 1.5 * r)]
+        if inner.size and ring.size:
+            keep[i] = (inner.mean() > ring.mean()) == (polarity == "bright")
+    return keep
+
+
+@implements("hough.circles", backend="opencv", requires=REQUIRES, extra=EXTRA)
+def cv_hough_circles(
+    edges: np.ndarray,
+    image: np.ndarray,
+    *,
+    min_radius: float = 10.0,
+    max_radius: float = 30.0,
+    radius_step: float = 1.0,
+    polarity: str = "both",
+    sigma: float = 1.0,
+    vote_sigma: float = 1.0,
+    threshold: float = 0.3,
+    min_distance: float | None = None,
+    max_circles: int = 100,
+) -> object:
+    """``cv2.HoughCirclesWithAccumulator(HOUGH_GRADIENT)`` on the 8-bit image (OpenCV
+    finds its own Canny edges, high threshold 100 of 8-bit Sobel), centres
+    ``min_distance`` apart, radii in ``[⌊min_radius⌋, ⌈max_radius⌉]``; each circle is
+    scored as the reference scores it, by ``edges``: the share of its circumference
+    with an edge point within a pixel, kept from ``threshold`` on (strongest first,
+    ``max_circles``), ``polarity`` by the mean inside against a ring outside.
+    ``radius_step``, ``sigma`` and ``vote_sigma`` are the reference's; ``accumulator``
+    is zero (OpenCV does not return its own)."""
+    from ..hough._circles import HoughCircles
+
+    cv2 = cv()
+    if image.shape != edges.shape:
+        raise ValueError(
+            f"edges and image must have the same size, got {edges.shape} and {image.shape}"
+        )
+    distance = min_radius if min_distance is None else min_distance
+    found = cv2.HoughCirclesWithAccumulator(
+        to_u8(image),
+        cv2.HOUGH_GRADIENT,
+        1,
+        distance,
+        param1=100,
+        param2=max(1.0, threshold * np.pi * min_radius),
+        minRadius=int(np.floor(min_radius)),
+        maxRadius=int(np.ceil(max_radius)),
+    )
+    circles = circles_from_cv(found)
+    circles[:, 3] = _coverage(edges, circles)
+    circles = circles[(circles[:, 3] >= threshold) & _polarity(image, circles, polarity)]
+    circles = circles[np.argsort(-circles[:, 3], kind="stable")][:max_circles]
+    return HoughCircles(circles, len(circles), np.zeros(edges.shape, np.float32))

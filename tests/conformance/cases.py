@@ -180,8 +180,25 @@ def _segments(rows: int = 90, cols: int = 120) -> np.ndarray:
     return edges
 
 
+def _disks(rows: int = 100, cols: int = 140) -> tuple[np.ndarray, np.ndarray]:
+    """Two bright disks and a dark one on gray, mild noise, and their rims as edges."""
+    y, x = np.mgrid[0:rows, 0:cols]
+    image = np.full((rows, cols), 0.45)
+    edges = np.zeros((rows, cols), bool)
+    for cx, cy, r, value in [(30, 30, 14.3, 0.95), (100, 45, 12.6, 0.05), (60, 72, 18.4, 0.9)]:
+        d = np.hypot(x - cx, y - cy)
+        image[d < r] = value
+        edges |= np.abs(d - r) < 0.5
+    image += np.random.default_rng(2).normal(0, 0.02, image.shape)
+    return edges, np.clip(image, 0, 1).astype(np.float32)
+
+
 def _hough() -> dict[str, list[Case]]:
+    edges, disks = _disks()
+    circles = {"min_radius": 8.0, "max_radius": 25.0}
     return {
+        "hough.circles": [({"edges": edges, "image": disks}, {**circles, "polarity": p})
+                          for p in ("both", "bright", "dark")],
         "hough.lines": [({"edges": _segments()}, {}),
                         ({"edges": _segments()}, {"theta_bins": 360, "rho_step": 0.5,
                                                   "min_distance": 10})],
