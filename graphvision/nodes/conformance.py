@@ -85,6 +85,8 @@ def _leaf(rule: Conformance, expected: np.ndarray, got: np.ndarray) -> str:
         return "" if np.array_equal(expected, got) else f"{got!r} != {expected!r}"
     if rule.metric == "recall":
         return _recall_problem(rule, expected, got)
+    if rule.metric == "disparity":
+        return _disparity_problem(rule, expected, got)
     if expected.shape != got.shape:
         return f"shape {got.shape} != {expected.shape}"
     if rule.margin and expected.ndim >= 2 and min(expected.shape[:2]) > 2 * rule.margin:
@@ -119,6 +121,24 @@ def _recall_problem(rule: Conformance, expected: np.ndarray, got: np.ndarray) ->
         return ""
     worst = min(_share_near(a, b, rule.radius), _share_near(b, a, rule.radius))
     return "" if worst >= rule.tolerance else f"recall {worst:.3f} < {rule.tolerance}"
+
+
+def _disparity_problem(rule: Conformance, expected: np.ndarray, got: np.ndarray) -> str:
+    """Disparity maps (NaN invalid): of the pixels valid in both, at most a ``tolerance``
+    share differ by more than ``radius`` pixels; at most a ``mismatch`` share of the
+    pixels valid in either are valid in one alone."""
+    if expected.shape != got.shape:
+        return f"shape {got.shape} != {expected.shape}"
+    ours, theirs = np.isfinite(expected), np.isfinite(got)
+    both, either = ours & theirs, ours | theirs
+    alone = float(np.mean(both[either] == 0)) if either.any() else 0.0
+    if alone > rule.mismatch:
+        return f"{alone:.3%} of the valid pixels valid in one map alone > {rule.mismatch:.3%}"
+    difference = np.abs(expected[both].astype(np.float64) - got[both].astype(np.float64))
+    bad = float(np.mean(difference > rule.radius)) if both.any() else 0.0
+    if bad > rule.tolerance:
+        return f"{bad:.3%} of the pixels valid in both differ by > {rule.radius} px"
+    return ""
 
 
 def _line_points(lines: np.ndarray) -> np.ndarray:

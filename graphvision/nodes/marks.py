@@ -41,7 +41,10 @@ class Conformance:
       directions of their centres, within ``tolerance`` degrees;
     * ``recall``: at least a ``tolerance`` share of the reference's detections (mask
       pixels, keypoint positions, match pairs) have one of the other's within
-      ``radius`` pixels, and the other way round.
+      ``radius`` pixels, and the other way round;
+    * ``disparity``: disparity maps (NaN invalid) of which at most a ``tolerance``
+      share of the pixels valid in both differ by more than ``radius`` pixels, and at
+      most a ``mismatch`` share of the pixels valid in either are valid in one alone.
 
     ``note`` states the differences of convention that remain (an integer Otsu level,
     a border mode a library lacks), shown by ``graphvision describe``.

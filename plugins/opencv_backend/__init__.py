@@ -36,9 +36,11 @@ from .pixels import (
     cv_otsu,
     cv_to_gray,
 )
+from .stereo import cv_block_match, cv_sgm
 from .views import cv_fundamental, cv_relative_pose, cv_triangulate, cv_undistort_image
 
 __all__ = [
+    "cv_block_match",
     "cv_box",
     "cv_canny",
     "cv_close",
@@ -62,6 +64,7 @@ __all__ = [
     "cv_open",
     "cv_otsu",
     "cv_relative_pose",
+    "cv_sgm",
     "cv_sift",
     "cv_to_gray",
     "cv_triangulate",

@@ -33,6 +33,7 @@ __all__ = [
     "border",
     "circles_from_cv",
     "cv",
+    "disparity_from_cv",
     "filtered",
     "from_bgr",
     "from_u8",
@@ -217,3 +218,17 @@ def circles_from_cv(circles: Any) -> np.ndarray:
     if circles is None:
         return np.zeros((0, 4), dtype=np.float64)
     return np.asarray(circles, dtype=np.float64).reshape(-1, 4)
+
+
+DISPARITY_SCALE = 16
+"""OpenCV's stereo matchers return disparities in fixed point, 1/16 pixel, as int16."""
+
+
+def disparity_from_cv(fixed: np.ndarray, min_disparity: int, num_disparities: int) -> np.ndarray:
+    """OpenCV's 1/16-pixel int16 disparity (invalid: below ``min_disparity``) as float32
+    pixels, NaN where invalid or outside ``[min_disparity, min_disparity + n - 1]`` (OpenCV
+    searches a range rounded up to a multiple of 16)."""
+    disparity = fixed.astype(np.float32) / np.float32(DISPARITY_SCALE)
+    top = min_disparity + num_disparities - 1
+    disparity[(disparity < min_disparity) | (disparity > top)] = np.nan
+    return disparity

@@ -8,7 +8,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import AfterValidator, Field
 
-from graphvision import GrayImage, node
+from graphvision import Conformance, GrayImage, node
 
 from ..shared.params import odd
 from ._cost import Cost, cost_volume, maximum_cost
@@ -133,7 +133,25 @@ def _volume(
     return summed
 
 
-@node("stereo.block_match", version=3, check=_census_window)
+@node(
+    "stereo.block_match",
+    version=3,
+    check=_census_window,
+    conformance=Conformance(
+        "disparity",
+        0.01,
+        radius=1.0,
+        mismatch=0.25,
+        note=(
+            "OpenCV returns 1/16-pixel fixed point (divided by 16 here, NaN where invalid), "
+            "matches by SAD of x-Sobel-prefiltered 8-bit images over one block of at least 5 "
+            "(cost is the reference's), leaves invalid the first min_disparity + 16⌈n/16⌉ + "
+            "block/2 columns and block/2 rows at the top and bottom, and takes uniqueness in "
+            "whole percent and lr_tolerance in whole pixels; at most 1 % of the pixels valid "
+            "in both differ by more than 1 px"
+        ),
+    ),
+)
 def block_match(
     left: GrayImage,
     right: GrayImage,
@@ -242,7 +260,26 @@ def _jumps(
     return jumps
 
 
-@node("stereo.sgm", version=2, check=_sgm_params)
+@node(
+    "stereo.sgm",
+    version=2,
+    check=_sgm_params,
+    conformance=Conformance(
+        "disparity",
+        0.01,
+        radius=1.0,
+        mismatch=0.15,
+        note=(
+            "OpenCV returns 1/16-pixel fixed point (divided by 16 here, NaN where invalid), "
+            "matches by Birchfield-Tomasi SAD of 8-bit images (cost is the reference's), its "
+            "penalties 8b² and 32b² are scaled by p1/12 and p2/128 (other units: with "
+            "cost='sad' the two disagree on 16 % of the pixels), paths=4 runs its 5-path "
+            "mode, edge has no counterpart, and it leaves the first min_disparity + 16⌈n/16⌉ "
+            "columns invalid; with census, at most 1 % of the pixels valid in both differ by "
+            "more than 1 px"
+        ),
+    ),
+)
 def sgm(
     left: GrayImage,
     right: GrayImage,

@@ -193,6 +193,36 @@ def _disks(rows: int = 100, cols: int = 140) -> tuple[np.ndarray, np.ndarray]:
     return edges, np.clip(image, 0, 1).astype(np.float32)
 
 
+@cache
+def _stereo_pair(rows: int = 128, cols: int = 256) -> tuple[np.ndarray, np.ndarray]:
+    """A rectified pair of blurred noise: disparity 8 with a rectangle at 14 in front,
+    ``left(x) = right(x - d)``."""
+    import scipy.ndimage as ndi
+
+    rng = np.random.default_rng(12)
+    texture = ndi.gaussian_filter(rng.uniform(0, 1, (rows, cols + 40)), 1.2)
+    texture = (texture - texture.min()) / (texture.max() - texture.min())
+    disparity = np.full((rows, cols), 8.0)
+    disparity[40:100, 100:180] = 14.0
+    x, grid = np.arange(cols), np.arange(-20, cols + 20)
+    left = np.stack([np.interp(x - disparity[r], grid, texture[r]) for r in range(rows)])
+    return left.astype(np.float32), texture[:, 20 : 20 + cols].astype(np.float32)
+
+
+def _stereo() -> dict[str, list[Case]]:
+    left, right = _stereo_pair()
+    pair = {"left": left, "right": right}
+    return {
+        "stereo.block_match": [(pair, {"num_disparities": 24, **p})
+                               for p in ({}, {"cost": "sad", "window": 9},
+                                         {"cost": "sad", "window": 9, "subpixel": False},
+                                         {"min_disparity": 4, "num_disparities": 20})],
+        "stereo.sgm": [(pair, {"num_disparities": 24, **p})
+                       for p in ({}, {"paths": 4}, {"min_disparity": 4, "num_disparities": 20},
+                                 {"subpixel": False, "lr_tolerance": None})],
+    }  # fmt: skip
+
+
 def _hough() -> dict[str, list[Case]]:
     edges, disks = _disks()
     circles = {"min_radius": 8.0, "max_radius": 25.0}
@@ -206,7 +236,7 @@ def _hough() -> dict[str, list[Case]]:
 
 
 Builder = Callable[[], dict[str, list[Case]]]
-CASE_BUILDERS: list[Builder] = [_filters, _pixels, _geometry, _two_views, _hough]
+CASE_BUILDERS: list[Builder] = [_filters, _pixels, _geometry, _two_views, _hough, _stereo]
 
 
 def all_cases() -> dict[str, list[Case]]:

@@ -77,3 +77,29 @@ def test_lines_and_circles_are_compared_by_position() -> None:
         _recall_problem(rule, circles, circles + np.array([0.0, 0.0, 2.0, 0.0]))
         == "recall 0.000 < 1.0"
     )
+
+
+def test_disparity_maps_are_compared_where_both_are_valid() -> None:
+    """NaN is invalid: pixels valid in one map alone count against ``mismatch``, pixels
+    valid in both more than ``radius`` apart against ``tolerance``."""
+    from graphvision.nodes.conformance import _leaf
+
+    rule = gv.Conformance("disparity", 0.1, radius=1.0, mismatch=0.2)
+    ours = np.full((4, 5), 8.0, np.float32)
+    ours[0, :2] = np.nan
+    theirs = ours + np.float32(0.5)
+    theirs[3, 4] = np.nan  # 1 of 19 valid pixels alone
+    assert _leaf(rule, ours, theirs) == ""
+    theirs[1:3] += 2.0  # 10 of 17 differ by 2.5 px
+    assert _leaf(rule, ours, theirs) == "58.824% of the pixels valid in both differ by > 1.0 px"
+    theirs[:] = np.nan
+    assert _leaf(rule, ours, theirs).startswith("100.000% of the valid pixels valid in one")
+
+
+def test_opencv_fixed_point_disparity_is_divided_by_16_and_invalid_is_nan() -> None:
+    from graphvision_plugins.opencv_backend.convert import disparity_from_cv
+
+    fixed = np.array([[-16, 0, 8, 130, 400]], np.int16)  # invalid, 0, 0.5, 8.125, 25
+    out = disparity_from_cv(fixed, 0, 24)
+    assert out.dtype == np.float32
+    np.testing.assert_array_equal(out, [[np.nan, 0.0, 0.5, 8.125, np.nan]])
