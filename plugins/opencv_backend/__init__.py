@@ -37,10 +37,17 @@ from .pixels import (
     cv_to_gray,
 )
 from .stereo import cv_block_match, cv_sgm
-from .views import cv_fundamental, cv_relative_pose, cv_triangulate, cv_undistort_image
+from .views import (
+    cv_board_corners,
+    cv_fundamental,
+    cv_relative_pose,
+    cv_triangulate,
+    cv_undistort_image,
+)
 
 __all__ = [
     "cv_block_match",
+    "cv_board_corners",
     "cv_box",
     "cv_canny",
     "cv_close",

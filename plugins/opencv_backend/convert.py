@@ -30,6 +30,7 @@ from graphvision import KeypointSet, MatchSet
 __all__ = [
     "EXTRA",
     "REQUIRES",
+    "board_from_cv",
     "border",
     "circles_from_cv",
     "cv",
@@ -232,3 +233,18 @@ def disparity_from_cv(fixed: np.ndarray, min_disparity: int, num_disparities: in
     top = min_disparity + num_disparities - 1
     disparity[(disparity < min_disparity) | (disparity > top)] = np.nan
     return disparity
+
+
+def board_from_cv(points: Any, columns: int, rows: int, image: np.ndarray) -> np.ndarray:
+    """``cv2.findChessboardCorners``' corners (``N×1×2`` float32, in one of the board's
+    turns) as ``rows·columns × 2`` float64 in graphvision's fixed order: x along
+    ``columns``, the board seen from its front, the first square dark (OpenCV may start
+    at any end, and on a square board along either side)."""
+    import scipy.ndimage as ndi
+
+    from ..camera._corners import _oriented
+
+    grid = np.asarray(points, dtype=np.float64).reshape(rows, columns, 2)
+    smooth = ndi.gaussian_filter(np.asarray(image, dtype=np.float64), 1.0)
+    ordered = _oriented(grid, smooth)
+    return np.full((rows * columns, 2), np.nan) if ordered is None else ordered

@@ -7,9 +7,15 @@ import numpy as np
 
 from graphvision import PinholeCamera, implements
 
-from .convert import EXTRA, REQUIRES, cv, points_to_cv, significance
+from .convert import EXTRA, REQUIRES, board_from_cv, cv, points_to_cv, significance, to_u8
 
-__all__ = ["cv_fundamental", "cv_relative_pose", "cv_triangulate", "cv_undistort_image"]
+__all__ = [
+    "cv_board_corners",
+    "cv_fundamental",
+    "cv_relative_pose",
+    "cv_triangulate",
+    "cv_undistort_image",
+]
 
 
 @implements("camera.undistort_image", backend="opencv", requires=REQUIRES, extra=EXTRA)
@@ -143,3 +149,51 @@ def cv_relative_pose(
     reference = PinholeCamera(camera_a.K.copy(), size=camera_a.size.copy())
     moved = PinholeCamera(camera_b.K.copy(), R, -R.T @ t, size=camera_b.size.copy())
     return RelativePose(reference, moved)
+
+
+def _cv_board(image: np.ndarray, columns: int, rows: int, max_window: int) -> np.ndarray:
+    """One view's corners in graphvision's order, NaN when OpenCV finds no board."""
+    cv2 = cv()
+    u8 = to_u8(image)
+    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
+    found, points = cv2.findChessboardCorners(u8, (columns, rows), flags=flags)
+    if not found:
+        return np.full((rows * columns, 2), np.nan)
+    xy = points.reshape(-1, 2).astype(np.float64)
+    spacing = np.linalg.norm(xy[:, None] - xy[None], axis=2) + np.eye(len(xy)) * 1e9
+    half = int(np.clip(0.45 * spacing.min(), 3, max_window))
+    stop = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 100, 1e-3)
+    refined = cv2.cornerSubPix(u8, points, (half, half), (-1, -1), stop)
+    return board_from_cv(refined, columns, rows, image)
+
+
+@implements("camera.board_corners", backend="opencv", requires=REQUIRES, extra=EXTRA)
+def cv_board_corners(
+    views: np.ndarray,
+    *,
+    columns: int = 9,
+    rows: int = 6,
+    sigma: float | None = None,
+    max_window: int = 15,
+) -> object:
+    """``cv2.findChessboardCorners`` (adaptive threshold, normalised 8-bit image) and
+    ``cv2.cornerSubPix`` with one half window for the board, 0.45 of the least corner
+    spacing (at least 3, at most ``max_window``); the corners put in the reference's
+    order (:func:`.convert.board_from_cv`). ``sigma`` is the reference's alone."""
+    import warnings
+
+    from ..camera._corners import BoardCorners
+
+    stack = views[None] if views.ndim == 2 else views
+    if stack.ndim != 3:
+        raise ValueError(f"views must be H×W or N×H×W gray images, got shape {views.shape}")
+    corners = np.stack([_cv_board(image, columns, rows, max_window) for image in stack])
+    found = np.isfinite(corners).all(axis=(1, 2))
+    missing = np.flatnonzero(~found).tolist()
+    if missing:
+        warnings.warn(
+            f"no board of {columns}×{rows} inner corners found in {len(missing)} of "
+            f"{len(stack)} views: {missing} (their corners are NaN)",
+            stacklevel=2,
+        )
+    return BoardCorners(corners, found)

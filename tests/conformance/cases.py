@@ -223,6 +223,17 @@ def _stereo() -> dict[str, list[Case]]:
     }  # fmt: skip
 
 
+def _boards() -> dict[str, list[Case]]:
+    from graphvision_plugins.synthetic import board_views
+
+    views = board_views(views=3, width=320, height=240, focal=400.0, seed=1).views
+    square = board_views(views=1, columns=5, rows=5, width=240, height=240, seed=2).views
+    return {
+        "camera.board_corners": [({"views": views}, {}),
+                                 ({"views": square}, {"columns": 5, "rows": 5})],
+    }  # fmt: skip
+
+
 def _hough() -> dict[str, list[Case]]:
     edges, disks = _disks()
     circles = {"min_radius": 8.0, "max_radius": 25.0}
@@ -236,7 +247,7 @@ def _hough() -> dict[str, list[Case]]:
 
 
 Builder = Callable[[], dict[str, list[Case]]]
-CASE_BUILDERS: list[Builder] = [_filters, _pixels, _geometry, _two_views, _hough, _stereo]
+CASE_BUILDERS: list[Builder] = [_filters, _pixels, _geometry, _two_views, _hough, _stereo, _boards]
 
 
 def all_cases() -> dict[str, list[Case]]:

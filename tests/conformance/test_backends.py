@@ -103,3 +103,14 @@ def test_opencv_fixed_point_disparity_is_divided_by_16_and_invalid_is_nan() -> N
     out = disparity_from_cv(fixed, 0, 24)
     assert out.dtype == np.float32
     np.testing.assert_array_equal(out, [[np.nan, 0.0, 0.5, 8.125, np.nan]])
+
+
+def test_opencv_board_corners_are_put_in_the_reference_order_whatever_end_it_starts() -> None:
+    from graphvision_plugins.opencv_backend.convert import board_from_cv
+    from graphvision_plugins.synthetic import board_views
+
+    board = board_views(views=1, width=320, height=240, focal=400.0, seed=1)
+    truth = board.corners[0]  # the reference's order, built with the views
+    for turned in (truth, truth[::-1]):  # OpenCV may list the board from either end
+        ordered = board_from_cv(turned.astype(np.float32), 9, 6, board.views[0])
+        np.testing.assert_allclose(ordered, truth, atol=1e-4)
