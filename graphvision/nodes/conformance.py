@@ -65,6 +65,10 @@ def _compare(rule: Conformance, reference: Any, candidate: Any, label: str) -> l
         worst = max(_pose_angles(reference, candidate), default=0.0)
         ok = worst <= rule.tolerance
         return [] if ok else [f"{label}: pose differs by {worst:.3g}° > {rule.tolerance}°"]
+    if rule.metric == "up_to_scale":
+        error = _scale_free_distance(_homography(reference), _homography(candidate))
+        ok = error <= rule.tolerance
+        return [] if ok else [f"{label}: unit-norm distance {error:.3g} > {rule.tolerance}"]
     if rule.metric == "corner_error":
         error = _corner_error(_homography(reference), _homography(candidate), rule.radius)
         ok = error <= rule.tolerance
@@ -189,6 +193,13 @@ def _pose_angles(reference: Any, candidate: Any) -> list[float]:
 def _homography(value: Any) -> np.ndarray:
     matrix = value[0] if isinstance(value, tuple) else value
     return np.asarray(matrix, dtype=np.float64)
+
+
+def _scale_free_distance(m1: np.ndarray, m2: np.ndarray) -> float:
+    """Frobenius distance between two matrices scaled to unit norm, the sign that
+    brings them closest (a matrix defined up to scale and sign: F, E)."""
+    u1, u2 = m1 / np.linalg.norm(m1), m2 / np.linalg.norm(m2)
+    return float(min(np.linalg.norm(u1 - u2), np.linalg.norm(u1 + u2)))
 
 
 def _corner_error(h1: np.ndarray, h2: np.ndarray, side: float) -> float:

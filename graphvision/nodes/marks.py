@@ -42,6 +42,8 @@ class Conformance:
     * ``recall``: at least a ``tolerance`` share of the reference's detections (mask
       pixels, keypoint positions, match pairs) have one of the other's within
       ``radius`` pixels, and the other way round;
+    * ``up_to_scale``: the first outputs (a matrix defined up to scale and sign, as E),
+      scaled to unit Frobenius norm, within ``tolerance`` of each other;
     * ``disparity``: disparity maps (NaN invalid) of which at most a ``tolerance``
       share of the pixels valid in both differ by more than ``radius`` pixels, and at
       most a ``mismatch`` share of the pixels valid in either are valid in one alone.

@@ -39,6 +39,7 @@ from .pixels import (
 from .stereo import cv_block_match, cv_sgm
 from .views import (
     cv_board_corners,
+    cv_essential_from_points,
     cv_fundamental,
     cv_relative_pose,
     cv_triangulate,
@@ -57,6 +58,7 @@ __all__ = [
     "cv_derivative",
     "cv_dilate",
     "cv_erode",
+    "cv_essential_from_points",
     "cv_from_rgb",
     "cv_fundamental",
     "cv_gaussian",

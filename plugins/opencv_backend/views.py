@@ -11,6 +11,7 @@ from .convert import EXTRA, REQUIRES, board_from_cv, cv, points_to_cv, significa
 
 __all__ = [
     "cv_board_corners",
+    "cv_essential_from_points",
     "cv_fundamental",
     "cv_relative_pose",
     "cv_triangulate",
@@ -197,3 +198,47 @@ def cv_board_corners(
             stacklevel=2,
         )
     return BoardCorners(corners, found)
+
+
+@implements("epipolar.essential_from_points", backend="opencv", requires=REQUIRES, extra=EXTRA)
+def cv_essential_from_points(
+    a: np.ndarray,
+    b: np.ndarray,
+    camera_a: PinholeCamera,
+    camera_b: PinholeCamera,
+    *,
+    threshold: float = 1.0,
+    confidence: float = 0.999,
+    max_iterations: int = 2000,
+    max_nfa: float | None = 1.0,
+    seed: int = 0,
+) -> object:
+    """``cv2.findEssentialMat(RANSAC)`` (Nistér's five points) on the points normalised
+    by each camera's K, the pixel threshold divided by the mean focal length as the
+    reference divides it, OpenCV's generator seeded with ``seed``; the first of its
+    solutions, singular values forced to (1, 1, 0). The significance is the reference's
+    test on OpenCV's inliers."""
+    from ..camera import normalise_pixels
+    from ..epipolar._geometry import essential_from_fundamental, sampson_distance
+    from ..epipolar._nodes import EssentialFit, _pairs
+
+    cv2 = cv()
+    _pairs(a, b, 8, "the essential matrix from points")
+    focal = float(np.mean([camera_a.K[0, 0], camera_a.K[1, 1], camera_b.K[0, 0], camera_b.K[1, 1]]))
+    na, nb = normalise_pixels(a, camera_a.K), normalise_pixels(b, camera_b.K)
+    cv2.setRNGSeed(seed)
+    E, mask = cv2.findEssentialMat(
+        na.astype(np.float64), nb.astype(np.float64), np.eye(3), cv2.RANSAC,
+        confidence, threshold / focal, maxIters=max_iterations,
+    )  # fmt: skip
+    if E is None or E.shape[0] < 3:
+        raise ValueError("no essential matrix: OpenCV found no consensus of 5 or more pairs")
+    E = essential_from_fundamental(E[:3], np.eye(3), np.eye(3))
+    inliers = mask.ravel().astype(bool)
+
+    def fits(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return sampson_distance(E, x, y) < threshold / focal
+
+    what = "the essential matrix"
+    log_nfa = significance(inliers, na, nb, fits, 8, max_nfa, what, seed)
+    return EssentialFit(E, int(inliers.sum()), a[inliers], b[inliers], log_nfa)

@@ -157,6 +157,8 @@ def _two_views() -> dict[str, list[Case]]:
     lens = gv.PinholeCamera(K, distortion=np.array([-0.25, 0.06, 0.002, -0.001, 0.0]))
     return {
         "epipolar.fundamental": [({"a": a, "b": b}, {"threshold": 1.5})],
+        "epipolar.essential_from_points": [({"a": a, "b": b, "camera_a": scene_.camera_a,
+                                             "camera_b": scene_.camera_b}, {})],
         "epipolar.triangulate": [({"a": scene_.a, "b": scene_.b, "camera_a": scene_.camera_a,
                                    "camera_b": scene_.camera_b}, {"method": m})
                                  for m in ("linear", "nonlinear")],

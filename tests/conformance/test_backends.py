@@ -114,3 +114,14 @@ def test_opencv_board_corners_are_put_in_the_reference_order_whatever_end_it_sta
     for turned in (truth, truth[::-1]):  # OpenCV may list the board from either end
         ordered = board_from_cv(turned.astype(np.float32), 9, 6, board.views[0])
         np.testing.assert_allclose(ordered, truth, atol=1e-4)
+
+
+def test_a_matrix_up_to_scale_is_compared_at_unit_norm_whatever_its_sign() -> None:
+    from graphvision.nodes.conformance import _compare
+
+    rule = gv.Conformance("up_to_scale", 0.05)
+    E = np.array([[0.0, -1.0, 0.2], [1.0, 0.0, -0.5], [-0.1, 0.4, 0.0]])
+    assert _compare(rule, (E,), (-3.0 * E,), "E") == []
+    tilted = E + np.array([[0.0, 0.0, 0.3], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    apart = np.linalg.norm(E / np.linalg.norm(E) - tilted / np.linalg.norm(tilted))
+    assert _compare(rule, (E,), (tilted,), "E") == [f"E: unit-norm distance {apart:.3g} > 0.05"]
