@@ -39,6 +39,7 @@ from .pixels import (
 from .stereo import cv_block_match, cv_sgm
 from .views import (
     cv_board_corners,
+    cv_calibrate_board,
     cv_essential_from_points,
     cv_fundamental,
     cv_relative_pose,
@@ -50,6 +51,7 @@ __all__ = [
     "cv_block_match",
     "cv_board_corners",
     "cv_box",
+    "cv_calibrate_board",
     "cv_canny",
     "cv_close",
     "cv_convolve",

@@ -11,6 +11,7 @@ from .convert import EXTRA, REQUIRES, board_from_cv, cv, points_to_cv, significa
 
 __all__ = [
     "cv_board_corners",
+    "cv_calibrate_board",
     "cv_essential_from_points",
     "cv_fundamental",
     "cv_relative_pose",
@@ -242,3 +243,64 @@ def cv_essential_from_points(
     what = "the essential matrix"
     log_nfa = significance(inliers, na, nb, fits, 8, max_nfa, what, seed)
     return EssentialFit(E, int(inliers.sum()), a[inliers], b[inliers], log_nfa)
+
+
+def _calibration_flags(radial: int, tangential: bool) -> int:
+    """OpenCV's flags for ``radial`` coefficients k1.. and optional p1, p2 (zero skew is
+    OpenCV's model)."""
+    cv2 = cv()
+    flags = 0 if tangential else cv2.CALIB_ZERO_TANGENT_DIST
+    for k, name in enumerate(("CALIB_FIX_K1", "CALIB_FIX_K2", "CALIB_FIX_K3")):
+        if k >= radial:
+            flags |= getattr(cv2, name)
+    return int(flags)
+
+
+@implements("camera.calibrate_board", backend="opencv", requires=REQUIRES, extra=EXTRA)
+def cv_calibrate_board(
+    corners: np.ndarray,
+    object_points: np.ndarray,
+    *,
+    radial: int = 2,
+    tangential: bool = False,
+    min_views: int = 3,
+) -> object:
+    """``cv2.calibrateCamera`` on the views with a board, k1.. beyond ``radial`` fixed at
+    0 (and p1, p2 without ``tangential``). OpenCV starts its principal point at the
+    centre of the image size it is given: here the centre of the corners' bounding box
+    (the op has no image size). The camera is posed as the first usable view."""
+    from ..camera._calibrate import BoardCalibration
+
+    cv2 = cv()
+    if corners.ndim != 3 or corners.shape[1:] != (len(object_points), 2):
+        raise ValueError(
+            f"corners must be N×{len(object_points)}×2 (one row per object point), "
+            f"got shape {corners.shape}"
+        )
+    if np.abs(object_points[:, 2]).max() > 1e-9:
+        raise ValueError("object_points must lie on the board plane Z = 0")
+    usable = np.isfinite(corners).all(axis=(1, 2))
+    if usable.sum() < min_views:
+        missing = np.flatnonzero(~usable).tolist()
+        reason = f"; no board found in views {missing}" if missing else ""
+        raise ValueError(
+            f"only {int(usable.sum())} of {len(corners)} views have a board, need "
+            f"{min_views}{reason}"
+        )
+    views = np.flatnonzero(usable)
+    image_points = [points_to_cv(corners[v]) for v in views]
+    board = [np.ascontiguousarray(object_points, dtype=np.float32)] * len(views)
+    xy = corners[views].reshape(-1, 2)
+    size = (int(np.ceil(xy[:, 0].min() + xy[:, 0].max())) + 1,
+            int(np.ceil(xy[:, 1].min() + xy[:, 1].max())) + 1)  # fmt: skip
+    stop = (cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-12)
+    flags = _calibration_flags(radial, tangential)
+    rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(
+        board, image_points, size, None, None, flags=flags, criteria=stop
+    )
+    distortion = np.zeros(5)
+    distortion[: min(5, dist.size)] = dist.ravel()[:5]
+    R0, _ = cv2.Rodrigues(rvecs[0])
+    C0 = -R0.T @ tvecs[0].ravel()
+    camera = PinholeCamera(K, R0, C0, distortion, np.zeros(2, np.int64))
+    return BoardCalibration(camera, float(rms), views.astype(np.int64))

@@ -230,7 +230,12 @@ def _boards() -> dict[str, list[Case]]:
 
     views = board_views(views=3, width=320, height=240, focal=400.0, seed=1).views
     square = board_views(views=1, columns=5, rows=5, width=240, height=240, seed=2).views
+    board = board_views(views=6, width=320, height=240, focal=400.0, noise=0.0, seed=3)
+    corners = board.corners + np.random.default_rng(1).normal(0, 0.1, board.corners.shape)
+    calibration = {"corners": corners, "object_points": board.object_points}
     return {
+        "camera.calibrate_board": [(calibration, p) for p in ({}, {"radial": 1},
+                                                               {"tangential": True})],
         "camera.board_corners": [({"views": views}, {}),
                                  ({"views": square}, {"columns": 5, "rows": 5})],
     }  # fmt: skip

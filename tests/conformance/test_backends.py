@@ -125,3 +125,16 @@ def test_a_matrix_up_to_scale_is_compared_at_unit_norm_whatever_its_sign() -> No
     tilted = E + np.array([[0.0, 0.0, 0.3], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
     apart = np.linalg.norm(E / np.linalg.norm(E) - tilted / np.linalg.norm(tilted))
     assert _compare(rule, (E,), (tilted,), "E") == [f"E: unit-norm distance {apart:.3g} > 0.05"]
+
+
+def test_opencv_calibration_refuses_too_few_boards_naming_the_views() -> None:
+    from graphvision_plugins.opencv_backend import cv_calibrate_board
+
+    inputs, _ = CASES["camera.calibrate_board"][0]
+    corners = inputs["corners"].copy()
+    corners[2:] = np.nan
+    with pytest.raises(
+        ValueError,
+        match=r"only 2 of 6 views have a board, need 3; no board found in views \[2, 3, 4, 5\]",
+    ):
+        cv_calibrate_board(corners, inputs["object_points"])
