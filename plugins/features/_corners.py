@@ -206,8 +206,6 @@ def log_blobs(
 
     from ..shared.separable import gaussian_derivative
 
-    if max_sigma < min_sigma:
-        raise ValueError(f"max_sigma ({max_sigma}) must not be below min_sigma ({min_sigma})")
     sigmas = np.geomspace(min_sigma, max_sigma, scales)
     data = image.astype(np.float64)
 

@@ -121,8 +121,6 @@ def manual(
     -------
     mask : (H, W) bool ndarray
     """
-    if high is not None and high < low:
-        raise ValueError(f"high ({high}) must not be below low ({low})")
     mask = image > low
     return mask & (image <= high) if high is not None else mask
 
