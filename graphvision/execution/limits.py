@@ -43,6 +43,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from graphvision.compiler.compiled import CompiledGraph
+from graphvision.errors import PipelineError, Problem
 from graphvision.execution.crash_note import real_exit
 
 __all__ = [
@@ -54,6 +56,7 @@ __all__ = [
     "current_limits",
     "ended_by_limit",
     "node_limits",
+    "refuse_declared_limits",
     "start_on_own_thread",
 ]
 
@@ -260,3 +263,24 @@ def ended_by_limit(fn: Callable, args: tuple[Any, ...]) -> NodeLimitError | None
     with contextlib.suppress(OSError):
         note.parent.rmdir()  # the last note read
     return NodeLimitError(f"{message}; its worker process was ended and replaced")
+
+
+def refuse_declared_limits(compiled: CompiledGraph, executor: str) -> None:
+    """A ``timeout:`` in the pipeline on Dask (whose workers are not ours to end): one
+    problem per node, at its line, before anything runs."""
+    if executor != "dask":
+        return
+    graph = compiled.graph
+    problems = [
+        Problem(
+            graph.line_of(f"nodes.{name}.timeout"),
+            f"nodes.{name}.timeout",
+            "node time limits apply on sync, threads and processes, not dask "
+            "(remove it or choose another --executor)",
+            graph.source,
+        )
+        for name, node in graph.nodes.items()
+        if node.timeout is not None
+    ]
+    if problems:
+        raise PipelineError(problems, graph.source)

@@ -61,7 +61,7 @@ from graphvision.execution.executors import (
     make_executor,
 )
 from graphvision.execution.inputs import resolve_input
-from graphvision.execution.limits import current_limits, node_limits
+from graphvision.execution.limits import current_limits, node_limits, refuse_declared_limits
 from graphvision.execution.peak_memory import check_peak_memory, running_at_once
 from graphvision.execution.provenance import describe_run
 from graphvision.execution.record import RunHooks, RunRecord, RunResult
@@ -161,6 +161,7 @@ def run(
     given = _given_inputs(compiled, schedule, inputs)
     reference_keys = _referenced_inputs(compiled, given, registry)
     with pixel_budget(max_pixels), node_limits(node_timeout, node_memory):
+        refuse_declared_limits(compiled, executor_name(executor))
         timed = any(node.timeout for node in compiled.graph.nodes.values())
         current_limits().check_executor(executor_name(executor), timed)
         values = {

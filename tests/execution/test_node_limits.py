@@ -120,3 +120,14 @@ def test_a_timeout_in_the_pipeline_file_is_checked_and_kept(tmp_path):
     assert graph.nodes["nap"].timeout == 2.5
     again = gv.parse_pipeline(gv.dump_pipeline(graph), "again.yaml")
     assert again.nodes["nap"].timeout == 2.5
+
+
+def test_a_timeout_in_the_pipeline_file_is_refused_on_dask_at_its_line(tmp_path, capsys):
+    """Dask's workers are not ours to end: the file's timeout is named, with its line,
+    before anything runs (it was a ValueError from run(), an internal error on the CLI)."""
+    graph = _pipeline(tmp_path, "  ok: {op: slow.quick}\n  nap: {op: slow.sleep, timeout: 2}")
+    with pytest.raises(gv.PipelineError, match=r"nodes.nap.timeout at .*p.yaml:6: node time"):
+        gv.run(graph, cache=None, executor="dask")
+    assert main(["run", str(tmp_path / "p.yaml"), "--executor", "dask"]) == 2
+    err = capsys.readouterr().err
+    assert "nodes.nap.timeout at" in err and "not dask" in err and "Traceback" not in err
