@@ -88,9 +88,10 @@ class NodeLimits:
             return ()
         return (call_in_worker, str(_NOTES / uuid.uuid4().hex), seconds, self.memory, label)
 
-    def check_executor(self, name: str, declared: bool) -> None:
-        """Refuse limits where they cannot be kept (see the module docstring)."""
-        if name == "dask" and (self.timeout or self.memory or declared):
+    def check_executor(self, name: str) -> None:
+        """Refuse the run's limits where they cannot be kept (see the module docstring; a
+        pipeline's own ``timeout:`` on Dask is :func:`refuse_declared_limits`')."""
+        if name == "dask" and (self.timeout or self.memory):
             raise ValueError("node time and memory limits apply on sync, threads and processes")
         if self.memory is not None and name != "processes":
             raise ValueError(

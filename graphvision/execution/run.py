@@ -161,9 +161,9 @@ def run(
     given = _given_inputs(compiled, schedule, inputs)
     reference_keys = _referenced_inputs(compiled, given, registry)
     with pixel_budget(max_pixels), node_limits(node_timeout, node_memory):
-        refuse_declared_limits(compiled, executor_name(executor))
-        timed = any(node.timeout for node in compiled.graph.nodes.values())
-        current_limits().check_executor(executor_name(executor), timed)
+        where = executor_name(executor)
+        refuse_declared_limits(compiled, where)
+        current_limits().check_executor(where)
         values = {
             name: partial(resolve_input, name, compiled.input_types[name], value, registry)
             if name in reference_keys
