@@ -63,6 +63,7 @@ __all__ = [
     "SUFFIX",
     "CacheInfo",
     "DiskStore",
+    "warn_dropped",
 ]
 
 
@@ -83,6 +84,15 @@ class CacheInfo:
     entries: int
     bytes: int
     max_bytes: int
+
+
+def warn_dropped(path: object, reason: str) -> None:
+    """The warning a store gives for a corrupt entry it drops (the caller recomputes it)."""
+    warnings.warn(
+        f"cache entry {path} is corrupt ({reason}); dropped, the result is recomputed",
+        CacheWarning,
+        stacklevel=4,
+    )
 
 
 class DiskStore:
@@ -199,11 +209,7 @@ class DiskStore:
         return entry
 
     def _drop(self, path: Path, reason: str, remove: bool) -> None:
-        warnings.warn(
-            f"cache entry {path} is corrupt ({reason}); dropped, the result is recomputed",
-            CacheWarning,
-            stacklevel=3,
-        )
+        warn_dropped(path, reason)
         if remove:
             with contextlib.suppress(OSError):
                 path.unlink()

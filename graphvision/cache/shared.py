@@ -33,13 +33,19 @@ import contextlib
 import io
 import time
 import uuid
-import warnings
 from collections.abc import Iterator
 from datetime import datetime
 from typing import Any
 
-from graphvision.cache.disk import MARKER, MARKER_TEXT, STALE_TEMP_SECONDS, SUFFIX, CacheInfo
-from graphvision.cache.entries import CacheWarning, Encoded, NotACacheError
+from graphvision.cache.disk import (
+    MARKER,
+    MARKER_TEXT,
+    STALE_TEMP_SECONDS,
+    SUFFIX,
+    CacheInfo,
+    warn_dropped,
+)
+from graphvision.cache.entries import Encoded, NotACacheError
 from graphvision.cache.format import decode_blob, encode_blob
 from graphvision.values.memory import read_aligned
 
@@ -129,11 +135,7 @@ class FsspecStore:
             return None
 
     def _drop(self, path: str, reason: str, remove: bool) -> None:
-        warnings.warn(
-            f"cache entry {path} is corrupt ({reason}); dropped, the result is recomputed",
-            CacheWarning,
-            stacklevel=3,
-        )
+        warn_dropped(path, reason)
         if remove:
             with contextlib.suppress(OSError):
                 self.fs.rm_file(path)
