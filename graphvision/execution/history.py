@@ -78,6 +78,8 @@ def keep_previous_run(directory: Path, owned: set[str]) -> Path | None:
     history.mkdir(exist_ok=True)
     (history / MARKER).touch()
     staging = history / f".{entry.name}.writing"
+    if staging.is_symlink() or staging.is_file():  # planted or left: ours to replace
+        staging.unlink()
     shutil.rmtree(staging, ignore_errors=True)
     staging.mkdir()
     for name in sorted(owned):

@@ -79,6 +79,7 @@ class NodeModel(_Section):
     timeout: float | None = Field(
         None,
         gt=0,
+        allow_inf_nan=False,
         description="Seconds the node may run before it fails alone (the lower of this and "
         "--node-timeout applies).",
     )

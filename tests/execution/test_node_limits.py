@@ -131,3 +131,10 @@ def test_a_timeout_in_the_pipeline_file_is_refused_on_dask_at_its_line(tmp_path,
     assert main(["run", str(tmp_path / "p.yaml"), "--executor", "dask"]) == 2
     err = capsys.readouterr().err
     assert "nodes.nap.timeout at" in err and "not dask" in err and "Traceback" not in err
+
+
+def test_an_infinite_timeout_in_the_pipeline_file_is_refused_at_its_line(tmp_path):
+    """`timeout: .inf` passed validation, then broke the timer thread with a traceback and
+    the node ran unlimited."""
+    with pytest.raises(gv.PipelineError, match=r"nodes.nap.timeout at .*p.yaml:6: "):
+        _pipeline(tmp_path, "  ok: {op: slow.quick}\n  nap: {op: slow.sleep, timeout: .inf}")

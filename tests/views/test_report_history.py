@@ -74,3 +74,29 @@ def test_keep_intermediates_shows_cached_nodes_too(tmp_path, warm):
     page = (folder / "report.html").read_text()
     headings = re.findall(r"<h3>([^<]+)</h3>", page.split("Intermediate values")[-1])
     assert {"lstsq", "total", "points.truth"} <= set(headings)
+
+
+@pytest.mark.parametrize("planted", ["symlink", "file"])
+def test_a_planted_staging_name_neither_blocks_the_next_run_nor_is_written_through(
+    tmp_path, planted
+):
+    """The staging folder's name follows from record.json; a symlink or a file planted there
+    made every later run fail with 'File exists' until someone removed it."""
+    import hashlib
+
+    folder, cache, victim = tmp_path / "out", tmp_path / "cache", tmp_path / "victim"
+    victim.mkdir()
+    _run(folder, cache)
+    raw = (folder / "record.json").read_bytes()
+    date = str(json.loads(raw)["date"]).replace("+00:00", "Z")
+    name = f"000001-{re.sub(r'[^0-9TZ.]', '', date)}-{hashlib.sha256(raw).hexdigest()[:8]}"
+    (folder / "history").mkdir()
+    (folder / "history" / history.MARKER).touch()
+    staging = folder / "history" / f".{name}.writing"
+    if planted == "symlink":
+        staging.symlink_to(victim, target_is_directory=True)
+    else:
+        staging.write_text("planted")
+    _run(folder, cache)
+    assert (folder / "history" / name / "record.json").read_bytes() == raw
+    assert list(victim.iterdir()) == []
