@@ -167,4 +167,8 @@ def check_peak_memory(
 
 
 def _gib(count: int) -> str:
-    return f"{count / 2**30:.2f} GiB" if count >= 2**28 else f"{count / 2**20:.1f} MiB"
+    """A byte count in the largest unit that keeps it at least 0.25 (1 KiB, not '0.0 MiB')."""
+    for unit, size in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if count >= size // 4:
+            return f"{count / size:.2f} {unit}" if unit == "GiB" else f"{count / size:.1f} {unit}"
+    return f"{count} bytes"

@@ -18,6 +18,7 @@ loader checks, by construction.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -47,6 +48,7 @@ __all__ = [
 ]
 
 
+_SCALARS = (bool, int, float, str)
 _PATTERN_MESSAGES = {
     NAME_PATTERN: "names must be identifiers (letters, digits, _)",
     REF_PATTERN: "a reference must be 'node' or 'node.port' (identifiers)",
@@ -75,6 +77,12 @@ def _model_problems(
             message = output_name_problem(loc[1])
         elif item["type"] == "string_pattern_mismatch":
             message = _PATTERN_MESSAGES.get(item.get("ctx", {}).get("pattern", ""), message)
+        elif item["type"] == "too_short" and isinstance(item.get("input"), list):
+            message = "an empty list: name at least one, or leave the key out"
+        elif item["type"].endswith("_type") and isinstance(
+            item.get("input"), bool | int | float | str
+        ):
+            message += f", got {json.dumps(item['input'])}"
         line = 0
         parts = list(loc)
         while parts and not line:

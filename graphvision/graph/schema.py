@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StringConstraints
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictFloat, StringConstraints
 
 from graphvision.graph.model import (
     NAME_PATTERN,
@@ -48,6 +48,7 @@ class InputModel(_Section):
     description: str = Field("", description="What the input is for.")
     truth_of: list[Name] = Field(
         default_factory=list,
+        min_length=1,
         description="Inputs this one is the ground truth of: its default holds for their "
         "defaults only, so when one of them is given and this one is not, the outputs that "
         "read it are skipped (one line says why).",
@@ -76,7 +77,7 @@ class NodeModel(_Section):
         description="Node parameters; '${params.NAME}' substitutes a pipeline param.",
     )
     description: str = Field("", description="What this step does in the pipeline.")
-    timeout: float | None = Field(
+    timeout: StrictFloat | None = Field(
         None,
         gt=0,
         allow_inf_nan=False,
@@ -85,6 +86,7 @@ class NodeModel(_Section):
     )
     truth_of: list[Name] = Field(
         default_factory=list,
+        min_length=1,
         description="Inputs whose defaults this node measures against a truth written into "
         "the pipeline: when one of them is given, the outputs that read this node are "
         "skipped (one line says why).",

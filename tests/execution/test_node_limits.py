@@ -116,6 +116,10 @@ def test_a_timeout_in_the_pipeline_file_is_checked_and_kept(tmp_path):
         gv.PipelineError, match=r"nodes.nap.timeout at .*p.yaml:6: Input should be greater than 0"
     ):
         _pipeline(tmp_path, "  nap: {op: slow.sleep,\n         timeout: -2}")
+    with pytest.raises(
+        gv.PipelineError, match=r"nodes.nap.timeout at .*p.yaml:5: .*valid number, got true"
+    ):  # YAML's true was read as 1 second
+        _pipeline(tmp_path, "  nap: {op: slow.sleep, timeout: true}")
     graph = _pipeline(tmp_path, "  nap: {op: slow.sleep, timeout: 2.5}")
     assert graph.nodes["nap"].timeout == 2.5
     again = gv.parse_pipeline(gv.dump_pipeline(graph), "again.yaml")

@@ -81,3 +81,13 @@ def test_the_command_line_refuses_with_exit_2_and_creates_nothing(tmp_path, caps
     assert "this run cannot fit: it must hold at least" in err
     assert "1.0 MiB is allowed (--max-memory)" in err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("allowed", "shown"), [(2**10, "1.0 KiB is allowed"), (100, "100 bytes is allowed")]
+)
+def test_a_small_allowance_is_named_in_a_unit_that_shows_it(allowed, shown):
+    """``--max-memory 1K`` was reported as '0.0 MiB is allowed'."""
+    graph = gv.load_pipeline(PIPELINES / "edges.yaml")
+    with pytest.raises(gv.InputError, match=shown):
+        gv.run(graph, inputs={"image": _image((30, 40, 3))}, max_memory=allowed, cache=None)

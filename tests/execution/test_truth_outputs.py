@@ -129,3 +129,19 @@ def test_every_shipped_pipeline_marks_the_truth_inputs_it_has():
     ]
     reconstruct = gv.load_pipeline(PIPELINES / "reconstruct.yaml")
     assert reconstruct.nodes["errors"].truth_of == ["left", "right"]
+
+
+@pytest.mark.parametrize("where", ["input", "node"])
+def test_an_empty_truth_of_is_refused_at_its_line(tmp_path, where):
+    """``truth_of: []`` said nothing and was accepted silently."""
+    text = (
+        PIPELINE.replace("truth_of: [image]", "truth_of: []")
+        if where == "input"
+        else PIPELINE.replace("params: {sigma: 2.0}}", "params: {sigma: 2.0}, truth_of: []}")
+    )
+    (tmp_path / "empty.yaml").write_text(text)
+    line = next(n for n, row in enumerate(text.splitlines(), 1) if "truth_of: []" in row)
+    with pytest.raises(
+        gv.PipelineError, match=rf"truth_of at .*empty.yaml:{line}: an empty list: name at least"
+    ):
+        gv.load_pipeline(tmp_path / "empty.yaml")
