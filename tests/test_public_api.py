@@ -78,4 +78,13 @@ def test_pyproject_lists_every_package_so_a_wheel_holds_them_all():
     families = {"graphvision_plugins"} | {
         f"graphvision_plugins.{p.parent.name}" for p in (root / "plugins").glob("*/__init__.py")
     }
-    assert set(listed) == engine | families
+    data = {  # folders of files shipped with the code (the studio's built page): listed too,
+        # or setuptools warns that they are absent from `packages`
+        ".".join(folder.relative_to(root).parts)
+        for folder in (root / "graphvision").rglob("*")
+        if folder.is_dir()
+        and folder.name != "__pycache__"
+        and not (folder / "__init__.py").exists()
+        and any(child.is_file() for child in folder.iterdir())
+    }
+    assert set(listed) == engine | families | data
