@@ -17,7 +17,7 @@ demo: $(STAMP)
 	$(BIN)/graphvision run pipelines/homography.yaml --output-dir out/homography
 
 test: $(STAMP)
-	@start=$$(date +%s); $(BIN)/python -m pytest -n 2; status=$$?; \
+	@start=$$(date +%s); $(BIN)/python -m pytest -n 2 --dist worksteal; status=$$?; \
 	echo "make test: $$(( $$(date +%s) - start )) s"; exit $$status
 
 lint: $(STAMP)

@@ -30,6 +30,7 @@ def encoded(result: gv.RunResult) -> dict[str, tuple[dict[str, tuple[str, tuple,
     return bits
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("path", sorted(PIPELINES.glob("*.yaml")), ids=lambda p: p.name)
 def test_pipeline_runs_on_defaults_and_gives_the_same_bits_warm(path, tmp_path):
     """Cold, then warm with every other node's entries removed (so nodes compute on values

@@ -13,6 +13,8 @@ from graphvision_plugins.synthetic import SceneSet, digit_scenes
 
 from ...conftest import PIPELINES
 
+pytestmark = pytest.mark.heavy  # trains networks: run first (tests/conftest.py)
+
 # --- ROI pooling -----------------------------------------------------------------------
 
 

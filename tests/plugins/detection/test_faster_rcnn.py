@@ -23,6 +23,8 @@ from graphvision_plugins.synthetic import digit_scenes
 
 from ...conftest import PIPELINES
 
+pytestmark = pytest.mark.heavy  # trains networks: run first (tests/conftest.py)
+
 
 def test_roi_pooling_with_argmax_equals_roi_pooling_and_points_at_each_maximum():
     from graphvision_plugins.detection._faster_kernels import roi_max_pool_argmax

@@ -14,6 +14,8 @@ from graphvision_plugins.synthetic import instance_scenes
 
 from .test_faster_rcnn import small_backbone
 
+pytestmark = pytest.mark.heavy  # trains networks: run first (tests/conftest.py)
+
 
 def test_roi_align_samples_a_plane_exactly_at_the_bin_centres():
     rows, cols = np.mgrid[0:12, 0:16].astype(np.float64)

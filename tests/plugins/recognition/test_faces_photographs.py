@@ -27,6 +27,8 @@ from graphvision_plugins.synthetic._face_collage import ASTRONAUT_FACE, photogra
 
 from ...conftest import PIPELINES
 
+pytestmark = pytest.mark.heavy  # trains networks: run first (tests/conftest.py)
+
 
 @pytest.fixture(scope="module")
 def cascade():

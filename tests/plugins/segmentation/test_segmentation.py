@@ -15,6 +15,8 @@ from graphvision_plugins import segmentation, synthetic
 from graphvision_plugins.segmentation import Conv, MaxPool, Relu, UpConv
 from graphvision_plugins.synthetic import LabelledSceneSet
 
+pytestmark = pytest.mark.heavy  # trains networks: run first (tests/conftest.py)
+
 
 def _relative_error(analytic: np.ndarray, numeric: np.ndarray) -> float:
     return float(np.abs(analytic - numeric).max() / max(np.abs(numeric).max(), 1e-12))
