@@ -25,6 +25,7 @@ import bench_find_object  # noqa: E402
 import bench_held_out_geometry  # noqa: E402
 import bench_held_out_robust  # noqa: E402
 import bench_homography  # noqa: E402
+import bench_kernels_contrib  # noqa: E402
 import bench_kernels_vs_opencv  # noqa: E402
 import bench_recognition  # noqa: E402
 import bench_scheduler  # noqa: E402
@@ -57,6 +58,10 @@ def main() -> None:
             bench_held_out_robust.main,
         ),
         ("Own kernels against OpenCV, single-threaded (issue 26)", bench_kernels_vs_opencv.main),
+        (
+            "Own kernels against opencv-contrib, single-threaded (issue 26)",
+            bench_kernels_contrib.main,
+        ),
         (
             "Semantic segmentation: U-Net and per-pixel classifiers (issue 28)",
             bench_semantic_segmentation.main,

@@ -29,16 +29,6 @@ HOG_EPS = 1e-5
 Pair = tuple[Count, Count]
 
 
-def _gradients(images: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Central differences ``I[r+1] − I[r−1]`` (rows) and ``I[c+1] − I[c−1]`` (columns), in
-    the images' dtype, zero on the border rows and columns."""
-    g_row = np.zeros_like(images)
-    g_col = np.zeros_like(images)
-    g_row[..., 1:-1, :] = images[..., 2:, :] - images[..., :-2, :]
-    g_col[..., :, 1:-1] = images[..., :, 2:] - images[..., :, :-2]
-    return g_row.astype(np.float64), g_col.astype(np.float64)
-
-
 def hog_cells(images: np.ndarray, orientations: int, cell: tuple[int, int]) -> np.ndarray:
     r"""Cell histograms (..., cells_row, cells_col, orientations) of gray images (..., H, W).
 
@@ -48,28 +38,15 @@ def hog_cells(images: np.ndarray, orientations: int, cell: tuple[int, int]) -> n
     single precision, as scikit-image's); a histogram is divided by the cell's pixel
     count. Cells that do not fit whole are dropped.
     """
+    from ._hog_kernels import cell_histograms
+
     rows, cols = cell
     lead = images.shape[:-2]
-    cells_row, cells_col = images.shape[-2] // rows, images.shape[-1] // cols
-    g_row, g_col = _gradients(images)
-    g_row = g_row[..., : cells_row * rows, : cells_col * cols]
-    g_col = g_col[..., : cells_row * rows, : cells_col * cols]
-    magnitude = np.hypot(g_col, g_row)
-    angle = np.rad2deg(np.arctan2(g_row, g_col)) % 180
+    stack = images.reshape(-1, *images.shape[-2:])
     step = np.float32(180.0 / orientations)
     edges = (step * np.arange(orientations + 1, dtype=np.float32)).astype(np.float64)
-    bins = np.searchsorted(edges, angle, side="right") - 1
-    magnitude = np.where(bins < orientations, magnitude, 0.0)
-    bins = np.minimum(bins, orientations - 1)
-    # one flat index per (image, cell, bin), summed with bincount
-    shape = (*lead, cells_row, rows, cells_col, cols)
-    cell_index = np.arange(int(np.prod(lead, dtype=np.int64)) * cells_row * cells_col).reshape(
-        *lead, cells_row, 1, cells_col, 1
-    )
-    flat = (np.broadcast_to(cell_index, shape) * orientations + bins.reshape(shape)).ravel()
-    total = cell_index.size * orientations
-    histogram = np.bincount(flat, weights=magnitude.reshape(shape).ravel(), minlength=total)
-    return histogram.reshape(*lead, cells_row, cells_col, orientations) / (rows * cols)
+    histogram = cell_histograms(np.ascontiguousarray(stack), orientations, rows, cols, edges)
+    return histogram.reshape(*lead, *histogram.shape[1:]) / (rows * cols)
 
 
 def normalise_blocks(cells: np.ndarray, block: tuple[int, int]) -> np.ndarray:
