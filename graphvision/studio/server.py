@@ -45,12 +45,13 @@ class StudioServer:
         return f"http://{shown}:{self.port}/?token={self.token}"
 
     def stop(self) -> None:
-        """Stop serving (the runs in flight are left to finish in their threads)."""
+        """Stop serving: the run in flight is cancelled, the worker processes end."""
         self.session.emit({"event": "closed"})  # event streams end, so shutting down is quick
         if self.server is not None:
             self.server.should_exit = True
         if self.thread is not None:
             self.thread.join(10)
+        self.session.close()
 
     def _repr_html_(self) -> str:
         return (

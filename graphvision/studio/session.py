@@ -7,11 +7,14 @@ each node port as an extra output), so a node the change does not reach is loade
 the cache and its value is at hand for the viewers, while only the nodes downstream of
 the change compute.
 
-A newer change supersedes a run in flight: the run's hooks refuse to start any further
-node of it (the executor is shut down, queued nodes are dropped), its events are marked
-with its id so the page ignores them, and its values are never mixed with the newer
-run's: each run keeps its own values, looked up by run id. A node already running in a
-thread finishes (Python cannot stop a thread); its result is cached, not shown.
+A newer change supersedes a run in flight (and the page's cancel button cancels it): the
+run's hooks refuse to start any further node of it, its events are marked with its id so
+the page ignores them, and its values are never mixed with the newer run's: each run
+keeps its own values, looked up by run id. On the ``processes`` executor (the default)
+nodes run in the session's worker processes (:mod:`.workers`): a node of the stopped run
+still running has its worker killed at once, so no stale work keeps the CPU busy, and a
+worker that dies fails its node alone, naming it. On ``threads`` or ``sync`` a node
+already running finishes (Python cannot stop a thread); its result is cached, not shown.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from graphvision.execution.record import RunHooks, RunRecord
 from graphvision.execution.run import run
 from graphvision.graph.model import Graph, Ref
 from graphvision.nodes.registry import Registry
+from graphvision.studio.workers import WorkerPool
 
 __all__ = ["KEPT_RUNS", "Session", "StudioRun", "Superseded"]
 
@@ -80,6 +84,7 @@ class StudioRun:
     record: RunRecord | None = None
     compiled: CompiledGraph | None = None
     stop: bool = False
+    killed: list[int] = field(default_factory=list)  # workers ended when it was stopped
 
     def summary(self) -> dict[str, Any]:
         """What the page lists about the run (JSON)."""
@@ -119,8 +124,12 @@ class _Hooks(RunHooks):
         self.session.emit({"event": "node", "run": self.run.id, "node": name, "status": "running"})
 
     def node_finished(self, *, name: str, op: str, status: str, seconds: float) -> None:
-        self.run.nodes[name] = {"status": status, "seconds": seconds}
         stored = self.session.cache.taken()
+        if self.run.stop and status == "failed":  # its worker was ended: not its failure
+            self.run.nodes[name] = {"status": "stopped", "seconds": seconds}
+            stored.clear()
+            raise Superseded
+        self.run.nodes[name] = {"status": status, "seconds": seconds}
         streamed = False
         if status == "computed" and self.run.compiled is not None and not self.run.stop:
             ports = list(self.run.compiled.steps[name].outputs)
@@ -148,6 +157,11 @@ class Session:
         Graph inputs and ``node.param`` overrides to start from (``-i`` and ``--set``).
     cache : Cache, optional
         Where values are kept between runs (default: 1 GiB in memory).
+    executor : {"processes", "threads", "sync"}
+        Where nodes run: ``processes`` (the session's own worker processes, ended when
+        their run is superseded; see :mod:`.workers`), or in this process.
+    workers : int, optional
+        Worker processes (default: the machine's cores).
     """
 
     def __init__(
@@ -158,7 +172,8 @@ class Session:
         inputs: dict[str, Any] | None = None,
         overrides: dict[str, Any] | None = None,
         cache: Cache | None = None,
-        executor: str = "threads",
+        executor: str = "processes",
+        workers: int | None = None,
     ) -> None:
         self.graph, self.registry, self.executor = graph, registry, executor
         self.inputs = dict(inputs or {})
@@ -170,6 +185,7 @@ class Session:
         self.listeners: list[Callable[[dict[str, Any]], None]] = []
         self.lock = threading.RLock()
         self.threads: list[threading.Thread] = []
+        self.pool = WorkerPool(workers) if executor == "processes" else None
 
     # -- events -----------------------------------------------------------------------
 
@@ -212,6 +228,7 @@ class Session:
             if previous is not None and previous.status == "running":
                 previous.stop = True
                 previous.status = "superseded"
+                self._end_workers(previous, "superseded")
                 self.emit({"event": "run", "run": previous.id, "status": "superseded"})
             diff = _diff(previous.overrides if previous else {}, self.overrides)
             studio_run = StudioRun(
@@ -236,16 +253,29 @@ class Session:
             if current is None or current.status != "running":
                 return None
             current.stop, current.status = True, "cancelled"
+            self._end_workers(current, "cancelled")
         self.emit({"event": "run", "run": current.id, "status": "cancelled"})
         return current
+
+    def _end_workers(self, studio_run: StudioRun, why: str) -> None:
+        """Kill the workers still running nodes of a stopped run (processes only)."""
+        if self.pool is not None:
+            studio_run.killed = self.pool.end_run(studio_run.id, f"its run was {why}")
+
+    def close(self) -> None:
+        """Stop the run in flight and end the worker processes (the studio stops)."""
+        self.cancel()
+        if self.pool is not None:
+            self.pool.close()
 
     def _run(self, studio_run: StudioRun, compiled: CompiledGraph) -> None:
         began = time.perf_counter()
         result = None
+        executor = self.pool.executor(studio_run.id) if self.pool else self.executor
         try:
             result = run(
                 compiled, self.registry, inputs=studio_run.inputs, cache=self.cache,
-                executor=self.executor, hooks=[_Hooks(self, studio_run)], keep_going=True,
+                executor=executor, hooks=[_Hooks(self, studio_run)], keep_going=True,
             )  # fmt: skip
         except Superseded:
             pass
