@@ -85,7 +85,38 @@ function history(node, port) {
   }).filter((h) => h.value !== undefined);
 }
 
-async function renderValue(container, run, node, port) {
+// A value's picture as RGBA bytes (no PNG to encode or decode), made ready to draw off
+// the main thread (createImageBitmap); null when it has none.
+async function fetchPicture(base, step = 1) {
+  const r = await fetch(`api/rgba/${base}?step=${step}`);
+  if (!r.ok) return null;
+  const [ph, pw] = r.headers.get("X-Shape").split(",").map(Number);
+  const data = new ImageData(new Uint8ClampedArray(await r.arrayBuffer()), pw, ph);
+  return typeof createImageBitmap === "function" ? createImageBitmap(data) : pictureCanvas(data);
+}
+
+function pictureCanvas(data) {
+  const canvas = document.createElement("canvas");
+  canvas.width = data.width;
+  canvas.height = data.height;
+  canvas.getContext("2d").putImageData(data, 0, 0);
+  return canvas;
+}
+
+// The image viewer drawing on each canvas (to know at what zoom a picture is shown).
+const viewerOf = new WeakMap();
+
+// How many times smaller than the picture a first preview can be, shown where `canvas`
+// is: the viewer's zoom shows 1/scale picture pixels per canvas pixel (1: no preview).
+function previewStep(canvas) {
+  const scale = viewerOf.get(canvas)?.scale;
+  return scale > 0 ? Math.max(1, Math.min(16, Math.floor(1 / scale))) : 1;
+}
+
+// `picture`: `{ step, promise }` of the picture's request, when the caller started it
+// already (a repaint of a card that showed one), so that it travels while the value's
+// description is asked for. A preview (step > 1) is drawn first, the picture after it.
+async function renderValue(container, run, node, port, picture = null) {
   const found = await api(`api/value/${run}/${node}/${port}`);
   if (!found.ok) { container.append(el("div", { class: "gv-error" }, found.data?.error || "no value")); return null; }
   const d = found.data;
@@ -102,15 +133,17 @@ async function renderValue(container, run, node, port) {
       const r = await fetch(`api/raw/${base}`);
       if (r.ok) viewer.setValues(new Float32Array(await r.arrayBuffer()), r.headers.get("X-Shape").split(",").map(Number));
     });
-    await addOverlays(viewer, run, node, port);
-    const r = await fetch(`api/rgba/${base}`);  // raw bytes: no PNG to encode or decode
-    if (r.ok) {
-      const [ph, pw] = r.headers.get("X-Shape").split(",").map(Number);
-      const canvas = document.createElement("canvas");
-      canvas.width = pw;
-      canvas.height = ph;
-      canvas.getContext("2d").putImageData(new ImageData(new Uint8ClampedArray(await r.arrayBuffer()), pw, ph), 0, 0);
-      viewer.setSource(canvas);
+    viewer.canvas.dataset.picture = "rgba";
+    viewerOf.set(viewer.canvas, viewer);
+    const first = picture || { step: 1, promise: fetchPicture(base) };
+    const [bitmap] = await Promise.all([first.promise, addOverlays(viewer, run, node, port)]);
+    if (bitmap) viewer.setSource(bitmap);
+    if (bitmap && first.step > 1) {
+      viewer.canvas.dataset.preview = String(first.step);
+      fetchPicture(base).then((full) => {
+        if (full) viewer.setSource(full);
+        delete viewer.canvas.dataset.preview;
+      });
     }
   } else if (d.view === "floatmap") {
     const r = await fetch(`api/raw/${base}`);
@@ -159,7 +192,11 @@ async function repaintNode(run, node) {
     fresh.classList.remove("gv-stale");
     fresh.dataset.streamed = String(run);
     fresh.append(card.querySelector("h4").cloneNode(true));
-    await renderValue(fresh, run, node, card.dataset.portName);
+    const base = `${run}/${node}/${card.dataset.portName}`;
+    const shown = card.querySelector("canvas[data-picture]");
+    const step = shown ? previewStep(shown) : 1;
+    const picture = shown ? { step, promise: fetchPicture(base, step) } : null;
+    await renderValue(fresh, run, node, card.dataset.portName, picture);
     if (run === S.latest) card.replaceWith(fresh);
   }));
   window.dispatchEvent(new CustomEvent("gv-node-painted", { detail: { run, node } }));

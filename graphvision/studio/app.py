@@ -14,7 +14,8 @@ other request gets 403. Routes:
 ``GET /api/runs``                       every run of the session: diff, metrics, states
 ``GET /api/value/RUN/NODE/PORT``        a value's description (:mod:`.payload`)
 ``GET /api/png/RUN/NODE/PORT``          its picture; ``/api/raw/...`` its float32 values;
-                                        ``/api/rgba/...`` its picture as RGBA bytes
+                                        ``/api/rgba/...?step=N`` its picture as RGBA bytes,
+                                        N times smaller (made ahead: :mod:`.pictures`)
 ``POST /api/save``                      ``{"path": optional new file}``: save parameters
 ``GET /api/command``                    the equivalent ``graphvision run`` command
 """
@@ -40,7 +41,8 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 
 from graphvision.errors import PipelineError
 from graphvision.studio.describe import describe_graph
-from graphvision.studio.payload import describe_value, png_of, raw_of, rgba_of
+from graphvision.studio.payload import MAX_STEP, describe_value, png_of, raw_of
+from graphvision.studio.pictures import Pictures
 from graphvision.studio.saving import command_line, save_parameters
 from graphvision.studio.session import Session, StudioRun
 
@@ -106,6 +108,7 @@ class _Api:
     def __init__(self, session: Session) -> None:
         self.session = session
         self.pngs: OrderedDict[tuple[int, str, str], bytes] = OrderedDict()
+        self.pictures = Pictures(session)
 
     async def page(self, request: Request) -> Response:
         text = (STATIC / "index.html").read_text(encoding="utf-8")
@@ -225,15 +228,25 @@ class _Api:
         found = self._value(request)
         if isinstance(found, Response):
             return found
+        studio_run, node, port = found[:3]
+        text = request.query_params.get("step", "1")
+        if not text.isdigit() or not 1 <= int(text) <= MAX_STEP:
+            message = f"step={text!r}: must be a whole number from 1 to {MAX_STEP}"
+            return JSONResponse({"error": message}, 400)
         began = time.perf_counter()
-        picture = await run_in_threadpool(rgba_of, found[3], found[4])
+        self.pictures.wanted(studio_run.id, node, port, int(text))
+        making = self.pictures.future(studio_run, node, port, int(text))
+        picture = None if making is None else await asyncio.wrap_future(making)
         if picture is None:
             return JSONResponse({"error": "no picture for this type"}, 404)
-        data, shape = picture
+        data, shape, seconds = picture
+        waited = (time.perf_counter() - began) * 1e3
         headers = {
             "X-Shape": ",".join(map(str, shape)),
             "Cache-Control": "no-store",
-            "Server-Timing": f"encode;dur={(time.perf_counter() - began) * 1e3:.1f}",
+            # encode: what this request waited for the picture (made ahead when the page
+            # showed the port before); made: what making it took (on the picture thread)
+            "Server-Timing": f"encode;dur={waited:.1f}, made;dur={seconds * 1e3:.1f}",
         }
         return Response(data, media_type="application/octet-stream", headers=headers)
 

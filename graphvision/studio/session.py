@@ -129,7 +129,7 @@ class _Hooks(RunHooks):
             self.run.nodes[name] = {"status": "stopped", "seconds": seconds}
             stored.clear()
             raise Superseded
-        self.run.nodes[name] = {"status": status, "seconds": seconds}
+        self.run.nodes[name] = {"status": status, "seconds": seconds, "ended": time.time()}
         streamed = False
         if status == "computed" and self.run.compiled is not None and not self.run.stop:
             ports = list(self.run.compiled.steps[name].outputs)
@@ -185,7 +185,10 @@ class Session:
         self.listeners: list[Callable[[dict[str, Any]], None]] = []
         self.lock = threading.RLock()
         self.threads: list[threading.Thread] = []
-        self.pool = WorkerPool(workers) if executor == "processes" else None
+        self.pool = None
+        if executor == "processes":
+            functions = [step.spec.ref for step in self.compiled.steps.values()]
+            self.pool = WorkerPool(workers, warm=functions)
 
     # -- events -----------------------------------------------------------------------
 
