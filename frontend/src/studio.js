@@ -35,12 +35,9 @@ function onEvent(event) {
     S.runs[event.run] = { ...(S.runs[event.run] || {}), ...event };
     if (event.status === "running") {
       S.latest = Math.max(S.latest, event.run);
-      $("#run-status").textContent = `run ${event.run} running`;
-      $("#cancel").disabled = false;
+      showRunning(event.run);
     } else if (event.run === S.latest) {
-      $("#run-status").textContent = `run ${event.run} ${event.status}` +
-        (event.seconds ? ` in ${(event.seconds * 1000).toFixed(0)} ms` : "") + (event.error ? ": see failed nodes" : "");
-      $("#cancel").disabled = true;
+      showStatus(event);
       if (event.status === "done" || event.status === "failed") showRun(event.run);
       if (event.status === "cancelled") for (const [id, s] of Object.entries(S.states)) if (s.state === "running" || s.state === "queued") setNodeState(id, "stale");
       refreshRuns();
@@ -58,6 +55,27 @@ function onEvent(event) {
     setNodeState(event.node, event.status, event.seconds);
     if (event.value) repaintNode(event.run, event.node);
   }
+}
+
+function showRunning(id) {
+  $("#run-status").textContent = `run ${id} running`;
+  $("#run-status").dataset.status = "running";
+  $("#cancel").disabled = false;
+}
+
+// The latest run's end in the header: how it ended, in how long, and why it failed.
+function showStatus(run) {
+  $("#run-status").textContent = `run ${run.id ?? run.run} ${run.status}` +
+    (run.seconds ? ` in ${(run.seconds * 1000).toFixed(0)} ms` : "") + (run.error ? `: ${whyFailed(run)}` : "");
+  $("#run-status").dataset.status = run.status;
+  $("#cancel").disabled = true;
+}
+
+// What made a run fail, in the command line's words: each failed node's error (naming the
+// node: a node that raised, a worker that died), else the run's (an input file deleted).
+function whyFailed(event) {
+  const nodes = Object.values(event.nodes || {}).filter((n) => n.error && n.status === "failed");
+  return nodes.length ? nodes.map((n) => n.error).join("; ") : event.error;
 }
 
 async function showRun(id) {
@@ -363,6 +381,10 @@ async function refreshRuns() {
     const diff = Object.entries(r.diff).map(([k, [o, n]]) => `${k}: ${o ?? "file"} → ${n ?? "file"}`).join("; ");
     const metrics = Object.entries(r.metrics).map(([k, v]) => `${k} ${typeof v === "number" ? Number(v.toPrecision(4)) : v}`).join(", ");
     if (r.kept && r.id === S.latest && r.status !== "running" && r.id > S.shown) showRun(r.id);
+    if (r.id === S.latest) {  // a start or an end this tab missed (it opened meanwhile)
+      if (r.status !== "running") showStatus(r);
+      else showRunning(r.id);
+    }
     table.append(el("tr", { "data-run": r.id }, el("td", {}, a), el("td", {}, b), el("td", {}, String(r.id)), el("td", {}, r.status),
       el("td", {}, (r.seconds * 1000).toFixed(0)), el("td", {}, diff || "–"), el("td", {}, metrics || "–")));
   }
@@ -431,6 +453,7 @@ async function main() {
   if (last) {
     S.latest = last.id;
     if (last.status !== "running") showRun(last.id);
+    else showRunning(last.id);
   }
   const first = Object.values(S.graph.outputs)[0];
   if (first) select(first[0]);

@@ -1,0 +1,151 @@
+"""The studio's page when things go wrong, in Debian's Chromium (Playwright): a worker
+killed with ``kill -9``, the cancel button on a node that would spin for ten minutes, an
+input file deleted while the studio runs. The page says what happened, naming the node or
+the file; the server keeps serving and the next change runs."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+pytest.importorskip("starlette")
+sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+
+import graphvision as gv  # noqa: E402
+from graphvision.studio.server import studio  # noqa: E402
+
+PLUGIN = Path(__file__).parent / "stopping_plugin.py"
+TOY = Path(__file__).parents[1] / "fixtures" / "toy.py"
+BROWSER = next(
+    (shutil.which(name) for name in ("chromium", "chromium-browser") if shutil.which(name)), None
+)
+pytestmark = pytest.mark.skipif(BROWSER is None, reason="no Chromium installed (CI installs one)")
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[object]:
+    with sync_api.sync_playwright() as playwright:
+        launched = playwright.chromium.launch(executable_path=BROWSER, args=["--no-sandbox"])
+        yield launched
+        launched.close()
+
+
+@pytest.fixture(scope="module")
+def registry() -> gv.Registry:
+    return gv.discover([PLUGIN, TOY])
+
+
+def _spinning(registry: gv.Registry, pidfile: Path):
+    graph = gv.Graph("spinning")
+    graph.input("x", "Float", default=1.0)
+    graph.add("spin", "studio_test.spin", x="x",
+              params={"seconds": 600.0, "pidfile": str(pidfile)})  # fmt: skip
+    graph.output("y", "spin")
+    return studio(graph, registry=registry)
+
+
+def _pid(pidfile: Path) -> int:
+    deadline = time.monotonic() + 120  # a cold worker imports numpy and the plugins first
+    while not pidfile.exists() or not pidfile.read_text():
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    return int(pidfile.read_text())
+
+
+def _ended(pid: int) -> bool:
+    deadline = time.monotonic() + 1.0
+    while time.monotonic() < deadline:
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except FileNotFoundError:
+            return True
+        if state in ("Z", "X"):
+            return True
+        time.sleep(0.01)
+    return False
+
+
+def _status(page, status: str) -> str:
+    page.wait_for_selector(f"#run-status[data-status={status}]", timeout=60_000)
+    return page.inner_text("#run-status")
+
+
+def test_the_page_names_the_node_whose_worker_died_and_the_next_change_runs(
+    browser, registry, tmp_path: Path
+) -> None:
+    server = _spinning(registry, tmp_path / "pid")
+    try:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(server.url)
+        pid = _pid(tmp_path / "pid")
+        os.kill(pid, signal.SIGKILL)
+        said = _status(page, "failed")
+        assert re.search(
+            r"run 1 failed in \d+ ms: node 'spin' \(op studio_test.spin\) failed: "
+            rf"WorkerDiedError: the worker process running this node \(pid {pid}\) died: "
+            r"killed by signal 9 \(SIGKILL\); a new worker took its place",
+            said,
+        ), said
+        page.click("[data-node=spin]")
+        box = page.locator("[data-inspect=spin] [data-param=seconds] input.gv-number")
+        box.fill("0.25")
+        box.press("Enter")
+        page.wait_for_selector("body[data-painted-run='2']", timeout=60_000)
+        assert float(page.inner_text("[data-output=y] .gv-scalar")) == 1.25
+        assert server.session.runs[-1].status == "done"
+    finally:
+        server.stop()
+
+
+def test_the_cancel_button_ends_the_running_node(browser, registry, tmp_path: Path) -> None:
+    server = _spinning(registry, tmp_path / "pid")
+    try:
+        page = browser.new_page()
+        page.goto(server.url)
+        pid = _pid(tmp_path / "pid")
+        page.wait_for_selector("#cancel:not([disabled])")
+        page.click("#cancel")
+        assert _status(page, "cancelled").startswith("run 1 cancelled")
+        assert _ended(pid)  # not after ten minutes: the node's worker was killed
+        assert page.get_attribute("[data-node=spin]", "data-state") == "stale"
+        assert server.session.runs[-1].nodes["spin"]["status"] == "stopped"
+    finally:
+        server.stop()
+
+
+def test_an_input_deleted_while_the_studio_runs_is_named(
+    browser, registry, tmp_path: Path
+) -> None:
+    picture = tmp_path / "scene.png"
+    iio.imwrite(picture, np.zeros((8, 8), np.uint8))
+    graph = gv.Graph("counting")
+    graph.input("image", "Image", default=str(picture))
+    graph.add("n", "toy.count", image="image")
+    graph.output("n", "n")
+    server = studio(graph, registry=registry)
+    try:
+        page = browser.new_page()
+        page.goto(server.url)
+        page.wait_for_selector("body[data-painted-run='1']", timeout=60_000)
+        picture.unlink()
+        page.click("[data-node=image]")
+        page.fill("[data-input=image]", str(picture))  # the same path: ask for a run
+        page.dispatch_event("[data-input=image]", "change")
+        said = _status(page, "failed")
+        assert re.search(rf"run 2 failed.*: input 'image': no such file: {picture}", said), said
+        iio.imwrite(picture, np.zeros((4, 4), np.uint8))  # the server kept serving
+        page.fill("[data-input=image]", str(picture))
+        page.dispatch_event("[data-input=image]", "change")
+        page.wait_for_selector("body[data-painted-run='3']", timeout=60_000)
+        assert page.inner_text("[data-output=n] .gv-scalar") == "16"
+    finally:
+        server.stop()
