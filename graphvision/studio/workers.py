@@ -7,7 +7,7 @@ that makes it slow. The studio therefore runs its nodes in worker processes of i
 one thread here that knows which run's node it is running. Ending a run
 (:meth:`WorkerPool.end_run`) drops its queued nodes and kills (``SIGKILL``) every worker
 running one of its nodes; the worker is replaced by a new process at once. The killed
-node's future fails with :class:`NodeStopped`, so no value of it reaches the cache (the
+node's future fails with :class:`NodeStoppedError`, so no value of it reaches the cache (the
 engine stores whole results only, in this process).
 
 A worker that dies by itself (``kill -9`` from outside, ``os._exit`` or a crash in a
@@ -20,6 +20,7 @@ bits as there; each worker holds one BLAS thread (:mod:`graphvision.execution.bl
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import pickle
@@ -35,7 +36,7 @@ from typing import Any
 from graphvision.execution.executors import WorkerDiedError
 from graphvision.execution.limits import ended_by_limit
 
-__all__ = ["NodeStopped", "RunExecutor", "WorkerPool", "how_it_ended", "receive", "send"]
+__all__ = ["NodeStoppedError", "RunExecutor", "WorkerPool", "how_it_ended", "receive", "send"]
 
 _SPAWN = multiprocessing.get_context("spawn")
 
@@ -59,7 +60,7 @@ def receive(connection: Any) -> Any:
     return pickle.loads(memoryview(head)[4:], buffers=buffers)
 
 
-class NodeStopped(RuntimeError):
+class NodeStoppedError(RuntimeError):
     """The node's run was superseded or cancelled: its worker was ended mid-node."""
 
 
@@ -113,7 +114,7 @@ class WorkerPool:
         task = _Task(run, fn, args)
         task.future.set_running_or_notify_cancel()
         if self.closed:
-            task.future.set_exception(NodeStopped("the studio is closing"))
+            task.future.set_exception(NodeStoppedError("the studio is closing"))
         else:
             self.tasks.put(task)
         return task.future
@@ -155,7 +156,7 @@ class WorkerPool:
             except queue.Empty:
                 break
             if task is not None and (run is None or task.run == run):
-                task.future.set_exception(NodeStopped(why))
+                task.future.set_exception(NodeStoppedError(why))
             else:
                 kept.append(task)
         for task in kept:
@@ -166,7 +167,9 @@ class WorkerPool:
     def _start_worker(self) -> _Worker:
         mine, theirs = _SPAWN.Pipe()
         process = _SPAWN.Process(
-            target=_serve, args=(theirs, os.getpid(), self.warm), daemon=True,
+            target=_serve,
+            args=(theirs, os.getpid(), self.warm),
+            daemon=True,
             name="graphvision-studio",
         )
         process.start()
@@ -241,7 +244,8 @@ class WorkerPool:
     def _died(self, worker: _Worker, task: _Task) -> bool:
         worker.process.join()
         if task.stopped:
-            task.future.set_exception(NodeStopped("its run was superseded: its worker was ended"))
+            stopped = "its run was superseded or cancelled: its worker was ended"
+            task.future.set_exception(NodeStoppedError(stopped))
             return False
         ended = ended_by_limit(task.fn, task.args)
         task.future.set_exception(
@@ -300,10 +304,8 @@ def _serve(connection: Any, parent: int, warm: list[Any]) -> None:
     one_blas_thread_for_good()
     threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
     for ref in warm:
-        try:
+        with contextlib.suppress(Exception):  # the node fails when it runs, saying why
             ref.resolve()
-        except Exception:  # the node fails when it runs, saying why
-            pass
     while True:
         try:
             fn, args = receive(connection)

@@ -122,9 +122,7 @@ def test_the_cancel_button_ends_the_running_node(browser, registry, tmp_path: Pa
         server.stop()
 
 
-def test_an_input_deleted_while_the_studio_runs_is_named(
-    browser, registry, tmp_path: Path
-) -> None:
+def test_an_input_deleted_while_the_studio_runs_is_named(browser, registry, tmp_path: Path) -> None:
     picture = tmp_path / "scene.png"
     iio.imwrite(picture, np.zeros((8, 8), np.uint8))
     graph = gv.Graph("counting")

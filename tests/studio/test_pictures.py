@@ -1,0 +1,119 @@
+"""Pictures for the page: RGBA bytes of known values, previews made smaller by block means,
+made ahead of the page's request, a bad ``step`` refused with its reason; values to and
+from the workers out of band."""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("starlette")
+
+import graphvision as gv
+from graphvision.studio.payload import rgba_of, shrunk
+from graphvision.studio.pictures import Pictures
+from graphvision.studio.server import studio
+from graphvision.studio.session import Session
+from graphvision.studio.workers import receive, send
+
+TOY = Path(__file__).parents[1] / "fixtures" / "toy.py"
+
+
+class _Shown(gv.ColorImagePort):
+    """A colour image whose picture is its value (the test's numbers, unchanged)."""
+
+    @classmethod
+    def preview(cls, value: np.ndarray) -> np.ndarray:
+        return value
+
+
+def test_rgba_bytes_are_the_rounded_levels_with_nan_as_zero() -> None:
+    levels = np.arange(256, dtype=np.float64) / 255.0  # level k is k/255: its byte is k
+    picture = np.stack([levels, levels[::-1], np.full(256, 0.5)], axis=1).reshape(16, 16, 3)
+    picture[0, 0] = [np.nan, np.inf, -np.inf]
+    picture[0, 1] = [-3.0, 7.0, 0.5]
+    data, shape = rgba_of(_Shown, picture.astype(np.float32))
+    rgba = np.frombuffer(data, np.uint8).reshape(16, 16, 4)
+    assert shape == [16, 16]
+    expected = np.stack([np.arange(256), 255 - np.arange(256), np.full(256, 128)], axis=1)
+    expected = expected.reshape(16, 16, 3)
+    expected[0, 0] = [0, 255, 0]  # NaN as 0, +inf as 1, -inf as 0
+    expected[0, 1] = [0, 255, 128]  # clipped to [0, 1]
+    assert np.array_equal(rgba[:, :, :3], expected)
+    assert (rgba[:, :, 3] == 255).all()
+
+
+def test_a_gray_picture_is_the_same_in_red_green_and_blue() -> None:
+    gray = np.array([[0.0, 1.0], [0.2, 0.6]], np.float32)
+    data, _ = rgba_of(gv.GrayImagePort, gray)
+    rgba = np.frombuffer(data, np.uint8).reshape(2, 2, 4)
+    assert rgba[:, :, 0].tolist() == [[0, 255], [51, 153]]
+    assert (rgba[:, :, 0] == rgba[:, :, 1]).all() and (rgba[:, :, 0] == rgba[:, :, 2]).all()
+
+
+def test_a_preview_is_the_mean_of_each_block() -> None:
+    picture = np.arange(5 * 7, dtype=np.float32).reshape(5, 7)  # 5x7: 2x3 whole 2x2 blocks
+    small = shrunk(picture, 2)
+    assert small.shape == (2, 3)
+    assert small[0, 0] == pytest.approx((0 + 1 + 7 + 8) / 4)
+    assert small[1, 2] == pytest.approx((18 + 19 + 25 + 26) / 4)
+    assert shrunk(picture, 1) is picture
+    assert shrunk(picture, 8) is picture  # no whole block: the picture itself
+    data, shape = rgba_of(_Shown, np.ones((40, 60, 3), np.float32) * 0.2, step=4)
+    assert shape == [10, 15] and len(data) == 10 * 15 * 4
+
+
+def test_the_picture_the_page_shows_is_made_when_its_node_finishes() -> None:
+    graph = gv.Graph("darkening")
+    graph.input("image", "GrayImage", default=np.full((6, 8), 0.8, np.float32))
+    graph.add("dark", "toy.darken", image="image", params={"factor": 0.5})
+    graph.output("dark", "dark")
+    session = Session(graph, gv.discover([TOY]), executor="threads")
+    pictures = Pictures(session)
+    first = session.start()
+    session.wait()
+    assert pictures.made == {}  # the page has shown no picture yet
+    pictures.wanted(first.id, "dark", "out", 2)
+    second = session.change({"dark.factor": 0.25})
+    session.wait()
+    made = pictures.made[(second.id, "dark", "out", 2)].result()  # before anyone asked
+    data, shape, _ = made
+    assert shape == [3, 4]
+    assert set(data[::4]) == {round(0.8 * 0.25 * 255)}  # the newer run's value
+
+
+def test_a_bad_step_is_refused_with_its_reason() -> None:
+    graph = gv.Graph("darkening")
+    graph.input("image", "GrayImage", default=np.full((6, 8), 0.8, np.float32))
+    graph.add("dark", "toy.darken", image="image")
+    graph.output("dark", "dark")
+    server = studio(graph, registry=gv.discover([TOY]))
+    try:
+        server.session.wait()
+        base = f"http://127.0.0.1:{server.port}/api/rgba/1/dark/out?token={server.token}"
+        with urllib.request.urlopen(base + "&step=2", timeout=30) as answer:
+            assert answer.headers["X-Shape"] == "3,4"
+        for bad in ("0", "17", "two"):
+            with pytest.raises(urllib.error.HTTPError) as refused:
+                urllib.request.urlopen(f"{base}&step={bad}", timeout=30)
+            assert refused.value.code == 400
+            error = json.loads(refused.value.read())["error"]
+            assert error == f"step='{bad}': must be a whole number from 1 to 16"
+    finally:
+        server.stop()
+
+
+def test_values_cross_the_pipe_unchanged() -> None:
+    mine, theirs = multiprocessing.Pipe()
+    sent = {"picture": np.arange(12, dtype=np.float32).reshape(3, 4), "n": 3,
+            "columns": np.asfortranarray(np.ones((2, 3)))}  # fmt: skip
+    send(mine, sent)
+    got = receive(theirs)
+    assert got["n"] == 3 and np.array_equal(got["picture"], sent["picture"])
+    assert got["picture"].dtype == np.float32 and np.array_equal(got["columns"], sent["columns"])
