@@ -3,12 +3,12 @@
 Python cannot stop a thread, so a node still running when its run is superseded (a newer
 change) or cancelled would keep the CPU busy until it returns, minutes for a parameter
 that makes it slow. The studio therefore runs its nodes in worker processes of its own
-(``spawn``, started with the session, so the first change finds them warm), each fed by
-one thread here that knows which run's node it is running. Ending a run
+(fresh interpreters, started with the session, so the first change finds them warm),
+each fed by one thread here that knows which run's node it is running. Ending a run
 (:meth:`WorkerPool.end_run`) drops its queued nodes and kills (``SIGKILL``) every worker
 running one of its nodes; the worker is replaced by a new process at once. The killed
-node's future fails with :class:`NodeStoppedError`, so no value of it reaches the cache (the
-engine stores whole results only, in this process).
+node's future fails with :class:`NodeStoppedError`, so no value of it reaches the cache
+(the engine stores whole results only, in this process).
 
 A worker that dies by itself (``kill -9`` from outside, ``os._exit`` or a crash in a
 node's C code, out of memory) fails its node alone with :class:`WorkerDiedError`, naming
@@ -21,24 +21,35 @@ bits as there; each worker holds one BLAS thread (:mod:`graphvision.execution.bl
 from __future__ import annotations
 
 import contextlib
-import multiprocessing
 import os
 import pickle
 import queue
 import signal
+import socket
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
 from typing import Any
 
 from graphvision.execution.executors import WorkerDiedError
 from graphvision.execution.limits import ended_by_limit
 
-__all__ = ["NodeStoppedError", "RunExecutor", "WorkerPool", "how_it_ended", "receive", "send"]
+__all__ = [
+    "NodeStoppedError",
+    "RunExecutor",
+    "WorkerPool",
+    "how_it_ended",
+    "receive",
+    "send",
+    "serve",
+]
 
-_SPAWN = multiprocessing.get_context("spawn")
+_MAIN = "from graphvision.studio.workers import serve; serve()"
 
 
 def send(connection: Any, message: Any) -> None:
@@ -165,30 +176,32 @@ class WorkerPool:
     # -- one thread per worker ----------------------------------------------------------
 
     def _start_worker(self) -> _Worker:
-        mine, theirs = _SPAWN.Pipe()
-        process = _SPAWN.Process(
-            target=_serve,
-            args=(theirs, os.getpid(), self.warm),
-            daemon=True,
-            name="graphvision-studio",
+        """A new worker: a fresh interpreter (it imports no ``__main__``, so a script that
+        calls ``gv.studio`` needs no ``if __name__ == "__main__"``), on a socket pair."""
+        mine, theirs = socket.socketpair()
+        process = subprocess.Popen(
+            [sys.executable, "-c", _MAIN, str(theirs.fileno())],
+            pass_fds=[theirs.fileno()],
+            stdin=subprocess.DEVNULL,
         )
-        process.start()
         theirs.close()
-        worker = _Worker(process, mine)
+        connection = Connection(mine.detach())
+        send(connection, (os.getpid(), sys.path, self.warm))
+        worker = _Worker(process, connection)
         with self.lock:
             self.workers.append(worker)
         return worker
 
     def _retire(self, worker: _Worker) -> None:
         worker.connection.close()
-        worker.process.join()
+        worker.process.wait()
         with self.lock:
             self.workers.remove(worker)
 
     def _feed(self) -> None:
         try:
             worker = self._start_worker()
-        except Exception as error:  # e.g. spawn refused: the runs fail, saying why
+        except Exception as error:  # e.g. no process can start: the runs fail, saying why
             self._refuse_all(f"no worker process could start: {type(error).__name__}: {error}")
             return
         while True:
@@ -242,7 +255,7 @@ class WorkerPool:
         return True
 
     def _died(self, worker: _Worker, task: _Task) -> bool:
-        worker.process.join()
+        worker.process.wait()
         if task.stopped:
             stopped = "its run was superseded or cancelled: its worker was ended"
             task.future.set_exception(NodeStoppedError(stopped))
@@ -252,7 +265,7 @@ class WorkerPool:
             ended
             or WorkerDiedError(
                 f"the worker process running this node (pid {worker.process.pid}) died: "
-                f"{how_it_ended(worker.process.exitcode)}; a new worker took its place"
+                f"{how_it_ended(worker.process.returncode)}; a new worker took its place"
             )
         )
         return False
@@ -292,13 +305,17 @@ def how_it_ended(exitcode: int | None) -> str:
 # -- in the worker process -------------------------------------------------------------
 
 
-def _serve(connection: Any, parent: int, warm: list[Any]) -> None:
-    """A worker's loop: take ``(fn, args)``, answer ``(failed, result or exception)``."""
+def serve() -> None:
+    """A worker's loop (``python -c`` runs it, on the socket whose descriptor is its
+    argument): take ``(fn, args)``, answer ``(failed, result or exception)``."""
     import warnings
 
     from graphvision.execution.blas import one_blas_thread_for_good
     from graphvision.execution.warnings import show_warning
 
+    connection = Connection(int(sys.argv[1]))
+    parent, path, warm = receive(connection)
+    sys.path[:] = path  # plugins found where the studio found them
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the server's to handle
     warnings.showwarning = show_warning
     one_blas_thread_for_good()

@@ -13,6 +13,8 @@ from __future__ import annotations
 import os
 import re
 import signal
+import subprocess
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -168,3 +170,28 @@ def test_closing_the_session_ends_its_workers(spinning) -> None:
     assert _ends_within_a_second(pid)
     session.wait()
     assert run.status == "cancelled"
+
+
+def test_a_script_needs_no_main_guard_for_the_workers(tmp_path: Path) -> None:
+    """Workers are fresh interpreters: they do not import the script that started them (a
+    ``spawn`` worker would, and run its top level again)."""
+    script = tmp_path / "tune.py"
+    script.write_text(
+        "import graphvision as gv\n"
+        "from graphvision.studio.session import Session\n"
+        f"registry = gv.discover([{str(PLUGIN)!r}])\n"
+        "graph = gv.Graph('g')\n"
+        "graph.input('x', 'Float', default=2.0)\n"
+        "graph.add('spin', 'studio_test.spin', x='x', params={'seconds': 0.25})\n"
+        "graph.output('y', 'spin')\n"
+        "session = Session(graph, registry, workers=1)\n"
+        "run = session.start()\n"
+        "session.wait()\n"
+        "print(run.status, run.metrics, run.error)\n"
+        "session.close()\n"
+    )
+    done = subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == "done {'y': 2.25} \n"
