@@ -110,6 +110,7 @@ class WorkerPool:
         self.lock = threading.Lock()
         self.workers: list[_Worker] = []
         self.closed = False
+        self.ended: dict[int, str] = {}  # runs ended, and why
         self.feeders = [
             threading.Thread(target=self._feed, daemon=True, name=f"studio-worker-{i}")
             for i in range(self.size)
@@ -124,10 +125,12 @@ class WorkerPool:
     def submit(self, run: int, fn: Callable[..., Any], args: tuple[Any, ...]) -> Future:
         task = _Task(run, fn, args)
         task.future.set_running_or_notify_cancel()
-        if self.closed:
-            task.future.set_exception(NodeStoppedError("the studio is closing"))
-        else:
-            self.tasks.put(task)
+        with self.lock:  # a node handed over just after its run ended never starts
+            refused = "the studio is closing" if self.closed else self.ended.get(run)
+            if refused is None:
+                self.tasks.put(task)
+        if refused is not None:
+            task.future.set_exception(NodeStoppedError(refused))
         return task.future
 
     def end_run(self, run: int, why: str) -> list[int]:
@@ -135,6 +138,7 @@ class WorkerPool:
         worker killed. Returns the process ids killed."""
         killed = []
         with self.lock:
+            self.ended[run] = why
             for worker in self.workers:
                 task = worker.task
                 if task is not None and task.run == run and not task.stopped:

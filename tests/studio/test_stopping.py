@@ -25,7 +25,7 @@ pytest.importorskip("starlette")
 
 import graphvision as gv
 from graphvision.studio.session import Session, StudioRun
-from graphvision.studio.workers import how_it_ended
+from graphvision.studio.workers import NodeStoppedError, WorkerPool, how_it_ended
 
 PLUGIN = Path(__file__).parent / "stopping_plugin.py"
 MINUTES = 600.0
@@ -195,3 +195,15 @@ def test_a_script_needs_no_main_guard_for_the_workers(tmp_path: Path) -> None:
     )
     assert done.returncode == 0, done.stderr
     assert done.stdout == "done {'y': 2.25} \n"
+
+
+def test_a_node_handed_over_after_its_run_ended_never_starts() -> None:
+    pool = WorkerPool(1)
+    try:
+        assert pool.end_run(7, "its run was superseded") == []
+        refused = pool.executor(7).submit(print, "never")
+        with pytest.raises(NodeStoppedError, match="its run was superseded"):
+            refused.result(timeout=1)
+        assert pool.executor(8).submit(abs, -3).result(timeout=120) == 3  # other runs go on
+    finally:
+        pool.close()
