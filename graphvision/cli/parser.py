@@ -237,7 +237,8 @@ def _studio(command: Command) -> None:
     p = command("studio", "tune a pipeline live in the browser (needs graphvision[studio])")
     run_options(p)
     studio_options(p)
-    p.set_defaults(func=cmd_studio)
+    # its own worker processes by default: a superseded node's worker is ended, not waited for
+    p.set_defaults(func=cmd_studio, executor="processes")
 
 
 def _validate(command: Command) -> None:

@@ -56,3 +56,13 @@ def test_the_command_serves_until_interrupted() -> None:
         if child.poll() is None:
             child.kill()
             child.wait()
+
+
+def test_the_command_runs_nodes_in_its_own_processes_unless_told() -> None:
+    """On threads a superseded node already running kept a core busy to its end."""
+    from graphvision.cli.parser import build_parser
+
+    parse = build_parser().parse_args
+    assert parse(["studio", "p.yaml"]).executor == "processes"
+    assert parse(["studio", "p.yaml", "--executor", "threads"]).executor == "threads"
+    assert parse(["run", "p.yaml"]).executor == "threads"
