@@ -6,7 +6,7 @@ import numpy as np
 
 from graphvision import ColorImage, Image, Keypoints, Matches, node
 
-from ..shared.draw import colour_canvas, draw_circle, draw_segment
+from ..shared.draw import colour_canvas, draw_circle, draw_segment, draw_segments
 
 __all__ = ["draw_keypoints", "draw_matches"]
 
@@ -74,8 +74,9 @@ def draw_matches(
     canvas[: a.shape[0], : a.shape[1]] = colour_canvas(a)
     canvas[: b.shape[0], a.shape[1] :] = colour_canvas(b)
     good = set(map(tuple, inliers.pairs.tolist())) if inliers is not None else None
+    pairs = matches.pairs
+    green = [good is None or (int(i), int(j)) in good for i, j in pairs.tolist()]
+    colours = np.where(np.array(green, bool).reshape(-1, 1), GREEN, RED)
     shift = np.array([a.shape[1], 0.0])
-    for i, j in matches.pairs:
-        colour = GREEN if good is None or (int(i), int(j)) in good else RED
-        draw_segment(canvas, keypoints_a.xy[i], keypoints_b.xy[j] + shift, colour)
+    draw_segments(canvas, keypoints_a.xy[pairs[:, 0]], keypoints_b.xy[pairs[:, 1]] + shift, colours)
     return canvas
