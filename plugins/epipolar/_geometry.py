@@ -21,11 +21,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..camera._projection import cross_matrix, rotation_from_vector
+from ..fitting._ransac import RansacResult, _refit_to_convergence
 
 __all__ = [
     "eight_point",
     "essential_from_fundamental",
     "poses_from_essential",
+    "ransac_eight_point",
     "reprojection_residuals",
     "sampson_distance",
     "triangulate_linear",
@@ -61,6 +63,42 @@ def eight_point(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
     F = tb.T @ f @ ta
     norm = np.linalg.norm(F)
     return F / norm if norm > 0 else None
+
+
+def ransac_eight_point(
+    a: np.ndarray,
+    b: np.ndarray,
+    threshold: float,
+    confidence: float,
+    max_iterations: int,
+    seed: int,
+) -> RansacResult:
+    """:func:`~graphvision_plugins.fitting.ransac` with :func:`eight_point` samples scored by
+    :func:`sampson_distance` and refit by :func:`eight_point`: the same samples (seed for
+    seed) and the same model, its loop over samples compiled (:mod:`._kernels`)."""
+    from ._kernels import ransac_fundamental  # numba compiles (or loads its cache) on first use
+
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    b = np.ascontiguousarray(b, dtype=np.float64)
+    if len(a) < 8:
+        return RansacResult(None, np.zeros(len(a), dtype=bool), 0)
+    rng = np.random.default_rng(seed)
+    model, inliers, drawn, any_model = ransac_fundamental(
+        a, b, float(threshold), float(confidence), int(max_iterations), rng
+    )
+    if not any_model:
+        return RansacResult(None, inliers, drawn)
+    if inliers.sum() >= 8:
+        model, inliers = _refit_to_convergence(
+            model,
+            inliers,
+            lambda i: eight_point(a[i], b[i]),
+            lambda F: sampson_distance(F, a, b),
+            threshold,
+            8,
+            10,
+        )
+    return RansacResult(model, inliers, drawn)
 
 
 def refine_fundamental(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

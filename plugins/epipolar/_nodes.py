@@ -25,14 +25,13 @@ from graphvision import (
 )
 
 from ..camera import normalise_pixels
-from ..fitting import ransac
 from ..fitting._ransac import model_significance, refuse_chance
-from ..geometry import estimate_homography, transfer_error
+from ..geometry._homography import ransac_four_point
 from ..shared.params import Iterations, Positive, Probability, Seed
 from ._geometry import (
-    eight_point,
     essential_from_fundamental,
     poses_from_essential,
+    ransac_eight_point,
     refine_fundamental,
     refine_pose,
     reprojection_residuals,
@@ -96,16 +95,7 @@ def _refuse_a_homography(a: np.ndarray, b: np.ndarray, threshold: float, seed: i
     RANSAC returns is arbitrary (the test of DEGENSAC and model selection in SLAM)."""
     # Only a share of 90 % or more matters: then a 4-point sample is clean with probability
     # 0.9^4 = 0.66, and 25 samples miss every clean one with probability 0.34^25 < 1e-11.
-    planar = ransac(
-        len(a),
-        4,
-        lambda s: estimate_homography(a[s], b[s]),
-        lambda H: transfer_error(H, a, b),
-        2.0 * threshold,
-        refit=lambda i: estimate_homography(a[i], b[i]),
-        max_iterations=25,
-        seed=seed,
-    )
+    planar = ransac_four_point(a, b, 2.0 * threshold, max_iterations=25, seed=seed)
     share = float(planar.inliers.mean()) if planar.model is not None else 0.0
     if share >= 0.9:
         raise ValueError(
@@ -241,17 +231,7 @@ def robust_fundamental(
     ``what`` and the threshold (``pixel_threshold`` when given: the user's value before a
     change of units) when fewer than 8 correspondences are inliers, or when the NFA is
     above ``max_nfa`` (None: never)."""
-    found = ransac(
-        len(a),
-        8,
-        lambda s: eight_point(a[s], b[s]),
-        lambda F: sampson_distance(F, a, b),
-        threshold,
-        refit=lambda i: eight_point(a[i], b[i]),
-        confidence=confidence,
-        max_iterations=max_iterations,
-        seed=seed,
-    )
+    found = ransac_eight_point(a, b, threshold, confidence, max_iterations, seed)
     if found.model is None:
         raise ValueError(
             "no fundamental matrix: every sample of 8 correspondences was degenerate "

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Annotated, NamedTuple
 
 import numpy as np
@@ -9,8 +10,7 @@ from pydantic import Field
 
 from graphvision import Conformance, Float, FloatImage, Homography, Keypoints, Matches, node
 
-from ..fitting import ransac
-from ..fitting._ransac import model_significance, refuse_chance
+from ..fitting._ransac import RansacResult, _refit_to_convergence, model_significance, refuse_chance
 from ..shared.params import ImageSide, Iterations, Positive, Probability, Seed
 
 __all__ = [
@@ -19,6 +19,7 @@ __all__ = [
     "estimate_homography",
     "homography_ransac",
     "normalising_transform",
+    "ransac_four_point",
     "refine_homography",
     "transfer_error",
 ]
@@ -114,6 +115,45 @@ def refine_homography(h: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.nda
     fit = least_squares(residual, (h / h[2, 2]).ravel()[:8], method="lm", max_nfev=200)
     refined = np.append(fit.x, 1.0).reshape(3, 3)
     return refined if np.isfinite(refined).all() else h
+
+
+def ransac_four_point(
+    src: np.ndarray,
+    dst: np.ndarray,
+    threshold: float,
+    *,
+    refit: Callable[[np.ndarray], np.ndarray | None] | None = None,
+    confidence: float = 0.99,
+    max_iterations: int = 10_000,
+    seed: int = 0,
+) -> RansacResult:
+    """:func:`~graphvision_plugins.fitting.ransac` with :func:`estimate_homography` on
+    4-point samples scored by :func:`transfer_error` (refit by ``refit``, or by
+    :func:`estimate_homography` on the inliers): the same samples (seed for seed) and
+    the same model, its loop over samples compiled (:mod:`._kernels`)."""
+    from ._kernels import ransac_homography  # numba compiles (or loads its cache) on first use
+
+    src = np.ascontiguousarray(src, dtype=np.float64)
+    dst = np.ascontiguousarray(dst, dtype=np.float64)
+    if len(src) < 4:
+        return RansacResult(None, np.zeros(len(src), dtype=bool), 0)
+    rng = np.random.default_rng(seed)
+    model, inliers, drawn, any_model = ransac_homography(
+        src, dst, float(threshold), float(confidence), int(max_iterations), rng
+    )
+    if not any_model:
+        return RansacResult(None, inliers, drawn)
+    if inliers.sum() >= 4:
+        model, inliers = _refit_to_convergence(
+            model,
+            inliers,
+            refit or (lambda i: estimate_homography(src[i], dst[i])),
+            lambda h: transfer_error(h, src, dst),
+            threshold,
+            4,
+            10,
+        )
+    return RansacResult(model, inliers, drawn)
 
 
 class HomographyFit(NamedTuple):
@@ -219,11 +259,9 @@ def homography_ransac(
         h = estimate_homography(a[indices], b[indices])
         return refine_homography(h, a[indices], b[indices]) if h is not None and refine else h
 
-    result = ransac(
-        len(a),
-        4,
-        lambda s: estimate_homography(a[s], b[s]),
-        lambda h: transfer_error(h, a, b),
+    result = ransac_four_point(
+        a,
+        b,
         threshold,
         refit=refit,
         confidence=confidence,

@@ -1,0 +1,180 @@
+"""numba kernels of the fundamental matrix's RANSAC (imported on first use: numba loads
+slowly).
+
+The Python loop spent most of its time in NumPy's per-call overhead on 8 × 9 arrays
+(normalise, build the design matrix, two SVDs, score 500 Sampson distances, a few
+hundred times). :func:`ransac_fundamental` runs the whole loop compiled: sample (the
+samples of ``Generator.choice``, :mod:`..fitting._kernels`), solve by the normalised
+8-point algorithm, score by Sampson distance, keep the best, lower the sample count.
+The arithmetic is :func:`._geometry.eight_point`'s and :func:`._geometry.sampson_distance`'s.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ..fitting._kernels import draw_sample, iterations_needed
+
+__all__ = ["ransac_fundamental"]
+
+
+@numba.njit(cache=True, nogil=True)
+def _normalising(x, y):  # pragma: no cover - compiled
+    """(scale, centre x, centre y) of Hartley's similarity (``_geometry._normalising``)."""
+    n = x.shape[0]
+    cx = x.sum() / n
+    cy = y.sum() / n
+    spread = 0.0
+    for i in range(n):
+        spread += math.sqrt((x[i] - cx) ** 2 + (y[i] - cy) ** 2)
+    return math.sqrt(2.0) / max(spread / n, 1e-12), cx, cy
+
+
+@numba.njit(cache=True, nogil=True)
+def _similarity(scale, cx, cy):  # pragma: no cover - compiled
+    t = np.zeros((3, 3))
+    t[0, 0] = scale
+    t[1, 1] = scale
+    t[0, 2] = -scale * cx
+    t[1, 2] = -scale * cy
+    t[2, 2] = 1.0
+    return t
+
+
+@numba.njit(cache=True, nogil=True)
+def eight_point_sample(a, b, sample):  # pragma: no cover - compiled
+    """(F, True) from the correspondences ``sample`` of a, b; (zeros, False) if degenerate."""
+    n = sample.shape[0]
+    ax, ay, bx, by = a[sample, 0], a[sample, 1], b[sample, 0], b[sample, 1]
+    sa, cax, cay = _normalising(ax, ay)
+    sb, cbx, cby = _normalising(bx, by)
+    design = np.empty((n, 9))
+    for r in range(n):
+        ha = (sa * ax[r] - sa * cax, sa * ay[r] - sa * cay, 1.0)
+        hb = (sb * bx[r] - sb * cbx, sb * by[r] - sb * cby, 1.0)
+        for i in range(3):
+            for j in range(3):
+                design[r, 3 * i + j] = hb[i] * ha[j]
+    _, singular, vt = np.linalg.svd(design, full_matrices=n < 9)
+    if singular[7] < 1e-9 * singular[0]:
+        return np.zeros((3, 3)), False
+    f = vt[vt.shape[0] - 1].copy().reshape(3, 3)
+    u, s, vt2 = np.linalg.svd(f)
+    rank2 = (u * np.array([s[0], s[1], 0.0])) @ vt2
+    F = _similarity(sb, cbx, cby).T @ rank2 @ _similarity(sa, cax, cay)
+    norm = math.sqrt((F * F).sum())
+    if norm <= 0.0:
+        return np.zeros((3, 3)), False
+    return F / norm, True
+
+
+@numba.njit(cache=True, nogil=True)
+def sampson_inliers(F, a, b, threshold, out):  # pragma: no cover - compiled
+    """``out[i]`` = Sampson distance of pair i below ``threshold``; returns their count."""
+    found = 0
+    for i in range(a.shape[0]):
+        xa, ya, xb, yb = a[i, 0], a[i, 1], b[i, 0], b[i, 1]
+        fa0 = F[0, 0] * xa + F[0, 1] * ya + F[0, 2]
+        fa1 = F[1, 0] * xa + F[1, 1] * ya + F[1, 2]
+        fa2 = F[2, 0] * xa + F[2, 1] * ya + F[2, 2]
+        fb0 = xb * F[0, 0] + yb * F[1, 0] + F[2, 0]
+        fb1 = xb * F[0, 1] + yb * F[1, 1] + F[2, 1]
+        algebraic = xb * fa0 + yb * fa1 + fa2
+        denominator = max(fa0 * fa0 + fa1 * fa1 + fb0 * fb0 + fb1 * fb1, 1e-300)
+        inside = math.sqrt(algebraic * algebraic / denominator) < threshold
+        out[i] = inside
+        found += inside
+    return found
+
+
+@numba.njit(cache=True, nogil=True)
+def ransac_fundamental(a, b, threshold, confidence, max_iterations, rng):  # pragma: no cover
+    """(best F, its inlier mask, samples drawn, whether any sample gave a model): the loop of
+    :func:`~graphvision_plugins.fitting.ransac` with 8-point samples and Sampson scores."""
+    count = a.shape[0]
+    best, best_inliers, best_count = np.zeros((3, 3)), np.zeros(count, np.bool_), -1
+    inliers = np.zeros(count, np.bool_)
+    sample = np.empty(8, np.int64)
+    needed, drawn = max_iterations, 0
+    while drawn < min(needed, max_iterations):
+        drawn += 1
+        draw_sample(rng, count, sample)
+        F, ok = eight_point_sample(a, b, sample)
+        if not ok:
+            continue
+        found = sampson_inliers(F, a, b, threshold, inliers)
+        if found > best_count:
+            best, best_count = F, found
+            best_inliers[:] = inliers
+            needed = iterations_needed(1.0 - found / count, 8, confidence)
+    return best, best_inliers, drawn, best_count >= 0
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def triangulate_dlt(Pa, Pb, a, b):  # pragma: no cover - compiled
+    """:func:`._geometry.triangulate_linear` point by point: the right singular vector of the
+    smallest singular value of the 4 × 4 DLT rows (each of unit norm), by one-sided Jacobi
+    rotations (Hestenes), accurate to rounding as LAPACK's SVD; NumPy's batched SVD paid a
+    LAPACK call per point."""
+    count = a.shape[0]
+    out = np.empty((count, 3))
+    A = np.empty((4, 4))
+    V = np.empty((4, 4))
+    for n in range(count):
+        for r in range(4):
+            P = Pa if r < 2 else Pb
+            coord = (a[n, r] if r < 2 else b[n, r - 2])
+            k = r % 2
+            norm = 0.0
+            for c in range(4):
+                A[r, c] = coord * P[2, c] - P[k, c]
+                norm += A[r, c] * A[r, c]
+            norm = math.sqrt(norm)
+            for c in range(4):
+                A[r, c] /= norm
+        _jacobi_columns(A, V)
+        smallest, least = 0, math.inf
+        for c in range(4):
+            size = A[0, c] ** 2 + A[1, c] ** 2 + A[2, c] ** 2 + A[3, c] ** 2
+            if size < least:
+                smallest, least = c, size
+        w = V[3, smallest]
+        for c in range(3):
+            out[n, c] = V[c, smallest] / w
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _jacobi_columns(A, V):  # pragma: no cover - compiled
+    """Rotate the columns of ``A`` until they are orthogonal (A V = U Σ), V in ``V``."""
+    m = A.shape[1]
+    V[:] = 0.0
+    for i in range(m):
+        V[i, i] = 1.0
+    for _ in range(60):
+        rotated = False
+        for i in range(m - 1):
+            for j in range(i + 1, m):
+                alpha = beta = gamma = 0.0
+                for r in range(A.shape[0]):
+                    alpha += A[r, i] * A[r, i]
+                    beta += A[r, j] * A[r, j]
+                    gamma += A[r, i] * A[r, j]
+                if abs(gamma) <= 1e-15 * math.sqrt(alpha * beta) or gamma == 0.0:
+                    continue
+                rotated = True
+                zeta = (beta - alpha) / (2.0 * gamma)
+                t = math.copysign(1.0, zeta) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                c = 1.0 / math.sqrt(1.0 + t * t)
+                s = c * t
+                for r in range(A.shape[0]):
+                    x, y = A[r, i], A[r, j]
+                    A[r, i], A[r, j] = c * x - s * y, s * x + c * y
+                for r in range(m):
+                    x, y = V[r, i], V[r, j]
+                    V[r, i], V[r, j] = c * x - s * y, s * x + c * y
+        if not rotated:
+            break
