@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..camera._projection import cross_matrix, rotation_from_vector
+from ..camera._projection import rotation_from_vector
 from ..fitting._ransac import RansacResult, _refit_to_convergence
 
 __all__ = [
@@ -112,6 +112,8 @@ def refine_fundamental(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarra
     """
     from scipy.optimize import least_squares
 
+    from ._kernels import fundamental_residuals  # compiled: LM evaluates it some fifty times
+
     if len(a) <= 7:
         return F / np.linalg.norm(F)
 
@@ -123,8 +125,10 @@ def refine_fundamental(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarra
         vt = vt0 @ rotation_from_vector(x[3:6]).T
         return u @ np.diag([1.0, x[6], 0.0]) @ vt
 
+    a, b = np.ascontiguousarray(a, dtype=np.float64), np.ascontiguousarray(b, dtype=np.float64)
+
     def residuals(x: np.ndarray) -> np.ndarray:
-        return sampson_distance(compose(x), a, b)
+        return fundamental_residuals(x, u0, vt0, a, b)  # type: ignore[no-any-return]
 
     x0 = np.concatenate([np.zeros(6), [ratio]])
     refined = compose(least_squares(residuals, x0, method="lm").x)
@@ -141,6 +145,8 @@ def refine_pose(
     average over)."""
     from scipy.optimize import least_squares
 
+    from ._kernels import pose_residuals  # compiled: LM evaluates it some fifty times
+
     if len(a) <= 5:
         return R, t / np.linalg.norm(t)
 
@@ -155,9 +161,11 @@ def refine_pose(
         direction = t + x[3] * e1 + x[4] * e2
         return rotation_from_vector(x[:3]) @ R, direction / np.linalg.norm(direction)
 
+    a, b = np.ascontiguousarray(a, dtype=np.float64), np.ascontiguousarray(b, dtype=np.float64)
+    R = np.ascontiguousarray(R, dtype=np.float64)
+
     def residuals(x: np.ndarray) -> np.ndarray:
-        Rx, tx = pose(x)
-        return sampson_distance(kb_inv.T @ cross_matrix(tx) @ Rx @ ka_inv, a, b)
+        return pose_residuals(x, R, t, e1, e2, ka_inv, kb_inv, a, b)  # type: ignore[no-any-return]
 
     return pose(least_squares(residuals, np.zeros(5), method="lm").x)
 
@@ -195,21 +203,17 @@ def poses_from_essential(E: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
 
 def triangulate_linear(Pa: np.ndarray, Pb: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     r"""Points ``N×3`` by the DLT: the null vector of
-    :math:`[x P^3 - P^1;\ y P^3 - P^2]` for both views (each row normalised)."""
-    rows = np.stack(
-        [
-            a[:, :1] * Pa[2] - Pa[0],
-            a[:, 1:2] * Pa[2] - Pa[1],
-            b[:, :1] * Pb[2] - Pb[0],
-            b[:, 1:2] * Pb[2] - Pb[1],
-        ],
-        axis=1,
+    :math:`[x P^3 - P^1;\ y P^3 - P^2]` for both views (each row normalised), the right
+    singular vector of the smallest singular value, by one-sided Jacobi rotations compiled
+    per point (:func:`._kernels.triangulate_dlt`; a point at infinity gives inf or NaN)."""
+    from ._kernels import triangulate_dlt  # numba compiles (or loads its cache) on first use
+
+    return triangulate_dlt(
+        np.ascontiguousarray(Pa, dtype=np.float64),
+        np.ascontiguousarray(Pb, dtype=np.float64),
+        np.ascontiguousarray(a, dtype=np.float64),
+        np.ascontiguousarray(b, dtype=np.float64),
     )
-    rows /= np.linalg.norm(rows, axis=2, keepdims=True)
-    _, _, vt = np.linalg.svd(rows)
-    homogeneous = vt[:, -1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return homogeneous[:, :3] / homogeneous[:, 3:]
 
 
 def reprojection_residuals(

@@ -126,7 +126,7 @@ def triangulate_dlt(Pa, Pb, a, b):  # pragma: no cover - compiled
     for n in range(count):
         for r in range(4):
             P = Pa if r < 2 else Pb
-            coord = (a[n, r] if r < 2 else b[n, r - 2])
+            coord = a[n, r] if r < 2 else b[n, r - 2]
             k = r % 2
             norm = 0.0
             for c in range(4):
@@ -178,3 +178,59 @@ def _jacobi_columns(A, V):  # pragma: no cover - compiled
                     V[r, i], V[r, j] = c * x - s * y, s * x + c * y
         if not rotated:
             break
+
+
+@numba.njit(cache=True, nogil=True)
+def sampson_distances(F, a, b):  # pragma: no cover - compiled
+    """:func:`._geometry.sampson_distance`, compiled (the residuals Levenberg-Marquardt
+    evaluates some fifty times per refinement)."""
+    out = np.empty(a.shape[0])
+    for i in range(a.shape[0]):
+        xa, ya, xb, yb = a[i, 0], a[i, 1], b[i, 0], b[i, 1]
+        fa0 = F[0, 0] * xa + F[0, 1] * ya + F[0, 2]
+        fa1 = F[1, 0] * xa + F[1, 1] * ya + F[1, 2]
+        fa2 = F[2, 0] * xa + F[2, 1] * ya + F[2, 2]
+        fb0 = xb * F[0, 0] + yb * F[1, 0] + F[2, 0]
+        fb1 = xb * F[0, 1] + yb * F[1, 1] + F[2, 1]
+        algebraic = xb * fa0 + yb * fa1 + fa2
+        denominator = max(fa0 * fa0 + fa1 * fa1 + fb0 * fb0 + fb1 * fb1, 1e-300)
+        out[i] = math.sqrt(algebraic * algebraic / denominator)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _cross(x, y, z):  # pragma: no cover - compiled
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+@numba.njit(cache=True, nogil=True)
+def _rotation(x, y, z):  # pragma: no cover - compiled
+    """``camera._projection.rotation_from_vector`` (Rodrigues' formula), compiled."""
+    theta = math.sqrt(x * x + y * y + z * z)
+    if theta < 1e-12:
+        return np.eye(3) + _cross(x, y, z)
+    k = _cross(x / theta, y / theta, z / theta)
+    return np.eye(3) + math.sin(theta) * k + (1.0 - math.cos(theta)) * (k @ k)
+
+
+@numba.njit(cache=True, nogil=True)
+def fundamental_residuals(x, u0, vt0, a, b):  # pragma: no cover - compiled
+    """Sampson distances under :math:`F = R(x_{0:3}) U_0 \\operatorname{diag}(1, x_6, 0)
+    V_0^T R(x_{3:6})^T` (``_geometry.refine_fundamental``'s parametrisation)."""
+    u = _rotation(x[0], x[1], x[2]) @ u0
+    vt = vt0 @ _rotation(x[3], x[4], x[5]).T
+    middle = np.zeros((3, 3))
+    middle[0, 0] = 1.0
+    middle[1, 1] = x[6]
+    return sampson_distances(u @ middle @ vt, a, b)
+
+
+@numba.njit(cache=True, nogil=True)
+def pose_residuals(x, R, t, e1, e2, ka_inv, kb_inv, a, b):  # pragma: no cover - compiled
+    """Sampson distances under :math:`F = K_b^{-T} [t(x)]_\\times R(x_{0:3}) R K_a^{-1}`,
+    :math:`t(x) \\propto t + x_3 e_1 + x_4 e_2` (``_geometry.refine_pose``'s parametrisation)."""
+    direction = t + x[3] * e1 + x[4] * e2
+    direction = direction / math.sqrt((direction * direction).sum())
+    rotation = _rotation(x[0], x[1], x[2]) @ R
+    cross = _cross(direction[0], direction[1], direction[2])
+    return sampson_distances(kb_inv.T @ cross @ rotation @ ka_inv, a, b)
