@@ -45,6 +45,17 @@ def _similarity(scale, cx, cy):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
+def _product(x, y):  # pragma: no cover - compiled
+    """3 × 3 matrix product in a loop (``@`` calls BLAS: a microsecond each at this size)."""
+    out = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                out[i, j] += x[i, k] * y[k, j]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
 def eight_point_sample(a, b, sample):  # pragma: no cover - compiled
     """(F, True) from the correspondences ``sample`` of a, b; (zeros, False) if degenerate."""
     n = sample.shape[0]
@@ -58,17 +69,98 @@ def eight_point_sample(a, b, sample):  # pragma: no cover - compiled
         for i in range(3):
             for j in range(3):
                 design[r, 3 * i + j] = hb[i] * ha[j]
-    _, singular, vt = np.linalg.svd(design, full_matrices=n < 9)
-    if singular[7] < 1e-9 * singular[0]:
+    if n == 8:
+        f, degenerate = null_vector_8x9(design)
+    else:
+        _, singular, vt = np.linalg.svd(design, full_matrices=False)
+        degenerate = singular[7] < 1e-9 * singular[0]
+        f = vt[8].copy()
+    if degenerate:
         return np.zeros((3, 3)), False
-    f = vt[vt.shape[0] - 1].copy().reshape(3, 3)
-    u, s, vt2 = np.linalg.svd(f)
-    rank2 = (u * np.array([s[0], s[1], 0.0])) @ vt2
-    F = _similarity(sb, cbx, cby).T @ rank2 @ _similarity(sa, cax, cay)
+    f = f.reshape(3, 3)
+    rotated, V = f.copy(), np.empty((3, 3))
+    _jacobi_columns(rotated, V)  # f V = U Σ: drop the smallest singular triple
+    least = 0
+    for c in range(1, 3):
+        if (rotated[:, c] ** 2).sum() < (rotated[:, least] ** 2).sum():
+            least = c
+    rank2 = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            rank2[i, j] = f[i, j] - rotated[i, least] * V[j, least]
+    F = _product(_product(_similarity(sb, cbx, cby).T, rank2), _similarity(sa, cax, cay))
     norm = math.sqrt((F * F).sum())
     if norm <= 0.0:
         return np.zeros((3, 3)), False
     return F / norm, True
+
+
+@numba.njit(cache=True, nogil=True)
+def null_vector_8x9(design):  # pragma: no cover - compiled
+    """(unit null vector of the 8 × 9 ``design``, whether its singular values have
+    σ₈ < 10⁻⁹ σ₁): the 8-point algorithm's SVD and test, by Householder QR of designᵀ.
+
+    With designᵀ = QR, the null vector is Q's last column and design's singular values
+    are R's, so that with c = ‖R‖_F ‖R⁻¹‖_F, 1/c ≤ σ₈/σ₁ ≤ 8/c. Outside that band the
+    test is settled; inside it (a nearly degenerate sample, rare) LAPACK's SVD decides.
+    """
+    m = design.T.copy()  # 9 × 8, becomes R above its diagonal
+    vs = np.zeros((9, 8))
+    betas = np.zeros(8)
+    for k in range(8):
+        norm = 0.0
+        for r in range(k, 9):
+            norm += m[r, k] * m[r, k]
+        if norm == 0.0:
+            continue  # a zero column of R: singular, settled below
+        alpha = -math.copysign(math.sqrt(norm), m[k, k])
+        length = 0.0
+        for r in range(k, 9):
+            vs[r, k] = m[r, k]
+        vs[k, k] -= alpha
+        for r in range(k, 9):
+            length += vs[r, k] * vs[r, k]
+        betas[k] = 2.0 / length
+        for c in range(k, 8):
+            dot = 0.0
+            for r in range(k, 9):
+                dot += vs[r, k] * m[r, c]
+            dot *= betas[k]
+            for r in range(k, 9):
+                m[r, c] -= dot * vs[r, k]
+    null = np.zeros(9)
+    null[8] = 1.0
+    for k in range(7, -1, -1):
+        dot = 0.0
+        for r in range(k, 9):
+            dot += vs[r, k] * null[r]
+        dot *= betas[k]
+        for r in range(k, 9):
+            null[r] -= dot * vs[r, k]
+    inverse = np.zeros((8, 8))  # R⁻¹ by back substitution
+    for j in range(8):
+        for i in range(j, -1, -1):
+            if m[i, i] == 0.0:
+                return null, True
+            total = 1.0 if i == j else 0.0
+            for k in range(i + 1, j + 1):
+                total -= m[i, k] * inverse[k, j]
+            inverse[i, j] = total / m[i, i]
+    size = 0.0
+    for i in range(8):
+        for j in range(i, 8):
+            size += m[i, j] * m[i, j]
+    inverse_size = 0.0
+    for i in range(8):
+        for j in range(i, 8):
+            inverse_size += inverse[i, j] * inverse[i, j]
+    spread = math.sqrt(size * inverse_size)  # c
+    if 1.0 / spread > 1.01e-9:
+        return null, False
+    if 8.0 / spread < 0.99e-9:
+        return null, True
+    _, singular, vt = np.linalg.svd(design, full_matrices=True)
+    return vt[8].copy(), singular[7] < 1e-9 * singular[0]
 
 
 @numba.njit(cache=True, nogil=True)
