@@ -128,7 +128,7 @@ def refine_fundamental(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarra
     a, b = np.ascontiguousarray(a, dtype=np.float64), np.ascontiguousarray(b, dtype=np.float64)
 
     def residuals(x: np.ndarray) -> np.ndarray:
-        return fundamental_residuals(x, u0, vt0, a, b)  # type: ignore[no-any-return]
+        return fundamental_residuals(x, u0, vt0, a, b)
 
     x0 = np.concatenate([np.zeros(6), [ratio]])
     refined = compose(least_squares(residuals, x0, method="lm").x)
@@ -165,7 +165,7 @@ def refine_pose(
     R = np.ascontiguousarray(R, dtype=np.float64)
 
     def residuals(x: np.ndarray) -> np.ndarray:
-        return pose_residuals(x, R, t, e1, e2, ka_inv, kb_inv, a, b)  # type: ignore[no-any-return]
+        return pose_residuals(x, R, t, e1, e2, ka_inv, kb_inv, a, b)
 
     return pose(least_squares(residuals, np.zeros(5), method="lm").x)
 
