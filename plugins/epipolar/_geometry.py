@@ -65,6 +65,10 @@ def eight_point(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
     return F / norm if norm > 0 else None
 
 
+def _compiled_or_none(F: np.ndarray, solved: bool) -> np.ndarray | None:
+    return F if solved else None
+
+
 def ransac_eight_point(
     a: np.ndarray,
     b: np.ndarray,
@@ -75,8 +79,9 @@ def ransac_eight_point(
 ) -> RansacResult:
     """:func:`~graphvision_plugins.fitting.ransac` with :func:`eight_point` samples scored by
     :func:`sampson_distance` and refit by :func:`eight_point`: the same samples (seed for
-    seed) and the same model, its loop over samples compiled (:mod:`._kernels`)."""
-    from ._kernels import ransac_fundamental  # numba compiles (or loads its cache) on first use
+    seed) and the same model (to rounding), its loop over samples and its refits compiled
+    (:mod:`._kernels`)."""
+    from ._kernels import eight_point_sample, ransac_fundamental  # numba: compiled on first use
 
     a = np.ascontiguousarray(a, dtype=np.float64)
     b = np.ascontiguousarray(b, dtype=np.float64)
@@ -92,7 +97,7 @@ def ransac_eight_point(
         model, inliers = _refit_to_convergence(
             model,
             inliers,
-            lambda i: eight_point(a[i], b[i]),
+            lambda i: _compiled_or_none(*eight_point_sample(a, b, i)),
             lambda F: sampson_distance(F, a, b),
             threshold,
             8,
