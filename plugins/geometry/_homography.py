@@ -117,6 +117,10 @@ def refine_homography(h: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.nda
     return refined if np.isfinite(refined).all() else h
 
 
+def _compiled_or_none(h: np.ndarray, solved: bool) -> np.ndarray | None:
+    return h if solved else None
+
+
 def ransac_four_point(
     src: np.ndarray,
     dst: np.ndarray,
@@ -129,9 +133,10 @@ def ransac_four_point(
 ) -> RansacResult:
     """:func:`~graphvision_plugins.fitting.ransac` with :func:`estimate_homography` on
     4-point samples scored by :func:`transfer_error` (refit by ``refit``, or by
-    :func:`estimate_homography` on the inliers): the same samples (seed for seed) and
-    the same model, its loop over samples compiled (:mod:`._kernels`)."""
-    from ._kernels import ransac_homography  # numba compiles (or loads its cache) on first use
+    :func:`estimate_homography`'s DLT on the inliers, compiled): the same samples (seed
+    for seed) and the same model (to rounding), its loop over samples compiled
+    (:mod:`._kernels`)."""
+    from ._kernels import dlt, ransac_homography  # numba compiles (or loads its cache) on first use
 
     src = np.ascontiguousarray(src, dtype=np.float64)
     dst = np.ascontiguousarray(dst, dtype=np.float64)
@@ -147,7 +152,7 @@ def ransac_four_point(
         model, inliers = _refit_to_convergence(
             model,
             inliers,
-            refit or (lambda i: estimate_homography(src[i], dst[i])),
+            refit or (lambda i: _compiled_or_none(*dlt(src[i], dst[i]))),
             lambda h: transfer_error(h, src, dst),
             threshold,
             4,

@@ -48,25 +48,26 @@ def _collinear_triple(p):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def dlt_four(src, dst):  # pragma: no cover - compiled
-    """(H, True) through 4 correspondences, (zeros, False) where
+def dlt(src, dst):  # pragma: no cover - compiled
+    """(H, True) through 4 or more correspondences, (zeros, False) where
     :func:`._homography.estimate_homography` returns None."""
-    if not (np.isfinite(src).all() and np.isfinite(dst).all()):
+    n = src.shape[0]
+    if n < 4 or not (np.isfinite(src).all() and np.isfinite(dst).all()):
         return np.zeros((3, 3)), False
     a, sa, cax, cay = _normalised(src)
     b, sb, cbx, cby = _normalised(dst)
-    if _collinear_triple(a) or _collinear_triple(b):
+    if n == 4 and (_collinear_triple(a) or _collinear_triple(b)):
         return np.zeros((3, 3)), False
-    rows = np.zeros((8, 9))
-    for i in range(4):
+    rows = np.zeros((2 * n, 9))
+    for i in range(n):
         x = (a[i, 0], a[i, 1], 1.0)
         for j in range(3):
             rows[2 * i, j] = -x[j]
             rows[2 * i, 6 + j] = b[i, 0] * x[j]
             rows[2 * i + 1, 3 + j] = -x[j]
             rows[2 * i + 1, 6 + j] = b[i, 1] * x[j]
-    _, singular, vt = np.linalg.svd(rows, full_matrices=True)
-    if singular[6] < 1e-10 * singular[0]:
+    _, singular, vt = np.linalg.svd(rows, full_matrices=2 * n < 9)
+    if singular[singular.shape[0] - 2] < 1e-10 * singular[0]:
         return np.zeros((3, 3)), False
     h = vt[8].copy().reshape(3, 3)
     t_src = np.array([[sa, 0.0, -sa * cax], [0.0, sa, -sa * cay], [0.0, 0.0, 1.0]])
@@ -103,7 +104,7 @@ def ransac_homography(src, dst, threshold, confidence, max_iterations, rng):  # 
     while drawn < min(needed, max_iterations):
         drawn += 1
         draw_sample(rng, count, sample)
-        h, ok = dlt_four(src[sample], dst[sample])
+        h, ok = dlt(src[sample], dst[sample])
         if not ok:
             continue
         found = transfer_inliers(h, src, dst, threshold, inliers)
