@@ -6,7 +6,11 @@ The Python loop spent most of its time in NumPy's per-call overhead on 8 × 9 ar
 hundred times). :func:`ransac_fundamental` runs the whole loop compiled: sample (the
 samples of ``Generator.choice``, :mod:`..fitting._kernels`), solve by the normalised
 8-point algorithm, score by Sampson distance, keep the best, lower the sample count.
-The arithmetic is :func:`._geometry.eight_point`'s and :func:`._geometry.sampson_distance`'s.
+The arithmetic is :func:`._geometry.eight_point`'s and :func:`._geometry.sampson_distance`'s,
+with the 8 × 9 null vector by Householder QR and rank 2 by Jacobi rotations instead of
+LAPACK's SVD (a microsecond call each, where the SVDs took 30): the same inliers. Also here:
+the DLT triangulation point by point, and Levenberg-Marquardt's residuals and Jacobians
+for F and the pose.
 """
 
 from __future__ import annotations
