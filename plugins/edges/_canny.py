@@ -70,9 +70,12 @@ def canny_edges(
         magnitude = np.hypot(dx, dy).astype(np.float32)
     if thresholds == "quantile":
         low, high = (float(q) for q in np.quantile(magnitude, [low, high]))
-    # a zero gradient is never an edge, whatever the thresholds (constant images have none)
-    thin = non_maximum_suppression(dx, dy, magnitude, low)
-    return hysteresis(thin, thin & (magnitude >= high)), magnitude
+    # a zero gradient is never an edge, whatever the thresholds (constant images have none);
+    # one compiled pass: suppression, then hysteresis as a flood from the strong pixels
+    from ._kernels import canny_mask
+
+    edges = canny_mask(dx, dy, magnitude, np.float32(low), np.float32(high))
+    return edges, magnitude
 
 
 class Canny(NamedTuple):
