@@ -39,14 +39,12 @@ def _sample(magnitude, y, x, fy, fx):
     return total
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _is_maximum(dx, dy, magnitude, y, x, low):
-    """Whether pixel ``(y, x)`` has ``magnitude >= low`` (and > 0) and is a maximum along the
-    gradient direction: above the neighbour behind, at least the one ahead, "ahead"
-    pointing to increasing x (to increasing y for a vertical gradient)."""
+@numba.njit(cache=True, nogil=True)
+def _is_maximum(dx, dy, magnitude, y, x):
+    """Whether pixel ``(y, x)`` is a maximum along the gradient direction: above the
+    neighbour behind, at least the one ahead, "ahead" pointing to increasing x (to
+    increasing y for a vertical gradient). Only called where ``magnitude > 0``."""
     m = magnitude[y, x]
-    if m < low or m <= 0.0:
-        return False
     gx = float(dx[y, x])
     gy = float(dy[y, x])
     scale = max(abs(gx), abs(gy))
@@ -59,12 +57,14 @@ def _is_maximum(dx, dy, magnitude, y, x, low):
 
 @numba.njit(cache=True, nogil=True)
 def suppress_non_maxima(dx, dy, magnitude, low):
-    """Mask of the pixels :func:`_is_maximum` keeps."""
+    """Mask of the pixels with ``magnitude >= low`` (and > 0) that :func:`_is_maximum` keeps."""
     height, width = magnitude.shape
     keep = np.zeros((height, width), dtype=np.bool_)
     for y in range(height):
         for x in range(width):
-            keep[y, x] = _is_maximum(dx, dy, magnitude, y, x, low)
+            m = magnitude[y, x]
+            if m >= low and m > 0.0 and _is_maximum(dx, dy, magnitude, y, x):
+                keep[y, x] = True
     return keep
 
 
@@ -73,33 +73,34 @@ def canny_mask(dx, dy, magnitude, low, high):
     """Canny's edges: the non-maxima suppressed (:func:`_is_maximum`), then hysteresis by a
     flood from every kept pixel of ``magnitude >= high`` through the kept pixels,
     8-connected (exactly the 8-connected components of the kept mask that hold a strong
-    pixel). One pass and a stack; no labels, no full-size temporaries besides the mask."""
+    pixel). One pass and a stack; no labels, no full-size temporaries besides the masks."""
     height, width = magnitude.shape
-    state = np.zeros((height, width), dtype=np.uint8)  # 1 kept (weak), 2 on an edge
-    stack = np.empty(64, dtype=np.int64)
+    weak = np.zeros((height, width), dtype=np.bool_)
+    edges = np.zeros((height, width), dtype=np.bool_)
+    stack = np.empty(height * width, dtype=np.int64)  # pages are touched only as used
     top = 0
     for y in range(height):
         for x in range(width):
-            if _is_maximum(dx, dy, magnitude, y, x, low):
-                state[y, x] = 1
-                if magnitude[y, x] >= high:
-                    state[y, x] = 2
-                    if top == stack.size:
-                        stack = np.concatenate((stack, np.empty_like(stack)))
+            m = magnitude[y, x]
+            if m >= low and m > 0.0 and _is_maximum(dx, dy, magnitude, y, x):
+                if m >= high:
+                    edges[y, x] = True
                     stack[top] = y * width + x
                     top += 1
+                else:
+                    weak[y, x] = True
     while top > 0:
         top -= 1
-        y, x = divmod(stack[top], width)
+        y = stack[top] // width
+        x = stack[top] - y * width
         for v in range(max(y - 1, 0), min(y + 2, height)):
             for u in range(max(x - 1, 0), min(x + 2, width)):
-                if state[v, u] == 1:
-                    state[v, u] = 2
-                    if top == stack.size:
-                        stack = np.concatenate((stack, np.empty_like(stack)))
+                if weak[v, u]:
+                    weak[v, u] = False
+                    edges[v, u] = True
                     stack[top] = v * width + u
                     top += 1
-    return state == 2
+    return edges
 
 
 @numba.njit(cache=True, nogil=True)
