@@ -82,20 +82,12 @@ _ANGLES = np.linspace(0.0, np.pi, 8, endpoint=False)
 def saddle_candidates(image: np.ndarray, count: int, sigma: float) -> np.ndarray:
     """The ``count`` strongest local maxima of :math:`-\\det H` (at scale ``sigma``), ``N×2``,
     strongest first."""
-    from scipy import ndimage
-
     from ..shared.separable import smooth_gaussian
+    from ._corner_kernels import saddle_peaks, saddle_response
 
     smooth = smooth_gaussian(image.astype(np.float64), sigma)
-    iy, ix = np.gradient(smooth)
-    iyy, iyx = np.gradient(iy)
-    ixy, ixx = np.gradient(ix)
-    response = -(ixx * iyy - ixy * iyx)
-    radius = max(2, int(round(2 * sigma)))
-    peaks = (response == ndimage.maximum_filter(response, 2 * radius + 1)) & (response > 0)
-    border = radius + 1
-    peaks[:border], peaks[-border:], peaks[:, :border], peaks[:, -border:] = (False,) * 4
-    rows, cols = np.nonzero(peaks)
+    response = saddle_response(np.ascontiguousarray(smooth))
+    rows, cols = saddle_peaks(response, max(2, int(round(2 * sigma))))
     strength = response[rows, cols]
     order = np.argsort(strength)[::-1][:count]
     return np.column_stack([cols[order], rows[order]]).astype(np.float64)
@@ -140,18 +132,17 @@ class _Photo:
 
     def __init__(self, image: np.ndarray) -> None:
         from ..shared.separable import smooth_gaussian
+        from ._corner_kernels import gradient
 
-        self.smooth = smooth_gaussian(image.astype(np.float64), 1.0)
-        self.gy, self.gx = np.gradient(self.smooth)
+        self.smooth = np.ascontiguousarray(smooth_gaussian(image.astype(np.float64), 1.0))
+        self.gy, self.gx = gradient(self.smooth)
 
     @staticmethod
     def _at(values: np.ndarray, points: np.ndarray) -> np.ndarray:
-        from scipy import ndimage
+        from ._corner_kernels import sample
 
-        flat = points.reshape(-1, 2)
-        return ndimage.map_coordinates(values, [flat[:, 1], flat[:, 0]], order=1).reshape(
-            points.shape[:-1]
-        )
+        flat = np.ascontiguousarray(points.reshape(-1, 2))
+        return sample(values, flat[:, 0].copy(), flat[:, 1].copy()).reshape(points.shape[:-1])
 
     def x_junctions(self, points: np.ndarray, radius: np.ndarray) -> bool:
         """Every point is point-symmetric at ``radius`` (an X-junction, not an L or T)."""
@@ -331,7 +322,7 @@ def find_board(
             continue
         # the window grows with the squares (0.45 of the spacing), within [3, max_window]
         radius = np.clip(0.45 * grid_spacing(best, columns, rows), 3.0, max_window)
-        return refine_corners(image, best, radius)
+        return _refine(photo.gx, photo.gy, best, radius, 20)
     return None
 
 
@@ -356,12 +347,19 @@ def refine_corners(
     Corner i uses a square window of half size ``radius[i]`` with Gaussian
     weights of σ = ``radius[i]``, on the gradient of the image smoothed by σ = 1.
     """
-    from scipy import ndimage
-
     from ..shared.separable import smooth_gaussian
+    from ._corner_kernels import gradient
 
-    smooth = smooth_gaussian(image.astype(np.float64), 1.0)
-    gy, gx = np.gradient(smooth)
+    gy, gx = gradient(np.ascontiguousarray(smooth_gaussian(image.astype(np.float64), 1.0)))
+    return _refine(gx, gy, corners, radius, iterations)
+
+
+def _refine(
+    gx: np.ndarray, gy: np.ndarray, corners: np.ndarray, radius: np.ndarray, iterations: int
+) -> np.ndarray:
+    """:func:`refine_corners` on the gradient ``gx, gy`` of the image smoothed by σ = 1."""
+    from ._corner_kernels import forstner
+
     half = int(np.ceil(radius.max()))
     offsets = np.arange(-half, half + 1, dtype=np.float64)
     grid_y, grid_x = np.meshgrid(offsets, offsets, indexing="ij")
@@ -370,27 +368,8 @@ def refine_corners(
     inside = (np.abs(ox) <= r) & (np.abs(oy) <= r)
     weight = np.exp(-(ox**2 + oy**2) / (2 * r**2)) * inside
     weight[:, (ox == 0) & (oy == 0)] = 0.0  # the centre's gradient carries no position
-    q = corners.astype(np.float64).copy()
-    for _ in range(iterations):
-        px = q[:, :1] + ox  # N×P sample positions
-        py = q[:, 1:] + oy
-        sx = ndimage.map_coordinates(gx, [py.ravel(), px.ravel()], order=1).reshape(px.shape)
-        sy = ndimage.map_coordinates(gy, [py.ravel(), px.ravel()], order=1).reshape(px.shape)
-        axx = (weight * sx * sx).sum(axis=1)
-        axy = (weight * sx * sy).sum(axis=1)
-        ayy = (weight * sy * sy).sum(axis=1)
-        bx = (weight * (sx * sx * px + sx * sy * py)).sum(axis=1)
-        by = (weight * (sx * sy * px + sy * sy * py)).sum(axis=1)
-        det = axx * ayy - axy * axy
-        ok = det > 1e-12
-        new = q.copy()
-        new[ok, 0] = (ayy[ok] * bx[ok] - axy[ok] * by[ok]) / det[ok]
-        new[ok, 1] = (axx[ok] * by[ok] - axy[ok] * bx[ok]) / det[ok]
-        shift = np.abs(new - q).max()
-        q = new
-        if shift < 1e-4:
-            break
-    return q
+    q = np.ascontiguousarray(corners, dtype=np.float64)
+    return forstner(gx, gy, q, ox, oy, np.ascontiguousarray(weight), iterations)
 
 
 class BoardCorners(NamedTuple):
