@@ -14,7 +14,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["forstner", "gradient", "saddle_peaks", "saddle_response", "sample"]
+__all__ = ["forstner", "gradient", "grid_homography", "saddle_peaks", "saddle_response", "sample"]
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -115,6 +115,25 @@ def _bilinear(values, x, y):  # pragma: no cover
     return (1.0 - wy) * top + wy * bottom
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _bilinear_pair(a, b, x, y):  # pragma: no cover
+    """:func:`_bilinear` of two images of one shape at one point."""
+    height, width = a.shape
+    if not (0.0 <= x <= width - 1 and 0.0 <= y <= height - 1):
+        return 0.0, 0.0
+    x0 = min(int(np.floor(x)), width - 1)
+    y0 = min(int(np.floor(y)), height - 1)
+    wx = x - x0
+    wy = y - y0
+    x1 = min(x0 + 1, width - 1)
+    y1 = min(y0 + 1, height - 1)
+    top = (1.0 - wx) * a[y0, x0] + wx * a[y0, x1]
+    bottom = (1.0 - wx) * a[y1, x0] + wx * a[y1, x1]
+    top_b = (1.0 - wx) * b[y0, x0] + wx * b[y0, x1]
+    bottom_b = (1.0 - wx) * b[y1, x0] + wx * b[y1, x1]
+    return (1.0 - wy) * top + wy * bottom, (1.0 - wy) * top_b + wy * bottom_b
+
+
 @numba.njit(cache=True, nogil=True)
 def sample(values, xs, ys):  # pragma: no cover
     """``values`` at the points ``(xs[i], ys[i])`` (flat arrays), see :func:`_bilinear`."""
@@ -141,8 +160,7 @@ def forstner(gx, gy, corners, ox, oy, weight, iterations):  # pragma: no cover
                     continue
                 px = q[i, 0] + ox[k]
                 py = q[i, 1] + oy[k]
-                sx = _bilinear(gx, px, py)
-                sy = _bilinear(gy, px, py)
+                sx, sy = _bilinear_pair(gx, gy, px, py)
                 axx += w * sx * sx
                 axy += w * sx * sy
                 ayy += w * sy * sy
@@ -158,3 +176,55 @@ def forstner(gx, gy, corners, ox, oy, weight, iterations):  # pragma: no cover
         if shift < 1e-4:
             break
     return q
+
+
+@numba.njit(cache=True, nogil=True)
+def _normalising(points):  # pragma: no cover
+    """Hartley's similarity (``geometry.normalising_transform``) as ``(scale, cx, cy)``."""
+    n = points.shape[0]
+    cx = cy = 0.0
+    for i in range(n):
+        cx += points[i, 0]
+        cy += points[i, 1]
+    cx /= n
+    cy /= n
+    total = 0.0
+    for i in range(n):
+        total += (points[i, 0] - cx) ** 2 + (points[i, 1] - cy) ** 2
+    spread = np.sqrt(total / n)
+    return (np.sqrt(2.0) / spread if spread > 0 else 1.0), cx, cy
+
+
+@numba.njit(cache=True, nogil=True)
+def grid_homography(src, dst):  # pragma: no cover
+    """Normalised DLT by the 9×9 normal equations (see ``_corners._grid_homography``):
+    ``(True, H)`` with :math:`H_{33} = 1`, or ``(False, zeros)`` when degenerate."""
+    s_scale, s_cx, s_cy = _normalising(src)
+    d_scale, d_cx, d_cy = _normalising(dst)
+    normal = np.zeros((9, 9))
+    row = np.empty(9)
+    for i in range(src.shape[0]):
+        ax = s_scale * src[i, 0] - s_scale * s_cx
+        ay = s_scale * src[i, 1] - s_scale * s_cy
+        bx = d_scale * dst[i, 0] - d_scale * d_cx
+        by = d_scale * dst[i, 1] - d_scale * d_cy
+        for k in range(2):
+            b = bx if k == 0 else by
+            row[:] = 0.0
+            row[3 * k] = -ax
+            row[3 * k + 1] = -ay
+            row[3 * k + 2] = -1.0
+            row[6], row[7], row[8] = b * ax, b * ay, b
+            for p in range(9):
+                for q in range(9):
+                    normal[p, q] += row[p] * row[q]
+    values, vectors = np.linalg.eigh(normal)
+    h = np.zeros((3, 3))
+    if values[1] < 1e-12 * values[-1]:
+        return False, h
+    t_src = np.array([[s_scale, 0, -s_scale * s_cx], [0, s_scale, -s_scale * s_cy], [0, 0, 1.0]])
+    t_dst = np.array([[d_scale, 0, -d_scale * d_cx], [0, d_scale, -d_scale * d_cy], [0, 0, 1.0]])
+    h = np.linalg.inv(t_dst) @ np.ascontiguousarray(vectors[:, 0]).reshape(3, 3) @ t_src
+    if abs(h[2, 2]) <= 1e-15:
+        return False, h
+    return True, h / h[2, 2]

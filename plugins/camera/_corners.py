@@ -54,7 +54,7 @@ from pydantic import Field
 
 from graphvision import Array, Conformance, node
 
-from ..geometry import apply_homography, normalising_transform
+from ..geometry import apply_homography
 from ..shared.params import Positive
 
 __all__ = [
@@ -112,19 +112,10 @@ def _grid_homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
     vector of A) without the full SVD of the 2N×9 system, which growing the
     grid runs dozens of times per view.
     """
-    t_src, t_dst = normalising_transform(src), normalising_transform(dst)
-    a = apply_homography(t_src, src)
-    b = apply_homography(t_dst, dst)
-    xs = np.column_stack([a, np.ones(len(a))])
-    zeros = np.zeros((len(a), 3))
-    rows = np.vstack(
-        [np.hstack([-xs, zeros, b[:, :1] * xs]), np.hstack([zeros, -xs, b[:, 1:] * xs])]
-    )
-    values, vectors = np.linalg.eigh(rows.T @ rows)
-    if values[1] < 1e-12 * values[-1]:
-        return None
-    h = np.linalg.inv(t_dst) @ vectors[:, 0].reshape(3, 3) @ t_src
-    return h / h[2, 2] if abs(h[2, 2]) > 1e-15 else None
+    from ._corner_kernels import grid_homography
+
+    ok, h = grid_homography(np.ascontiguousarray(src), np.ascontiguousarray(dst))
+    return h if ok else None
 
 
 class _Photo:
