@@ -9,7 +9,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["line_support", "select_lines", "vote_lines"]
+__all__ = ["bucket_points", "line_peaks", "line_support", "select_lines", "vote_lines"]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -32,6 +32,81 @@ def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho):
 
 
 @numba.njit(cache=True, nogil=True)
+def line_peaks(extended, pad, theta_bins):
+    """``(θ row, ρ column)`` of the cells of ``extended`` (θ padded by ``pad`` rows each way)
+    in rows ``[pad, pad + theta_bins)`` and columns ``(0, n_rho - 1)`` that are positive and
+    the maximum of their 3×3 neighbourhood, row-major (``local_maxima(extended, 3, 0)``
+    restricted to those cells, where the window lies inside the array)."""
+    n_rho = extended.shape[1]
+    rows = []
+    cols = []
+    for t in range(pad, pad + theta_bins):
+        for r in range(1, n_rho - 1):
+            value = extended[t, r]
+            if value <= 0.0:
+                continue
+            peak = True
+            for v in range(t - 1, t + 2):
+                for u in range(r - 1, r + 2):
+                    if extended[v, u] > value:
+                        peak = False
+            if peak:
+                rows.append(t)
+                cols.append(r)
+    out = np.empty((len(rows), 2), dtype=np.int64)
+    for i in range(len(rows)):
+        out[i, 0] = rows[i]
+        out[i, 1] = cols[i]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def bucket_points(x, y, cos, sin, rho0, n_rho):
+    """For each θ bin ``k`` (``cos``, ``sin`` of its angle over the ρ step; ``rho0`` ρ of
+    bin 0 in steps), the points ordered by their ρ bin: ``order[k, starts[k, b]:starts[k,
+    b + 1]]`` are the points whose ρ at that angle falls in bin ``b`` (clipped to the grid).
+    Lets a line's support visit only the points near it instead of all of them."""
+    n_theta = cos.size
+    starts = np.zeros((n_theta, n_rho + 1), dtype=np.int64)
+    order = np.empty((n_theta, x.size), dtype=np.int64)
+    bins = np.empty(x.size, dtype=np.int64)
+    for k in range(n_theta):
+        for i in range(x.size):
+            b = int(np.floor(x[i] * cos[k] + y[i] * sin[k] - rho0))
+            bins[i] = min(max(b, 0), n_rho - 1)
+            starts[k, bins[i] + 1] += 1
+        for b in range(n_rho):
+            starts[k, b + 1] += starts[k, b]
+        fill = starts[k, :n_rho].copy()
+        for i in range(x.size):
+            order[k, fill[bins[i]]] = i
+            fill[bins[i]] += 1
+    return order, starts
+
+
+@numba.njit(cache=True, nogil=True)
+def _near_line(theta, rho, tolerance, buckets, cos, sin, rho0, reach):
+    """The slice bounds ``(k, first, last)`` into ``buckets[0][k]`` holding every point
+    that can lie within ``tolerance`` of the line ``(rho, theta)``: θ bin ``k`` nearest to
+    ``theta`` (modulo π, where ρ changes sign), ρ bins widened by how far ρ of a point at
+    distance ``reach`` from the origin moves between ``theta`` and the bin's angle, plus
+    one bin for rounding."""
+    starts = buckets[1]
+    n_theta = cos.size
+    n_rho = starts.shape[1] - 1
+    step = np.pi / n_theta
+    nearest = int(np.round(theta / step))
+    k = nearest % n_theta
+    sign = 1.0 if (nearest - k) // n_theta % 2 == 0 else -1.0
+    scale = np.hypot(cos[0], sin[0])  # 1 / ρ step
+    margin = (tolerance + abs(theta - nearest * step) * reach) * scale + 1.0
+    centre = sign * rho * scale - rho0
+    first = min(max(int(np.floor(centre - margin)), 0), n_rho - 1)
+    last = min(max(int(np.floor(centre + margin)), 0), n_rho - 1)
+    return k, starts[k, first], starts[k, last + 1]
+
+
+@numba.njit(cache=True, nogil=True)
 def _scan_ranges(orientation, check, theta, window):
     """Index ranges ``(a0, a1, b0, b1)`` of the points, sorted by ``orientation`` in [0, π),
     whose orientation can be within ``window`` of ``theta`` mod π (all of them unless
@@ -49,11 +124,15 @@ def _scan_ranges(orientation, check, theta, window):
 
 
 @numba.njit(cache=True, nogil=True)
-def _gather(x, y, orientation, check, free, rho, theta, tolerance, window, cells, stamp, on, mark):
+def _gather(
+    x, y, orientation, check, free, rho, theta, tolerance, window, cells, stamp, on, mark, near
+):
     """Mark in ``on`` (if ``mark``; cleared first) the free points supporting the line
     ``(rho, theta)``: within ``tolerance`` of it and, where ``check``, with ``orientation``
     within ``window`` of ``theta`` mod π. Returns how many 1-px cells along the line they
     cover (``cells`` holds ``stamp`` where covered; positions are offset by half its size).
+    Without ``check``, ``near`` (:func:`bucket_points` and the arguments of
+    :func:`_near_line`) limits the scan to the points near the line.
     """
     c, s = np.cos(theta), np.sin(theta)
     t = theta % np.pi
@@ -62,8 +141,12 @@ def _gather(x, y, orientation, check, free, rho, theta, tolerance, window, cells
     if mark:
         on[:] = False
     a0, a1, b0, b1 = _scan_ranges(orientation, check, theta, window)
+    k = 0
+    if not check:
+        k, a0, a1 = _near_line(theta, rho, tolerance, *near)
     for first, last in ((a0, a1), (b0, b1)):
-        for i in range(first, last):
+        for j in range(first, last):
+            i = near[0][0][k, j] if not check else j
             if not free[i] or abs(x[i] * c + y[i] * s - rho) > tolerance:
                 continue
             if check:
@@ -80,7 +163,7 @@ def _gather(x, y, orientation, check, free, rho, theta, tolerance, window, cells
 
 
 @numba.njit(cache=True, nogil=True)
-def line_support(x, y, orientation, check, rho, theta, tolerance, window, extent):
+def line_support(x, y, orientation, check, rho, theta, tolerance, window, extent, near):
     """Length in pixels of each line ``(rho[k], theta[k])`` covered by edge points: the number
     of 1-px cells along it holding the projection of a point within ``tolerance`` of it (and,
     where ``check``, of ``orientation`` within ``window`` radians of ``theta`` mod π). Points
@@ -104,6 +187,7 @@ def line_support(x, y, orientation, check, rho, theta, tolerance, window, extent
             k + 1,
             on,
             False,
+            near,
         )
     return counts
 
@@ -125,6 +209,7 @@ def select_lines(
     min_distance,
     theta_step,
     rho_step,
+    near,
 ):
     """Greedy selection of lines ``(ρ, θ, covered length)`` from candidates ``order``: each
     candidate is refitted twice by total least squares to its free supporting points, kept
@@ -142,7 +227,7 @@ def select_lines(
         r, t = rho[k], theta[k]
         stamp += 1
         covered = _gather(
-            x, y, orientation, check, free, r, t, tolerance, window, cells, stamp, on, True
+            x, y, orientation, check, free, r, t, tolerance, window, cells, stamp, on, True, near
         )
         if covered < floor:
             continue
@@ -176,7 +261,20 @@ def select_lines(
             r = mx * nx + my * ny
             stamp += 1
             covered = _gather(
-                x, y, orientation, check, free, r, t, tolerance, window, cells, stamp, on, True
+                x,
+                y,
+                orientation,
+                check,
+                free,
+                r,
+                t,
+                tolerance,
+                window,
+                cells,
+                stamp,
+                on,
+                True,
+                near,
             )
         if covered < floor:
             continue

@@ -12,7 +12,7 @@ from graphvision import BinaryImage, Conformance, FloatImage, GrayImage, Int, no
 
 from ..edges import gradient_images
 from ..shared.params import Count
-from ._peaks import local_maxima, quadratic_peak_2d
+from ._peaks import quadratic_peak_2d
 from ._ports import Lines
 
 __all__ = ["HoughLines", "hough_lines", "line_accumulator"]
@@ -94,13 +94,10 @@ def _select_lines(
     max_lines: int,
 ) -> np.ndarray:
     """``(ρ, θ, support)`` rows of the lines kept (see :func:`hough_lines`), best first."""
-    from ._kernels import line_support, select_lines
+    from ._kernels import line_peaks, line_support, select_lines
 
     x, y, orientation = points
-    n_rho = extended.shape[1]
-    peaks = local_maxima(extended, 3, 0.0)  # every peak: one line can mask another's 11×11
-    peaks = peaks[(peaks[:, 0] >= pad) & (peaks[:, 0] < pad + theta_bins)]
-    peaks = peaks[(peaks[:, 1] > 0) & (peaks[:, 1] < n_rho - 1)]
+    peaks = line_peaks(extended, pad, theta_bins)  # every peak: one line can mask another's
     if len(peaks) == 0 or len(x) == 0:
         return np.zeros((0, 3))
     t, r = peaks[:, 0], peaks[:, 1]
@@ -117,7 +114,8 @@ def _select_lines(
     window = max(SUPPORT_ORIENTATION, math.radians(orientation_window) + 0.5 * step)
     tolerance = max(1.0, rho_step)
     extent = math.hypot(shape[0], shape[1]) + 1.0
-    support = line_support(x, y, angles, check, rho, theta, tolerance, window, extent)
+    near = _buckets(x, y, check, shape, theta_bins, rho_step)
+    support = line_support(x, y, angles, check, rho, theta, tolerance, window, extent, near)
     floor = threshold * float(support.max())
     if floor <= 0:
         return np.zeros((0, 3))
@@ -139,8 +137,27 @@ def _select_lines(
         float(min_distance),
         step,
         rho_step,
+        near,
     )
     return lines[np.argsort(-lines[:, 2], kind="stable")]
+
+
+def _buckets(
+    x: np.ndarray, y: np.ndarray, check: bool, shape: tuple[int, ...], theta_bins: int, step: float
+) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray, np.ndarray, float, float]:
+    """The points bucketed by ρ bin at every θ bin (``_kernels.bucket_points``), so that a
+    line's support scans only the points near it; empty when ``check`` (points sorted by
+    orientation are scanned by their orientation range instead)."""
+    from ._kernels import bucket_points
+
+    n_rho, rho0 = _rho_grid(shape, step)
+    table = np.arange(theta_bins) * (math.pi / theta_bins)
+    cos, sin = np.cos(table) / step, np.sin(table) / step
+    if check or len(x) == 0:
+        empty = np.zeros((1, 1), dtype=np.int64)
+        return (empty, empty), cos, sin, rho0 / step, 0.0
+    reach = float(np.hypot(x, y).max())
+    return bucket_points(x, y, cos, sin, rho0 / step, n_rho), cos, sin, rho0 / step, reach
 
 
 def _wrap_theta(accumulator: np.ndarray, pad: int) -> np.ndarray:
