@@ -13,7 +13,7 @@ from graphvision import BinaryImage, Conformance, FloatImage, GrayImage, Int, no
 from ..edges import gradient_images
 from ..shared.checks import ordered
 from ..shared.params import Count, Positive
-from ._peaks import local_maxima, parabolic_offset, suppress_close
+from ._peaks import parabolic_offset, suppress_close
 from ._ports import Circles
 
 __all__ = ["HoughCircles", "circle_accumulator", "hough_circles"]
@@ -37,16 +37,10 @@ def circle_accumulator(
     rows, cols = rows[moving], cols[moving]
     ux, uy = gx[moving] / norm[moving], gy[moving] / norm[moving]
     signs = {"both": (1.0, -1.0), "bright": (1.0,), "dark": (-1.0,)}[polarity]
-    height, width = edges.shape
-    size = len(radii) * height * width
-    accumulator = np.zeros(size)
-    for sign in signs:
-        cx = np.rint(cols[None, :] + sign * radii[:, None] * ux[None, :]).astype(np.intp)
-        cy = np.rint(rows[None, :] + sign * radii[:, None] * uy[None, :]).astype(np.intp)
-        inside = (cx >= 0) & (cx < width) & (cy >= 0) & (cy < height)
-        index = (np.arange(len(radii))[:, None] * height + cy) * width + cx
-        accumulator += np.bincount(index[inside], minlength=size)
-    return accumulator.reshape(len(radii), height, width)
+    from ._circle_kernels import vote_circles
+
+    radii = np.ascontiguousarray(radii, dtype=np.float64)
+    return vote_circles(rows, cols, ux, uy, radii, np.array(signs), *edges.shape)
 
 
 class HoughCircles(NamedTuple):
@@ -143,15 +137,19 @@ def hough_circles(
             f"edges and image must have the same size, got {edges.shape} and {image.shape}"
         )
     radii = np.arange(min_radius, max_radius + radius_step / 2, radius_step)
-    votes = circle_accumulator(edges, image, radii, sigma, polarity)
+    from ._circle_kernels import score_planes, window_maxima
+
+    scores = circle_accumulator(edges, image, radii, sigma, polarity)
+    spread = 1.0
     if vote_sigma > 0:
         # spread each vote as a Gaussian of height 1 (so one vote still counts one)
-        votes = np.stack([smooth_gaussian(plane, vote_sigma, "constant") for plane in votes])
-        votes *= 2.0 * math.pi * vote_sigma**2
-    scores = votes / (2.0 * math.pi * radii[:, None, None])
-    best = scores.max(axis=0)
+        for plane in scores:
+            plane[...] = smooth_gaussian(plane, vote_sigma, "constant")
+        spread = 2.0 * math.pi * vote_sigma**2
+    # scores: votes × spread / 2πr, in place; best: their maximum over radii
+    best = score_planes(scores, spread, 2.0 * math.pi * radii)
     distance = min_radius if min_distance is None else min_distance
-    peaks = local_maxima(best, 2 * int(math.ceil(distance / 2)) + 1, 0.0)
+    peaks = window_maxima(best, 2 * int(math.ceil(distance / 2)) + 1, 0.0)
     peaks = peaks[best[peaks[:, 0], peaks[:, 1]] >= threshold]
     height, width = best.shape
     peaks = peaks[

@@ -67,14 +67,10 @@ def suppress_close(
 ) -> np.ndarray:
     """Greedy non-maximum suppression: indices of peaks, strongest first, kept at least
     ``min_distance`` apart (Euclidean over the columns of ``positions``), at most ``limit``."""
+    from ._circle_kernels import greedy_suppression
+
     order = np.argsort(-scores, kind="stable")
-    kept: list[int] = []
-    for index in order:
-        if len(kept) == limit:
-            break
-        if kept:
-            gaps = np.linalg.norm(positions[kept] - positions[index], axis=1)
-            if gaps.min() < min_distance:
-                continue
-        kept.append(int(index))
-    return np.array(kept, dtype=np.intp)
+    points = np.ascontiguousarray(positions, dtype=np.float64)
+    if points.ndim == 1:  # one coordinate per peak
+        points = points.reshape(-1, 1)
+    return greedy_suppression(points, order, float(min_distance), int(limit))

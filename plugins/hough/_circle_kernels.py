@@ -1,0 +1,106 @@
+"""numba kernels of circle voting and of peak picking (imported on first use: numba loads slowly).
+
+Votes go straight into the ``radii × H × W`` accumulator (no ``radii × points`` index
+arrays), scores and the best score over radii are one pass over it, window maxima are
+taken along rows then down columns, and the greedy suppression of close peaks is one
+loop. The arithmetic is the array form's, operation for operation, so results are the
+same to the bit.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+__all__ = ["greedy_suppression", "score_planes", "vote_circles", "window_maxima"]
+
+
+@numba.njit(cache=True, nogil=True)
+def vote_circles(rows, cols, ux, uy, radii, signs, height, width):  # pragma: no cover
+    """Accumulator ``(len(radii), height, width)``: point ``i`` votes 1 at
+    ``rint((col, row) + sign · r · u_i)`` for every radius and sign, when inside."""
+    votes = np.zeros((radii.size, height, width))
+    for sign in signs:
+        for k in range(radii.size):
+            step = sign * radii[k]
+            for i in range(rows.size):
+                cx = int(np.rint(cols[i] + step * ux[i]))
+                cy = int(np.rint(rows[i] + step * uy[i]))
+                if 0 <= cx < width and 0 <= cy < height:
+                    votes[k, cy, cx] += 1.0
+    return votes
+
+
+@numba.njit(cache=True, nogil=True)
+def score_planes(votes, spread, circumference):  # pragma: no cover
+    """In place: ``votes[k] * spread / circumference[k]`` (the scores); returns their
+    maximum over ``k`` at each pixel."""
+    n, height, width = votes.shape
+    best = np.empty((height, width))
+    for k in range(n):
+        for y in range(height):
+            for x in range(width):
+                score = votes[k, y, x] * spread / circumference[k]
+                votes[k, y, x] = score
+                if k == 0 or score > best[y, x]:
+                    best[y, x] = score
+    return best
+
+
+@numba.njit(cache=True, nogil=True)
+def window_maxima(values, size, floor):  # pragma: no cover
+    """``(row, col)`` of the cells equal to the maximum of their ``size × size`` window
+    (the image edge replicated, as ``maximum_filter(mode="nearest")``) and above
+    ``floor``, row-major."""
+    height, width = values.shape
+    before = size // 2
+    after = size - 1 - before
+    across = np.empty((height, width))
+    for y in range(height):
+        for x in range(width):
+            best = values[y, max(x - before, 0)]
+            for u in range(max(x - before, 0), min(x + after, width - 1) + 1):
+                best = max(best, values[y, u])
+            across[y, x] = best
+    rows = []
+    cols = []
+    for y in range(height):
+        for x in range(width):
+            value = values[y, x]
+            if not value > floor:
+                continue
+            best = across[max(y - before, 0), x]
+            for v in range(max(y - before, 0), min(y + after, height - 1) + 1):
+                best = max(best, across[v, x])
+            if value == best:
+                rows.append(y)
+                cols.append(x)
+    out = np.empty((len(rows), 2), dtype=np.int64)
+    for i in range(len(rows)):
+        out[i, 0] = rows[i]
+        out[i, 1] = cols[i]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def greedy_suppression(positions, order, min_distance, limit):  # pragma: no cover
+    """Indices from ``order`` (strongest first) kept when at least ``min_distance``
+    (Euclidean) from every index kept before, at most ``limit``."""
+    kept = np.empty(min(limit, order.size), dtype=np.intp)
+    count = 0
+    for index in order:
+        if count == limit:
+            break
+        close = False
+        for j in range(count):
+            total = 0.0
+            for d in range(positions.shape[1]):
+                gap = positions[kept[j], d] - positions[index, d]
+                total += gap * gap
+            if np.sqrt(total) < min_distance:
+                close = True
+                break
+        if not close:
+            kept[count] = index
+            count += 1
+    return kept[:count]
