@@ -14,7 +14,16 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["forstner", "gradient", "grid_homography", "saddle_peaks", "saddle_response", "sample"]
+__all__ = [
+    "forstner",
+    "gradient",
+    "grid_homography",
+    "next_row",
+    "saddle_peaks",
+    "saddle_response",
+    "sample",
+    "x_junctions",
+]
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -228,3 +237,86 @@ def grid_homography(src, dst):  # pragma: no cover
     if abs(h[2, 2]) <= 1e-15:
         return False, h
     return True, h / h[2, 2]
+
+
+@numba.njit(cache=True, nogil=True)
+def _strongest_near(candidates, x, y, radius):  # pragma: no cover
+    """The first (strongest) candidate within ``radius`` of ``(x, y)``, or -1."""
+    for i in range(candidates.shape[0]):
+        dx = candidates[i, 0] - x
+        dy = candidates[i, 1] - y
+        if np.sqrt(dx * dx + dy * dy) <= radius:
+            return i
+    return -1
+
+
+@numba.njit(cache=True, nogil=True)
+def x_junctions(smooth, points, radius, cos, sin, max_asymmetry):  # pragma: no cover
+    """Every point is point-symmetric at its ``radius`` (``_corners._Photo.x_junctions``)."""
+    for i in range(points.shape[0]):
+        high = -np.inf
+        low = np.inf
+        worst = 0.0
+        for a in range(cos.size):
+            ox = radius[i] * cos[a]
+            oy = radius[i] * sin[a]
+            ahead = _bilinear(smooth, points[i, 0] + ox, points[i, 1] + oy)
+            behind = _bilinear(smooth, points[i, 0] - ox, points[i, 1] - oy)
+            high = max(high, ahead, behind)
+            low = min(low, ahead, behind)
+            worst = max(worst, abs(ahead - behind))
+        if not worst <= max_asymmetry * max(high - low, 1e-9):
+            return False
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
+def next_row(candidates, grid, smooth, tolerance, cos, sin, max_asymmetry):  # pragma: no cover
+    """The row after the last of ``grid`` (``_corners._Grower._next_row``): ``(True, fit,
+    indices)`` or ``(False, 0, empty)``. A homography fitted to the last 3 rows predicts it,
+    each prediction takes the strongest candidate within ``tolerance`` × its distance to
+    the last row; the row must be distinct, new and of X-junctions."""
+    height, width = grid.shape
+    first = max(height - 3, 0)
+    count = (height - first) * width
+    src = np.empty((count, 2))
+    dst = np.empty((count, 2))
+    n = 0
+    for j in range(first, height):
+        for i in range(width):
+            src[n, 0], src[n, 1] = i, j
+            dst[n, 0], dst[n, 1] = candidates[grid[j, i], 0], candidates[grid[j, i], 1]
+            n += 1
+    none = np.empty(0, dtype=np.int64)
+    ok, h = grid_homography(src, dst)
+    if not ok:
+        return False, 0.0, none
+    index = np.empty(width, dtype=np.int64)
+    spacing = np.empty(width)
+    predicted = np.empty((width, 2))
+    fit = 0.0
+    for i in range(width):
+        w = i * h[2, 0] + height * h[2, 1] + h[2, 2]
+        px = (i * h[0, 0] + height * h[0, 1] + h[0, 2]) / w
+        py = (i * h[1, 0] + height * h[1, 1] + h[1, 2]) / w
+        if not (np.isfinite(px) and np.isfinite(py)):
+            return False, 0.0, none
+        last = candidates[grid[height - 1, i]]
+        spacing[i] = np.sqrt((px - last[0]) ** 2 + (py - last[1]) ** 2)
+        found = _strongest_near(candidates, px, py, tolerance * spacing[i])
+        if found < 0:
+            return False, 0.0, none
+        for k in range(i):
+            if index[k] == found:
+                return False, 0.0, none
+        if (grid == found).any():
+            return False, 0.0, none
+        index[i] = found
+        predicted[i, 0], predicted[i, 1] = px, py
+    points = np.empty((width, 2))
+    for i in range(width):
+        points[i] = candidates[index[i]]
+        fit += np.sqrt(np.sum((points[i] - predicted[i]) ** 2)) / spacing[i]
+    if not x_junctions(smooth, points, tolerance * spacing, cos, sin, max_asymmetry):
+        return False, 0.0, none
+    return True, fit / width, index

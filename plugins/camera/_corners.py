@@ -54,7 +54,6 @@ from pydantic import Field
 
 from graphvision import Array, Conformance, node
 
-from ..geometry import apply_homography
 from ..shared.params import Positive
 
 __all__ = [
@@ -104,20 +103,6 @@ def sigma_ladder(shape: tuple[int, ...], columns: int, rows: int) -> list[float]
     return [*ladder, 1.4, 1.0]
 
 
-def _grid_homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
-    """Normalised DLT for the grid, solved by the 9×9 normal equations.
-
-    The same estimate as :func:`~graphvision_plugins.geometry.estimate_homography`
-    (the smallest eigenvector of :math:`A^T A` is the smallest right singular
-    vector of A) without the full SVD of the 2N×9 system, which growing the
-    grid runs dozens of times per view.
-    """
-    from ._corner_kernels import grid_homography
-
-    ok, h = grid_homography(np.ascontiguousarray(src), np.ascontiguousarray(dst))
-    return h if ok else None
-
-
 class _Photo:
     """The image smoothed by σ = 1 and its gradient, sampled at sub-pixel points."""
 
@@ -136,14 +121,21 @@ class _Photo:
         return sample(values, flat[:, 0].copy(), flat[:, 1].copy()).reshape(points.shape[:-1])
 
     def x_junctions(self, points: np.ndarray, radius: np.ndarray) -> bool:
-        """Every point is point-symmetric at ``radius`` (an X-junction, not an L or T)."""
-        u = np.column_stack([np.cos(_ANGLES), np.sin(_ANGLES)])
-        offset = np.asarray(radius, np.float64).reshape(-1, 1, 1) * u[None]
-        ahead = self._at(self.smooth, points[:, None, :] + offset)
-        behind = self._at(self.smooth, points[:, None, :] - offset)
-        both = np.concatenate([ahead, behind], axis=1)
-        contrast = np.maximum(both.max(axis=1) - both.min(axis=1), 1e-9)
-        return bool((np.abs(ahead - behind).max(axis=1) <= MAX_ASYMMETRY * contrast).all())
+        """Every point is point-symmetric at ``radius`` (an X-junction, not an L or T):
+        :math:`|I(p + \\rho u) - I(p - \\rho u)|` at most ``MAX_ASYMMETRY`` of the contrast
+        of those 16 samples, for 8 directions u."""
+        from ._corner_kernels import x_junctions
+
+        return bool(
+            x_junctions(
+                self.smooth,
+                np.ascontiguousarray(points, dtype=np.float64),
+                np.asarray(radius, np.float64),
+                np.cos(_ANGLES),
+                np.sin(_ANGLES),
+                MAX_ASYMMETRY,
+            )
+        )
 
     def on_edges(self, a: np.ndarray, b: np.ndarray, contrast: float) -> bool:
         """Every segment a–b crosses an edge at its midpoint (two neighbouring corners)."""
@@ -212,32 +204,22 @@ class _Grower:
         return None
 
     def _next_row(self, grid: np.ndarray) -> tuple[float, np.ndarray] | None:
-        """The row after the last of ``grid`` (its fit and candidate indices), or None."""
-        height, width = grid.shape
-        near = grid[-3:]
-        j, i = np.mgrid[height - len(near) : height, 0:width]
-        h = _grid_homography(
-            np.column_stack([i.ravel(), j.ravel()]).astype(np.float64),
-            self.candidates[near.ravel()],
+        """The row after the last of ``grid`` (its fit and candidate indices), or None: a
+        homography fitted to the 3 nearest rows predicts it, each prediction takes the
+        strongest candidate within ``TOLERANCE`` of the spacing, and the row must be
+        distinct, new and of X-junctions (one compiled call)."""
+        from ._corner_kernels import next_row
+
+        ok, fit, index = next_row(
+            self.candidates,
+            np.ascontiguousarray(grid, dtype=np.int64),
+            self.photo.smooth,
+            TOLERANCE,
+            np.cos(_ANGLES),
+            np.sin(_ANGLES),
+            MAX_ASYMMETRY,
         )
-        if h is None:
-            return None
-        predicted = apply_homography(h, np.column_stack([np.arange(width), np.full(width, height)]))
-        if not np.isfinite(predicted).all():
-            return None
-        spacing = np.linalg.norm(predicted - self.candidates[grid[-1]], axis=1)
-        found = [
-            self.strongest_near(q, TOLERANCE * d) for q, d in zip(predicted, spacing, strict=True)
-        ]
-        if any(f is None for f in found):
-            return None
-        index = np.array(found, np.int64)
-        if len(set(found)) != width or set(found) & set(grid.ravel().tolist()):
-            return None
-        if not self.photo.x_junctions(self.candidates[index], TOLERANCE * spacing):
-            return None
-        fit = float(np.mean(np.linalg.norm(self.candidates[index] - predicted, axis=1) / spacing))
-        return fit, index
+        return (fit, index) if ok else None
 
     def _grow(self, grid: np.ndarray) -> np.ndarray:
         while True:
