@@ -1,0 +1,70 @@
+"""The compiled Hough helpers equal what they replace: scipy's maximum filter for peaks,
+a scan of every point for a line's support, and the greedy loop of close-peak suppression."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from graphvision_plugins.hough._circle_kernels import window_maxima
+from graphvision_plugins.hough._kernels import line_peaks, line_support
+from graphvision_plugins.hough._lines import _buckets, _rho_grid
+from graphvision_plugins.hough._peaks import suppress_close
+
+
+@pytest.mark.parametrize("size", [3, 5, 17])
+def test_window_maxima_equal_scipy_maximum_filter(size):
+    rng = np.random.default_rng(size)
+    values = np.round(rng.random((60, 80)) * 20) / 4  # plateaus: ties count as maxima
+    values[:, :3] = 0.0
+    expected = np.argwhere(
+        (values == ndimage.maximum_filter(values, size, mode="nearest")) & (values > 0.5)
+    )
+    np.testing.assert_array_equal(window_maxima(values, size, 0.5), expected)
+
+
+def test_line_peaks_equal_scipy_maximum_filter_on_the_kept_rows():
+    rng = np.random.default_rng(3)
+    extended = np.round(rng.random((40, 90)) * 10)
+    pad, bins = 5, 30
+    maxima = (extended == ndimage.maximum_filter(extended, 3, mode="nearest")) & (extended > 0)
+    expected = np.argwhere(maxima)
+    expected = expected[(expected[:, 0] >= pad) & (expected[:, 0] < pad + bins)]
+    expected = expected[(expected[:, 1] > 0) & (expected[:, 1] < 89)]
+    np.testing.assert_array_equal(line_peaks(extended, pad, bins), expected)
+
+
+def _covered(x, y, rho, theta, tolerance, extent):
+    """Support by brute force: distinct 1-px cells along the line of the points near it."""
+    near = np.abs(x * np.cos(theta) + y * np.sin(theta) - rho) <= tolerance
+    along = np.floor(y[near] * np.cos(theta) - x[near] * np.sin(theta)) + int(np.ceil(extent)) + 2
+    return len(np.unique(along))
+
+
+def test_bucketed_support_equals_a_scan_of_every_point():
+    rng = np.random.default_rng(11)
+    shape, bins, step = (120, 160), 90, 1.0
+    x, y = rng.uniform(0, 159, 3000), rng.uniform(0, 119, 3000)
+    x[:200], y[:200] = np.linspace(0, 159, 200), 30 + 0.3 * np.linspace(0, 159, 200)  # a line
+    _, rho0 = _rho_grid(shape, step)
+    # θ across [0, π) and beyond it (the padded rows and refits): ρ changes sign there
+    theta = rng.uniform(-0.3, math.pi + 0.3, 400)
+    rho = rng.uniform(rho0, -rho0, 400)
+    theta[:2], rho[:2] = math.atan2(1, -0.3), 30 / math.hypot(1, 0.3)
+    extent = math.hypot(*shape) + 1.0
+    near = _buckets(x, y, False, shape, bins, step)
+    support = line_support(x, y, np.zeros(len(x)), False, rho, theta, 1.0, 0.0, extent, near)
+    expected = [_covered(x, y, r, t, 1.0, extent) for r, t in zip(rho, theta, strict=True)]
+    np.testing.assert_array_equal(support, expected)
+    assert support[0] > 150
+
+
+def test_suppress_close_keeps_strongest_first_apart():
+    positions = np.array([[0.0, 0.0], [3.0, 0.0], [10.0, 0.0], [12.0, 0.0], [0.0, 4.0]])
+    scores = np.array([1.0, 5.0, 2.0, 2.0, 0.5])
+    # 1 (5) first; 2 and 3 tie (stable: 2 first), 3 within 5 of 2; 0 within 5 of 1; 4 is 5 from 1
+    np.testing.assert_array_equal(suppress_close(positions, scores, 5.0, 10), [1, 2, 4])
+    np.testing.assert_array_equal(suppress_close(positions, scores, 5.0, 2), [1, 2])
