@@ -81,30 +81,40 @@ def saddle_peaks(response, radius):  # pragma: no cover
     """Rows and columns (row-major order) of the pixels at least ``radius + 1`` from the
     border with a positive response equal to the maximum of their ``2 radius + 1``
     square (``response == maximum_filter(response, 2 radius + 1)``, whose window lies
-    inside the image there), the maximum taken along rows, then down columns."""
+    inside the image there), the maximum taken along rows (kept for the window's rows
+    only), then down columns."""
     height, width = response.shape
     border = radius + 1
-    across = np.empty_like(response)  # the maximum along each row's window
-    for y in range(height):
-        for x in range(radius, width - radius):
-            best = response[y, x - radius]
-            for u in range(x - radius + 1, x + radius + 1):
-                best = max(best, response[y, u])
-            across[y, x] = best
+    size = 2 * radius + 1
+    across = np.empty((size, width))  # row maxima of the rows y - radius .. y + radius
+    for v in range(border - radius, min(border + radius, height)):
+        _row_maxima(response, v, radius, across[v % size])
     rows = []
     cols = []
     for y in range(border, height - border):
+        _row_maxima(response, y + radius, radius, across[(y + radius) % size])
         for x in range(border, width - border):
             value = response[y, x]
-            if value <= 0.0 or across[y, x] > value:
+            if value <= 0.0 or across[y % size, x] > value:
                 continue
-            best = across[y - radius, x]
+            best = across[(y - radius) % size, x]
             for v in range(y - radius + 1, y + radius + 1):
-                best = max(best, across[v, x])
+                best = max(best, across[v % size, x])
             if best <= value:
                 rows.append(y)
                 cols.append(x)
     return np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64)
+
+
+@numba.njit(cache=True, nogil=True)
+def _row_maxima(response, y, radius, out):  # pragma: no cover
+    """``out[x]``: the maximum of row ``y`` over ``x ± radius`` (inside the row)."""
+    width = response.shape[1]
+    for x in range(radius, width - radius):
+        best = response[y, x - radius]
+        for u in range(x - radius + 1, x + radius + 1):
+            best = max(best, response[y, u])
+        out[x] = best
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
