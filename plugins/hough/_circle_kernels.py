@@ -1,7 +1,7 @@
 """numba kernels of circle voting and of peak picking (imported on first use: numba loads slowly).
 
-Votes go straight into the ``radii × H × W`` accumulator (no ``radii × points`` index
-arrays), scores and the best score over radii are one pass over it, window maxima are
+Votes go straight into the accumulator (no ``radii × points`` index arrays), one radius
+at a time folded into the best score over radii (never the whole stack), window maxima are
 taken along rows then down columns, and the greedy suppression of close peaks is one
 loop. The arithmetic is the array form's, operation for operation, so results are the
 same to the bit.
@@ -12,7 +12,13 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["greedy_suppression", "score_planes", "vote_circles", "window_maxima"]
+__all__ = [
+    "fold_plane",
+    "greedy_suppression",
+    "vote_circles",
+    "vote_plane",
+    "window_maxima",
+]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -32,19 +38,41 @@ def vote_circles(rows, cols, ux, uy, radii, signs, height, width):  # pragma: no
 
 
 @numba.njit(cache=True, nogil=True)
-def score_planes(votes, spread, circumference):  # pragma: no cover
-    """In place: ``votes[k] * spread / circumference[k]`` (the scores); returns their
-    maximum over ``k`` at each pixel."""
-    n, height, width = votes.shape
-    best = np.empty((height, width))
-    for k in range(n):
-        for y in range(height):
-            for x in range(width):
-                score = votes[k, y, x] * spread / circumference[k]
-                votes[k, y, x] = score
-                if k == 0 or score > best[y, x]:
-                    best[y, x] = score
-    return best
+def vote_plane(rows, cols, ux, uy, radius, signs, plane):  # pragma: no cover
+    """:func:`vote_circles` for one radius, into ``plane`` (cleared first)."""
+    height, width = plane.shape
+    plane[:] = 0.0
+    for sign in signs:
+        step = sign * radius
+        for i in range(rows.size):
+            cx = int(np.rint(cols[i] + step * ux[i]))
+            cy = int(np.rint(rows[i] + step * uy[i]))
+            if 0 <= cx < width and 0 <= cy < height:
+                plane[cy, cx] += 1.0
+    return plane
+
+
+@numba.njit(cache=True, nogil=True)
+def fold_plane(plane, k, last, spread, circumference, best, k_best, below, above, previous):
+    """Fold the votes of radius ``k`` (of ``0..last``) into the running maximum over radii:
+    the score ``plane · spread / circumference``; ``best`` and ``k_best`` the largest score
+    and its first radius, ``below`` and ``above`` the scores of the radii either side of it
+    (its own at the ends), ``previous`` the scores of radius ``k - 1``. Equals
+    ``scores.max(0)``, ``argmax(0)`` and ``scores[k ± 1]`` of the whole stack of scores,
+    without holding it."""
+    height, width = plane.shape
+    for y in range(height):
+        for x in range(width):
+            score = plane[y, x] * spread / circumference
+            if k > 0 and k_best[y, x] == k - 1:
+                above[y, x] = score
+            if k == 0 or score > best[y, x]:
+                best[y, x] = score
+                k_best[y, x] = k
+                below[y, x] = previous[y, x] if k > 0 else score
+            if k == last and k_best[y, x] == k:
+                above[y, x] = score
+            previous[y, x] = score
 
 
 @numba.njit(cache=True, nogil=True)

@@ -29,6 +29,18 @@ def circle_accumulator(
     A bright disc's gradient points inwards, so ``bright`` votes at
     :math:`p + r u`, ``dark`` at :math:`p - r u`, ``both`` at both.
     """
+    from ._circle_kernels import vote_circles
+
+    rows, cols, ux, uy, signs = _voters(edges, image, sigma, polarity)
+    radii = np.ascontiguousarray(radii, dtype=np.float64)
+    return vote_circles(rows, cols, ux, uy, radii, signs, *edges.shape)
+
+
+def _voters(
+    edges: np.ndarray, image: np.ndarray, sigma: float, polarity: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Rows, columns and unit gradients of the edge points with a gradient, and the signs
+    they vote with."""
     rows, cols = np.nonzero(edges)
     dx, dy = gradient_images(image, "gaussian", sigma)
     gx, gy = dx[rows, cols].astype(np.float64), dy[rows, cols].astype(np.float64)
@@ -37,10 +49,36 @@ def circle_accumulator(
     rows, cols = rows[moving], cols[moving]
     ux, uy = gx[moving] / norm[moving], gy[moving] / norm[moving]
     signs = {"both": (1.0, -1.0), "bright": (1.0,), "dark": (-1.0,)}[polarity]
-    from ._circle_kernels import vote_circles
+    return rows, cols, ux, uy, np.array(signs)
 
-    radii = np.ascontiguousarray(radii, dtype=np.float64)
-    return vote_circles(rows, cols, ux, uy, radii, np.array(signs), *edges.shape)
+
+def _best_over_radii(
+    edges: np.ndarray,
+    image: np.ndarray,
+    radii: np.ndarray,
+    sigma: float,
+    polarity: str,
+    vote_sigma: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Best score over radii at each pixel, its radius index and the scores of the radii
+    either side: one radius at a time (votes, spread, score), never the whole stack."""
+    from ..shared.separable import smooth_gaussian
+    from ._circle_kernels import fold_plane, vote_plane
+
+    rows, cols, ux, uy, signs = _voters(edges, image, sigma, polarity)
+    plane = np.empty(edges.shape)
+    best, below, above, previous = (np.empty(edges.shape) for _ in range(4))
+    k_best = np.zeros(edges.shape, dtype=np.int64)
+    # spread each vote as a Gaussian of height 1 (so one vote still counts one)
+    spread = 2.0 * math.pi * vote_sigma**2 if vote_sigma > 0 else 1.0
+    for k, radius in enumerate(radii):
+        votes = vote_plane(rows, cols, ux, uy, float(radius), signs, plane)
+        if vote_sigma > 0:
+            votes = smooth_gaussian(votes, vote_sigma, "constant")
+        circumference = 2.0 * math.pi * radius
+        last = len(radii) - 1
+        fold_plane(votes, k, last, spread, circumference, best, k_best, below, above, previous)
+    return best, k_best, below, above
 
 
 class HoughCircles(NamedTuple):
@@ -130,24 +168,16 @@ def hough_circles(
        shapes", Pattern Recognition 13(2), 1981 (gradient-directed voting).
     .. [2] Szeliski (2022), section 7.4.2.
     """
-    from ..shared.separable import smooth_gaussian
+    from ._circle_kernels import window_maxima
 
     if image.shape != edges.shape:
         raise ValueError(
             f"edges and image must have the same size, got {edges.shape} and {image.shape}"
         )
     radii = np.arange(min_radius, max_radius + radius_step / 2, radius_step)
-    from ._circle_kernels import score_planes, window_maxima
-
-    scores = circle_accumulator(edges, image, radii, sigma, polarity)
-    spread = 1.0
-    if vote_sigma > 0:
-        # spread each vote as a Gaussian of height 1 (so one vote still counts one)
-        for plane in scores:
-            plane[...] = smooth_gaussian(plane, vote_sigma, "constant")
-        spread = 2.0 * math.pi * vote_sigma**2
-    # scores: votes × spread / 2πr, in place; best: their maximum over radii
-    best = score_planes(scores, spread, 2.0 * math.pi * radii)
+    best, k_best, below_all, above_all = _best_over_radii(
+        edges, image, radii, sigma, polarity, vote_sigma
+    )
     distance = min_radius if min_distance is None else min_distance
     peaks = window_maxima(best, 2 * int(math.ceil(distance / 2)) + 1, 0.0)
     peaks = peaks[best[peaks[:, 0], peaks[:, 1]] >= threshold]
@@ -161,12 +191,11 @@ def hough_circles(
     centre_scores = best[peaks[:, 0], peaks[:, 1]]
     kept = peaks[suppress_close(peaks.astype(np.float64), centre_scores, distance, max_circles)]
     y, x = kept[:, 0], kept[:, 1]
-    k = scores[:, y, x].argmax(axis=0)
-    centre = scores[k, y, x]
+    k = k_best[y, x]
+    centre = best[y, x]
     d_y = parabolic_offset(best[y - 1, x], best[y, x], best[y + 1, x])
     d_x = parabolic_offset(best[y, x - 1], best[y, x], best[y, x + 1])
-    below = scores[np.maximum(k - 1, 0), y, x]
-    above = scores[np.minimum(k + 1, len(radii) - 1), y, x]
+    below, above = below_all[y, x], above_all[y, x]
     interior = (k > 0) & (k < len(radii) - 1)
     d_r = np.where(interior, parabolic_offset(below, centre, above), 0.0)
     circles = np.column_stack([x + d_x, y + d_y, radii[k] + d_r * radius_step, centre])

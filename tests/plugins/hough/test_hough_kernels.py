@@ -68,3 +68,22 @@ def test_suppress_close_keeps_strongest_first_apart():
     # 1 (5) first; 2 and 3 tie (stable: 2 first), 3 within 5 of 2; 0 within 5 of 1; 4 is 5 from 1
     np.testing.assert_array_equal(suppress_close(positions, scores, 5.0, 10), [1, 2, 4])
     np.testing.assert_array_equal(suppress_close(positions, scores, 5.0, 2), [1, 2])
+
+
+def test_folding_radii_equals_the_whole_stack_of_scores():
+    from graphvision_plugins.hough._circle_kernels import fold_plane
+
+    rng = np.random.default_rng(5)
+    stack = np.round(rng.random((6, 20, 30)) * 8) / 8  # ties: the first radius wins
+    n = len(stack)
+    best, below, above, previous = (np.empty((20, 30)) for _ in range(4))
+    k_best = np.zeros((20, 30), dtype=np.int64)
+    for k, plane in enumerate(stack):
+        fold_plane(plane * 3.0, k, n - 1, 0.5, 1.5, best, k_best, below, above, previous)
+    scores = stack * 3.0 * 0.5 / 1.5
+    k = scores.argmax(axis=0)
+    y, x = np.mgrid[0:20, 0:30]
+    np.testing.assert_array_equal(best, scores.max(axis=0))
+    np.testing.assert_array_equal(k_best, k)
+    np.testing.assert_array_equal(below, scores[np.maximum(k - 1, 0), y, x])
+    np.testing.assert_array_equal(above, scores[np.minimum(k + 1, n - 1), y, x])
