@@ -19,6 +19,17 @@ def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho):
     divided by the ρ step and ``rho0`` is ρ of bin 0 in steps."""
     n_theta = cos.size
     accumulator = np.zeros((n_theta, n_rho))
+    if width == n_theta:  # every point votes for every θ: one θ row at a time (in cache),
+        for t in range(n_theta):  # each cell's votes still summed in the points' order
+            row = accumulator[t]
+            for i in range(x.size):
+                position = x[i] * cos[t] + y[i] * sin[t] - rho0
+                lower = int(np.floor(position))
+                frac = position - lower
+                if lower >= 0 and lower + 1 < n_rho:
+                    row[lower] += weights[i] * (1.0 - frac)
+                    row[lower + 1] += weights[i] * frac
+        return accumulator
     for i in range(x.size):
         for k in range(width):
             t = (first[i] + k) % n_theta
