@@ -12,6 +12,14 @@ const common = { bundle: true, minify: true, target: "es2020", legalComments: "n
 await build({ ...common, entryPoints: ["src/studio.js"], outfile: `${out}/studio.js`, format: "iife" });
 await build({ ...common, entryPoints: ["src/viewers-bundle.js"], outfile: `${out}/viewers.js`,
   format: "iife", globalName: "GraphvisionViewers" });
+// report.html's graph layout, owned by the views package (which may not import the studio's)
+const views = "../graphvision/views/static";
+rmSync(views, { recursive: true, force: true });
+mkdirSync(`${views}/licences`, { recursive: true });
+await build({ ...common, entryPoints: ["src/report-graph.js"], outfile: `${views}/graph.js`,
+  format: "iife", globalName: "GraphvisionGraph" });
+cpSync("node_modules/@dagrejs/dagre/LICENSE", `${views}/licences/dagre.LICENSE`);
+cpSync("node_modules/@dagrejs/graphlib/LICENSE", `${views}/licences/graphlib.LICENSE`);
 cpSync("src/studio.css", `${out}/studio.css`);
 cpSync("index.html", `${out}/index.html`);
 const katex = "node_modules/katex/dist";
@@ -30,4 +38,8 @@ writeFileSync(`${out}/licences/README.txt`,
   `  @dagrejs/dagre ${version("@dagrejs/dagre")} (MIT), @dagrejs/graphlib ${version("@dagrejs/graphlib")} (MIT): graph layout, bundled into studio.js and viewers.js\n` +
   `  katex ${version("katex")} (MIT): formulas, katex/\n` +
   `  esbuild ${version("esbuild")} (MIT): the bundler (build time only)\n`);
-console.log(`built ${out}`);
+writeFileSync(`${views}/licences/README.txt`,
+  `Built by frontend/build.mjs from the npm registry (package-lock.json pins every version):\n` +
+  `  @dagrejs/dagre ${version("@dagrejs/dagre")} (MIT), @dagrejs/graphlib ${version("@dagrejs/graphlib")} (MIT): ` +
+  `graph layout, bundled into graph.js, which report.html inlines\n`);
+console.log(`built ${out} and ${views}`);

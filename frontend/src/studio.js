@@ -2,11 +2,12 @@
 import { GraphView } from "./graphview.js";
 import { downstream } from "./layout.js";
 import { docHtml } from "./tex.js";
-import { el, floatMapViewer, ImageViewer, pointCloudViewer, scalarViewer, tableViewer } from "./viewers.js";
+import { classifierPanel, cloudPanel, curvesPanel, epipolarPanel, maskLayer, matchesPanel } from "./panels.js";
+import { el, floatMapViewer, ImageViewer, scalarViewer, tableViewer } from "./viewers.js";
 import { readValue, widgetSpec } from "./widgets.js";
 
 const S = { graph: null, view: null, selected: null, latest: 0, shown: 0, runs: {}, states: {},
-  timers: {}, showing: new Set() };
+  timers: {}, showing: new Set(), queued: {} };
 const $ = (sel) => document.querySelector(sel);
 
 async function api(path, body) {
@@ -46,6 +47,7 @@ function onEvent(event) {
   }
   if (event.run < S.latest) return; // a superseded run: never mixed with the newer one
   if (event.event === "queued") {
+    S.queued[event.run] = new Set(event.nodes);
     for (const id of event.nodes) setNodeState(id, "queued");
     for (const card of document.querySelectorAll("[data-producer]")) {
       if (event.nodes.includes(card.dataset.producer)) card.classList.add("gv-stale");
@@ -131,6 +133,50 @@ function previewStep(canvas) {
   return scale > 0 ? Math.max(1, Math.min(16, Math.floor(1 / scale))) : 1;
 }
 
+// A run's values for the viewers that draw one value with others (panels.js). A value
+// whose cache key is known is fetched once (the images and keypoints a change downstream
+// of them leaves alone are not sent again for every run).
+const fetched = new Map();
+// The cache key of a node's output in a run; while the run streams (its keys not known
+// yet), that of the latest run which knows it, when this run did not queue the node.
+function keyIn(run, node, port) {
+  const known = S.runs[run]?.nodes?.[node]?.keys?.[port];
+  if (known !== undefined || !S.queued[run] || S.queued[run].has(node)) return known;
+  for (let r = run - 1; r > 0; r--) {
+    const key = S.runs[r]?.nodes?.[node]?.keys?.[port];
+    if (key !== undefined) return key;
+  }
+  return undefined;
+}
+
+function remembered(kind, run, node, port, get) {
+  const key = keyIn(run, node, port);
+  if (key === undefined) return get();
+  const id = `${kind}/${node}/${port}/${key}`;
+  if (!fetched.has(id)) {
+    fetched.set(id, get().then((value) => { if (value === null) fetched.delete(id); return value; }));
+    while (fetched.size > 48) fetched.delete(fetched.keys().next().value);
+  }
+  return fetched.get(id);
+}
+
+function sourceOf(run) {
+  const fresh = freshSource(run);
+  return Object.fromEntries(Object.entries(fresh).map(([kind, get]) =>
+    [kind, (node, port) => remembered(kind, run, node, port, () => get(node, port))]));
+}
+
+function freshSource(run) {
+  return {
+    value: async (node, port) => { const r = await api(`api/value/${run}/${node}/${port}`); return r.ok ? r.data : null; },
+    raw: async (node, port) => {
+      const r = await fetch(`api/raw/${run}/${node}/${port}`);
+      return r.ok ? { values: new Float32Array(await r.arrayBuffer()), shape: r.headers.get("X-Shape").split(",").map(Number) } : null;
+    },
+    picture: (node, port) => fetchPicture(`${run}/${node}/${port}`),
+  };
+}
+
 // `picture`: `{ step, promise }` of the picture's request, when the caller started it
 // already (a repaint of a card that showed one), so that it travels while the value's
 // description is asked for. A preview (step > 1) is drawn first, the picture after it.
@@ -141,7 +187,9 @@ async function renderValue(container, run, node, port, picture = null) {
   const base = `${run}/${node}/${port}`;
   container.append(el("div", { class: "gv-caption" }, d.summary));
   if (["image", "labels", "mask"].includes(d.view) || (d.view === "summary" && d.png && d.shape?.length >= 2 && d.shape[0] > 8)) {
-    const [h, w] = d.shape;
+    // a summary's picture (a scatter of points, a mosaic) has its own size, not the value's
+    const own = d.view === "summary" ? await sourceOf(run).picture(node, port) : null;
+    const [h, w] = own ? [own.height, own.width] : d.shape;
     const viewer = new ImageViewer(container, { width: w, height: h, label: "" });
     viewer.canvas.dataset.value = base;
     let asked = false;
@@ -153,10 +201,12 @@ async function renderValue(container, run, node, port, picture = null) {
     });
     viewer.canvas.dataset.picture = "rgba";
     viewerOf.set(viewer.canvas, viewer);
-    const first = picture || { step: 1, promise: fetchPicture(base) };
+    const first = picture || { step: 1, promise: own ? Promise.resolve(own) : fetchPicture(base) };
     const [bitmap] = await Promise.all([first.promise, addOverlays(viewer, run, node, port)]);
-    if (bitmap) viewer.setSource(bitmap);
-    if (bitmap && first.step > 1) {
+    // a mask or label map is tinted over the image behind it (its own picture when none)
+    const tinted = d.over && ["mask", "labels"].includes(d.view) && await maskLayer(viewer, d, sourceOf(run));
+    if (bitmap && !tinted) viewer.setSource(bitmap);
+    if (bitmap && !tinted && first.step > 1) {
       viewer.canvas.dataset.preview = String(first.step);
       fetchPicture(base).then((full) => {
         if (full) viewer.setSource(full);
@@ -172,11 +222,14 @@ async function renderValue(container, run, node, port, picture = null) {
   } else if (d.view === "scalar" || d.view === "text") {
     scalarViewer(container, d.value, history(node, port));
   } else if (d.view === "points3d") {
-    pointCloudViewer(container, d.points);
+    await cloudPanel(container, d, sourceOf(run));
   } else if (["table", "keypoints", "boxes", "matches", "lines", "circles"].includes(d.view)) {
+    if (d.view === "matches" && d.pair) await matchesPanel(container, d, sourceOf(run));
+    if (d.confusion) await classifierPanel(container, d, sourceOf(run));
     if (d.over) container.append(el("div", { class: "gv-caption" }, `drawn over ${d.over[0]} (toggle it there)`));
     tableViewer(container, d.columns, d.count ?? d.rows);
-  } else if (d.view === "matrix") {
+  } else if (d.view === "fundamental" || d.view === "matrix") {
+    if (d.view === "fundamental" && d.pair) await epipolarPanel(container, d, sourceOf(run));
     const rows = d.shape.length === 2 ? d.shape[0] : 1, cols = d.value.length / rows;
     const columns = {};
     for (let j = 0; j < cols; j++) columns[`[${j}]`] = Array.from({ length: rows }, (_, i) => d.value[i * cols + j]);
@@ -184,6 +237,7 @@ async function renderValue(container, run, node, port, picture = null) {
   } else if (d.png) {
     container.append(el("img", { src: `api/png/${base}`, class: "gv-preview" }));
   }
+  if (d.curves) curvesPanel(container, d);
   return d;
 }
 

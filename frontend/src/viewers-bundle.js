@@ -4,5 +4,9 @@ export { GraphView, STATE_COLOURS } from "./graphview.js";
 export { layoutGraph, overlaps, downstream } from "./layout.js";
 export { colourise, finiteRange, labelColour, ticks, viridis } from "./colormap.js";
 export { docHtml } from "./tex.js";
-export { drawColourBar, floatMapViewer, ImageViewer, pointCloudViewer, scalarViewer, tableViewer } from "./viewers.js";
+export { canvasOf, cloudColours, drawColourBar, floatMapViewer, ImageViewer, pointCloudViewer, scalarViewer,
+  tableViewer, tint } from "./viewers.js";
+export { clipLine, epipolarLine, epipolarSegments, matchSegments, pairViewer, PAIR_GAP, sideBySide, spread } from "./pairs.js";
+export { confusionShares, confusionViewer, curvesViewer, niceTicks, samplesRow } from "./charts.js";
+export { classifierPanel, cloudPanel, curvesPanel, epipolarPanel, maskLayer, matchesPanel } from "./panels.js";
 export { readValue, widgetSpec } from "./widgets.js";

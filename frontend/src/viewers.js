@@ -1,6 +1,6 @@
 // Viewers for values, one per kind of port (shared by the studio and report.html).
 // Each takes a container element and a description (see graphvision/studio/payload.py).
-import { colourise, finiteRange, ticks, viridis } from "./colormap.js";
+import { colourise, finiteRange, labelColour, ticks, viridis } from "./colormap.js";
 
 const el = (tag, attrs = {}, ...children) => {
   const e = document.createElement(tag);
@@ -43,19 +43,45 @@ export class ImageViewer {
     this.redraw();
   }
 
+  // One redraw at the next frame for any number of overlays added now (a pair viewer adds
+  // hundreds of lines in a few layers): the picture itself is drawn at once (setSource).
+  later() {
+    if (this.pending) return;
+    this.pending = true;
+    requestAnimationFrame(() => { this.pending = false; this.redraw(); });
+  }
+
   setValues(values, shape) {
     this.values = values;
     this.shape = shape;
   }
 
-  addOverlay(name, kind, columns) {
-    const entry = { name, kind, columns, visible: true };
+  addOverlay(name, kind, columns, colour = null) {
+    const entry = { name, kind, columns, colour, visible: true };
     this.overlays.push(entry);
     const box = el("input", { type: "checkbox", "data-overlay": name });
     box.checked = true;
     box.addEventListener("change", () => { entry.visible = box.checked; this.redraw(); });
-    this.tools.append(el("label", { class: "gv-toggle" }, box, " " + name));
-    this.redraw();
+    const swatch = el("span", { class: "gv-swatch" });
+    swatch.style.background = colour || OVERLAY_COLOURS[kind] || "#ff0";
+    this.tools.append(el("label", { class: "gv-toggle" }, box, swatch, " " + name));
+    this.later();
+    return entry;
+  }
+
+  // A picture (canvas) drawn over the image with an opacity, toggled, with an alpha slider.
+  addLayer(name, picture, alpha = 0.5) {
+    const entry = { name, picture, alpha, visible: true };
+    this.layers = [...(this.layers || []), entry];
+    const box = el("input", { type: "checkbox", "data-layer": name });
+    box.checked = true;
+    box.addEventListener("change", () => { entry.visible = box.checked; this.redraw(); });
+    const slider = el("input", { type: "range", min: 0, max: 1, step: 0.05, "data-alpha": name, class: "gv-alpha" });
+    slider.value = alpha;
+    slider.addEventListener("input", () => { entry.alpha = Number(slider.value); this.redraw(); });
+    this.tools.append(el("label", { class: "gv-toggle" }, box, " " + name), el("label", { class: "gv-toggle" }, "alpha ", slider));
+    this.later();
+    return entry;
   }
 
   resize() {
@@ -84,6 +110,12 @@ export class ImageViewer {
     ctx.setTransform(this.scale, 0, 0, this.scale, this.tx, this.ty);
     ctx.imageSmoothingEnabled = this.scale < 1;
     if (this.source) ctx.drawImage(this.source, 0, 0, this.width, this.height);
+    for (const layer of this.layers || []) {
+      if (!layer.visible) continue;
+      ctx.globalAlpha = layer.alpha;
+      ctx.drawImage(layer.picture, 0, 0, this.width, this.height);
+      ctx.globalAlpha = 1;
+    }
     for (const o of this.overlays) if (o.visible) drawOverlay(ctx, o, this.scale);
   }
 
@@ -137,7 +169,7 @@ function fmt(v) {
 
 export function drawOverlay(ctx, overlay, scale) {
   const c = overlay.columns;
-  ctx.strokeStyle = OVERLAY_COLOURS[overlay.kind] || "#ff0";
+  ctx.strokeStyle = overlay.colour || OVERLAY_COLOURS[overlay.kind] || "#ff0";
   ctx.lineWidth = 1.5 / scale;
   ctx.beginPath();
   if (overlay.kind === "keypoints") {
@@ -150,6 +182,8 @@ export function drawOverlay(ctx, overlay, scale) {
     c.x0.forEach((x0, i) => ctx.rect(x0, c.y0[i], c.x1[i] - x0, c.y1[i] - c.y0[i]));
   } else if (overlay.kind === "circles") {
     c.x.forEach((x, i) => { ctx.moveTo(x + c.radius[i], c.y[i]); ctx.arc(x, c.y[i], c.radius[i], 0, 2 * Math.PI); });
+  } else if (overlay.kind === "segments") {
+    c.x0.forEach((x0, i) => { ctx.moveTo(x0, c.y0[i]); ctx.lineTo(c.x1[i], c.y1[i]); });
   } else if (overlay.kind === "lines") {
     const big = 1e5;
     c.rho.forEach((rho, i) => {
@@ -164,6 +198,31 @@ export function drawOverlay(ctx, overlay, scale) {
     ctx.font = `${12 / scale}px monospace`;
     c.x0.forEach((x0, i) => ctx.fillText(fmt(c.score[i]), x0, c.y0[i] - 2 / scale));
   }
+}
+
+// RGBA of a mask or label map (row-major values) tinted for drawing over its image:
+// a mask's nonzero pixels in `colour`, a label map's labels in their distinct colours;
+// the background (0) transparent.
+export function tint(values, labels = false, colour = [255, 0, 0]) {
+  const out = new Uint8ClampedArray(values.length * 4);
+  for (let i = 0; i < values.length; i++) {
+    const v = values[i];
+    if (!v || !Number.isFinite(v)) continue;
+    const c = labels ? labelColour(v) : colour;
+    out[4 * i] = c[0];
+    out[4 * i + 1] = c[1];
+    out[4 * i + 2] = c[2];
+    out[4 * i + 3] = 255;
+  }
+  return out;
+}
+
+export function canvasOf(rgba, width, height) {
+  const canvas = document.createElement("canvas");
+  canvas.width = width;
+  canvas.height = height;
+  canvas.getContext("2d").putImageData(new ImageData(rgba, width, height), 0, 0);
+  return canvas;
 }
 
 // A float map through viridis with its colour bar, auto range or a fixed one.
@@ -209,16 +268,40 @@ export function drawColourBar(container, lo, hi, title) {
   container.append(el("div", { class: "gv-bartitle" }, title), canvas, scale);
 }
 
-// A point cloud, turned by dragging, coloured by depth (or by `colours`, 0-255 RGB).
+// The colour of each point: by depth (viridis over the finite range of Z) or by the
+// image's colour (`colours`, N×3 in [0, 1]); 0-255 RGB triples.
+export function cloudColours(points, mode, colours = null) {
+  if (mode === "image" && colours && colours.length === points.length) {
+    return colours.map((c) => c.map((v) => Math.round(Math.min(1, Math.max(0, v)) * 255)));
+  }
+  const [zlo, zhi] = finiteRange(points.map((p) => p[2]));
+  return points.map((p) => viridis((p[2] - zlo) / (zhi - zlo || 1)));
+}
+
+// A point cloud, turned by dragging, coloured by depth or by image colour (`colours`,
+// N×3 in [0, 1], one per point) with a switch between the two when colours are given.
 export function pointCloudViewer(container, points, colours = null) {
   const canvas = el("canvas", { width: 480, height: 360, class: "gv-cloud" });
-  container.append(canvas, el("div", { class: "gv-status" },
+  const tools = el("div", { class: "gv-tools" });
+  const root = el("div", { class: "gv-cloudbox" }, tools, canvas, el("div", { class: "gv-status" },
     `${points.length} points · drag to turn, wheel to zoom`));
+  container.append(root);
+  let mode = colours ? "image" : "depth";
+  let shown = cloudColours(points, mode, colours);
+  if (colours) {
+    const menu = el("select", { "data-cloud-colour": "1" }, el("option", { value: "image" }, "image colour"),
+      el("option", { value: "depth" }, "depth"));
+    menu.value = mode;
+    menu.addEventListener("change", () => { mode = menu.value; shown = cloudColours(points, mode, colours); root.dataset.colour = mode; draw(); });
+    tools.append(el("label", { class: "gv-toggle" }, "colour by ", menu));
+  }
+  root.dataset.colour = mode;
   const n = points.length;
   const mean = [0, 1, 2].map((k) => points.reduce((s, p) => s + (p[k] || 0), 0) / (n || 1));
-  const radius = Math.max(1e-9, ...points.map((p) => Math.hypot(p[0] - mean[0], p[1] - mean[1], p[2] - mean[2])));
-  const [zlo, zhi] = finiteRange(points.map((p) => p[2]));
-  let yaw = 0.5, pitch = 0.3, zoom = 1;
+  // the 95th percentile distance from the centre: a few far points do not shrink the rest
+  const distances = points.map((p) => Math.hypot(p[0] - mean[0], p[1] - mean[1], p[2] - mean[2])).sort((a, b) => a - b);
+  const radius = Math.max(1e-9, distances[Math.floor(0.95 * (distances.length - 1))] || 0);
+  let yaw = 0, pitch = 0, zoom = 1;
   const draw = () => {
     const ctx = canvas.getContext("2d");
     ctx.fillStyle = "#111";
@@ -232,9 +315,9 @@ export function pointCloudViewer(container, points, colours = null) {
       return [x1, y1, z2, i];
     }).sort((a, b) => b[2] - a[2]);
     for (const [x, y, , i] of order) {
-      const c = colours ? colours[i] : viridis((points[i][2] - zlo) / (zhi - zlo || 1));
+      const c = shown[i];
       ctx.fillStyle = `rgb(${c[0]},${c[1]},${c[2]})`;
-      ctx.fillRect(canvas.width / 2 + x * s, canvas.height / 2 + y * s, 2, 2);
+      ctx.fillRect(Math.round(canvas.width / 2 + x * s), Math.round(canvas.height / 2 + y * s), 2, 2);
     }
   };
   let drag = null;
@@ -249,6 +332,7 @@ export function pointCloudViewer(container, points, colours = null) {
   });
   canvas.addEventListener("wheel", (e) => { e.preventDefault(); zoom *= Math.exp(-e.deltaY * 0.0015); draw(); }, { passive: false });
   draw();
+  return root;
 }
 
 // A number with its history across runs, as a small line chart.

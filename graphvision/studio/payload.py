@@ -11,9 +11,19 @@ does not import):
 ``mask``      a binary image: PNG;
 ``keypoints``, ``boxes``, ``lines``, ``circles``  drawn over the image they were found in
               (``over``: the producing node's image input), and listed as a table;
-``points3d``  an N×3 point cloud (at most 20 000 points sent), for the 3-D view;
+``points3d``  an N×3 point cloud (at most 20 000 points sent), for the 3-D view, with
+              ``colours``: the node's ``PointColours`` output, when it has one;
+``matches``   with ``pair``: the whole set, its inliers and each side's keypoints and image
+              (see :func:`graphvision.views.pairing.match_pair`), drawn over the image pair;
+``fundamental`` the 3×3 matrix with ``pair``: each view's points and image (epipolar lines);
+``samples``   a classifier's samples: their labels and (small ones) their pixels;
 ``scalar``, ``table``, ``matrix``, ``text`` and ``summary`` for the rest (a ``png`` too when
               the port type has a preview picture).
+
+Float maps carry their port type's ``units`` (for the colour bar); a mask or label map its
+``over`` image (tinted over it); a classifier's table (integer ``label`` and ``predicted``)
+its ``confusion`` matrix, the first right and wrong rows and its ``samples``; a trained
+network (a value with a per-epoch ``history``) its training ``curves``.
 """
 
 from __future__ import annotations
@@ -33,11 +43,15 @@ from graphvision.values.images import (
 from graphvision.values.ports import ArrayPort, PortType
 from graphvision.values.records import BoxesPort, KeypointsPort, MatchesPort
 from graphvision.values.scalars import TablePort, _ScalarPort
+from graphvision.views import pairing
 
 __all__ = ["MAX_STEP", "describe_value", "png_of", "raw_of", "rgba_of", "shrunk"]
 
 MAX_POINTS = 20_000
 MAX_ROWS = 200
+MAX_SAMPLES = 400  # a classifier's samples sent with their pixels (each at most 64×64)
+SAMPLE_SIDE = 64
+SHOWN_PREDICTIONS = 8  # right and wrong predictions shown, each
 
 
 def _finite_range(array: np.ndarray) -> tuple[float, float]:
@@ -64,7 +78,8 @@ def view_of(kind: type[PortType], value: Any) -> str:
         return "mask"
     if issubclass(kind, ImagePort):
         return "image"
-    special = {"Lines": "lines", "Circles": "circles", "Points3D": "points3d"}
+    special = {"Lines": "lines", "Circles": "circles", "Points3D": "points3d",
+               "Fundamental": "fundamental", "Samples": "samples"}  # fmt: skip
     if name in special:
         return special[name]
     if issubclass(kind, KeypointsPort):
@@ -108,6 +123,7 @@ def describe_value(
         points = np.asarray(value, np.float64)
         step = max(1, math.ceil(len(points) / MAX_POINTS))
         found["points"] = np.round(points[::step], 4).tolist()
+        found["step"] = step
     elif view == "scalar":
         found["value"] = value.item() if hasattr(value, "item") else value
     elif view == "text":
@@ -115,11 +131,84 @@ def describe_value(
     elif view == "table":
         found["columns"] = {k: _list(np.asarray(v)[:MAX_ROWS]) for k, v in value.items()}
         found["rows"] = int(len(next(iter(value.values()), [])))
-    elif view == "matrix":
+    elif view in ("matrix", "fundamental"):
         found["value"] = _list(value)
+    elif view == "samples":
+        found.update(_samples(value))
     else:  # a picture when the type draws one (ndarray values of two or more axes)
         drawn = getattr(kind.preview, "__func__", None) is not PortType.preview.__func__  # type: ignore[attr-defined]
         found["png"] = drawn and _preview(kind, value) is not None
+    found.update(_links(kind, value, compiled, node, port, view))
+    return found
+
+
+def units_of(kind: type[PortType]) -> str:
+    """What a float map's values measure (its port type's ``units``), for its colour bar."""
+    units = getattr(kind, "units", "")
+    if units:
+        return str(units)
+    return "weights" if kind.type_name() == "Kernel" else ""
+
+
+def _links(
+    kind: type[PortType], value: Any, compiled: CompiledGraph, node: str, port: str, view: str
+) -> dict[str, Any]:
+    """What the viewer draws with this value: other values by ``[node, port]``, and what
+    it needs of this one that its view alone does not carry."""
+    found: dict[str, Any] = {}
+    if view == "floatmap":
+        found["units"] = units_of(kind)
+    elif view in ("mask", "labels"):
+        over = pairing.image_behind(compiled, node, "a")
+        found["over"] = list(over) if over else None
+    elif view == "matches":
+        found["pair"] = pairing.match_pair(compiled, node, port)
+    elif view == "fundamental":
+        found["pair"] = pairing.epipolar_pair(compiled, node)
+    elif view == "points3d":
+        colours = pairing.cloud_colours(compiled, node)
+        found["colours"] = list(colours) if colours else None
+    elif view == "table" and _is_classifier(value):
+        found.update(_classifier(value))
+        samples = pairing.prediction_samples(compiled, node)
+        found["samples"] = list(samples) if samples else None
+    history = getattr(value, "history", None)
+    if isinstance(history, np.ndarray) and history.ndim == 1 and history.size:
+        curves = {"loss": _list(history)}
+        accuracy = getattr(value, "accuracy", None)
+        if isinstance(accuracy, np.ndarray) and accuracy.shape == history.shape:
+            curves["accuracy"] = _list(accuracy)
+        found["curves"] = curves
+    return found
+
+
+def _is_classifier(table: Any) -> bool:
+    return {"label", "predicted"} <= set(table) and all(
+        np.issubdtype(np.asarray(table[c]).dtype, np.integer) for c in ("label", "predicted")
+    )
+
+
+def _classifier(table: Any) -> dict[str, Any]:
+    """The confusion matrix over every row, and the first right and wrong rows."""
+    labels, predicted = np.asarray(table["label"]), np.asarray(table["predicted"])
+    classes, counts = pairing.confusion_counts(labels, predicted)
+    rows = {
+        name: [
+            [int(i), labels[i].item(), predicted[i].item()]
+            for i in np.flatnonzero(chosen)[:SHOWN_PREDICTIONS]
+        ]
+        for name, chosen in (("right", labels == predicted), ("wrong", labels != predicted))
+    }  # [row, label, predicted]
+    return {"confusion": {"classes": classes, "counts": counts.tolist()}, **rows}
+
+
+def _samples(value: Any) -> dict[str, Any]:
+    """Labels of every sample; the pixels of the first MAX_SAMPLES when they are small."""
+    images = np.asarray(value.images)
+    found: dict[str, Any] = {"labels": np.asarray(value.labels).tolist(), "count": len(images)}
+    if images.ndim == 3 and max(images.shape[1:]) <= SAMPLE_SIDE:
+        found["side"] = list(images.shape[1:])
+        found["pixels"] = np.round(images[:MAX_SAMPLES].astype(np.float64), 3).ravel().tolist()
     return found
 
 

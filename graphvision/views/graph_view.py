@@ -5,13 +5,25 @@ and loses its fixed size, so that it scales to its container (never wider
 than the page). A few lines of script, inline, zoom with the wheel or the
 ``+``/``−`` buttons, pan by dragging, and ``fit`` shows the whole graph
 again; without script the graph still fits.
+
+Given the graph's nodes and edges (:func:`graph_data`), the page lays it out
+again with the studio's layered layout (dagre, bundled in ``static/graph.js``
+by ``frontend/build.sh`` and inlined by :func:`layout_script`: no network), so
+no two boxes or edge labels overlap; the drawn SVG stays as the page's look
+without script.
 """
 
 from __future__ import annotations
 
+import functools
+import json
 import re
+from pathlib import Path
+from typing import Any
 
-__all__ = ["GRAPH_SCRIPT", "GRAPH_STYLE", "graph_html"]
+__all__ = ["GRAPH_SCRIPT", "GRAPH_STYLE", "graph_data", "graph_html", "layout_script"]
+
+_BUNDLE = Path(__file__).parent / "static" / "graph.js"
 
 GRAPH_STYLE = """
 .graph { border: 1px solid #eee; padding: 0.5em; }
@@ -63,12 +75,44 @@ document.querySelectorAll(".graph").forEach(box => {
 </script>"""
 
 
-def graph_html(svg: str) -> str:
+@functools.cache
+def layout_script() -> str:
+    """The layout bundle and the call that lays out every graph of the page, as an inline
+    ``<script>`` (empty when the bundle was not built: the drawn SVG stays)."""
+    if not _BUNDLE.is_file():
+        return ""
+    code = _BUNDLE.read_text(encoding="utf-8").replace("</script", "<\\/script")
+    return f"<script>{code}\nGraphvisionGraph.layOutPage();</script>"
+
+
+def graph_data(compiled: Any, status: dict[str, str], seconds: dict[str, float]) -> dict:
+    """The graph's nodes (with what happened to each) and edges, for the page's layout."""
+    graph = compiled.graph
+    nodes: list[dict[str, Any]] = [
+        {"id": name, "kind": "input", "type": decl.type} for name, decl in graph.inputs.items()
+    ]
+    edges = []
+    for name, step in compiled.steps.items():
+        nodes.append({"id": name, "kind": "node", "op": step.spec.id,
+                      "status": status.get(name, ""), "seconds": seconds.get(name)})  # fmt: skip
+        for port, (source, source_port) in step.inputs.items():
+            edges.append({"from": source, "from_port": source_port, "to": name, "port": port})
+    return {"nodes": nodes, "edges": edges}
+
+
+def graph_html(svg: str, data: dict | None = None) -> str:
     """``svg`` (a graph drawing) made to shrink to its container (never enlarged beyond
-    its own size), with zoom buttons."""
+    its own size), with zoom buttons; with ``data`` (:func:`graph_data`) the page lays
+    the graph out again (see the module)."""
     size = re.search(r'<svg[^>]*? width="([\d.]+)" height="[\d.]+"', svg)
     fitted = re.sub(r'(<svg[^>]*?) width="[\d.]+" height="[\d.]+"', r"\1", svg, count=1)
     largest = f' style="max-width: {size.group(1)}px"' if size else ""
     fitted = fitted.replace("<svg ", f'<svg preserveAspectRatio="xMidYMid meet"{largest} ', 1)
     buttons = "".join(f'<button type="button">{b}</button>' for b in ("+", "\u2212", "fit"))
-    return f'<div class="graph"><div class="zoom">{buttons}</div>{fitted}</div>'
+    if data is None:
+        return f'<div class="graph"><div class="zoom">{buttons}</div>{fitted}</div>'
+    text = json.dumps(data).replace("</", "<\\/")
+    return (
+        f'<div class="graph"><div class="zoom">{buttons}</div>{fitted}'
+        f'<script type="application/json" data-graph="1">{text}</script></div>'
+    )

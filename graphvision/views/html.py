@@ -26,7 +26,15 @@ from graphvision.execution.history import Earlier
 from graphvision.execution.record import RunRecord
 from graphvision.values.ports import PortType
 from graphvision.values.scalars import TablePort
-from graphvision.views.graph_view import GRAPH_SCRIPT, GRAPH_STYLE, graph_html
+from graphvision.views.graph_view import (
+    GRAPH_SCRIPT,
+    GRAPH_STYLE,
+    graph_data,
+    graph_html,
+    layout_script,
+)
+from graphvision.views.linked import LINKED_STYLE, shown_html
+from graphvision.views.pairing import Ref, outputs_by_ref
 from graphvision.views.viewers import picture_html, value_html
 
 __all__ = ["html_report", "picture_html", "value_html", "write_html_report"]
@@ -53,6 +61,7 @@ table.confusion td.wrong { background: rgba(183, 28, 28, calc(var(--share) * 0.6
 .value { font-size: 1.6em; font-weight: bold; }
 """
     + GRAPH_STYLE
+    + LINKED_STYLE
 )
 
 
@@ -98,10 +107,15 @@ def html_report(
             for name, message in failures.items()
         )
         body.append(f'<ul class="failed">{items}</ul>')
-    body += ["<h2>Graph</h2>", graph_html(graph_svg(graph, status, seconds))]
-    body += ["<h2>Outputs</h2>", _outputs_html(compiled, outputs, record.files)]
+    drawn = graph_html(graph_svg(graph, status, seconds), graph_data(compiled, status, seconds))
+    body += ["<h2>Graph</h2>", drawn]
+    found = outputs_by_ref(compiled, outputs, intermediates)
+    body += ["<h2>Outputs</h2>", _outputs_html(compiled, outputs, record.files, found)]
     if intermediates:
-        body += ["<h2>Intermediate values</h2>", _intermediates_html(intermediates)]
+        body += [
+            "<h2>Intermediate values</h2>",
+            _intermediates_html(compiled, intermediates, found),
+        ]
     body += ["<h2>Nodes</h2>", _nodes_html(record), "<h2>Provenance</h2>", _provenance_html(record)]
     if earlier:
         body += ["<h2>Earlier runs (newest first)</h2>", _earlier_html(earlier)]
@@ -109,15 +123,22 @@ def html_report(
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         f"<title>{escape(graph.name)}: graphvision report</title><style>{_STYLE}</style></head>"
-        f"<body>{''.join(body)}{GRAPH_SCRIPT}</body></html>\n"
+        f"<body>{''.join(body)}{layout_script()}{GRAPH_SCRIPT}</body></html>\n"
     )
 
 
-def _intermediates_html(intermediates: Mapping[str, tuple[type[PortType], Any]]) -> str:
+def _intermediates_html(
+    compiled: CompiledGraph,
+    intermediates: Mapping[str, tuple[type[PortType], Any]],
+    found: Mapping[Ref, Any],
+) -> str:
     """Each intermediate value by its viewer; a table folded (its summary shows)."""
     shown = []
     for where, (kind, value) in intermediates.items():
-        view = value_html(kind, value, where)
+        node, _, port = where.partition(".")
+        step = compiled.steps.get(node)
+        port = port or (next(iter(step.outputs)) if step is not None else "")
+        view = shown_html(compiled, found, (node, port), kind, value, where)
         if issubclass(kind, TablePort):
             view = f"<details><summary>{escape(kind.summary(value))}</summary>{view}</details>"
         shown.append(f'<div class="output"><h3>{escape(where)}</h3>{view}</div>')
@@ -154,13 +175,17 @@ def _file_link(name: str, prefix: str = "") -> str:
 
 
 def _outputs_html(
-    compiled: CompiledGraph, outputs: Mapping[str, Any], files: Mapping[str, list[str]]
+    compiled: CompiledGraph,
+    outputs: Mapping[str, Any],
+    files: Mapping[str, list[str]],
+    found: Mapping[Ref, Any],
 ) -> str:
     sections = []
     for name in compiled.outputs:
         kind = compiled.output_type(name)
+        where = tuple(compiled.outputs[name])
         shown = (
-            value_html(kind, outputs[name], name)
+            shown_html(compiled, found, where, kind, outputs[name], name)  # type: ignore[arg-type]
             if name in outputs
             else '<p class="failed">not produced</p>'
         )

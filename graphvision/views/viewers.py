@@ -26,6 +26,7 @@ from graphvision.values.geometry import Points3DPort
 from graphvision.values.images import FloatImagePort, ImagePort, KernelPort, LabelImagePort
 from graphvision.values.ports import PortType
 from graphvision.values.scalars import TablePort, _ScalarPort
+from graphvision.views.pairing import confusion_counts
 
 __all__ = ["colour_scale", "float_map_range", "picture_html", "value_html"]
 
@@ -118,9 +119,12 @@ def _labels_html(value: np.ndarray, name: str) -> str:
     )
 
 
-def _points3d_html(value: np.ndarray, name: str, side: int = 384) -> str:
+def _points3d_html(
+    value: np.ndarray, name: str, side: int = 384, colours: np.ndarray | None = None
+) -> str:
     """The points seen along the camera's axis (x right, y down), each coloured by its
-    depth Z, nearer points drawn over farther ones."""
+    depth Z (or by ``colours``, N×3 in [0, 1]: its image colour), nearer points drawn
+    over farther ones."""
     if len(value) == 0:
         return ""
     low_xy, high_xy = np.percentile(value[:, :2], [0.5, 99.5], axis=0)
@@ -131,12 +135,18 @@ def _points3d_html(value: np.ndarray, name: str, side: int = 384) -> str:
     span = float_map_range(depth) or (0.0, 1.0)
     order = np.argsort(-depth)  # far first: the nearest is written last
     canvas = np.ones((side, side, 3), np.float32)
-    colours = colour_scale(depth, *span)[order]
+    shown = colour_scale(depth, *span) if colours is None else np.asarray(colours)[inside]
+    shown = shown[order]
     rows, cols = rows[inside][order], cols[inside][order]
     radius = 1 if len(rows) < 20_000 else 0
     for dy in range(-radius, radius + 1):
         for dx in range(-radius, radius + 1):
-            canvas[np.clip(rows + dy, 0, side - 1), np.clip(cols + dx, 0, side - 1)] = colours
+            canvas[np.clip(rows + dy, 0, side - 1), np.clip(cols + dx, 0, side - 1)] = shown
+    if colours is not None:
+        return picture_html(canvas, name) + (
+            '<p class="range">seen from the camera (x right, y down), each point in the '
+            "colour of its pixel</p>"
+        )
     units = getattr(Points3DPort, "units", "") or "Z, units of the points"
     return (
         picture_html(canvas, name)
@@ -148,14 +158,10 @@ def _points3d_html(value: np.ndarray, name: str, side: int = 384) -> str:
 def _confusion_html(labels: np.ndarray, predicted: np.ndarray) -> str:
     """The confusion matrix of a classifier's results: rows the true class, columns the
     predicted one, cells shaded by their share of the row; the diagonal is right."""
-    classes = np.unique(np.concatenate([labels, predicted]))
-    index = {value: i for i, value in enumerate(classes.tolist())}
-    counts = np.zeros((len(classes), len(classes)), np.int64)
-    for truth, guess in zip(labels.tolist(), predicted.tolist(), strict=True):
-        counts[index[truth], index[guess]] += 1
-    head = "".join(f"<th>{escape(str(c))}</th>" for c in classes.tolist())
+    classes, counts = confusion_counts(labels, predicted)
+    head = "".join(f"<th>{escape(str(c))}</th>" for c in classes)
     rows = []
-    for i, truth in enumerate(classes.tolist()):
+    for i, truth in enumerate(classes):
         total = max(int(counts[i].sum()), 1)
         cells = "".join(
             f'<td class="{"right" if i == j else "wrong"}" '

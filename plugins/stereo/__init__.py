@@ -5,11 +5,20 @@ ground truth, rectification (calibrated and uncalibrated), structured light, dra
 
 from ._colour_map import colour_map
 from ._cost import cost_volume
-from ._depth import depth_from_disparity, depth_points
+from ._depth import ColouredPoints, coloured_points, depth_from_disparity, depth_points
 from ._disparity import block_match, left_right_check, sgm
 from ._draw import draw_disparity, draw_point_cloud
 from ._evaluate import depth_rmse, disparity_error
-from ._ports import Depth, DepthPort, Disparity, DisparityPort, Frames, FramesPort
+from ._ports import (
+    Depth,
+    DepthPort,
+    Disparity,
+    DisparityPort,
+    Frames,
+    FramesPort,
+    PointColours,
+    PointColoursPort,
+)
 from ._rectify import (
     hartley_homographies,
     rectification_dy,
@@ -21,16 +30,20 @@ from ._speckles import filter_speckles
 from ._structured import Stripes, StripesPort, decode_gray_code, depth_from_stripes
 
 __all__ = [
+    "ColouredPoints",
     "Depth",
     "DepthPort",
     "Disparity",
     "DisparityPort",
     "Frames",
     "FramesPort",
+    "PointColours",
+    "PointColoursPort",
     "Stripes",
     "StripesPort",
     "block_match",
     "colour_map",
+    "coloured_points",
     "cost_volume",
     "decode_gray_code",
     "depth_from_disparity",

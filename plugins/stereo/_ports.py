@@ -9,7 +9,16 @@ from numpy.typing import NDArray
 
 from graphvision import ArrayPort, PortValueError
 
-__all__ = ["Depth", "DepthPort", "Disparity", "DisparityPort", "Frames", "FramesPort"]
+__all__ = [
+    "Depth",
+    "DepthPort",
+    "Disparity",
+    "DisparityPort",
+    "Frames",
+    "FramesPort",
+    "PointColours",
+    "PointColoursPort",
+]
 
 
 class DisparityPort(ArrayPort):
@@ -76,6 +85,30 @@ class FramesPort(ArrayPort):
         return np.concatenate(list(value[: min(len(value), 4)]), axis=1)
 
 
+class PointColoursPort(ArrayPort):
+    """The colour of each point of a cloud, row for row: ``float32`` ``N×3`` RGB in [0, 1]
+    (N may be 0); viewers colour the cloud by it (``stereo.coloured_points``)."""
+
+    ndims: ClassVar[tuple[int, ...]] = (2,)
+    dtypes = (np.float32,)
+    expected = "float32 N×3 RGB in [0, 1]"
+    allow_empty = True
+
+    @classmethod
+    def validate(cls, value: Any) -> np.ndarray:
+        value = super().validate(value)
+        if value.shape[1] != 3:
+            raise PortValueError(f"expected {cls.type_name()} ({cls.expected}), got {value.shape}")
+        if value.size and not (float(value.min()) >= 0.0 and float(value.max()) <= 1.0):
+            raise PortValueError(f"expected {cls.type_name()} values in [0, 1]")
+        return value
+
+    @classmethod
+    def preview(cls, value: np.ndarray) -> np.ndarray | None:
+        return None
+
+
 Disparity = Annotated[NDArray[np.float32], DisparityPort]
 Depth = Annotated[NDArray[np.float32], DepthPort]
 Frames = Annotated[NDArray[np.float32], FramesPort]
+PointColours = Annotated[NDArray[np.float32], PointColoursPort]
