@@ -11,6 +11,7 @@ from pydantic import AfterValidator, Field
 from graphvision import Conformance, GrayImage, node
 
 from ..shared.params import odd
+from ._census import census_block_match, census_sgm
 from ._cost import Cost, cost_volume, maximum_cost
 from ._ports import Disparity
 from ._speckles import SpeckleRange, SpeckleWindow, speckles
@@ -85,18 +86,14 @@ def left_right_check(
     right pixel nearest to :math:`x - d` instead refuses correct pixels of
     slanted surfaces whose disparity lies half-way between two integers.
     """
-    rows, cols = disparity.shape
-    valid = np.isfinite(disparity)
-    estimate = np.where(valid, disparity, 0)
-    y = np.broadcast_to(np.arange(rows)[:, None], (rows, cols))
-    keep = np.zeros(disparity.shape, dtype=bool)
-    for whole in (np.floor(estimate), np.ceil(estimate)):
-        x_right = np.arange(cols)[None, :] - whole.astype(np.int64)
-        inside = valid & (x_right >= 0) & (x_right < cols)
-        seen = np.full(disparity.shape, np.nan, dtype=np.float32)
-        seen[inside] = right_disparity[y[inside], x_right[inside]]
-        keep |= np.abs(whole - seen) <= tolerance  # False for NaN
-    return np.where(keep, disparity, np.float32(np.nan)).astype(np.float32)
+    from ._match_kernels import left_right_keep
+
+    kept: np.ndarray = left_right_keep(
+        np.ascontiguousarray(disparity, np.float32),
+        np.ascontiguousarray(right_disparity, np.float32),
+        float(tolerance),
+    )
+    return kept
 
 
 def _select(
@@ -113,8 +110,20 @@ def _select(
     from ._kernels import right_disparity, winner_take_all
 
     disparity: np.ndarray = winner_take_all(volume, d_min, uniqueness, subpixel)
+    right = right_disparity(volume, d_min) if lr_tolerance is not None else disparity
+    return _checked(disparity, right, lr_tolerance, speckle_window, speckle_range)
+
+
+def _checked(
+    disparity: np.ndarray,
+    right: np.ndarray,
+    lr_tolerance: float | None,
+    speckle_window: int,
+    speckle_range: float,
+) -> np.ndarray:
+    """The left-right check against the right image's disparity, then the speckle filter."""
     if lr_tolerance is not None:
-        disparity = left_right_check(disparity, right_disparity(volume, d_min), lr_tolerance)
+        disparity = left_right_check(disparity, right, lr_tolerance)
     if speckle_window > 0:
         disparity = speckles(disparity, speckle_window, speckle_range)
     return disparity
@@ -239,6 +248,11 @@ def block_match(
     """
     check_pair(left, right, min_disparity, num_disparities, window)
     block = (9 if cost == "census" else 1) if block is None else block
+    if cost == "census":  # by running sums, row by row: no volume
+        found = census_block_match(
+            left, right, min_disparity, num_disparities, window, block, uniqueness, subpixel
+        )
+        return _checked(*found, lr_tolerance, speckle_window, speckle_range)
     volume = _volume(left, right, min_disparity, num_disparities, cost, window, block)
     return _select(
         volume, min_disparity, uniqueness, subpixel, lr_tolerance, speckle_window, speckle_range
@@ -385,26 +399,27 @@ def sgm(
     from ._kernels import aggregate_path
 
     block = (5 if cost == "census" else 1) if block is None else block
-    volume = _volume(left, right, min_disparity, num_disparities, cost, window, block)
     area = block * block
     scaled_p1, scaled_p2 = p1 * area, p2 * area
     highest = maximum_cost(cost, window) * area
-    integral = (
-        volume.dtype == np.uint16
-        and float(scaled_p1).is_integer()
-        and float(scaled_p2).is_integer()
-    )
-    dtype: type[np.number]
+    integral = cost == "census" and float(scaled_p1).is_integer() and float(scaled_p2).is_integer()
     if integral and paths * (highest + scaled_p2) <= np.iinfo(np.uint16).max:
-        # each path's cost is at most C_max + P2, so the sum fits in 16 bits
-        dtype = np.uint16
-    else:
-        dtype = np.float32
-        volume = volume.astype(np.float32)
+        # each path's cost is at most C_max + P2, so the sum fits in 16 bits: two sweeps
+        found = census_sgm(
+            left,
+            right,
+            (min_disparity, num_disparities, window, block),
+            (int(scaled_p1), int(scaled_p2), edge),
+            paths,
+            (uniqueness, subpixel),
+        )
+        return _checked(*found, lr_tolerance, speckle_window, speckle_range)
+    volume = _volume(left, right, min_disparity, num_disparities, cost, window, block)
+    volume = volume.astype(np.float32)
     total = np.zeros_like(volume)
     for step_y, step_x in PATHS[:paths]:
-        jumps = _jumps(left, step_y, step_x, scaled_p1, scaled_p2, edge).astype(dtype)
-        aggregate_path(volume, total, step_y, step_x, dtype(scaled_p1), jumps)
+        jumps = _jumps(left, step_y, step_x, scaled_p1, scaled_p2, edge).astype(np.float32)
+        aggregate_path(volume, total, step_y, step_x, np.float32(scaled_p1), jumps)
     return _select(
         total,
         min_disparity,
