@@ -66,28 +66,20 @@ def census_signatures(image: np.ndarray, half: int) -> np.ndarray:  # pragma: no
 def _cost_row(
     left: np.ndarray, right: np.ndarray, d_min: int, outside: int, out: np.ndarray
 ) -> None:  # pragma: no cover
-    """``out[x, k]``: Hamming distance of left ``x`` and right ``x − d_min − k`` (``outside``
-    where that leaves the image)."""
-    cols, count = out.shape
-    for x in range(cols):
-        signature, row = left[x], out[x]
-        start, stop = max(0, x - d_min - cols + 1), min(count, max(0, x - d_min + 1))
-        for k in range(min(start, count)):
-            row[k] = outside
-        for k in range(start, stop):
-            row[k] = _ctpop(signature ^ right[x - d_min - k])
-        for k in range(max(stop, start), count):
-            row[k] = outside
-
-
-@njit(cache=True, nogil=True)
-def _box_rows(
-    left: np.ndarray, right: np.ndarray, d_min: int, outside: int, half: int, ring: np.ndarray
-) -> None:  # pragma: no cover
-    """Fill ``ring`` with the cost rows the first output row's column sums need."""
-    rows = left.shape[0]
-    for source in range(min(half + 1, rows)):
-        _cost_row(left[source], right[source], d_min, outside, ring[source % ring.shape[0]])
+    """``out[k, x]``: Hamming distance of left ``x`` and right ``x − d_min − k`` (``outside``
+    where that leaves the image); disparity-major, so each disparity is one vector loop."""
+    count, cols = out.shape
+    for k in range(count):
+        shift, row = d_min + k, out[k]
+        start = min(max(shift, 0), cols)
+        stop = max(min(cols + shift, cols), start)
+        # loops from 0 over slices: a signed index from elsewhere keeps numba's
+        # negative-index check in the loop, and then it does not vectorise
+        row[:start] = outside
+        row[stop:] = outside
+        inside, lefts, rights = row[start:stop], left[start:stop], right[start - shift :]
+        for i in range(stop - start):
+            inside[i] = _ctpop(lefts[i] ^ rights[i])
 
 
 @njit(cache=True, nogil=True)
@@ -96,14 +88,15 @@ def _block_rows(
 ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
     """Row pipeline state: the ring of cost rows and the column sums of row 0."""
     rows, cols = left.shape
-    ring = np.empty((2 * half + 2, cols, count), dtype=np.uint16)
-    _box_rows(left, right, d_min, outside, half, ring)
-    columns = np.zeros((cols, count), dtype=np.uint16)
+    ring = np.empty((2 * half + 2, count, cols), dtype=np.uint16)
+    for source in range(min(half + 1, rows)):
+        _cost_row(left[source], right[source], d_min, outside, ring[source % ring.shape[0]])
+    columns = np.zeros((count, cols), dtype=np.uint16)
     for dy in range(-half, half + 1):
         source = ring[min(max(dy, 0), rows - 1) % ring.shape[0]]
-        for x in range(cols):
-            for k in range(count):
-                columns[x, k] += source[x, k]
+        for k in range(count):
+            for x in range(cols):
+                columns[k, x] += source[k, x]
     return ring, columns
 
 
@@ -118,99 +111,106 @@ def _next_columns(
     ring: np.ndarray,
     columns: np.ndarray,
 ) -> None:  # pragma: no cover
-    """Column sums of row ``y − 1`` → row ``y``: add the entering row, drop the leaving one."""
+    """Column sums of row ``y − 1`` → row ``y``: add the entering row, drop the leaving one
+    (modulo 2¹⁶: every sum fits)."""
     rows = left.shape[0]
     entering, leaving = min(y + half, rows - 1), max(y - half - 1, 0)
     size = ring.shape[0]
     if y + half <= rows - 1:
         _cost_row(left[entering], right[entering], d_min, outside, ring[entering % size])
-    new, old = ring[entering % size], ring[leaving % size]
-    cols, count = columns.shape
-    for x in range(cols):
-        for k in range(count):
-            columns[x, k] = np.uint16(np.uint16(columns[x, k] + new[x, k]) - old[x, k])
+    new, old = ring[entering % size].reshape(-1), ring[leaving % size].reshape(-1)
+    flat = columns.reshape(-1)
+    for i in range(flat.size):
+        flat[i] = np.uint16(np.uint16(flat[i] + new[i]) - old[i])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _clamped_sum(row: np.ndarray, x: int, half: int) -> np.uint16:  # pragma: no cover
+    """``Σ row[clamp(x + dx)]`` over ``|dx| ≤ half`` (an end of the row)."""
+    total = np.uint16(0)
+    cols = row.size
+    for dx in range(-half, half + 1):
+        total = np.uint16(total + row[min(max(x + dx, 0), cols - 1)])
+    return total
 
 
 @njit(cache=True, nogil=True)
 def _across(columns: np.ndarray, half: int, out: np.ndarray) -> None:  # pragma: no cover
-    """``out[x] = Σ columns[clamp(x + dx)]`` over ``|dx| ≤ half``, as a running sum."""
-    cols, count = columns.shape
-    running = np.zeros(count, dtype=np.uint16)  # modulo 2¹⁶: each sum fits
-    for dx in range(-half, half + 1):
-        source = min(max(dx, 0), cols - 1)
-        for k in range(count):
-            running[k] = np.uint16(running[k] + columns[source, k])
-    for x in range(cols):
-        for k in range(count):
-            out[x, k] = running[k]
-        new, old = min(x + half + 1, cols - 1), max(x - half, 0)
-        for k in range(count):
-            running[k] = np.uint16(np.uint16(running[k] + columns[new, k]) - columns[old, k])
+    """``out[k, x] = Σ columns[k, clamp(x + dx)]`` over ``|dx| ≤ half``: shifted rows
+    added whole inside, the clamped ends apart."""
+    count, cols = columns.shape
+    inner = max(cols - half, half)
+    for k in range(count):
+        row, sums = columns[k], out[k]
+        middle = sums[half:inner]
+        middle[:] = row[: inner - half]
+        for dx in range(1, 2 * half + 1):
+            shifted = row[dx:]
+            for i in range(inner - half):
+                middle[i] = np.uint16(middle[i] + shifted[i])
+        for x in range(min(half, cols)):
+            sums[x] = _clamped_sum(row, x, half)
+        for x in range(inner, cols):
+            sums[x] = _clamped_sum(row, x, half)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _least(costs: np.ndarray, start: int, stop: int) -> int:  # pragma: no cover
-    """min of ``costs[start:stop]`` (a large value if empty), branch-free so it vectorises."""
-    low = np.iinfo(np.int64).max
-    for k in range(start, stop):
-        low = min(low, np.int64(costs[k]))
-    return low
+def _key(cost: np.uint16, k: int) -> np.uint32:  # pragma: no cover
+    """``(cost << 10) | k``: the least key is the least cost at the first disparity."""
+    return np.uint32((np.uint32(cost) << np.uint32(10)) | np.uint32(k))
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _first_least(
-    costs: np.ndarray, start: int, stop: int, offset: int, stride: int
-) -> np.uint32:  # pragma: no cover
-    """``(least << 10) | k`` of the first least of ``costs[offset + k stride]``, k in
-    [start, stop): one min over keys, so it vectorises (k < 1024, costs < 2²²)."""
-    low = np.uint32(0xFFFFFFFF)
-    for k in range(start, stop):
-        key = (np.uint32(costs[offset + k * stride]) << np.uint32(10)) | np.uint32(k)
-        low = min(low, key)
-    return low
+def _lower(a: np.uint32, b: np.uint32) -> np.uint32:  # pragma: no cover
+    """The smaller, a select on 32-bit lanes (``min`` of unsigned integers widens)."""
+    return a if a < b else b
 
 
 @njit(cache=True, nogil=True)
-def _winner(
-    costs: np.ndarray, x: int, d_min: int, uniqueness: float, subpixel: bool
-) -> float:  # pragma: no cover
-    """``_kernels.winner_take_all`` of one pixel (the same values; NaN if refused): the
-    first least cost, its rivals more than a step away, the parabola's vertex."""
-    top = min(costs.size - 1, x - d_min)
-    if top < 0:
-        return np.nan
-    key = _first_least(costs, 0, top + 1, 0, 1)
-    best_k = int(key & 1023)
-    best = float(key >> 10)
-    if best_k == top or best_k == 0:
-        return np.nan
-    rival = min(_least(costs, 0, best_k - 1), _least(costs, best_k + 2, top + 1))
-    second = float(rival) if rival < np.iinfo(np.int64).max else np.inf
-    if second < best + abs(best) * uniqueness:
-        return np.nan
-    value = np.float32(best_k)
-    if subpixel:
-        below = float(costs[best_k - 1])
-        above = float(costs[best_k + 1])
-        curvature = below - 2.0 * best + above
-        if curvature > 0:
-            value += np.float32(0.5 * (below - above) / curvature)
-    return np.float32(value + d_min)
+def _winner_keys(costs: np.ndarray, d_min: int, keys: np.ndarray) -> None:  # pragma: no cover
+    """``keys[x] = (least << 10) | k`` of the first least cost of ``x`` over the disparities
+    whose right pixel is inside (``k ≤ x − d_min``): one min over keys per disparity row."""
+    count, cols = costs.shape
+    keys[:] = 0xFFFFFFFF
+    for k in range(count):
+        start = max(0, min(d_min + k, cols))
+        row, found = costs[k, start:], keys[start:]
+        for i in range(cols - start):
+            found[i] = _lower(found[i], _key(row[i], k))
+
+
+@njit(cache=True, nogil=True)
+def _rivals(
+    costs: np.ndarray, d_min: int, keys: np.ndarray, rivals: np.ndarray
+) -> None:  # pragma: no cover
+    """``rivals[x]``: least cost of ``x`` more than one step from its winner."""
+    count, cols = costs.shape
+    rivals[:] = 0xFFFFFFFF
+    for k in range(count):
+        start = max(0, min(d_min + k, cols))
+        row, winners, found = costs[k, start:], keys[start:], rivals[start:]
+        for i in range(cols - start):
+            offset = np.uint32(np.uint32(k + 1) - (winners[i] & np.uint32(1023)))
+            near = offset <= np.uint32(2)  # |k − best| ≤ 1 (a negative offset wraps high)
+            found[i] = _lower(found[i], np.uint32(0xFFFFFFFF) if near else np.uint32(row[i]))
 
 
 @njit(cache=True, nogil=True)
 def _right_winners(costs: np.ndarray, d_min: int, out: np.ndarray) -> None:  # pragma: no cover
     """``_kernels.right_disparity`` of one row: right ``x_r`` takes the first least of
-    ``costs[x_r + d_min + k, k]`` over the ``k`` that stay inside (NaN if none)."""
-    cols, count = costs.shape
-    flat = costs.reshape(-1)
+    ``costs[k, x_r + d_min + k]`` over the ``k`` that stay inside (NaN if none)."""
+    count, cols = costs.shape
+    keys = np.full(cols, 0xFFFFFFFF, dtype=np.uint32)
+    for k in range(count):
+        shift = d_min + k
+        start = min(max(0, -shift), cols)
+        stop = max(min(cols, cols - shift), start)
+        row, found = costs[k, start + shift :], keys[start:stop]
+        for i in range(stop - start):
+            found[i] = _lower(found[i], _key(row[i], k))
     for xr in range(cols):
-        start, stop = max(0, -xr - d_min), min(count, cols - xr - d_min)
-        if start >= stop:
-            out[xr] = np.nan
-            continue
-        key = _first_least(flat, start, stop, (xr + d_min) * count, count + 1)
-        out[xr] = np.float32(d_min + int(key & 1023))
+        found = keys[xr] != np.uint32(0xFFFFFFFF)
+        out[xr] = np.float32(d_min + np.int64(keys[xr] & np.uint32(1023))) if found else np.nan
 
 
 @njit(cache=True, nogil=True)
@@ -222,9 +222,33 @@ def resolve_row(
     out: np.ndarray,
     right_out: np.ndarray,
 ) -> None:  # pragma: no cover
-    """One row's winners (left) and the right image's winners from the same costs."""
-    for x in range(costs.shape[0]):
-        out[x] = _winner(costs[x], x, d_min, uniqueness, subpixel)
+    """One row's winners, left (``_kernels.winner_take_all``: the first least cost, refused
+    at the range's ends or when a rival more than a step away is within ``uniqueness``;
+    the parabola's vertex) and right, from its disparity-major costs ``(count, cols)``."""
+    count, cols = costs.shape
+    keys = np.empty(cols, dtype=np.uint32)
+    rivals = np.empty(cols, dtype=np.uint32)
+    _winner_keys(costs, d_min, keys)
+    _rivals(costs, d_min, keys, rivals)
+    for x in range(cols):
+        top = min(count - 1, x - d_min)
+        best_k = np.int64(keys[x] & np.uint32(1023))
+        if top < 0 or best_k == top or best_k == 0:
+            out[x] = np.nan
+            continue
+        best = float(keys[x] >> np.uint32(10))
+        second = float(rivals[x]) if rivals[x] != np.uint32(0xFFFFFFFF) else np.inf
+        if second < best + abs(best) * uniqueness:
+            out[x] = np.nan
+            continue
+        value = np.float32(best_k)
+        if subpixel:
+            below = float(costs[best_k - 1, x])
+            above = float(costs[best_k + 1, x])
+            curvature = below - 2.0 * best + above
+            if curvature > 0:
+                value += np.float32(0.5 * (below - above) / curvature)
+        out[x] = value + d_min
     _right_winners(costs, d_min, right_out)
 
 
@@ -245,7 +269,7 @@ def census_block_match(
     out = np.empty((rows, cols), dtype=np.float32)
     right_out = np.empty((rows, cols), dtype=np.float32)
     ring, columns = _block_rows(left, right, d_min, count, outside, half)
-    summed = np.empty((cols, count), dtype=np.uint16)
+    summed = np.empty((count, cols), dtype=np.uint16)
     for y in range(rows):
         if y > 0:
             _next_columns(left, right, d_min, outside, half, y, ring, columns)
@@ -263,10 +287,12 @@ def census_volume(
     rows, cols = left.shape
     volume = np.empty((rows, cols, count), dtype=np.uint16)
     ring, columns = _block_rows(left, right, d_min, count, outside, half)
+    summed = np.empty((count, cols), dtype=np.uint16)
     for y in range(rows):
         if y > 0:
             _next_columns(left, right, d_min, outside, half, y, ring, columns)
-        _across(columns, half, volume[y])
+        _across(columns, half, summed)
+        volume[y] = summed.T
     return volume
 
 

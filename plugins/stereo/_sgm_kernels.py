@@ -134,6 +134,8 @@ def sweep_paths(
     _sweep(volume, total, -1, small, backward_jumps)
     out = np.empty((rows, cols), dtype=np.float32)
     right_out = np.empty((rows, cols), dtype=np.float32)
+    costs = np.empty((volume.shape[2], cols), dtype=volume.dtype)
     for y in range(rows):
-        resolve_row(total[y], d_min, uniqueness, subpixel, out[y], right_out[y])
+        costs[:] = total[y].T
+        resolve_row(costs, d_min, uniqueness, subpixel, out[y], right_out[y])
     return out, right_out
