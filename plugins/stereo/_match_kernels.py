@@ -191,8 +191,9 @@ def _rivals(
         row, winners, found = costs[k, start:], keys[start:], rivals[start:]
         for i in range(cols - start):
             offset = np.uint32(np.uint32(k + 1) - (winners[i] & np.uint32(1023)))
-            near = offset <= np.uint32(2)  # |k − best| ≤ 1 (a negative offset wraps high)
-            found[i] = _lower(found[i], np.uint32(0xFFFFFFFF) if near else np.uint32(row[i]))
+            # |k − best| ≤ 1 (a negative offset wraps high): all ones, else none
+            mask = np.uint32(0) - np.uint32(offset <= np.uint32(2))
+            found[i] = _lower(found[i], np.uint32(row[i]) | mask)
 
 
 @njit(cache=True, nogil=True)
