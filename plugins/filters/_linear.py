@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import Annotated, Literal
 
 import numpy as np
@@ -49,12 +50,21 @@ def _rank_one_factors(kernel: np.ndarray) -> tuple[np.ndarray, np.ndarray] | Non
     return u[:, 0] * s[0], vt[0]
 
 
-def _boundary_index(length: int, before: int, after: int, boundary: str) -> np.ndarray:
-    """Source index of each padded position along an axis (−1: zero; crop pads too)."""
+@lru_cache(maxsize=64)
+def _padded_index(length: int, before: int, after: int, boundary: str) -> np.ndarray:
+    """Source index of each padded position along an axis (−1: zero; crop pads too); kept
+    for the next call of the same size (read-only: np.pad costs as much as a small filter)."""
     positions = np.arange(length, dtype=np.int64)
     if boundary == "zero":
         return np.pad(positions, (before, after), mode="constant", constant_values=-1)
     return np.pad(positions, (before, after), mode=_NUMPY_PAD[scipy_mode(boundary)])
+
+
+def _boundary_index(length: int, before: int, after: int, boundary: str) -> np.ndarray:
+    """The cached index, read-only (it is shared between calls)."""
+    index = _padded_index(length, before, after, boundary)
+    index.flags.writeable = False
+    return index
 
 
 def _correlate_any(image: np.ndarray, kernel: np.ndarray, boundary: str) -> np.ndarray:

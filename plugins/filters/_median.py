@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Annotated, Literal
 
 import numpy as np
@@ -28,14 +29,23 @@ _BLOCK = 512  # columns per pass of the selection network: its wires stay in L2
 MedianSize = Annotated[int, Field(ge=1, le=31), AfterValidator(odd)]
 
 
-def _boundary_index(length: int, half: int, boundary: str) -> np.ndarray:
-    """Source index of each padded position along an axis (−1: zero; crop: no padding)."""
+@lru_cache(maxsize=64)
+def _padded_index(length: int, half: int, boundary: str) -> np.ndarray:
+    """Source index of each padded position along an axis (−1: zero; crop: no padding); kept
+    for the next call of the same size (read-only)."""
     positions = np.arange(length, dtype=np.int64)
     if boundary == "crop":
         return positions
     if boundary == "zero":
         return np.pad(positions, half, mode="constant", constant_values=-1)
     return np.pad(positions, half, mode=_NUMPY_PAD[boundary])
+
+
+def _boundary_index(length: int, half: int, boundary: str) -> np.ndarray:
+    """The cached index, read-only (it is shared between calls)."""
+    index = _padded_index(length, half, boundary)
+    index.flags.writeable = False
+    return index
 
 
 def _median_2d(plane: np.ndarray, size: int, boundary: str, out: np.ndarray) -> None:
