@@ -70,7 +70,7 @@ def _srgb_levels(dtype: np.dtype) -> tuple[np.ndarray, np.ndarray]:
 def _forward(rgb: np.ndarray, space: str, dtype: type) -> np.ndarray:
     """RGB to ``space`` by the compiled kernels, computed in float64 (YCbCr: in ``dtype``)
     and stored as ``dtype``."""
-    from ._spaces_kernels import rgb_to_hsv, rgb_to_lab, rgb_to_linear
+    from ._spaces_kernels import rgb_to_hsv, rgb_to_lab, rgb_to_lab_single, rgb_to_linear
 
     work = dtype if space == "ycbcr" else np.float64
     if space != "ycbcr" and np.asarray(rgb).dtype == np.float32:
@@ -82,7 +82,8 @@ def _forward(rgb: np.ndarray, space: str, dtype: type) -> np.ndarray:
     elif space == "lab":
         levels, linear = _srgb_levels(pixels.dtype)
         matrix = XYZ_FROM_RGB / D65_WHITE[:, None]
-        rgb_to_lab(pixels, matrix, LAB_EPSILON, LAB_SLOPE, levels, linear, out)
+        convert = rgb_to_lab_single if dtype == np.float32 else rgb_to_lab
+        convert(pixels, matrix, LAB_EPSILON, LAB_SLOPE, levels, linear, out)
     else:
         rgb_to_linear(pixels, YCBCR_FROM_RGB.astype(work), YCBCR_OFFSET.astype(work), out)
     return out.reshape(np.shape(rgb))
