@@ -83,36 +83,54 @@ def _step(
 
 
 @njit(cache=True, nogil=True)
+def _row_path(
+    volume: np.ndarray,
+    total: np.ndarray,
+    y: int,
+    step: tuple[int, int],
+    small: int,
+    jumps: np.ndarray,
+    buffers: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:  # pragma: no cover
+    """One path over row ``y``: the predecessor of ``x`` is ``x − step_x`` in the
+    previous row of the sweep (``step_y ≠ 0``) or in this row (``step_y = 0``, visited in
+    the path's direction); ``buffers`` are (previous, previous_min, current, current_min)."""
+    rows, cols, _ = volume.shape
+    previous, previous_min, current, current_min = buffers
+    step_y, step_x = step
+    before, before_min = (current, current_min) if step_y == 0 else (previous, previous_min)
+    first_row = y - step_y < 0 or y - step_y >= rows
+    for j in range(cols):
+        x = j if step_x >= 0 else cols - 1 - j
+        px = x - step_x
+        cost, here = volume[y, x], total[y, x]
+        if first_row or px < 0 or px >= cols:
+            current_min[x] = _start(cost, current[x], here)
+        else:
+            current_min[x] = _step(
+                cost, before[px], before_min[px], current[x], here, small, np.int64(jumps[y, x])
+            )
+
+
+@njit(cache=True, nogil=True)
 def _sweep(
     volume: np.ndarray, total: np.ndarray, sign: int, small: int, jumps: np.ndarray
 ) -> None:  # pragma: no cover
     """Aggregate the ``jumps.shape[0]`` paths of one sweep (``sign`` 1 forward, −1
-    backward) into ``total``; ``jumps[p]`` are path ``p``'s jump penalties."""
+    backward) into ``total``, row by row, path by path; ``jumps[p]`` are path ``p``'s
+    jump penalties."""
     rows, cols, count = volume.shape
     paths = jumps.shape[0]
-    steps = np.array([[0, sign], [sign, 0], [sign, sign], [sign, -sign]])
+    steps = ((0, sign), (sign, 0), (sign, sign), (sign, -sign))
     previous = np.empty((paths, cols, count), dtype=volume.dtype)
     current = np.empty((paths, cols, count), dtype=volume.dtype)
     previous_min = np.empty((paths, cols), dtype=np.uint16)
     current_min = np.empty((paths, cols), dtype=np.uint16)
     for i in range(rows):
         y = i if sign > 0 else rows - 1 - i
-        for j in range(cols):
-            x = j if sign > 0 else cols - 1 - j
-            cost, here = volume[y, x], total[y, x]
-            for p in range(paths):
-                py, px = y - steps[p, 0], x - steps[p, 1]
-                if py < 0 or py >= rows or px < 0 or px >= cols:
-                    current_min[p, x] = _start(cost, current[p, x], here)
-                    continue
-                source, low = (
-                    (current[p, px], current_min[p, px])
-                    if steps[p, 0] == 0
-                    else (previous[p, px], previous_min[p, px])
-                )
-                current_min[p, x] = _step(
-                    cost, source, low, current[p, x], here, small, np.int64(jumps[p, y, x])
-                )
+        for p in range(paths):
+            buffers = (previous[p], previous_min[p], current[p], current_min[p])
+            _row_path(volume, total, y, steps[p], small, jumps[p], buffers)
         previous, current = current, previous
         previous_min, current_min = current_min, previous_min
 
