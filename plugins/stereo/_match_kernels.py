@@ -283,17 +283,16 @@ def census_block_match(
 def census_volume(
     left: np.ndarray, right: np.ndarray, d_min: int, count: int, outside: int, half: int
 ) -> np.ndarray:  # pragma: no cover
-    """The census cost volume summed over ``(2 half + 1)²`` blocks, uint16 (what
-    ``box_sum(census_costs(...), half)`` gives, by running sums)."""
+    """The census cost volume summed over ``(2 half + 1)²`` blocks, uint16, disparity-major
+    ``(rows, count, cols)`` (``box_sum(census_costs(...), half)`` with its last two axes
+    swapped, by running sums)."""
     rows, cols = left.shape
-    volume = np.empty((rows, cols, count), dtype=np.uint16)
+    volume = np.empty((rows, count, cols), dtype=np.uint16)
     ring, columns = _block_rows(left, right, d_min, count, outside, half)
-    summed = np.empty((count, cols), dtype=np.uint16)
     for y in range(rows):
         if y > 0:
             _next_columns(left, right, d_min, outside, half, y, ring, columns)
-        _across(columns, half, summed)
-        volume[y] = summed.T
+        _across(columns, half, volume[y])
     return volume
 
 

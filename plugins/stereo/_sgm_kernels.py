@@ -83,33 +83,103 @@ def _step(
 
 
 @njit(cache=True, nogil=True)
-def _row_path(
+def _transpose(source: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
+    """``out = source.T``, a row of ``source`` at a time."""
+    for k in range(source.shape[0]):
+        line, column = source[k], out[:, k]
+        for x in range(line.size):
+            column[x] = line[x]
+
+
+@njit(cache=True, nogil=True)
+def _add_transposed(source: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
+    """``out += source.T`` (16-bit, wrapping: the caller bounds the sum)."""
+    for k in range(out.shape[0]):
+        line, column = out[k], source[:, k]
+        for x in range(line.size):
+            line[x] = np.uint16(line[x] + column[x])
+
+
+@njit(cache=True, nogil=True)
+def _horizontal(
     volume: np.ndarray,
     total: np.ndarray,
     y: int,
-    step: tuple[int, int],
+    step_x: int,
     small: int,
     jumps: np.ndarray,
-    buffers: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    work: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
 ) -> None:  # pragma: no cover
-    """One path over row ``y``: the predecessor of ``x`` is ``x − step_x`` in the
-    previous row of the sweep (``step_y ≠ 0``) or in this row (``step_y = 0``, visited in
-    the path's direction); ``buffers`` are (previous, previous_min, current, current_min)."""
-    rows, cols, _ = volume.shape
-    previous, previous_min, current, current_min = buffers
-    step_y, step_x = step
-    before, before_min = (current, current_min) if step_y == 0 else (previous, previous_min)
-    first_row = y - step_y < 0 or y - step_y >= rows
+    """The path along row ``y`` (predecessor ``x − step_x``, visited in that order), on
+    the row turned pixel-major (``work``: costs, path costs, their minima, their sum)."""
+    cols = volume.shape[2]
+    costs, found, found_min = work[0], work[1], work[2]
+    _transpose(volume[y], costs)
+    added = work[3]
+    added[:] = 0
     for j in range(cols):
-        x = j if step_x >= 0 else cols - 1 - j
-        px = x - step_x
-        cost, here = volume[y, x], total[y, x]
-        if first_row or px < 0 or px >= cols:
-            current_min[x] = _start(cost, current[x], here)
+        x = j if step_x > 0 else cols - 1 - j
+        if j == 0:
+            found_min[x] = _start(costs[x], found[x], added[x])
         else:
-            current_min[x] = _step(
-                cost, before[px], before_min[px], current[x], here, small, np.int64(jumps[y, x])
+            px = x - step_x
+            low = found_min[px]
+            found_min[x] = _step(
+                costs[x], found[px], low, found[x], added[x], small, np.int64(jumps[y, x])
             )
+    _add_transposed(added, total[y])
+
+
+@njit(cache=True, nogil=True)
+def _across_rows(
+    cost: np.ndarray,
+    total: np.ndarray,
+    step_x: int,
+    small: int,
+    jumps: np.ndarray,
+    first_row: bool,
+    before: tuple[np.ndarray, np.ndarray],
+    out: tuple[np.ndarray, np.ndarray],
+) -> None:  # pragma: no cover
+    """A vertical or diagonal path over one disparity-major row ``cost`` ``(count, cols)``:
+    pixel ``x`` continues from ``x − step_x`` of the sweep's previous row (``before``:
+    path costs with a sentinel row above and below, and their minima; unused on the
+    first row), every pixel of the row at once (SIMD over x). ``out`` gets this row's."""
+    count, cols = cost.shape
+    found, found_min = out
+    lo, hi = (0, 0) if first_row else (max(0, step_x), min(cols, cols + step_x))
+    for x in range(cols):  # the path starts where its predecessor is outside the image
+        if lo <= x < hi:
+            continue
+        found_min[x] = 65535
+        for k in range(count):
+            found[k + 1, x] = cost[k, x]
+            total[k, x] = np.uint16(total[k, x] + cost[k, x])
+            found_min[x] = min(found_min[x], cost[k, x])
+    if hi <= lo:
+        return
+    previous, previous_min = before
+    n = hi - lo
+    low_before = previous_min[lo - step_x : hi - step_x]
+    jump = np.empty(n, dtype=np.uint16)
+    penalty = jumps[lo:hi]
+    for i in range(n):
+        jump[i] = np.uint16(low_before[i] + penalty[i])
+    lowest = found_min[lo:hi]
+    lowest[:] = 65535
+    step = np.uint16(small)
+    for k in range(count):
+        below = previous[k, lo - step_x : hi - step_x]
+        here = previous[k + 1, lo - step_x : hi - step_x]
+        above = previous[k + 2, lo - step_x : hi - step_x]
+        c, o, t = cost[k, lo:hi], found[k + 1, lo:hi], total[k, lo:hi]
+        for i in range(n):
+            side = _least(np.uint16(below[i] + step), np.uint16(above[i] + step))
+            best = _least(_least(here[i], side), jump[i])
+            value = np.uint16(c[i] + np.uint16(best - low_before[i]))
+            o[i] = value
+            t[i] = np.uint16(t[i] + value)
+            lowest[i] = _least(lowest[i], value)
 
 
 @njit(cache=True, nogil=True)
@@ -117,20 +187,36 @@ def _sweep(
     volume: np.ndarray, total: np.ndarray, sign: int, small: int, jumps: np.ndarray
 ) -> None:  # pragma: no cover
     """Aggregate the ``jumps.shape[0]`` paths of one sweep (``sign`` 1 forward, −1
-    backward) into ``total``, row by row, path by path; ``jumps[p]`` are path ``p``'s
-    jump penalties."""
-    rows, cols, count = volume.shape
+    backward) into ``total``, row by row: ``(0, sign)`` along the row, then ``(sign, 0)``,
+    ``(sign, sign)``, ``(sign, −sign)`` across rows; ``jumps[p]`` are path ``p``'s jump
+    penalties. ``volume`` and ``total`` are disparity-major ``(rows, count, cols)``."""
+    rows, count, cols = volume.shape
     paths = jumps.shape[0]
-    steps = ((0, sign), (sign, 0), (sign, sign), (sign, -sign))
-    previous = np.empty((paths, cols, count), dtype=volume.dtype)
-    current = np.empty((paths, cols, count), dtype=volume.dtype)
+    steps_x = (0, 0, sign, -sign)
+    previous = np.full((paths, count + 2, cols), 65535 - small, dtype=np.uint16)
+    current = previous.copy()  # rows 0 and count + 1: sentinels that never win
     previous_min = np.empty((paths, cols), dtype=np.uint16)
     current_min = np.empty((paths, cols), dtype=np.uint16)
+    work = (
+        np.empty((cols, count), dtype=np.uint16),
+        np.empty((cols, count), dtype=np.uint16),
+        np.empty(cols, dtype=np.uint16),
+        np.empty((cols, count), dtype=np.uint16),
+    )
     for i in range(rows):
         y = i if sign > 0 else rows - 1 - i
-        for p in range(paths):
-            buffers = (previous[p], previous_min[p], current[p], current_min[p])
-            _row_path(volume, total, y, steps[p], small, jumps[p], buffers)
+        _horizontal(volume, total, y, sign, small, jumps[0], work)
+        for p in range(1, paths):
+            _across_rows(
+                volume[y],
+                total[y],
+                steps_x[p],
+                small,
+                jumps[p, y],
+                i == 0,
+                (previous[p], previous_min[p]),
+                (current[p], current_min[p]),
+            )
         previous, current = current, previous
         previous_min, current_min = current_min, previous_min
 
@@ -145,15 +231,14 @@ def sweep_paths(
     uniqueness: float,
     subpixel: bool,
 ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
-    """Left and right disparities of the path-aggregated ``volume`` (uint16)."""
-    rows, cols, _ = volume.shape
+    """Left and right disparities of the path-aggregated disparity-major ``volume``
+    ``(rows, count, cols)``, uint16."""
+    rows, _, cols = volume.shape
     total = np.zeros_like(volume)
     _sweep(volume, total, 1, small, forward_jumps)
     _sweep(volume, total, -1, small, backward_jumps)
     out = np.empty((rows, cols), dtype=np.float32)
     right_out = np.empty((rows, cols), dtype=np.float32)
-    costs = np.empty((volume.shape[2], cols), dtype=volume.dtype)
     for y in range(rows):
-        costs[:] = total[y].T
-        resolve_row(costs, d_min, uniqueness, subpixel, out[y], right_out[y])
+        resolve_row(total[y], d_min, uniqueness, subpixel, out[y], right_out[y])
     return out, right_out
