@@ -1,15 +1,14 @@
 """numba kernels of semi-global matching in two sweeps (imported on first use).
 
-The forward sweep visits the pixels row by row from the top left and aggregates the
-paths whose predecessor it has already visited, ``(0, 1)``, ``(1, 0)``, ``(1, 1)`` and
-``(1, −1)``; the backward sweep from the bottom right does the opposite four (with 4
-paths: the horizontal and vertical ones only). Each path's costs of the previous row
-(and, for the horizontal path, of the previous pixel) stay in row buffers, so the cost
-volume is read twice and the sum written twice, instead of once per path. The sum is in
-16-bit integers (the caller checks that it fits), so the order of the paths does not
-change it: the result is ``_kernels.aggregate_path``'s over ``PATHS`` to the bit. Each
-row is resolved (winner take all, and the right image's winners) as soon as the
-backward sweep has finished it.
+The volume and the sum are disparity-major, ``(rows, count, cols)``. The forward sweep
+goes down the rows and aggregates the paths whose predecessor it has already visited,
+``(0, 1)``, ``(1, 0)``, ``(1, 1)`` and ``(1, −1)``; the backward sweep goes up with the
+opposite four (with 4 paths: the horizontal and vertical ones only). A vertical or
+diagonal path advances a whole row at once from its previous row's costs (one SIMD loop
+over the row's pixels per disparity, a sentinel row at each end of the range); the
+horizontal path goes pixel by pixel on the row turned pixel-major. The sum is in 16-bit
+integers (the caller checks that it fits), so the order of the paths does not change it:
+the result is ``_kernels.aggregate_path``'s over ``PATHS`` to the bit.
 """
 
 from __future__ import annotations
