@@ -88,13 +88,17 @@ def rgb_to_linear(
     rgb: np.ndarray, matrix: np.ndarray, offset: np.ndarray, out: np.ndarray
 ) -> None:  # pragma: no cover
     """``out[i] = matrix @ rgb[i] + offset``, summed from the offset in column order, in
-    ``rgb``'s float (``matrix`` and ``offset`` given in that float)."""
+    ``rgb``'s float (``matrix`` and ``offset`` given in that float); the nine weights are
+    held in registers."""
+    m00, m01, m02 = matrix[0, 0], matrix[0, 1], matrix[0, 2]
+    m10, m11, m12 = matrix[1, 0], matrix[1, 1], matrix[1, 2]
+    m20, m21, m22 = matrix[2, 0], matrix[2, 1], matrix[2, 2]
+    o0, o1, o2 = offset[0], offset[1], offset[2]
     for i in range(rgb.shape[0]):
-        for row in range(3):
-            total = offset[row]
-            for col in range(3):
-                total += matrix[row, col] * rgb[i, col]
-            out[i, row] = total
+        r, g, b = rgb[i, 0], rgb[i, 1], rgb[i, 2]
+        out[i, 0] = ((o0 + m00 * r) + m01 * g) + m02 * b
+        out[i, 1] = ((o1 + m10 * r) + m11 * g) + m12 * b
+        out[i, 2] = ((o2 + m20 * r) + m21 * g) + m22 * b
 
 
 _CHUNK = 512  # pixels per vectorised pass
