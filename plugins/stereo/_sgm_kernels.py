@@ -91,31 +91,18 @@ def _transpose(source: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
 
 
 @njit(cache=True, nogil=True)
-def _add_transposed(source: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
-    """``out += source.T`` (16-bit, wrapping: the caller bounds the sum)."""
-    for k in range(out.shape[0]):
-        line, column = out[k], source[:, k]
-        for x in range(line.size):
-            line[x] = np.uint16(line[x] + column[x])
-
-
-@njit(cache=True, nogil=True)
-def _horizontal(
-    volume: np.ndarray,
-    total: np.ndarray,
-    y: int,
+def _along_row(
+    costs: np.ndarray,
     step_x: int,
     small: int,
     jumps: np.ndarray,
-    work: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    work: tuple[np.ndarray, np.ndarray, np.ndarray],
 ) -> None:  # pragma: no cover
-    """The path along row ``y`` (predecessor ``x − step_x``, visited in that order), on
-    the row turned pixel-major (``work``: costs, path costs, their minima, their sum)."""
-    cols = volume.shape[2]
-    costs, found, found_min = work[0], work[1], work[2]
-    _transpose(volume[y], costs)
-    added = work[3]
-    added[:] = 0
+    """The path along a pixel-major row ``costs`` ``(cols, count)`` whose predecessor of
+    ``x`` is ``x − step_x`` (visited in that order), added to ``work[2]`` (``work``: path
+    costs, their minima, the sum)."""
+    cols = costs.shape[0]
+    found, found_min, added = work
     for j in range(cols):
         x = j if step_x > 0 else cols - 1 - j
         if j == 0:
@@ -124,9 +111,29 @@ def _horizontal(
             px = x - step_x
             low = found_min[px]
             found_min[x] = _step(
-                costs[x], found[px], low, found[x], added[x], small, np.int64(jumps[y, x])
+                costs[x], found[px], low, found[x], added[x], small, np.int64(jumps[x])
             )
-    _add_transposed(added, total[y])
+
+
+@njit(cache=True, nogil=True)
+def _horizontal(
+    volume: np.ndarray, total: np.ndarray, small: int, jumps: tuple[np.ndarray, np.ndarray]
+) -> None:  # pragma: no cover
+    """``total`` = the two paths along the rows, ``(0, 1)`` and ``(0, −1)`` (``jumps``:
+    theirs), each row turned pixel-major once for both (the paths stay within a row)."""
+    rows, count, cols = volume.shape
+    costs = np.empty((cols, count), dtype=np.uint16)
+    work = (
+        np.empty((cols, count), dtype=np.uint16),
+        np.empty(cols, dtype=np.uint16),
+        np.empty((cols, count), dtype=np.uint16),
+    )
+    for y in range(rows):
+        _transpose(volume[y], costs)
+        work[2][:] = 0
+        _along_row(costs, 1, small, jumps[0][y], work)
+        _along_row(costs, -1, small, jumps[1][y], work)
+        _transpose(work[2], total[y])
 
 
 @njit(cache=True, nogil=True)
@@ -185,10 +192,10 @@ def _across_rows(
 def _sweep(
     volume: np.ndarray, total: np.ndarray, sign: int, small: int, jumps: np.ndarray
 ) -> None:  # pragma: no cover
-    """Aggregate the ``jumps.shape[0]`` paths of one sweep (``sign`` 1 forward, −1
-    backward) into ``total``, row by row: ``(0, sign)`` along the row, then ``(sign, 0)``,
-    ``(sign, sign)``, ``(sign, −sign)`` across rows; ``jumps[p]`` are path ``p``'s jump
-    penalties. ``volume`` and ``total`` are disparity-major ``(rows, count, cols)``."""
+    """Add the paths across rows of one sweep (``sign`` 1 forward, −1 backward) to
+    ``total``, row by row: ``(sign, 0)``, ``(sign, sign)``, ``(sign, −sign)`` for
+    ``jumps[1:]`` (``jumps[0]``, along the row, is :func:`_horizontal`'s). ``volume`` and
+    ``total`` are disparity-major ``(rows, count, cols)``."""
     rows, count, cols = volume.shape
     paths = jumps.shape[0]
     steps_x = (0, 0, sign, -sign)
@@ -196,15 +203,8 @@ def _sweep(
     current = previous.copy()  # rows 0 and count + 1: sentinels that never win
     previous_min = np.empty((paths, cols), dtype=np.uint16)
     current_min = np.empty((paths, cols), dtype=np.uint16)
-    work = (
-        np.empty((cols, count), dtype=np.uint16),
-        np.empty((cols, count), dtype=np.uint16),
-        np.empty(cols, dtype=np.uint16),
-        np.empty((cols, count), dtype=np.uint16),
-    )
     for i in range(rows):
         y = i if sign > 0 else rows - 1 - i
-        _horizontal(volume, total, y, sign, small, jumps[0], work)
         for p in range(1, paths):
             _across_rows(
                 volume[y],
@@ -233,7 +233,8 @@ def sweep_paths(
     """Left and right disparities of the path-aggregated disparity-major ``volume``
     ``(rows, count, cols)``, uint16."""
     rows, _, cols = volume.shape
-    total = np.zeros_like(volume)
+    total = np.empty_like(volume)
+    _horizontal(volume, total, small, (forward_jumps[0], backward_jumps[0]))
     _sweep(volume, total, 1, small, forward_jumps)
     _sweep(volume, total, -1, small, backward_jumps)
     out = np.empty((rows, cols), dtype=np.float32)
