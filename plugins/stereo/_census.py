@@ -63,5 +63,8 @@ def census_sgm(
         jumps.append(
             jump_penalties(left, steps, float(small), float(large), -1.0 if edge is None else edge)
         )
-    found: tuple[np.ndarray, np.ndarray] = sweep_paths(volume, small, *jumps, d_min, *select)
+    uniqueness, subpixel = select
+    found: tuple[np.ndarray, np.ndarray] = sweep_paths(
+        volume, small, jumps[0], jumps[1], d_min, uniqueness, subpixel
+    )
     return found

@@ -14,6 +14,8 @@ sweep has finished it. All sums are integers (census bits), so the results are t
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit, types
 from numba.extending import intrinsic
@@ -28,11 +30,11 @@ __all__ = [
 
 
 @intrinsic
-def _ctpop(typingctx, value):  # type: ignore[no-untyped-def]  # pragma: no cover
+def _ctpop(typingctx: Any, value: Any) -> Any:  # pragma: no cover
     """The set bits of a uint64 (LLVM's ctpop: one POPCNT instruction)."""
     signature = types.uint64(types.uint64)
 
-    def codegen(context, builder, sig, args):  # type: ignore[no-untyped-def]
+    def codegen(context: Any, builder: Any, sig: Any, args: Any) -> Any:
         return builder.ctpop(args[0])
 
     return signature, codegen
@@ -79,7 +81,7 @@ def _cost_row(
         row[stop:] = outside
         inside, lefts, rights = row[start:stop], left[start:stop], right[start - shift :]
         for i in range(stop - start):
-            inside[i] = _ctpop(lefts[i] ^ rights[i])
+            inside[i] = _ctpop(lefts[i] ^ rights[i])  # type: ignore[call-arg]
 
 
 @njit(cache=True, nogil=True)
@@ -336,6 +338,6 @@ def left_right_keep(
                 for whole in (np.floor(value), np.ceil(value)):
                     xr = x - np.int64(whole)
                     if 0 <= xr < cols:
-                        keep |= np.float32(abs(whole - right_disparity[y, xr])) <= tolerance
+                        keep |= bool(np.float32(abs(whole - right_disparity[y, xr])) <= tolerance)
             out[y, x] = value if keep else np.nan
     return out

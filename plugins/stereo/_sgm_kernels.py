@@ -22,7 +22,7 @@ __all__ = ["sweep_paths"]
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _start(cost: np.ndarray, out: np.ndarray, total: np.ndarray) -> int:  # pragma: no cover
+def _start(cost: np.ndarray, out: np.ndarray, total: np.ndarray) -> np.uint16:  # pragma: no cover
     """A path's first pixel: ``out = cost``, added to ``total``; returns min_k."""
     low = np.uint16(65535)
     for k in range(cost.size):
@@ -46,8 +46,8 @@ def _step(
     out: np.ndarray,
     total: np.ndarray,
     small: int,
-    large: int,
-) -> int:  # pragma: no cover
+    large: int | np.integer,
+) -> np.uint16:  # pragma: no cover
     """``out[k] = cost[k] + min(before[k], before[k ± 1] + small, before_min + large)
     − before_min``, added to ``total``; returns min_k out (ends of the range apart).
 
