@@ -104,7 +104,7 @@ def rgb_to_linear(
 _CHUNK = 512  # pixels per vectorised pass
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")  # no zero-divisor check: it vectorises
 def _cube_roots(values: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
     """``out = ∛values`` for positive normal ``values``, within an ulp or two of float64:
     the exponent divided by three on the bits (Kahan's seed, ~7 %), then three Halley
@@ -161,7 +161,7 @@ def rgb_to_lab_single(
                     total += matrix[row, col] * linear[col, i]
                 # the seed needs a positive normal number; the slope's side is taken below it
                 target[i] = total if total > epsilon else 1.0
-            _cube_roots(target, roots[row])
+            _cube_roots(target[:size], roots[row, :size])
             for i in range(size):
                 total = 0.0
                 for col in range(3):
