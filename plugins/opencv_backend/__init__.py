@@ -36,6 +36,7 @@ from .pixels import (
     cv_otsu,
     cv_to_gray,
 )
+from .rectify import cv_rectify_calibrated, cv_rectify_pair
 from .stereo import cv_block_match, cv_sgm
 from .views import (
     cv_board_corners,
@@ -74,6 +75,8 @@ __all__ = [
     "cv_median",
     "cv_open",
     "cv_otsu",
+    "cv_rectify_calibrated",
+    "cv_rectify_pair",
     "cv_relative_pose",
     "cv_sgm",
     "cv_sift",

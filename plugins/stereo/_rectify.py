@@ -8,7 +8,17 @@ from typing import Generic, NamedTuple
 
 import numpy as np
 
-from graphvision import Camera, Float, Homography, Image, ImageT, PinholeCamera, Points2D, node
+from graphvision import (
+    Camera,
+    Conformance,
+    Float,
+    Homography,
+    Image,
+    ImageT,
+    PinholeCamera,
+    Points2D,
+    node,
+)
 
 from ..camera._projection import cross_matrix
 from ..epipolar._nodes import Fundamental
@@ -53,7 +63,22 @@ def _recentre(H_a: np.ndarray, H_b: np.ndarray, width: int, height: int) -> np.n
     return shift
 
 
-@node("stereo.rectify_calibrated", version=1)
+_OPENCV_ROTATION = (
+    "OpenCV (cv2.stereoRectify) turns each camera by half the relative rotation, then puts "
+    "the baseline on x: its rectified x axis is the baseline too, rows align as exactly "
+    "(|dy| of corresponding points below 1e-9 px), but its common orientation differs "
+    "from Fusiello's (z: the left camera's axis made perpendicular to the baseline) by a "
+    "rotation about the baseline of about half the angle between the two optical axes "
+    "about it (never more than that angle), and its K is its own (alpha=-1), not the mean "
+    "K with the left image's centre kept; compared by the rectified cameras' rotation"
+)
+
+
+@node(
+    "stereo.rectify_calibrated",
+    version=1,
+    conformance=Conformance("rotation_error", 3.0, note=_OPENCV_ROTATION),
+)
 def rectify_calibrated(camera_a: Camera, camera_b: Camera) -> Rectification:
     r"""Rectify a calibrated pair (Fusiello, Trucco & Verri 2000): both cameras turned to a
     common orientation whose x axis is the baseline, with one calibration matrix.
@@ -192,7 +217,13 @@ def rectify_uncalibrated(
     return UncalibratedRectification(shift @ H_a, shift @ H_b)
 
 
-@node("stereo.rectify_pair", version=1)
+@node(
+    "stereo.rectify_pair",
+    version=1,
+    conformance=Conformance(
+        "max_abs", 1e-4, note="OpenCV's remap reads a float32 map (source positions to ~1e-5 px)"
+    ),
+)
 def rectify_pair(
     left: ImageT, right: ImageT, H_a: Homography, H_b: Homography
 ) -> RectifiedPair[ImageT]:

@@ -225,6 +225,20 @@ def _stereo() -> dict[str, list[Case]]:
     }  # fmt: skip
 
 
+def _rectification() -> dict[str, list[Case]]:
+    from graphvision_plugins.synthetic import stereo_pair, two_view_scene
+
+    pairs = [two_view_scene(noise=0.0, seed=seed) for seed in range(3)]
+    image = stereo_pair(width=64, height=48).left
+    turn = np.array([[0.98, 0.05, 3.0], [-0.04, 1.02, 2.0], [1e-4, -2e-4, 1.0]])
+    shift = np.array([[1.0, 0.0, 3.0], [0.0, 1.0, 2.0], [0.0, 0.0, 1.0]])
+    return {
+        "stereo.rectify_calibrated": [({"camera_a": p.camera_a, "camera_b": p.camera_b}, {})
+                                      for p in pairs],
+        "stereo.rectify_pair": [({"left": image, "right": image, "H_a": turn, "H_b": shift}, {})],
+    }  # fmt: skip
+
+
 def _boards() -> dict[str, list[Case]]:
     from graphvision_plugins.synthetic import board_views
 
@@ -254,7 +268,9 @@ def _hough() -> dict[str, list[Case]]:
 
 
 Builder = Callable[[], dict[str, list[Case]]]
-CASE_BUILDERS: list[Builder] = [_filters, _pixels, _geometry, _two_views, _hough, _stereo, _boards]
+CASE_BUILDERS: list[Builder] = [
+    _filters, _pixels, _geometry, _two_views, _hough, _stereo, _rectification, _boards,
+]  # fmt: skip
 
 
 def all_cases() -> dict[str, list[Case]]:
