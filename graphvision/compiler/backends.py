@@ -7,16 +7,19 @@ that implements its op and is installed; the reference, which implements every o
 ends every order, so an op no backend of the order has runs as it always did. A node's
 ``backend:`` pins it: an op the backend lacks, or a backend whose library is not
 installed, is then a validation problem at the node's line (naming the extra to
-install), never a silent fallback. A backend name no plugin provides is a problem too
-(with a close match): a typo must not silently run the reference.
+install, or the reason a check of its ``requires`` gives), never a silent fallback.
+A backend name no plugin provides is a problem too (with a close match): a typo must
+not silently run the reference. A parameter value one backend alone handles (its
+``exclusive``, as OpenCV's ``method: magsac``) is a problem on any other backend.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 from graphvision.errors import RegistrationError, did_you_mean
-from graphvision.nodes.backends import REFERENCE
+from graphvision.nodes.backends import REFERENCE, exclusive_problem, unavailable
 from graphvision.nodes.registry import Registry
 from graphvision.nodes.spec import NodeSpec
 
@@ -50,18 +53,28 @@ class BackendChooser:
             if name not in known
         ]
 
-    def choose(self, spec: NodeSpec, pinned: str) -> tuple[NodeSpec, str]:
-        """(the implementation to run, '') or (the reference, the problem with the pin)."""
+    def choose(
+        self, spec: NodeSpec, pinned: str, params: Mapping[str, Any] | None = None
+    ) -> tuple[NodeSpec, str]:
+        """(the implementation to run, '') or (the reference, the problem with the pin);
+        ``params`` (the node's, validated) are checked against what each backend handles."""
         try:
-            if pinned:
-                return self._pinned(spec, pinned)
-            for backend in self.order:
-                impl = self.registry.implementation(spec.id, backend)
-                if impl is not None and self.registry.backends_of(spec.id).get(backend):
-                    return impl, ""
+            chosen, problem = self._pinned(spec, pinned) if pinned else (self._first(spec), "")
         except RegistrationError as error:
             return spec, str(error)
-        return spec, ""  # pragma: no cover - the reference ends every order
+        if problem:
+            return chosen, problem
+        others = self.registry.implementations.get(spec.id, {})
+        return chosen, exclusive_problem(spec.id, chosen.backend, others, params or {})
+
+    def _first(self, spec: NodeSpec) -> NodeSpec:
+        """The implementation of the first backend of the order that can run here."""
+        impls = self.registry.implementations.get(spec.id, {})
+        for backend in self.order:
+            impl = self.registry.implementation(spec.id, backend)
+            if impl is not None and (backend == REFERENCE or not unavailable(impls[backend])):
+                return impl
+        return spec  # pragma: no cover - the reference ends every order
 
     def _pinned(self, spec: NodeSpec, backend: str) -> tuple[NodeSpec, str]:
         available = self.registry.backends_of(spec.id)
@@ -73,10 +86,11 @@ class BackendChooser:
         impl = self.registry.implementation(spec.id, backend)
         if impl is None:  # pragma: no cover - backends_of lists only registered ones
             return spec, f"{spec.id} has no '{backend}' implementation"
-        if not available[backend]:
-            hint = self.registry.implementations[spec.id][backend].install_hint
+        registered = self.registry.implementations.get(spec.id, {}).get(backend)
+        reason = unavailable(registered) if registered is not None else ""
+        if reason and registered is not None:
+            state = "is not installed" if reason.endswith("not found") else "cannot run here"
             return spec, (
-                f"backend '{backend}' of {spec.id} is not installed "
-                f"({', '.join(impl.requires)} not found): {hint}"
+                f"backend '{backend}' of {spec.id} {state} ({reason}): {registered.install_hint}"
             )
         return impl, ""

@@ -248,7 +248,7 @@ class _Checker:
             params = self.substitute(decl.params, f"nodes.{name}.params", used_params)
             checked = self.check_params(name, spec, params)
             wired = self.check_inputs(name, spec)
-            spec, problem = self.chooser.choose(spec, decl.backend)
+            spec, problem = self.chooser.choose(spec, decl.backend, checked)
             if problem:
                 self.report(f"nodes.{name}.backend", problem)
             steps[name] = Step(name, spec, checked, wired, self.resolved[name])

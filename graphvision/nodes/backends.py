@@ -19,7 +19,15 @@ implementation whose modules are not installed is listed but not chosen, and
 pinning it is a validation error naming ``extra`` (``pip install
 'graphvision[opencv]'``). Those modules are found with ``importlib.util.find_spec``
 (not imported) until a run uses the implementation, so listing the ops of a
-backend does not import its library.
+backend does not import its library. ``requires`` may also hold checks: functions
+returning why the installed library cannot run the implementation ('' when it
+can), such as a class a version of the library lacks; they run (and may import)
+only when a run considers the implementation, and a pin it fails is a validation
+error giving their reason.
+
+``exclusive`` names parameter values only this implementation handles (OpenCV's
+``method: magsac``): a node given one of them that runs another backend, the
+reference included, is a validation error naming the backend that has it.
 
 Each implementation has its own ``version``, and its code fingerprint covers its
 own source and helpers, and the version of the libraries in ``requires``: the cache
@@ -32,7 +40,7 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from importlib.util import find_spec
@@ -43,16 +51,23 @@ from graphvision.nodes.spec import FunctionRef, NodeSpec
 
 __all__ = [
     "REFERENCE",
+    "Check",
     "Implementation",
     "ImplementationMark",
+    "exclusive_problem",
     "implementation_problem",
     "implementation_spec",
     "implements",
     "installed",
+    "unavailable",
 ]
 
 REFERENCE = "numpy"
 """The backend of every op's declaring function: always installed, the default."""
+
+
+Check = Callable[[], str]
+"""A requirement beyond a module: why the installed library cannot run it ('' if it can)."""
 
 
 @dataclass(frozen=True)
@@ -60,8 +75,14 @@ class ImplementationMark:
     op: str
     backend: str
     version: int
-    requires: tuple[str, ...]
+    requires: tuple[str | Check, ...]
     extra: str
+    exclusive: tuple[tuple[str, tuple[object, ...]], ...] = ()
+
+    @property
+    def modules(self) -> tuple[str, ...]:
+        """The modules of ``requires`` (its checks left out)."""
+        return tuple(r for r in self.requires if isinstance(r, str))
 
 
 @dataclass(frozen=True)
@@ -84,7 +105,7 @@ class Implementation:
     @property
     def install_hint(self) -> str:
         extra = self.mark.extra
-        modules = ", ".join(self.mark.requires)
+        modules = ", ".join(self.mark.modules)
         if extra:
             return f"pip install 'graphvision[{extra}]'"
         return f"install {modules}"
@@ -95,8 +116,9 @@ def implements(
     *,
     backend: str,
     version: int = 1,
-    requires: tuple[str, ...] = (),
+    requires: tuple[str | Check, ...] = (),
     extra: str = "",
+    exclusive: Mapping[str, Sequence[object]] | None = None,
 ) -> Callable[[Callable], Callable]:
     """Mark a function as the ``backend`` implementation of the op ``op``.
 
@@ -109,15 +131,21 @@ def implements(
     version : int
         Bump it when the implementation's results change for reasons its source
         does not show; it is part of the cache key of every result it computes.
-    requires : tuple of str
-        Modules the implementation imports when it runs (``("cv2",)``).
+    requires : tuple of str or callable
+        Modules the implementation imports when it runs (``("cv2",)``), and checks:
+        functions returning why the installed library cannot run it ('' when it
+        can), run only when a run considers the implementation.
     extra : str
         The ``graphvision`` extra that installs them, named by errors.
+    exclusive : mapping of str to values, optional
+        Parameter values this implementation alone handles (``{"method":
+        ["magsac"]}``): any other backend given one is a validation error.
     """
+    only = tuple((name, tuple(values)) for name, values in (exclusive or {}).items())
 
     def mark(func: Callable) -> Callable:
         func.__graphvision_implementation__ = ImplementationMark(  # type: ignore[attr-defined]
-            op, backend, version, tuple(requires), extra
+            op, backend, version, tuple(requires), extra, only
         )
         return func
 
@@ -153,6 +181,9 @@ def implementation_problem(spec: NodeSpec, impl: Implementation) -> str:
             f"{where}: the {impl.backend} implementation of {spec.id} takes inputs "
             f"({', '.join(inputs)}) but the op's are ({', '.join(spec.inputs)})"
         )
+    strange = sorted(name for name, _ in impl.mark.exclusive if name not in spec.param_fields)
+    if strange:
+        return f"{where}: exclusive names no parameter of {spec.id}: {', '.join(strange)}"
     if params != set(spec.param_fields):
         missing = sorted(set(spec.param_fields) - params)
         extra = sorted(params - set(spec.param_fields))
@@ -165,8 +196,43 @@ def implementation_problem(spec: NodeSpec, impl: Implementation) -> str:
 
 
 def installed(impl: Implementation) -> bool:
-    """True when every module ``impl`` requires can be imported (found, not imported)."""
-    return all(_found(module) for module in impl.mark.requires)
+    """True when every module ``impl`` requires can be imported (found, not imported;
+    its checks are not run: see :func:`unavailable`)."""
+    return all(_found(module) for module in impl.mark.modules)
+
+
+def unavailable(impl: Implementation) -> str:
+    """Why ``impl`` cannot run here ('' when it can): its modules not found, or the
+    reason a check of ``requires`` gives (the checks may import the library)."""
+    missing = [module for module in impl.mark.modules if not _found(module)]
+    if missing:
+        return f"{', '.join(missing)} not found"
+    for check in impl.mark.requires:
+        if not isinstance(check, str):
+            reason = check()
+            if reason:
+                return reason
+    return ""
+
+
+def exclusive_problem(
+    op: str, backend: str, others: Mapping[str, Implementation], params: Mapping[str, object]
+) -> str:
+    """Why ``backend`` cannot run ``op`` with ``params`` ('' when it can): a value
+    another backend's implementation declares ``exclusive`` (it alone handles it)."""
+    for other, impl in sorted(others.items()):
+        if other == backend:
+            continue
+        for name, values in impl.mark.exclusive:
+            value = params.get(name)
+            if any(value == v and type(value) is type(v) for v in values):
+                return (
+                    f"{name}: {value!r} of {op} is implemented by the '{other}' backend "
+                    f"alone, not by '{backend}': choose it (--backend {other}, "
+                    f"backends: [{other}] or backend: {other} on the node; "
+                    f"{impl.install_hint})"
+                )
+    return ""
 
 
 @cache
@@ -187,5 +253,5 @@ def implementation_spec(spec: NodeSpec, impl: Implementation) -> NodeSpec:
         ref=impl.ref,
         plugin=impl.plugin,
         backend=impl.backend,
-        requires=impl.mark.requires,
+        requires=impl.mark.modules,
     )

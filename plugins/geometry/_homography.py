@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Annotated, NamedTuple
+from typing import Annotated, Literal, NamedTuple
 
 import numpy as np
 from pydantic import Field
@@ -177,7 +177,8 @@ class HomographyFit(NamedTuple):
         radius=256.0,
         note=(
             "OpenCV thresholds the forward error and always refines the inliers' fit "
-            "(refine is the reference's alone)"
+            "(refine is the reference's alone); method: magsac (OpenCV's USAC_MAGSAC) has "
+            "no reference implementation and is compared with the reference's RANSAC"
         ),
     ),
 )
@@ -192,6 +193,7 @@ def homography_ransac(
     refine: bool = True,
     max_nfa: Annotated[float | None, Field(gt=0)] = 1.0,
     seed: Seed = 0,
+    method: Literal["ransac", "magsac"] = "ransac",
 ) -> HomographyFit:
     r"""The homography mapping ``src`` keypoints onto their matches in ``dst``, robust to
     outliers, refused when chance explains its inliers.
@@ -234,6 +236,12 @@ def homography_ransac(
         None accepts every model).
     seed : int
         Seed of the sample draws (and of the draws that measure α).
+    method : {"ransac", "magsac"}
+        ``ransac``: the consensus above. ``magsac``: MAGSAC++ (inliers scored by a
+        likelihood marginalised over the noise σ up to ``threshold``, then iteratively
+        reweighted least squares), implemented by the ``opencv`` backend alone
+        (``cv2.USAC_MAGSAC``); the reference refuses it at validation, naming that
+        backend.
 
     Returns
     -------
@@ -254,7 +262,14 @@ def homography_ransac(
     .. [1] Hartley & Zisserman, *Multiple View Geometry*, 2nd ed., 2004, §4.7.
     .. [2] L. Moisan, P. Moulon, P. Monasse, "Automatic homographic registration of a
        pair of images, with a contrario elimination of outliers", IPOL 2, 2012.
+    .. [3] D. Barath, J. Noskova, M. Ivashechkin, J. Matas, "MAGSAC++, a fast, reliable
+       and accurate robust estimator", CVPR 2020.
     """
+    if method != "ransac":
+        raise ValueError(
+            f"method {method!r} is implemented by the opencv backend alone "
+            "(cv2.USAC_MAGSAC): run it with backend opencv"
+        )
     if len(matches) < 4:
         raise ValueError(f"need at least 4 matches to estimate a homography, got {len(matches)}")
     a = src.xy[matches.pairs[:, 0]]

@@ -137,7 +137,13 @@ def cv_match(
     return matches_from_cv(kept)
 
 
-@implements("geometry.homography_ransac", backend="opencv", requires=REQUIRES, extra=EXTRA)
+@implements(
+    "geometry.homography_ransac",
+    backend="opencv",
+    requires=REQUIRES,
+    extra=EXTRA,
+    exclusive={"method": ("magsac",)},
+)
 def cv_homography_ransac(
     src: KeypointSet,
     dst: KeypointSet,
@@ -149,10 +155,13 @@ def cv_homography_ransac(
     refine: bool = True,
     max_nfa: float | None = 1.0,
     seed: int = 0,
+    method: str = "ransac",
 ) -> tuple[np.ndarray, MatchSet, float, float]:
     """``cv2.findHomography(RANSAC)`` on the matched points, OpenCV's random generator
-    seeded with ``seed``. OpenCV measures the forward error ``‖dst − H src‖`` and always
-    refines the inliers' fit by Levenberg-Marquardt (``refine`` is the reference's). The
+    seeded with ``seed``; ``method: magsac`` is ``cv2.USAC_MAGSAC`` (MAGSAC++, with
+    ``threshold`` its largest noise σ; USAC seeds its own generator, so ``seed`` changes
+    only the significance draws). OpenCV measures the forward error ``‖dst − H src‖``
+    and always refines the inliers' fit (``refine`` is the reference's). The
     significance (``log_nfa``, ``max_nfa``) is the reference's test on OpenCV's inliers."""
     from ..geometry._homography import HomographyFit, transfer_error
 
@@ -162,8 +171,9 @@ def cv_homography_ransac(
     a = points_to_cv(src.xy[matches.pairs[:, 0]])
     b = points_to_cv(dst.xy[matches.pairs[:, 1]])
     cv2.setRNGSeed(seed)
+    flag = cv2.USAC_MAGSAC if method == "magsac" else cv2.RANSAC
     homography, mask = cv2.findHomography(
-        a, b, cv2.RANSAC, threshold, maxIters=max_iterations, confidence=confidence
+        a, b, flag, threshold, maxIters=max_iterations, confidence=confidence
     )
     if homography is None:
         raise ValueError("no homography: OpenCV found no consensus of 4 or more matches")

@@ -1,0 +1,63 @@
+"""``method: magsac`` of geometry.homography_ransac: OpenCV's USAC_MAGSAC (MAGSAC++),
+compared with the reference's RANSAC by the corner error the op declares; the
+reference refuses it at validation, naming the backend that has it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import graphvision as gv
+from graphvision_plugins import geometry
+
+from .cases import _homography_case
+
+PIPELINES = Path(__file__).parents[2] / "pipelines"
+
+
+def _corner_error(h1: np.ndarray, h2: np.ndarray, side: float = 256.0) -> float:
+    corners = np.array([[0, 0, 1], [side, 0, 1], [side, side, 1], [0, side, 1]], float)
+    p1, p2 = corners @ h1.T, corners @ h2.T
+    return float(np.mean(np.linalg.norm(p1[:, :2] / p1[:, 2:] - p2[:, :2] / p2[:, 2:], axis=1)))
+
+
+def test_opencv_magsac_agrees_with_the_reference_ransac_by_corner_error() -> None:
+    pytest.importorskip("cv2", reason="the opencv backend needs opencv-python-headless")
+    from graphvision_plugins.opencv_backend import cv_homography_ransac
+
+    inputs, params = _homography_case()  # 80 matches, 20 % outliers, σ = 0.3 px
+    truth = np.array([[1.05, 0.04, 6.0], [-0.03, 0.97, -4.0], [2e-4, -1e-4, 1.0]])
+    reference = geometry.homography_ransac(**inputs, **params)
+    magsac = cv_homography_ransac(**inputs, **params, method="magsac")
+    tolerance = gv.discover().node("geometry.homography_ransac").conformance.tolerance
+    assert _corner_error(reference.homography, magsac.homography) <= tolerance
+    assert _corner_error(truth, magsac.homography) < 0.5  # measured 0.23 (RANSAC: 0.23)
+    # the 16 outliers are the first 16 matches: MAGSAC keeps none of them
+    assert magsac.inliers.pairs[:, 0].min() >= 16 and magsac.inlier_ratio == pytest.approx(0.8)
+
+
+def _homography_with(tmp_path: Path, params: str) -> Path:
+    text = (PIPELINES / "homography.yaml").read_text()
+    text = text.replace("params: {threshold: 3.0, seed: 0}", params)
+    path = tmp_path / "homography.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_magsac_on_the_reference_is_refused_at_validation_naming_opencv(tmp_path: Path) -> None:
+    path = _homography_with(tmp_path, "params: {threshold: 3.0, seed: 0, method: magsac}")
+    graph = gv.load_pipeline(path)
+    with pytest.raises(
+        gv.PipelineError,
+        match=r"homography.yaml:\d+.*method: 'magsac' of geometry.homography_ransac is "
+        r"implemented by the 'opencv' backend alone, not by 'numpy'",
+    ):
+        gv.compile_graph(graph, gv.discover(), backends=["numpy"])
+    with pytest.raises(ValueError, match=r"method 'magsac' is implemented by the opencv backend"):
+        inputs, params = _homography_case()
+        geometry.homography_ransac(**inputs, **params, method="magsac")
+    if gv.discover().backends_of("geometry.homography_ransac")["opencv"]:
+        compiled = gv.compile_graph(graph, gv.discover(), backends=["opencv", "numpy"])
+        assert compiled.steps["fit"].spec.backend == "opencv"
