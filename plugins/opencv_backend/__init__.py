@@ -25,6 +25,7 @@ from .geometry import (
 )
 from .hough import cv_hough_circles, cv_hough_lines
 from .pixels import (
+    cv_adaptive_threshold,
     cv_canny,
     cv_close,
     cv_derivative,
@@ -49,6 +50,7 @@ from .views import (
 )
 
 __all__ = [
+    "cv_adaptive_threshold",
     "cv_block_match",
     "cv_board_corners",
     "cv_box",

@@ -12,6 +12,7 @@ from graphvision import implements
 from .convert import EXTRA, REQUIRES, cv, filtered, to_u8
 
 __all__ = [
+    "cv_adaptive_threshold",
     "cv_canny",
     "cv_close",
     "cv_derivative",
@@ -209,6 +210,24 @@ def cv_otsu(
     threshold = low + (level + 0.5) / 255.0 * (high - low)
     mask = image > threshold if foreground == "bright" else image <= threshold
     return Thresholded(mask, float(threshold))
+
+
+@implements("threshold.adaptive", backend="opencv", requires=REQUIRES, extra=EXTRA)
+def cv_adaptive_threshold(
+    image: np.ndarray,
+    *,
+    window: int = 11,
+    c: float = 0.02,
+    method: str = "mean",
+    foreground: str = "bright",
+) -> np.ndarray:
+    """``cv2.adaptiveThreshold`` on the 8-bit image (``ADAPTIVE_THRESH_MEAN_C`` or
+    ``GAUSSIAN_C``, ``THRESH_BINARY`` for bright, ``THRESH_BINARY_INV`` for dark) with
+    ``C = 255 c``. OpenCV rounds the local mean and ``C`` to whole levels."""
+    cv2 = cv()
+    kind = cv2.ADAPTIVE_THRESH_MEAN_C if method == "mean" else cv2.ADAPTIVE_THRESH_GAUSSIAN_C
+    rule = cv2.THRESH_BINARY if foreground == "bright" else cv2.THRESH_BINARY_INV
+    return cv2.adaptiveThreshold(to_u8(image), 255, kind, rule, window, 255.0 * c) > 0
 
 
 @implements("regions.label", backend="opencv", requires=REQUIRES, extra=EXTRA)

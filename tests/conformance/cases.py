@@ -90,6 +90,10 @@ def _pixels() -> dict[str, list[Case]]:
         "morphology.open": morphology,
         "morphology.close": morphology,
         "threshold.otsu": [({"image": image}, {"foreground": f}) for f in ("bright", "dark")],
+        "threshold.adaptive": [({"image": np.rint(image * 255) / np.float32(255)},
+                                {"window": w, "c": c, "method": m, "foreground": f})
+                               for w, c in ((11, 5 / 255), (25, -3 / 255))
+                               for m in ("mean", "gaussian") for f in ("bright", "dark")],
         "regions.label": [({"mask": mask | (textured(72, 96) > 0.7)}, {"connectivity": c})
                           for c in (4, 8)],
     }  # fmt: skip
