@@ -13,6 +13,7 @@ the conversions and the import of ``cv2`` stay in one place, the families' refer
 code is untouched by it, and the backend is one entry point that a user can leave out.
 """
 
+from .cascade import cv_lbp_detect
 from .filters import cv_box, cv_convolve, cv_correlate, cv_gaussian, cv_median
 from .geometry import (
     cv_demosaic,
@@ -72,6 +73,7 @@ __all__ = [
     "cv_hough_circles",
     "cv_hough_lines",
     "cv_label",
+    "cv_lbp_detect",
     "cv_match",
     "cv_match_template",
     "cv_median",

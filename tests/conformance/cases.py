@@ -271,9 +271,18 @@ def _hough() -> dict[str, list[Case]]:
     }  # fmt: skip
 
 
+def _faces() -> dict[str, list[Case]]:
+    from graphvision_plugins.recognition import lbp_cascade
+    from graphvision_plugins.synthetic import face_scenes
+
+    images = face_scenes(seed=0).images[1:4]  # 2, 3 and 3 faces (lfw and the astronaut)
+    cascade = lbp_cascade()
+    return {"recognition.lbp_detect": [({"image": i, "cascade": cascade}, {}) for i in images]}
+
+
 Builder = Callable[[], dict[str, list[Case]]]
 CASE_BUILDERS: list[Builder] = [
-    _filters, _pixels, _geometry, _two_views, _hough, _stereo, _rectification, _boards,
+    _filters, _pixels, _geometry, _two_views, _hough, _stereo, _rectification, _boards, _faces,
 ]  # fmt: skip
 
 

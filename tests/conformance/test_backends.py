@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import graphvision as gv
+from graphvision.nodes.backends import unavailable
 from graphvision.testing import PluginCheckError, check_conformance
 
 from .cases import all_cases
@@ -41,6 +42,9 @@ def test_every_implementation_has_cases_and_every_op_a_tolerance() -> None:
     [(op, b, n) for op, b in IMPLEMENTED for n in range(len(CASES.get(op, [])))],
 )
 def test_implementation_conforms(op: str, backend: str, number: int) -> None:
+    reason = unavailable(REGISTRY.implementations[op][backend])
+    if reason:  # a check of its requires fails here (OpenCV 5 lacks CascadeClassifier)
+        pytest.skip(reason)
     inputs, params = CASES[op][number]
     check_conformance(op, backend, inputs, params, registry=REGISTRY)
 
