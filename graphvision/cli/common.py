@@ -227,12 +227,26 @@ def load_run_arguments(
     graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
     graph = graph.with_backends(getattr(args, "backend", None))  # --backend: the run's order
     registry = registry_for(args, graph)
+    check_backend_option(args, registry)
     overrides = {
         key: yaml_value(value, f"--set {key}={value}")
         for key, value in named_pairs(args.set, "--set").items()
     }
     check_overrides(graph, registry, overrides, "--set")
     return graph, registry, overrides, dict(named_pairs(args.input, "--input"))
+
+
+def check_backend_option(args: argparse.Namespace, registry: Registry) -> None:
+    """``--backend``'s names, each provided by an installed plugin (a usage error,
+    attributed to the option, not to the pipeline file whose ``backends:`` it replaces)."""
+    from graphvision.compiler.backends import BackendChooser, parse_backends
+
+    order = getattr(args, "backend", None)
+    if order is None:
+        return
+    problems = BackendChooser(registry, parse_backends(order)).order_problems()
+    if problems:
+        raise UsageError(f"--backend {order}: " + "; ".join(problems))
 
 
 def node_limit_options(args: argparse.Namespace) -> None:

@@ -23,7 +23,7 @@ from graphvision.nodes.backends import REFERENCE, exclusive_problem, unavailable
 from graphvision.nodes.registry import Registry
 from graphvision.nodes.spec import NodeSpec
 
-__all__ = ["BackendChooser", "parse_backends"]
+__all__ = ["BackendChooser", "known_backends", "parse_backends"]
 
 
 def parse_backends(text: str | Sequence[str] | None) -> list[str]:
@@ -32,6 +32,25 @@ def parse_backends(text: str | Sequence[str] | None) -> list[str]:
         return []
     items = text.split(",") if isinstance(text, str) else list(text)
     return [str(item).strip() for item in items if str(item).strip()]
+
+
+def known_backends(registry: Registry) -> set[str]:
+    """The backends of ``registry`` and those the plugin index lists for the installed
+    plugins (read from the index, nothing imported): a run loads only the plugins of
+    its backends, so a name is unknown only if no installed plugin provides it."""
+    from graphvision.nodes.plugin_index import (
+        environment_key,
+        has_index,
+        installed_entry_points,
+        read_providers,
+    )
+
+    known = registry.backends()
+    key = environment_key(installed_entry_points())
+    providers = read_providers(key) if has_index(key) else None
+    for entry in (providers or {}).values():
+        known |= {item.partition("@")[2] for item in entry.get("implementations", [])}
+    return known
 
 
 class BackendChooser:
@@ -44,8 +63,11 @@ class BackendChooser:
             self.order.append(REFERENCE)
 
     def order_problems(self) -> list[str]:
-        """One message per name of the order that no loaded plugin provides."""
-        known = self.registry.backends()
+        """One message per name of the order that no plugin provides (loaded, or
+        listed by the plugin index)."""
+        if all(name in self.registry.backends() for name in self.order):
+            return []
+        known = known_backends(self.registry)
         return [
             f"unknown backend '{name}'{did_you_mean(name, known)}; "
             f"backends: {', '.join(sorted(known))}"
