@@ -29,8 +29,9 @@ def test_an_unknown_backend_lists_every_installed_one_and_blames_the_option(
     err = capsys.readouterr().err
     assert err.startswith("error: --backend cuda: unknown backend 'cuda'; backends: numpy, opencv")
     assert "coins.yaml" not in err
-    assert main(["sweep", str(PIPELINES / "coins.yaml"), "--grid", "binary.window=[11]",
-                 "--backend", "opencv,bogus", "--no-cache", "-d", str(tmp_path / "s")]) == 2  # fmt: skip
+    sweep = ["sweep", str(PIPELINES / "coins.yaml"), "--grid", "binary.window=[11]"]
+    options = ["--backend", "opencv,bogus", "--no-cache", "-d", str(tmp_path / "s")]
+    assert main(sweep + options) == 2
     assert "error: --backend opencv,bogus: unknown backend 'bogus'" in capsys.readouterr().err
 
 
