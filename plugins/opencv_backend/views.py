@@ -44,7 +44,13 @@ def cv_undistort_image(image: np.ndarray, camera: PinholeCamera) -> np.ndarray:
     return np.clip(out, 0.0, 1.0)
 
 
-@implements("epipolar.fundamental", backend="opencv", requires=REQUIRES, extra=EXTRA)
+@implements(
+    "epipolar.fundamental",
+    backend="opencv",
+    requires=REQUIRES,
+    extra=EXTRA,
+    exclusive={"method": ("magsac",)},
+)
 def cv_fundamental(
     a: np.ndarray,
     b: np.ndarray,
@@ -54,9 +60,11 @@ def cv_fundamental(
     max_iterations: int = 2000,
     max_nfa: float | None = 1.0,
     seed: int = 0,
+    method: str = "ransac",
 ) -> tuple[np.ndarray, int, float, np.ndarray, np.ndarray, float]:
-    """``cv2.findFundamentalMat(FM_RANSAC)``, OpenCV's generator seeded with ``seed``,
-    scaled to unit Frobenius norm. OpenCV thresholds the distance to the epipolar line
+    """``cv2.findFundamentalMat(FM_RANSAC)``, OpenCV's generator seeded with ``seed``
+    (``method: magsac``: ``USAC_MAGSAC``, MAGSAC++, its own generator), scaled to unit
+    Frobenius norm. OpenCV thresholds the distance to the epipolar line
     and refits on the inliers without the reference's Levenberg-Marquardt step. The
     significance (``log_nfa``, ``max_nfa``) is the reference's test on OpenCV's inliers."""
     from ..epipolar._geometry import sampson_distance
@@ -68,8 +76,9 @@ def cv_fundamental(
     if len(a) < 8:
         raise ValueError(f"the fundamental matrix needs at least 8 correspondences, got {len(a)}")
     cv2.setRNGSeed(seed)
+    flag = cv2.USAC_MAGSAC if method == "magsac" else cv2.FM_RANSAC
     F, mask = cv2.findFundamentalMat(
-        points_to_cv(a), points_to_cv(b), cv2.FM_RANSAC, threshold, confidence, max_iterations
+        points_to_cv(a), points_to_cv(b), flag, threshold, confidence, max_iterations
     )
     if F is None or F.shape != (3, 3):
         raise ValueError("no fundamental matrix: OpenCV found no consensus of 8 or more pairs")
