@@ -53,7 +53,8 @@ def _headline(result: gv.RunResult, name: str) -> tuple[str, str]:
     return chosen, f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
-def pipeline_rows(names: list[str]) -> list[str]:
+def pipeline_rows(names: list[str], echo: bool = False) -> list[str]:
+    """The table's rows; with ``echo`` each row is printed as soon as it is measured."""
     rows = [
         "| pipeline | numpy s | opencv s | speed-up | nodes on opencv | figure | numpy | opencv |",
         "|---|---|---|---|---|---|---|---|",
@@ -73,6 +74,8 @@ def pipeline_rows(names: list[str]) -> list[str]:
             f"| {name} | {t0:.2f} | {t1:.2f} | {t0 / t1:.1f}× | {on_cv}/{len(r1.record.nodes)} "
             f"| {figure} | {first} | {second} |"
         )
+        if echo:
+            print(rows[-1], flush=True)
     return rows
 
 
@@ -161,8 +164,12 @@ def overhead_rows() -> list[str]:
     return rows
 
 
+def _all() -> list[str]:
+    return sorted(p.name for p in PIPELINES.glob("*.yaml"))
+
+
 def main(names: list[str] | None = None) -> list[str]:
-    names = names or sorted(p.name for p in PIPELINES.glob("*.yaml"))
+    names = names or _all()
     rows = ["Each pipeline with each backend (one cold run, no cache):", ""]
     rows += pipeline_rows(names)
     rows += ["", "The engine with the OpenCV backend against the same calls in a script:", ""]
@@ -170,4 +177,7 @@ def main(names: list[str] | None = None) -> list[str]:
 
 
 if __name__ == "__main__":
-    print("\n".join(main(sys.argv[1:] or None)))
+    if sys.argv[1:2] == ["--table"]:  # the per-pipeline table alone, row by row
+        print("\n".join(pipeline_rows(sys.argv[2:] or _all(), echo=True)[:2]))
+    else:
+        print("\n".join(main(sys.argv[1:] or None)))
