@@ -4,7 +4,9 @@ others in this process's threads or as one task each of the executor
 
 from __future__ import annotations
 
+import contextlib
 import pickle
+import threading
 import uuid
 from pathlib import Path
 from typing import Any
@@ -24,6 +26,7 @@ from graphvision.execution.file_task import (
     FileOutcome,
     Seed,
     local_plugin_paths,
+    preload_modules,
     shared_seeds,
     warm_worker,
 )
@@ -139,10 +142,24 @@ class BatchRun:
         return sum(o.value_bytes for o in self.outcomes), sent + received
 
     def _warm_workers(self) -> None:
-        """Have each worker load the plugins now, while the first file runs here."""
-        paths = tuple(local_plugin_paths(self.options["registry"]))
-        for _ in range(executor_width(self.pool)):
-            self.pool.submit(warm_worker, plain_graph(self.graph), paths)
+        """Have each worker start and load the plugins now, while the first file runs here
+        (from a thread: a worker's start may wait for the executor's server to import)."""
+        registry, graph = self.options["registry"], plain_graph(self.graph)
+        preload = getattr(self.pool, "preload", None)
+        if preload is not None:
+            preload(preload_modules(registry, graph))
+        paths = tuple(local_plugin_paths(registry))
+        warm = getattr(self.pool, "warm", None)
+
+        def start() -> None:
+            with contextlib.suppress(Exception):  # a worker that failed shows on its first file
+                if warm is not None:  # on every worker (Dask)
+                    warm(warm_worker, graph, paths)
+                    return
+                for _ in range(executor_width(self.pool)):
+                    self.pool.submit(warm_worker, graph, paths)
+
+        threading.Thread(target=start, daemon=True, name="graphvision-warm-workers").start()
 
     def _share(self, job: FileJob) -> Any:
         """The job, or the executor's handle on it once sent to every worker (Dask)."""

@@ -29,7 +29,7 @@ __all__ = ["call_named", "real_exit", "running_nodes"]
 _RUNNING: dict[int, str] = {}
 """Thread ident -> the node it runs (``node 'name' (op)``)."""
 _TRAMPOLINES: dict[str, Callable[[Callable, dict[str, Any]], Any]] = {}
-_MOST_TRAMPOLINES = 4096
+_MOST_TRAMPOLINES = 16384  # a 10,000-node chain keeps its frames named without a rebuild
 real_exit = os._exit
 """``os._exit`` itself, for the engine's own exits (no note)."""
 _INSTALLED_IN: list[int] = []  # the process whose os._exit notes the running nodes

@@ -9,15 +9,16 @@ by name with :func:`make_executor`:
 ``threads`` (default)
     A thread pool; numpy and scipy release the GIL in their kernels.
 ``processes``
-    A process pool (``spawn``). The node function travels as a
-    :class:`~graphvision.nodes.node.FunctionRef` (imported by name in the worker,
-    local plugin files by path) and values travel in their port type's
-    encoding (named arrays and a JSON header), never as pickled objects.
+    A process pool, its workers forked from a server that has imported
+    graphvision and the plugins (:mod:`~graphvision.execution.worker_start`).
+    The node function travels as a :class:`~graphvision.nodes.node.FunctionRef`
+    (imported by name in the worker, local plugin files by path) and values travel
+    in their port type's encoding (named arrays and a JSON header), never as
+    pickled objects.
 """
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import signal
 import threading
@@ -30,6 +31,7 @@ from typing import Any, Protocol
 from graphvision.execution.crash_note import call_named
 from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.warnings import running, show_warning
+from graphvision.execution.worker_start import ClientStdio, context, start_server
 from graphvision.nodes.spec import FunctionRef
 from graphvision.values.ports import PortType, freeze
 
@@ -112,6 +114,7 @@ class SyncExecutor:
     encodes_values = False
     width = 1
     name = "sync"
+    in_calling_thread = True  # the run calls quick nodes itself, without a future
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         try:
@@ -138,7 +141,7 @@ class WorkerDiedError(RuntimeError):
 
 
 class _Processes:
-    """A spawn process pool that survives a dying worker.
+    """A process pool that survives a dying worker.
 
     When a worker dies, ``concurrent.futures`` breaks the whole pool and fails
     every node running in it. Here the pool is replaced and each node whose
@@ -155,15 +158,21 @@ class _Processes:
         self._workers = workers
         self.width = workers
         self._lock = threading.Lock()
+        start_server(start=False)  # the server imports graphvision (a batch adds its plugins)
         self._pool = self._new_pool()
 
     def _new_pool(self, workers: int = 0) -> ProcessPoolExecutor:
         return ProcessPoolExecutor(
             max_workers=workers or self._workers,
-            mp_context=multiprocessing.get_context("spawn"),
+            mp_context=context(),
             initializer=_worker_setup,
-            initargs=(os.getpid(),),
+            initargs=(dict(os.environ), ClientStdio()),
         )
+
+    def preload(self, modules: list[str]) -> None:
+        """Start the workers' server in the background, importing ``modules`` too (the
+        plugin modules a batch uses) when it has not started yet."""
+        start_server(modules)
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         outer: Future = Future()
@@ -233,23 +242,42 @@ def _copy(source: Future, target: Future) -> None:
         target.set_result(source.result())
 
 
-def _worker_setup(parent: int) -> None:
-    """In each worker: leave Ctrl-C to the parent, exit when the parent is gone, and print
-    warnings as the command line does (one line naming the node)."""
+def _worker_setup(environment: dict[str, str], _: ClientStdio) -> None:
+    """In each worker: the client's environment variables, standard output and error (a
+    worker forked from the server has the server's), leave Ctrl-C to the client, exit when
+    the client is gone (even after ``kill -9``), and print warnings as the command line
+    does (one line naming the node)."""
     import warnings
 
     from graphvision.execution.blas import one_blas_thread_for_good
 
+    if environment != os.environ:
+        os.environ.clear()
+        os.environ.update(environment)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     warnings.showwarning = show_warning
     one_blas_thread_for_good()  # the same bits as in the parent's runs (execution.blas)
+    threading.Thread(target=_exit_with_client, daemon=True, name="graphvision-parent-watch").start()
 
-    def watch() -> None:
+
+def _exit_with_client() -> None:
+    """Wait for the client process to end, then end this worker.
+
+    The worker's end of a pipe the client holds open (multiprocessing's parent
+    sentinel) becomes readable when the client exits, however it ends. The
+    worker's parent process is no sign: a worker forked from the fork server is
+    the server's child, and the server lives while any of its workers does.
+    """
+    import multiprocessing
+
+    client = multiprocessing.parent_process()
+    if client is not None:
+        client.join()
+    else:  # pragma: no cover - a pool's workers always have one
+        parent = os.getppid()
         while os.getppid() == parent:
             time.sleep(0.5)
-        os._exit(0)
-
-    threading.Thread(target=watch, daemon=True, name="graphvision-parent-watch").start()
+    os._exit(0)
 
 
 def executor_name(executor: Any) -> str:

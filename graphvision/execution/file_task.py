@@ -58,6 +58,7 @@ __all__ = [
     "FileOutcome",
     "Seed",
     "local_plugin_paths",
+    "preload_modules",
     "run_file_task",
     "shared_seeds",
     "shared_steps",
@@ -142,6 +143,19 @@ def local_plugin_paths(registry: Registry) -> list[str]:
     ]
 
 
+def preload_modules(registry: Registry, graph: Graph) -> list[str]:
+    """The modules of the nodes and input types ``graph`` uses that import by name (for a
+    worker server to import once: :mod:`graphvision.execution.worker_start`)."""
+    from graphvision.nodes.plugins import Needs
+
+    needs = Needs.of(graph)
+    specs = [registry.nodes[op] for op in sorted(needs.ops) if op in registry.nodes]
+    types = [registry.port_types[n] for n in sorted(needs.port_types) if n in registry.port_types]
+    modules = [spec.ref.module for spec in specs if not spec.ref.path]
+    modules += [kind.__module__ for kind in types]
+    return [m for m in dict.fromkeys(modules) if m != "__main__"]
+
+
 @dataclass
 class _Prepared:
     """A job as a worker process uses it: registry, compiled graph, decoded shared values."""
@@ -170,12 +184,15 @@ def _registry(graph: Graph, plugin_paths: tuple[str, ...]) -> Registry:
 
 
 def warm_worker(graph: Graph, plugin_paths: tuple[str, ...]) -> int:
-    """Load the plugins ``graph`` needs in this worker process ahead of its first file
-    (a batch sends one per worker while its first file runs in the client); its pid."""
+    """Load the plugins ``graph`` needs in this worker process ahead of its first file, and
+    set up numba's compiler (a batch sends one per worker while its first file runs in the
+    client); its pid."""
     import os
 
     with _PREPARED_LOCK:
         _registry(graph, plugin_paths)
+    import graphvision.execution._preload  # noqa: F401 - numba's compiler set up, once
+
     return os.getpid()
 
 

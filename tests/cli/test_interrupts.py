@@ -104,8 +104,10 @@ def _children(pid: int) -> set[int]:
 def test_worker_processes_exit_when_the_command_is_killed(tmp_path):
     process = _start(tmp_path, "processes")
     workers = set()
-    for _ in range(40):
-        workers = {c for c in _children(process.pid) if _is_worker(c)}
+    for _ in range(40):  # the fork server is a child, its workers grandchildren
+        children = _children(process.pid)
+        children |= {g for c in children for g in _children_if_alive(c)}
+        workers = {c for c in children if _is_worker(c)}
         if workers:
             break
         time.sleep(0.25)
@@ -119,11 +121,20 @@ def test_worker_processes_exit_when_the_command_is_killed(tmp_path):
     assert not any(Path(f"/proc/{w}").exists() and not _is_zombie(w) for w in workers)
 
 
-def _is_worker(pid: int) -> bool:
+def _children_if_alive(pid: int) -> set[int]:
     try:
-        return b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes()
+        return _children(pid)
+    except OSError:
+        return set()
+
+
+def _is_worker(pid: int) -> bool:
+    """A worker process, or the fork server the workers are forked from."""
+    try:
+        command = Path(f"/proc/{pid}/cmdline").read_bytes()
     except OSError:
         return False
+    return b"spawn_main" in command or b"multiprocessing.forkserver" in command
 
 
 def _is_zombie(pid: int) -> bool:

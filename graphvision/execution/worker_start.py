@@ -1,0 +1,104 @@
+"""How the ``processes`` executor's worker processes start: forked from a server that has
+already imported what every task needs.
+
+Why not ``spawn``
+-----------------
+A spawned worker is a new interpreter that imports numpy, graphvision, the
+plugins and numba's compiler before its first task: seconds per worker (on
+two loaded cores, 6 s to start two workers and 10 s more for each one's first
+coins file, numba's compiler set-up alone over 3 s), paid again by every batch.
+
+Why not ``fork``
+----------------
+A fork of the client would be nearly free, but it is unsafe once the client
+has threads: a lock one of them holds at the fork (a logging handler's, the
+import lock, a BLAS or numba thread pool's) stays held in the child for good.
+A graphvision client has threads by then (the pool's manager thread, Dask's
+client, the studio's server, a notebook's), so a fork could hang a worker.
+
+``forkserver`` with a preload list
+----------------------------------
+The first pool of a client process starts one server process: a fresh
+interpreter, single-threaded, which imports the preload list once: the
+client's ``__main__`` (as ``spawn`` does, so that nodes a script defines are
+found), graphvision's file task, the plugin modules the batch uses, then
+:mod:`graphvision.execution._preload` (numba's compiler set up). Each worker
+is a fork of that server, which has no other thread: milliseconds, with all of
+that already imported. The server is started in the background (while the
+client runs a batch's first file), lives as long as the client and serves
+every later pool (its preload list is the first one's); it exits when the
+client does, even after ``kill -9``. Each worker takes the client's
+environment variables at its start, as under ``spawn``. Where the platform has
+no fork server (Windows), workers are spawned.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import os
+import threading
+from collections.abc import Iterable
+from multiprocessing.context import BaseContext
+from typing import Any
+
+__all__ = ["BASE_PRELOAD", "ClientStdio", "context", "start_server"]
+
+BASE_PRELOAD = ("__main__", "graphvision.execution.file_task")
+_LAST = "graphvision.execution._preload"
+
+
+def context() -> BaseContext:
+    """The start method of worker processes: ``forkserver`` where there is one, else spawn."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("forkserver")
+    return multiprocessing.get_context("spawn")  # pragma: no cover - not on Linux
+
+
+def start_server(modules: Iterable[str] = (), *, start: bool = True) -> None:
+    """Have the fork server preload ``modules`` too (when it has not started yet) and, with
+    ``start``, start it in a background thread, so that the first worker's start does not
+    wait for it."""
+    found = context()
+    if found.get_start_method() != "forkserver":  # pragma: no cover - not on Linux
+        return
+    extra = [m for m in dict.fromkeys(modules) if m not in BASE_PRELOAD and m != _LAST]
+    found.set_forkserver_preload([*BASE_PRELOAD, *extra, _LAST])
+    if start:
+        name = "graphvision-forkserver"
+        threading.Thread(target=_ensure_running, daemon=True, name=name).start()
+
+
+class ClientStdio:
+    """The client's standard output and error, for a worker: pickled as a worker starts
+    (in its process object), unpickled in the worker by pointing its own at them.
+
+    A worker forked from the server would otherwise write where the server's went: the
+    client's when the server started, not where the client's are now (a test's capture,
+    a redirection made since), as a spawned worker does.
+    """
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        from multiprocessing import context as mp_context
+        from multiprocessing import reduction
+
+        if mp_context.get_spawning_popen() is None:  # not a worker's start: nothing to send
+            return (ClientStdio, ())
+        return (_use_stdio, (reduction.DupFd(1), reduction.DupFd(2)))
+
+
+def _use_stdio(out: Any, err: Any) -> ClientStdio:
+    """In a starting worker: standard output and error are the client's (see ClientStdio)."""
+    for target, sent in ((1, out), (2, err)):
+        fd = sent.detach()
+        if fd != target:
+            os.dup2(fd, target)
+            os.close(fd)
+    return ClientStdio()
+
+
+def _ensure_running() -> None:
+    from multiprocessing import forkserver
+
+    with contextlib.suppress(Exception):  # the pool's first worker start reports it
+        forkserver.ensure_running()
