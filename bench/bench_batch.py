@@ -16,7 +16,8 @@ is printed beside each row.
 time per file and the client's peak traced memory (``tracemalloc``) should
 stay flat.
 
-Run: ``python bench/bench_batch.py`` (``make bench`` runs every benchmark).
+Run: ``python bench/bench_batch.py [main] [client_bytes] [scaling]`` (all three
+without an argument; ``make bench`` runs every benchmark).
 """
 
 from __future__ import annotations
@@ -211,4 +212,9 @@ def client_bytes(files: int = 200) -> list[str]:
 
 
 if __name__ == "__main__":
-    print("\n".join([*main(), "", *client_bytes(), "", *scaling()]))
+    import sys
+
+    PARTS = {"main": main, "client_bytes": client_bytes, "scaling": scaling}
+    chosen = sys.argv[1:] or list(PARTS)  # e.g. ``python bench/bench_batch.py main``
+    for name in chosen:
+        print("\n".join([*PARTS[name](), ""]), flush=True)

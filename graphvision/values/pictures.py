@@ -108,13 +108,26 @@ def png_bytes(picture: np.ndarray, smallest: int = 64, longest: int = 2048) -> b
     factor = min(int(np.ceil(smallest / shortest)), max(1, longest // longer))
     if factor > 1:
         picture = np.repeat(np.repeat(picture, factor, axis=0), factor, axis=1)
-    values = np.nan_to_num(picture.astype(np.float64), nan=0.0, posinf=1.0, neginf=0.0)
-    data = np.round(np.clip(values, 0.0, 1.0) * 255.0).astype(np.uint8)
+    data = _bytes(picture)
     buffer = io.BytesIO()
     # zlib's fastest level: 2-4x faster than Pillow's default (6) on a 512-pixel
     # thumbnail, for files about 10 % larger; a report page is written on every run.
     Image.fromarray(data).save(buffer, format="PNG", compress_level=1)
     return buffer.getvalue()
+
+
+def _bytes(picture: np.ndarray) -> np.ndarray:
+    """``round(clip(picture, 0, 1) × 255)`` as ``uint8``, NaN 0, worked in float64 in place
+    (a float32 value times 255 is exact there, so the rounding is the exact one): one
+    copy, where ``nan_to_num`` then ``clip`` made four passes and three copies."""
+    values = np.array(picture, dtype=np.float64)  # a copy of its own, written in place
+    np.clip(values, 0.0, 1.0, out=values)  # +inf to 1, -inf to 0; NaN stays NaN
+    nan = np.isnan(values)
+    if nan.any():
+        values[nan] = 0.0
+    values *= 255.0
+    np.rint(values, out=values)  # halves to even, as np.round
+    return values.astype(np.uint8)
 
 
 def _drawable(picture: np.ndarray) -> np.ndarray:

@@ -104,11 +104,11 @@ def _children(pid: int) -> set[int]:
 def test_worker_processes_exit_when_the_command_is_killed(tmp_path):
     process = _start(tmp_path, "processes")
     workers = set()
-    for _ in range(40):  # the fork server is a child, its workers grandchildren
-        children = _children(process.pid)
-        children |= {g for c in children for g in _children_if_alive(c)}
-        workers = {c for c in children if _is_worker(c)}
-        if workers:
+    for _ in range(240):  # the fork server is a child, its workers (once it has imported
+        children = _children(process.pid)  # what they need) its children
+        forked = {g for c in children for g in _children_if_alive(c)}
+        workers = {c for c in children | forked if _is_worker(c)}
+        if workers & forked or any(b"spawn_main" in _command(w) for w in workers):
             break
         time.sleep(0.25)
     assert workers, "no worker process found"
@@ -128,12 +128,16 @@ def _children_if_alive(pid: int) -> set[int]:
         return set()
 
 
+def _command(pid: int) -> bytes:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return b""
+
+
 def _is_worker(pid: int) -> bool:
     """A worker process, or the fork server the workers are forked from."""
-    try:
-        command = Path(f"/proc/{pid}/cmdline").read_bytes()
-    except OSError:
-        return False
+    command = _command(pid)
     return b"spawn_main" in command or b"multiprocessing.forkserver" in command
 
 
