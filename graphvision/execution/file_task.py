@@ -191,7 +191,7 @@ def warm_worker(graph: Graph, plugin_paths: tuple[str, ...]) -> int:
 
     with _PREPARED_LOCK:
         _registry(graph, plugin_paths)
-    import graphvision.execution._preload  # noqa: F401 - numba's compiler set up, once
+    import graphvision.execution._numba_setup  # noqa: F401 - numba's compiler, once
 
     return os.getpid()
 

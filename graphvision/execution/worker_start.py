@@ -21,14 +21,17 @@ client, the studio's server, a notebook's), so a fork could hang a worker.
 The first pool of a client process starts one server process: a fresh
 interpreter, single-threaded, which imports the preload list once: the
 client's ``__main__`` (as ``spawn`` does, so that nodes a script defines are
-found), graphvision's file task, the plugin modules the batch uses, then
-:mod:`graphvision.execution._preload` (numba's compiler set up). Each worker
+found), graphvision's file task and, for a batch, the plugin modules it uses
+and numba's compiler (:mod:`graphvision.execution._numba_setup`), then
+:mod:`graphvision.execution._preload` (a worker that cannot start because the
+client is gone says nothing). Each worker
 is a fork of that server, which has no other thread: milliseconds, with all of
 that already imported. The server is started in the background (while the
 client runs a batch's first file), lives as long as the client and serves
 every later pool (its preload list is the first one's); it exits when the
 client does, even after ``kill -9``. Each worker takes the client's
-environment variables at its start, as under ``spawn``. Where the platform has
+environment variables, standard output and error as they are at its start, as
+under ``spawn`` (:class:`ClientStdio`). Where the platform has
 no fork server (Windows), workers are spawned.
 """
 
@@ -45,6 +48,7 @@ from typing import Any
 __all__ = ["BASE_PRELOAD", "ClientStdio", "context", "start_server"]
 
 BASE_PRELOAD = ("__main__", "graphvision.execution.file_task")
+_NUMBA = "graphvision.execution._numba_setup"
 _LAST = "graphvision.execution._preload"
 
 
@@ -63,6 +67,8 @@ def start_server(modules: Iterable[str] = (), *, start: bool = True) -> None:
     if found.get_start_method() != "forkserver":  # pragma: no cover - not on Linux
         return
     extra = [m for m in dict.fromkeys(modules) if m not in BASE_PRELOAD and m != _LAST]
+    if extra:  # a batch's: its workers will run kernels
+        extra.append(_NUMBA)
     found.set_forkserver_preload([*BASE_PRELOAD, *extra, _LAST])
     if start:
         name = "graphvision-forkserver"
