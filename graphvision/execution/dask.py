@@ -141,9 +141,11 @@ class DaskExecutor:
         return self.client.submit(_shared, value, pure=False, retries=self.retries)
 
     def warm(self, fn: Callable[..., Any], /, *args: Any) -> None:
-        """Run ``fn(*args)`` once on every worker now (not as a task: a batch's imports and
-        plugin loading, done on each worker while its first file runs in the client)."""
-        self.client.run(fn, *args)
+        """Have every worker run ``fn(*args)`` now, not waiting for it (not as a task: a
+        batch's imports and plugin loading, done on each worker while its first file runs
+        in the client; a worker that dies meanwhile or a cluster closed leaves nothing
+        waiting on it)."""
+        self.client.run(fn, *args, wait=False)
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         """Run ``fn(*args)`` as a Dask task; a ``concurrent.futures`` future of its result.
