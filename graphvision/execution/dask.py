@@ -141,11 +141,17 @@ class DaskExecutor:
         return self.client.submit(_shared, value, pure=False, retries=self.retries)
 
     def warm(self, fn: Callable[..., Any], /, *args: Any) -> None:
-        """Have every worker run ``fn(*args)`` now, not waiting for it (not as a task: a
-        batch's imports and plugin loading, done on each worker while its first file runs
-        in the client; a worker that dies meanwhile or a cluster closed leaves nothing
-        waiting on it)."""
-        self.client.run(fn, *args, wait=False)
+        """Have every worker run ``fn(*args)`` now, as a task of its own that nothing waits
+        for (a batch's imports and plugin loading, done on each worker while its first file
+        runs in the client). A task, not ``Client.run``: that runs in the worker's event
+        loop, which stopped answering the scheduler for the seconds it took."""
+        from distributed import fire_and_forget
+
+        for address in self.client.scheduler_info()["workers"]:
+            task = self.client.submit(
+                fn, *args, workers=[address], allow_other_workers=True, pure=False
+            )
+            fire_and_forget(task)
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         """Run ``fn(*args)`` as a Dask task; a ``concurrent.futures`` future of its result.

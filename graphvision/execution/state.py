@@ -109,19 +109,15 @@ class RunState:
         self.in_flight: dict[str, Any] = {}
         self.quick_ops: set[str] = set()  # ops whose last call here took under _QUICK_SECONDS
         self.limits = current_limits()  # time and memory per node (execution.limits)
-        # Whether any node has a time limit: without one, no node needs a look at it.
-        self.timed = self.limits.timeout is not None or any(
-            node.timeout is not None for node in self.compiled.graph.nodes.values()
-        )
-        # On an executor that runs each task in the calling thread (sync), a hand-off gains
-        # nothing: every node without a time limit runs here, whatever it takes.
+        nodes = self.compiled.graph.nodes.values()
+        self.timed = self.limits.timeout is not None or any(n.timeout is not None for n in nodes)
+        # sync runs tasks in this thread anyway: each node without a time limit runs here
         self.inline = bool(getattr(self.executor, "in_calling_thread", False))
 
     def seconds_for(self, name: str) -> float | None:
         """The node's time limit: its own ``timeout:`` or the run's, the lower."""
-        if not self.timed:
-            return None
-        return self.limits.seconds_for(self.compiled.graph.nodes[name].timeout)
+        timed = self.timed  # with no limit anywhere, nothing to look up
+        return self.limits.seconds_for(self.compiled.graph.nodes[name].timeout) if timed else None
 
     def release_inputs(self, step: Step) -> None:
         consumers = self.consumers
@@ -216,14 +212,10 @@ class RunState:
 
     def new_record(self, step: Step, status: str) -> NodeRecord:
         """A node's record, with the parameters it runs with and its outputs' keys."""
-        name, keys = step.name, self.keys
+        name, keys, spec = step.name, self.keys, step.spec
+        made = {port: keys[(name, port)] for port in step.outputs}
         return NodeRecord(
-            name,
-            step.spec.id,
-            status,
-            params=dict(step.params),
-            keys={port: keys[(name, port)] for port in step.outputs},
-            backend=step.spec.backend,
+            name, spec.id, status, params=dict(step.params), keys=made, backend=spec.backend
         )
 
     # -- execution --------------------------------------------------------------------
@@ -247,11 +239,10 @@ class RunState:
 
     def is_quick(self, name: str) -> bool:
         """Whether the step's op last ran here faster than a hand-off to a thread costs, or
-        the executor runs tasks in this thread anyway (``sync``); a node with a time limit
-        never runs here (it could not be left at its limit)."""
-        if self.inline or self.compiled.steps[name].spec.id in self.quick_ops:
-            return not self.timed or self.seconds_for(name) is None
-        return False
+        the executor runs tasks in this thread anyway (``sync``); never a node with a time
+        limit (it could not be left at its limit)."""
+        quick = self.inline or self.compiled.steps[name].spec.id in self.quick_ops
+        return quick and (not self.timed or self.seconds_for(name) is None)
 
     def run_here(self, name: str) -> bool:
         """Run a step in this thread and finish it (the scheduler does for a quick one);
