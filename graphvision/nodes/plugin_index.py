@@ -20,7 +20,7 @@ can change what discovery finds, computed on every use:
   the file's time stamp);
 * the entry points (name, target, and their distribution's metadata file,
   which holds its name and version);
-* the modification time of each ``sys.path`` folder but the first (a package
+* the modification time of each ``sys.path`` folder but the first, each once (a package
   installed or removed there, such as a dependency a plugin imports; the
   first is the script's folder or, for ``python -m``, the current one, whose
   time changes with every file made there, and the packages it provides are
@@ -83,7 +83,7 @@ def environment_key(entries: list[EntryPoint]) -> str:
 
     hasher = xxhash.xxh3_128()
     hasher.update(f"{FORMAT}|{sys.version}|{sys.executable}\n".encode())
-    for folder in sys.path[1:]:
+    for folder in _path_folders():
         with contextlib.suppress(OSError):
             hasher.update(f"{folder}|{os.stat(folder or '.').st_mtime_ns}\n".encode())
     packages = {"graphvision"}
@@ -102,6 +102,14 @@ def environment_key(entries: list[EntryPoint]) -> str:
             with contextlib.suppress(OSError):
                 hasher.update(file.read_bytes())
     return hasher.hexdigest()
+
+
+def _path_folders() -> list[str]:
+    """``sys.path`` but its first folder, each folder once: a worker process started by
+    multiprocessing has its script's folder on its path twice (its own first entry, then
+    the client's path after it), and must find the client's index all the same."""
+    first = sys.path[0] if sys.path else None
+    return list(dict.fromkeys(folder for folder in sys.path[1:] if folder != first))
 
 
 def _package_files(name: str) -> list[Path]:

@@ -294,3 +294,32 @@ def test_a_misspelt_op_is_named_with_every_familys_ops_to_choose_from(capsys, tm
     assert status == 2
     assert "unknown op 'filters.gausian' (did you mean 'filters.gaussian'?)" in err
     assert "smooth.yaml" in err
+
+
+CLIENT_AND_WORKER = """
+import multiprocessing, os, sys
+sys.path.insert(0, os.path.dirname(os.path.dirname(__file__)))  # as run_all.py does
+from graphvision.nodes import plugin_index
+
+def key():
+    return plugin_index.environment_key(plugin_index.installed_entry_points())
+
+if __name__ == "__main__":
+    with multiprocessing.get_context(sys.argv[1]).Pool(1) as pool:
+        print(pool.apply(key) == key())
+"""
+
+
+@pytest.mark.parametrize("method", ["spawn", "forkserver"])
+def test_a_worker_process_finds_its_clients_index(tmp_path, method):
+    """A worker started by multiprocessing from a script that put a folder first on its path
+    has its script's folder on sys.path twice; the key hashed that as another folder, so every
+    worker of a batch missed the client's index and discovered the plugins again (seconds per
+    worker)."""
+    (tmp_path / "scripts").mkdir()
+    script = tmp_path / "scripts" / "client.py"
+    script.write_text(CLIENT_AND_WORKER)
+    done = subprocess.run(
+        [sys.executable, str(script), method], capture_output=True, text=True, timeout=120
+    )
+    assert done.stdout.strip() == "True", done.stderr[-2000:]
