@@ -73,8 +73,19 @@ export function epipolarSegments(F, allA, allB, sizeA, sizeB, offset, most = 30)
   return { inB, inA, points };
 }
 
-// One canvas holding image a and image b side by side (each a canvas or null).
+// One canvas holding image a and image b side by side (each a canvas or null). The same
+// two pictures (a run's images, fetched once per cache key) give the same canvas: a
+// repaint of the matches for every change of a parameter does not compose it again.
+const composed = new WeakMap();
 export function sideBySide(a, b) {
+  if (!a || !b) return compose(a, b);
+  if (!composed.has(a)) composed.set(a, new WeakMap());
+  const byB = composed.get(a);
+  if (!byB.has(b)) byB.set(b, compose(a, b));
+  return byB.get(b);
+}
+
+function compose(a, b) {
   const wa = a ? a.width : 0, wb = b ? b.width : 0;
   const canvas = document.createElement("canvas");
   canvas.width = wa + PAIR_GAP + wb;

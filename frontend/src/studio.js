@@ -7,7 +7,7 @@ import { el, floatMapViewer, ImageViewer, scalarViewer, tableViewer } from "./vi
 import { readValue, widgetSpec } from "./widgets.js";
 
 const S = { graph: null, view: null, selected: null, latest: 0, shown: 0, runs: {}, states: {},
-  timers: {}, showing: new Set(), queued: {} };
+  timers: {}, showing: new Set(), queued: {}, repainting: new Map() };
 const $ = (sel) => document.querySelector(sel);
 
 async function api(path, body) {
@@ -93,6 +93,9 @@ async function showRun(id) {
   S.shown = id;
   for (const [name, n] of Object.entries(run.nodes)) setNodeState(name, n.status, n.seconds);
   document.body.dataset.shownRun = String(id);
+  // a node's repaint still under way swaps its cards in (streamed): they are kept, not
+  // fetched and drawn a second time
+  await Promise.all([...S.repainting].filter(([k]) => k.startsWith(`${id}/`)).map(([, p]) => p));
   await Promise.all([renderOutputs(), S.selected ? renderInspector(S.selected, false) : null]);
   document.body.dataset.paintedRun = String(id);
   window.dispatchEvent(new CustomEvent("gv-painted", { detail: { run: id } }));
@@ -258,6 +261,14 @@ async function addOverlays(viewer, run, node, port) {
 
 // A node's outputs repainted as soon as it finishes (before its run ends).
 async function repaintNode(run, node) {
+  const id = `${run}/${node}`;
+  const done = repaintCards(run, node);
+  S.repainting.set(id, done);
+  try { await done; } finally { S.repainting.delete(id); }
+  window.dispatchEvent(new CustomEvent("gv-node-painted", { detail: { run, node } }));
+}
+
+async function repaintCards(run, node) {
   const cards = [...document.querySelectorAll(`[data-producer="${node}"]`)];
   await Promise.all(cards.map(async (card) => {
     const fresh = card.cloneNode(false);
@@ -268,10 +279,12 @@ async function repaintNode(run, node) {
     const shown = card.querySelector("canvas[data-picture]");
     const step = shown ? previewStep(shown) : 1;
     const picture = shown ? { step, promise: fetchPicture(base, step) } : null;
-    await renderValue(fresh, run, node, card.dataset.portName, picture);
-    if (run === S.latest) card.replaceWith(fresh);
+    const d = await renderValue(fresh, run, node, card.dataset.portName, picture);
+    if (run !== S.latest) return;
+    card.replaceWith(fresh);
+    const shape = card.dataset.port && document.querySelector(`[data-inspect="${node}"] [data-shape="${card.dataset.portName}"]`);
+    if (shape) shape.textContent = d?.shape ? d.shape.join("×") : "";
   }));
-  window.dispatchEvent(new CustomEvent("gv-node-painted", { detail: { run, node } }));
 }
 
 function keyOf(run, node, port) {
@@ -363,9 +376,16 @@ async function renderInspector(id, force = true) {
   const keys = JSON.stringify(S.runs[S.shown]?.nodes?.[id] ?? {});
   const current = $("#inspector").firstElementChild;
   if (!force && current && current.dataset.inspect === id && current.dataset.keys === keys) return;
-  const panel = el("div", { "data-inspect": id, "data-keys": keys });
   const run = S.runs[S.shown];
   const record = run?.nodes?.[id] || {};
+  if (!force && current && current.dataset.inspect === id && streamedIn(current, S.shown) && !record.error) {
+    current.dataset.keys = keys;  // its values are this run's already: its status and keys only
+    const [meta, key] = nodeMeta(record);
+    current.querySelector(".gv-meta").replaceWith(meta);
+    current.querySelector(".gv-key").replaceWith(key);
+    return;
+  }
+  const panel = el("div", { "data-inspect": id, "data-keys": keys });
   if (node.kind === "input") {
     const box = el("input", { type: "text", class: "gv-text", "data-input": id });
     box.value = node.value ?? "";
@@ -388,13 +408,11 @@ async function renderInspector(id, force = true) {
     for (const [p, t] of Object.entries(node.inputs)) ports.append(el("tr", {}, el("td", {}, "in " + p), el("td", {}, t), el("td", {}, "")));
     const shapes = {};
     for (const [p, t] of Object.entries(node.outputs)) {
-      shapes[p] = el("td", {}, "");
+      shapes[p] = el("td", { "data-shape": p }, "");
       ports.append(el("tr", {}, el("td", {}, "out " + p), el("td", {}, t), shapes[p]));
     }
     panel.append(ports);
-    const keys = Object.entries(record.keys || {}).map(([p, k]) => `${p}: ${k}`).join("\n");
-    panel.append(el("div", { class: "gv-meta" }, `status ${record.status || "–"} · ${record.seconds !== undefined ? (record.seconds * 1000).toFixed(1) + " ms" : "–"}`),
-      el("pre", { class: "gv-key", title: "cache key" }, keys || "cache key: –"));
+    panel.append(...nodeMeta(record));
     if (record.error) panel.append(el("pre", { class: "gv-error", "data-error": id }, record.error));
     if (node.params.length) {
       panel.append(el("h4", {}, "parameters"));
@@ -415,6 +433,19 @@ async function renderInspector(id, force = true) {
     return;
   }
   $("#inspector").replaceChildren(panel);
+}
+
+// A node's status, time and cache keys in the inspector.
+function nodeMeta(record) {
+  const keys = Object.entries(record.keys || {}).map(([p, k]) => `${p}: ${k}`).join("\n");
+  return [el("div", { class: "gv-meta" }, `status ${record.status || "–"} · ${record.seconds !== undefined ? (record.seconds * 1000).toFixed(1) + " ms" : "–"}`),
+    el("pre", { class: "gv-key", title: "cache key" }, keys || "cache key: –")];
+}
+
+// Whether every output shown in an inspector panel was repainted for `run` as it streamed.
+function streamedIn(panel, run) {
+  const boxes = [...panel.querySelectorAll(".gv-values > .gv-output")];
+  return boxes.length > 0 && boxes.every((b) => b.dataset.streamed === String(run));
 }
 
 async function select(id) {

@@ -87,6 +87,9 @@ export class ImageViewer {
   resize() {
     const w = this.root.clientWidth || 400;
     const h = Math.max(200, Math.min(600, Math.round((w * this.height) / this.width)));
+    // the observer also reports a box that did not change size (observed, moved in the
+    // page): setting the canvas's size would clear it and draw it all again for nothing
+    if (this.fitted && this.canvas.width === w && this.canvas.height === h) return;
     this.canvas.width = w;
     this.canvas.height = h;
     if (!this.fitted) this.fit();
