@@ -171,7 +171,7 @@ function sourceOf(run) {
 
 function freshSource(run) {
   return {
-    value: async (node, port) => { const r = await api(`api/value/${run}/${node}/${port}`); return r.ok ? r.data : null; },
+    value: async (node, port) => { const r = await describe(run, node, port); return r.ok ? r.data : null; },
     raw: async (node, port) => {
       const r = await fetch(`api/raw/${run}/${node}/${port}`);
       return r.ok ? { values: new Float32Array(await r.arrayBuffer()), shape: r.headers.get("X-Shape").split(",").map(Number) } : null;
@@ -180,11 +180,24 @@ function freshSource(run) {
   };
 }
 
+// A value's description, asked for once per run and port: the outputs and the inspector
+// showing the same port (and the overlays drawn over an image) share one request, so
+// that a node's repaint does not queue a second copy of each before the pictures.
+const described = new Map();
+function describe(run, node, port) {
+  const id = `${run}/${node}/${port}`;
+  if (!described.has(id)) {
+    described.set(id, api(`api/value/${id}`).then((r) => { if (!r.ok) described.delete(id); return r; }));
+    while (described.size > 64) described.delete(described.keys().next().value);
+  }
+  return described.get(id);
+}
+
 // `picture`: `{ step, promise }` of the picture's request, when the caller started it
 // already (a repaint of a card that showed one), so that it travels while the value's
 // description is asked for. A preview (step > 1) is drawn first, the picture after it.
 async function renderValue(container, run, node, port, picture = null) {
-  const found = await api(`api/value/${run}/${node}/${port}`);
+  const found = await describe(run, node, port);
   if (!found.ok) { container.append(el("div", { class: "gv-error" }, found.data?.error || "no value")); return null; }
   const d = found.data;
   const base = `${run}/${node}/${port}`;
@@ -251,7 +264,7 @@ async function addOverlays(viewer, run, node, port) {
     const target = S.graph.nodes.find((n) => n.id === e.to);
     for (const [out, type] of Object.entries(target.outputs || {})) {
       if (!["Keypoints", "Boxes", "Lines", "Circles"].includes(type)) continue;
-      const found = await api(`api/value/${run}/${target.id}/${out}`);
+      const found = await describe(run, target.id, out);
       if (found.ok && found.data.over && found.data.over[0] === node) {
         viewer.addOverlay(`${target.id}.${out}`, found.data.view, found.data.columns);
       }
