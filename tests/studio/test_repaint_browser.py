@@ -23,6 +23,10 @@ BROWSER = next(
 pytestmark = pytest.mark.skipif(BROWSER is None, reason="no Chromium installed (CI installs one)")
 
 
+_CHANGE = """fetch("api/change", {method: "POST", headers: {"Content-Type": "application/json"},
+  body: JSON.stringify({overrides: {"binary.k": -0.3}})})"""
+
+
 def test_a_streamed_inspector_is_kept_and_its_value_asked_for_once() -> None:
     server = studio(PIPELINES / "coins.yaml")
     try:
@@ -35,25 +39,25 @@ def test_a_streamed_inspector_is_kept_and_its_value_asked_for_once() -> None:
             page.on("request", lambda r: asked.update([r.url.split("/api/", 1)[-1]]))
             page.goto(server.url)
             page.wait_for_selector("body[data-painted-run='1']", timeout=120_000)
-            page.click("[data-node=binary]")
-            page.wait_for_selector("[data-inspect=binary] [data-port='binary.out'] canvas")
-            page.evaluate("document.querySelector('[data-inspect=binary]').dataset.mark = 'kept'")
-            box = page.locator("[data-inspect=binary] [data-param=k] input.gv-number")
-            box.fill("-0.3")
-            box.press("Enter")
+            page.click("[data-node=overlay]")  # an output too: shown twice
+            panel = "[data-inspect=overlay]"
+            page.wait_for_selector(f"{panel} [data-port='overlay.out'] canvas")
+            page.evaluate(f"document.querySelector('{panel}').dataset.mark = 'kept'")
+            page.evaluate(_CHANGE)
             page.wait_for_selector("body[data-painted-run='2']", timeout=120_000)
-            # binary computed in run 2: its card was repainted as it finished (streamed)...
-            card = "[data-inspect=binary] [data-port='binary.out']"
-            assert page.get_attribute(card, "data-streamed") == "2"
+            # coins computed in run 2: its cards were repainted as it finished (streamed)...
+            for card in (f"{panel} [data-port='overlay.out']", "[data-output=overlay]"):
+                assert page.get_attribute(card, "data-streamed") == "2"
             # ...and the run's end updated the panel's status and keys, nothing else
-            assert page.get_attribute("[data-inspect=binary]", "data-mark") == "kept"
-            assert page.inner_text("[data-inspect=binary] .gv-meta").startswith("status computed")
-            keys = server.session.runs[-1].nodes["binary"]["keys"]
-            assert page.inner_text("[data-inspect=binary] .gv-key") == "\n".join(
+            assert page.get_attribute(panel, "data-mark") == "kept"
+            assert page.inner_text(f"{panel} .gv-meta").startswith("status computed")
+            keys = server.session.runs[-1].nodes["overlay"]["keys"]
+            assert page.inner_text(f"{panel} .gv-key") == "\n".join(
                 f"{p}: {k}" for p, k in keys.items()
             )
-            assert page.inner_text("[data-inspect=binary] td[data-shape=out]") == "303×384"
-            assert asked["value/2/binary/out"] == 1  # binary is no output: its inspector card only
+            assert page.inner_text(f"{panel} td[data-shape=out]") == "303×384×3"
+            # one request for the overlay's description, shared by the output and the inspector
+            assert asked["value/2/overlay/out"] == 1
             assert errors == []
             browser.close()
     finally:
