@@ -53,7 +53,6 @@ from graphvision.errors import (
     NodeExecutionError,
     PortValueError,
 )
-from graphvision.execution.crash_note import call_named
 from graphvision.execution.executors import (
     NODE_ERRORS,
     Executor,
@@ -66,7 +65,6 @@ from graphvision.execution.inputs import freeze_value, value_bytes
 from graphvision.execution.limits import current_limits, start_on_own_thread
 from graphvision.execution.plan import plan_steps
 from graphvision.execution.record import NodeRecord, RunHooks, RunRecord, RunResult
-from graphvision.execution.warnings import running
 from graphvision.values.scalars import _ScalarPort
 
 __all__ = ["RunState"]
@@ -252,18 +250,13 @@ class RunState:
         for hook in self.hooks:
             hook.node_started(name=name, op=spec.id)
         inputs = {port: values[source] for port, source in step.inputs.items()}
-        running.op = spec.id  # warnings name the node (as call_node does on a worker)
         began = time.perf_counter()
-        try:
-            label = f"node '{name}' ({spec.id})"  # named in a fault handler's traceback
-            result = call_named(label, spec.func, {**inputs, **step.params})
-            seconds = time.perf_counter() - began
+        try:  # as on a worker: warnings and a fault name the node, a forked child is ended
+            result, seconds = call_node(spec.func, step.params, inputs, name)
             outputs = self.accept(step, result)
         except NODE_ERRORS as error:
             self.started[name] = began
             return self.failed(step, error)
-        finally:
-            running.op = ""
         return self.computed(step, outputs, seconds)
 
     def _submit_encoded(self, name: str, step: Step) -> Future:
