@@ -137,6 +137,7 @@ def entry() -> None:
     """
     signal.signal(signal.SIGTERM, _terminate)
     faulthandler.enable(all_threads=True)  # a node that crashes the process: where it was
+    quiet_resource_tracker()
     status = main()
     sys.stdout.flush()
     sys.stderr.flush()
@@ -153,6 +154,21 @@ class Terminated(KeyboardInterrupt):
 
 def _terminate(signum: int, frame: Any) -> None:
     raise Terminated
+
+
+def quiet_resource_tracker() -> None:
+    """Have multiprocessing's resource tracker, started later by this process, keep its
+    leaked-semaphore warning to itself.
+
+    An interrupt that lands while a process pool is still being made (its
+    semaphores registered, the finalizers that unlink them not yet) leaves them
+    to the tracker, which unlinks them at its own end and warns first: a second
+    and third line after Ctrl-C's one. The tracker is started with this
+    process's warning options (``sys.warnoptions``), so the filter reaches it.
+    """
+    quiet = "ignore:resource_tracker:UserWarning"
+    if quiet not in sys.warnoptions:
+        sys.warnoptions.append(quiet)
 
 
 def _release_process_resources() -> None:

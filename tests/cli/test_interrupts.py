@@ -146,3 +146,27 @@ def _is_zombie(pid: int) -> bool:
         return " Z " in Path(f"/proc/{pid}/stat").read_text()
     except OSError:
         return True
+
+
+LEAKING_CLIENT = """
+import multiprocessing, os, sys
+from graphvision.cli.main import quiet_resource_tracker
+if sys.argv[1] == "quiet":
+    quiet_resource_tracker()
+lock = multiprocessing.get_context("forkserver").Lock()  # a semaphore the tracker knows
+os._exit(130)  # as an interrupt in the middle of making a pool leaves it
+"""
+
+
+def test_an_interrupt_while_a_pool_is_made_prints_no_semaphore_warning():
+    """The resource tracker's 'leaked semaphore objects' warning came after Ctrl-C's line
+    when the interrupt landed while the process pool was being made."""
+
+    def stderr_of(mode: str) -> str:
+        command = [sys.executable, "-c", LEAKING_CLIENT, mode]
+        done = subprocess.run(command, capture_output=True, text=True, timeout=60)
+        assert done.returncode == 130
+        return done.stderr
+
+    assert "leaked semaphore" in stderr_of("loud")  # the test shows the warning it removes
+    assert stderr_of("quiet") == ""
