@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 import skimage.data
 import skimage.transform
+from bench_kernels_vs_opencv import _single_threaded
 from timing import best
 
 Row = tuple[str, str, Callable[[], object], Callable[[], object]]
@@ -57,15 +58,6 @@ def _in_child(folder: str) -> list[str]:
         [sys.executable, __file__], env=env, capture_output=True, text=True, check=False
     )
     return done.stdout.splitlines() or [f"the contrib bench failed: {done.stderr[-400:]}"]
-
-
-def _single_threaded(cv2) -> None:
-    cv2.setNumThreads(1)
-    import numba
-    from threadpoolctl import threadpool_limits
-
-    numba.set_num_threads(1)
-    threadpool_limits(1)
 
 
 def _cascade_rows(cv2, folder: Path) -> list[Row]:

@@ -137,20 +137,7 @@ def _bilinear(values, x, y):  # pragma: no cover
 @numba.njit(cache=True, nogil=True, inline="always")
 def _bilinear_pair(a, b, x, y):  # pragma: no cover
     """:func:`_bilinear` of two images of one shape at one point."""
-    height, width = a.shape
-    if not (0.0 <= x <= width - 1 and 0.0 <= y <= height - 1):
-        return 0.0, 0.0
-    x0 = min(int(np.floor(x)), width - 1)
-    y0 = min(int(np.floor(y)), height - 1)
-    wx = x - x0
-    wy = y - y0
-    x1 = min(x0 + 1, width - 1)
-    y1 = min(y0 + 1, height - 1)
-    top = (1.0 - wx) * a[y0, x0] + wx * a[y0, x1]
-    bottom = (1.0 - wx) * a[y1, x0] + wx * a[y1, x1]
-    top_b = (1.0 - wx) * b[y0, x0] + wx * b[y0, x1]
-    bottom_b = (1.0 - wx) * b[y1, x0] + wx * b[y1, x1]
-    return (1.0 - wy) * top + wy * bottom, (1.0 - wy) * top_b + wy * bottom_b
+    return _bilinear(a, x, y), _bilinear(b, x, y)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -167,20 +167,25 @@ def null_vector_8x9(design):  # pragma: no cover - compiled
     return vt[8].copy(), singular[7] < 1e-9 * singular[0]
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _sampson(F, xa, ya, xb, yb):  # pragma: no cover - compiled
+    """The Sampson distance of one pair ``(xa, ya)`` ↔ ``(xb, yb)`` under ``F``."""
+    fa0 = F[0, 0] * xa + F[0, 1] * ya + F[0, 2]
+    fa1 = F[1, 0] * xa + F[1, 1] * ya + F[1, 2]
+    fa2 = F[2, 0] * xa + F[2, 1] * ya + F[2, 2]
+    fb0 = xb * F[0, 0] + yb * F[1, 0] + F[2, 0]
+    fb1 = xb * F[0, 1] + yb * F[1, 1] + F[2, 1]
+    algebraic = xb * fa0 + yb * fa1 + fa2
+    denominator = max(fa0 * fa0 + fa1 * fa1 + fb0 * fb0 + fb1 * fb1, 1e-300)
+    return math.sqrt(algebraic * algebraic / denominator)
+
+
 @numba.njit(cache=True, nogil=True)
 def sampson_inliers(F, a, b, threshold, out):  # pragma: no cover - compiled
     """``out[i]`` = Sampson distance of pair i below ``threshold``; returns their count."""
     found = 0
     for i in range(a.shape[0]):
-        xa, ya, xb, yb = a[i, 0], a[i, 1], b[i, 0], b[i, 1]
-        fa0 = F[0, 0] * xa + F[0, 1] * ya + F[0, 2]
-        fa1 = F[1, 0] * xa + F[1, 1] * ya + F[1, 2]
-        fa2 = F[2, 0] * xa + F[2, 1] * ya + F[2, 2]
-        fb0 = xb * F[0, 0] + yb * F[1, 0] + F[2, 0]
-        fb1 = xb * F[0, 1] + yb * F[1, 1] + F[2, 1]
-        algebraic = xb * fa0 + yb * fa1 + fa2
-        denominator = max(fa0 * fa0 + fa1 * fa1 + fb0 * fb0 + fb1 * fb1, 1e-300)
-        inside = math.sqrt(algebraic * algebraic / denominator) < threshold
+        inside = _sampson(F, a[i, 0], a[i, 1], b[i, 0], b[i, 1]) < threshold
         out[i] = inside
         found += inside
     return found
@@ -282,15 +287,7 @@ def sampson_distances(F, a, b):  # pragma: no cover - compiled
     evaluates some fifty times per refinement)."""
     out = np.empty(a.shape[0])
     for i in range(a.shape[0]):
-        xa, ya, xb, yb = a[i, 0], a[i, 1], b[i, 0], b[i, 1]
-        fa0 = F[0, 0] * xa + F[0, 1] * ya + F[0, 2]
-        fa1 = F[1, 0] * xa + F[1, 1] * ya + F[1, 2]
-        fa2 = F[2, 0] * xa + F[2, 1] * ya + F[2, 2]
-        fb0 = xb * F[0, 0] + yb * F[1, 0] + F[2, 0]
-        fb1 = xb * F[0, 1] + yb * F[1, 1] + F[2, 1]
-        algebraic = xb * fa0 + yb * fa1 + fa2
-        denominator = max(fa0 * fa0 + fa1 * fa1 + fb0 * fb0 + fb1 * fb1, 1e-300)
-        out[i] = math.sqrt(algebraic * algebraic / denominator)
+        out[i] = _sampson(F, a[i, 0], a[i, 1], b[i, 0], b[i, 1])
     return out
 
 

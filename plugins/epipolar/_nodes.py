@@ -27,6 +27,7 @@ from graphvision import (
 from ..camera import normalise_pixels
 from ..fitting._ransac import model_significance, refuse_chance
 from ..geometry._homography import ransac_four_point
+from ..shared.checks import check_reference_method
 from ..shared.params import Iterations, Positive, Probability, Seed
 from ._geometry import (
     essential_from_fundamental,
@@ -213,11 +214,7 @@ def fundamental(
     .. [3] D. Barath, J. Noskova, M. Ivashechkin, J. Matas, "MAGSAC++, a fast, reliable
        and accurate robust estimator", CVPR 2020.
     """
-    if method != "ransac":
-        raise ValueError(
-            f"method {method!r} is implemented by the opencv backend alone "
-            "(cv2.USAC_MAGSAC): run it with backend opencv"
-        )
+    check_reference_method(method)
     _pairs(a, b, 8, "the fundamental matrix")
     F, inliers, log_nfa = robust_fundamental(
         a, b, threshold, confidence, max_iterations, seed, max_nfa=max_nfa

@@ -11,6 +11,7 @@ from pydantic import Field
 from graphvision import Conformance, Float, FloatImage, Homography, Keypoints, Matches, node
 
 from ..fitting._ransac import RansacResult, _refit_to_convergence, model_significance, refuse_chance
+from ..shared.checks import check_reference_method
 from ..shared.params import ImageSide, Iterations, Positive, Probability, Seed
 
 __all__ = [
@@ -265,11 +266,7 @@ def homography_ransac(
     .. [3] D. Barath, J. Noskova, M. Ivashechkin, J. Matas, "MAGSAC++, a fast, reliable
        and accurate robust estimator", CVPR 2020.
     """
-    if method != "ransac":
-        raise ValueError(
-            f"method {method!r} is implemented by the opencv backend alone "
-            "(cv2.USAC_MAGSAC): run it with backend opencv"
-        )
+    check_reference_method(method)
     if len(matches) < 4:
         raise ValueError(f"need at least 4 matches to estimate a homography, got {len(matches)}")
     a = src.xy[matches.pairs[:, 0]]

@@ -17,6 +17,7 @@ __all__ = [
     "MAX_VALUES",
     "all_of",
     "at_most_values",
+    "check_reference_method",
     "check_same_shape",
     "check_window",
     "ordered",
@@ -26,6 +27,16 @@ __all__ = [
 MAX_VALUES = 2**28
 """Most values a node may make from its parameters alone (1 GiB in float32): a generator
 of ``count`` images of ``size`` × ``size`` pixels is refused beyond it before it runs."""
+
+
+def check_reference_method(method: str) -> None:
+    """Refuse a robust-fit ``method`` the reference does not implement (``magsac``: OpenCV's
+    ``USAC_MAGSAC``), for a direct call; a run refuses it at validation already."""
+    if method != "ransac":
+        raise ValueError(
+            f"method {method!r} is implemented by the opencv backend alone "
+            "(cv2.USAC_MAGSAC): run it with backend opencv"
+        )
 
 
 def check_same_shape(a: np.ndarray, b: np.ndarray, names: tuple[str, str] = ("a", "b")) -> None:
