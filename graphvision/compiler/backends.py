@@ -34,10 +34,9 @@ def parse_backends(text: str | Sequence[str] | None) -> list[str]:
     return [str(item).strip() for item in items if str(item).strip()]
 
 
-def known_backends(registry: Registry) -> set[str]:
-    """The backends of ``registry`` and those the plugin index lists for the installed
-    plugins (read from the index, nothing imported): a run loads only the plugins of
-    its backends, so a name is unknown only if no installed plugin provides it."""
+def indexed_implementations() -> set[str]:
+    """Every ``op@backend`` the plugin index lists for the installed plugins (read from
+    the index, nothing imported; empty without a sound index)."""
     from graphvision.nodes.plugin_index import (
         environment_key,
         has_index,
@@ -45,12 +44,17 @@ def known_backends(registry: Registry) -> set[str]:
         read_providers,
     )
 
-    known = registry.backends()
     key = environment_key(installed_entry_points())
     providers = read_providers(key) if has_index(key) else None
-    for entry in (providers or {}).values():
-        known |= {item.partition("@")[2] for item in entry.get("implementations", [])}
-    return known
+    entries = (providers or {}).values()
+    return {item for entry in entries for item in entry.get("implementations", [])}
+
+
+def known_backends(registry: Registry) -> set[str]:
+    """The backends of ``registry`` and those the plugin index lists for the installed
+    plugins: a run loads only the plugins of its backends, so a name is unknown only if
+    no installed plugin provides it."""
+    return registry.backends() | {item.partition("@")[2] for item in indexed_implementations()}
 
 
 class BackendChooser:
@@ -101,9 +105,13 @@ class BackendChooser:
     def _pinned(self, spec: NodeSpec, backend: str) -> tuple[NodeSpec, str]:
         available = self.registry.backends_of(spec.id)
         if backend not in available:
+            # a pin the run's plugins cannot serve: name every installed backend of the op
+            indexed = (item.partition("@") for item in indexed_implementations())
+            others = {b for op, _, b in indexed if op == spec.id and b not in available}
+            names = [*available, *sorted(others)]
             return spec, (
                 f"{spec.id} has no '{backend}' implementation"
-                f"{did_you_mean(backend, available)}; backends: {', '.join(available)}"
+                f"{did_you_mean(backend, names)}; backends: {', '.join(names)}"
             )
         impl = self.registry.implementation(spec.id, backend)
         if impl is None:  # pragma: no cover - backends_of lists only registered ones

@@ -64,3 +64,16 @@ def test_a_pipeline_files_unknown_backend_is_its_lines(
     assert main(["run", str(path), "--no-cache"]) == 2
     err = capsys.readouterr().err
     assert f"coins.yaml:{line}: unknown backend 'cuda'; backends: numpy, opencv" in err
+
+
+def test_a_node_pinned_to_a_misspelt_backend_lists_the_ops_installed_ones(
+    indexed: None, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The list named only the backends whose plugins the run had loaded ('numpy')."""
+    text = (PIPELINES / "coins.yaml").read_text()
+    assert "op: colour.to_gray" in text
+    path = tmp_path / "pinned.yaml"
+    path.write_text(text.replace("op: colour.to_gray", "op: colour.to_gray, backend: OpenCV"))
+    assert main(["run", str(path), "--no-cache"]) == 2
+    err = capsys.readouterr().err
+    assert "colour.to_gray has no 'OpenCV' implementation; backends: numpy, opencv" in err
