@@ -75,8 +75,9 @@ def _ended(pid: int) -> bool:
     return state in ("Z", "X")
 
 
-def _ends_within_a_second(pid: int) -> bool:
-    deadline = time.monotonic() + 1.0
+def _ends_soon(pid: int) -> bool:
+    """Within ten seconds (a loaded machine reaps slowly), not the ten minutes it would spin."""
+    deadline = time.monotonic() + 10.0
     while not _ended(pid):
         if time.monotonic() > deadline:
             return False
@@ -92,7 +93,7 @@ def test_a_superseded_node_has_its_worker_ended_and_the_newer_values_are_shown(
     pid = _spinning_pid(session, stale, pidfile)
     newer = session.change({"spin.seconds": 0.5})
     assert stale.killed == [pid]
-    assert _ends_within_a_second(pid)  # not 10 minutes: the stale node keeps no CPU busy
+    assert _ends_soon(pid)  # the stale node keeps no CPU busy
     session.wait()
     assert stale.status == "superseded" and stale.values == {}
     assert stale.nodes["spin"]["status"] == "stopped"
@@ -107,7 +108,7 @@ def test_the_cancel_button_ends_the_running_node(spinning) -> None:
     slow = session.start()
     pid = _spinning_pid(session, slow, pidfile)
     assert session.cancel() is slow
-    assert _ends_within_a_second(pid)
+    assert _ends_soon(pid)
     session.wait()
     assert slow.status == "cancelled" and slow.values == {}
     assert slow.nodes["spin"]["status"] == "stopped"
@@ -167,7 +168,7 @@ def test_closing_the_session_ends_its_workers(spinning) -> None:
     run = session.start()
     pid = _spinning_pid(session, run, pidfile)
     session.close()
-    assert _ends_within_a_second(pid)
+    assert _ends_soon(pid)
     session.wait()
     assert run.status == "cancelled"
 
