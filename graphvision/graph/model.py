@@ -231,7 +231,7 @@ class Graph:
 
     def truth_problems(self) -> list[tuple[str, str]]:
         """(where, message) for each ``truth_of`` name that is not an input of the
-        pipeline (not the input itself, on an input)."""
+        pipeline (not the input itself, on an input) or is named twice."""
         marked = [(f"inputs.{n}", n, d.truth_of) for n, d in self.inputs.items()] + [
             (f"nodes.{n}", n, d.truth_of) for n, d in self.nodes.items()
         ]
@@ -241,6 +241,8 @@ class Graph:
             for subject in (s for s in subjects if s not in others):
                 listed = f"{did_you_mean(subject, others)}; inputs: {', '.join(others) or 'none'}"
                 problems.append((f"{where}.truth_of", f"'{subject}' is not another input{listed}"))
+            for subject in sorted({s for s in subjects if subjects.count(s) > 1}):
+                problems.append((f"{where}.truth_of", f"'{subject}' is named twice"))
         return problems
 
     def with_backends(self, backends: list[str] | str | None) -> Graph:

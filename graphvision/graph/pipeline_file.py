@@ -82,7 +82,7 @@ def _model_problems(
         elif item["type"].endswith("_type") and isinstance(
             item.get("input"), bool | int | float | str
         ):
-            message += f", got {json.dumps(item['input'])}"
+            message += f", got {json.dumps(item['input'])}{_yaml_number_hint(item['input'])}"
         line = 0
         parts = list(loc)
         while parts and not line:
@@ -90,6 +90,21 @@ def _model_problems(
             parts.pop()
         problems.append(Problem(line, where, message, file))
     return problems
+
+
+def _yaml_number_hint(value: object) -> str:
+    """How to write a number YAML read as text: YAML 1.1 (PyYAML) takes ``1e-9`` and
+    ``1.0e9`` for strings, since its floats need a dot and a signed exponent."""
+    if not isinstance(value, str) or "e" not in value.lower():
+        return ""
+    try:
+        float(value)
+    except ValueError:
+        return ""
+    mantissa, exponent = value.lower().split("e", 1)
+    mantissa += "" if "." in mantissa else ".0"
+    exponent = exponent if exponent[:1] in "+-" else f"+{exponent}"
+    return f" (YAML reads {value} as text: write {mantissa}e{exponent})"
 
 
 def _model_at(loc: list[str]) -> type[BaseModel] | None:

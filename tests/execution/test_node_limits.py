@@ -4,6 +4,8 @@ its worker is ended and replaced; a memory limit is refused where it cannot be k
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 import graphvision as gv
@@ -120,6 +122,15 @@ def test_a_timeout_in_the_pipeline_file_is_checked_and_kept(tmp_path):
         gv.PipelineError, match=r"nodes.nap.timeout at .*p.yaml:5: .*valid number, got true"
     ):  # YAML's true was read as 1 second
         _pipeline(tmp_path, "  nap: {op: slow.sleep, timeout: true}")
+    for written, spelt in (("1e-9", "1.0e-9"), ("2.5e3", "2.5e+3")):  # YAML 1.1 reads text
+        with pytest.raises(
+            gv.PipelineError,
+            match=re.escape(f'got "{written}" (YAML reads {written} as text: write {spelt})'),
+        ):
+            _pipeline(tmp_path, f"  nap: {{op: slow.sleep, timeout: {written}}}")
+        assert gv.parse_pipeline(
+            (tmp_path / "p.yaml").read_text().replace(written, spelt), "p.yaml"
+        ).nodes["nap"].timeout == float(spelt)
     graph = _pipeline(tmp_path, "  nap: {op: slow.sleep, timeout: 2.5}")
     assert graph.nodes["nap"].timeout == 2.5
     again = gv.parse_pipeline(gv.dump_pipeline(graph), "again.yaml")

@@ -145,3 +145,21 @@ def test_an_empty_truth_of_is_refused_at_its_line(tmp_path, where):
         gv.PipelineError, match=rf"truth_of at .*empty.yaml:{line}: an empty list: name at least"
     ):
         gv.load_pipeline(tmp_path / "empty.yaml")
+
+
+@pytest.mark.parametrize("where", ["input", "node"])
+def test_an_input_named_twice_in_truth_of_is_refused_at_its_line(tmp_path, where):
+    """``truth_of: [image, image]`` was accepted: the second name said nothing new."""
+    text = (
+        PIPELINE.replace("truth_of: [image]", "truth_of: [image, image]")
+        if where == "input"
+        else PIPELINE.replace(
+            "params: {sigma: 2.0}}", "params: {sigma: 2.0}, truth_of: [image, image]}"
+        )
+    )
+    (tmp_path / "twice.yaml").write_text(text)
+    line = next(n for n, row in enumerate(text.splitlines(), 1) if "[image, image]" in row)
+    with pytest.raises(
+        gv.PipelineError, match=rf"truth_of at .*twice.yaml:{line}: 'image' is named twice"
+    ):
+        gv.compile_graph(gv.load_pipeline(tmp_path / "twice.yaml"), gv.discover())
