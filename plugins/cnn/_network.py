@@ -3,9 +3,11 @@
 A network is a frozen dataclass (nothing pickled): ``architecture`` is JSON text
 ``{"input": [C, H, W], "layers": ["conv 16x3 pad 1", "relu", ...]}``, ``weights`` one
 float64 vector holding every layer's parameters in order (weights then bias, C order),
-``classes`` the label each output unit stands for, and ``history`` the mean training
-loss of each epoch. Building a network chains the layer shapes and refuses, naming the
-layer, one whose input does not fit.
+``classes`` the label each output unit stands for, ``history`` the mean training loss of
+each epoch, ``accuracy`` the training accuracy of each epoch and ``held_out_accuracy``
+that of the held-out samples after each epoch (empty when none were given; both empty
+in a network trained before they were recorded). Building a network chains the layer
+shapes and refuses, naming the layer, one whose input does not fit.
 """
 
 from __future__ import annotations
@@ -190,6 +192,8 @@ class NetworkModel:
     weights: np.ndarray
     classes: np.ndarray
     history: np.ndarray
+    accuracy: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    held_out_accuracy: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
 
     def parsed(self) -> Architecture:
         """The architecture, parsed and chained."""
@@ -248,6 +252,10 @@ class NetworkPort(RecordPort):
                 f"the network's last layer gives {architecture.shapes[-1]} outputs for "
                 f"{len(classes)} classes"
             )
+        for name in ("accuracy", "held_out_accuracy"):
+            curve = getattr(value, name)
+            if not isinstance(curve, np.ndarray) or curve.ndim != 1:
+                raise PortValueError(f"Network '{name}' must be a vector (one value per epoch)")
         return value
 
     @classmethod
