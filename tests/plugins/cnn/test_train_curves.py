@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 import graphvision as gv
-
 from graphvision_plugins import cnn
 from graphvision_plugins.recognition._types import SampleSet
 
@@ -42,7 +41,7 @@ def test_the_training_accuracy_is_that_of_the_weights_each_batch_was_scored_with
     network = cnn.train(train, train, layers=["dense 2"], epochs=5, batch_size=24,
                         learning_rate=0.2, momentum=0.0)  # fmt: skip
     np.testing.assert_array_equal(network.accuracy[1:], network.held_out_accuracy[:-1])
-    assert 0 <= network.accuracy.min() and network.accuracy.max() <= 1
+    assert network.accuracy.min() >= 0 and network.accuracy.max() <= 1
 
 
 def test_without_held_out_samples_the_held_out_curve_is_empty():
@@ -61,7 +60,8 @@ def test_a_held_out_class_the_training_set_lacks_counts_as_wrong():
 
 
 def test_held_out_images_of_another_size_are_refused_naming_both_sizes():
-    with pytest.raises(ValueError, match=r"held_out images are \(4, 4\).*training images are \(6, 6\)"):
+    expected = r"held_out images are \(4, 4\).*training images are \(6, 6\)"
+    with pytest.raises(ValueError, match=expected):
         cnn.train(_halves(10, seed=6), _halves(4, seed=7, side=4), layers=["dense 2"], epochs=1)
 
 
