@@ -63,25 +63,34 @@ export function niceTicks(lo, hi, n = 5) {
   return out;
 }
 
-// Training curves: one chart per series (loss, accuracy) against the epoch, with axes,
-// ticks and labels. curves: {loss: [...], accuracy: [...]} (one value per epoch).
+// Training curves: one chart per quantity (loss, accuracy) against the epoch, with axes,
+// ticks and labels. curves: {loss: [...], accuracy: [...]} (one value per epoch), or a
+// quantity of several series drawn together with a legend: {accuracy: {training: [...],
+// "held out": [...]}}.
 export function curvesViewer(container, curves) {
   const box = el("div", { class: "gv-curves" });
   for (const [name, values] of Object.entries(curves)) {
-    if (!values || !values.length) continue;
-    box.append(curveSvg(name, values));
+    const series = Array.isArray(values) ? { [name]: values } : Object.fromEntries(
+      Object.entries(values || {}).filter(([, v]) => Array.isArray(v) && v.length));
+    if (!Object.values(series).some((v) => v && v.length)) continue;
+    box.append(curveSvg(name, series, !Array.isArray(values)));
   }
   container.append(box);
   return box;
 }
 
-function curveSvg(name, values) {
-  const W = 300, H = 170, L = 50, R = 10, T = 20, B = 38;
-  const finite = values.filter((v) => Number.isFinite(v));
+// the first series of a quantity in the colour the studio always drew it in
+const seriesColour = (quantity, i) => (quantity === "accuracy"
+  ? ["#16a34a", "#ea580c", "#9333ea", "#2563eb"] : ["#2563eb", "#ea580c", "#9333ea", "#16a34a"])[i % 4];
+
+function curveSvg(name, series, legend) {
+  const W = 300, H = legend ? 186 : 170, L = 50, R = 10, T = 20, B = legend ? 54 : 38;
+  const all = Object.values(series);
+  const finite = all.flat().filter((v) => Number.isFinite(v));
   let lo = Math.min(...finite), hi = Math.max(...finite);
   if (name === "accuracy") { lo = Math.min(lo, 0); hi = Math.max(hi, 1); }
   if (!(hi > lo)) { hi = lo + 1; }
-  const n = values.length;
+  const n = Math.max(...all.map((v) => v.length));
   const x = (i) => L + (n > 1 ? ((i - 1) * (W - L - R)) / (n - 1) : (W - L - R) / 2);
   const y = (v) => T + (H - T - B) * (1 - (v - lo) / (hi - lo));
   const NS = "http://www.w3.org/2000/svg";
@@ -107,12 +116,23 @@ function curveSvg(name, values) {
     add("line", { x1: x(t), y1: H - B, x2: x(t), y2: H - B + 4, stroke: "#444" });
     add("text", { x: x(t), y: H - B + 14, "text-anchor": "middle", "font-size": 10 }, String(t));
   }
-  add("text", { x: (L + W - R) / 2, y: H - 4, "text-anchor": "middle", "font-size": 11, class: "gv-axis-x" }, "epoch");
+  add("text", { x: (L + W - R) / 2, y: legend ? H - B + 28 : H - 4, "text-anchor": "middle", "font-size": 11, class: "gv-axis-x" }, "epoch");
   add("text", { x: 12, y: (T + H - B) / 2, "text-anchor": "middle", "font-size": 11, class: "gv-axis-y",
     transform: `rotate(-90 12 ${(T + H - B) / 2})` }, name);
-  add("text", { x: L, y: 12, "font-size": 11, "font-weight": "bold" }, `${name} per epoch (last ${Number(values[n - 1]).toPrecision(4)})`);
-  const pts = values.map((v, i) => `${x(i + 1).toFixed(1)},${y(v).toFixed(1)}`).join(" ");
-  add("polyline", { points: pts, fill: "none", stroke: name === "accuracy" ? "#16a34a" : "#2563eb", "stroke-width": 1.8 });
-  values.forEach((v, i) => add("circle", { cx: x(i + 1), cy: y(v), r: 2.5, fill: name === "accuracy" ? "#16a34a" : "#2563eb" }));
+  const last = (values) => Number(values[values.length - 1]).toPrecision(4);
+  const ends = Object.entries(series).map(([s, v]) => (legend ? `${s} ${last(v)}` : last(v)));
+  add("text", { x: L, y: 12, "font-size": 11, "font-weight": "bold" }, `${name} per epoch (last ${ends.join(", ")})`);
+  Object.entries(series).forEach(([label, values], k) => {
+    const colour = seriesColour(name, k);
+    const drawn = values.map((v, i) => [i + 1, v]).filter(([, v]) => Number.isFinite(v));
+    const pts = drawn.map(([i, v]) => `${x(i).toFixed(1)},${y(v).toFixed(1)}`).join(" ");
+    add("polyline", { points: pts, fill: "none", stroke: colour, "stroke-width": 1.8, "data-series": label });
+    drawn.forEach(([i, v]) => add("circle", { cx: x(i), cy: y(v), r: 2.5, fill: colour }));
+    if (legend) { // a row under the axis's label: never over a curve
+      const lx = L + 110 * k, ly = H - 6;
+      add("line", { x1: lx, y1: ly - 3, x2: lx + 14, y2: ly - 3, stroke: colour, "stroke-width": 2 });
+      add("text", { x: lx + 18, y: ly, "font-size": 10, class: "gv-legend" }, label);
+    }
+  });
   return svg;
 }

@@ -1,7 +1,12 @@
-// The report's graph laid out by the studio's layout (dagre), as a static SVG whose viewBox
-// report.html's own zoom and fit drive. Built by build.mjs into graphvision/views/static/
-// (window.GraphvisionGraph) and inlined in each report: no network.
+// The report's script: its graph laid out by the studio's layout (dagre), as a static SVG
+// whose viewBox report.html's own zoom and fit drive, and its values drawn by the studio's
+// viewers (viewers.js, pairs.js, charts.js, colormap.js, composed by panels.js) from the
+// data the page holds (graphvision/views/scripted.py). Built by build.mjs into
+// graphvision/views/static/graph.js (window.GraphvisionGraph) and inlined in each report:
+// no network.
 import { LINE, layoutGraph } from "./layout.js";
+import { classifierPanel, curvesPanel, maskLayer } from "./panels.js";
+import { ImageViewer, el } from "./viewers.js";
 
 const NS = "http://www.w3.org/2000/svg";
 export const STATUS_FILL = { computed: "#bbf7d0", cached: "#dbeafe", failed: "#fecaca",
@@ -67,4 +72,86 @@ export function layOutPage(root = document) {
     const width = box.clientWidth || 1100, height = 0.75 * (window.innerHeight || 880);
     old.replaceWith(reportSvg(JSON.parse(data.textContent), width, height));
   }
+}
+
+// The report's values as the studio's viewers fetch a run's (panels.js `source`), from
+// the page's JSON: {values: {"node.port": description}, raw: {"node.port": {dtype, shape,
+// deflate}}, pictures: {"node.port": PNG data URL}}.
+export function pageSource(data) {
+  const pictures = new Map();
+  const key = (node, port) => `${node}.${port}`;
+  return {
+    value: async (node, port) => data.values[key(node, port)] ?? null,
+    raw: async (node, port) => decodeRaw(data.raw[key(node, port)]),
+    picture: (node, port) => {
+      const k = key(node, port);
+      if (!pictures.has(k)) pictures.set(k, data.pictures[k] ? loadPicture(data.pictures[k]) : Promise.resolve(null));
+      return pictures.get(k);
+    },
+  };
+}
+
+const ARRAYS = { uint8: Uint8Array, uint16: Uint16Array, int32: Int32Array, float32: Float32Array };
+
+// An array of the page: base64 of its little-endian bytes, deflated (zlib).
+export async function decodeRaw(entry) {
+  if (!entry || !ARRAYS[entry.dtype]) return null;
+  const packed = Uint8Array.from(atob(entry.deflate), (c) => c.charCodeAt(0));
+  const stream = new Blob([packed]).stream().pipeThrough(new DecompressionStream("deflate"));
+  const bytes = await new Response(stream).arrayBuffer();
+  return { values: new ARRAYS[entry.dtype](bytes), shape: entry.shape };
+}
+
+async function loadPicture(url) {
+  const image = new Image();
+  image.src = url;
+  await image.decode();
+  const canvas = document.createElement("canvas");
+  canvas.width = image.naturalWidth;
+  canvas.height = image.naturalHeight;
+  canvas.getContext("2d").drawImage(image, 0, 0);
+  return canvas;
+}
+
+// One value's box: drawn by the viewer the studio draws it with; true when drawn.
+export async function drawValue(box, d, source) {
+  const drawn = el("div", { class: "gv-drawn" });
+  let done = false;
+  if (d.view === "mask" || d.view === "labels") {
+    const viewer = new ImageViewer(drawn, { width: d.shape[1], height: d.shape[0], label: d.summary });
+    box.prepend(drawn); // the viewer sizes its canvas to its box: in the page first
+    done = await maskLayer(viewer, d, source);
+  } else if (d.view === "table" && d.confusion) {
+    await classifierPanel(drawn, d, source);
+    done = true;
+  } else if (d.curves) {
+    curvesPanel(drawn, d);
+    done = true;
+  }
+  if (!done) { drawn.remove(); return false; }
+  if (d.keep) { box.append(drawn); box.dataset.keep = "1"; } else if (!drawn.parentNode) box.prepend(drawn);
+  box.dataset.drawn = d.view;
+  return true;
+}
+
+// Every value box of the page drawn from the JSON that follows it (a notebook may hold
+// several reports, each with its own).
+export async function showValues(root = document) {
+  const stores = [...root.querySelectorAll("script[data-values]")];
+  const boxes = [...root.querySelectorAll(".gv-view")];
+  for (const store of stores) {
+    const data = JSON.parse(store.textContent);
+    const source = pageSource(data);
+    const mine = boxes.filter((b) => !b.dataset.seen && (b.compareDocumentPosition(store) & Node.DOCUMENT_POSITION_FOLLOWING));
+    await Promise.all(mine.map(async (box) => {
+      box.dataset.seen = "1";
+      const d = data.values[box.dataset.view];
+      try {
+        if (d && !(await drawValue(box, d, source))) box.dataset.skipped = "1";
+      } catch (error) { // the page's own drawing stays
+        box.dataset.error = String(error);
+      }
+    }));
+  }
+  document.documentElement.dataset.valuesShown = "1";
 }

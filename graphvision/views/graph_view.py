@@ -77,12 +77,16 @@ document.querySelectorAll(".graph").forEach(box => {
 
 @functools.cache
 def layout_script() -> str:
-    """The layout bundle and the call that lays out every graph of the page, as an inline
-    ``<script>`` (empty when the bundle was not built: the drawn SVG stays)."""
+    """The layout bundle and the calls that lay out every graph of the page and draw its
+    values with the studio's viewers (:mod:`graphvision.views.scripted`), as an inline
+    ``<script>`` (empty when the bundle was not built: the drawn SVG and pictures stay)."""
     if not _BUNDLE.is_file():
         return ""
     code = _BUNDLE.read_text(encoding="utf-8").replace("</script", "<\\/script")
-    return f"<script>{code}\nGraphvisionGraph.layOutPage();</script>"
+    return (
+        f"<script>{code}\nGraphvisionGraph.layOutPage();\n"
+        "if (GraphvisionGraph.showValues) GraphvisionGraph.showValues();</script>"
+    )
 
 
 def graph_data(compiled: Any, status: dict[str, str], seconds: dict[str, float]) -> dict:

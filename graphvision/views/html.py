@@ -34,7 +34,8 @@ from graphvision.views.graph_view import (
     layout_script,
 )
 from graphvision.views.linked import LINKED_STYLE, shown_html
-from graphvision.views.pairing import Ref, outputs_by_ref
+from graphvision.views.pairing import outputs_by_ref
+from graphvision.views.scripted import SCRIPTED_STYLE, PageValues
 from graphvision.views.viewers import picture_html, value_html
 
 __all__ = ["html_report", "picture_html", "value_html", "write_html_report"]
@@ -62,6 +63,7 @@ table.confusion td.wrong { background: rgba(183, 28, 28, calc(var(--share) * 0.6
 """
     + GRAPH_STYLE
     + LINKED_STYLE
+    + SCRIPTED_STYLE
 )
 
 
@@ -110,12 +112,10 @@ def html_report(
     drawn = graph_html(graph_svg(graph, status, seconds), graph_data(compiled, status, seconds))
     body += ["<h2>Graph</h2>", drawn]
     found = outputs_by_ref(compiled, outputs, intermediates)
-    body += ["<h2>Outputs</h2>", _outputs_html(compiled, outputs, record.files, found)]
+    page = PageValues(compiled, found)
+    body += ["<h2>Outputs</h2>", _outputs_html(compiled, outputs, record.files, page)]
     if intermediates:
-        body += [
-            "<h2>Intermediate values</h2>",
-            _intermediates_html(compiled, intermediates, found),
-        ]
+        body += ["<h2>Intermediate values</h2>", _intermediates_html(intermediates, page)]
     body += ["<h2>Nodes</h2>", _nodes_html(record), "<h2>Provenance</h2>", _provenance_html(record)]
     if earlier:
         body += ["<h2>Earlier runs (newest first)</h2>", _earlier_html(earlier)]
@@ -123,22 +123,21 @@ def html_report(
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         f"<title>{escape(graph.name)}: graphvision report</title><style>{_STYLE}</style></head>"
-        f"<body>{''.join(body)}{layout_script()}{GRAPH_SCRIPT}</body></html>\n"
+        f"<body>{''.join(body)}{page.script()}{layout_script()}{GRAPH_SCRIPT}</body></html>\n"
     )
 
 
 def _intermediates_html(
-    compiled: CompiledGraph,
-    intermediates: Mapping[str, tuple[type[PortType], Any]],
-    found: Mapping[Ref, Any],
+    intermediates: Mapping[str, tuple[type[PortType], Any]], page: PageValues
 ) -> str:
     """Each intermediate value by its viewer; a table folded (its summary shows)."""
     shown = []
+    compiled, found = page.compiled, page.found
     for where, (kind, value) in intermediates.items():
         node, _, port = where.partition(".")
         step = compiled.steps.get(node)
         port = port or (next(iter(step.outputs)) if step is not None else "")
-        view = shown_html(compiled, found, (node, port), kind, value, where)
+        view = shown_html(compiled, found, (node, port), kind, value, where, page)
         if issubclass(kind, TablePort):
             view = f"<details><summary>{escape(kind.summary(value))}</summary>{view}</details>"
         shown.append(f'<div class="output"><h3>{escape(where)}</h3>{view}</div>')
@@ -178,14 +177,14 @@ def _outputs_html(
     compiled: CompiledGraph,
     outputs: Mapping[str, Any],
     files: Mapping[str, list[str]],
-    found: Mapping[Ref, Any],
+    page: PageValues,
 ) -> str:
     sections = []
     for name in compiled.outputs:
         kind = compiled.output_type(name)
         where = tuple(compiled.outputs[name])
         shown = (
-            shown_html(compiled, found, where, kind, outputs[name], name)  # type: ignore[arg-type]
+            shown_html(compiled, page.found, where, kind, outputs[name], name, page)  # type: ignore[arg-type]
             if name in outputs
             else '<p class="failed">not produced</p>'
         )

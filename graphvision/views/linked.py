@@ -28,9 +28,11 @@ from graphvision.compiler.compile import CompiledGraph
 from graphvision.values.geometry import Points3DPort
 from graphvision.values.ports import PortType
 from graphvision.values.records import MatchesPort
+from graphvision.values.scalars import TablePort
 from graphvision.views import pairing
 from graphvision.views.pairing import Ref
-from graphvision.views.viewers import _points3d_html, value_html
+from graphvision.views.scripted import PageValues, is_classifier
+from graphvision.views.viewers import _points3d_html, table_parts, value_html
 
 __all__ = ["LINKED_STYLE", "linked_html", "pair_svg", "shown_html"]
 
@@ -226,11 +228,18 @@ def shown_html(
     kind: type[PortType],
     value: Any,
     name: str,
+    page: PageValues | None = None,
 ) -> str:
     """A value by its viewer (:func:`~graphvision.views.viewers.value_html`) with what
     :func:`linked_html` adds; a coloured cloud replaces the cloud coloured by depth alone
-    (the switch shows that one too)."""
+    (the switch shows that one too). With ``page``, a value the studio's viewers draw in
+    the page (:mod:`graphvision.views.scripted`) is in its box, this drawing its fallback."""
     extra = linked_html(compiled, found, where, kind, value, name)
     if extra and issubclass(kind, Points3DPort):
         return f"<p>{escape(kind.summary(value))}</p>{extra}"
-    return value_html(kind, value, name) + extra
+    if page is None:
+        return value_html(kind, value, name) + extra
+    if issubclass(kind, TablePort) and is_classifier(value):
+        confusion, rows = table_parts(value)
+        return page.wrap(where, kind, value, confusion) + rows + extra
+    return page.wrap(where, kind, value, value_html(kind, value, name)) + extra

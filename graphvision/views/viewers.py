@@ -28,7 +28,7 @@ from graphvision.values.ports import PortType
 from graphvision.values.scalars import TablePort, _ScalarPort
 from graphvision.views.pairing import confusion_counts
 
-__all__ = ["colour_scale", "float_map_range", "picture_html", "value_html"]
+__all__ = ["colour_scale", "float_map_range", "picture_html", "table_parts", "value_html"]
 
 _TABLE_ROWS = 50
 # viridis (van der Walt and Smith, matplotlib 2.0) at nine even stops: perceptually
@@ -193,6 +193,13 @@ def _confusion_html(labels: np.ndarray, predicted: np.ndarray) -> str:
 def table_html(table: Mapping[str, np.ndarray]) -> str:
     """A column table as an HTML table (its first rows), with a confusion matrix first
     when it holds a classifier's results (integer ``label`` and ``predicted`` columns)."""
+    confusion, rows = table_parts(table)
+    return confusion + rows
+
+
+def table_parts(table: Mapping[str, np.ndarray]) -> tuple[str, str]:
+    """A classifier's confusion matrix ('' for another table) and the table's rows (folded
+    under the matrix when there is one)."""
     columns = list(table)
     count = len(next(iter(table.values()))) if columns else 0
     confusion = ""
@@ -212,8 +219,8 @@ def table_html(table: Mapping[str, np.ndarray]) -> str:
     more = f"<p>{count - _TABLE_ROWS} more rows in the CSV</p>" if count > _TABLE_ROWS else ""
     shown = f"<table><tr>{head}</tr>{''.join(rows)}</table>{more}"
     if confusion:  # the rows behind the matrix, on demand
-        return f"{confusion}<details><summary>the {count} rows</summary>{shown}</details>"
-    return shown
+        return confusion, f"<details><summary>the {count} rows</summary>{shown}</details>"
+    return "", shown
 
 
 def is_float_map(kind: type[PortType], value: Any) -> bool:

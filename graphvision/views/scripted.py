@@ -1,0 +1,233 @@
+"""Values ``report.html`` draws with the studio's own viewers.
+
+The studio's viewer modules (``frontend/src``: viewers.js, pairs.js, charts.js,
+colormap.js, composed by panels.js) are bundled with the report's graph layout into
+``static/graph.js`` by ``frontend/build.sh``, and the report inlines that bundle (no
+network). For each value they draw, the page holds a description in the studio's
+format (:mod:`graphvision.studio.payload`: ``view``, ``node``, ``port``, ``shape``,
+``over``, ``confusion``, ``curves``...) and what the viewer asks of the run: the
+pictures (PNG ``data:`` URLs) and the raw values (``deflate``-compressed little-endian
+arrays, base64) of the values it draws with. So the report and the studio draw:
+
+- a mask or a label map tinted over the image it was found in (when the report holds
+  that image: a graph output, or an intermediate kept by ``--keep-intermediates``),
+  the tint toggled, with an alpha slider;
+- a classifier's confusion matrix and its first right and wrong predictions, each
+  sample's picture captioned "true → predicted" (when its samples are in the report);
+- a trained network's training curves: its loss, and its training and held-out
+  accuracy, against the epoch, with labelled axes.
+
+Each is drawn into its box in place of the page's own HTML drawing of the value, which
+stays as the page without script.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import zlib
+from collections.abc import Mapping
+from html import escape
+from typing import Any
+
+import numpy as np
+
+from graphvision.compiler.compile import CompiledGraph
+from graphvision.values.images import BinaryImagePort, LabelImagePort
+from graphvision.values.ports import PortType
+from graphvision.values.scalars import TablePort
+from graphvision.views import pairing
+from graphvision.views.pairing import Ref
+
+__all__ = [
+    "LONGEST",
+    "SCRIPTED_STYLE",
+    "SHOWN_PREDICTIONS",
+    "PageValues",
+    "curves_of",
+    "is_classifier",
+]
+
+LONGEST = 1600  # a tinted map and its image are drawn at most this many pixels on a side
+SHOWN_PREDICTIONS = 8  # right and wrong predictions shown, each (as the studio shows)
+_RAW_TYPES = (np.uint8, np.uint16, np.int32)
+
+SCRIPTED_STYLE = """
+.gv-view[data-drawn]:not([data-keep]) > .gv-fallback { display: none; }
+.gv-image { position: relative; width: 100%; min-width: 320px; }
+.gv-canvas { width: 100%; display: block; cursor: crosshair; image-rendering: pixelated; }
+.gv-status, .gv-caption { font: 12px monospace; color: #4b5563; min-height: 1.2em; }
+.gv-tools label { margin-right: 8px; font-size: 12px; }
+.gv-alpha { width: 80px; vertical-align: middle; }
+.gv-confusion { border-collapse: collapse; font: 12px monospace; margin: 4px 0; }
+.gv-confusion caption { text-align: left; }
+.gv-confusion td, .gv-confusion th { border: 1px solid #e5e7eb; padding: 2px 6px; }
+.gv-samples { display: flex; flex-wrap: wrap; gap: 4px; }
+.gv-samples figure { margin: 0; text-align: center; font: 11px monospace; }
+.gv-samples canvas { width: 40px; height: 40px; image-rendering: pixelated; border: 3px solid;
+                     display: block; }
+.gv-samples canvas.gv-right { border-color: #16a34a; }
+.gv-samples canvas.gv-wrong { border-color: #dc2626; }
+.gv-curves { display: flex; flex-wrap: wrap; gap: 8px; }
+"""
+
+
+def curves_of(value: Any) -> dict[str, Any] | None:
+    """A trained model's curves, one value per epoch: ``{"loss": [...], "accuracy":
+    {"training": [...], "held out": [...]}}`` from its ``history`` (the loss),
+    ``accuracy`` and ``held_out_accuracy`` vectors; None when it has no history."""
+    history = getattr(value, "history", None)
+    if not (isinstance(history, np.ndarray) and history.ndim == 1 and history.size):
+        return None
+    series = {}
+    for name, field in (("training", "accuracy"), ("held out", "held_out_accuracy")):
+        curve = getattr(value, field, None)
+        if isinstance(curve, np.ndarray) and curve.shape == history.shape:
+            series[name] = _numbers(curve)
+    curves: dict[str, Any] = {"loss": _numbers(history)}
+    if series:
+        curves["accuracy"] = series
+    return curves
+
+
+def is_classifier(table: Any) -> bool:
+    """A table of a classifier's results: integer ``label`` and ``predicted`` columns."""
+    return (
+        isinstance(table, Mapping)
+        and {"label", "predicted"} <= set(table)
+        and all(
+            np.issubdtype(np.asarray(table[c]).dtype, np.integer) for c in ("label", "predicted")
+        )
+    )
+
+
+def _numbers(array: np.ndarray) -> list[float | None]:
+    return [round(v, 6) if math.isfinite(v) else None for v in array.astype(float).tolist()]
+
+
+class PageValues:
+    """What the page's script needs to draw the report's values with the studio's viewers.
+
+    :meth:`wrap` gives a value's box (its description kept here) around the page's own
+    drawing of it; :meth:`script` the data of every described value, as JSON.
+    """
+
+    def __init__(self, compiled: CompiledGraph, found: Mapping[Ref, Any]) -> None:
+        self.compiled = compiled
+        self.found = found
+        self.values: dict[str, dict[str, Any]] = {}
+        self.raw: dict[str, dict[str, Any]] = {}
+        self.pictures: dict[str, str] = {}
+
+    def wrap(self, where: Ref | None, kind: type[PortType], value: Any, fallback: str) -> str:
+        """``fallback`` (the page's drawing of the value) in a box the script draws the
+        value into with the studio's viewer; ``fallback`` alone when none applies."""
+        described = None if where is None else self.describe(where, kind, value)
+        if described is None:
+            return fallback
+        key = f"{where[0]}.{where[1]}"  # type: ignore[index]
+        self.values[key] = described
+        return (
+            f'<div class="gv-view" data-view="{escape(key)}">'
+            f'<div class="gv-fallback">{fallback}</div></div>'
+        )
+
+    def describe(self, where: Ref, kind: type[PortType], value: Any) -> dict[str, Any] | None:
+        """The studio's description of ``value`` for the viewers the report draws with
+        them (see the module), or None."""
+        node, port = where
+        found: dict[str, Any] = {"type": kind.type_name(), "summary": kind.summary(value),
+                                 "node": node, "port": port}  # fmt: skip
+        curves = curves_of(value)
+        if curves is not None:
+            return {**found, "view": "summary", "curves": curves, "keep": True}
+        if issubclass(kind, TablePort) and is_classifier(value):
+            return {**found, "view": "table", **self._classifier(node, value)}
+        if issubclass(kind, LabelImagePort | BinaryImagePort):
+            return self._tinted(found, kind, value)
+        return None
+
+    def _tinted(
+        self, found: dict[str, Any], kind: type[PortType], value: Any
+    ) -> dict[str, Any] | None:
+        """A mask or label map with the image it is tinted over, both kept for the script."""
+        over = pairing.image_behind(self.compiled, found["node"], "a")
+        base = self.found.get(over) if over else None
+        if over is None or not isinstance(base, np.ndarray) or base.shape[:2] != value.shape:
+            return None
+        step = max(1, math.ceil(max(value.shape) / LONGEST))
+        kind_over = self.compiled.steps[over[0]].outputs[over[1]]
+        picture = kind_over.preview(base[::step, ::step])
+        values = np.asarray(value)[::step, ::step]
+        if picture is None or values.dtype.kind not in "biu" or values.size == 0:
+            return None
+        if values.min() < 0 or values.max() > np.iinfo(np.int32).max:
+            return None
+        key = f"{found['node']}.{found['port']}"
+        self.raw[key] = _raw(values)
+        self.pictures[f"{over[0]}.{over[1]}"] = _png_uri(picture)
+        view = "labels" if issubclass(kind, LabelImagePort) else "mask"
+        return {**found, "view": view, "shape": list(values.shape), "over": list(over)}
+
+    def _classifier(self, node: str, table: Mapping[str, Any]) -> dict[str, Any]:
+        """The confusion matrix, the first right and wrong rows, and their samples when
+        the report holds them (only those samples' pixels are kept: rows renumbered)."""
+        labels, predicted = np.asarray(table["label"]), np.asarray(table["predicted"])
+        classes, counts = pairing.confusion_counts(labels, predicted)
+        chosen = {
+            name: np.flatnonzero(rows)[:SHOWN_PREDICTIONS]
+            for name, rows in (("right", labels == predicted), ("wrong", labels != predicted))
+        }
+        rows = {name: [[int(i), labels[i].item(), predicted[i].item()] for i in indices]
+                for name, indices in chosen.items()}  # fmt: skip
+        described: dict[str, Any] = {
+            "confusion": {"classes": classes, "counts": counts.tolist()},
+            **rows,
+            "samples": None,
+        }
+        ref = pairing.prediction_samples(self.compiled, node)
+        samples = self.found.get(ref) if ref else None
+        images = np.asarray(getattr(samples, "images", None))
+        shown = np.concatenate([chosen["right"], chosen["wrong"]]).astype(np.int64)
+        if ref is None or images.ndim != 3 or len(images) != len(labels) or not shown.size:
+            return described
+        key = f"{ref[0]}.{ref[1]}"
+        self.values[key] = {
+            "view": "samples", "node": ref[0], "port": ref[1], "side": list(images.shape[1:]),
+            "pixels": _numbers(np.clip(images[shown], 0, 1).ravel().round(3)),
+        }  # fmt: skip
+        renumbered = iter(range(len(shown)))
+        for name in ("right", "wrong"):
+            described[name] = [[next(renumbered), a, b] for _, a, b in rows[name]]
+        described["samples"] = list(ref)
+        return described
+
+    def script(self) -> str:
+        """The described values and what they draw with, as the page's JSON; '' if none."""
+        if not self.values:
+            return ""
+        data = {"values": self.values, "raw": self.raw, "pictures": self.pictures}
+        text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
+        return f'<script type="application/json" data-values="1">{text}</script>'
+
+
+def _raw(values: np.ndarray) -> dict[str, Any]:
+    """An integer map as the smallest of uint8, uint16, int32 that holds it, little-endian,
+    deflated (``zlib``), base64: the script inflates it (``DecompressionStream``)."""
+    high = int(values.max())
+    dtype = next(t for t in _RAW_TYPES if high <= np.iinfo(t).max)
+    data = np.ascontiguousarray(values, np.dtype(dtype).newbyteorder("<")).tobytes()
+    return {
+        "dtype": np.dtype(dtype).name,
+        "shape": list(values.shape),
+        "deflate": base64.b64encode(zlib.compress(data, 6)).decode("ascii"),
+    }
+
+
+def _png_uri(picture: np.ndarray) -> str:
+    from graphvision.values.pictures import png_bytes
+
+    data = png_bytes(picture, smallest=1, longest=LONGEST)
+    return "data:image/png;base64," + base64.b64encode(data).decode("ascii")
+
