@@ -84,8 +84,9 @@ const seriesColour = (quantity, i) => (quantity === "accuracy"
   ? ["#16a34a", "#ea580c", "#9333ea", "#2563eb"] : ["#2563eb", "#ea580c", "#9333ea", "#16a34a"])[i % 4];
 
 function curveSvg(name, series, legend) {
-  const W = 300, H = legend ? 186 : 170, L = 50, R = 10, T = 20, B = legend ? 54 : 38;
   const all = Object.values(series);
+  const rows = legend ? all.length : 0; // a legend row per series under the axis's label
+  const W = 300, H = 170 + 14 * rows, L = 50, R = 10, T = 20, B = 38 + 14 * rows;
   const finite = all.flat().filter((v) => Number.isFinite(v));
   let lo = Math.min(...finite), hi = Math.max(...finite);
   if (name === "accuracy") { lo = Math.min(lo, 0); hi = Math.max(hi, 1); }
@@ -120,18 +121,19 @@ function curveSvg(name, series, legend) {
   add("text", { x: 12, y: (T + H - B) / 2, "text-anchor": "middle", "font-size": 11, class: "gv-axis-y",
     transform: `rotate(-90 12 ${(T + H - B) / 2})` }, name);
   const last = (values) => Number(values[values.length - 1]).toPrecision(4);
-  const ends = Object.entries(series).map(([s, v]) => (legend ? `${s} ${last(v)}` : last(v)));
-  add("text", { x: L, y: 12, "font-size": 11, "font-weight": "bold" }, `${name} per epoch (last ${ends.join(", ")})`);
+  const title = legend ? `${name} per epoch` : `${name} per epoch (last ${last(all[0])})`;
+  add("text", { x: L, y: 12, "font-size": 11, "font-weight": "bold" }, title);
   Object.entries(series).forEach(([label, values], k) => {
     const colour = seriesColour(name, k);
     const drawn = values.map((v, i) => [i + 1, v]).filter(([, v]) => Number.isFinite(v));
     const pts = drawn.map(([i, v]) => `${x(i).toFixed(1)},${y(v).toFixed(1)}`).join(" ");
     add("polyline", { points: pts, fill: "none", stroke: colour, "stroke-width": 1.8, "data-series": label });
     drawn.forEach(([i, v]) => add("circle", { cx: x(i), cy: y(v), r: 2.5, fill: colour }));
-    if (legend) { // a row under the axis's label: never over a curve
-      const lx = L + 110 * k, ly = H - 6;
-      add("line", { x1: lx, y1: ly - 3, x2: lx + 14, y2: ly - 3, stroke: colour, "stroke-width": 2 });
-      add("text", { x: lx + 18, y: ly, "font-size": 10, class: "gv-legend" }, label);
+    if (legend) { // under the axis's label: never over a curve
+      const ly = H - B + 30 + 14 * (k + 1);
+      add("line", { x1: L, y1: ly - 3, x2: L + 14, y2: ly - 3, stroke: colour, "stroke-width": 2 });
+      add("text", { x: L + 18, y: ly, "font-size": 10, class: "gv-legend", "data-last": last(values) }, label);
+      add("text", { x: L + 90, y: ly, "font-size": 10, fill: "#4b5563" }, `last ${last(values)}`);
     }
   });
   return svg;

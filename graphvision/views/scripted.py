@@ -61,7 +61,7 @@ SCRIPTED_STYLE = """
 .gv-tools label { margin-right: 8px; font-size: 12px; }
 .gv-alpha { width: 80px; vertical-align: middle; }
 .gv-confusion { border-collapse: collapse; font: 12px monospace; margin: 4px 0; }
-.gv-confusion caption { text-align: left; }
+.gv-confusion caption { text-align: left; white-space: nowrap; }
 .gv-confusion td, .gv-confusion th { border: 1px solid #e5e7eb; padding: 2px 6px; }
 .gv-samples { display: flex; flex-wrap: wrap; gap: 4px; }
 .gv-samples figure { margin: 0; text-align: center; font: 11px monospace; }
@@ -230,4 +230,3 @@ def _png_uri(picture: np.ndarray) -> str:
 
     data = png_bytes(picture, smallest=1, longest=LONGEST)
     return "data:image/png;base64," + base64.b64encode(data).decode("ascii")
-

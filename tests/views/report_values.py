@@ -1,0 +1,83 @@
+"""Small report pages of coins.yaml and cnn_digits.yaml with values made here (the graphs
+compiled, nothing run): a label map and the image it was found in, a classifier's results
+with its samples, a network with its training curves."""
+
+from __future__ import annotations
+
+import functools
+import json
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import graphvision as gv
+from graphvision.compiler.compile import compile_graph
+from graphvision.execution.record import RunRecord
+from graphvision.views.html import html_report
+
+PIPELINES = Path(__file__).parents[2] / "pipelines"
+GRAY = 0.5  # the image the labels are tinted over: one gray
+
+
+@functools.cache
+def compiled(name: str) -> Any:
+    graph = gv.load_pipeline(PIPELINES / name)
+    return compile_graph(graph, gv.discover(graph.plugins))
+
+
+def labels_map() -> np.ndarray:
+    """24×32, label 1 a block in the middle (its centre pixel among them), 2 a corner block."""
+    labels = np.zeros((24, 32), np.int32)
+    labels[8:16, 10:22] = 1
+    labels[0:4, 0:4] = 2
+    return labels
+
+
+def coins_page(with_image: bool = True) -> str:
+    """coins.yaml's report: its labels output, and (``with_image``) the gray image kept
+    as an intermediate (the image the labels were found in)."""
+    graph = compiled("coins.yaml")
+    gray = np.full((24, 32), GRAY, np.float32)
+    outputs = {"count": 2, "regions": {"area": np.array([96.0, 16.0])}, "labels": labels_map(),
+               "overlay": np.zeros((24, 32, 3), np.float32)}  # fmt: skip
+    kept = {"gray": (graph.steps["gray"].outputs["out"], gray)} if with_image else None
+    return html_report(graph, outputs, RunRecord("coins", "threads"), intermediates=kept)
+
+
+def classifier_values() -> tuple[Any, dict[str, np.ndarray], Any]:
+    """A network with curves, 30 predictions (every third wrong), their 30 samples."""
+    from graphvision_plugins import cnn
+    from graphvision_plugins.recognition._types import SampleSet
+
+    rng = np.random.default_rng(0)
+    labels = np.arange(30, dtype=np.int64) % 3
+    predicted = labels.copy()
+    predicted[::3] = (labels[::3] + 1) % 3
+    samples = SampleSet(rng.uniform(0, 1, (30, 4, 4)).astype(np.float32), labels)
+    spec = json.dumps({"input": [1, 4, 4], "layers": ["dense 3"]})
+    network = cnn.NetworkModel(
+        spec, rng.normal(0, 0.1, 51), np.arange(3, dtype=np.int64),
+        np.array([1.2, 0.7, 0.4, 0.3]), np.array([0.4, 0.7, 0.8, 0.9]),
+        np.array([0.3, 0.6, 0.7, 0.75]),
+    )  # fmt: skip
+    table = {"label": labels, "predicted": predicted, "probability": np.full(30, 0.5)}
+    return network, table, samples
+
+
+def cnn_page() -> str:
+    """cnn_digits.yaml's report with the classifier values and split.test kept."""
+    graph = compiled("cnn_digits.yaml")
+    network, table, samples = classifier_values()
+    outputs = {"accuracy": 0.7, "linear_accuracy": 0.6, "network": network,
+               "predictions": table, "examples": np.zeros((8, 8, 3), np.float32)}  # fmt: skip
+    kept = {"split.test": (graph.steps["split"].outputs["test"], samples)}
+    return html_report(graph, outputs, RunRecord("cnn_digits", "threads"), intermediates=kept)
+
+
+def page_data(page: str) -> dict[str, Any]:
+    """The JSON the page's script draws its values from."""
+    found = re.search(r'<script type="application/json" data-values="1">(.*?)</script>', page)
+    assert found, "the page holds no values for its viewers"
+    return json.loads(found.group(1).replace("<\\/", "</"))

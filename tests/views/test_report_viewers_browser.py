@@ -1,0 +1,118 @@
+"""report.html's values drawn by the studio's viewers in Chromium (Debian's, through
+Playwright; nothing downloads): a label map tinted over its image (toggle, alpha slider),
+a network's training curves with labelled axes and a legend, a classifier's confusion
+matrix with its right and wrong samples. Checked from the canvas's pixels and the DOM;
+each wait has a deadline (GRAPHVISION_VIEWER_SHOTS=DIR keeps screenshots)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from .report_values import GRAY, classifier_values, cnn_page, coins_page
+
+sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+BROWSER = next(
+    (shutil.which(name) for name in ("chromium", "chromium-browser") if shutil.which(name)), None
+)
+pytestmark = pytest.mark.skipif(BROWSER is None, reason="no Chromium installed (CI installs one)")
+DEADLINE = 30_000  # ms
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[object]:
+    with sync_api.sync_playwright() as playwright:
+        launched = playwright.chromium.launch(executable_path=BROWSER, args=["--no-sandbox"])
+        yield launched
+        launched.close()
+
+
+def _open(browser, html: str, folder: Path) -> object:
+    path = folder / "report.html"
+    path.write_text(html, encoding="utf-8")
+    page = browser.new_page(viewport={"width": 1000, "height": 900})
+    errors: list[str] = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    page.goto(path.as_uri())
+    page.wait_for_selector("html[data-values-shown='1']", state="attached", timeout=DEADLINE)
+    page.errors = errors
+    return page
+
+
+def _shot(page, selector: str, name: str, tmp_path: Path) -> None:
+    folder = Path(os.environ.get("GRAPHVISION_VIEWER_SHOTS", tmp_path))
+    page.locator(selector).screenshot(path=str(folder / f"{name}.png"))
+
+
+CENTRE = """() => {
+  const c = document.querySelector('.gv-view[data-view="coins.labels"] canvas.gv-canvas');
+  return Array.from(c.getContext('2d').getImageData(c.width >> 1, c.height >> 1, 1, 1).data);
+}"""
+
+
+def test_a_label_map_is_tinted_over_its_image_toggled_and_faded(browser, tmp_path):
+    page = _open(browser, coins_page(), tmp_path)
+    box = '.gv-view[data-view="coins.labels"]'
+    assert page.get_attribute(box, "data-drawn") == "labels"
+    assert page.locator(f"{box} > .gv-fallback").is_hidden()  # the viewer replaced it
+    gray = round(255 * GRAY)
+    # the tint is drawn at the next frame: wait for it, with a deadline
+    page.wait_for_function(f"() => ({CENTRE})()[0] !== {gray} || ({CENTRE})()[1] !== {gray}",
+                           timeout=DEADLINE)  # fmt: skip
+    half = np.array(page.evaluate(CENTRE)[:3])
+    fade = "s => { s.value = 1; s.dispatchEvent(new Event('input')); }"
+    page.eval_on_selector(f"{box} input[data-alpha]", fade)
+    whole = np.array(page.evaluate(CENTRE)[:3])  # the label's own colour
+    assert not np.all(whole == gray)
+    assert np.abs(half - (whole + gray) / 2).max() <= 2  # alpha 0.5: half label, half image
+    page.uncheck(f"{box} input[data-layer]")
+    assert page.evaluate(CENTRE)[:3] == [gray, gray, gray]  # the image alone
+    _shot(page, box, "report-labels", tmp_path)
+    assert page.errors == []
+
+
+def test_curves_and_a_confusion_matrix_with_samples_are_drawn(browser, tmp_path):
+    page = _open(browser, cnn_page(), tmp_path)
+    _, table, _ = classifier_values()
+    curves = page.eval_on_selector_all(
+        '.gv-view[data-view="cnn.out"] svg.gv-curve',
+        """svgs => svgs.map(s => ({name: s.dataset.curve,
+            axes: [...s.querySelectorAll('.gv-axis-x, .gv-axis-y')].map(t => t.textContent),
+            series: [...s.querySelectorAll('polyline')].map(p => [p.dataset.series,
+                      p.getAttribute('points').trim().split(' ').length]),
+            legend: [...s.querySelectorAll('.gv-legend')].map(t => t.textContent)}))""",
+    )
+    assert curves == [
+        {"name": "loss", "axes": ["epoch", "loss"], "series": [["loss", 4]], "legend": []},
+        {"name": "accuracy", "axes": ["epoch", "accuracy"],
+         "series": [["training", 4], ["held out", 4]], "legend": ["training", "held out"]},
+    ]  # fmt: skip
+    assert page.locator('.gv-view[data-view="cnn.out"] > .gv-fallback').is_visible()  # kept
+    box = '.gv-view[data-view="predicted.out"]'
+    cells = page.eval_on_selector_all(
+        f"{box} table.gv-confusion tr",
+        "rows => rows.slice(1).map(r => [...r.querySelectorAll('td')].map(d => +d.textContent))",
+    )
+    counts = np.zeros((3, 3), int)
+    np.add.at(counts, (table["label"], table["predicted"]), 1)
+    assert cells == counts.tolist()
+    assert page.locator(f"{box} > .gv-fallback").is_hidden()
+    captions = {
+        side: page.eval_on_selector_all(
+            f"{box} .gv-samples[data-samples={side}] figcaption", "f => f.map(c => c.textContent)"
+        )
+        for side in ("right", "wrong")
+    }
+    right = np.flatnonzero(table["label"] == table["predicted"])[:8]
+    wrong = np.flatnonzero(table["label"] != table["predicted"])[:8]
+    assert captions == {
+        side: [f"{table['label'][i]} → {table['predicted'][i]}" for i in rows]
+        for side, rows in (("right", right), ("wrong", wrong))
+    }
+    _shot(page, ".outputs >> nth=0", "report-classifier", tmp_path)
+    assert page.errors == []
