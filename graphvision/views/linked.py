@@ -236,7 +236,8 @@ def shown_html(
     the page (:mod:`graphvision.views.scripted`) is in its box, this drawing its fallback."""
     extra = linked_html(compiled, found, where, kind, value, name)
     if extra and issubclass(kind, Points3DPort):
-        return f"<p>{escape(kind.summary(value))}</p>{extra}"
+        shown = f"<p>{escape(kind.summary(value))}</p>{extra}"
+        return shown if page is None else page.wrap(where, kind, value, shown)
     if page is None:
         return value_html(kind, value, name) + extra
     if issubclass(kind, TablePort) and is_classifier(value):

@@ -15,7 +15,10 @@ arrays, base64) of the values it draws with. So the report and the studio draw:
 - a classifier's confusion matrix and its first right and wrong predictions, each
   sample's picture captioned "true → predicted" (when its samples are in the report);
 - a trained network's training curves: its loss, and its training and held-out
-  accuracy, against the epoch, with labelled axes.
+  accuracy, against the epoch, with labelled axes;
+- a point cloud in a 3-D view turned by dragging (at most ``MAX_POINTS``, evenly
+  taken), coloured by depth, or by its points' image colours with a switch between
+  the two when the node gives them.
 
 Each is drawn into its box in place of the page's own HTML drawing of the value, which
 stays as the page without script.
@@ -34,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from graphvision.compiler.compile import CompiledGraph
+from graphvision.values.geometry import Points3DPort
 from graphvision.values.images import BinaryImagePort, LabelImagePort
 from graphvision.values.ports import PortType
 from graphvision.values.scalars import TablePort
@@ -49,6 +53,7 @@ __all__ = [
     "is_classifier",
 ]
 
+MAX_POINTS = 20_000  # points of a cloud in the 3-D view (as many as the studio sends)
 LONGEST = 1600  # a tinted map and its image are drawn at most this many pixels on a side
 SHOWN_PREDICTIONS = 8  # right and wrong predictions shown, each (as the studio shows)
 _RAW_TYPES = (np.uint8, np.uint16, np.int32)
@@ -146,7 +151,27 @@ class PageValues:
             return {**found, "view": "table", **self._classifier(node, value)}
         if issubclass(kind, LabelImagePort | BinaryImagePort):
             return self._tinted(found, kind, value)
+        if issubclass(kind, Points3DPort):
+            return self._cloud(found, value)
         return None
+
+    def _cloud(self, found: dict[str, Any], value: Any) -> dict[str, Any] | None:
+        """A point cloud (at most ``MAX_POINTS``, evenly taken) with its points' colours
+        when the node gives them, for the 3-D view."""
+        points = np.asarray(value, np.float64)
+        if points.ndim != 2 or points.shape[1] != 3 or not len(points):
+            return None
+        step = max(1, math.ceil(len(points) / MAX_POINTS))
+        key = f"{found['node']}.{found['port']}"
+        self.raw[key] = _raw(points[::step])
+        ref = pairing.cloud_colours(self.compiled, found["node"])
+        colours = self.found.get(ref) if ref else None
+        if colours is not None and np.shape(colours) == points.shape:
+            self.raw[f"{ref[0]}.{ref[1]}"] = _raw(np.asarray(colours)[::step])  # type: ignore[index]
+        else:
+            ref = None
+        described = {**found, "view": "points3d", "count": len(points), "step": 1}
+        return {**described, "colours": list(ref) if ref else None}
 
     def _tinted(
         self, found: dict[str, Any], kind: type[PortType], value: Any
@@ -213,10 +238,14 @@ class PageValues:
 
 
 def _raw(values: np.ndarray) -> dict[str, Any]:
-    """An integer map as the smallest of uint8, uint16, int32 that holds it, little-endian,
-    deflated (``zlib``), base64: the script inflates it (``DecompressionStream``)."""
-    high = int(values.max())
-    dtype = next(t for t in _RAW_TYPES if high <= np.iinfo(t).max)
+    """An array as little-endian bytes, deflated (``zlib``), base64 (the script inflates
+    it with ``DecompressionStream``): an integer map in the smallest of uint8, uint16,
+    int32 that holds it, real values in float32."""
+    if values.dtype.kind == "f":
+        dtype: type = np.float32
+    else:
+        high = int(values.max()) if values.size else 0
+        dtype = next(t for t in _RAW_TYPES if high <= np.iinfo(t).max)
     data = np.ascontiguousarray(values, np.dtype(dtype).newbyteorder("<")).tobytes()
     return {
         "dtype": np.dtype(dtype).name,

@@ -81,3 +81,19 @@ def page_data(page: str) -> dict[str, Any]:
     found = re.search(r'<script type="application/json" data-values="1">(.*?)</script>', page)
     assert found, "the page holds no values for its viewers"
     return json.loads(found.group(1).replace("<\\/", "</"))
+
+
+def cloud_points() -> np.ndarray:
+    """30 000 points on a tilted plane: more than the 3-D view takes (every second one)."""
+    rng = np.random.default_rng(1)
+    xy = rng.uniform(-1, 1, (30_000, 2))
+    return np.column_stack([xy, 5 + 0.5 * xy[:, 0]])
+
+
+def stereo_page() -> str:
+    """stereo.yaml's report with its cloud and the cloud's colours (all red)."""
+    graph = compiled("stereo.yaml")
+    points = cloud_points()
+    colours = np.tile(np.array([1.0, 0.0, 0.0], np.float32), (len(points), 1))
+    outputs = {"cloud": points, "cloud_colours": colours}
+    return html_report(graph, outputs, RunRecord("stereo", "threads"))

@@ -1,8 +1,9 @@
 """report.html's values drawn by the studio's viewers in Chromium (Debian's, through
 Playwright; nothing downloads): a label map tinted over its image (toggle, alpha slider),
 a network's training curves with labelled axes and a legend, a classifier's confusion
-matrix with its right and wrong samples. Checked from the canvas's pixels and the DOM;
-each wait has a deadline (GRAPHVISION_VIEWER_SHOTS=DIR keeps screenshots)."""
+matrix with its right and wrong samples, a point cloud in 3-D by image colour or depth.
+Checked from the canvas's pixels and the DOM; each wait has a deadline
+(GRAPHVISION_VIEWER_SHOTS=DIR keeps screenshots)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from .report_values import GRAY, classifier_values, cnn_page, coins_page
+from .report_values import GRAY, classifier_values, cnn_page, coins_page, stereo_page
 
 sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 BROWSER = next(
@@ -115,4 +116,30 @@ def test_curves_and_a_confusion_matrix_with_samples_are_drawn(browser, tmp_path)
         for side, rows in (("right", right), ("wrong", wrong))
     }
     _shot(page, ".outputs >> nth=0", "report-classifier", tmp_path)
+    assert page.errors == []
+
+
+REDS = """() => {
+  const c = document.querySelector('.gv-view[data-view="cloud.points"] canvas.gv-cloud');
+  const p = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  let red = 0, other = 0;
+  for (let i = 0; i < p.length; i += 4) {
+    if (p[i] === 255 && p[i + 1] === 0 && p[i + 2] === 0) red++;
+    else if (p[i] + p[i + 1] + p[i + 2] > 3 * 0x11 + 6) other++;
+  }
+  return [red, other];
+}"""
+
+
+def test_a_cloud_is_drawn_in_3d_by_its_colours_or_by_depth(browser, tmp_path):
+    page = _open(browser, stereo_page(), tmp_path)
+    box = '.gv-view[data-view="cloud.points"]'
+    assert page.get_attribute(box, "data-drawn") == "points3d"
+    assert page.locator(f"{box} > .gv-fallback").is_hidden()
+    red, other = page.evaluate(REDS)
+    assert red > 1000 and other == 0  # every point red, as its colours say
+    page.select_option(f"{box} select[data-cloud-colour]", "depth")
+    red, other = page.evaluate(REDS)
+    assert red == 0 and other > 1000  # viridis over the depth: no pure red
+    _shot(page, box, "report-cloud", tmp_path)
     assert page.errors == []

@@ -16,10 +16,12 @@ from graphvision.views.graph_view import layout_script
 from .report_values import (
     GRAY,
     classifier_values,
+    cloud_points,
     cnn_page,
     coins_page,
     labels_map,
     page_data,
+    stereo_page,
 )
 
 
@@ -75,3 +77,16 @@ def test_a_networks_curves_are_in_the_page_with_training_and_held_out_accuracy()
                      "held out": network.held_out_accuracy.tolist()},
     }  # fmt: skip
     assert data["values"]["cnn.out"]["keep"]  # the filters' picture stays beside them
+
+
+def test_a_cloud_is_kept_for_the_3d_view_with_its_colours_evenly_taken():
+    data = page_data(stereo_page())
+    described = data["values"]["cloud.points"]
+    assert described["view"] == "points3d" and described["colours"] == ["cloud", "colours"]
+    assert described["count"] == 30_000
+    raw = data["raw"]["cloud.points"]
+    points = np.frombuffer(zlib.decompress(base64.b64decode(raw["deflate"])), raw["dtype"])
+    # 30 000 points, at most 20 000 shown: every second one
+    np.testing.assert_array_equal(points.reshape(raw["shape"]), cloud_points()[::2].astype("<f4"))
+    colours = data["raw"]["cloud.colours"]
+    assert colours["shape"] == [15_000, 3]
