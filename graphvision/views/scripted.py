@@ -233,7 +233,8 @@ class PageValues:
         if not self.values:
             return ""
         data = {"values": self.values, "raw": self.raw, "pictures": self.pictures}
-        text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
+        # no "<" at all inside the script element: no "</script>" nor "<!--" can end it
+        text = json.dumps(data, separators=(",", ":")).replace("<", "\\u003c")
         return f'<script type="application/json" data-values="1">{text}</script>'
 
 

@@ -80,7 +80,7 @@ def page_data(page: str) -> dict[str, Any]:
     """The JSON the page's script draws its values from."""
     found = re.search(r'<script type="application/json" data-values="1">(.*?)</script>', page)
     assert found, "the page holds no values for its viewers"
-    return json.loads(found.group(1).replace("<\\/", "</"))
+    return json.loads(found.group(1))
 
 
 def cloud_points() -> np.ndarray:

@@ -90,3 +90,4 @@ def test_a_cloud_is_kept_for_the_3d_view_with_its_colours_evenly_taken():
     np.testing.assert_array_equal(points.reshape(raw["shape"]), cloud_points()[::2].astype("<f4"))
     colours = data["raw"]["cloud.colours"]
     assert colours["shape"] == [15_000, 3]
+
