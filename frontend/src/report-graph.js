@@ -5,7 +5,7 @@
 // graphvision/views/static/graph.js (window.GraphvisionGraph) and inlined in each report:
 // no network.
 import { LINE, layoutGraph } from "./layout.js";
-import { classifierPanel, cloudPanel, curvesPanel, maskLayer } from "./panels.js";
+import { classifierPanel, cloudPanel, curvesPanel, epipolarPanel, maskLayer, matchesPanel } from "./panels.js";
 import { ImageViewer, el } from "./viewers.js";
 
 const NS = "http://www.w3.org/2000/svg";
@@ -124,6 +124,9 @@ export async function drawValue(box, d, source) {
   } else if (d.view === "table" && d.confusion) {
     await classifierPanel(drawn, d, source);
     done = true;
+  } else if (d.view === "matches" || d.view === "fundamental") {
+    box.prepend(drawn);
+    done = !!(await (d.view === "matches" ? matchesPanel : epipolarPanel)(drawn, d, source));
   } else if (d.view === "points3d") {
     const raw = await source.raw(d.node, d.port);
     if (raw) {

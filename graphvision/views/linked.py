@@ -243,4 +243,4 @@ def shown_html(
     if issubclass(kind, TablePort) and is_classifier(value):
         confusion, rows = table_parts(value)
         return page.wrap(where, kind, value, confusion) + rows + extra
-    return page.wrap(where, kind, value, value_html(kind, value, name)) + extra
+    return page.wrap(where, kind, value, value_html(kind, value, name) + extra)

@@ -16,6 +16,9 @@ arrays, base64) of the values it draws with. So the report and the studio draw:
   sample's picture captioned "true → predicted" (when its samples are in the report);
 - a trained network's training curves: its loss, and its training and held-out
   accuracy, against the epoch, with labelled axes;
+- matches over their image pair (inliers and outliers apart, each toggled) and a
+  fundamental matrix's epipolar lines over both images, with zoom and pan (when the
+  report holds the images, keypoints or points: with ``--keep-intermediates``);
 - a point cloud in a 3-D view turned by dragging (at most ``MAX_POINTS``, evenly
   taken), coloured by depth, or by its points' image colours with a switch between
   the two when the node gives them.
@@ -40,6 +43,7 @@ from graphvision.compiler.compile import CompiledGraph
 from graphvision.values.geometry import Points3DPort
 from graphvision.values.images import BinaryImagePort, LabelImagePort
 from graphvision.values.ports import PortType
+from graphvision.values.records import MatchesPort
 from graphvision.values.scalars import TablePort
 from graphvision.views import pairing
 from graphvision.views.pairing import Ref
@@ -132,7 +136,7 @@ class PageValues:
         if described is None:
             return fallback
         key = f"{where[0]}.{where[1]}"  # type: ignore[index]
-        self.values[key] = described
+        self.values[key] = {**self.values.get(key, {}), **described}
         return (
             f'<div class="gv-view" data-view="{escape(key)}">'
             f'<div class="gv-fallback">{fallback}</div></div>'
@@ -153,7 +157,60 @@ class PageValues:
             return self._tinted(found, kind, value)
         if issubclass(kind, Points3DPort):
             return self._cloud(found, value)
+        if issubclass(kind, MatchesPort):
+            return self._matches(found, value)
+        if kind.type_name() == "Fundamental":
+            return self._epipolar(found, value)
         return None
+
+    def _keep(self, ref: list[str] | tuple[str, str], data: dict[str, Any]) -> None:
+        """``data`` of a value a viewer draws with (a box's own description wins)."""
+        self.values.setdefault(f"{ref[0]}.{ref[1]}", data)
+
+    def _picture(self, ref: list[str] | tuple[str, str] | None) -> bool:
+        """Keep the picture of image ``ref`` at full size (what finds are drawn over);
+        False when the report does not hold it."""
+        value = self.found.get((ref[0], ref[1])) if ref else None
+        if ref is None or not isinstance(value, np.ndarray):
+            return False
+        key = f"{ref[0]}.{ref[1]}"
+        if key not in self.pictures:
+            picture = self.compiled.steps[ref[0]].outputs[ref[1]].preview(value)
+            if picture is None:
+                return False
+            self.pictures[key] = _png_uri(picture)
+        return True
+
+    def _matches(self, found: dict[str, Any], value: Any) -> dict[str, Any] | None:
+        """Matches with their whole set, inliers, keypoints and images, for the pair view."""
+        pair = pairing.match_pair(self.compiled, found["node"], found["port"])
+        if pair is None or not all(self._picture(pair[s]["image"]) for s in ("a", "b")):
+            return None
+        sets = {name: self.found.get(tuple(pair[name])) if pair[name] else None
+                for name in ("all", "inliers")}  # fmt: skip
+        keypoints = [self.found.get(tuple(pair[s]["keypoints"])) for s in ("a", "b")]
+        if sets["all"] is None or any(k is None for k in keypoints):
+            return None
+        for name, matches in sets.items():
+            if matches is not None:
+                self._keep(pair[name], {"columns": _pairs(matches)})
+        for side, points in zip(("a", "b"), keypoints, strict=True):
+            xy = np.asarray(points.xy, np.float64)
+            self._keep(pair[side]["keypoints"], {"columns": {"x": _numbers(xy[:, 0]),
+                                                             "y": _numbers(xy[:, 1])}})  # fmt: skip
+        return {**found, "view": "matches", "pair": pair, "columns": _pairs(value)}
+
+    def _epipolar(self, found: dict[str, Any], value: Any) -> dict[str, Any] | None:
+        """A fundamental matrix with each view's points and image, for epipolar lines."""
+        pair = pairing.epipolar_pair(self.compiled, found["node"])
+        if pair is None or not all(self._picture(pair[s]["image"]) for s in ("a", "b")):
+            return None
+        points = [self.found.get(tuple(pair[s]["points"])) for s in ("a", "b")]
+        if any(np.ndim(p) != 2 or np.shape(p)[1] != 2 for p in points):
+            return None
+        for side, xy in zip(("a", "b"), points, strict=True):
+            self.raw[".".join(pair[side]["points"])] = _raw(np.asarray(xy, np.float64))
+        return {**found, "view": "fundamental", "pair": pair, "value": _numbers(np.ravel(value))}
 
     def _cloud(self, found: dict[str, Any], value: Any) -> dict[str, Any] | None:
         """A point cloud (at most ``MAX_POINTS``, evenly taken) with its points' colours
@@ -236,6 +293,11 @@ class PageValues:
         # no "<" at all inside the script element: no "</script>" nor "<!--" can end it
         text = json.dumps(data, separators=(",", ":")).replace("<", "\\u003c")
         return f'<script type="application/json" data-values="1">{text}</script>'
+
+
+def _pairs(matches: Any) -> dict[str, list[int]]:
+    pairs = np.asarray(matches.pairs)
+    return {"a": pairs[:, 0].tolist(), "b": pairs[:, 1].tolist()}
 
 
 def _raw(values: np.ndarray) -> dict[str, Any]:

@@ -97,3 +97,28 @@ def stereo_page() -> str:
     colours = np.tile(np.array([1.0, 0.0, 0.0], np.float32), (len(points), 1))
     outputs = {"cloud": points, "cloud_colours": colours}
     return html_report(graph, outputs, RunRecord("stereo", "threads"))
+
+
+def homography_page() -> str:
+    """homography.yaml's report: 3 matches, 2 of them the fit's inliers, with both
+    keypoint sets and both images kept as intermediates."""
+    from graphvision.values.records import KeypointSet, MatchSet
+
+    graph = compiled("homography.yaml")
+
+    def keypoints(xy: list[list[float]]) -> KeypointSet:
+        n = len(xy)
+        return KeypointSet(np.array(xy, np.float64), np.ones(n), np.zeros(n), np.ones(n),
+                           np.tile(np.eye(2), (n, 1, 1)))  # fmt: skip
+
+    whole = MatchSet(np.array([[0, 2], [1, 1], [2, 0]], np.int64), np.zeros(3))
+    values = {"f0.keypoints": keypoints([[1, 2], [3, 4], [5, 6]]),
+              "f1.keypoints": keypoints([[10, 20], [30, 40], [50, 60]]),
+              "gray": np.zeros((70, 40), np.float32), "warp.image": np.ones((80, 60), np.float32),
+              "matches": whole, "fit.inliers": whole.take(np.array([0, 2]))}  # fmt: skip
+    kept = {}
+    for where, value in values.items():
+        node, _, port = where.partition(".")
+        step = graph.steps[node]
+        kept[where] = (step.outputs[port or next(iter(step.outputs))], value)
+    return html_report(graph, {}, RunRecord("homography", "threads"), intermediates=kept)

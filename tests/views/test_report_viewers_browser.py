@@ -1,7 +1,8 @@
 """report.html's values drawn by the studio's viewers in Chromium (Debian's, through
 Playwright; nothing downloads): a label map tinted over its image (toggle, alpha slider),
 a network's training curves with labelled axes and a legend, a classifier's confusion
-matrix with its right and wrong samples, a point cloud in 3-D by image colour or depth.
+matrix with its right and wrong samples, a point cloud in 3-D by image colour or depth,
+matches over their image pair (inliers and outliers apart, toggled).
 Checked from the canvas's pixels and the DOM; each wait has a deadline
 (GRAPHVISION_VIEWER_SHOTS=DIR keeps screenshots)."""
 
@@ -15,7 +16,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from .report_values import GRAY, classifier_values, cnn_page, coins_page, stereo_page
+from .report_values import (
+    GRAY,
+    classifier_values,
+    cnn_page,
+    coins_page,
+    homography_page,
+    stereo_page,
+)
 
 sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 BROWSER = next(
@@ -142,4 +150,18 @@ def test_a_cloud_is_drawn_in_3d_by_its_colours_or_by_depth(browser, tmp_path):
     red, other = page.evaluate(REDS)
     assert red == 0 and other > 1000  # viridis over the depth: no pure red
     _shot(page, box, "report-cloud", tmp_path)
+    assert page.errors == []
+
+
+def test_matches_are_drawn_over_their_pair_inliers_and_outliers_apart(browser, tmp_path):
+    page = _open(browser, homography_page(), tmp_path)
+    box = '.gv-view[data-view="matches.out"]'
+    assert page.get_attribute(box, "data-drawn") == "matches"
+    assert page.locator(f"{box} > .gv-fallback").is_hidden()  # the page's own SVG pair
+    # 3 matches: (0, 2) and (2, 0) the fit's inliers, (1, 1) the outlier
+    assert page.get_attribute(f"{box} .gv-pair", "data-matches") == '{"inliers":2,"outliers":1}'
+    toggles = page.eval_on_selector_all(
+        f"{box} input[data-overlay]", "b => b.map(i => i.dataset.overlay)"
+    )
+    assert toggles == ["inliers (2)", "outliers (1)"]
     assert page.errors == []

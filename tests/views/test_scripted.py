@@ -19,6 +19,7 @@ from .report_values import (
     cloud_points,
     cnn_page,
     coins_page,
+    homography_page,
     labels_map,
     page_data,
     stereo_page,
@@ -91,3 +92,16 @@ def test_a_cloud_is_kept_for_the_3d_view_with_its_colours_evenly_taken():
     colours = data["raw"]["cloud.colours"]
     assert colours["shape"] == [15_000, 3]
 
+
+def test_matches_are_kept_with_their_pair_keypoints_and_full_size_images():
+    data = page_data(homography_page())
+    described = data["values"]["matches.out"]
+    assert described["view"] == "matches" and described["columns"] == {"a": [0, 1, 2],
+                                                                        "b": [2, 1, 0]}  # fmt: skip
+    assert described["pair"]["inliers"] == ["fit", "inliers"]
+    assert data["values"]["fit.inliers"]["columns"] == {"a": [0, 2], "b": [2, 0]}
+    assert data["values"]["f1.keypoints"]["columns"] == {"x": [10, 30, 50], "y": [20, 40, 60]}
+    sizes = {}
+    for key, url in data["pictures"].items():
+        sizes[key] = iio.imread(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))).shape[:2]
+    assert sizes == {"gray.out": (70, 40), "warp.image": (80, 60)}  # keypoints' pixels
