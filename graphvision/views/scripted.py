@@ -188,7 +188,7 @@ class PageValues:
             return None
         sets = {name: self.found.get(tuple(pair[name])) if pair[name] else None
                 for name in ("all", "inliers")}  # fmt: skip
-        keypoints = [self.found.get(tuple(pair[s]["keypoints"])) for s in ("a", "b")]
+        keypoints: list[Any] = [self.found.get(tuple(pair[s]["keypoints"])) for s in ("a", "b")]
         if sets["all"] is None or any(k is None for k in keypoints):
             return None
         for name, matches in sets.items():
@@ -205,7 +205,7 @@ class PageValues:
         pair = pairing.epipolar_pair(self.compiled, found["node"])
         if pair is None or not all(self._picture(pair[s]["image"]) for s in ("a", "b")):
             return None
-        points = [self.found.get(tuple(pair[s]["points"])) for s in ("a", "b")]
+        points: list[Any] = [self.found.get(tuple(pair[s]["points"])) for s in ("a", "b")]
         if any(np.ndim(p) != 2 or np.shape(p)[1] != 2 for p in points):
             return None
         for side, xy in zip(("a", "b"), points, strict=True):
