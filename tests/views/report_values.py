@@ -84,9 +84,9 @@ def page_data(page: str) -> dict[str, Any]:
 
 
 def cloud_points() -> np.ndarray:
-    """30 000 points on a tilted plane: more than the 3-D view takes (every second one)."""
+    """21 000 points on a tilted plane: more than the 3-D view takes (every second one)."""
     rng = np.random.default_rng(1)
-    xy = rng.uniform(-1, 1, (30_000, 2))
+    xy = rng.uniform(-1, 1, (21_000, 2))
     return np.column_stack([xy, 5 + 0.5 * xy[:, 0]])
 
 

@@ -84,13 +84,13 @@ def test_a_cloud_is_kept_for_the_3d_view_with_its_colours_evenly_taken():
     data = page_data(stereo_page())
     described = data["values"]["cloud.points"]
     assert described["view"] == "points3d" and described["colours"] == ["cloud", "colours"]
-    assert described["count"] == 30_000
+    assert described["count"] == 21_000
     raw = data["raw"]["cloud.points"]
     points = np.frombuffer(zlib.decompress(base64.b64decode(raw["deflate"])), raw["dtype"])
-    # 30 000 points, at most 20 000 shown: every second one
+    # 21 000 points, at most 20 000 shown: every second one
     np.testing.assert_array_equal(points.reshape(raw["shape"]), cloud_points()[::2].astype("<f4"))
     colours = data["raw"]["cloud.colours"]
-    assert colours["shape"] == [15_000, 3]
+    assert colours["shape"] == [10_500, 3]
 
 
 def test_matches_are_kept_with_their_pair_keypoints_and_full_size_images():
