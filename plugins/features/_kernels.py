@@ -1,4 +1,12 @@
-"""numba kernels of the SIFT descriptor (imported on first use: numba loads slowly).
+"""numba kernels of SIFT's orientation and descriptor (imported on first use: numba loads slowly).
+
+Both are histograms of the gradients around a keypoint in its pyramid level.
+The gradient (central differences, magnitude and ``atan2`` angle) is computed
+on demand, for the pixels some keypoint's window reaches, and kept in the
+level's ``magnitude`` / ``angle`` arrays with a ``done`` flag: a level's
+keypoints cover a fraction of it, and ``atan2`` of every pixel of every level
+was the largest single cost of SIFT. The values are the whole-image ones
+(float32 ``hypot`` and ``atan2``, as numpy computes them).
 
 The descriptor is a scatter of every pixel of a rotated window into 8
 trilinearly interpolated histogram bins; in numpy that is a ``bincount``
@@ -14,11 +22,56 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["descriptor_histograms"]
+__all__ = ["descriptor_histograms", "orientation_histograms"]
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _gradient(image, magnitude, angle, done, y, x):  # pragma: no cover
+    """Fill the gradient of inner pixel (y, x) of ``image`` if not yet computed."""
+    if not done[y, x]:
+        dx = image[y, x + 1] - image[y, x - 1]
+        dy = image[y + 1, x] - image[y - 1, x]
+        magnitude[y, x] = math.hypot(dx, dy)
+        angle[y, x] = math.atan2(dy, dx)
+        done[y, x] = True
 
 
 @numba.njit(cache=True, nogil=True)
-def descriptor_histograms(magnitude, angle, cx, cy, width, theta, cells, bins):
+def orientation_histograms(image, magnitude, angle, done, cx, cy, sigma, bins):  # pragma: no cover
+    """Smoothed orientation histograms (Lowe 2004, section 5) of keypoints in one level.
+
+    The pixels within ``round(3σ)`` of the keypoint's rounded position vote
+    their magnitude times :math:`e^{-d^2 / 2\sigma^2}` into ``bins`` bins; the
+    histogram is then smoothed by (1, 4, 6, 4, 1) / 16, circularly.
+    """
+    rows, cols = image.shape
+    out = np.zeros((cx.shape[0], bins), np.float64)
+    hist = np.zeros(bins, np.float64)
+    count, two_pi = np.float32(bins), np.float32(2.0 * math.pi)
+    for k in range(cx.shape[0]):
+        hist[:] = 0.0
+        radius = int(round(3.0 * sigma[k]))
+        x0, y0 = int(round(cx[k])), int(round(cy[k]))
+        spread = 2.0 * sigma[k] ** 2
+        for dy in range(-radius, radius + 1):
+            y = y0 + dy
+            if y <= 0 or y >= rows - 1:
+                continue
+            for dx in range(-radius, radius + 1):
+                x = x0 + dx
+                if x <= 0 or x >= cols - 1 or dx * dx + dy * dy > radius * radius:
+                    continue
+                _gradient(image, magnitude, angle, done, y, x)
+                weight = math.exp(-(dx * dx + dy * dy) / spread) * magnitude[y, x]
+                hist[int(math.floor(angle[y, x] * count / two_pi)) % bins] += weight
+        for b in range(bins):
+            left, right = hist[b - 1], hist[(b + 1) % bins]
+            out[k, b] = (hist[b - 2] + hist[(b + 2) % bins] + 4 * (left + right) + 6 * hist[b]) / 16
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def descriptor_histograms(image, magnitude, angle, done, cx, cy, width, theta, cells, bins):
     """Raw (cells × cells × bins) histograms for keypoints at (cx, cy) in one pyramid level.
 
     ``width`` is the cell width (3σ) and ``theta`` the orientation of each keypoint.
@@ -55,6 +108,7 @@ def descriptor_histograms(magnitude, angle, cx, cy, width, theta, cells, bins):
                 if rbin <= -1.0 or rbin >= cells or cbin <= -1.0 or cbin >= cells:
                     continue
                 weight = math.exp(-(x_rot * x_rot + y_rot * y_rot) / (2.0 * half * half))
+                _gradient(image, magnitude, angle, done, y, x)
                 weight *= magnitude[y, x]
                 obin = (angle[y, x] - theta[k]) % two_pi * bins / two_pi
                 r0 = int(math.floor(rbin))

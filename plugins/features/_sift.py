@@ -1,8 +1,10 @@
-"""Lowe's DoG detector, orientation assignment and the SIFT descriptor, vectorised.
+"""Lowe's DoG detector, orientation assignment and the SIFT descriptor.
 
-Everything is computed per (octave, layer) group of keypoints with numpy:
-the pyramid with ``scipy.ndimage``, extrema with 3×3×3 max/min filters,
-sub-pixel refinement as batched 3×3 solves, histograms with ``bincount``.
+The pyramid is made with the compiled separable Gaussian (incremental
+sigmas); the search, refinement and tests of each octave's extrema are one
+compiled pass (:mod:`._dog_kernels`); orientations and descriptors are
+compiled per (octave, layer) group of keypoints, with the level's gradients
+computed only where a keypoint's window reaches (:mod:`._kernels`).
 """
 
 from __future__ import annotations
@@ -59,7 +61,8 @@ class _Pyramid:
     factor: float  # input pixels per octave-0 pixel (0.5 when upsampled)
     shift: float  # input coordinate of octave-0 pixel 0 (-0.25 when upsampled)
     params: SiftParams
-    gradients: dict = field(default_factory=dict)  # (octave, layer) -> (magnitude, angle)
+    # (octave, layer) -> (magnitude, angle, done): gradients filled on demand by the kernels
+    gradients: dict = field(default_factory=dict)
 
     def layer_sigma(self, layer: np.ndarray) -> np.ndarray:
         """Blur, in octave pixels, of the (fractional) layer."""
@@ -67,15 +70,15 @@ class _Pyramid:
 
 
 def _pyramid(image: np.ndarray, params: SiftParams) -> _Pyramid:
-    import scipy.ndimage as ndi
+    from ._dog_kernels import upsample_twice
 
-    base = image.astype(np.float32)
+    base = np.ascontiguousarray(image, np.float32)
     assumed = 0.5
     factor = 1.0
     shift = 0.0
     if params.upsample:
         # pixel centres: up-sampled pixel j sits at input coordinate j / 2 - 1/4
-        base = ndi.zoom(base, 2, order=1, grid_mode=True, mode="nearest")
+        base = upsample_twice(base)  # = ndi.zoom(base, 2, order=1, grid_mode=True, mode="nearest")
         assumed, factor, shift = 1.0, 0.5, -0.25
     base = smooth_gaussian(base, math.sqrt(max(params.sigma**2 - assumed**2, 0.01)))
     s = params.intervals
@@ -96,93 +99,6 @@ def _pyramid(image: np.ndarray, params: SiftParams) -> _Pyramid:
     return _Pyramid(gaussians, dogs, factor, shift, params)
 
 
-def _refine(dog: np.ndarray, layer: np.ndarray, y: np.ndarray, x: np.ndarray, params: SiftParams):
-    """Quadratic sub-pixel refinement (Brown & Lowe), up to 5 moves; drops the unstable."""
-    s = params.intervals
-    alive = np.ones(len(x), bool)
-    offset = np.zeros((len(x), 3))
-    gradient = np.zeros((len(x), 3))
-    for _ in range(5):
-        i, r, c = layer[alive], y[alive], x[alive]
-        d = dog
-        dx = (d[i, r, c + 1] - d[i, r, c - 1]) / 2
-        dy = (d[i, r + 1, c] - d[i, r - 1, c]) / 2
-        ds = (d[i + 1, r, c] - d[i - 1, r, c]) / 2
-        centre = d[i, r, c]
-        dxx = d[i, r, c + 1] + d[i, r, c - 1] - 2 * centre
-        dyy = d[i, r + 1, c] + d[i, r - 1, c] - 2 * centre
-        dss = d[i + 1, r, c] + d[i - 1, r, c] - 2 * centre
-        dxy = (
-            d[i, r + 1, c + 1] - d[i, r + 1, c - 1] - d[i, r - 1, c + 1] + d[i, r - 1, c - 1]
-        ) / 4
-        dxs = (
-            d[i + 1, r, c + 1] - d[i + 1, r, c - 1] - d[i - 1, r, c + 1] + d[i - 1, r, c - 1]
-        ) / 4
-        dys = (
-            d[i + 1, r + 1, c] - d[i + 1, r - 1, c] - d[i - 1, r + 1, c] + d[i - 1, r - 1, c]
-        ) / 4
-        hessian = np.stack(
-            [
-                np.stack([dxx, dxy, dxs], -1),
-                np.stack([dxy, dyy, dys], -1),
-                np.stack([dxs, dys, dss], -1),
-            ],
-            -2,
-        ).astype(np.float64)
-        grad = np.stack([dx, dy, ds], -1).astype(np.float64)
-        det = np.linalg.det(hessian)
-        solvable = np.abs(det) > 1e-12
-        step = np.zeros_like(grad)
-        step[solvable] = -np.linalg.solve(hessian[solvable], grad[solvable][..., None])[..., 0]
-        index = np.flatnonzero(alive)
-        offset[index], gradient[index] = step, grad
-        dead = ~solvable
-        converged = (np.abs(step) < 0.5).all(axis=1) & solvable
-        moving = ~converged & solvable
-        move = np.round(step[moving]).astype(int)
-        x[index[moving]] += move[:, 0]
-        y[index[moving]] += move[:, 1]
-        layer[index[moving]] += move[:, 2]
-        inside = (
-            (layer >= 1)
-            & (layer <= s)
-            & (y >= BORDER)
-            & (y < dog.shape[1] - BORDER)
-            & (x >= BORDER)
-            & (x < dog.shape[2] - BORDER)
-        )
-        alive[index[dead]] = False
-        alive &= inside
-        if not moving.any():
-            break
-    else:
-        alive[:] = alive & (np.abs(offset) < 0.5).all(axis=1)
-    return alive, offset, gradient
-
-
-def _extreme3(stack: np.ndarray, pick) -> np.ndarray:
-    """Max (or min, with ``pick=np.minimum``) over each 3×3×3 block, for the interior points.
-
-    Three separable passes of two element-wise ``pick`` over shifted views.
-    """
-    out = pick(pick(stack[:-2], stack[1:-1]), stack[2:])
-    out = pick(pick(out[:, :-2], out[:, 1:-1]), out[:, 2:])
-    return pick(pick(out[:, :, :-2], out[:, :, 1:-1]), out[:, :, 2:])
-
-
-def _extrema(dog: np.ndarray, prefilter: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Points of the inner layers, away from the border, that are maxima (or minima) of
-    their 3×3×3 neighbourhood and beyond ``prefilter`` in absolute value."""
-    centre = dog[1:-1, 1:-1, 1:-1]
-    extreme = (centre > prefilter) & (centre >= _extreme3(dog, np.maximum))
-    extreme |= (centre < -prefilter) & (centre <= _extreme3(dog, np.minimum))
-    edge = BORDER - 1
-    extreme[:, :edge] = extreme[:, -edge:] = False
-    extreme[:, :, :edge] = extreme[:, :, -edge:] = False
-    layer, y, x = np.nonzero(extreme)
-    return layer + 1, y + 1, x + 1
-
-
 def detect_dog(
     image: np.ndarray, params: SiftParams = SiftParams()
 ) -> tuple[KeypointSet, _Pyramid, np.ndarray]:
@@ -192,48 +108,17 @@ def detect_dog(
     keypoint its (octave, layer, x, y) in octave coordinates.
     """
 
+    from ._dog_kernels import octave_keypoints
+
     pyramid = _pyramid(image, params)
     s = params.intervals
     prefilter = 0.5 * params.contrast_threshold / s
     found = []
     for octave, dog in enumerate(pyramid.dogs):
-        layer, y, x = _extrema(dog, prefilter)
-        alive, offset, gradient = _refine(dog, layer, y, x, params)
-        layer, y, x, offset, gradient = (
-            layer[alive],
-            y[alive],
-            x[alive],
-            offset[alive],
-            gradient[alive],
+        rows = octave_keypoints(
+            dog, prefilter, params.contrast_threshold / s, params.edge_ratio, s, BORDER
         )
-        value = dog[layer, y, x] + 0.5 * (gradient * offset).sum(axis=1)
-        d = dog
-        dxx = d[layer, y, x + 1] + d[layer, y, x - 1] - 2 * d[layer, y, x]
-        dyy = d[layer, y + 1, x] + d[layer, y - 1, x] - 2 * d[layer, y, x]
-        dxy = (
-            d[layer, y + 1, x + 1]
-            - d[layer, y + 1, x - 1]
-            - d[layer, y - 1, x + 1]
-            + d[layer, y - 1, x - 1]
-        ) / 4
-        trace, det = dxx + dyy, dxx * dyy - dxy * dxy
-        r = params.edge_ratio
-        keep = (
-            (np.abs(value) >= params.contrast_threshold / s)
-            & (det > 0)
-            & (trace * trace * r < (r + 1) ** 2 * det)
-        )
-        found.append(
-            np.column_stack(
-                [
-                    np.full(keep.sum(), octave),
-                    layer[keep] + offset[keep, 2],
-                    x[keep] + offset[keep, 0],
-                    y[keep] + offset[keep, 1],
-                    np.abs(value[keep]),
-                ]
-            )
-        )
+        found.append(np.column_stack([np.full(len(rows), octave), rows]))
     table = np.vstack(found) if found else np.zeros((0, 5))
     if params.max_keypoints and len(table) > params.max_keypoints:
         table = table[np.argsort(-table[:, 4], kind="stable")[: params.max_keypoints]]
@@ -248,20 +133,17 @@ def detect_dog(
     return keypoints, pyramid, table[:, :4]
 
 
-def _gradients(pyramid: _Pyramid, octave: int, layer: int) -> tuple[np.ndarray, np.ndarray]:
-    """Gradient magnitude and angle of a pyramid level (central differences), computed once."""
+def _gradients(pyramid: _Pyramid, octave: int, layer: int):
+    """The level's image and its gradient arrays (magnitude, angle, done), filled on demand."""
     key = (octave, layer)
+    image = pyramid.gaussians[octave][layer]
     if key not in pyramid.gradients:
-        pyramid.gradients[key] = _central_gradients(pyramid.gaussians[octave][layer])
-    return pyramid.gradients[key]
-
-
-def _central_gradients(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    dx = np.zeros_like(image)
-    dy = np.zeros_like(image)
-    dx[:, 1:-1] = image[:, 2:] - image[:, :-2]
-    dy[1:-1, :] = image[2:, :] - image[:-2, :]
-    return np.hypot(dx, dy), np.arctan2(dy, dx)
+        pyramid.gradients[key] = (
+            np.empty(image.shape, np.float32),
+            np.empty(image.shape, np.float32),
+            np.zeros(image.shape, np.bool_),
+        )
+    return (image, *pyramid.gradients[key])
 
 
 def _groups(where: np.ndarray):
@@ -273,15 +155,6 @@ def _groups(where: np.ndarray):
         yield int(key // 100), int(key % 100), index
 
 
-def _patches(shape: tuple[int, int], cx: np.ndarray, cy: np.ndarray, radius: int):
-    """Pixel indices of square patches centred at rounded (cx, cy), and which lie inside."""
-    offsets = np.arange(-radius, radius + 1)
-    ys = np.round(cy).astype(int)[:, None, None] + offsets[None, :, None]
-    xs = np.round(cx).astype(int)[:, None, None] + offsets[None, None, :]
-    inside = (ys > 0) & (ys < shape[0] - 1) & (xs > 0) & (xs < shape[1] - 1)
-    return np.clip(ys, 0, shape[0] - 1), np.clip(xs, 0, shape[1] - 1), inside
-
-
 def assign_orientations(
     pyramid: _Pyramid, where: np.ndarray, keypoints: KeypointSet
 ) -> tuple[KeypointSet, np.ndarray]:
@@ -291,29 +164,17 @@ def assign_orientations(
     weighted by magnitude and a Gaussian of 1.5σ, smoothed; every local peak
     above 0.8 of the maximum gives a keypoint, its angle refined by a parabola.
     """
+    from ._kernels import orientation_histograms
+
     out_index, out_angle = [], []
     for octave, layer, index in _groups(where):
-        magnitude, angle = _gradients(pyramid, octave, layer)
-        sigma = 1.5 * pyramid.layer_sigma(where[index, 1])
-        radius = int(np.round(3 * sigma.max()))
-        ys, xs, inside = _patches(magnitude.shape, where[index, 2], where[index, 3], radius)
-        offsets = np.arange(-radius, radius + 1)
-        distance2 = offsets[None, :, None] ** 2 + offsets[None, None, :] ** 2
-        weight = np.exp(-distance2 / (2 * sigma[:, None, None] ** 2))
-        weight *= inside & (distance2 <= np.round(3 * sigma)[:, None, None] ** 2)
-        weight *= magnitude[ys, xs]
-        bins = (
-            np.floor(angle[ys, xs] * ORIENTATION_BINS / (2 * np.pi)).astype(int) % ORIENTATION_BINS
+        smooth = orientation_histograms(
+            *_gradients(pyramid, octave, layer),
+            where[index, 2].copy(),
+            where[index, 3].copy(),
+            1.5 * pyramid.layer_sigma(where[index, 1]),
+            ORIENTATION_BINS,
         )
-        flat = bins + ORIENTATION_BINS * np.arange(len(index))[:, None, None]
-        hist = np.bincount(flat.ravel(), weight.ravel(), len(index) * ORIENTATION_BINS)
-        hist = hist.reshape(len(index), ORIENTATION_BINS)
-        smooth = (
-            np.roll(hist, 2, 1)
-            + np.roll(hist, -2, 1)
-            + 4 * (np.roll(hist, 1, 1) + np.roll(hist, -1, 1))
-            + 6 * hist
-        ) / 16
         left, right = np.roll(smooth, 1, 1), np.roll(smooth, -1, 1)
         peaks = (
             (smooth > left) & (smooth > right) & (smooth >= 0.8 * smooth.max(axis=1, keepdims=True))
@@ -349,11 +210,9 @@ def sift_descriptors(pyramid: _Pyramid, where: np.ndarray, orientation: np.ndarr
     d, n = DESCRIPTOR_CELLS, DESCRIPTOR_BINS
     out = np.zeros((len(where), d * d * n), np.float32)
     for octave, layer, index in _groups(where):
-        magnitude, angle = _gradients(pyramid, octave, layer)
         width = 3.0 * pyramid.layer_sigma(where[index, 1])
         out[index] = descriptor_histograms(
-            magnitude,
-            angle,
+            *_gradients(pyramid, octave, layer),
             where[index, 2].copy(),
             where[index, 3].copy(),
             width,
