@@ -70,6 +70,64 @@ def orientation_histograms(image, magnitude, angle, done, cx, cy, sigma, bins): 
     return out
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _vote(hist, rbin, cbin, obin, weight):  # pragma: no cover
+    """Trilinear vote of ``weight`` at fractional (row, column, orientation) bin."""
+    r0, c0, o0 = int(math.floor(rbin)), int(math.floor(cbin)), int(math.floor(obin))
+    fr, fc, fo = rbin - r0, cbin - c0, obin - o0
+    for dr in range(2):
+        wr = weight * (fr if dr else 1.0 - fr)
+        for dc in range(2):
+            wrc = wr * (fc if dc else 1.0 - fc)
+            hist[r0 + 1 + dr, c0 + 1 + dc, o0] += wrc * (1.0 - fo)
+            hist[r0 + 1 + dr, c0 + 1 + dc, o0 + 1] += wrc * fo
+
+
+@numba.njit(cache=True, nogil=True)
+def _describe(hist, image, magnitude, angle, done, cx, cy, w, theta, cells, bins):  # pragma: no cover
+    """Accumulate one keypoint's raw histogram into ``hist`` (cells + 2, cells + 2, bins + 2).
+
+    The Gaussian weight :math:`e^{-(x_r^2 + y_r^2) / 2 (d/2)^2}` of the rotated
+    coordinates in cell widths equals :math:`e^{-o_x^2 / s}\, e^{-o_y^2 / s}`,
+    :math:`s = 2 (d w / 2)^2`, the offsets' (a rotation keeps lengths), so it
+    is two tables of exponentials per keypoint instead of one per pixel.
+    """
+    rows, cols = magnitude.shape
+    two_pi = 2.0 * math.pi
+    half = 0.5 * cells
+    cos_t, sin_t, inverse = math.cos(theta), math.sin(theta), 1.0 / w
+    radius = int(round(w * math.sqrt(2.0) * (cells + 1) * 0.5))
+    radius = min(radius, int(math.sqrt(rows * rows + cols * cols)))
+    x0, y0 = int(round(cx)), int(round(cy))
+    spread = -1.0 / (2.0 * half * half * w * w)
+    along_x = np.empty(2 * radius + 1, np.float64)
+    for d in range(-radius, radius + 1):
+        along_x[d + radius] = math.exp(spread * (x0 + d - cx) ** 2)
+    for dy in range(-radius, radius + 1):
+        y = y0 + dy
+        if y <= 0 or y >= rows - 1:
+            continue
+        oy = y - cy
+        along_y = math.exp(spread * oy * oy)
+        for dx in range(-radius, radius + 1):
+            x = x0 + dx
+            if x <= 0 or x >= cols - 1:
+                continue
+            ox = x - cx
+            rbin = (-sin_t * ox + cos_t * oy) * inverse + half - 0.5
+            cbin = (cos_t * ox + sin_t * oy) * inverse + half - 0.5
+            if rbin <= -1.0 or rbin >= cells or cbin <= -1.0 or cbin >= cells:
+                continue
+            _gradient(image, magnitude, angle, done, y, x)
+            relative = angle[y, x] - theta
+            while relative < 0.0:
+                relative += two_pi
+            while relative >= two_pi:
+                relative -= two_pi
+            weight = along_y * along_x[dx + radius] * magnitude[y, x]
+            _vote(hist, rbin, cbin, relative * (bins / two_pi), weight)
+
+
 @numba.njit(cache=True, nogil=True)
 def descriptor_histograms(image, magnitude, angle, done, cx, cy, width, theta, cells, bins):
     """Raw (cells × cells × bins) histograms for keypoints at (cx, cy) in one pyramid level.
@@ -77,54 +135,11 @@ def descriptor_histograms(image, magnitude, angle, done, cx, cy, width, theta, c
     ``width`` is the cell width (3σ) and ``theta`` the orientation of each keypoint.
     """
     count = cx.shape[0]
-    rows, cols = magnitude.shape
     out = np.zeros((count, cells * cells * bins), np.float32)
     hist = np.zeros((cells + 2, cells + 2, bins + 2), np.float64)
-    two_pi = 2.0 * math.pi
-    half = 0.5 * cells
     for k in range(count):
         hist[:] = 0.0
-        cos_t = math.cos(theta[k])
-        sin_t = math.sin(theta[k])
-        w = width[k]
-        radius = int(round(w * math.sqrt(2.0) * (cells + 1) * 0.5))
-        radius = min(radius, int(math.sqrt(rows * rows + cols * cols)))
-        x0 = int(round(cx[k]))
-        y0 = int(round(cy[k]))
-        for dy in range(-radius, radius + 1):
-            y = y0 + dy
-            if y <= 0 or y >= rows - 1:
-                continue
-            for dx in range(-radius, radius + 1):
-                x = x0 + dx
-                if x <= 0 or x >= cols - 1:
-                    continue
-                ox = x - cx[k]
-                oy = y - cy[k]
-                x_rot = (cos_t * ox + sin_t * oy) / w
-                y_rot = (-sin_t * ox + cos_t * oy) / w
-                rbin = y_rot + half - 0.5
-                cbin = x_rot + half - 0.5
-                if rbin <= -1.0 or rbin >= cells or cbin <= -1.0 or cbin >= cells:
-                    continue
-                weight = math.exp(-(x_rot * x_rot + y_rot * y_rot) / (2.0 * half * half))
-                _gradient(image, magnitude, angle, done, y, x)
-                weight *= magnitude[y, x]
-                obin = (angle[y, x] - theta[k]) % two_pi * bins / two_pi
-                r0 = int(math.floor(rbin))
-                c0 = int(math.floor(cbin))
-                o0 = int(math.floor(obin))
-                fr = rbin - r0
-                fc = cbin - c0
-                fo = obin - o0
-                for dr in range(2):
-                    wr = weight * (fr if dr else 1.0 - fr)
-                    for dc in range(2):
-                        wrc = wr * (fc if dc else 1.0 - fc)
-                        for do in range(2):
-                            hist[r0 + 1 + dr, c0 + 1 + dc, o0 + do] += wrc * (
-                                fo if do else 1.0 - fo
-                            )
+        _describe(hist, image, magnitude, angle, done, cx[k], cy[k], width[k], theta[k], cells, bins)
         for r in range(cells):
             for c in range(cells):
                 for o in range(bins):
