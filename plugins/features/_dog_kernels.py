@@ -88,7 +88,7 @@ def _fit(d: np.ndarray, i: int, r: int, c: int, hessian: np.ndarray, grad: np.nd
 
 @njit(cache=True, nogil=True)
 def _solve3(a: np.ndarray, b: np.ndarray, x: np.ndarray) -> float:
-    """x = a⁻¹ b by Gaussian elimination with partial pivoting; returns det(a) (a, b overwritten)."""
+    """x = a⁻¹ b by Gaussian elimination with partial pivoting; returns det(a); overwrites a, b."""
     det = 1.0
     for k in range(3):
         p = k

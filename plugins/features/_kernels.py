@@ -38,7 +38,7 @@ def _gradient(image, magnitude, angle, done, y, x):  # pragma: no cover
 
 @numba.njit(cache=True, nogil=True)
 def orientation_histograms(image, magnitude, angle, done, cx, cy, sigma, bins):  # pragma: no cover
-    """Smoothed orientation histograms (Lowe 2004, section 5) of keypoints in one level.
+    r"""Smoothed orientation histograms (Lowe 2004, section 5) of keypoints in one level.
 
     The pixels within ``round(3σ)`` of the keypoint's rounded position vote
     their magnitude times :math:`e^{-d^2 / 2\sigma^2}` into ``bins`` bins; the
@@ -84,8 +84,8 @@ def _vote(hist, rbin, cbin, obin, weight):  # pragma: no cover
 
 
 @numba.njit(cache=True, nogil=True)
-def _describe(hist, image, magnitude, angle, done, cx, cy, w, theta, cells, bins):  # pragma: no cover
-    """Accumulate one keypoint's raw histogram into ``hist`` (cells + 2, cells + 2, bins + 2).
+def _describe(hist, image, magnitude, angle, done, cx, cy, w, theta, cells, bins):
+    r"""Accumulate one keypoint's raw histogram into ``hist`` (cells + 2, cells + 2, bins + 2).
 
     The Gaussian weight :math:`e^{-(x_r^2 + y_r^2) / 2 (d/2)^2}` of the rotated
     coordinates in cell widths equals :math:`e^{-o_x^2 / s}\, e^{-o_y^2 / s}`,
@@ -139,7 +139,9 @@ def descriptor_histograms(image, magnitude, angle, done, cx, cy, width, theta, c
     hist = np.zeros((cells + 2, cells + 2, bins + 2), np.float64)
     for k in range(count):
         hist[:] = 0.0
-        _describe(hist, image, magnitude, angle, done, cx[k], cy[k], width[k], theta[k], cells, bins)
+        _describe(
+            hist, image, magnitude, angle, done, cx[k], cy[k], width[k], theta[k], cells, bins
+        )
         for r in range(cells):
             for c in range(cells):
                 for o in range(bins):

@@ -133,7 +133,7 @@ def detect_dog(
     return keypoints, pyramid, table[:, :4]
 
 
-def _gradients(pyramid: _Pyramid, octave: int, layer: int):
+def _gradients(pyramid: _Pyramid, octave: int, layer: int) -> tuple[np.ndarray, ...]:
     """The level's image and its gradient arrays (magnitude, angle, done), filled on demand."""
     key = (octave, layer)
     image = pyramid.gaussians[octave][layer]
@@ -168,8 +168,12 @@ def assign_orientations(
 
     out_index, out_angle = [], []
     for octave, layer, index in _groups(where):
+        image, magnitude, angle, done = _gradients(pyramid, octave, layer)
         smooth = orientation_histograms(
-            *_gradients(pyramid, octave, layer),
+            image,
+            magnitude,
+            angle,
+            done,
             where[index, 2].copy(),
             where[index, 3].copy(),
             1.5 * pyramid.layer_sigma(where[index, 1]),
@@ -211,8 +215,12 @@ def sift_descriptors(pyramid: _Pyramid, where: np.ndarray, orientation: np.ndarr
     out = np.zeros((len(where), d * d * n), np.float32)
     for octave, layer, index in _groups(where):
         width = 3.0 * pyramid.layer_sigma(where[index, 1])
+        image, magnitude, angle, done = _gradients(pyramid, octave, layer)
         out[index] = descriptor_histograms(
-            *_gradients(pyramid, octave, layer),
+            image,
+            magnitude,
+            angle,
+            done,
             where[index, 2].copy(),
             where[index, 3].copy(),
             width,
