@@ -14,40 +14,52 @@ __all__ = ["match", "nearest_two"]
 _BLOCK = 2048
 
 
+def _brute(query: np.ndarray, train: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two nearest ``train`` rows of each ``query`` row, and the nearest query row of each
+    ``train`` row, from one pass over blocks of :math:`\\|a\\|^2 + \\|b\\|^2 - 2 a \\cdot b`."""
+    from ._kernels import two_smallest
+
+    a = query.astype(np.float32)
+    b = train.astype(np.float32)
+    b_norm = (b * b).sum(axis=1)
+    index = np.empty((len(a), 2), np.int64)
+    value = np.empty((len(a), 2), np.float32)
+    column_value = np.full(len(b), np.inf)
+    column_index = np.zeros(len(b), np.int64)
+    for start in range(0, len(a), _BLOCK):
+        block = a[start : start + _BLOCK]
+        squared = (block * block).sum(axis=1)[:, None] + b_norm[None, :] - 2.0 * block @ b.T
+        stop = start + len(block)
+        two_smallest(
+            squared, start, index[start:stop], value[start:stop], column_value, column_index
+        )
+    return index, np.sqrt(np.maximum(value, 0.0)).astype(np.float64), column_index
+
+
 def nearest_two(
     query: np.ndarray, train: np.ndarray, method: str = "brute"
 ) -> tuple[np.ndarray, np.ndarray]:
     """Indices and Euclidean distances of the two nearest ``train`` rows of each ``query`` row.
 
     ``brute`` computes :math:`\\|a\\|^2 + \\|b\\|^2 - 2 a \\cdot b` in blocks
-    (one matrix product each); ``kdtree`` uses ``scipy.spatial.cKDTree``.
-    With one train row, the second neighbour has infinite distance.
+    (one matrix product each) and keeps each row's two smallest in a compiled
+    pass; ``kdtree`` uses ``scipy.spatial.cKDTree``. With one train row, the
+    second neighbour has infinite distance.
     """
-    k = min(2, len(train))
     if method == "kdtree":
         from scipy.spatial import cKDTree
 
+        k = min(2, len(train))
         distance, index = cKDTree(train).query(query, k=k)
         distance, index = distance.reshape(len(query), k), index.reshape(len(query), k)
-    else:
-        a = query.astype(np.float32)
-        b = train.astype(np.float32)
-        b_norm = (b * b).sum(axis=1)
-        index = np.empty((len(a), k), np.int64)
-        distance = np.empty((len(a), k), np.float64)
-        for start in range(0, len(a), _BLOCK):
-            block = a[start : start + _BLOCK]
-            squared = (block * block).sum(axis=1)[:, None] + b_norm[None, :] - 2.0 * block @ b.T
-            nearest = np.argpartition(squared, k - 1, axis=1)[:, :k]
-            values = np.take_along_axis(squared, nearest, axis=1)
-            order = np.argsort(values, axis=1)
-            index[start : start + _BLOCK] = np.take_along_axis(nearest, order, axis=1)
-            distance[start : start + _BLOCK] = np.sqrt(
-                np.maximum(np.take_along_axis(values, order, axis=1), 0.0)
-            )
-    if k == 1:
-        index = np.column_stack([index[:, 0], index[:, 0]])
-        distance = np.column_stack([distance[:, 0], np.full(len(distance), np.inf)])
+        if k == 2:
+            return index, distance
+        return np.column_stack([index[:, 0], index[:, 0]]), np.column_stack(
+            [distance[:, 0], np.full(len(distance), np.inf)]
+        )
+    index, distance, _ = _brute(query, train)
+    if len(train) == 1:
+        index[:, 1] = index[:, 0]
     return index, distance
 
 
@@ -95,11 +107,14 @@ def match(
         raise ValueError(f"descriptors have different lengths: {a.shape[1]} and {b.shape[1]}")
     if len(a) == 0 or len(b) == 0:
         return MatchSet(np.zeros((0, 2), np.int64), np.zeros(0))
-    index, distance = nearest_two(a, b, method)
+    if method == "brute":  # one pass gives both directions
+        index, distance, back = _brute(a, b)
+    else:
+        index, distance = nearest_two(a, b, method)
+        back = nearest_two(b, a, method)[0][:, 0] if symmetric else None
     keep = distance[:, 0] < ratio * distance[:, 1] if ratio < 1 else np.ones(len(a), bool)
-    if symmetric:
-        back, _ = nearest_two(b, a, method)
-        keep &= back[index[:, 0], 0] == np.arange(len(a))
+    if symmetric and back is not None:
+        keep &= back[index[:, 0]] == np.arange(len(a))
     rows = np.flatnonzero(keep)
     order = np.argsort(distance[rows, 0], kind="stable")
     rows = rows[order]
