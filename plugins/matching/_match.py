@@ -111,9 +111,9 @@ def match(
         index, distance, back = _brute(a, b)
     else:
         index, distance = nearest_two(a, b, method)
-        back = nearest_two(b, a, method)[0][:, 0] if symmetric else None
+        back = nearest_two(b, a, method)[0][:, 0] if symmetric else index[:, 0]
     keep = distance[:, 0] < ratio * distance[:, 1] if ratio < 1 else np.ones(len(a), bool)
-    if symmetric and back is not None:
+    if symmetric:
         keep &= back[index[:, 0]] == np.arange(len(a))
     rows = np.flatnonzero(keep)
     order = np.argsort(distance[rows, 0], kind="stable")
