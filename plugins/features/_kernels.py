@@ -83,6 +83,27 @@ def _vote(hist, rbin, cbin, obin, weight):  # pragma: no cover
             hist[r0 + 1 + dr, c0 + 1 + dc, o0 + 1] += wrc * fo
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _row_span(cos_t, sin_t, oy, reach, cx):  # pragma: no cover
+    r"""Columns (a pixel wider each side) of one row that can fall in the rotated window.
+
+    The window is :math:`|c\,o_x + s\,o_y| < R` and :math:`|-s\,o_x + c\,o_y| < R`
+    (:math:`R` = ``reach``); each slab bounds :math:`o_x` when its coefficient is
+    not zero. The caller still tests every pixel: the span only skips those that
+    surely fail.
+    """
+    low, high = -math.inf, math.inf
+    if abs(cos_t) > 1e-9:
+        a, b = (-reach - sin_t * oy) / cos_t, (reach - sin_t * oy) / cos_t
+        low, high = max(low, min(a, b)), min(high, max(a, b))
+    if abs(sin_t) > 1e-9:
+        a, b = (cos_t * oy - reach) / sin_t, (cos_t * oy + reach) / sin_t
+        low, high = max(low, min(a, b)), min(high, max(a, b))
+    if low > high:
+        return 1, 0
+    return int(math.floor(low + cx)) - 1, int(math.ceil(high + cx)) + 1
+
+
 @numba.njit(cache=True, nogil=True)
 def _describe(hist, image, magnitude, angle, done, cx, cy, w, theta, cells, bins):
     r"""Accumulate one keypoint's raw histogram into ``hist`` (cells + 2, cells + 2, bins + 2).
@@ -109,10 +130,10 @@ def _describe(hist, image, magnitude, angle, done, cx, cy, w, theta, cells, bins
             continue
         oy = y - cy
         along_y = math.exp(spread * oy * oy)
-        for dx in range(-radius, radius + 1):
-            x = x0 + dx
-            if x <= 0 or x >= cols - 1:
-                continue
+        first, last = _row_span(cos_t, sin_t, oy, (half + 0.5) * w, cx)
+        first, last = max(x0 - radius, first, 1), min(x0 + radius, last, cols - 2)
+        for x in range(first, last + 1):
+            dx = x - x0
             ox = x - cx
             rbin = (-sin_t * ox + cos_t * oy) * inverse + half - 0.5
             cbin = (cos_t * ox + sin_t * oy) * inverse + half - 0.5
