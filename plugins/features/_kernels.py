@@ -53,6 +53,9 @@ def orientation_histograms(image, magnitude, angle, done, cx, cy, sigma, bins): 
         radius = int(round(3.0 * sigma[k]))
         x0, y0 = int(round(cx[k])), int(round(cy[k]))
         spread = 2.0 * sigma[k] ** 2
+        gauss = np.empty(radius * radius + 1, np.float64)  # by squared distance
+        for d2 in range(radius * radius + 1):
+            gauss[d2] = math.exp(-d2 / spread)
         for dy in range(-radius, radius + 1):
             y = y0 + dy
             if y <= 0 or y >= rows - 1:
@@ -62,7 +65,7 @@ def orientation_histograms(image, magnitude, angle, done, cx, cy, sigma, bins): 
                 if x <= 0 or x >= cols - 1 or dx * dx + dy * dy > radius * radius:
                     continue
                 _gradient(image, magnitude, angle, done, y, x)
-                weight = math.exp(-(dx * dx + dy * dy) / spread) * magnitude[y, x]
+                weight = gauss[dx * dx + dy * dy] * magnitude[y, x]
                 hist[int(math.floor(angle[y, x] * count / two_pi)) % bins] += weight
         for b in range(bins):
             left, right = hist[b - 1], hist[(b + 1) % bins]
