@@ -9,6 +9,7 @@ computed only where a keypoint's window reaches (:mod:`._kernels`).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Annotated, NamedTuple
@@ -18,7 +19,7 @@ from pydantic import Field
 
 from graphvision import Conformance, Descriptors, GrayImage, Keypoints, KeypointSet, node
 
-from ..shared.separable import smooth_gaussian
+from ..shared.separable import gaussian_taps, smooth_gaussian
 
 # Lowe's parameters, defined once for every SIFT node (defaults as in the paper and OpenCV).
 Intervals = Annotated[int, Field(ge=1, le=8, description="Scales per octave, s.")]
@@ -69,6 +70,29 @@ class _Pyramid:
         return self.params.sigma * 2.0 ** (layer / self.params.intervals)
 
 
+@functools.lru_cache(maxsize=64)
+def _reflected(length: int, half: int) -> np.ndarray:
+    """Source index of each position of a line of ``length`` padded by ``half`` (reflect)."""
+    return np.pad(np.arange(length, dtype=np.int64), half, mode="symmetric")
+
+
+def _blur_stack(stack: np.ndarray, steps: list[float]) -> None:
+    """``stack[i] = smooth_gaussian(stack[i - 1], steps[i - 1], truncate=3.0)``, in place.
+
+    The same compiled separable kernel writing straight into the octave's stack
+    (no temporary level and copy), the boundary indices made once per size.
+    """
+    from ..shared.separable_kernels import correlate_both
+
+    rows, cols = stack.shape[1:]
+    for i, step in enumerate(steps, start=1):
+        taps = gaussian_taps(step, 3.0).astype(np.float32)
+        half = taps.size // 2
+        correlate_both(
+            stack[i - 1], taps, 1, _reflected(rows, half), taps, 1, _reflected(cols, half), stack[i]
+        )
+
+
 def _pyramid(image: np.ndarray, params: SiftParams) -> _Pyramid:
     from ._dog_kernels import upsample_twice
 
@@ -89,8 +113,7 @@ def _pyramid(image: np.ndarray, params: SiftParams) -> _Pyramid:
     for _ in range(octaves):
         stack = np.empty((s + 3, *base.shape), np.float32)
         stack[0] = base
-        for i, step in enumerate(steps, start=1):
-            stack[i] = smooth_gaussian(stack[i - 1], step, truncate=3.0)
+        _blur_stack(stack, steps)
         gaussians.append(stack)
         dogs.append(np.diff(stack, axis=0))
         base = stack[s][::2, ::2]

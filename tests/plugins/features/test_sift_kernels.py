@@ -78,3 +78,15 @@ def test_three_by_three_solve_agrees_with_lapack(seed):
     det = _solve3(a.copy(), b.copy(), x)
     np.testing.assert_allclose(x, np.linalg.solve(a, b), rtol=1e-10)
     assert det == pytest.approx(np.linalg.det(a), rel=1e-10)
+
+
+def test_the_octave_stack_is_blurred_in_place_as_smooth_gaussian_blurs_it():
+    from graphvision_plugins.shared.separable import smooth_gaussian
+
+    stack = np.random.default_rng(0).random((6, 37, 51)).astype(np.float32)
+    steps = [1.2, 1.5, 1.9, 2.4, 3.1]
+    expected = stack.copy()
+    for i, step in enumerate(steps, start=1):
+        expected[i] = smooth_gaussian(expected[i - 1], step, truncate=3.0)
+    _sift._blur_stack(stack, steps)
+    np.testing.assert_array_equal(stack, expected)
