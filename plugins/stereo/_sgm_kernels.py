@@ -67,12 +67,16 @@ def _step(
     out[0] = value
     total[0] = np.uint16(total[0] + value)
     low = value
-    for k in range(1, last):
-        side = _least(np.uint16(before[k - 1] + step), np.uint16(before[k + 1] + step))
-        here = _least(_least(before[k], side), jump)
-        value = np.uint16(cost[k] + np.uint16(here - low_before))
-        out[k] = value
-        total[k] = np.uint16(total[k] + value)
+    # slices indexed from 0: ``before[k - 1]`` kept numba's negative-index check in the
+    # loop, and then it did not vectorise (one disparity per instruction)
+    below, middle, above = before[: last - 1], before[1:last], before[2:]
+    costs, outs, totals = cost[1:last], out[1:last], total[1:last]
+    for i in range(last - 1):
+        side = _least(np.uint16(below[i] + step), np.uint16(above[i] + step))
+        here = _least(_least(middle[i], side), jump)
+        value = np.uint16(costs[i] + np.uint16(here - low_before))
+        outs[i] = value
+        totals[i] = np.uint16(totals[i] + value)
         low = _least(low, value)
     here = _least(_least(before[last], np.uint16(before[last - 1] + step)), jump)
     value = np.uint16(cost[last] + np.uint16(here - low_before))
