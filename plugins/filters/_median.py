@@ -63,7 +63,7 @@ def _median_2d(plane: np.ndarray, size: int, boundary: str, out: np.ndarray) -> 
     elif size == 5:
         from ._median_select5 import median_5x5
 
-        median_5x5(image, rows, columns, sort_network(5), out, _BLOCK)
+        median_5x5(image, rows, columns, out, _BLOCK)
     else:
         selection, median_wire = median_network(size)
         median_by_network(

@@ -6,9 +6,33 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._median_kernels import _advance, _compare
+from ._median_kernels import _advance, lower, upper
 
 __all__ = ["median_5x5"]
+
+
+@njit(cache=True, nogil=True)
+def _sort_columns(lines, columns, span):
+    for x in range(span):
+        a0 = lines[0, x]
+        a1 = lines[1, x]
+        a2 = lines[2, x]
+        a3 = lines[3, x]
+        a4 = lines[4, x]
+        a0, a1 = lower(a0, a1), upper(a0, a1)
+        a2, a3 = lower(a2, a3), upper(a2, a3)
+        a0, a2 = lower(a0, a2), upper(a0, a2)
+        a1, a3 = lower(a1, a3), upper(a1, a3)
+        a1, a2 = lower(a1, a2), upper(a1, a2)
+        a0, a4 = lower(a0, a4), upper(a0, a4)
+        a2, a4 = lower(a2, a4), upper(a2, a4)
+        a1, a2 = lower(a1, a2), upper(a1, a2)
+        a3, a4 = lower(a3, a4), upper(a3, a4)
+        columns[0, x] = a0
+        columns[1, x] = a1
+        columns[2, x] = a2
+        columns[3, x] = a3
+        columns[4, x] = a4
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -46,51 +70,51 @@ def _load(columns, x):
 def _stage_0(w):
     a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12 = w[:13]
     a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23, a24 = w[13:]
-    a0, a1 = np.minimum(a0, a1), np.maximum(a0, a1)
-    a20, a21 = np.minimum(a20, a21), np.maximum(a20, a21)
-    a20, a1 = np.minimum(a20, a1), np.maximum(a20, a1)
-    a10, a11 = np.minimum(a10, a11), np.maximum(a10, a11)
-    a10, a20 = np.minimum(a10, a20), np.maximum(a10, a20)
-    a11, a1 = np.minimum(a11, a1), np.maximum(a11, a1)
-    a5, a6 = np.minimum(a5, a6), np.maximum(a5, a6)
-    a15, a16 = np.minimum(a15, a16), np.maximum(a15, a16)
-    a15, a6 = np.minimum(a15, a6), np.maximum(a15, a6)
-    a5, a10 = np.minimum(a5, a10), np.maximum(a5, a10)
-    a15, a20 = np.minimum(a15, a20), np.maximum(a15, a20)
-    a6, a11 = np.minimum(a6, a11), np.maximum(a6, a11)
-    a16, a1 = np.minimum(a16, a1), np.maximum(a16, a1)
-    a2, a3 = np.minimum(a2, a3), np.maximum(a2, a3)
-    a22, a23 = np.minimum(a22, a23), np.maximum(a22, a23)
-    a22, a3 = np.minimum(a22, a3), np.maximum(a22, a3)
-    a12, a13 = np.minimum(a12, a13), np.maximum(a12, a13)
-    a12, a22 = np.minimum(a12, a22), np.maximum(a12, a22)
-    a13, a3 = np.minimum(a13, a3), np.maximum(a13, a3)
-    a7, a8 = np.minimum(a7, a8), np.maximum(a7, a8)
-    a17, a18 = np.minimum(a17, a18), np.maximum(a17, a18)
-    a17, a8 = np.minimum(a17, a8), np.maximum(a17, a8)
-    a7, a12 = np.minimum(a7, a12), np.maximum(a7, a12)
-    a17, a22 = np.minimum(a17, a22), np.maximum(a17, a22)
-    a8, a13 = np.minimum(a8, a13), np.maximum(a8, a13)
-    a18, a3 = np.minimum(a18, a3), np.maximum(a18, a3)
-    a0, a2 = np.minimum(a0, a2), np.maximum(a0, a2)
-    a1, a3 = np.minimum(a1, a3), np.maximum(a1, a3)
-    a1, a2 = np.minimum(a1, a2), np.maximum(a1, a2)
-    a20, a22 = np.minimum(a20, a22), np.maximum(a20, a22)
-    a20, a1 = np.minimum(a20, a1), np.maximum(a20, a1)
-    a22, a2 = np.minimum(a22, a2), np.maximum(a22, a2)
-    a10, a12 = np.minimum(a10, a12), np.maximum(a10, a12)
-    a11, a13 = np.minimum(a11, a13), np.maximum(a11, a13)
-    a11, a12 = np.minimum(a11, a12), np.maximum(a11, a12)
-    a10, a20 = np.minimum(a10, a20), np.maximum(a10, a20)
-    a11, a1 = np.minimum(a11, a1), np.maximum(a11, a1)
-    a12, a22 = np.minimum(a12, a22), np.maximum(a12, a22)
-    a13, a2 = np.minimum(a13, a2), np.maximum(a13, a2)
-    a5, a7 = np.minimum(a5, a7), np.maximum(a5, a7)
-    a21, a23 = np.minimum(a21, a23), np.maximum(a21, a23)
-    a21, a7 = np.minimum(a21, a7), np.maximum(a21, a7)
-    a6, a8 = np.minimum(a6, a8), np.maximum(a6, a8)
-    a6, a21 = np.minimum(a6, a21), np.maximum(a6, a21)
-    a8, a7 = np.minimum(a8, a7), np.maximum(a8, a7)
+    a0, a1 = lower(a0, a1), upper(a0, a1)
+    a20, a21 = lower(a20, a21), upper(a20, a21)
+    a20, a1 = lower(a20, a1), upper(a20, a1)
+    a10, a11 = lower(a10, a11), upper(a10, a11)
+    a10, a20 = lower(a10, a20), upper(a10, a20)
+    a11, a1 = lower(a11, a1), upper(a11, a1)
+    a5, a6 = lower(a5, a6), upper(a5, a6)
+    a15, a16 = lower(a15, a16), upper(a15, a16)
+    a15, a6 = lower(a15, a6), upper(a15, a6)
+    a5, a10 = lower(a5, a10), upper(a5, a10)
+    a15, a20 = lower(a15, a20), upper(a15, a20)
+    a6, a11 = lower(a6, a11), upper(a6, a11)
+    a16, a1 = lower(a16, a1), upper(a16, a1)
+    a2, a3 = lower(a2, a3), upper(a2, a3)
+    a22, a23 = lower(a22, a23), upper(a22, a23)
+    a22, a3 = lower(a22, a3), upper(a22, a3)
+    a12, a13 = lower(a12, a13), upper(a12, a13)
+    a12, a22 = lower(a12, a22), upper(a12, a22)
+    a13, a3 = lower(a13, a3), upper(a13, a3)
+    a7, a8 = lower(a7, a8), upper(a7, a8)
+    a17, a18 = lower(a17, a18), upper(a17, a18)
+    a17, a8 = lower(a17, a8), upper(a17, a8)
+    a7, a12 = lower(a7, a12), upper(a7, a12)
+    a17, a22 = lower(a17, a22), upper(a17, a22)
+    a8, a13 = lower(a8, a13), upper(a8, a13)
+    a18, a3 = lower(a18, a3), upper(a18, a3)
+    a0, a2 = lower(a0, a2), upper(a0, a2)
+    a1, a3 = lower(a1, a3), upper(a1, a3)
+    a1, a2 = lower(a1, a2), upper(a1, a2)
+    a20, a22 = lower(a20, a22), upper(a20, a22)
+    a20, a1 = lower(a20, a1), upper(a20, a1)
+    a22, a2 = lower(a22, a2), upper(a22, a2)
+    a10, a12 = lower(a10, a12), upper(a10, a12)
+    a11, a13 = lower(a11, a13), upper(a11, a13)
+    a11, a12 = lower(a11, a12), upper(a11, a12)
+    a10, a20 = lower(a10, a20), upper(a10, a20)
+    a11, a1 = lower(a11, a1), upper(a11, a1)
+    a12, a22 = lower(a12, a22), upper(a12, a22)
+    a13, a2 = lower(a13, a2), upper(a13, a2)
+    a5, a7 = lower(a5, a7), upper(a5, a7)
+    a21, a23 = lower(a21, a23), upper(a21, a23)
+    a21, a7 = lower(a21, a7), upper(a21, a7)
+    a6, a8 = lower(a6, a8), upper(a6, a8)
+    a6, a21 = lower(a6, a21), upper(a6, a21)
+    a8, a7 = lower(a8, a7), upper(a8, a7)
     first = (a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12)
     return first + (a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23, a24)  # noqa: RUF005
 
@@ -99,43 +123,43 @@ def _stage_0(w):
 def _stage_1(w):
     a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12 = w[:13]
     a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23, a24 = w[13:]
-    a15, a17 = np.minimum(a15, a17), np.maximum(a15, a17)
-    a16, a18 = np.minimum(a16, a18), np.maximum(a16, a18)
-    a16, a17 = np.minimum(a16, a17), np.maximum(a16, a17)
-    a15, a6 = np.minimum(a15, a6), np.maximum(a15, a6)
-    a16, a21 = np.minimum(a16, a21), np.maximum(a16, a21)
-    a17, a8 = np.minimum(a17, a8), np.maximum(a17, a8)
-    a18, a7 = np.minimum(a18, a7), np.maximum(a18, a7)
-    a5, a10 = np.minimum(a5, a10), np.maximum(a5, a10)
-    a15, a20 = np.minimum(a15, a20), np.maximum(a15, a20)
-    a11 = np.maximum(a6, a11)
-    a16, a1 = np.minimum(a16, a1), np.maximum(a16, a1)
-    a21, a12 = np.minimum(a21, a12), np.maximum(a21, a12)
-    a17, a22 = np.minimum(a17, a22), np.maximum(a17, a22)
-    a8 = np.minimum(a8, a13)
-    a2 = np.maximum(a18, a2)
-    a7, a3 = np.minimum(a7, a3), np.maximum(a7, a3)
-    a4 = np.maximum(a0, a4)
-    a2 = np.minimum(a2, a4)
-    a2 = np.maximum(a1, a2)
-    a24 = np.maximum(a20, a24)
-    a22 = np.minimum(a22, a24)
-    a22 = np.minimum(a22, a2)
-    a14 = np.maximum(a10, a14)
-    a3 = np.minimum(a3, a14)
-    a12 = np.minimum(a12, a3)
-    a12 = np.maximum(a11, a12)
-    a22 = np.maximum(a12, a22)
-    a9 = np.maximum(a5, a9)
-    a7 = np.minimum(a7, a9)
-    a7 = np.maximum(a21, a7)
-    a8 = np.minimum(a8, a7)
-    a19 = np.maximum(a15, a19)
-    a23 = np.minimum(a23, a19)
-    a17 = np.minimum(a17, a23)
-    a17 = np.maximum(a16, a17)
-    a17 = np.minimum(a17, a8)
-    a22 = np.maximum(a17, a22)
+    a15, a17 = lower(a15, a17), upper(a15, a17)
+    a16, a18 = lower(a16, a18), upper(a16, a18)
+    a16, a17 = lower(a16, a17), upper(a16, a17)
+    a15, a6 = lower(a15, a6), upper(a15, a6)
+    a16, a21 = lower(a16, a21), upper(a16, a21)
+    a17, a8 = lower(a17, a8), upper(a17, a8)
+    a18, a7 = lower(a18, a7), upper(a18, a7)
+    a5, a10 = lower(a5, a10), upper(a5, a10)
+    a15, a20 = lower(a15, a20), upper(a15, a20)
+    a11 = upper(a6, a11)
+    a16, a1 = lower(a16, a1), upper(a16, a1)
+    a21, a12 = lower(a21, a12), upper(a21, a12)
+    a17, a22 = lower(a17, a22), upper(a17, a22)
+    a8 = lower(a8, a13)
+    a2 = upper(a18, a2)
+    a7, a3 = lower(a7, a3), upper(a7, a3)
+    a4 = upper(a0, a4)
+    a2 = lower(a2, a4)
+    a2 = upper(a1, a2)
+    a24 = upper(a20, a24)
+    a22 = lower(a22, a24)
+    a22 = lower(a22, a2)
+    a14 = upper(a10, a14)
+    a3 = lower(a3, a14)
+    a12 = lower(a12, a3)
+    a12 = upper(a11, a12)
+    a22 = upper(a12, a22)
+    a9 = upper(a5, a9)
+    a7 = lower(a7, a9)
+    a7 = upper(a21, a7)
+    a8 = lower(a8, a7)
+    a19 = upper(a15, a19)
+    a23 = lower(a23, a19)
+    a17 = lower(a17, a23)
+    a17 = upper(a16, a17)
+    a17 = lower(a17, a8)
+    a22 = upper(a17, a22)
     first = (a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12)
     return first + (a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23, a24)  # noqa: RUF005
 
@@ -150,11 +174,11 @@ def median_5x5(
     image: np.ndarray,
     row_index: np.ndarray,
     column_index: np.ndarray,
-    column_sort: np.ndarray,
     out: np.ndarray,
     block: int,
 ) -> None:  # pragma: no cover
-    """``median_by_network`` for 5×5 windows, the selection in registers per pixel."""
+    """``median_by_network`` for 5×5 windows, the column sort and the selection in
+    registers per pixel."""
     rows, cols = out.shape
     lines = np.empty((5, column_index.size), dtype=np.float32)
     columns = np.empty((5, block + 4), dtype=np.float32)
@@ -163,10 +187,7 @@ def median_5x5(
         for start in range(0, cols, block):
             width = min(block, cols - start)
             span = width + 4
-            for rank in range(5):
-                columns[rank, :span] = lines[rank, start : start + span]
-            for t in range(column_sort.shape[0]):
-                _compare(columns, column_sort[t, 0], column_sort[t, 1], 0, span)
+            _sort_columns(lines[:, start : start + span], columns, span)
             row = out[r]
             for x in range(width):
                 row[start + x] = _select(_load(columns, x))

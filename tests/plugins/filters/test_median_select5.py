@@ -27,7 +27,7 @@ def test_straight_line_selection_equals_the_network_kernel(boundary, shape):
     columns = _median._boundary_index(shape[1], 2, boundary)
     out_shape = (rows.size - 4, columns.size - 4)
     found, expected = np.empty(out_shape, np.float32), np.empty(out_shape, np.float32)
-    median_5x5(image, rows, columns, sort_network(5), found, 512)
+    median_5x5(image, rows, columns, found, 512)
     selection, wire = median_network(5)
     median_by_network(image, rows, columns, sort_network(5), selection, wire, expected, 512)
     np.testing.assert_array_equal(found, expected)

@@ -50,9 +50,20 @@ def test_block_matching_rows_equal_the_volume(pair, d_min, count, half, block_ha
     np.testing.assert_array_equal(summed, volume.transpose(0, 2, 1))  # disparity-major
 
 
-@pytest.mark.parametrize(("paths", "edge", "d_min"), [(8, 0.02, 0), (4, None, -3), (8, 0.1, 2)])
-def test_sgm_sweeps_equal_the_path_kernels(pair, paths, edge, d_min):
-    _, volume = _volume(pair, d_min, 20, 3, 2)
+@pytest.mark.parametrize(
+    ("paths", "edge", "d_min", "count"),
+    # 1, 2 and 3 disparities: the horizontal step's vector loop over the inner ones is empty
+    [
+        (8, 0.02, 0, 20),
+        (4, None, -3, 20),
+        (8, 0.1, 2, 20),
+        (8, 0.02, 0, 1),
+        (4, 0.02, 1, 2),
+        (8, 0.02, -1, 3),
+    ],
+)
+def test_sgm_sweeps_equal_the_path_kernels(pair, paths, edge, d_min, count):
+    _, volume = _volume(pair, d_min, count, 3, 2)
     p1, p2 = 12 * 25, 128 * 25
     total = np.zeros_like(volume)
     for step_y, step_x in PATHS[:paths]:
