@@ -7,7 +7,9 @@ SGBM). OpenCV runs with ``cv2.setNumThreads(1)``, numba with one thread and BLAS
 thread (``threadpoolctl``). Inputs are scikit-image's astronaut and camera resized to
 512² and 2048² and rounded to 8-bit levels, as an image read from a file is (float32 in
 [0, 1] for graphvision; the dtype OpenCV's call takes, noted in the row, for OpenCV).
-graphvision is called as a user calls a node directly, its port checks included. The calls compared:
+graphvision is called as a user calls a node directly, its port checks included; the median,
+correlation and SGM rows are repeated with the node's own function (``__wrapped__``, no port
+checks), the kernel's time alone. The calls compared:
 
 * colour: ``colour.from_rgb`` against ``cv2.cvtColor`` (RGB2HSV, RGB2Lab, RGB2YCrCb) on float32;
 * median 3/5/7: ``filters.median`` against ``cv2.medianBlur`` (float32 for 3 and 5; uint8
@@ -44,6 +46,9 @@ import skimage.transform
 from timing import best
 
 SIZES = (512, 2048)
+# the node's function without the port checks (np.min/np.max of input and output): the
+# kernel's own time, beside the direct node call a user makes
+_KERNEL_ONLY = " (kernel, no port checks)"
 Row = tuple[str, str, Callable[[], object], Callable[[], object]]
 
 
@@ -72,23 +77,26 @@ def _image_rows(cv2, size: int) -> list[Row]:
         )
     for k in (3, 5, 7):
         src = gray if k < 7 else gray8
+        for label, median in (("", filters.median), (_KERNEL_ONLY, filters.median.__wrapped__)):
+            rows.append(
+                (
+                    f"median {k}×{k}{label}",
+                    f"`cv2.medianBlur` {src.dtype}",
+                    lambda k=k, median=median: median(gray, size=k),
+                    lambda k=k, src=src: cv2.medianBlur(src, k),
+                )
+            )
+    kernel = np.random.default_rng(0).random((5, 5)).astype(np.float32)
+    correlations = (("", filters.correlate), (_KERNEL_ONLY, filters.correlate.__wrapped__))
+    for label, correlate in correlations:
         rows.append(
             (
-                f"median {k}×{k}",
-                f"`cv2.medianBlur` {src.dtype}",
-                lambda k=k: filters.median(gray, size=k),
-                lambda k=k, src=src: cv2.medianBlur(src, k),
+                f"correlate 5×5{label}",
+                "`cv2.filter2D` float32",
+                lambda correlate=correlate: correlate(gray, kernel),
+                lambda: cv2.filter2D(gray, -1, kernel, borderType=cv2.BORDER_REFLECT_101),
             )
         )
-    kernel = np.random.default_rng(0).random((5, 5)).astype(np.float32)
-    rows.append(
-        (
-            "correlate 5×5",
-            "`cv2.filter2D` float32",
-            lambda: filters.correlate(gray, kernel),
-            lambda: cv2.filter2D(gray, -1, kernel, borderType=cv2.BORDER_REFLECT_101),
-        )
-    )
 
     def pyr_down() -> list[np.ndarray]:
         levels = [gray]
@@ -193,6 +201,12 @@ def _stereo_rows(cv2) -> list[Row]:
             "SGM, 64 disparities (target 1.5)",
             "`cv2.StereoSGBM(MODE_HH)` uint8",
             lambda: stereo.sgm(left, right, num_disparities=64),
+            lambda: sgbm.compute(left8, right8),
+        ),
+        (
+            f"SGM, 64 disparities{_KERNEL_ONLY}",
+            "`cv2.StereoSGBM(MODE_HH)` uint8",
+            lambda: stereo.sgm.__wrapped__(left, right, num_disparities=64),
             lambda: sgbm.compute(left8, right8),
         ),
     ]
