@@ -6,7 +6,9 @@ goes down the rows and aggregates the paths whose predecessor it has already vis
 opposite four (with 4 paths: the horizontal and vertical ones only). A vertical or
 diagonal path advances a whole row at once from its previous row's costs (one SIMD loop
 over the row's pixels per disparity, a sentinel row at each end of the range); the
-horizontal path goes pixel by pixel on the row turned pixel-major. The sum is in 16-bit
+horizontal path goes pixel by pixel on the row turned pixel-major, one SIMD loop over
+the disparities per pixel (a band of rows advanced together, SIMD over the rows, was
+slower: turning a 16-row band pixel-major misses the cache where a row fits). The sum is in 16-bit
 integers (the caller checks that it fits), so the order of the paths does not change it:
 the result is ``_kernels.aggregate_path``'s over ``PATHS`` to the bit.
 """
