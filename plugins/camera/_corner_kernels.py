@@ -18,6 +18,7 @@ __all__ = [
     "forstner",
     "gradient",
     "grid_homography",
+    "grow",
     "next_row",
     "saddle_peaks",
     "saddle_response",
@@ -81,40 +82,33 @@ def saddle_peaks(response, radius):  # pragma: no cover
     """Rows and columns (row-major order) of the pixels at least ``radius + 1`` from the
     border with a positive response equal to the maximum of their ``2 radius + 1``
     square (``response == maximum_filter(response, 2 radius + 1)``, whose window lies
-    inside the image there), the maximum taken along rows (kept for the window's rows
-    only), then down columns."""
+    inside the image there). A pixel is first compared with its 4 neighbours, which
+    rejects almost every pixel; only the rest scan the whole square."""
     height, width = response.shape
     border = radius + 1
-    size = 2 * radius + 1
-    across = np.empty((size, width))  # row maxima of the rows y - radius .. y + radius
-    for v in range(border - radius, min(border + radius, height)):
-        _row_maxima(response, v, radius, across[v % size])
     rows = []
     cols = []
     for y in range(border, height - border):
-        _row_maxima(response, y + radius, radius, across[(y + radius) % size])
         for x in range(border, width - border):
             value = response[y, x]
-            if value <= 0.0 or across[y % size, x] > value:
+            if value <= 0.0 or response[y, x + 1] > value or response[y, x - 1] > value:
                 continue
-            best = across[(y - radius) % size, x]
-            for v in range(y - radius + 1, y + radius + 1):
-                best = max(best, across[v % size, x])
-            if best <= value:
+            if response[y + 1, x] > value or response[y - 1, x] > value:
+                continue
+            if _peak_of(response, y, x, radius, value):
                 rows.append(y)
                 cols.append(x)
     return np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64)
 
 
-@numba.njit(cache=True, nogil=True)
-def _row_maxima(response, y, radius, out):  # pragma: no cover
-    """``out[x]``: the maximum of row ``y`` over ``x ± radius`` (inside the row)."""
-    width = response.shape[1]
-    for x in range(radius, width - radius):
-        best = response[y, x - radius]
-        for u in range(x - radius + 1, x + radius + 1):
-            best = max(best, response[y, u])
-        out[x] = best
+@numba.njit(cache=True, nogil=True, inline="always")
+def _peak_of(response, y, x, radius, value):  # pragma: no cover
+    """No pixel of the square ``(y, x) ± radius`` exceeds ``value``."""
+    for v in range(y - radius, y + radius + 1):
+        for u in range(x - radius, x + radius + 1):
+            if response[v, u] > value:
+                return False
+    return True
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -134,12 +128,6 @@ def _bilinear(values, x, y):  # pragma: no cover
     return (1.0 - wy) * top + wy * bottom
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _bilinear_pair(a, b, x, y):  # pragma: no cover
-    """:func:`_bilinear` of two images of one shape at one point."""
-    return _bilinear(a, x, y), _bilinear(b, x, y)
-
-
 @numba.njit(cache=True, nogil=True)
 def sample(values, xs, ys):  # pragma: no cover
     """``values`` at the points ``(xs[i], ys[i])`` (flat arrays), see :func:`_bilinear`."""
@@ -150,28 +138,85 @@ def sample(values, xs, ys):  # pragma: no cover
 
 
 @numba.njit(cache=True, nogil=True)
-def forstner(gx, gy, corners, ox, oy, weight, iterations):  # pragma: no cover
-    """Förstner's iteration for every corner at once (see ``refine_corners``): ``ox, oy``
-    the window's offsets, ``weight`` their ``corners × offsets`` weights; stops when no
-    corner moves by 1e-4 px or more."""
+def _axis_samples(q, half, length, first, second, weight, inside):  # pragma: no cover
+    """For the ``2 half + 1`` positions ``q + o`` (o = −half … half) along one axis of
+    ``length`` pixels, what :func:`_bilinear` derives from each: the lower and upper pixel
+    (``first``, ``second``), the weight of the upper one and whether it lies inside
+    ``[0, length - 1]``, computed as :func:`_bilinear` computes them."""
+    for c in range(2 * half + 1):
+        p = q + float(c - half)
+        inside[c] = 0.0 <= p <= length - 1
+        lower = min(int(np.floor(p)), length - 1) if inside[c] else 0
+        first[c] = lower
+        second[c] = min(lower + 1, length - 1)
+        weight[c] = p - lower
+
+
+@numba.njit(cache=True, nogil=True)
+def _forstner_sums(gx, gy, qx, qy, half, weight, columns, rows):  # pragma: no cover
+    """Förstner's normal equations ``(axx, axy, ayy, bx, by)`` of one corner at ``(qx,
+    qy)``: the window's samples in row-major order, each as :func:`_bilinear` gives it
+    at ``q + offset`` (``columns`` and ``rows`` hold :func:`_axis_samples` of each axis)."""
+    x0, x1, wxs, xin = columns
+    y0, y1, wys, yin = rows
+    side = 2 * half + 1
+    axx = axy = ayy = bx = by = 0.0
+    for r in range(side):
+        py = qy + float(r - half)
+        wy, top, bottom = wys[r], y0[r], y1[r]
+        for c in range(side):
+            w = weight[r * side + c]
+            if w == 0.0:
+                continue
+            px = qx + float(c - half)
+            sx = sy = 0.0
+            if yin[r] and xin[c]:
+                wx, left, right = wxs[c], x0[c], x1[c]
+                upper = (1.0 - wx) * gx[top, left] + wx * gx[top, right]
+                lower = (1.0 - wx) * gx[bottom, left] + wx * gx[bottom, right]
+                sx = (1.0 - wy) * upper + wy * lower
+                upper = (1.0 - wx) * gy[top, left] + wx * gy[top, right]
+                lower = (1.0 - wx) * gy[bottom, left] + wx * gy[bottom, right]
+                sy = (1.0 - wy) * upper + wy * lower
+            axx += w * sx * sx
+            axy += w * sx * sy
+            ayy += w * sy * sy
+            bx += w * (sx * sx * px + sx * sy * py)
+            by += w * (sx * sy * px + sy * sy * py)
+    return axx, axy, ayy, bx, by
+
+
+@numba.njit(cache=True, nogil=True)
+def forstner(gx, gy, corners, half, weight, iterations):  # pragma: no cover
+    """Förstner's iteration for every corner at once (see ``refine_corners``): the window's
+    offsets are the ``(2 half + 1)²`` integer ones, row-major (x fastest), ``weight`` their
+    ``corners × offsets`` weights; stops when no corner moves by 1e-4 px or more. The
+    samples' pixels and weights are found once per row and column of a window, not once
+    per sample; the arithmetic is :func:`_bilinear`'s."""
+    height, width = gx.shape
+    side = 2 * half + 1
+    columns = (
+        np.empty(side, np.int64),
+        np.empty(side, np.int64),
+        np.empty(side),
+        np.empty(side, np.bool_),
+    )
+    rows = (
+        np.empty(side, np.int64),
+        np.empty(side, np.int64),
+        np.empty(side),
+        np.empty(side, np.bool_),
+    )
     q = corners.copy()
     new = corners.copy()
     for _ in range(iterations):
         shift = 0.0
         for i in range(q.shape[0]):
-            axx = axy = ayy = bx = by = 0.0
-            for k in range(ox.size):
-                w = weight[i, k]
-                if w == 0.0:
-                    continue
-                px = q[i, 0] + ox[k]
-                py = q[i, 1] + oy[k]
-                sx, sy = _bilinear_pair(gx, gy, px, py)
-                axx += w * sx * sx
-                axy += w * sx * sy
-                ayy += w * sy * sy
-                bx += w * (sx * sx * px + sx * sy * py)
-                by += w * (sx * sy * px + sy * sy * py)
+            _axis_samples(q[i, 0], half, width, *columns)
+            _axis_samples(q[i, 1], half, height, *rows)
+            axx, axy, ayy, bx, by = _forstner_sums(
+                gx, gy, q[i, 0], q[i, 1], half, weight[i], columns, rows
+            )
             det = axx * ayy - axy * axy
             new[i, 0], new[i, 1] = q[i, 0], q[i, 1]
             if det > 1e-12:
@@ -317,3 +362,57 @@ def next_row(candidates, grid, smooth, tolerance, cos, sin, max_asymmetry):  # p
     if not x_junctions(smooth, points, tolerance * spacing, cos, sin, max_asymmetry):
         return False, 0.0, none
     return True, fit / width, index
+
+
+@numba.njit(cache=True, nogil=True)
+def _rot90(grid, turn):  # pragma: no cover
+    """``np.rot90(grid, turn)`` for ``turn`` in 0 … 3, as a new array."""
+    height, width = grid.shape
+    if turn % 2 == 0:
+        out = np.empty((height, width), dtype=grid.dtype)
+    else:
+        out = np.empty((width, height), dtype=grid.dtype)
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            if turn == 0:
+                out[i, j] = grid[i, j]
+            elif turn == 1:
+                out[i, j] = grid[j, width - 1 - i]
+            elif turn == 2:
+                out[i, j] = grid[height - 1 - i, width - 1 - j]
+            else:
+                out[i, j] = grid[height - 1 - j, i]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def grow(
+    candidates, grid, smooth, columns, rows, tolerance, cos, sin, max_asymmetry
+):  # pragma: no cover
+    """The grid of candidate indices grown from ``grid`` (``_corners._Grower._grow``): at
+    each step, of the rows after the last of the grid turned by 0, 90, 180 and 270°
+    (:func:`next_row`, where the grid plus that row still fits a ``columns × rows`` board
+    either way round), the one that fits best (the first of equal fits) is added, until
+    none is found."""
+    while True:
+        best_fit = np.inf
+        best_turn = -1
+        best_row = np.empty(0, dtype=np.int64)
+        for turn in range(4):
+            turned = _rot90(grid, turn)
+            longer, across = turned.shape[0] + 1, turned.shape[1]
+            fits = (longer <= rows and across <= columns) or (longer <= columns and across <= rows)
+            if not fits:
+                continue
+            ok, fit, index = next_row(
+                candidates, turned, smooth, tolerance, cos, sin, max_asymmetry
+            )
+            if ok and (best_turn < 0 or fit < best_fit):
+                best_fit, best_turn, best_row = fit, turn, index
+        if best_turn < 0:
+            return grid
+        turned = _rot90(grid, best_turn)
+        longer = np.empty((turned.shape[0] + 1, turned.shape[1]), dtype=np.int64)
+        longer[:-1] = turned
+        longer[-1] = best_row
+        grid = _rot90(longer, (4 - best_turn) % 4)

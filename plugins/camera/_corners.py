@@ -84,7 +84,7 @@ def saddle_candidates(image: np.ndarray, count: int, sigma: float) -> np.ndarray
     from ..shared.separable import smooth_gaussian
     from ._corner_kernels import saddle_peaks, saddle_response
 
-    smooth = smooth_gaussian(image.astype(np.float64), sigma)
+    smooth = smooth_gaussian(np.asarray(image, np.float64), sigma)
     response = saddle_response(np.ascontiguousarray(smooth))
     rows, cols = saddle_peaks(response, max(2, int(round(2 * sigma))))
     strength = response[rows, cols]
@@ -110,7 +110,7 @@ class _Photo:
         from ..shared.separable import smooth_gaussian
         from ._corner_kernels import gradient
 
-        self.smooth = np.ascontiguousarray(smooth_gaussian(image.astype(np.float64), 1.0))
+        self.smooth = np.ascontiguousarray(smooth_gaussian(np.asarray(image, np.float64), 1.0))
         self.gy, self.gx = gradient(self.smooth)
 
     @staticmethod
@@ -203,39 +203,24 @@ class _Grower:
                 return cell
         return None
 
-    def _next_row(self, grid: np.ndarray) -> tuple[float, np.ndarray] | None:
-        """The row after the last of ``grid`` (its fit and candidate indices), or None: a
-        homography fitted to the 3 nearest rows predicts it, each prediction takes the
-        strongest candidate within ``TOLERANCE`` of the spacing, and the row must be
-        distinct, new and of X-junctions (one compiled call)."""
-        from ._corner_kernels import next_row
+    def _grow(self, grid: np.ndarray) -> np.ndarray:
+        """Add whole rows or columns (module docstring, step 2; one compiled call): a
+        homography fitted to the 3 nearest rows predicts the next one, each prediction
+        takes the strongest candidate within ``TOLERANCE`` of the spacing, and the row
+        must be distinct, new and of X-junctions; the extension that fits best first."""
+        from ._corner_kernels import grow
 
-        ok, fit, index = next_row(
+        return grow(
             self.candidates,
             np.ascontiguousarray(grid, dtype=np.int64),
             self.photo.smooth,
+            self.columns,
+            self.rows,
             TOLERANCE,
             np.cos(_ANGLES),
             np.sin(_ANGLES),
             MAX_ASYMMETRY,
         )
-        return (fit, index) if ok else None
-
-    def _grow(self, grid: np.ndarray) -> np.ndarray:
-        while True:
-            best: tuple[float, int, np.ndarray] | None = None
-            for turn in range(4):  # the row after the last of the grid turned by 90° steps
-                turned = np.rot90(grid, turn)
-                size = (turned.shape[0] + 1, turned.shape[1])
-                if not any(size[0] <= a and size[1] <= b for a, b in self.shapes):
-                    continue
-                found = self._next_row(turned)
-                if found is not None and (best is None or found[0] < best[0]):
-                    best = (found[0], turn, found[1])
-            if best is None:
-                return grid
-            _, turn, row = best
-            grid = np.rot90(np.vstack([np.rot90(grid, turn), row[None]]), -turn)
 
 
 def _cell_mean(image: np.ndarray, corners: np.ndarray, columns: int, a: int, b: int) -> float:
@@ -279,7 +264,7 @@ def find_board(
 
     ``sigma`` None tries the scales of :func:`sigma_ladder` in turn.
     """
-    image = image.astype(np.float64)
+    image = np.asarray(image, dtype=np.float64)
     photo = _Photo(image)
     count = columns * rows
     scales = sigma_ladder(image.shape, columns, rows) if sigma is None else [sigma]
@@ -342,7 +327,7 @@ def _refine(
     weight = np.exp(-(ox**2 + oy**2) / (2 * r**2)) * inside
     weight[:, (ox == 0) & (oy == 0)] = 0.0  # the centre's gradient carries no position
     q = np.ascontiguousarray(corners, dtype=np.float64)
-    return forstner(gx, gy, q, ox, oy, np.ascontiguousarray(weight), iterations)
+    return forstner(gx, gy, q, half, np.ascontiguousarray(weight), iterations)
 
 
 class BoardCorners(NamedTuple):

@@ -59,3 +59,84 @@ def test_grid_homography_equals_the_normalised_dlt():
     assert ok
     np.testing.assert_allclose(h, estimate_homography(src, dst), rtol=1e-8, atol=1e-10)
     assert not grid_homography(src[:7], dst[:7])[0]  # one row: collinear, degenerate
+
+
+def _forstner_per_sample(gx, gy, corners, radius, iterations):
+    """The iteration as it was before the window's rows and columns were shared: every
+    sample of every corner through ``sample`` (one bilinear sample each), sums in the
+    window's row-major order, all corners until none moves by 1e-4 px."""
+    half = int(np.ceil(radius.max()))
+    offsets = np.arange(-half, half + 1, dtype=np.float64)
+    oy, ox = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
+    r = radius[:, None]
+    weight = np.exp(-(ox**2 + oy**2) / (2 * r**2)) * ((np.abs(ox) <= r) & (np.abs(oy) <= r))
+    weight[:, (ox == 0) & (oy == 0)] = 0.0
+    q = corners.copy()
+    for _ in range(iterations):
+        new = q.copy()
+        for i, (qx, qy) in enumerate(q):
+            px, py = qx + ox, qy + oy
+            sxs, sys_ = sample(gx, px, py), sample(gy, px, py)
+            axx = axy = ayy = bx = by = 0.0
+            for k in np.flatnonzero(weight[i]):
+                w, sx, sy = weight[i, k], sxs[k], sys_[k]
+                axx += w * sx * sx
+                axy += w * sx * sy
+                ayy += w * sy * sy
+                bx += w * (sx * sx * px[k] + sx * sy * py[k])
+                by += w * (sx * sy * px[k] + sy * sy * py[k])
+            det = axx * ayy - axy * axy
+            if det > 1e-12:
+                new[i] = ((ayy * bx - axy * by) / det, (axx * by - axy * bx) / det)
+        shift = np.abs(new - q).max()
+        q = new
+        if shift < 1e-4:
+            break
+    return q
+
+
+def test_forstner_equals_the_per_sample_iteration_to_the_bit():
+    from graphvision_plugins.camera._corners import _refine
+
+    y, x = np.mgrid[0:40, 0:50].astype(np.float64)
+    smooth = np.tanh(x - 20.3) * np.tanh(y - 17.6) + 0.01 * np.sin(3 * x + y)  # an X-junction
+    gy, gx = gradient(smooth)
+    # one window inside, one crossing the border (its samples outside count zero)
+    corners = np.array([[21.0, 17.0], [2.5, 37.2], [30.4, 18.9]])
+    radius = np.array([4.0, 5.0, 3.5])
+    expected = _forstner_per_sample(gx, gy, corners, radius, 8)
+    np.testing.assert_array_equal(_refine(gx, gy, corners, radius, 8), expected)
+    assert np.abs(expected[0] - (20.3, 17.6)).max() < 0.05
+
+
+def test_rot90_and_grown_grid_equal_the_numpy_loop():
+    from graphvision_plugins import synthetic
+    from graphvision_plugins.camera._corner_kernels import _rot90, next_row
+    from graphvision_plugins.camera._corners import _ANGLES, MAX_ASYMMETRY, TOLERANCE
+    from graphvision_plugins.camera._corners import _Grower, _Photo, saddle_candidates
+
+    grid = np.arange(12).reshape(3, 4)
+    for turn in range(4):
+        np.testing.assert_array_equal(_rot90(grid, turn), np.rot90(grid, turn))
+    view = synthetic.board_views(views=1, width=240, height=180, focal=300.0, seed=4).views[0]
+    photo = _Photo(np.asarray(view, np.float64))
+    candidates = saddle_candidates(view, 6 * 54 + 50, 2.0)
+    grower = _Grower(candidates, photo, 9, 6)
+    cell = next(c for s in range(8) if (c := grower._first_cell(s)) is not None)
+    angles = (np.cos(_ANGLES), np.sin(_ANGLES), MAX_ASYMMETRY)
+    expected = cell  # the loop _Grower._grow was: rows added by np.rot90 and np.vstack
+    while True:
+        best = None
+        for turn in range(4):
+            turned = np.ascontiguousarray(np.rot90(expected, turn), dtype=np.int64)
+            if not any(turned.shape[0] + 1 <= a and turned.shape[1] <= b for a, b in grower.shapes):
+                continue
+            ok, fit, row = next_row(candidates, turned, photo.smooth, TOLERANCE, *angles)
+            if ok and (best is None or fit < best[0]):
+                best = (fit, turn, row)
+        if best is None:
+            break
+        turned = np.vstack([np.rot90(expected, best[1]), best[2][None]])
+        expected = np.rot90(turned, -best[1])
+    assert expected.size == 54
+    np.testing.assert_array_equal(grower._grow(cell), expected)
