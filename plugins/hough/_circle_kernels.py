@@ -12,7 +12,10 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ..shared.separable_kernels import correlate_both
+
 __all__ = [
+    "best_over_radii",
     "fold_plane",
     "greedy_suppression",
     "vote_circles",
@@ -59,20 +62,63 @@ def fold_plane(plane, k, last, spread, circumference, best, k_best, below, above
     and its first radius, ``below`` and ``above`` the scores of the radii either side of it
     (its own at the ends), ``previous`` the scores of radius ``k - 1``. Equals
     ``scores.max(0)``, ``argmax(0)`` and ``scores[k ± 1]`` of the whole stack of scores,
-    without holding it."""
+    without holding it. Selections without branches, one row at a time, so that the
+    compiler makes SIMD code of them."""  # pragma: no cover
     height, width = plane.shape
     for y in range(height):
+        votes, top, which = plane[y], best[y], k_best[y]
+        low, high, before = below[y], above[y], previous[y]
+        if k == 0:
+            for x in range(width):
+                score = votes[x] * spread / circumference
+                top[x] = score
+                which[x] = 0
+                low[x] = score
+                high[x] = score if last == 0 else high[x]
+                before[x] = score
+            continue
         for x in range(width):
-            score = plane[y, x] * spread / circumference
-            if k > 0 and k_best[y, x] == k - 1:
-                above[y, x] = score
-            if k == 0 or score > best[y, x]:
-                best[y, x] = score
-                k_best[y, x] = k
-                below[y, x] = previous[y, x] if k > 0 else score
-            if k == last and k_best[y, x] == k:
-                above[y, x] = score
-            previous[y, x] = score
+            score = votes[x] * spread / circumference
+            high[x] = score if which[x] == k - 1 else high[x]
+            better = score > top[x]
+            top[x] = score if better else top[x]
+            which[x] = k if better else which[x]
+            low[x] = before[x] if better else low[x]
+            before[x] = score
+        if k == last:
+            for x in range(width):
+                high[x] = top[x] if which[x] == k else high[x]
+
+
+@numba.njit(cache=True, nogil=True)
+def best_over_radii(voters, radii, signs, spread, shape, smoothing):  # pragma: no cover
+    """:func:`vote_plane`, the spreading of its votes and :func:`fold_plane` for every
+    radius in one call: ``voters`` the points' ``(rows, cols, ux, uy)``, ``smoothing``
+    the arguments of ``shared.separable_kernels.correlate_both`` after the image and the
+    output (no spreading when its taps are empty). Returns ``(best, k_best, below,
+    above)``."""
+    rows, cols, ux, uy = voters
+    height, width = shape
+    plane = np.empty((height, width))
+    spread_votes = np.empty((height, width))
+    best = np.empty((height, width))
+    below = np.empty((height, width))
+    above = np.empty((height, width))
+    previous = np.empty((height, width))
+    k_best = np.zeros((height, width), dtype=np.int64)
+    taps, symmetry, row_index, column_index = smoothing
+    last = radii.size - 1
+    for k in range(radii.size):
+        vote_plane(rows, cols, ux, uy, radii[k], signs, plane)
+        votes = plane
+        if taps.size > 0:
+            correlate_both(
+                plane, taps, symmetry, row_index, taps, symmetry, column_index, spread_votes
+            )
+            votes = spread_votes
+        circumference = 2.0 * np.pi * radii[k]
+        fold_plane(votes, k, last, spread, circumference, best, k_best, below, above, previous)
+    return best, k_best, below, above
 
 
 @numba.njit(cache=True, nogil=True)

@@ -61,24 +61,29 @@ def _best_over_radii(
     vote_sigma: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Best score over radii at each pixel, its radius index and the scores of the radii
-    either side: one radius at a time (votes, spread, score), never the whole stack."""
-    from ..shared.separable import smooth_gaussian
-    from ._circle_kernels import fold_plane, vote_plane
+    either side: one radius at a time (votes, spread, score), never the whole stack, all
+    in one compiled call (``_circle_kernels.best_over_radii``). The spreading is
+    ``smooth_gaussian(votes, vote_sigma, "constant")``'s own compiled passes."""
+    from ..shared.separable import _boundary_index, _odd_length, _symmetry, gaussian_taps
+    from ._circle_kernels import best_over_radii
 
     rows, cols, ux, uy, signs = _voters(edges, image, sigma, polarity)
-    plane = np.empty(edges.shape)
-    best, below, above, previous = (np.empty(edges.shape) for _ in range(4))
-    k_best = np.zeros(edges.shape, dtype=np.int64)
+    taps = np.zeros(0)
+    smoothing = (taps, 0, np.zeros(0, np.int64), np.zeros(0, np.int64))
+    if vote_sigma > 0:
+        taps = _odd_length(gaussian_taps(vote_sigma, 4.0))
+        half = taps.size // 2
+        smoothing = (
+            taps,
+            _symmetry(taps),
+            _boundary_index(edges.shape[0], half, "constant"),
+            _boundary_index(edges.shape[1], half, "constant"),
+        )
     # spread each vote as a Gaussian of height 1 (so one vote still counts one)
     spread = 2.0 * math.pi * vote_sigma**2 if vote_sigma > 0 else 1.0
-    for k, radius in enumerate(radii):
-        votes = vote_plane(rows, cols, ux, uy, float(radius), signs, plane)
-        if vote_sigma > 0:
-            votes = smooth_gaussian(votes, vote_sigma, "constant")
-        circumference = 2.0 * math.pi * radius
-        last = len(radii) - 1
-        fold_plane(votes, k, last, spread, circumference, best, k_best, below, above, previous)
-    return best, k_best, below, above
+    radii = np.ascontiguousarray(radii, dtype=np.float64)
+    voters = (rows.astype(np.int64), cols.astype(np.int64), ux, uy)
+    return best_over_radii(voters, radii, signs, spread, edges.shape, smoothing)
 
 
 class HoughCircles(NamedTuple):

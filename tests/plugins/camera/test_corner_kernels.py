@@ -112,8 +112,14 @@ def test_forstner_equals_the_per_sample_iteration_to_the_bit():
 def test_rot90_and_grown_grid_equal_the_numpy_loop():
     from graphvision_plugins import synthetic
     from graphvision_plugins.camera._corner_kernels import _rot90, next_row
-    from graphvision_plugins.camera._corners import _ANGLES, MAX_ASYMMETRY, TOLERANCE
-    from graphvision_plugins.camera._corners import _Grower, _Photo, saddle_candidates
+    from graphvision_plugins.camera._corners import (
+        _ANGLES,
+        MAX_ASYMMETRY,
+        TOLERANCE,
+        _Grower,
+        _Photo,
+        saddle_candidates,
+    )
 
     grid = np.arange(12).reshape(3, 4)
     for turn in range(4):

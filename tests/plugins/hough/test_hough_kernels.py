@@ -87,3 +87,34 @@ def test_folding_radii_equals_the_whole_stack_of_scores():
     np.testing.assert_array_equal(k_best, k)
     np.testing.assert_array_equal(below, scores[np.maximum(k - 1, 0), y, x])
     np.testing.assert_array_equal(above, scores[np.minimum(k + 1, n - 1), y, x])
+
+
+@pytest.mark.parametrize("vote_sigma", [0.0, 1.0])
+def test_radii_in_one_call_equal_the_stack_smoothed_plane_by_plane(vote_sigma):
+    """``_best_over_radii`` (votes, spreading and folding of every radius compiled in one
+    call) equals, to the bit, the whole stack of votes of ``vote_circles`` smoothed plane
+    by plane by ``smooth_gaussian(mode="constant")``, then its max and argmax over radii."""
+    from graphvision_plugins.hough._circle_kernels import vote_circles
+    from graphvision_plugins.hough._circles import _best_over_radii, _voters
+    from graphvision_plugins.shared.separable import smooth_gaussian
+
+    y, x = np.mgrid[0:48, 0:64]
+    image = (np.hypot(x - 30.3, y - 22.6) < 11.2).astype(np.float32)
+    image[5:12, 40:60] = 0.6  # a bar: votes that meet no centre
+    edges = np.abs(np.gradient(image.astype(np.float64))[0]) + np.abs(np.gradient(image)[1]) > 0
+    radii = np.arange(8.0, 14.5, 1.0)
+    best, k_best, below, above = _best_over_radii(edges, image, radii, 1.0, "both", vote_sigma)
+    rows, cols, ux, uy, signs = _voters(edges, image, 1.0, "both")
+    stack = vote_circles(rows, cols, ux, uy, radii, signs, *edges.shape)
+    if vote_sigma > 0:
+        stack = np.stack([smooth_gaussian(p, vote_sigma, "constant") for p in stack])
+    spread = 2.0 * math.pi * vote_sigma**2 if vote_sigma > 0 else 1.0
+    scores = np.stack([p * spread / (2.0 * math.pi * r) for p, r in zip(stack, radii, strict=True)])
+    k = scores.argmax(axis=0)
+    yy, xx = np.mgrid[0:48, 0:64]
+    np.testing.assert_array_equal(best, scores.max(axis=0))
+    np.testing.assert_array_equal(k_best, k)
+    np.testing.assert_array_equal(below, scores[np.maximum(k - 1, 0), yy, xx])
+    np.testing.assert_array_equal(above, scores[np.minimum(k + 1, len(radii) - 1), yy, xx])
+    peak = np.unravel_index(best.argmax(), best.shape)  # the disc's centre, row 22.6 col 30.3
+    assert abs(peak[0] - 22.6) < 1.5 and abs(peak[1] - 30.3) < 1.5
