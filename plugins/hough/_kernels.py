@@ -13,12 +13,15 @@ __all__ = ["bucket_points", "line_peaks", "line_support", "select_lines", "vote_
 
 
 @numba.njit(cache=True, nogil=True)
-def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho):
+def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho, pad):
     """Accumulator ``(len(cos), n_rho)``: point ``i`` votes for the ``width`` θ bins from
     ``first[i]`` (modulo the bin count) with weight ``weights[i]``; ``cos`` and ``sin`` are
-    divided by the ρ step and ``rho0`` is ρ of bin 0 in steps."""
+    divided by the ρ step and ``rho0`` is ρ of bin 0 in steps. With ``pad`` > 0 it comes
+    extended by ``pad`` rows each way, θ wrapping with ρ negated (θ + π is the line of θ
+    with ρ negated: row ``-1`` is the last row reversed along ρ), written in place."""
     n_theta = cos.size
-    accumulator = np.zeros((n_theta, n_rho))
+    extended = np.zeros((n_theta + 2 * pad, n_rho))
+    accumulator = extended[pad : pad + n_theta]
     if width == n_theta:  # every point votes for every θ: one θ row at a time (in cache),
         for t in range(n_theta):  # each cell's votes still summed in the points' order
             row = accumulator[t]
@@ -29,17 +32,21 @@ def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho):
                 if lower >= 0 and lower + 1 < n_rho:
                     row[lower] += weights[i] * (1.0 - frac)
                     row[lower + 1] += weights[i] * frac
-        return accumulator
-    for i in range(x.size):
-        for k in range(width):
-            t = (first[i] + k) % n_theta
-            position = x[i] * cos[t] + y[i] * sin[t] - rho0
-            lower = int(np.floor(position))
-            frac = position - lower
-            if lower >= 0 and lower + 1 < n_rho:
-                accumulator[t, lower] += weights[i] * (1.0 - frac)
-                accumulator[t, lower + 1] += weights[i] * frac
-    return accumulator
+    else:
+        for i in range(x.size):
+            for k in range(width):
+                t = (first[i] + k) % n_theta
+                position = x[i] * cos[t] + y[i] * sin[t] - rho0
+                lower = int(np.floor(position))
+                frac = position - lower
+                if lower >= 0 and lower + 1 < n_rho:
+                    accumulator[t, lower] += weights[i] * (1.0 - frac)
+                    accumulator[t, lower + 1] += weights[i] * frac
+    for i in range(pad):
+        for r in range(n_rho):
+            extended[i, r] = extended[n_theta + i, n_rho - 1 - r]
+            extended[pad + n_theta + i, r] = extended[pad + i, n_rho - 1 - r]
+    return extended
 
 
 @numba.njit(cache=True, nogil=True)
@@ -56,12 +63,7 @@ def line_peaks(extended, pad, theta_bins):
             value = extended[t, r]
             if value <= 0.0:
                 continue
-            peak = True
-            for v in range(t - 1, t + 2):
-                for u in range(r - 1, r + 2):
-                    if extended[v, u] > value:
-                        peak = False
-            if peak:
+            if _peak_3x3(extended, t, r, value):
                 rows.append(t)
                 cols.append(r)
     out = np.empty((len(rows), 2), dtype=np.int64)
@@ -69,6 +71,19 @@ def line_peaks(extended, pad, theta_bins):
         out[i, 0] = rows[i]
         out[i, 1] = cols[i]
     return out
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _peak_3x3(extended, t, r, value):
+    """No cell of the 3×3 around ``(t, r)`` exceeds ``value`` (the first larger one ends
+    the scan)."""
+    if extended[t, r + 1] > value or extended[t, r - 1] > value:
+        return False
+    for v in (t - 1, t + 1):
+        for u in range(r - 1, r + 2):
+            if extended[v, u] > value:
+                return False
+    return True
 
 
 @numba.njit(cache=True, nogil=True)
@@ -81,16 +96,20 @@ def bucket_points(x, y, cos, sin, rho0, n_rho):
     starts = np.zeros((n_theta, n_rho + 1), dtype=np.int64)
     order = np.empty((n_theta, x.size), dtype=np.int64)
     bins = np.empty(x.size, dtype=np.int64)
+    fill = np.empty(n_rho, dtype=np.int64)
     for k in range(n_theta):
+        c, s = cos[k], sin[k]
+        for i in range(x.size):  # no stores to the counts here: the compiler vectorises it
+            bins[i] = min(max(int(np.floor(x[i] * c + y[i] * s - rho0)), 0), n_rho - 1)
+        count = starts[k]
         for i in range(x.size):
-            b = int(np.floor(x[i] * cos[k] + y[i] * sin[k] - rho0))
-            bins[i] = min(max(b, 0), n_rho - 1)
-            starts[k, bins[i] + 1] += 1
+            count[bins[i] + 1] += 1
         for b in range(n_rho):
-            starts[k, b + 1] += starts[k, b]
-        fill = starts[k, :n_rho].copy()
+            count[b + 1] += count[b]
+        fill[:] = count[:n_rho]
+        points = order[k]
         for i in range(x.size):
-            order[k, fill[bins[i]]] = i
+            points[fill[bins[i]]] = i
             fill[bins[i]] += 1
     return order, starts
 

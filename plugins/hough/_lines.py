@@ -48,7 +48,7 @@ def line_accumulator(
 ) -> np.ndarray:
     """The (θ, ρ) vote array (``theta_bins × n_rho``), votes split linearly between ρ bins."""
     x, y, gx, gy = _edge_points(edges, image, sigma)
-    return _vote(edges.shape, x, y, gx, gy, theta_bins, rho_step, orientation_window, weighted)
+    return _vote(edges.shape, x, y, gx, gy, theta_bins, rho_step, orientation_window, weighted, 0)
 
 
 def _vote(
@@ -61,7 +61,10 @@ def _vote(
     rho_step: float,
     orientation_window: float,
     weighted: bool,
+    pad: int,
 ) -> np.ndarray:
+    """The votes, extended by ``pad`` θ rows each way: θ + π is the line of θ with ρ
+    negated, so row ``-1`` is the last row reversed along ρ."""
     n_rho, rho0 = _rho_grid(shape, rho_step)
     step = math.pi / theta_bins
     weights = np.ones(len(x))
@@ -78,7 +81,7 @@ def _vote(
 
     table = np.arange(theta_bins) * step
     cos, sin = np.cos(table) / rho_step, np.sin(table) / rho_step
-    return vote_lines(x, y, weights, first, width, cos, sin, rho0 / rho_step, n_rho)
+    return vote_lines(x, y, weights, first, width, cos, sin, rho0 / rho_step, n_rho, pad)
 
 
 def _select_lines(
@@ -158,11 +161,6 @@ def _buckets(
         return (empty, empty), cos, sin, rho0 / step, 0.0
     reach = float(np.hypot(x, y).max())
     return bucket_points(x, y, cos, sin, rho0 / step, n_rho), cos, sin, rho0 / step, reach
-
-
-def _wrap_theta(accumulator: np.ndarray, pad: int) -> np.ndarray:
-    """Extend θ by ``pad`` bins each way: θ + π is the line of θ with ρ negated."""
-    return np.concatenate([accumulator[-pad:, ::-1], accumulator, accumulator[:pad, ::-1]], axis=0)
 
 
 class HoughLines(NamedTuple):
@@ -289,9 +287,10 @@ def hough_lines(
             f"edges and image must have the same size, got {edges.shape} and {image.shape}"
         )
     x, y, gx, gy = _edge_points(edges, image, sigma)
-    votes = _vote(edges.shape, x, y, gx, gy, theta_bins, rho_step, orientation_window, weighted)
     pad = min(theta_bins, min_distance + 3 * math.ceil(vote_sigma) + 1)
-    extended = _wrap_theta(votes, pad)
+    extended = _vote(
+        edges.shape, x, y, gx, gy, theta_bins, rho_step, orientation_window, weighted, pad
+    )
     if vote_sigma > 0:
         extended = smooth_gaussian(extended, vote_sigma, "nearest")
     smoothed = extended[pad:-pad]

@@ -118,3 +118,21 @@ def test_radii_in_one_call_equal_the_stack_smoothed_plane_by_plane(vote_sigma):
     np.testing.assert_array_equal(above, scores[np.minimum(k + 1, len(radii) - 1), yy, xx])
     peak = np.unravel_index(best.argmax(), best.shape)  # the disc's centre, row 22.6 col 30.3
     assert abs(peak[0] - 22.6) < 1.5 and abs(peak[1] - 30.3) < 1.5
+
+
+@pytest.mark.parametrize("width", [7, 30])
+def test_votes_extended_in_place_equal_the_wrapped_copy(width):
+    """``vote_lines`` with ``pad`` rows equals the accumulator without them wrapped by
+    ``np.concatenate`` (θ + π is θ with ρ negated), as ``hough.lines`` extended it before."""
+    from graphvision_plugins.hough._kernels import vote_lines
+
+    rng = np.random.default_rng(7)
+    x, y, weights = rng.uniform(0, 40, 300), rng.uniform(0, 30, 300), rng.uniform(0, 2, 300)
+    first = rng.integers(0, 30, 300)
+    table = np.arange(30) * (math.pi / 30)
+    args = (x, y, weights, first, width, np.cos(table) / 0.7, np.sin(table) / 0.7, -75.0, 150)
+    plain = vote_lines(*args, 0)
+    for pad in (1, 9, 30):
+        wrapped = np.concatenate([plain[-pad:, ::-1], plain, plain[:pad, ::-1]], axis=0)
+        np.testing.assert_array_equal(vote_lines(*args, pad), wrapped)
+    assert plain.sum() > 0
