@@ -82,20 +82,31 @@ def saddle_peaks(response, radius):  # pragma: no cover
     """Rows and columns (row-major order) of the pixels at least ``radius + 1`` from the
     border with a positive response equal to the maximum of their ``2 radius + 1``
     square (``response == maximum_filter(response, 2 radius + 1)``, whose window lies
-    inside the image there). A pixel is first compared with its 4 neighbours, which
-    rejects almost every pixel; only the rest scan the whole square."""
+    inside the image there). A row's pixels are first compared with their 8 neighbours
+    without branches, which rejects almost every pixel; only the rest scan the whole
+    square."""
     height, width = response.shape
     border = radius + 1
     rows = []
     cols = []
+    local = np.zeros(width, dtype=np.bool_)
     for y in range(border, height - border):
+        above, row, below = response[y - 1], response[y], response[y + 1]
+        for x in range(border, width - border):  # no branches: SIMD code
+            value = row[x]
+            local[x] = (
+                (value > 0.0)
+                & (row[x - 1] <= value)
+                & (row[x + 1] <= value)
+                & (above[x - 1] <= value)
+                & (above[x] <= value)
+                & (above[x + 1] <= value)
+                & (below[x - 1] <= value)
+                & (below[x] <= value)
+                & (below[x + 1] <= value)
+            )
         for x in range(border, width - border):
-            value = response[y, x]
-            if value <= 0.0 or response[y, x + 1] > value or response[y, x - 1] > value:
-                continue
-            if response[y + 1, x] > value or response[y - 1, x] > value:
-                continue
-            if _peak_of(response, y, x, radius, value):
+            if local[x] and _peak_of(response, y, x, radius, row[x]):
                 rows.append(y)
                 cols.append(x)
     return np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64)
