@@ -322,9 +322,10 @@ def _refine(
     offsets = np.arange(-half, half + 1, dtype=np.float64)
     grid_y, grid_x = np.meshgrid(offsets, offsets, indexing="ij")
     ox, oy = grid_x.ravel(), grid_y.ravel()
-    r = radius[:, None]
+    radii, which = np.unique(radius, return_inverse=True)  # clipped: often one radius
+    r = radii[:, None]
     inside = (np.abs(ox) <= r) & (np.abs(oy) <= r)
-    weight = np.exp(-(ox**2 + oy**2) / (2 * r**2)) * inside
+    weight = (np.exp(-(ox**2 + oy**2) / (2 * r**2)) * inside)[which.ravel()]
     weight[:, (ox == 0) & (oy == 0)] = 0.0  # the centre's gradient carries no position
     q = np.ascontiguousarray(corners, dtype=np.float64)
     return forstner(gx, gy, q, half, np.ascontiguousarray(weight), iterations)

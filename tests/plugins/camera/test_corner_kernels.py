@@ -103,7 +103,7 @@ def test_forstner_equals_the_per_sample_iteration_to_the_bit():
     gy, gx = gradient(smooth)
     # one window inside, one crossing the border (its samples outside count zero)
     corners = np.array([[21.0, 17.0], [2.5, 37.2], [30.4, 18.9]])
-    radius = np.array([4.0, 5.0, 3.5])
+    radius = np.array([4.0, 5.0, 4.0])  # two corners share their weights
     expected = _forstner_per_sample(gx, gy, corners, radius, 8)
     np.testing.assert_array_equal(_refine(gx, gy, corners, radius, 8), expected)
     assert np.abs(expected[0] - (20.3, 17.6)).max() < 0.05
