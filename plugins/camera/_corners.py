@@ -124,7 +124,7 @@ class _Photo:
         """Every point is point-symmetric at ``radius`` (an X-junction, not an L or T):
         :math:`|I(p + \\rho u) - I(p - \\rho u)|` at most ``MAX_ASYMMETRY`` of the contrast
         of those 16 samples, for 8 directions u."""
-        from ._corner_kernels import x_junctions
+        from ._grid_kernels import x_junctions
 
         return bool(
             x_junctions(
@@ -208,7 +208,7 @@ class _Grower:
         homography fitted to the 3 nearest rows predicts the next one, each prediction
         takes the strongest candidate within ``TOLERANCE`` of the spacing, and the row
         must be distinct, new and of X-junctions; the extension that fits best first."""
-        from ._corner_kernels import grow
+        from ._grid_kernels import grow
 
         return grow(
             self.candidates,

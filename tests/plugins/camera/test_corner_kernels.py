@@ -9,11 +9,11 @@ from scipy import ndimage
 
 from graphvision_plugins.camera._corner_kernels import (
     gradient,
-    grid_homography,
     saddle_peaks,
     saddle_response,
     sample,
 )
+from graphvision_plugins.camera._grid_kernels import grid_homography
 from graphvision_plugins.geometry import estimate_homography
 
 
@@ -111,7 +111,6 @@ def test_forstner_equals_the_per_sample_iteration_to_the_bit():
 
 def test_rot90_and_grown_grid_equal_the_numpy_loop():
     from graphvision_plugins import synthetic
-    from graphvision_plugins.camera._corner_kernels import _rot90, next_row
     from graphvision_plugins.camera._corners import (
         _ANGLES,
         MAX_ASYMMETRY,
@@ -120,6 +119,7 @@ def test_rot90_and_grown_grid_equal_the_numpy_loop():
         _Photo,
         saddle_candidates,
     )
+    from graphvision_plugins.camera._grid_kernels import _rot90, next_row
 
     grid = np.arange(12).reshape(3, 4)
     for turn in range(4):
