@@ -224,10 +224,11 @@ def load_run_arguments(
     if args.max_pixels is not None:  # in the environment: worker processes read it too
         os.environ[ENVIRONMENT_VARIABLE] = str(args.max_pixels)
     node_limit_options(args)
+    order = backend_order(args)  # an empty entry is refused before the file is read
     graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
-    graph = graph.with_backends(getattr(args, "backend", None))  # --backend: the run's order
+    graph = graph.with_backends(order)  # --backend: the run's order
     registry = registry_for(args, graph)
-    check_backend_option(args, registry)
+    check_backend_option(order, registry)
     overrides = {
         key: yaml_value(value, f"--set {key}={value}")
         for key, value in named_pairs(args.set, "--set").items()
@@ -236,17 +237,31 @@ def load_run_arguments(
     return graph, registry, overrides, dict(named_pairs(args.input, "--input"))
 
 
-def check_backend_option(args: argparse.Namespace, registry: Registry) -> None:
-    """``--backend``'s names, each provided by an installed plugin (a usage error,
-    attributed to the option, not to the pipeline file whose ``backends:`` it replaces)."""
-    from graphvision.compiler.backends import BackendChooser, parse_backends
+def backend_order(args: argparse.Namespace) -> list[str] | None:
+    """``--backend``'s names in order (None without the option); an empty entry
+    (``--backend ''``, ``--backend opencv,``) is a usage error naming it."""
+    from graphvision.compiler.backends import parse_backends
 
-    order = getattr(args, "backend", None)
+    text = getattr(args, "backend", None)
+    if text is None:
+        return None
+    try:
+        return parse_backends(text)
+    except ValueError as error:
+        raise UsageError(f"--backend: {error}") from None
+
+
+def check_backend_option(order: list[str] | None, registry: Registry) -> None:
+    """``--backend``'s names, each once and provided by an installed plugin (a usage
+    error, attributed to the option, not to the pipeline file whose ``backends:`` it
+    replaces)."""
+    from graphvision.compiler.backends import BackendChooser
+
     if order is None:
         return
-    problems = BackendChooser(registry, parse_backends(order)).order_problems()
+    problems = BackendChooser(registry, order).order_problems()
     if problems:
-        raise UsageError(f"--backend {order}: " + "; ".join(problems))
+        raise UsageError(f"--backend {','.join(order)}: " + "; ".join(problems))
 
 
 def node_limit_options(args: argparse.Namespace) -> None:

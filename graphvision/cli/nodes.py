@@ -33,22 +33,37 @@ def listed_nodes(
         indexed = read_index(environment_key(installed_entry_points()))
         if indexed is not None:
             summaries = {op: str(entry["summary"]) for op, entry in indexed.items()}
-            others = {
-                op: [b for b in entry["description"].get("backends", {}) if b != "numpy"]
-                for op, entry in indexed.items()
-            }
+            others = {op: other_backends(entry["description"]) for op, entry in indexed.items()}
             return summaries, lambda op: indexed[op]["description"], others
     registry = registry_for(args)
     summaries = {op: spec.summary for op, spec in registry.nodes.items()}
-    others = {op: [b for b in registry.backends_of(op) if b != "numpy"] for op in summaries}
+    others = {op: other_backends(registry.describe(op)) for op in summaries}
     return summaries, registry.describe, others
 
 
-def backends_text(backends: dict[str, bool]) -> str:
-    """``numpy, opencv`` with each backend whose library is missing marked."""
-    if not backends:
+def _mark(backend: str, info: dict[str, Any], long: bool) -> str:
+    """``opencv``, ``opencv (not installed)`` or ``opencv (cannot run here)``: how a
+    backend of an op's description is listed (``long``: with why it cannot run)."""
+    if info.get("backends", {}).get(backend, True):
+        return backend
+    why = str(info.get("unavailable", {}).get(backend, ""))
+    if not why or why.endswith("not found"):
+        return f"{backend} (not installed)"
+    return f"{backend} (cannot run here{': ' + why if long else ''})"
+
+
+def other_backends(info: dict[str, Any]) -> list[str]:
+    """The backends of an op's description but the reference, each that cannot run here
+    marked (``graphvision nodes``)."""
+    return [_mark(b, info, long=False) for b in info.get("backends", {}) if b != "numpy"]
+
+
+def backends_text(info: dict[str, Any]) -> str:
+    """``numpy, opencv`` with each backend that cannot run here marked, and why
+    (``graphvision describe``)."""
+    if not info.get("backends"):
         return "numpy"
-    return ", ".join(f"{b}{'' if ok else ' (not installed)'}" for b, ok in backends.items())
+    return ", ".join(_mark(b, info, long=True) for b in info["backends"])
 
 
 def cmd_nodes(args: argparse.Namespace) -> int:
@@ -87,7 +102,7 @@ def cmd_describe(args: argparse.Namespace) -> int:
         return EXIT_OK
     where = f"version {info['version']}, plugin {info['plugin']}, {info['function']}"
     print(f"{info['id']} ({where})\n")
-    print(f"backends: {backends_text(info.get('backends', {}))}")
+    print(f"backends: {backends_text(info)}")
     if info.get("conformance"):  # how far another backend may be from the reference
         rule = info["conformance"]
         print(f"conformance: {rule['metric']} {rule['tolerance']}. {rule.get('note', '')}".strip())

@@ -15,7 +15,7 @@ not silently run the reference. A parameter value one backend alone handles (its
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 from graphvision.errors import RegistrationError, did_you_mean
@@ -23,15 +23,35 @@ from graphvision.nodes.backends import REFERENCE, exclusive_problem, unavailable
 from graphvision.nodes.registry import Registry
 from graphvision.nodes.spec import NodeSpec
 
-__all__ = ["BackendChooser", "known_backends", "parse_backends"]
+__all__ = ["BackendChooser", "close_backend", "known_backends", "parse_backends"]
 
 
 def parse_backends(text: str | Sequence[str] | None) -> list[str]:
-    """``"opencv,numpy"`` or ``["opencv", "numpy"]`` as a list of names (None: empty)."""
+    """``"opencv,numpy"`` or ``["opencv", "numpy"]`` as a list of names (None: empty).
+
+    Raises
+    ------
+    ValueError
+        Naming an empty entry (``''``, ``"opencv,"``): a slip that would otherwise run
+        the pipeline's own order, or the reference, without a word.
+    """
     if text is None:
         return []
     items = text.split(",") if isinstance(text, str) else list(text)
-    return [str(item).strip() for item in items if str(item).strip()]
+    names = [str(item).strip() for item in items]
+    if "" in names:
+        position = names.index("") + 1
+        raise ValueError(
+            f"the backend order {','.join(names)!r} has an empty entry ({position} of "
+            f"{len(names)}): name each backend once, separated by commas (e.g. opencv,numpy)"
+        )
+    return names
+
+
+def close_backend(name: str, names: Iterable[str]) -> str:
+    """``" (did you mean 'opencv'?)"`` for ``name`` among the backend ``names``, case
+    aside (backend names are lower case: ``OpenCV`` is ``opencv``), or ''."""
+    return did_you_mean(name.lower(), names)
 
 
 def indexed_implementations() -> set[str]:
@@ -62,21 +82,30 @@ class BackendChooser:
 
     def __init__(self, registry: Registry, order: Sequence[str]) -> None:
         self.registry = registry
+        self.given = list(order)
         self.order = [*dict.fromkeys(order)]
         if REFERENCE not in self.order:
             self.order.append(REFERENCE)
 
     def order_problems(self) -> list[str]:
-        """One message per name of the order that no plugin provides (loaded, or
-        listed by the plugin index)."""
-        if all(name in self.registry.backends() for name in self.order):
-            return []
+        """One message per name of the order that is empty, named twice, or that no
+        plugin provides (loaded, or listed by the plugin index)."""
+        problems = [
+            f"backend '{name}' is named {self.given.count(name)} times in the order; "
+            "name each once (the order says which backend to try first)"
+            for name in self.order
+            if name and self.given.count(name) > 1
+        ]
+        if "" in self.given:
+            problems.append("an empty backend name in the order; name each backend once")
+        if all(name in self.registry.backends() for name in self.order if name):
+            return problems
         known = known_backends(self.registry)
-        return [
-            f"unknown backend '{name}'{did_you_mean(name, known)}; "
+        return problems + [
+            f"unknown backend '{name}'{close_backend(name, known)}; "
             f"backends: {', '.join(sorted(known))}"
             for name in self.order
-            if name not in known
+            if name and name not in known
         ]
 
     def choose(
@@ -90,7 +119,7 @@ class BackendChooser:
             return spec, str(error)
         if problem:
             return chosen, problem
-        others = self.registry.implementations.get(spec.id, {})
+        others = self.registry.exclusive_of(spec.id)  # loaded, or in the plugin index
         return chosen, exclusive_problem(spec.id, chosen.backend, others, params or {})
 
     def _first(self, spec: NodeSpec) -> NodeSpec:
@@ -111,7 +140,7 @@ class BackendChooser:
             names = [*available, *sorted(others)]
             return spec, (
                 f"{spec.id} has no '{backend}' implementation"
-                f"{did_you_mean(backend, names)}; backends: {', '.join(names)}"
+                f"{close_backend(backend, names)}; backends: {', '.join(names)}"
             )
         impl = self.registry.implementation(spec.id, backend)
         if impl is None:  # pragma: no cover - backends_of lists only registered ones

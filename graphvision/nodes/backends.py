@@ -19,11 +19,19 @@ implementation whose modules are not installed is listed but not chosen, and
 pinning it is a validation error naming ``extra`` (``pip install
 'graphvision[opencv]'``). Those modules are found with ``importlib.util.find_spec``
 (not imported) until a run uses the implementation, so listing the ops of a
-backend does not import its library. ``requires`` may also hold checks: functions
-returning why the installed library cannot run the implementation ('' when it
-can), such as a class a version of the library lacks; they run (and may import)
-only when a run considers the implementation, and a pin it fails is a validation
-error giving their reason.
+backend does not import its library. ``requires`` may also hold
+
+* releases: ``"opencv-python-headless<5"`` (a distribution, ``<`` or ``>=`` and a
+  release), met when that distribution is not installed or its installed release is
+  in range. They are read from the distributions' metadata (``importlib.metadata``,
+  nothing imported), so ``graphvision nodes`` and ``describe`` (and the plugin index
+  they print from) show an implementation the installed release cannot run as
+  unavailable, and the install hint asks for the release (``pip install
+  'graphvision[opencv]' 'opencv-python-headless<5'``);
+* checks: functions returning why the installed library cannot run the
+  implementation ('' when it can), such as a class a build of the library lacks;
+  they run (and may import) only when a run considers the implementation, and a pin
+  it fails is a validation error giving their reason.
 
 ``exclusive`` names parameter values only this implementation handles (OpenCV's
 ``method: magsac``): a node given one of them that runs another backend, the
@@ -39,10 +47,13 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+import re
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as release_of
 from importlib.util import find_spec
 
 from graphvision.errors import RegistrationError
@@ -59,6 +70,7 @@ __all__ = [
     "implementation_spec",
     "implements",
     "installed",
+    "listed_problem",
     "unavailable",
 ]
 
@@ -81,8 +93,13 @@ class ImplementationMark:
 
     @property
     def modules(self) -> tuple[str, ...]:
-        """The modules of ``requires`` (its checks left out)."""
-        return tuple(r for r in self.requires if isinstance(r, str))
+        """The modules of ``requires`` (its releases and checks left out)."""
+        return tuple(r for r in self.requires if isinstance(r, str) and not _RELEASE.match(r))
+
+    @property
+    def releases(self) -> tuple[str, ...]:
+        """The releases of ``requires`` (``"opencv-python-headless<5"``)."""
+        return tuple(r for r in self.requires if isinstance(r, str) and _RELEASE.match(r))
 
 
 @dataclass(frozen=True)
@@ -104,11 +121,16 @@ class Implementation:
 
     @property
     def install_hint(self) -> str:
-        extra = self.mark.extra
-        modules = ", ".join(self.mark.modules)
+        """``pip install 'graphvision[EXTRA]'``, with the release it needs when it names
+        one (the one the installed distribution is out of, else the first)."""
+        extra, releases = self.mark.extra, self.mark.releases
+        wrong = [r for r in releases if release_problem(r)]
+        pinned = f" '{(wrong or releases)[0]}'" if releases else ""
         if extra:
-            return f"pip install 'graphvision[{extra}]'"
-        return f"install {modules}"
+            return f"pip install 'graphvision[{extra}]'{pinned}"
+        if pinned:
+            return f"pip install{pinned}"
+        return f"install {', '.join(self.mark.modules)}"
 
 
 def implements(
@@ -163,6 +185,12 @@ def implementation_of(func: Callable, plugin: str) -> Implementation:
         )
     if not isinstance(mark.version, int) or isinstance(mark.version, bool) or mark.version < 1:
         raise RegistrationError(f"{where}: version must be a positive integer")
+    odd = [r for r in mark.requires if isinstance(r, str) and not _requirement(r)]
+    if odd:
+        raise RegistrationError(
+            f"{where}: requires holds modules ('cv2'), releases ('opencv-python-headless<5', "
+            f"'numpy>=2') and checks; not {', '.join(map(repr, odd))}"
+        )
     func = unchecked(func)
     module = sys.modules.get(func.__module__)
     path = getattr(module, "__graphvision_path__", "") if module else ""
@@ -196,14 +224,29 @@ def implementation_problem(spec: NodeSpec, impl: Implementation) -> str:
 
 
 def installed(impl: Implementation) -> bool:
-    """True when every module ``impl`` requires can be imported (found, not imported;
-    its checks are not run: see :func:`unavailable`)."""
-    return all(_found(module) for module in impl.mark.modules)
+    """True when every module ``impl`` requires can be imported and every release it
+    requires is met (found and read from metadata, nothing imported; its checks are
+    not run: see :func:`unavailable`)."""
+    return not listed_problem(impl)
+
+
+def listed_problem(impl: Implementation) -> str:
+    """Why ``impl`` cannot run here, as far as is known without importing anything
+    ('' when nothing is): its modules not found, or an installed release out of range."""
+    missing = [module for module in impl.mark.modules if not _found(module)]
+    if missing:
+        return f"{', '.join(missing)} not found"
+    for release in impl.mark.releases:
+        reason = release_problem(release)
+        if reason:
+            return reason
+    return ""
 
 
 def unavailable(impl: Implementation) -> str:
-    """Why ``impl`` cannot run here ('' when it can): its modules not found, or the
-    reason a check of ``requires`` gives (the checks may import the library)."""
+    """Why ``impl`` cannot run here ('' when it can): its modules not found, the reason
+    a check of ``requires`` gives (the checks may import the library: they say what the
+    library lacks), or an installed release out of range."""
     missing = [module for module in impl.mark.modules if not _found(module)]
     if missing:
         return f"{', '.join(missing)} not found"
@@ -212,25 +255,57 @@ def unavailable(impl: Implementation) -> str:
             reason = check()
             if reason:
                 return reason
-    return ""
+    return listed_problem(impl)
+
+
+_RELEASE = re.compile(r"^([A-Za-z0-9][A-Za-z0-9._-]*)\s*(<|>=)\s*(\d+(?:\.\d+)*)$")
+_MODULE = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$")
+
+
+def _requirement(text: str) -> bool:
+    return bool(_MODULE.match(text) or _RELEASE.match(text))
+
+
+@cache
+def release_problem(requirement: str) -> str:
+    """Why the installed distribution is out of ``requirement`` (``"name<5"``,
+    ``"name>=4.8"``), read from its metadata; '' when it is in range or not installed."""
+    match = _RELEASE.match(requirement)
+    if match is None:  # pragma: no cover - registration refuses other forms
+        return ""
+    name, operator, bound = match.groups()
+    try:
+        installed_release = release_of(name)
+    except PackageNotFoundError:
+        return ""
+    leading = re.match(r"\d+(?:\.\d+)*", installed_release)  # 5.0.0rc1: 5.0.0
+    numbers = tuple(int(n) for n in leading.group().split(".")) if leading else ()
+    limit = tuple(int(n) for n in bound.split("."))
+    if (numbers < limit) == (operator == "<"):
+        return ""
+    return f"{name} {installed_release} is installed; needs {name}{operator}{bound}"
 
 
 def exclusive_problem(
-    op: str, backend: str, others: Mapping[str, Implementation], params: Mapping[str, object]
+    op: str,
+    backend: str,
+    others: Mapping[str, tuple[tuple[tuple[str, tuple[object, ...]], ...], str]],
+    params: Mapping[str, object],
 ) -> str:
     """Why ``backend`` cannot run ``op`` with ``params`` ('' when it can): a value
-    another backend's implementation declares ``exclusive`` (it alone handles it)."""
-    for other, impl in sorted(others.items()):
+    another backend's implementation declares ``exclusive`` (it alone handles it).
+    ``others``: backend -> (its ``exclusive`` values, its install hint), as
+    :meth:`~graphvision.nodes.registry.Registry.exclusive_of` gives them."""
+    for other, (exclusive, hint) in sorted(others.items()):
         if other == backend:
             continue
-        for name, values in impl.mark.exclusive:
+        for name, values in exclusive:
             value = params.get(name)
             if any(value == v and type(value) is type(v) for v in values):
                 return (
                     f"{name}: {value!r} of {op} is implemented by the '{other}' backend "
                     f"alone, not by '{backend}': choose it (--backend {other}, "
-                    f"backends: [{other}] or backend: {other} on the node; "
-                    f"{impl.install_hint})"
+                    f"backends: [{other}] or backend: {other} on the node; {hint})"
                 )
     return ""
 

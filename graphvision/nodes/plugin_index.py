@@ -56,6 +56,7 @@ if TYPE_CHECKING:
 __all__ = [
     "ENTRY_POINT_GROUP",
     "environment_key",
+    "exclusive_entries",
     "has_index",
     "index_path",
     "installed_entry_points",
@@ -65,7 +66,7 @@ __all__ = [
 ]
 
 ENTRY_POINT_GROUP = "graphvision.plugins"
-FORMAT = 4  # bump when what an index holds changes
+FORMAT = 5  # bump when what an index holds changes
 
 
 def installed_entry_points() -> list[EntryPoint]:
@@ -197,12 +198,49 @@ def read_index(key: str) -> dict[str, Any] | None:
     return index["nodes"] if index is not None else None
 
 
-def read_providers(key: str) -> dict[str, dict[str, list[str]]] | None:
+def read_providers(key: str) -> dict[str, dict[str, Any]] | None:
     """For each entry-point plugin of the index under ``key``, the node ids, port type
-    names, input-source schemes and implementations (``op@backend``) it registers; None
+    names, input-source schemes and implementations (``op@backend``) it registers, and
+    the ``exclusive`` values of those implementations (:func:`exclusive_entries`); None
     without a sound index."""
     index = _read(key)
     return index["plugins"] if index is not None else None
+
+
+Exclusive = tuple[tuple[str, tuple[object, ...]], ...]
+
+
+def exclusive_entries(plugins: dict[str, dict[str, Any]]) -> dict[str, tuple[Exclusive, str]]:
+    """``op@backend`` -> (its ``exclusive`` values, its install hint), for every
+    implementation of the index's ``plugins`` that declares some: a pipeline is refused
+    a value only a backend it did not load handles without importing that backend."""
+    found: dict[str, tuple[Exclusive, str]] = {}
+    for entry in plugins.values():
+        recorded = entry.get("exclusive")
+        for name, item in (recorded if isinstance(recorded, dict) else {}).items():
+            values = item.get("values") if isinstance(item, dict) else None
+            if isinstance(values, dict) and isinstance(item.get("hint"), str):
+                pairs = tuple((p, tuple(v)) for p, v in values.items() if isinstance(v, list))
+                found[name] = (pairs, item["hint"])
+    return found
+
+
+def _exclusive(registry: Registry, plugin: str) -> dict[str, Any]:
+    """The index's record of ``plugin``'s implementations with ``exclusive`` values (JSON
+    scalars: one of another kind is not recorded, and is found when the plugin loads)."""
+    scalars = (str, int, float, bool)
+    return {
+        f"{impl.op}@{impl.backend}": {
+            "values": {
+                name: [v for v in values if isinstance(v, scalars)]
+                for name, values in impl.mark.exclusive
+            },
+            "hint": impl.install_hint,
+        }
+        for impls in registry.implementations.values()
+        for impl in impls.values()
+        if impl.plugin == plugin and impl.mark.exclusive
+    }
 
 
 def write_index(key: str, registry: Registry) -> None:
@@ -218,6 +256,7 @@ def write_index(key: str, registry: Registry) -> None:
             "port_types": sorted(status.port_types),
             "sources": sorted(status.sources),
             "implementations": sorted(status.implementations),
+            "exclusive": _exclusive(registry, name),
         }
         for name, status in sorted(registry.plugins.items())
     }

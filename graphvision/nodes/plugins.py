@@ -67,6 +67,7 @@ def load_entry_points(registry: Registry, needs: Needs | None = None) -> None:
     key = environment_key(entries)
     providers = read_providers(key) if has_index(key) else None  # a damaged one is removed
     indexed = providers is not None
+    registry.indexed = providers or registry.indexed  # what the plugins not imported provide
     if providers is not None and needs is not None:
         wanted = _providers(providers, needs, set(registry.port_types))
         if wanted is not None:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import inspect
 import types
 from dataclasses import dataclass, field
+from typing import Any
 
 from graphvision.errors import DuplicateNodeError, RegistrationError, UnknownNameError, did_you_mean
 from graphvision.nodes.backends import (
@@ -24,6 +25,7 @@ from graphvision.nodes.backends import (
     implementation_problem,
     implementation_spec,
     installed,
+    listed_problem,
 )
 from graphvision.nodes.signature import build_spec
 from graphvision.nodes.spec import NodeSpec, SourceSpec
@@ -60,6 +62,9 @@ class Registry:
         self._implementation_specs: dict[tuple[str, str], NodeSpec] = {}
         self.implementations: dict[str, dict[str, Implementation]] = {}
         """Op id -> backend -> implementation (the reference, ``numpy``, is the op's node)."""
+        self.indexed: dict[str, dict[str, Any]] = {}
+        """The plugin index's entries of the installed plugins when discovery read one
+        (it may import only some of them): what the others provide, known unimported."""
         self.renamed: dict[str, str] = {}
         """Old op id -> new one, from the plugins' ``RENAMED_OPS`` (a pipeline using an old
         id is told the new one)."""
@@ -186,16 +191,43 @@ class Registry:
 
     def backends_of(self, op: str) -> dict[str, bool]:
         """The backends implementing ``op`` (the reference first), each with whether the
-        modules it requires are installed."""
+        modules it requires are installed and the releases it requires met."""
         found = {REFERENCE: True}
         for backend, impl in sorted(self.implementations.get(op, {}).items()):
             found[backend] = installed(impl)
         return found
 
+    def exclusive_of(
+        self, op: str
+    ) -> dict[str, tuple[tuple[tuple[str, tuple[object, ...]], ...], str]]:
+        """Backend -> (the ``exclusive`` values of its implementation of ``op``, its install
+        hint): the loaded implementations', and those the plugin index records for plugins
+        this registry did not import (a run imports only the backends it names)."""
+        from graphvision.nodes.plugin_index import exclusive_entries
+
+        found = {
+            backend: (impl.mark.exclusive, impl.install_hint)
+            for backend, impl in self.implementations.get(op, {}).items()
+            if impl.mark.exclusive
+        }
+        for name, entry in exclusive_entries(self.indexed).items():
+            indexed_op, _, backend = name.partition("@")
+            if indexed_op == op:
+                found.setdefault(backend, entry)
+        return found
+
     def describe(self, op: str) -> dict:
         """The op's description (:meth:`NodeSpec.describe`) with its ``backends``
-        (name -> installed), as ``graphvision describe`` and ``nodes --json`` show it."""
-        return {**self.node(op).describe(), "backends": self.backends_of(op)}
+        (name -> installed), as ``graphvision describe`` and ``nodes --json`` show it, and
+        when some cannot run here, ``unavailable`` (name -> why: a module not found, an
+        installed release out of range; read without importing anything)."""
+        described = {**self.node(op).describe(), "backends": self.backends_of(op)}
+        why = {
+            backend: listed_problem(impl)
+            for backend, impl in sorted(self.implementations.get(op, {}).items())
+            if listed_problem(impl)
+        }
+        return {**described, "unavailable": why} if why else described
 
     def backends(self) -> set[str]:
         """Every backend some op has an implementation of (the reference included)."""

@@ -284,7 +284,9 @@ class EssentialFit(NamedTuple):
         note=(
             "OpenCV samples five points (Nistér) where the reference samples eight and "
             "refines by Sampson's distance; E is compared at unit norm up to sign: 0.025 "
-            "apart on the conformance scene (0.5 px noise, 20 outliers in 150)"
+            "apart on the conformance scene (0.5 px noise, 20 outliers in 150); method: "
+            "magsac (OpenCV's USAC_MAGSAC) has no reference implementation and is compared "
+            "with the reference's RANSAC"
         ),
     ),
 )
@@ -299,6 +301,7 @@ def essential_from_points(
     max_iterations: Iterations = 2000,
     max_nfa: MaxNfa = 1.0,
     seed: Seed = 0,
+    method: Literal["ransac", "magsac"] = "ransac",
 ) -> EssentialFit:
     r"""E directly from normalised points: :func:`fundamental`'s robust method on
     :math:`\hat x = K^{-1} x`, then singular values forced to (1, 1, 0).
@@ -326,6 +329,11 @@ def essential_from_points(
         Largest number of false alarms accepted (None: every model).
     seed : int
         Seed of the sampler.
+    method : {"ransac", "magsac"}
+        ``ransac``: the consensus above. ``magsac``: MAGSAC++ [3]_ over Nistér's
+        five-point samples, implemented by the ``opencv`` backend alone
+        (``cv2.findEssentialMat(..., cv2.USAC_MAGSAC)``); the reference refuses it at
+        validation, naming that backend.
 
     Returns
     -------
@@ -338,7 +346,10 @@ def essential_from_points(
     ----------
     .. [1] R. Hartley, A. Zisserman, *Multiple View Geometry*, 2nd ed., 2004, §9.6.
     .. [2] L. Moisan, B. Stival, IJCV 57(3), 2004 (the significance).
+    .. [3] D. Barath, J. Noskova, M. Ivashechkin, J. Matas, "MAGSAC++, a fast, reliable
+       and accurate robust estimator", CVPR 2020.
     """
+    check_reference_method(method)
     _pairs(a, b, 8, "the essential matrix from points")
     focal = float(np.mean([camera_a.K[0, 0], camera_a.K[1, 1], camera_b.K[0, 0], camera_b.K[1, 1]]))
     na, nb = normalise_pixels(a, camera_a.K), normalise_pixels(b, camera_b.K)

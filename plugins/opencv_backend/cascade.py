@@ -1,6 +1,14 @@
 """OpenCV implementation of LBP cascade detection (``cv2.CascadeClassifier``), where the
 installed OpenCV has it: the 4.x wheels do, OpenCV 5 dropped the class (its objdetect
-module keeps no cascade classifier)."""
+module keeps no cascade classifier).
+
+Whether it can run is decided twice. From the installed wheel's release, read from its
+metadata (``requires``' ``"opencv-python-headless<5"``...; nothing imported): so that
+``graphvision nodes`` and ``describe``, which print from the plugin index without
+importing OpenCV, show it unavailable on OpenCV 5 and the install hint asks for
+``opencv-python-headless<5`` (``graphvision[opencv]`` alone installs 5). Then, when a run
+considers it, from the imported module (:func:`has_cascade_classifier`): a build without
+a wheel's metadata (OpenCV compiled from source) is judged by what it has."""
 
 from __future__ import annotations
 
@@ -13,7 +21,7 @@ import numpy as np
 
 from graphvision import BoxSet, implements
 
-from .convert import EXTRA, cv, to_u8
+from .convert import EXTRA, WHEELS, cv, to_u8
 
 __all__ = ["cascade_xml", "cv_lbp_detect", "has_cascade_classifier"]
 
@@ -87,7 +95,7 @@ def _classifier(model: Any) -> Any:
 @implements(
     "recognition.lbp_detect",
     backend="opencv",
-    requires=("cv2", has_cascade_classifier),
+    requires=("cv2", *(f"{wheel}<5" for wheel in WHEELS), has_cascade_classifier),
     extra=EXTRA,
 )
 def cv_lbp_detect(

@@ -30,6 +30,7 @@ from graphvision import KeypointSet, MatchSet
 __all__ = [
     "EXTRA",
     "REQUIRES",
+    "WHEELS",
     "board_from_cv",
     "border",
     "circles_from_cv",
@@ -50,6 +51,14 @@ __all__ = [
 
 REQUIRES = ("cv2",)
 EXTRA = "opencv"
+WHEELS = (
+    "opencv-python-headless",
+    "opencv-python",
+    "opencv-contrib-python-headless",
+    "opencv-contrib-python",
+)
+"""The distributions that install ``cv2`` (the extra's first): a requirement on OpenCV's
+release is one on each, since any of them may be the one installed."""
 
 _BORDERS = {"mirror": "BORDER_REFLECT", "replicate": "BORDER_REPLICATE", "zero": "BORDER_CONSTANT"}
 

@@ -210,7 +210,13 @@ def cv_board_corners(
     return BoardCorners(corners, found)
 
 
-@implements("epipolar.essential_from_points", backend="opencv", requires=REQUIRES, extra=EXTRA)
+@implements(
+    "epipolar.essential_from_points",
+    backend="opencv",
+    requires=REQUIRES,
+    extra=EXTRA,
+    exclusive={"method": ("magsac",)},
+)
 def cv_essential_from_points(
     a: np.ndarray,
     b: np.ndarray,
@@ -222,12 +228,14 @@ def cv_essential_from_points(
     max_iterations: int = 2000,
     max_nfa: float | None = 1.0,
     seed: int = 0,
+    method: str = "ransac",
 ) -> object:
     """``cv2.findEssentialMat(RANSAC)`` (Nistér's five points) on the points normalised
     by each camera's K, the pixel threshold divided by the mean focal length as the
-    reference divides it, OpenCV's generator seeded with ``seed``; the first of its
-    solutions, singular values forced to (1, 1, 0). The significance is the reference's
-    test on OpenCV's inliers."""
+    reference divides it, OpenCV's generator seeded with ``seed`` (``method: magsac``:
+    ``USAC_MAGSAC``, MAGSAC++, its own generator); the first of its solutions, singular
+    values forced to (1, 1, 0). The significance is the reference's test on OpenCV's
+    inliers."""
     from ..camera import normalise_pixels
     from ..epipolar._geometry import essential_from_fundamental, sampson_distance
     from ..epipolar._nodes import EssentialFit, _pairs
@@ -237,8 +245,9 @@ def cv_essential_from_points(
     focal = float(np.mean([camera_a.K[0, 0], camera_a.K[1, 1], camera_b.K[0, 0], camera_b.K[1, 1]]))
     na, nb = normalise_pixels(a, camera_a.K), normalise_pixels(b, camera_b.K)
     cv2.setRNGSeed(seed)
+    flag = cv2.USAC_MAGSAC if method == "magsac" else cv2.RANSAC
     E, mask = cv2.findEssentialMat(
-        na.astype(np.float64), nb.astype(np.float64), np.eye(3), cv2.RANSAC,
+        na.astype(np.float64), nb.astype(np.float64), np.eye(3), flag,
         confidence, threshold / focal, maxIters=max_iterations,
     )  # fmt: skip
     if E is None or E.shape[0] < 3:

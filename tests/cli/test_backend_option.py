@@ -76,4 +76,7 @@ def test_a_node_pinned_to_a_misspelt_backend_lists_the_ops_installed_ones(
     path.write_text(text.replace("op: colour.to_gray", "op: colour.to_gray, backend: OpenCV"))
     assert main(["run", str(path), "--no-cache"]) == 2
     err = capsys.readouterr().err
-    assert "colour.to_gray has no 'OpenCV' implementation; backends: numpy, opencv" in err
+    assert (
+        "colour.to_gray has no 'OpenCV' implementation (did you mean 'opencv'?); "
+        "backends: numpy, opencv"
+    ) in err  # a backend's name is lower case: its case is no typo to miss
