@@ -80,3 +80,83 @@ def test_a_node_pinned_to_a_misspelt_backend_lists_the_ops_installed_ones(
         "colour.to_gray has no 'OpenCV' implementation (did you mean 'opencv'?); "
         "backends: numpy, opencv"
     ) in err  # a backend's name is lower case: its case is no typo to miss
+
+
+def _camera_pipeline(tmp_path: Path, order: str = "") -> Path:
+    """A one-node pipeline (nothing to compute worth the name), with ``order`` as its
+    ``backends:`` line."""
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        f"name: p\n{order}\nnodes:\n  camera: {{op: camera.pinhole, params: {{fx: 500.0}}}}\n"
+        "outputs:\n  camera: camera\n"
+    )
+    return path
+
+
+@pytest.mark.parametrize(
+    ("given", "shown", "entry"), [("", "''", "1 of 1"), ("opencv,", "'opencv,'", "2 of 2"),
+                                  ("numpy, ,opencv", "'numpy,,opencv'", "2 of 3")]
+)  # fmt: skip
+def test_an_empty_backend_entry_is_a_usage_error_naming_it(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    given: str,
+    shown: str,
+    entry: str,
+) -> None:
+    """`--backend ''` ran the file's order, and `--backend opencv,` opencv, without a word
+    (refused before any plugin is looked for)."""
+    path = _camera_pipeline(tmp_path)
+    assert main(["run", str(path), "--backend", given, "--no-cache"]) == 2
+    assert capsys.readouterr().err.startswith(
+        f"error: --backend: the backend order {shown} has an empty entry ({entry}): "
+        "name each backend once, separated by commas"
+    )
+    with pytest.raises(ValueError, match=r"has an empty entry \(2 of 2\)"):
+        gv.run(path, backends="opencv,", executor="sync")
+
+
+def test_a_backend_named_twice_is_refused_on_the_option_and_at_the_files_line(
+    indexed: None, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _camera_pipeline(tmp_path)
+    assert main(["run", str(path), "--backend", "opencv,numpy,opencv", "--no-cache"]) == 2
+    assert capsys.readouterr().err.startswith(
+        "error: --backend opencv,numpy,opencv: backend 'opencv' is named 2 times in the order"
+    )
+    listed = _camera_pipeline(tmp_path, "backends: [opencv, opencv]")
+    assert main(["validate", str(listed)]) == 2
+    assert "p.yaml:2: backend 'opencv' is named 2 times" in capsys.readouterr().err
+
+
+def test_a_backend_in_capitals_is_told_its_lower_case_name(
+    indexed: None, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _camera_pipeline(tmp_path)
+    assert main(["run", str(path), "--backend", "OpenCV", "--no-cache"]) == 2
+    assert (
+        "error: --backend OpenCV: unknown backend 'OpenCV' (did you mean 'opencv'?)"
+        in capsys.readouterr().err
+    )
+
+
+def test_validate_refuses_a_value_of_a_backend_it_does_not_import_from_the_index(
+    indexed: None, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`validate` (and `run`) import only the plugins a pipeline's ops and backends need:
+    without --backend opencv, method: magsac was let through to fail at run time."""
+    from graphvision.nodes.plugins import Needs
+
+    text = (PIPELINES / "homography.yaml").read_text()
+    fit = "params: {threshold: 3.0, seed: 0}"
+    assert fit in text
+    path = tmp_path / "homography.yaml"
+    path.write_text(text.replace(fit, "params: {threshold: 3.0, seed: 0, method: magsac}"))
+    line = next(n for n, t in enumerate(path.read_text().splitlines(), 1) if "  fit:" in t)
+    needs = Needs.of(gv.load_pipeline(path))
+    assert "opencv" not in gv.discover(needs=needs).plugins  # the check is the index's
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert f"homography.yaml:{line}: method: 'magsac' of geometry.homography_ransac" in err
+    assert "implemented by the 'opencv' backend alone, not by 'numpy'" in err
+    assert "pip install 'graphvision[opencv]'" in err

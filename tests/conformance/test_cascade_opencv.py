@@ -3,6 +3,7 @@ a backend that OpenCV 5 (no CascadeClassifier) cannot run, refused with the reas
 
 from __future__ import annotations
 
+import re
 import textwrap
 from pathlib import Path
 
@@ -46,12 +47,34 @@ def test_a_pin_on_an_opencv_without_cascade_classifier_names_why(tmp_path: Path)
         gv.PipelineError,
         match=r"faces.yaml:7.*backend 'opencv' of recognition.lbp_detect cannot run here "
         rf"\(OpenCV {cv2.__version__} has no CascadeClassifier: OpenCV 5 dropped it; "
-        r"opencv-python-headless 4.x has it\)",
+        r"opencv-python-headless 4.x has it\): "
+        r"pip install 'graphvision\[opencv\]' 'opencv[a-z-]*-python[a-z-]*<5'$",
     ):
         gv.compile_graph(gv.load_pipeline(path), gv.discover())
     path.write_text(textwrap.dedent(PIPELINE % ""))  # an order falls back to the reference
     compiled = gv.compile_graph(gv.load_pipeline(path), gv.discover(), backends=["opencv"])
     assert compiled.steps["boxes"].spec.backend == "numpy"
+
+
+@pytest.mark.skipif(hasattr(cv2, "CascadeClassifier"), reason="this OpenCV has the class")
+def test_on_opencv_5_the_listings_say_the_cascade_cannot_run_from_the_wheels_release(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``nodes`` and ``describe`` print from the plugin index, without importing OpenCV:
+    they listed the opencv implementation as available on OpenCV 5."""
+    from graphvision.cli.main import main
+
+    gv.discover()  # the index they print from
+    assert main(["describe", "recognition.lbp_detect"]) == 0
+    assert re.search(
+        r"backends: numpy, opencv \(cannot run here: (opencv[a-z-]*) 5[.\d]* is installed; "
+        r"needs \1<5\)\n",
+        capsys.readouterr().out,
+    )
+    assert main(["nodes"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    (line,) = [t for t in lines if t.split()[:1] == ["recognition.lbp_detect"]]
+    assert line.endswith("[+opencv (cannot run here)]")
 
 
 @pytest.mark.skipif(not hasattr(cv2, "CascadeClassifier"), reason="OpenCV 5 lacks the class")

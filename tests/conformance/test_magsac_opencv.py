@@ -83,3 +83,59 @@ def test_opencv_magsac_fundamental_fits_the_reference_inliers_by_sampson_error()
     assert np.sqrt(np.mean(sampson)) <= tolerance  # measured 0.84 px (FM_RANSAC: 1.04)
     with pytest.raises(ValueError, match=r"method 'magsac' is implemented by the opencv backend"):
         epipolar.fundamental(**inputs, **params, method="magsac")
+
+
+def test_opencv_magsac_essential_gives_the_reference_ransacs_pose() -> None:
+    """epipolar.essential_from_points' ``method: magsac`` (``cv2.findEssentialMat(...,
+    cv2.USAC_MAGSAC)``) against the reference's RANSAC: E by the op's declared
+    tolerance (unit norm, up to sign), and the rotation the reference's relative_pose
+    recovers from each by that op's declared rotation error."""
+    pytest.importorskip("cv2", reason="the opencv backend needs opencv-python-headless")
+    from graphvision_plugins import epipolar
+    from graphvision_plugins.opencv_backend import cv_essential_from_points
+
+    from .cases import _two_views
+
+    (inputs, params), *_ = _two_views()["epipolar.essential_from_points"]  # 20 outliers in 150
+    reference = epipolar.essential_from_points(**inputs, **params)
+    magsac = cv_essential_from_points(**inputs, **params, method="magsac")
+    registry = gv.discover()
+    rule = registry.node("epipolar.essential_from_points").conformance
+    e1, e2 = (e / np.linalg.norm(e) for e in (reference.E, magsac.E))
+    apart = min(np.linalg.norm(e1 - e2), np.linalg.norm(e1 + e2))
+    assert rule.metric == "up_to_scale" and apart <= rule.tolerance  # measured 0.013 (RANSAC 0.025)
+    a, b, camera_a, camera_b = inputs["a"], inputs["b"], inputs["camera_a"], inputs["camera_b"]
+    poses = [epipolar.relative_pose(E, a, b, camera_a, camera_b).moved.R for E in (e1, e2)]
+    cosine = np.clip((np.trace(poses[0] @ poses[1].T) - 1) / 2, -1.0, 1.0)
+    degrees = float(np.degrees(np.arccos(cosine)))
+    pose_rule = registry.node("epipolar.relative_pose").conformance
+    assert pose_rule.metric == "rotation_error" and degrees <= pose_rule.tolerance  # 0.028°
+    assert magsac.inliers_a.shape[0] == magsac.inlier_count >= 0.6 * len(a)  # measured 100
+
+
+def test_magsac_essential_on_the_reference_is_refused_at_validation_naming_opencv() -> None:
+    from graphvision_plugins import epipolar
+
+    from .cases import _two_views
+
+    graph = gv.Graph("pose")
+    a, b = graph.input("a", "Points2D"), graph.input("b", "Points2D")
+    camera = graph.add("camera", "camera.pinhole", params={"fx": 90.0})
+    fit = graph.add(
+        "E", "epipolar.essential_from_points", params={"method": "magsac"},
+        a=a, b=b, camera_a=camera, camera_b=camera,
+    )  # fmt: skip
+    graph.output("E", fit["E"])
+    registry = gv.discover()
+    with pytest.raises(
+        gv.PipelineError,
+        match=r"method: 'magsac' of epipolar.essential_from_points is implemented by the "
+        r"'opencv' backend alone, not by 'numpy'",
+    ):
+        gv.compile_graph(graph, registry, backends=["numpy"])
+    (inputs, params), *_ = _two_views()["epipolar.essential_from_points"]
+    with pytest.raises(ValueError, match=r"method 'magsac' is implemented by the opencv backend"):
+        epipolar.essential_from_points(**inputs, **params, method="magsac")
+    if registry.backends_of("epipolar.essential_from_points")["opencv"]:
+        compiled = gv.compile_graph(graph, registry, backends=["opencv"])
+        assert compiled.steps["E"].spec.backend == "opencv"

@@ -101,3 +101,63 @@ def test_exclusive_must_name_a_parameter_of_the_op(tmp_path: Path) -> None:
     )
     (failure,) = gv.discover([path], entry_points=False).failed_plugins()
     assert "exclusive names no parameter of twice.value: speed" in failure.error
+
+
+RELEASES = '''
+"""An op whose second backend needs a release of NumPy that is not installed."""
+
+from graphvision import Float, implements, node
+
+
+@node("aged.value")
+def value(x: Float) -> Float:
+    """x."""
+    return x
+
+
+@implements("aged.value", backend="aged", requires=("numpy", "numpy<1.0"), extra="aged")
+def aged_value(x):
+    raise AssertionError("never chosen: the installed numpy is 1.0 or later")
+'''
+
+
+def test_a_release_out_of_range_is_read_from_metadata_listed_and_hinted(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A release requirement is known without importing the library: listings mark the
+    backend (the cascade on OpenCV 5 was listed as available), and a pin asks for it."""
+    from importlib.metadata import version
+
+    from graphvision.cli.main import main
+
+    plugin = tmp_path / "aged.py"
+    plugin.write_text(RELEASES)
+    registry = gv.discover([plugin], entry_points=False)
+    assert registry.backends_of("aged.value") == {"numpy": True, "aged": False}
+    why = f"numpy {version('numpy')} is installed; needs numpy<1.0"
+    assert registry.describe("aged.value")["unavailable"] == {"aged": why}
+    assert main(["describe", "aged.value", "--plugins", str(plugin)]) == 0
+    assert f"backends: numpy, aged (cannot run here: {why})\n" in capsys.readouterr().out
+    assert main(["nodes", "--plugins", str(plugin)]) == 0
+    assert "x.  [+aged (cannot run here)]" in capsys.readouterr().out
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "name: p\nplugins: [aged.py]\nnodes:\n  v: {op: aged.value, in: {x: x}, backend: aged}\n"
+        "inputs:\n  x: {type: Float, default: 1.0}\noutputs:\n  v: v\n"
+    )
+    with pytest.raises(
+        gv.PipelineError,
+        match=rf"p.yaml:4.*backend 'aged' of aged.value cannot run here \({why}\): "
+        r"pip install 'graphvision\[aged\]' 'numpy<1.0'",
+    ):
+        gv.compile_graph(gv.load_pipeline(path), registry)
+
+
+def test_requires_holds_modules_releases_and_checks_only(tmp_path: Path) -> None:
+    path = tmp_path / "odd.py"
+    path.write_text(RELEASES.replace('"numpy<1.0"', '"numpy ~= 1.0"'))
+    (failure,) = gv.discover([path], entry_points=False).failed_plugins()
+    assert (
+        "requires holds modules ('cv2'), releases ('opencv-python-headless<5', 'numpy>=2') "
+        "and checks; not 'numpy ~= 1.0'"
+    ) in failure.error
