@@ -55,6 +55,7 @@ from functools import cache
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as release_of
 from importlib.util import find_spec
+from typing import Any
 
 from graphvision.errors import RegistrationError
 from graphvision.nodes.marks import unchecked
@@ -65,6 +66,7 @@ __all__ = [
     "Check",
     "Implementation",
     "ImplementationMark",
+    "exclusive_entries",
     "exclusive_problem",
     "implementation_problem",
     "implementation_spec",
@@ -286,10 +288,28 @@ def release_problem(requirement: str) -> str:
     return f"{name} {installed_release} is installed; needs {name}{operator}{bound}"
 
 
+Exclusive = tuple[tuple[str, tuple[object, ...]], ...]
+
+
+def exclusive_entries(plugins: dict[str, dict[str, Any]]) -> dict[str, tuple[Exclusive, str]]:
+    """``op@backend`` -> (its ``exclusive`` values, its install hint), for every
+    implementation of the index's ``plugins`` that declares some: a pipeline is refused
+    a value only a backend it did not load handles without importing that backend."""
+    found: dict[str, tuple[Exclusive, str]] = {}
+    for entry in plugins.values():
+        recorded = entry.get("exclusive")
+        for name, item in (recorded if isinstance(recorded, dict) else {}).items():
+            values = item.get("values") if isinstance(item, dict) else None
+            if isinstance(values, dict) and isinstance(item.get("hint"), str):
+                pairs = tuple((p, tuple(v)) for p, v in values.items() if isinstance(v, list))
+                found[name] = (pairs, item["hint"])
+    return found
+
+
 def exclusive_problem(
     op: str,
     backend: str,
-    others: Mapping[str, tuple[tuple[tuple[str, tuple[object, ...]], ...], str]],
+    others: Mapping[str, tuple[Exclusive, str]],
     params: Mapping[str, object],
 ) -> str:
     """Why ``backend`` cannot run ``op`` with ``params`` ('' when it can): a value

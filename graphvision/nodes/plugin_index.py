@@ -56,7 +56,6 @@ if TYPE_CHECKING:
 __all__ = [
     "ENTRY_POINT_GROUP",
     "environment_key",
-    "exclusive_entries",
     "has_index",
     "index_path",
     "installed_entry_points",
@@ -201,28 +200,10 @@ def read_index(key: str) -> dict[str, Any] | None:
 def read_providers(key: str) -> dict[str, dict[str, Any]] | None:
     """For each entry-point plugin of the index under ``key``, the node ids, port type
     names, input-source schemes and implementations (``op@backend``) it registers, and
-    the ``exclusive`` values of those implementations (:func:`exclusive_entries`); None
-    without a sound index."""
+    the ``exclusive`` values of those implementations (read by
+    :func:`graphvision.nodes.backends.exclusive_entries`); None without a sound index."""
     index = _read(key)
     return index["plugins"] if index is not None else None
-
-
-Exclusive = tuple[tuple[str, tuple[object, ...]], ...]
-
-
-def exclusive_entries(plugins: dict[str, dict[str, Any]]) -> dict[str, tuple[Exclusive, str]]:
-    """``op@backend`` -> (its ``exclusive`` values, its install hint), for every
-    implementation of the index's ``plugins`` that declares some: a pipeline is refused
-    a value only a backend it did not load handles without importing that backend."""
-    found: dict[str, tuple[Exclusive, str]] = {}
-    for entry in plugins.values():
-        recorded = entry.get("exclusive")
-        for name, item in (recorded if isinstance(recorded, dict) else {}).items():
-            values = item.get("values") if isinstance(item, dict) else None
-            if isinstance(values, dict) and isinstance(item.get("hint"), str):
-                pairs = tuple((p, tuple(v)) for p, v in values.items() if isinstance(v, list))
-                found[name] = (pairs, item["hint"])
-    return found
 
 
 def _exclusive(registry: Registry, plugin: str) -> dict[str, Any]:

@@ -20,7 +20,9 @@ from typing import Any
 from graphvision.errors import DuplicateNodeError, RegistrationError, UnknownNameError, did_you_mean
 from graphvision.nodes.backends import (
     REFERENCE,
+    Exclusive,
     Implementation,
+    exclusive_entries,
     implementation_of,
     implementation_problem,
     implementation_spec,
@@ -197,14 +199,10 @@ class Registry:
             found[backend] = installed(impl)
         return found
 
-    def exclusive_of(
-        self, op: str
-    ) -> dict[str, tuple[tuple[tuple[str, tuple[object, ...]], ...], str]]:
+    def exclusive_of(self, op: str) -> dict[str, tuple[Exclusive, str]]:
         """Backend -> (the ``exclusive`` values of its implementation of ``op``, its install
         hint): the loaded implementations', and those the plugin index records for plugins
         this registry did not import (a run imports only the backends it names)."""
-        from graphvision.nodes.plugin_index import exclusive_entries
-
         found = {
             backend: (impl.mark.exclusive, impl.install_hint)
             for backend, impl in self.implementations.get(op, {}).items()
