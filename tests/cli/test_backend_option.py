@@ -18,8 +18,7 @@ PIPELINES = Path(__file__).parents[2] / "pipelines"
 def indexed() -> None:
     """A plugin index in this test's cache folder (a first discovery writes it), so a run
     loads only the plugins its ops and backends need, as the command line does."""
-    gv.discover()
-    assert "opencv" in gv.discover().backends()
+    assert "opencv" in gv.discover().backends()  # one discovery writes the index
 
 
 def test_an_unknown_backend_lists_every_installed_one_and_blames_the_option(
