@@ -240,7 +240,7 @@ def load_run_arguments(
 def backend_order(args: argparse.Namespace) -> list[str] | None:
     """``--backend``'s names in order (None without the option); an empty entry
     (``--backend ''``, ``--backend opencv,``) is a usage error naming it."""
-    from graphvision.compiler.backends import parse_backends
+    from graphvision.graph.model import parse_backends
 
     text = getattr(args, "backend", None)
     if text is None:

@@ -23,29 +23,7 @@ from graphvision.nodes.backends import REFERENCE, exclusive_problem, unavailable
 from graphvision.nodes.registry import Registry
 from graphvision.nodes.spec import NodeSpec
 
-__all__ = ["BackendChooser", "close_backend", "known_backends", "parse_backends"]
-
-
-def parse_backends(text: str | Sequence[str] | None) -> list[str]:
-    """``"opencv,numpy"`` or ``["opencv", "numpy"]`` as a list of names (None: empty).
-
-    Raises
-    ------
-    ValueError
-        Naming an empty entry (``''``, ``"opencv,"``): a slip that would otherwise run
-        the pipeline's own order, or the reference, without a word.
-    """
-    if text is None:
-        return []
-    items = text.split(",") if isinstance(text, str) else list(text)
-    names = [str(item).strip() for item in items]
-    if "" in names:
-        position = names.index("") + 1
-        raise ValueError(
-            f"the backend order {','.join(names)!r} has an empty entry ({position} of "
-            f"{len(names)}): name each backend once, separated by commas (e.g. opencv,numpy)"
-        )
-    return names
+__all__ = ["BackendChooser", "close_backend", "known_backends"]
 
 
 def close_backend(name: str, names: Iterable[str]) -> str:

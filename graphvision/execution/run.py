@@ -46,7 +46,6 @@ from functools import partial
 from typing import Any
 
 from graphvision.cache.store import Cache
-from graphvision.compiler.backends import parse_backends
 from graphvision.compiler.compile import CompiledGraph, Schedule, compile_graph
 from graphvision.errors import (
     RunError,
@@ -227,7 +226,7 @@ def _compiled(
             return graph, registry or _discover_for(graph.graph)
         graph = graph.graph  # overrides change parameters, an order the implementations
     if backends is not None:  # the run's order replaces the file's
-        graph = graph.with_backends(parse_backends(backends))
+        graph = graph.with_backends(backends)
     registry = registry or _discover_for(graph)
     if overrides:
         try:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import copy
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -36,6 +37,7 @@ __all__ = [
     "NodeDecl",
     "Ref",
     "output_name_problem",
+    "parse_backends",
 ]
 
 NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_]*$"
@@ -56,6 +58,28 @@ def output_name_problem(name: str) -> str:
 
 PARAM_REFERENCE = re.compile(r"\$\{params\.([A-Za-z_][A-Za-z0-9_]*)\}")
 """``${params.NAME}`` in a node parameter: a pipeline param substituted when compiling."""
+
+
+def parse_backends(text: str | Sequence[str] | None) -> list[str]:
+    """``"opencv,numpy"`` or ``["opencv", "numpy"]`` as a list of names (None: empty).
+
+    Raises
+    ------
+    ValueError
+        Naming an empty entry (``''``, ``"opencv,"``): a slip that would otherwise run
+        the pipeline's own order, or the reference, without a word.
+    """
+    if text is None:
+        return []
+    items = text.split(",") if isinstance(text, str) else list(text)
+    names = [str(item).strip() for item in items]
+    if "" in names:
+        position = names.index("") + 1
+        raise ValueError(
+            f"the backend order {','.join(names)!r} has an empty entry ({position} of "
+            f"{len(names)}): name each backend once, separated by commas (e.g. opencv,numpy)"
+        )
+    return names
 
 
 @dataclass(frozen=True)
@@ -248,12 +272,12 @@ class Graph:
     def with_backends(self, backends: list[str] | str | None) -> Graph:
         """A copy whose backend lookup order is ``backends`` (``"opencv,numpy"`` or a list;
         None: this graph itself). The order given for a run replaces the file's
-        ``backends:``, so a problem with it is not placed at that line."""
+        ``backends:``, so a problem with it is not placed at that line. An empty entry is a
+        ValueError (:func:`parse_backends`), on every path: runs, batches, sweeps."""
         if backends is None:
             return self
         graph = copy.deepcopy(self)
-        items = backends.split(",") if isinstance(backends, str) else list(backends)
-        graph.backends = [str(b).strip() for b in items if str(b).strip()]
+        graph.backends = parse_backends(backends)
         graph.lines = {k: v for k, v in graph.lines.items() if k.partition(".")[0] != "backends"}
         return graph
 

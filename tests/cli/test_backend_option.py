@@ -115,6 +115,18 @@ def test_an_empty_backend_entry_is_a_usage_error_naming_it(
         gv.run(path, backends="opencv,", executor="sync")
 
 
+@pytest.mark.parametrize("given", ["opencv,", ["opencv", " "]])
+def test_an_empty_backend_entry_is_refused_on_every_python_path(tmp_path: Path, given) -> None:
+    """`Graph.with_backends` dropped an empty entry without a word, and batches and sweeps
+    go through it (only `gv.run` and the option were checked)."""
+    path = _camera_pipeline(tmp_path)
+    graph = gv.load_pipeline(path)
+    with pytest.raises(ValueError, match=r"has an empty entry \(2 of 2\)"):
+        graph.with_backends(given)
+    with pytest.raises(ValueError, match=r"has an empty entry \(2 of 2\)"):
+        gv.sweep(path, {"camera.fx": [400.0, 500.0]}, backends=given, executor="sync")
+
+
 def test_a_backend_named_twice_is_refused_on_the_option_and_at_the_files_line(
     indexed: None, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
