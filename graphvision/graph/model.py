@@ -269,7 +269,7 @@ class Graph:
                 problems.append((f"{where}.truth_of", f"'{subject}' is named twice"))
         return problems
 
-    def with_backends(self, backends: list[str] | str | None) -> Graph:
+    def with_backends(self, backends: Sequence[str] | str | None) -> Graph:
         """A copy whose backend lookup order is ``backends`` (``"opencv,numpy"`` or a list;
         None: this graph itself). The order given for a run replaces the file's
         ``backends:``, so a problem with it is not placed at that line. An empty entry is a
