@@ -1,7 +1,13 @@
-"""Run every benchmark and write ``bench/results/latest.md`` (``make bench``)."""
+"""Run every benchmark and write ``bench/results/latest.md`` (``make bench``).
+
+``python bench/run_all.py "issue 25" studio`` runs only the sections whose title holds one
+of the phrases (case aside) and rewrites those sections of ``latest.md``, keeping the rest;
+every section says when it ran and the machine's load then.
+"""
 
 from __future__ import annotations
 
+import os
 import platform
 import sys
 import time
@@ -37,7 +43,9 @@ import bench_sweep  # noqa: E402
 import profile_batch  # noqa: E402
 
 
-def main() -> None:
+def main(only: list[str]) -> None:
+    """Run every section, or those whose title contains one of ``only`` (lower case),
+    which then replace their own sections of ``latest.md`` and keep the others."""
     sections = [
         ("Scheduler overhead (engine issue)", bench_scheduler.main),
         ("Cache (engine issue)", bench_cache.main),
@@ -79,23 +87,55 @@ def main() -> None:
         ),
         ("Backends: the reference and OpenCV (issue 25)", bench_backends.main),
     ]
+    chosen = [(t, f) for t, f in sections if not only or any(w in t.lower() for w in only)]
+    if not chosen:
+        titles = "\n  ".join(title for title, _ in sections)
+        raise SystemExit(f"no section matches {' '.join(only)!r}; sections:\n  {titles}")
+    out = HERE / "results" / "latest.md"
+    kept = _sections_of(out) if only else {}
+    for title, func in chosen:
+        print(f"== {title}", flush=True)
+        began = time.strftime("%Y-%m-%d %H:%M")
+        rows = func()
+        print("\n".join(rows), flush=True)
+        load = ", ".join(f"{value:.1f}" for value in os.getloadavg())
+        kept[title] = [f"_Run {began}, load average {load}._", "", *rows]
     lines = [
         f"# graphvision benchmarks — {time.strftime('%Y-%m-%d %H:%M')}",
         "",
-        f"Python {platform.python_version()}, {platform.machine()}, "
-        f"{__import__('os').cpu_count()} cores",
+        f"Python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores",
         "",
     ]
-    for title, func in sections:
-        print(f"== {title}", flush=True)
-        rows = func()
-        print("\n".join(rows), flush=True)
-        lines += [f"## {title}", "", *rows, ""]
-    out = HERE / "results" / "latest.md"
+    for title, _ in sections:  # the registry's order; a section never run is left out
+        if title in kept:
+            lines += [f"## {title}", "", *kept[title], ""]
     out.parent.mkdir(exist_ok=True)
     out.write_text("\n".join(lines))
     print(f"wrote {out}")
 
 
+def _sections_of(path: Path) -> dict[str, list[str]]:
+    """The sections of an earlier ``latest.md`` by title, kept when only some are run."""
+    if not path.exists():
+        return {}
+    sections: dict[str, list[str]] = {}
+    title = None
+    for line in path.read_text().splitlines():
+        if line.startswith("## "):
+            title = line[3:]
+            sections[title] = []
+        elif title is not None:
+            sections[title].append(line)
+    return {title: _trimmed(rows) for title, rows in sections.items()}
+
+
+def _trimmed(rows: list[str]) -> list[str]:
+    while rows and not rows[-1].strip():
+        rows = rows[:-1]
+    while rows and not rows[0].strip():
+        rows = rows[1:]
+    return rows
+
+
 if __name__ == "__main__":
-    main()
+    main([word.lower() for word in sys.argv[1:]])
