@@ -146,15 +146,18 @@ class BatchRun:
         (from a thread: a worker's start may wait for the executor's server to import)."""
         registry, graph = self.options["registry"], plain_graph(self.graph)
         preload = getattr(self.pool, "preload", None)
-        if preload is not None:
-            preload(preload_modules(registry, graph))
         paths = tuple(local_plugin_paths(registry))
         warm = getattr(self.pool, "warm", None)
 
         def start() -> None:
+            modules: list[str] = []
+            with contextlib.suppress(Exception):  # workers then import on their first file
+                modules = preload_modules(registry, graph, tuple(self.pages.run))
+                if preload is not None:  # the server imports them, once for every worker
+                    preload(modules)
             with contextlib.suppress(Exception):  # a worker that failed shows on its first file
                 if warm is not None:  # on every worker (Dask)
-                    warm(warm_worker, graph, paths)
+                    warm(warm_worker, graph, paths, tuple(modules))
                     return
                 for _ in range(executor_width(self.pool)):
                     self.pool.submit(warm_worker, graph, paths)

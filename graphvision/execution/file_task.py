@@ -143,9 +143,11 @@ def local_plugin_paths(registry: Registry) -> list[str]:
     ]
 
 
-def preload_modules(registry: Registry, graph: Graph) -> list[str]:
-    """The modules of the nodes and input types ``graph`` uses that import by name (for a
+def preload_modules(registry: Registry, graph: Graph, pages: tuple[RunPage, ...] = ()) -> list[str]:
+    """The modules of the nodes and input types ``graph`` uses that import by name, then
+    those their functions and the report ``pages`` import inside their bodies (for a
     worker server to import once: :mod:`graphvision.execution.worker_start`)."""
+    from graphvision.execution.batch_preload import lazy_imports
     from graphvision.nodes.plugins import Needs
 
     needs = Needs.of(graph)
@@ -153,7 +155,20 @@ def preload_modules(registry: Registry, graph: Graph) -> list[str]:
     types = [registry.port_types[n] for n in sorted(needs.port_types) if n in registry.port_types]
     modules = [spec.ref.module for spec in specs if not spec.ref.path]
     modules += [kind.__module__ for kind in types]
+    functions = [spec.func for spec in specs if not spec.ref.path]
+    functions += [source.func for name, source in registry.sources.items() if name == "file"]
+    functions += [*pages, *_methods(types)]
+    modules += lazy_imports(functions)
     return [m for m in dict.fromkeys(modules) if m != "__main__"]
+
+
+def _methods(kinds: list[Any]) -> list[Any]:
+    """The functions defined in the classes ``kinds`` (their methods, class and static)."""
+    found = []
+    for kind in kinds:
+        for member in vars(kind).values():
+            found.append(getattr(member, "__func__", member))
+    return [f for f in found if callable(f)]
 
 
 @dataclass
@@ -183,16 +198,20 @@ def _registry(graph: Graph, plugin_paths: tuple[str, ...]) -> Registry:
     return found
 
 
-def warm_worker(graph: Graph, plugin_paths: tuple[str, ...]) -> int:
-    """Load the plugins ``graph`` needs in this worker process ahead of its first file, and
-    set up numba's compiler (a batch sends one per worker while its first file runs in the
-    client); its pid."""
+def warm_worker(graph: Graph, plugin_paths: tuple[str, ...], modules: tuple[str, ...] = ()) -> int:
+    """Load the plugins ``graph`` needs in this worker process ahead of its first file, set
+    up numba's compiler, import ``modules`` (what the nodes import inside their bodies:
+    :func:`preload_modules`) and load their numba kernels from numba's cache (a batch sends
+    one per worker while its first file runs in the client); its pid."""
     import os
+
+    from graphvision.execution.batch_preload import import_modules, load_kernels
 
     with _PREPARED_LOCK:
         _registry(graph, plugin_paths)
     import graphvision.execution._numba_setup  # noqa: F401 - numba's compiler, once
 
+    load_kernels(import_modules(list(modules)))
     return os.getpid()
 
 

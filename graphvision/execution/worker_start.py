@@ -45,9 +45,10 @@ from collections.abc import Iterable
 from multiprocessing.context import BaseContext
 from typing import Any
 
-__all__ = ["BASE_PRELOAD", "ClientStdio", "context", "start_server"]
+__all__ = ["BASE_PRELOAD", "PRELOAD_VARIABLE", "ClientStdio", "context", "start_server"]
 
 BASE_PRELOAD = ("__main__", "graphvision.execution.file_task")
+PRELOAD_VARIABLE = "GRAPHVISION_WORKER_PRELOAD"  # the server's start only: see _ensure_running
 _NUMBA = "graphvision.execution._numba_setup"
 _LAST = "graphvision.execution._preload"
 
@@ -67,10 +68,10 @@ def start_server(modules: Iterable[str] = (), *, start: bool = True) -> None:
     if found.get_start_method() != "forkserver":  # pragma: no cover - not on Linux
         return
     extra = [m for m in dict.fromkeys(modules) if m not in BASE_PRELOAD and m != _LAST]
-    if extra:  # a batch's: its workers will run kernels
-        extra.append(_NUMBA)
-    found.set_forkserver_preload([*BASE_PRELOAD, *extra, _LAST])
+    found.set_forkserver_preload([*BASE_PRELOAD, *([_NUMBA] if extra else []), _LAST])
     if start:
+        if extra:  # a batch's: its workers will run kernels; for the server's start only
+            os.environ[PRELOAD_VARIABLE] = ",".join(extra)
         name = "graphvision-forkserver"
         threading.Thread(target=_ensure_running, daemon=True, name=name).start()
 
@@ -104,7 +105,15 @@ def _use_stdio(out: Any, err: Any) -> ClientStdio:
 
 
 def _ensure_running() -> None:
+    """Start the server if it is not running (whoever starts it, this thread or a pool's
+    first worker, sees the batch's modules in the environment: removed once it runs).
+    :mod:`graphvision.execution._preload` imports them in the server, each on its own (one
+    that fails to import fails its nodes, not the server), and loads the compiled code of
+    their numba kernels from numba's cache."""
     from multiprocessing import forkserver
 
-    with contextlib.suppress(Exception):  # the pool's first worker start reports it
-        forkserver.ensure_running()
+    try:
+        with contextlib.suppress(Exception):  # the pool's first worker start reports it
+            forkserver.ensure_running()
+    finally:
+        os.environ.pop(PRELOAD_VARIABLE, None)
