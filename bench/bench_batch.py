@@ -16,8 +16,11 @@ is printed beside each row.
 time per file and the client's peak traced memory (``tracemalloc``) should
 stay flat.
 
-Run: ``python bench/bench_batch.py [main] [client_bytes] [scaling]`` (all three
-without an argument; ``make bench`` runs every benchmark).
+:func:`startup` times a processes batch's start-up (run it alone, in a fresh
+process: ``python bench/bench_batch.py startup``).
+
+Run: ``python bench/bench_batch.py [startup] [main] [client_bytes] [scaling]`` (all
+four without an argument; ``make bench`` runs every benchmark).
 """
 
 from __future__ import annotations
@@ -173,6 +176,46 @@ def scaling(sizes: tuple[int, ...] = (50, 200, 1000)) -> list[str]:
     return rows
 
 
+def startup(files: int = 12) -> list[str]:
+    """Where a processes batch's start-up goes: seconds from the batch's start until its
+    first file (run in the client) and its first file done on a worker (the fork server
+    started, a worker forked and its first file run), then per further file. Meaningful
+    for the first processes batch of a process (the server then starts): run it alone."""
+    global FILES
+    graph, saved, FILES = gv.load_pipeline(PIPELINE), FILES, files
+    try:
+        with tempfile.TemporaryDirectory() as scratch:
+            paths = _write_images(Path(scratch) / "in")
+            _loop(paths[:1])  # the client's kernels loaded, as in main()
+            gv.run_batch(  # the plugin index and the client's imports, as in main()
+                graph, [str(paths[0])], input="image", output_dir=Path(scratch) / "w", cache=None
+            )
+            done: list[float] = []
+            began = time.perf_counter()
+            gv.run_batch(
+                graph,
+                [str(p) for p in paths],
+                input="image",
+                output_dir=Path(scratch) / "out",
+                outputs=["count"],
+                executor="processes",
+                workers=2,
+                cache=None,
+                on_item=lambda *_: done.append(time.perf_counter() - began),
+            )
+    finally:
+        FILES = saved
+    rest = (done[-1] - done[1]) / max(len(done) - 2, 1)
+    return [
+        f"| processes (2), {files} files, first batch of the process | seconds | load 1 min |",
+        "| --- | ---: | ---: |",
+        f"| first file done (in the client) | {done[0]:.2f} | {_load()} |",
+        f"| first file done on a worker (server start, fork, first file) | {done[1]:.2f} | "
+        f"{_load()} |",
+        f"| each further file (2 workers) | {rest:.3f} | {_load()} |",
+    ]
+
+
 def client_bytes(files: int = 200) -> list[str]:
     """A batch on a Dask LocalCluster (2 worker processes) with a disk cache the workers
     share: the bytes of the values they computed against what passed through the client."""
@@ -214,7 +257,7 @@ def client_bytes(files: int = 200) -> list[str]:
 if __name__ == "__main__":
     import sys
 
-    PARTS = {"main": main, "client_bytes": client_bytes, "scaling": scaling}
+    PARTS = {"startup": startup, "main": main, "client_bytes": client_bytes, "scaling": scaling}
     chosen = sys.argv[1:] or list(PARTS)  # e.g. ``python bench/bench_batch.py main``
     for name in chosen:
         print("\n".join([*PARTS[name](), ""]), flush=True)

@@ -10,7 +10,9 @@ module is skipped; a module that fails fails its nodes in the workers, as it
 would without the server). The numba kernels those modules define then load
 the compiled code numba's cache holds for them (this machine's, for the
 kernels' current code), so that no worker pays it on its first file; nothing is
-compiled here.
+compiled here. Last, the batch's graph (pickled after the modules, when the
+batch sends it) is loaded and compiled as each file's task will, so that its
+plugins' registry, parameter models and code fingerprints are built once.
 
 The server's ``sys.excepthook`` is each forked worker's until it runs its
 first line: a worker whose start was asked for just before the client ended
@@ -21,11 +23,15 @@ adds nothing to it. Anything else is printed as before.
 
 from __future__ import annotations
 
+import base64
+import contextlib
 import os
+import pickle
 import sys
 from typing import Any
 
 from graphvision.execution.batch_preload import import_modules, load_kernels
+from graphvision.execution.file_task import warm_graph
 
 _VARIABLE = "GRAPHVISION_WORKER_PRELOAD"  # worker_start.PRELOAD_VARIABLE
 
@@ -37,6 +43,17 @@ def _quiet_start_failure(kind: type[BaseException], error: BaseException, trace:
 
 
 sys.excepthook = _quiet_start_failure
-_names = [name for name in os.environ.pop(_VARIABLE, "").split(",") if name]
-if _names:
-    load_kernels(import_modules(_names))
+
+
+def start_batch(value: str) -> None:
+    """Import the modules ``value`` names, load their numba kernels, then compile the graph
+    it holds (``modules;pickled warm-up``: see ``worker_start._encoded``)."""
+    names, _, data = value.partition(";")
+    if names:
+        load_kernels(import_modules(names.split(",")))
+    if data:
+        with contextlib.suppress(Exception):  # each worker does it on its first file instead
+            warm_graph(*pickle.loads(base64.b64decode(data)))
+
+
+start_batch(os.environ.pop(_VARIABLE, ""))

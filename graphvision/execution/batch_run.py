@@ -31,6 +31,7 @@ from graphvision.execution.file_task import (
     warm_worker,
 )
 from graphvision.execution.record import RunResult
+from graphvision.execution.worker_start import warm_server
 from graphvision.graph.model import Graph
 
 __all__ = ["BatchRun"]
@@ -154,6 +155,7 @@ class BatchRun:
             with contextlib.suppress(Exception):  # workers then import on their first file
                 modules = preload_modules(registry, graph, tuple(self.pages.run))
                 if preload is not None:  # the server imports them, once for every worker
+                    warm_server(graph, paths, (*self.inputs, self.input))  # and its graph
                     preload(modules)
             with contextlib.suppress(Exception):  # a worker that failed shows on its first file
                 if warm is not None:  # on every worker (Dask)

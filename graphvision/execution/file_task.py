@@ -62,6 +62,7 @@ __all__ = [
     "run_file_task",
     "shared_seeds",
     "shared_steps",
+    "warm_graph",
     "warm_worker",
 ]
 
@@ -213,6 +214,17 @@ def warm_worker(graph: Graph, plugin_paths: tuple[str, ...], modules: tuple[str,
 
     load_kernels(import_modules(list(modules)))
     return os.getpid()
+
+
+def warm_graph(graph: Graph, plugin_paths: tuple[str, ...], provided: tuple[str, ...]) -> None:
+    """Load the plugins ``graph`` needs and compile it as each file's task will (building its
+    nodes' parameter models and code fingerprints): run by the worker server, once for the
+    workers forked from it (:mod:`graphvision.execution._preload`)."""
+    with _PREPARED_LOCK:
+        registry = _registry(graph, plugin_paths)
+    compiled = compile_graph(graph, registry, provided=set(provided))
+    for step in compiled.steps.values():
+        _ = step.fingerprint
 
 
 def _prepared(job: FileJob) -> _Prepared:

@@ -19,20 +19,28 @@ client, the studio's server, a notebook's), so a fork could hang a worker.
 ``forkserver`` with a preload list
 ----------------------------------
 The first pool of a client process starts one server process: a fresh
-interpreter, single-threaded, which imports the preload list once: the
-client's ``__main__`` (as ``spawn`` does, so that nodes a script defines are
-found), graphvision's file task and, for a batch, the plugin modules it uses
-and numba's compiler (:mod:`graphvision.execution._numba_setup`), then
-:mod:`graphvision.execution._preload` (a worker that cannot start because the
-client is gone says nothing). Each worker
-is a fork of that server, which has no other thread: milliseconds, with all of
-that already imported. The server is started in the background (while the
-client runs a batch's first file), lives as long as the client and serves
-every later pool (its preload list is the first one's); it exits when the
-client does, even after ``kill -9``. Each worker takes the client's
-environment variables, standard output and error as they are at its start, as
-under ``spawn`` (:class:`ClientStdio`). Where the platform has
-no fork server (Windows), workers are spawned.
+interpreter, single-threaded, which imports the preload list once:
+graphvision's file task and, for a batch, numba's compiler
+(:mod:`graphvision.execution._numba_setup`), then
+:mod:`graphvision.execution._preload`, which imports the batch's modules (its
+plugin modules and what their node functions import in their bodies: scipy's
+``ndimage``, the numba kernel modules; :mod:`graphvision.execution.batch_preload`),
+loads those kernels' compiled code from numba's cache and compiles the batch's
+graph as each file's task will (plugin registry, parameter models, code
+fingerprints). They reach it in an environment variable that only its start
+sees (``GRAPHVISION_WORKER_PRELOAD``). Each worker is a fork of that server,
+which has no other thread: milliseconds, with all of that already done once
+for every worker (on two loaded cores, a worker's first coins file went from
+over 2 s to 0.6 s). The list also names the client's ``__main__``, which
+Python 3.11's fork server does not import (it drops the script's path): each
+worker imports it, as ``spawn`` does, so that nodes a script defines are
+found. The server is started in the background (while the client runs a
+batch's first file), lives as long as the client and serves every later pool
+(its preload list is the first one's); it exits when the client does, even
+after ``kill -9``. Each worker takes the client's environment variables,
+standard output and error as they are at its start, as under ``spawn``
+(:class:`ClientStdio`). Where the platform has no fork server (Windows),
+workers are spawned.
 """
 
 from __future__ import annotations
@@ -45,12 +53,21 @@ from collections.abc import Iterable
 from multiprocessing.context import BaseContext
 from typing import Any
 
-__all__ = ["BASE_PRELOAD", "PRELOAD_VARIABLE", "ClientStdio", "context", "start_server"]
+__all__ = [
+    "BASE_PRELOAD",
+    "PRELOAD_VARIABLE",
+    "ClientStdio",
+    "context",
+    "start_server",
+    "warm_server",
+]
 
 BASE_PRELOAD = ("__main__", "graphvision.execution.file_task")
 PRELOAD_VARIABLE = "GRAPHVISION_WORKER_PRELOAD"  # the server's start only: see _ensure_running
 _NUMBA = "graphvision.execution._numba_setup"
 _LAST = "graphvision.execution._preload"
+_MOST_BYTES = 100_000  # Linux refuses one environment string over 128 KiB
+_WARM: tuple[Any, ...] = ()  # see warm_server
 
 
 def context() -> BaseContext:
@@ -58,6 +75,14 @@ def context() -> BaseContext:
     if "forkserver" in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("forkserver")
     return multiprocessing.get_context("spawn")  # pragma: no cover - not on Linux
+
+
+def warm_server(*arguments: Any) -> None:
+    """The arguments of :func:`~graphvision.execution.file_task.warm_graph` (a batch's graph,
+    plugin paths and inputs) for the server to run once it has imported the modules the
+    next :func:`start_server` gives it, if it starts then."""
+    global _WARM
+    _WARM = arguments
 
 
 def start_server(modules: Iterable[str] = (), *, start: bool = True) -> None:
@@ -71,9 +96,24 @@ def start_server(modules: Iterable[str] = (), *, start: bool = True) -> None:
     found.set_forkserver_preload([*BASE_PRELOAD, *([_NUMBA] if extra else []), _LAST])
     if start:
         if extra:  # a batch's: its workers will run kernels; for the server's start only
-            os.environ[PRELOAD_VARIABLE] = ",".join(extra)
+            os.environ[PRELOAD_VARIABLE] = _encoded(extra, _WARM)
         name = "graphvision-forkserver"
         threading.Thread(target=_ensure_running, daemon=True, name=name).start()
+
+
+def _encoded(modules: list[str], warm: tuple[Any, ...]) -> str:
+    """What the server's :mod:`~graphvision.execution._preload` reads: the modules, and the
+    warm-up's arguments pickled (left out when they do not pickle or are too long for one
+    environment variable)."""
+    import base64
+    import pickle
+
+    text = ",".join(modules)
+    try:
+        data = base64.b64encode(pickle.dumps(warm)).decode("ascii") if warm else ""
+    except Exception:  # a graph that does not pickle: the workers compile it themselves
+        data = ""
+    return f"{text};{data}" if len(text) + len(data) < _MOST_BYTES else text
 
 
 class ClientStdio:

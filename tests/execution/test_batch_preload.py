@@ -76,3 +76,26 @@ def test_the_coins_nodes_need_scipy_ndimage_and_their_numba_kernel_modules():
     assert "graphvision_plugins.regions._kernels" in modules  # label's numba kernels
     assert "graphvision_plugins.threshold._kernels" in modules
     assert "graphvision.values.pictures" in modules  # the report pages' thumbnails
+
+
+def test_the_server_imports_the_batch_modules_and_compiles_its_graph_once(monkeypatch):
+    import graphvision as gv
+    from graphvision.execution.worker_start import _encoded
+
+    monkeypatch.setattr(sys, "excepthook", sys.excepthook)  # _preload sets the server's
+    monkeypatch.delitem(sys.modules, "colorsys", raising=False)
+    from graphvision.execution import _preload
+
+    warmed = []
+    monkeypatch.setattr(_preload, "warm_graph", lambda *args: warmed.append(args))
+    graph = gv.Graph("g")
+    graph.output("gray", graph.add("gray", "colour.to_gray", image=graph.input("image", "Image")))
+    _preload.start_batch(_encoded(["colorsys", "no_such_module_b3"], (graph, ("p",), ("image",))))
+    assert "colorsys" in sys.modules  # and the module that does not exist is skipped
+    [(sent, paths, provided)] = warmed
+    assert (sent.nodes, sent.outputs, paths, provided) == (
+        graph.nodes,
+        graph.outputs,
+        ("p",),
+        ("image",),
+    )
