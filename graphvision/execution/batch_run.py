@@ -151,15 +151,13 @@ class BatchRun:
         warm = getattr(self.pool, "warm", None)
 
         def start() -> None:
-            modules: list[str] = []
-            with contextlib.suppress(Exception):  # workers then import on their first file
-                modules = preload_modules(registry, graph, tuple(self.pages.run))
-                if preload is not None:  # the server imports them, once for every worker
-                    warm_server(graph, paths, (*self.inputs, self.input))  # and its graph
-                    preload(modules)
+            if preload is not None:  # the server imports them and compiles the graph, once
+                with contextlib.suppress(Exception):  # else workers do it on their first file
+                    warm_server(graph, paths, (*self.inputs, self.input))
+                    preload(preload_modules(registry, graph, tuple(self.pages.run)))
             with contextlib.suppress(Exception):  # a worker that failed shows on its first file
                 if warm is not None:  # on every worker (Dask)
-                    warm(warm_worker, graph, paths, tuple(modules))
+                    warm(warm_worker, graph, paths)
                     return
                 for _ in range(executor_width(self.pool)):
                     self.pool.submit(warm_worker, graph, paths)

@@ -199,20 +199,16 @@ def _registry(graph: Graph, plugin_paths: tuple[str, ...]) -> Registry:
     return found
 
 
-def warm_worker(graph: Graph, plugin_paths: tuple[str, ...], modules: tuple[str, ...] = ()) -> int:
-    """Load the plugins ``graph`` needs in this worker process ahead of its first file, set
-    up numba's compiler, import ``modules`` (what the nodes import inside their bodies:
-    :func:`preload_modules`) and load their numba kernels from numba's cache (a batch sends
-    one per worker while its first file runs in the client); its pid."""
+def warm_worker(graph: Graph, plugin_paths: tuple[str, ...]) -> int:
+    """Load the plugins ``graph`` needs in this worker process ahead of its first file, and
+    set up numba's compiler (a batch sends one per worker while its first file runs in the
+    client); its pid."""
     import os
-
-    from graphvision.execution.batch_preload import import_modules, load_kernels
 
     with _PREPARED_LOCK:
         _registry(graph, plugin_paths)
     import graphvision.execution._numba_setup  # noqa: F401 - numba's compiler, once
 
-    load_kernels(import_modules(list(modules)))
     return os.getpid()
 
 
