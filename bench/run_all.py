@@ -76,6 +76,7 @@ def main(only: list[str]) -> None:
         ),
         ("Sweep sharing (issue 15)", bench_sweep.main),
         ("Studio: a change until the picture repaints (issue 27)", bench_studio.main),
+        ("Batch on processes: start-up to the first file (issue 26)", bench_batch.startup),
         ("Batch of 200 files against sync (issue 26)", bench_batch.main),
         ("Batch on processes: 50, 200, 1,000 files (issue 26)", bench_batch.scaling),
         ("Batch on Dask: bytes through the client (issue 26)", bench_batch.client_bytes),
