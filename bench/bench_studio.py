@@ -24,12 +24,13 @@ Aim (issue 27): median under 150 ms. Run: ``python bench/bench_studio.py``.
 
 from __future__ import annotations
 
+import os
 import shutil
 import statistics
 from pathlib import Path
 
 PIPELINE = Path(__file__).parent.parent / "pipelines" / "homography.yaml"
-CHANGES = 20
+CHANGES = int(os.environ.get("GV_BENCH_CHANGES", "20"))
 
 _CHANGE = """async (value) => {
   const t0 = performance.now();

@@ -80,9 +80,11 @@ export class GraphView {
   setState(id, state, text = state) {
     const box = this.boxes[id];
     if (!box) return;
-    box.rect.setAttribute("fill", STATE_COLOURS[state] || STATE_COLOURS.queued);
-    box.g.dataset.state = state;
-    box.status.textContent = text;
+    // only what changed: a text set again, even the same, lays the whole drawing out again
+    const fill = STATE_COLOURS[state] || STATE_COLOURS.queued;
+    if (box.rect.getAttribute("fill") !== fill) box.rect.setAttribute("fill", fill);
+    if (box.g.dataset.state !== state) box.g.dataset.state = state;
+    if (box.status.textContent !== text) box.status.textContent = text;
   }
 
   select(id) {

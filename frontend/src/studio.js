@@ -33,7 +33,7 @@ function setNodeState(id, state, seconds) {
 
 function onEvent(event) {
   if (event.event === "run") {
-    S.runs[event.run] = { ...(S.runs[event.run] || {}), ...event };
+    S.runs[event.run] = { ...(S.runs[event.run] || {}), ...event, id: event.run };
     if (event.status === "running") {
       S.latest = Math.max(S.latest, event.run);
       showRunning(event.run);
@@ -41,8 +41,8 @@ function onEvent(event) {
       showStatus(event);
       if (event.status === "done" || event.status === "failed") showRun(event.run);
       if (event.status === "cancelled") for (const [id, s] of Object.entries(S.states)) if (s.state === "running" || s.state === "queued") setNodeState(id, "stale");
-      refreshRuns();
     }
+    if (event.status !== "running" && event.seconds !== undefined) refreshRuns(false);
     return;
   }
   if (event.run < S.latest) return; // a superseded run: never mixed with the newer one
@@ -55,6 +55,8 @@ function onEvent(event) {
   }
   if (event.event === "node") {
     setNodeState(event.node, event.status, event.seconds);
+    // the descriptions the page asked for before ride the event: none is asked for again
+    for (const [port, d] of Object.entries(event.values || {})) pushed(event.run, event.node, port, d);
     if (event.value) repaintNode(event.run, event.node);
   }
 }
@@ -109,8 +111,21 @@ function history(node, port) {
 }
 
 // A value's picture as RGBA bytes (no PNG to encode or decode), made ready to draw off
-// the main thread (createImageBitmap); null when it has none.
-async function fetchPicture(base, step = 1) {
+// the main thread (createImageBitmap); null when it has none. Asked for once per run,
+// port and step: every panel showing it (the outputs, the inspector, a pair viewer)
+// shares the one request and the one bitmap.
+const pictures = new Map();
+function fetchPicture(base, step = 1) {
+  const id = `${base}?step=${step}`;
+  if (!pictures.has(id)) {
+    pictures.set(id, loadPicture(base, step).then((p) => { if (!p) pictures.delete(id); return p; },
+      (error) => { pictures.delete(id); throw error; }));
+    while (pictures.size > 24) pictures.delete(pictures.keys().next().value);
+  }
+  return pictures.get(id);
+}
+
+async function loadPicture(base, step) {
   const r = await fetch(`api/rgba/${base}?step=${step}`);
   if (!r.ok) return null;
   const [ph, pw] = r.headers.get("X-Shape").split(",").map(Number);
@@ -125,6 +140,9 @@ function pictureCanvas(data) {
   canvas.getContext("2d").putImageData(data, 0, 0);
   return canvas;
 }
+
+// The rows of a table made at once (the rest as it is scrolled): more than its box shows.
+const TABLE_ROWS = 24;
 
 // The image viewer drawing on each canvas (to know at what zoom a picture is shown).
 const viewerOf = new WeakMap();
@@ -186,11 +204,19 @@ function freshSource(run) {
 const described = new Map();
 function describe(run, node, port) {
   const id = `${run}/${node}/${port}`;
-  if (!described.has(id)) {
-    described.set(id, api(`api/value/${id}`).then((r) => { if (!r.ok) described.delete(id); return r; }));
-    while (described.size > 64) described.delete(described.keys().next().value);
-  }
+  if (!described.has(id)) keep(id, api(`api/value/${id}`).then((r) => { if (!r.ok) described.delete(id); return r; }));
   return described.get(id);
+}
+
+function keep(id, promise) {
+  described.set(id, promise);
+  while (described.size > 64) described.delete(described.keys().next().value);
+}
+
+// A description the server pushed with its node's event, as if asked for.
+function pushed(run, node, port, d) {
+  const id = `${run}/${node}/${port}`;
+  if (!described.has(id)) keep(id, Promise.resolve({ ok: true, status: 200, data: d }));
 }
 
 // `picture`: `{ step, promise }` of the picture's request, when the caller started it
@@ -207,28 +233,21 @@ async function renderValue(container, run, node, port, picture = null) {
     const own = d.view === "summary" ? await sourceOf(run).picture(node, port) : null;
     const [h, w] = own ? [own.height, own.width] : d.shape;
     const viewer = new ImageViewer(container, { width: w, height: h, label: "" });
-    viewer.canvas.dataset.value = base;
-    let asked = false;
+    Object.assign(viewer.canvas.dataset, { value: base, picture: "rgba", view: d.view, shape: String(d.shape) });
     viewer.canvas.addEventListener("mouseenter", async () => {
-      if (asked) return;
-      asked = true;
-      const r = await fetch(`api/raw/${base}`);
-      if (r.ok) viewer.setValues(new Float32Array(await r.arrayBuffer()), r.headers.get("X-Shape").split(",").map(Number));
+      const shown = viewer.canvas.dataset.value;  // the run shown now (repainted in place)
+      if (viewer.asked === shown) return;
+      viewer.asked = shown;
+      const r = await fetch(`api/raw/${shown}`);
+      if (r.ok && viewer.canvas.dataset.value === shown) viewer.setValues(new Float32Array(await r.arrayBuffer()), r.headers.get("X-Shape").split(",").map(Number));
     });
-    viewer.canvas.dataset.picture = "rgba";
     viewerOf.set(viewer.canvas, viewer);
     const first = picture || { step: 1, promise: own ? Promise.resolve(own) : fetchPicture(base) };
     const [bitmap] = await Promise.all([first.promise, addOverlays(viewer, run, node, port)]);
     // a mask or label map is tinted over the image behind it (its own picture when none)
     const tinted = d.over && ["mask", "labels"].includes(d.view) && await maskLayer(viewer, d, sourceOf(run));
-    if (bitmap && !tinted) viewer.setSource(bitmap);
-    if (bitmap && !tinted && first.step > 1) {
-      viewer.canvas.dataset.preview = String(first.step);
-      fetchPicture(base).then((full) => {
-        if (full) viewer.setSource(full);
-        delete viewer.canvas.dataset.preview;
-      });
-    }
+    if (bitmap && !tinted) showPicture(viewer, base, first.step, bitmap);
+    if (tinted) viewer.canvas.dataset.tinted = "1";
   } else if (d.view === "floatmap") {
     const r = await fetch(`api/raw/${base}`);
     const values = new Float32Array(await r.arrayBuffer());
@@ -243,18 +262,31 @@ async function renderValue(container, run, node, port, picture = null) {
     if (d.view === "matches" && d.pair) await matchesPanel(container, d, sourceOf(run));
     if (d.confusion) await classifierPanel(container, d, sourceOf(run));
     if (d.over) container.append(el("div", { class: "gv-caption" }, `drawn over ${d.over[0]} (toggle it there)`));
-    tableViewer(container, d.columns, d.count ?? d.rows);
+    tableViewer(container, d.columns, d.count ?? d.rows, TABLE_ROWS);
   } else if (d.view === "fundamental" || d.view === "matrix") {
     if (d.view === "fundamental" && d.pair) await epipolarPanel(container, d, sourceOf(run));
     const rows = d.shape.length === 2 ? d.shape[0] : 1, cols = d.value.length / rows;
     const columns = {};
     for (let j = 0; j < cols; j++) columns[`[${j}]`] = Array.from({ length: rows }, (_, i) => d.value[i * cols + j]);
-    tableViewer(container, columns);
+    tableViewer(container, columns, undefined, TABLE_ROWS);
   } else if (d.png) {
     container.append(el("img", { src: `api/png/${base}`, class: "gv-preview" }));
   }
   if (d.curves) curvesPanel(container, d);
   return d;
+}
+
+// A picture drawn on its viewer: a preview (step > 1) first, then the picture itself,
+// unless the viewer shows another run's value by then.
+function showPicture(viewer, base, step, bitmap) {
+  viewer.setSource(bitmap);
+  if (step <= 1) { delete viewer.canvas.dataset.preview; return; }
+  viewer.canvas.dataset.preview = String(step);
+  fetchPicture(base).then((full) => {
+    if (!full || viewer.canvas.dataset.value !== base) return;
+    viewer.setSource(full);
+    delete viewer.canvas.dataset.preview;
+  });
 }
 
 // Keypoints, boxes, lines and circles found in this image are drawn over it.
@@ -292,12 +324,35 @@ async function repaintCards(run, node) {
     const shown = card.querySelector("canvas[data-picture]");
     const step = shown ? previewStep(shown) : 1;
     const picture = shown ? { step, promise: fetchPicture(base, step) } : null;
-    const d = await renderValue(fresh, run, node, card.dataset.portName, picture);
+    const kept = shown && await repaintInPlace(card, shown, run, node, card.dataset.portName, picture);
+    const d = kept || await renderValue(fresh, run, node, card.dataset.portName, picture);
     if (run !== S.latest) return;
-    card.replaceWith(fresh);
+    if (!kept) card.replaceWith(fresh);
     const shape = card.dataset.port && document.querySelector(`[data-inspect="${node}"] [data-shape="${card.dataset.portName}"]`);
     if (shape) shape.textContent = d?.shape ? d.shape.join("×") : "";
   }));
+}
+
+// A picture shown alone (no overlay, no tint) whose new value has the same view and shape
+// keeps its card and viewer: the new picture is drawn on the same canvas, at the zoom the
+// user left it (no new card to lay out, no canvas made again). The description, or null
+// when the card has to be made again.
+async function repaintInPlace(card, canvas, run, node, port, picture) {
+  const viewer = viewerOf.get(canvas);
+  if (!viewer || viewer.overlays.length || viewer.layers?.length || canvas.dataset.tinted) return null;
+  const found = await describe(run, node, port);
+  const d = found.ok ? found.data : null;
+  if (!d || d.over || d.view !== canvas.dataset.view || String(d.shape) !== canvas.dataset.shape) return null;
+  const bitmap = await picture.promise;
+  if (!bitmap || run !== S.latest) return run !== S.latest ? d : null;
+  const base = `${run}/${node}/${port}`;
+  canvas.dataset.value = base;
+  viewer.values = null;  // the values under the cursor are the new run's, asked for again
+  showPicture(viewer, base, picture.step, bitmap);
+  card.querySelector(".gv-caption").textContent = d.summary;
+  card.classList.remove("gv-stale");
+  card.dataset.streamed = String(run);
+  return d;
 }
 
 function keyOf(run, node, port) {
@@ -467,12 +522,19 @@ async function select(id) {
   await renderInspector(id);
 }
 
-async function refreshRuns() {
-  const found = await api("api/runs");
-  if (!found.ok) return;
+// The runs table. A run's end redraws it from the runs' own events (each run's last one
+// carries its status, time, metrics and nodes; its first its changes); the list is asked
+// for when the tab (re)connects, or when this tab missed a run's events.
+async function refreshRuns(ask = true) {
+  const ids = Array.from({ length: S.latest }, (_, i) => i + 1);
+  if (ask || !ids.every((id) => S.runs[id]?.diff && S.runs[id].metrics && S.runs[id].kept !== undefined)) {
+    const found = await api("api/runs");
+    if (!found.ok) return;
+    for (const r of found.data) S.runs[r.id] = { ...S.runs[r.id], ...r };
+  }
+  const runs = Object.values(S.runs).filter((r) => r.id).sort((a, b) => b.id - a.id);
   const table = el("table", { class: "gv-runs" }, el("tr", {}, ...["A", "B", "run", "status", "ms", "changes", "metrics"].map((h) => el("th", {}, h))));
-  for (const r of found.data.slice().reverse()) {
-    S.runs[r.id] = { ...S.runs[r.id], ...r };
+  for (const r of runs) {
     const a = el("input", { type: "radio", name: "cmp-a", value: r.id });
     const b = el("input", { type: "radio", name: "cmp-b", value: r.id });
     if (!r.kept) { a.disabled = b.disabled = true; }
@@ -484,7 +546,7 @@ async function refreshRuns() {
       else showRunning(r.id);
     }
     table.append(el("tr", { "data-run": r.id }, el("td", {}, a), el("td", {}, b), el("td", {}, String(r.id)), el("td", {}, r.status),
-      el("td", {}, (r.seconds * 1000).toFixed(0)), el("td", {}, diff || "–"), el("td", {}, metrics || "–")));
+      el("td", {}, ((r.seconds || 0) * 1000).toFixed(0)), el("td", {}, diff || "–"), el("td", {}, metrics || "–")));
   }
   $("#runs").replaceChildren(table);
 }

@@ -358,17 +358,23 @@ export function scalarViewer(container, value, history = []) {
   container.append(el("div", { class: "gv-caption" }, `history over ${numbers.length} runs (${fmt(lo)} – ${fmt(hi)})`), holder);
 }
 
-// A table of columns (the first 200 rows).
-export function tableViewer(container, columns, total) {
+// A table of columns (the first 200 rows). `first`: the rows made at once, the rest when
+// the table is first scrolled (the studio redraws its tables at every run: a table shows
+// about a dozen rows before it scrolls, and 200 rows cost its page a long layout each time).
+export function tableViewer(container, columns, total, first = 200) {
   const names = Object.keys(columns);
   const rows = names.length ? columns[names[0]].length : 0;
   const table = el("table", { class: "gv-table" });
   table.append(el("tr", {}, ...names.map((n) => el("th", {}, n))));
-  for (let i = 0; i < Math.min(rows, 200); i++) {
-    table.append(el("tr", {}, ...names.map((n) => el("td", {}, cell(columns[n][i])))));
-  }
+  const shown = Math.min(rows, 200);
+  const add = (from, to) => {
+    for (let i = from; i < to; i++) table.append(el("tr", {}, ...names.map((n) => el("td", {}, cell(columns[n][i])))));
+  };
+  add(0, Math.min(shown, first));
+  const box = el("div", { class: "gv-tablebox" }, table);
+  if (first < shown) box.addEventListener("scroll", () => add(first, shown), { once: true });
   const note = total !== undefined && total > rows ? `${rows} of ${total} rows` : `${rows} rows`;
-  container.append(el("div", { class: "gv-caption" }, note), el("div", { class: "gv-tablebox" }, table));
+  container.append(el("div", { class: "gv-caption" }, note), box);
 }
 
 function cell(v) {

@@ -41,8 +41,8 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 
 from graphvision.errors import PipelineError
 from graphvision.studio.describe import describe_graph
-from graphvision.studio.payload import MAX_STEP, describe_value, png_of, raw_of
-from graphvision.studio.pictures import Pictures
+from graphvision.studio.payload import MAX_STEP, png_of, raw_of
+from graphvision.studio.pictures import Descriptions, Pictures
 from graphvision.studio.saving import command_line, save_parameters
 from graphvision.studio.session import Session, StudioRun
 
@@ -109,6 +109,7 @@ class _Api:
         self.session = session
         self.pngs: OrderedDict[tuple[int, str, str], bytes] = OrderedDict()
         self.pictures = Pictures(session)
+        self.descriptions = Descriptions(session)
 
     async def page(self, request: Request) -> Response:
         text = (STATIC / "index.html").read_text(encoding="utf-8")
@@ -185,12 +186,8 @@ class _Api:
         found = self._value(request)
         if isinstance(found, Response):
             return found
-        studio_run, node, port, kind, value = found
-        assert studio_run.compiled is not None
-        described = await run_in_threadpool(
-            describe_value, kind, value, studio_run.compiled, node, port
-        )
-        described["run"] = studio_run.id
+        studio_run, node, port = found[:3]
+        described = await run_in_threadpool(self.descriptions.describe, studio_run, node, port)
         return JSONResponse(described)
 
     async def png(self, request: Request) -> Response:

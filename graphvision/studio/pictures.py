@@ -1,4 +1,4 @@
-"""Pictures of a session's values for the page, made once, and ahead of the page's request.
+"""Pictures and descriptions of a session's values for the page, ahead of the page's request.
 
 A picture (:func:`~graphvision.studio.payload.rgba_of`) is made once per run, node and
 port and kept for the last few. A port whose picture the page has asked for before is
@@ -7,22 +7,29 @@ with a value), its pictures (the preview, then the picture, as the page asked fo
 last time) are made at once on a thread of their own, while the event
 travels to the page and the page asks for the value's description, so the page's request
 for the picture finds it made, or part made.
+
+A value's description (:func:`~graphvision.studio.payload.describe_value`, well under a
+millisecond) rides its node's ``node`` event (:class:`Descriptions`) once the page has
+asked for that port's description: the page then asks for the pictures at once and for no
+description, and its few connections to the server are left to the pictures.
 """
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 from collections import OrderedDict
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
-from graphvision.studio.payload import rgba_of
+from graphvision.studio.payload import describe_value, rgba_of
 from graphvision.studio.session import Session, StudioRun
 
-__all__ = ["KEPT_PICTURES", "Pictures"]
+__all__ = ["KEPT_PICTURES", "PUSHED_BYTES", "Descriptions", "Pictures"]
 
 KEPT_PICTURES = 16
+PUSHED_BYTES = 256 * 1024  # a larger description (a big table, a cloud) is asked for
 Picture = tuple[bytes, list[int], float]  # RGBA bytes, [H, W], seconds it took to make
 
 
@@ -85,3 +92,42 @@ def _made(kind: Any, value: Any, step: int) -> Picture | None:
     if picture is None:
         return None
     return picture[0], picture[1], time.perf_counter() - began
+
+
+class Descriptions:
+    """The descriptions of ``session``'s values, pushed with their node's event to the page
+    once it has asked for the port's description (see the module docstring)."""
+
+    def __init__(self, session: Session) -> None:
+        self.session = session
+        self.asked: set[tuple[str, str]] = set()  # ports whose description the page asked for
+        session.describer = self.of_node
+
+    def describe(self, studio_run: StudioRun, node: str, port: str) -> dict[str, Any]:
+        """The description of a value the run holds (the page's request: pushed from now on)."""
+        assert studio_run.compiled is not None
+        self.asked.add((node, port))
+        kind = studio_run.compiled.steps[node].outputs[port]
+        value = studio_run.values[(node, port)]
+        described = describe_value(kind, value, studio_run.compiled, node, port)
+        described["run"] = studio_run.id
+        return described
+
+    def of_node(self, studio_run: StudioRun, node: str) -> dict[str, Any]:
+        """The descriptions of ``node``'s outputs in ``studio_run`` the page asked for before,
+        by port; one that fails, is not plain JSON or is larger than PUSHED_BYTES is left
+        out (the page asks for it, and is told what went wrong)."""
+        found: dict[str, Any] = {}
+        if studio_run.compiled is None:
+            return found
+        for port in studio_run.compiled.steps[node].outputs:
+            if (node, port) not in self.asked or (node, port) not in studio_run.values:
+                continue
+            try:
+                described = self.describe(studio_run, node, port)
+                size = len(json.dumps(described, allow_nan=False))
+            except Exception:  # a nicety: the page's own request says why
+                continue
+            if size <= PUSHED_BYTES:
+                found[port] = described
+        return found

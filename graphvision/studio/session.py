@@ -137,10 +137,13 @@ class _Hooks(RunHooks):
                 self.run.values.update({(name, p): v for p, v in zip(ports, stored, strict=True)})
                 streamed = True
         stored.clear()
-        self.session.emit(
-            {"event": "node", "run": self.run.id, "node": name, "status": status,
-             "seconds": seconds, "value": streamed}
-        )  # fmt: skip
+        event = {"event": "node", "run": self.run.id, "node": name, "status": status,
+                 "seconds": seconds, "value": streamed}  # fmt: skip
+        if streamed and self.session.describer is not None:
+            # the descriptions of the ports the page shows ride the event: the page asks
+            # for the pictures at once, and for no description (sub-millisecond to make)
+            event["values"] = self.session.describer(self.run, name)
+        self.session.emit(event)
         self._check()
 
 
@@ -183,6 +186,8 @@ class Session:
         self.compiled = self.check(self.overrides)
         self.runs: list[StudioRun] = []
         self.listeners: list[Callable[[dict[str, Any]], None]] = []
+        # run, node -> the descriptions its ``node`` event carries, by port (set by the app)
+        self.describer: Callable[[StudioRun, str], dict[str, Any]] | None = None
         self.lock = threading.RLock()
         self.threads: list[threading.Thread] = []
         self.pool = None
