@@ -1,11 +1,12 @@
 """Pictures for the page: RGBA bytes of known values, previews made smaller by block means,
 made ahead of the page's request, a bad ``step`` refused with its reason; values to and
-from the workers out of band."""
+from the workers out of band; descriptions the page asked for pushed with their node's event."""
 
 from __future__ import annotations
 
 import json
 import multiprocessing
+import threading
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -17,7 +18,7 @@ pytest.importorskip("starlette")
 
 import graphvision as gv
 from graphvision.studio.payload import rgba_of, shrunk
-from graphvision.studio.pictures import Pictures
+from graphvision.studio.pictures import Descriptions, Pictures
 from graphvision.studio.server import studio
 from graphvision.studio.session import Session
 from graphvision.studio.workers import receive, send
@@ -88,6 +89,28 @@ def test_the_picture_the_page_shows_is_made_when_its_node_finishes() -> None:
     assert set(data[::4]) == {round(0.8 * 0.25 * 255)}  # the newer run's value
 
 
+def test_a_description_the_page_asked_for_rides_its_node_event() -> None:
+    graph = gv.Graph("darkening")
+    graph.input("image", "GrayImage", default=np.full((6, 8), 0.8, np.float32))
+    graph.add("dark", "toy.darken", image="image", params={"factor": 0.5})
+    graph.add("darker", "toy.darken", image="dark", params={"factor": 0.5})
+    graph.output("darker", "darker")
+    session = Session(graph, gv.discover([TOY]), executor="threads")
+    descriptions = Descriptions(session)
+    first = session.start()
+    session.wait()
+    assert descriptions.describe(first, "dark", "out")["range"] == pytest.approx([0.4, 0.4])
+    events: list[dict] = []
+    session.listeners.append(events.append)
+    second = session.change({"dark.factor": 0.25})
+    session.wait()
+    nodes = {e["node"]: e for e in events if e["event"] == "node" and e["status"] == "computed"}
+    pushed = nodes["dark"]["values"]["out"]  # asked for in run 1: pushed in run 2
+    assert pushed["run"] == second.id and pushed["view"] == "image"
+    assert pushed["shape"] == [6, 8] and pushed["range"] == pytest.approx([0.2, 0.2])
+    assert nodes["darker"].get("values", {}) == {}  # never asked for: the page asks
+
+
 def test_a_bad_step_is_refused_with_its_reason() -> None:
     graph = gv.Graph("darkening")
     graph.input("image", "GrayImage", default=np.full((6, 8), 0.8, np.float32))
@@ -117,3 +140,16 @@ def test_values_cross_the_pipe_unchanged() -> None:
     got = receive(theirs)
     assert got["n"] == 3 and np.array_equal(got["picture"], sent["picture"])
     assert got["picture"].dtype == np.float32 and np.array_equal(got["columns"], sent["columns"])
+
+
+@pytest.mark.parametrize("duplex", [True, False])  # a socket pair: shared memory; a pipe: inline
+def test_large_values_cross_the_pipe_unchanged(duplex: bool) -> None:
+    reader, writer = multiprocessing.Pipe(duplex)
+    big = np.random.default_rng(0).random((256, 512, 3)).astype(np.float32)  # 1.5 MB: shared
+    sent = {"big": big, "small": np.arange(5.0), "again": big[::2]}
+    sender = threading.Thread(target=send, args=(writer, sent))  # a pipe holds 64 kB
+    sender.start()
+    got = receive(reader)
+    sender.join()
+    assert np.array_equal(got["big"], big) and got["big"].dtype == np.float32
+    assert np.array_equal(got["small"], np.arange(5.0)) and np.array_equal(got["again"], big[::2])

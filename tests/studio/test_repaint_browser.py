@@ -1,7 +1,8 @@
 """What a change repaints in the studio (Debian's Chromium through Playwright): the values a
 node streams are drawn once, not fetched and drawn again when its run ends (issue 27 item 4:
 the inspector was built again from scratch at every run's end, its pair viewers and formulas
-included, which doubled the studio's paint time while the next change was already under way)."""
+included, which doubled the studio's paint time while the next change was already under way);
+a picture shown twice is fetched once, on the canvas it was drawn on before."""
 
 from __future__ import annotations
 
@@ -43,6 +44,8 @@ def test_a_streamed_inspector_is_kept_and_its_value_asked_for_once() -> None:
             panel = "[data-inspect=overlay]"
             page.wait_for_selector(f"{panel} [data-port='overlay.out'] canvas")
             page.evaluate(f"document.querySelector('{panel}').dataset.mark = 'kept'")
+            output = "[data-output=overlay] canvas"
+            page.evaluate(f"document.querySelector('{output}').dataset.mark = 'same'")
             page.evaluate(_CHANGE)
             page.wait_for_selector("body[data-painted-run='2']", timeout=120_000)
             # coins computed in run 2: its cards were repainted as it finished (streamed)...
@@ -56,8 +59,14 @@ def test_a_streamed_inspector_is_kept_and_its_value_asked_for_once() -> None:
                 f"{p}: {k}" for p, k in keys.items()
             )
             assert page.inner_text(f"{panel} td[data-shape=out]") == "303×384×3"
-            # one request for the overlay's description, shared by the output and the inspector
-            assert asked["value/2/overlay/out"] == 1
+            # the overlay's description, asked for in run 1, rode its node's event in run 2;
+            # its picture was asked for once per step, shared by the output and the inspector
+            assert asked["value/2/overlay/out"] == 0
+            steps = [k for k in asked if k.startswith("rgba/2/overlay/out?")]
+            assert steps and all(asked[k] == 1 for k in steps), asked
+            # the same picture's new value was drawn on the same canvas (no card made again)
+            assert page.get_attribute(output, "data-mark") == "same"
+            assert page.get_attribute(output, "data-value") == "2/overlay/out"
             assert errors == []
             browser.close()
     finally:
