@@ -19,7 +19,8 @@ finished and its picture is on the canvas), and split into:
 ``paint``    the rest: the node's event reaching the page, the value's description (asked
              for while the picture travels), the picture made ready and drawn
 
-Aim (issue 27): median under 150 ms. Run: ``python bench/bench_studio.py``.
+Aim (issue 27): median under 150 ms. Run: ``python bench/bench_studio.py`` (``GV_BENCH_CHANGES=10``
+for fewer changes).
 """
 
 from __future__ import annotations
