@@ -43,7 +43,7 @@ from graphvision.values.images import (
 from graphvision.values.ports import ArrayPort, PortType
 from graphvision.values.records import BoxesPort, KeypointsPort, MatchesPort
 from graphvision.values.scalars import TablePort, _ScalarPort
-from graphvision.views import pairing
+from graphvision.views import pairing, scripted
 
 __all__ = ["MAX_STEP", "describe_value", "png_of", "raw_of", "rgba_of", "shrunk"]
 
@@ -172,12 +172,8 @@ def _links(
         found.update(_classifier(value))
         samples = pairing.prediction_samples(compiled, node)
         found["samples"] = list(samples) if samples else None
-    history = getattr(value, "history", None)
-    if isinstance(history, np.ndarray) and history.ndim == 1 and history.size:
-        curves = {"loss": _list(history)}
-        accuracy = getattr(value, "accuracy", None)
-        if isinstance(accuracy, np.ndarray) and accuracy.shape == history.shape:
-            curves["accuracy"] = _list(accuracy)
+    curves = scripted.curves_of(value)  # the report's curves: one drawing of them
+    if curves is not None:
         found["curves"] = curves
     return found
 

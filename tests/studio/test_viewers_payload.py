@@ -107,8 +107,15 @@ def test_samples_send_their_pixels_when_small():
 def test_a_trained_network_sends_its_training_curves():
     compiled = _compiled("cnn_digits.yaml")
     kind = PortType  # any value with a per-epoch history (the cnn, segmentation, detection models)
-    model = SimpleNamespace(history=np.array([2.0, 1.0, 0.5]), accuracy=np.array([0.2, 0.6, 0.9]))
+    model = SimpleNamespace(
+        history=np.array([2.0, 1.0, 0.5]),
+        accuracy=np.array([0.2, 0.6, 0.9]),
+        held_out_accuracy=np.array([0.3, 0.5, 0.7]),
+    )
     found = describe_value(kind, model, compiled, "cnn", "out")
-    assert found["curves"] == {"loss": [2.0, 1.0, 0.5], "accuracy": [0.2, 0.6, 0.9]}
+    assert found["curves"] == {
+        "loss": [2.0, 1.0, 0.5],
+        "accuracy": {"training": [0.2, 0.6, 0.9], "held out": [0.3, 0.5, 0.7]},
+    }  # the held-out curve too (the studio sent the training accuracy alone)
     no_accuracy = SimpleNamespace(history=np.array([1.0]), accuracy=None)
     assert describe_value(kind, no_accuracy, compiled, "cnn", "out")["curves"] == {"loss": [1.0]}
