@@ -38,6 +38,22 @@ class Step:
         spec = self.spec
         return node_fingerprint(spec.key_id, spec.version, spec.source_hash, self.params)
 
+    @cached_property
+    def call_names(self) -> tuple[str, str]:
+        """What names a call of the node, made once for every run: the label of its frame
+        (``node 'name' (op)``) and the op its warnings name (the function's node id)."""
+        mark = getattr(self.spec.func, "__graphvision_node__", None)
+        op = mark.id if mark is not None else getattr(self.spec.func, "__qualname__", "")
+        return f"node '{self.name}' ({op})", op
+
+    @cached_property
+    def only_output(self) -> tuple[str, type[PortType]] | None:
+        """The port and type of the node's one output when it returns it alone (no tuple)."""
+        if self.spec.output_tuple is not None:
+            return None
+        [(port, kind)] = self.outputs.items()
+        return port, kind
+
 
 @dataclass(frozen=True)
 class Schedule:

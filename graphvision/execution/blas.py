@@ -25,14 +25,20 @@ original, and a run inside a batch or a node inside a run only counts.
 Finding the loaded BLAS libraries takes milliseconds (threadpoolctl walks
 every loaded shared library; 3-8 ms, two walks per run, were most of the
 engine's cost on a 35 ms pipeline), so the controller that found them is kept
-and found again only when a module has been imported since; setting and
-lifting the limit through it takes about 0.05 ms. The limit is set and lifted from a helper thread
-of its own, whatever thread the user is in: once the main thread has lowered
-OpenBLAS's thread count, a call from another thread cannot raise it again.
+and found again only when a module has been imported since. The limit is set and
+lifted from a helper thread, whatever thread the user is in: once the main thread
+has lowered OpenBLAS's thread count, a call from another thread cannot raise it
+again. The helper is one thread kept for the process's life, waiting for the next
+run (a thread made and joined twice per run cost 5-9 ms of a 15 ms pipeline on a
+loaded machine); it asks each BLAS library for its thread count and sets it
+directly (microseconds), and does nothing when every library already runs one
+thread (a worker process holding the limit for good).
 """
 
 from __future__ import annotations
 
+import os
+import queue
 import sys
 import threading
 from collections.abc import Callable, Iterator
@@ -53,49 +59,91 @@ class _SharedLimit:
         self.controller: Any = None
         self.modules_seen = 0
 
-    def _controller(self) -> Any:
-        """threadpoolctl's view of the loaded libraries, found again after an import."""
+    def _libraries(self) -> list[Any]:
+        """threadpoolctl's controllers of the loaded BLAS libraries, found again after an
+        import."""
         from threadpoolctl import ThreadpoolController  # type: ignore[import-untyped]  # no types
 
         if self.controller is None or len(sys.modules) != self.modules_seen:
             self.modules_seen = len(sys.modules)
-            self.controller = ThreadpoolController()
-        return self.controller
+            self.controller = ThreadpoolController().select(user_api="blas").lib_controllers
+        return list(self.controller)
 
     def enter(self) -> None:
         with self.lock:
             if self.users == 0:
-                controller = self._controller()
-                self.limiter = _in_a_helper_thread(
-                    lambda: controller.limit(limits=1, user_api="blas")
-                )
+                busy = [lib for lib in self._libraries() if (lib.get_num_threads() or 1) > 1]
+                self.limiter = _in_the_helper_thread(lambda: _lower(busy)) if busy else []
             self.users += 1
 
     def leave(self) -> None:
         with self.lock:
             self.users -= 1
             if self.users == 0:
-                _in_a_helper_thread(self.limiter.restore_original_limits)
-                self.limiter = None
+                lowered, self.limiter = self.limiter, None
+                if lowered:
+                    _in_the_helper_thread(lambda: _restore(lowered))
 
 
-def _in_a_helper_thread(call: Callable[[], Any]) -> Any:
-    """``call()`` in a thread of its own (see the module docstring), its result or error."""
-    outcome: list[Any] = []
+def _lower(libraries: list[Any]) -> list[tuple[Any, int]]:
+    """Each BLAS library with more than one thread, set to one; what each had."""
+    lowered = []
+    for library in libraries:
+        had = library.get_num_threads()
+        if had is not None and had > 1:
+            library.set_num_threads(1)
+            lowered.append((library, had))
+    return lowered
 
-    def run() -> None:
+
+def _restore(lowered: list[tuple[Any, int]]) -> None:
+    for library, had in lowered:
+        library.set_num_threads(had)
+
+
+class _Helper:
+    """The one thread that sets and lifts the limit (see the module docstring); made on
+    first use, and again in a forked child (which has only the thread that forked)."""
+
+    def __init__(self) -> None:
+        self.requests: queue.SimpleQueue[tuple[Callable[[], Any], queue.SimpleQueue]] = (
+            queue.SimpleQueue()
+        )
+        self.thread: threading.Thread | None = None
+
+    def call(self, call: Callable[[], Any]) -> Any:
+        if self.thread is None:
+            self.thread = threading.Thread(
+                target=_serve, args=(self.requests,), name="graphvision-blas-limit", daemon=True
+            )
+            self.thread.start()
+        reply: queue.SimpleQueue[tuple[bool, Any]] = queue.SimpleQueue()
+        self.requests.put((call, reply))
+        succeeded, value = reply.get()
+        if not succeeded:
+            raise value
+        return value
+
+    def forget(self) -> None:
+        self.__init__()  # type: ignore[misc]  # in a forked child: the thread is not there
+
+
+def _serve(requests: queue.SimpleQueue) -> None:
+    while True:
+        call, reply = requests.get()
         try:
-            outcome.append((True, call()))
+            reply.put((True, call()))
         except BaseException as error:  # re-raised in the caller's thread
-            outcome.append((False, error))
+            reply.put((False, error))
 
-    helper = threading.Thread(target=run, name="graphvision-blas-limit")
-    helper.start()
-    helper.join()
-    succeeded, value = outcome[0]
-    if not succeeded:
-        raise value
-    return value
+
+_HELPER = _Helper()
+os.register_at_fork(after_in_child=_HELPER.forget)
+
+
+def _in_the_helper_thread(call: Callable[[], Any]) -> Any:
+    """``call()`` in the helper thread (see the module docstring), its result or error."""
+    return _HELPER.call(call)
 
 
 _LIMIT = _SharedLimit()

@@ -41,7 +41,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import partial
 from typing import Any
 
@@ -64,7 +64,7 @@ from graphvision.execution.limits import current_limits, node_limits, refuse_dec
 from graphvision.execution.peak_memory import check_peak_memory, running_at_once
 from graphvision.execution.provenance import describe_run
 from graphvision.execution.record import RunHooks, RunRecord, RunResult
-from graphvision.execution.scheduler import run_tasks
+from graphvision.execution.scheduler import EVERY_TASK, run_tasks
 from graphvision.execution.state import RunState
 from graphvision.execution.truth import outputs_with_truth
 from graphvision.graph.model import Graph
@@ -344,7 +344,7 @@ def _execute(
                 state.finish,
                 keep_going=keep_going,
                 run_here=state.run_here if here else None,
-                quick=state.is_quick if here else None,
+                quick=_quick(state) if here else None,
                 limit=2 * executor_width(pool) if here else None,
                 ahead=state.chained,
             )
@@ -363,6 +363,11 @@ def _execute(
         for hook in hooks:
             hook.run_finished(record=state.record, failed=failed)
     return state
+
+
+def _quick(state: RunState) -> Callable[[str], bool]:
+    """Which nodes run in this thread: all of them on ``sync`` without time limits."""
+    return EVERY_TASK if state.inline and not state.timed else state.is_quick
 
 
 def _mark_skipped(state: RunState, skipped: list[str], hooks: Sequence[RunHooks]) -> None:

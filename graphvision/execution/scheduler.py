@@ -40,7 +40,7 @@ from collections import deque
 from collections.abc import Callable, Mapping, Set
 from concurrent.futures import Future
 
-__all__ = ["run_tasks"]
+__all__ = ["EVERY_TASK", "run_tasks"]
 
 
 def run_tasks(
@@ -88,12 +88,52 @@ def run_tasks(
         task that completes before a dependency has finished waits for it; one
         whose dependency failed is skipped, whatever its own future says.
     """
+    if run_here is not None and quick is EVERY_TASK:
+        return _one_by_one(dependencies, run_here, keep_going)
     loop = _Loop(dependencies, start, finish, keep_going, run_here, quick, limit, ahead)
     loop.ready.extend(name for name, count in loop.waiting.items() if count == 0)
     loop.launch()
     while loop.running:
         loop.step()
     return [name for name in dependencies if name not in loop.started or name in loop.blocked]
+
+
+def EVERY_TASK(name: str) -> bool:  # noqa: N802  # a constant that is a function
+    """``quick`` when every task runs in this thread (``sync`` without time limits): the
+    tasks then run one by one, in the order the loop would give them, without the loop."""
+    return True
+
+
+def _one_by_one(
+    dependencies: Mapping[str, Set[str]], run_here: Callable[[str], bool], keep_going: bool
+) -> list[str]:
+    """:func:`run_tasks` when every task is quick: first in, first out, as the loop runs them
+    (a task is ready once its dependencies succeeded; after a failure without
+    ``keep_going`` the tasks ready already still run, no other starts)."""
+    waiting = {name: len(deps) for name, deps in dependencies.items()}
+    dependents: dict[str, list[str]] = {name: [] for name in dependencies}
+    for name, deps in dependencies.items():
+        for dep in deps:
+            dependents[dep].append(name)
+    ready = deque([name for name, count in waiting.items() if count == 0])
+    started, blocked, stopping = set(), set(), False
+    while ready:
+        name = ready.popleft()
+        started.add(name)
+        if run_here(name):
+            for child in dependents[name]:
+                waiting[child] -= 1
+                if not waiting[child] and not stopping and child not in blocked:
+                    ready.append(child)
+            continue
+        stack = [name]
+        while stack:  # everything downstream of the failed task is skipped
+            for child in dependents[stack.pop()]:
+                if child not in blocked:
+                    blocked.add(child)
+                    stack.append(child)
+        stopping = stopping or not keep_going
+    return [name for name in dependencies if name not in started or name in blocked]
 
 
 class _Loop:

@@ -56,6 +56,7 @@ from graphvision.errors import (
 from graphvision.execution.executors import (
     NODE_ERRORS,
     Executor,
+    call_labelled,
     call_node,
     call_node_encoded,
     chains_tasks,
@@ -246,13 +247,14 @@ class RunState:
         """Run a step in this thread and finish it (the scheduler does for a quick one);
         False when it failed."""
         step = self.compiled.steps[name]
-        spec, values = step.spec, self.values
         for hook in self.hooks:
-            hook.node_started(name=name, op=spec.id)
-        inputs = {port: values[source] for port, source in step.inputs.items()}
+            hook.node_started(name=name, op=step.spec.id)
+        values = self.values
+        kwargs = {port: values[source] for port, source in step.inputs.items()}
+        kwargs.update(step.params)
         began = time.perf_counter()
         try:  # as on a worker: warnings and a fault name the node, a forked child is ended
-            result, seconds = call_node(spec.func, step.params, inputs, name)
+            result, seconds = call_labelled(step.spec.func, kwargs, *step.call_names)
             outputs = self.accept(step, result)
         except NODE_ERRORS as error:
             self.started[name] = began
@@ -344,8 +346,9 @@ class RunState:
                 port: freeze_value(kind, kind.decode(arrays, meta))
                 for port, (kind, arrays, meta) in result.items()
             }
-        if step.spec.output_tuple is None:  # one output: no tuple to split
-            [(port, kind)] = step.outputs.items()
+        only = step.only_output
+        if only is not None:  # one output: no tuple to split
+            port, kind = only
             try:
                 return {port: freeze_value(kind, kind.validate(result))}
             except PortValueError as error:
