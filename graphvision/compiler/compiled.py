@@ -14,6 +14,7 @@ from graphvision.graph.model import Graph
 from graphvision.nodes.fingerprint import node_fingerprint
 from graphvision.nodes.spec import NodeSpec
 from graphvision.values.ports import PortType
+from graphvision.values.scalars import _ScalarPort
 
 __all__ = ["CompiledGraph", "Schedule", "Step"]
 
@@ -47,12 +48,13 @@ class Step:
         return f"node '{self.name}' ({op})", op
 
     @cached_property
-    def only_output(self) -> tuple[str, type[PortType]] | None:
-        """The port and type of the node's one output when it returns it alone (no tuple)."""
+    def only_output(self) -> tuple[str, type[PortType], bool] | None:
+        """The port and type of the node's one output when it returns it alone (no tuple),
+        and whether it is a scalar (a value with no arrays to freeze)."""
         if self.spec.output_tuple is not None:
             return None
         [(port, kind)] = self.outputs.items()
-        return port, kind
+        return port, kind, issubclass(kind, _ScalarPort)
 
 
 @dataclass(frozen=True)
@@ -79,6 +81,19 @@ class CompiledGraph:
     steps: dict[str, Step]
     input_types: dict[str, type[PortType]]
     outputs: dict[str, tuple[str, str]]
+
+    @cached_property
+    def last_keys(self) -> dict[tuple[Any, ...], tuple[list[str], dict[tuple[str, str], str]]]:
+        """The output keys the last run of these steps chained, by the steps and their
+        graph inputs' keys (a run reads and writes it: keys are a function of these alone)."""
+        return {}
+
+    @cached_property
+    def truth_marks(self) -> list[tuple[str, tuple[str, ...]]]:
+        """The graph inputs and nodes marked as the truth of some inputs, with those inputs."""
+        graph = self.graph
+        marked = [(n, tuple(d.truth_of)) for n, d in graph.inputs.items() if d.truth_of]
+        return marked + [(n, tuple(d.truth_of)) for n, d in graph.nodes.items() if d.truth_of]
 
     def output_type(self, name: str) -> type[PortType]:
         producer, port = self.outputs[name]

@@ -98,7 +98,7 @@ def run_tasks(
     return [name for name in dependencies if name not in loop.started or name in loop.blocked]
 
 
-def EVERY_TASK(name: str) -> bool:  # noqa: N802  # a constant that is a function
+def EVERY_TASK(name: str) -> bool:  # a constant that is a function
     """``quick`` when every task runs in this thread (``sync`` without time limits): the
     tasks then run one by one, in the order the loop would give them, without the loop."""
     return True

@@ -136,13 +136,28 @@ class RunState:
             self.keys[(name, "")] = content_key(self.compiled.input_types[name], value)
 
     def key_steps(self, names: list[str]) -> None:
-        keys, steps = self.keys, self.compiled.steps
+        """Chain the output keys of the steps ``names`` from the graph inputs' keys (those of
+        the last run of the same steps on inputs of the same keys are taken as they are)."""
+        given = tuple(sorted((n, k) for (n, p), k in self.keys.items() if not p))
+        memo = self.compiled.last_keys
+        found = memo.get(given)
+        if found is not None and found[0] == names:
+            self.keys.update(found[1])
+            return
+        made = self._chain_keys(names)
+        memo.clear()  # the last run's only: a graph run on many inputs keeps one
+        memo[given] = (list(names), made)
+        self.keys.update(made)
+
+    def _chain_keys(self, names: list[str]) -> dict[tuple[str, str], str]:
+        keys, steps = dict(self.keys), self.compiled.steps
         for name in names:
             step = steps[name]
             inputs = {port: keys[source] for port, source in step.inputs.items()}
             made = output_keys(step.fingerprint, inputs, step.outputs)
             for port, key in zip(step.outputs, made, strict=True):
                 keys[(name, port)] = key
+        return {source: key for source, key in keys.items() if source[0] in steps}
 
     def plan(self, needed: list[str], wanted: list[tuple[str, str]]) -> list[str]:
         """Apply :func:`plan_steps`: record the loaded values as cached nodes (and tell the
@@ -183,8 +198,9 @@ class RunState:
             read = set(schedule.inputs)
         else:
             dependencies, read = self.count_readers(compute, wanted)
+        new_record = self.new_record
         for name in compute:
-            nodes[name] = self.new_record(steps[name], "pending")
+            nodes[name] = new_record(steps[name], "pending")
         self.pinned = set(wanted)
         if self.keep_intermediates:
             self.pinned.update((name, port) for name in compute for port in steps[name].outputs)
@@ -213,9 +229,7 @@ class RunState:
         """A node's record, with the parameters it runs with and its outputs' keys."""
         name, keys, spec = step.name, self.keys, step.spec
         made = {port: keys[(name, port)] for port in step.outputs}
-        return NodeRecord(
-            name, spec.id, status, params=dict(step.params), keys=made, backend=spec.backend
-        )
+        return NodeRecord(name, spec.id, status, 0.0, 0, "", dict(step.params), made, spec.backend)
 
     # -- execution --------------------------------------------------------------------
 
@@ -328,14 +342,19 @@ class RunState:
         else:
             self.quick_ops.discard(op)
         cache = self.cache if step.spec.cache else None
+        values = self.values
         for port, value in outputs.items():
             kind = step.outputs[port]
-            self.values[(name, port)] = value
+            values[(name, port)] = value
             if cache is not None:
                 node.output_bytes += cache.put(self.keys[(name, port)], kind, value)
             elif not issubclass(kind, _ScalarPort):
                 node.output_bytes += value_bytes(kind, value)
-        self.release_inputs(step)
+        consumers, pinned = self.consumers, self.pinned  # release the inputs it read
+        for source in step.inputs.values():
+            consumers[source] -= 1
+            if consumers[source] == 0 and source not in pinned:
+                values.pop(source, None)
         for hook in self.hooks:
             hook.node_finished(name=name, op=op, status="computed", seconds=seconds)
         return True
@@ -348,9 +367,10 @@ class RunState:
             }
         only = step.only_output
         if only is not None:  # one output: no tuple to split
-            port, kind = only
+            port, kind, scalar = only
             try:
-                return {port: freeze_value(kind, kind.validate(result))}
+                value = kind.validate(result)
+                return {port: value if scalar else freeze_value(kind, value)}
             except PortValueError as error:
                 raise PortValueError(f"node returned an invalid output '{port}': {error}") from None
         outputs = {}

@@ -27,9 +27,8 @@ class MissingTruthWarning(UserWarning):
 def missing_truth(compiled: CompiledGraph, given: set[str]) -> dict[str, list[str]]:
     """Truth input or marked node -> the inputs given without it, for each one missing (a
     node's truth, written into the pipeline, is missing whenever one of them is given)."""
-    graph, missing = compiled.graph, {}
-    marked = [(n, d.truth_of) for n, d in graph.inputs.items()]
-    for name, truth_of in marked + [(n, d.truth_of) for n, d in graph.nodes.items()]:
+    missing = {}
+    for name, truth_of in compiled.truth_marks:
         subjects = [subject for subject in truth_of if subject in given]
         if subjects and name not in given:
             missing[name] = subjects
