@@ -16,7 +16,8 @@ the OpenCV backend, and the engine's cost on top of OpenCV against a plain scrip
    freezing the nodes' outputs (validated, copied read-only:
    :func:`graphvision.execution.inputs.freeze_value`), per run.
 
-Run: ``python bench/bench_backends.py [PIPELINE.yaml ...]`` (all pipelines by default).
+Run: ``python bench/bench_backends.py [PIPELINE.yaml ...]`` (all pipelines by default);
+``python bench/bench_backends.py --overhead`` gives part 2 alone, with the load average.
 """
 
 from __future__ import annotations
@@ -177,7 +178,12 @@ def main(names: list[str] | None = None) -> list[str]:
 
 
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["--table"]:  # the per-pipeline table alone, row by row
+    if sys.argv[1:2] == ["--overhead"]:  # part 2 alone
+        import os
+
+        print(f"load average {os.getloadavg()[0]:.1f} (1 min)")
+        print("\n".join(overhead_rows()))
+    elif sys.argv[1:2] == ["--table"]:  # the per-pipeline table alone, row by row
         print("\n".join(pipeline_rows(sys.argv[2:] or _all(), echo=True)[:2]))
     else:
         print("\n".join(main(sys.argv[1:] or None)))

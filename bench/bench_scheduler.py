@@ -11,13 +11,19 @@ Validation: a pipeline file of a chain of 1,000, 10,000 and 100,000 nodes,
 parsed and compiled (what ``graphvision validate`` does), in µs per node, and
 the peak memory traced meanwhile (``tracemalloc``, a separate untimed pass).
 
-Run: ``python bench/bench_scheduler.py`` (``make bench`` runs every benchmark).
+Phases (``--phases``): where a run's time goes, in CPU µs per node (``time.process_time``,
+which load disturbs less than wall time), best of 7 runs: the inputs' and outputs' keys,
+the nodes' records, the scheduler with the nodes themselves, ground-truth checks,
+provenance, and the rest (BLAS limit, executor, outputs).
+
+Run: ``python bench/bench_scheduler.py [--phases]`` (``make bench`` runs every benchmark).
 """
 
 from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import Any
 
 from timing import best
 
@@ -142,5 +148,68 @@ def main() -> list[str]:
     return [*rows, "", *validation_rows(registry)]
 
 
+def phase_rows(registry: gv.Registry, repeats: int = 7) -> list[str]:
+    """CPU µs per node of each phase of a run (see the module docstring)."""
+    from graphvision.execution import run as run_module
+    from graphvision.execution.state import RunState
+
+    spent: dict[str, float] = {}
+    wrapped = [
+        (RunState, "key_inputs", "keys"),
+        (RunState, "key_steps", "keys"),
+        (RunState, "prepare", "records"),
+        (run_module, "run_tasks", "scheduler + nodes"),
+        (run_module, "outputs_with_truth", "truth"),
+        (run_module, "describe_run", "provenance"),
+    ]
+    originals = [(owner, name, getattr(owner, name)) for owner, name, _ in wrapped]
+
+    def timed(original: Any, label: str) -> Any:
+        def call(*args: Any, **kwargs: Any) -> Any:
+            began = time.process_time()
+            try:
+                return original(*args, **kwargs)
+            finally:
+                spent[label] = spent.get(label, 0.0) + time.process_time() - began
+
+        return call
+
+    labels = ["keys", "records", "scheduler + nodes", "truth", "provenance"]
+    rows = [
+        f"| shape | executor | total | {' | '.join(labels)} | rest |",
+        "| --- | --- |" + " ---: |" * (len(labels) + 2),
+    ]
+    try:
+        for owner, name, label in wrapped:
+            setattr(owner, name, timed(getattr(owner, name), label))
+        for shape, builder, n in [("chain", chain_graph, 10_000), ("fan-out", fan_graph, 1_000)]:
+            compiled = gv.compile_graph(builder(n), registry)
+            for executor in ("sync", "threads"):
+                gv.run(compiled, registry, executor=executor)
+                runs = []
+                for _ in range(repeats):
+                    spent.clear()
+                    began = time.process_time()
+                    gv.run(compiled, registry, executor=executor)
+                    runs.append((time.process_time() - began, dict(spent)))
+                total, parts = min(runs, key=lambda item: item[0])
+                cells = [parts.get(label, 0.0) / n * 1e6 for label in labels]
+                rest = total / n * 1e6 - sum(cells)
+                rows.append(
+                    f"| {shape} | {executor} | {total / n * 1e6:.1f} | "
+                    + " | ".join(f"{c:.2f}" for c in cells)
+                    + f" | {rest:.2f} |"
+                )
+    finally:
+        for owner, name, original in originals:
+            setattr(owner, name, original)
+    return rows
+
+
 if __name__ == "__main__":
-    print("\n".join(main()))
+    import sys
+
+    if sys.argv[1:2] == ["--phases"]:
+        print("\n".join(phase_rows(gv.discover([HERE / "trivial_nodes.py"]))))
+    else:
+        print("\n".join(main()))

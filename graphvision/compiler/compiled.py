@@ -89,6 +89,12 @@ class CompiledGraph:
         return {}
 
     @cached_property
+    def quick_ops(self) -> set[str]:
+        """The ops the runs of this graph found quicker than handing them to a thread costs
+        (:mod:`graphvision.execution.state` keeps it): where the next run starts."""
+        return set()
+
+    @cached_property
     def truth_marks(self) -> list[tuple[str, tuple[str, ...]]]:
         """The graph inputs and nodes marked as the truth of some inputs, with those inputs."""
         graph = self.graph

@@ -33,7 +33,7 @@ from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.warnings import running, show_warning
 from graphvision.execution.worker_start import ClientStdio, context, start_server
 from graphvision.nodes.spec import FunctionRef
-from graphvision.values.ports import PortType, freeze
+from graphvision.values.ports import PortType, freeze_all
 
 __all__ = [
     "EXECUTORS",
@@ -406,8 +406,7 @@ def call_node_encoded(
         sent = {port: produced[source] for port, ((produced, _), source) in upstream.items()}
         inputs = {**inputs, **sent}
     values = {  # read-only for good, as under threads
-        port: kind.decode({name: freeze(a) for name, a in arrays.items()}, meta)
-        for port, (kind, arrays, meta) in inputs.items()
+        port: kind.decode(freeze_all(arrays), meta) for port, (kind, arrays, meta) in inputs.items()
     }
     result, seconds = call_node(func, params, values)
     parts = dict(zip(outputs, result, strict=True)) if output_tuple else {"out": result}

@@ -13,7 +13,7 @@ from graphvision.errors import (
     PortValueError,
 )
 from graphvision.nodes.registry import Registry
-from graphvision.values.ports import PortType, freeze
+from graphvision.values.ports import PortType, freeze_all
 from graphvision.values.scalars import TextPort, _ScalarPort
 
 __all__ = ["freeze_value", "resolve_input", "value_bytes"]
@@ -97,4 +97,4 @@ def freeze_value(port_type: type[PortType], value: Any) -> Any:
     if issubclass(port_type, _ScalarPort):
         return value
     arrays, meta = port_type.encode(value)
-    return port_type.decode({name: freeze(a) for name, a in arrays.items()}, meta)
+    return port_type.decode(freeze_all(arrays), meta)

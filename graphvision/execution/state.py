@@ -106,7 +106,8 @@ class RunState:
         self.chained = self.encoded and chains_tasks(self.executor)
         # With a chaining executor, its futures (each with a ``task``) of the steps not finished.
         self.in_flight: dict[str, Any] = {}
-        self.quick_ops: set[str] = set()  # ops whose last call here took under _QUICK_SECONDS
+        # ops whose last call here took under _QUICK_SECONDS (learnt by the graph's last runs)
+        self.quick_ops: set[str] = self.compiled.quick_ops
         self.limits = current_limits()  # time and memory per node (execution.limits)
         nodes = self.compiled.graph.nodes.values()
         self.timed = self.limits.timeout is not None or any(n.timeout is not None for n in nodes)

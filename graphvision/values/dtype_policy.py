@@ -26,7 +26,23 @@ import numpy as np
 
 from graphvision.errors import PortValueError
 
-__all__ = ["to_dtype", "to_float_image", "to_labels", "to_mask"]
+__all__ = ["in_unit_range", "to_dtype", "to_float_image", "to_labels", "to_mask"]
+
+
+_ONE_BITS = int(np.float32(1.0).view(np.uint32))
+
+
+def in_unit_range(array: np.ndarray) -> bool:
+    """Whether every value of a ``float32`` array lies in [+0, 1], in one pass over it.
+
+    Read as unsigned integers, the floats +0 to 1 are exactly the numbers 0 to
+    ``0x3F800000``; a negative number (sign bit set), NaN and infinity all read
+    as larger ones. So one integer maximum decides, where a minimum and a maximum
+    took two passes (5 ms per port on a 2048² image). False also for -0.0 (a
+    number with the sign bit): the caller then looks closer with the minimum and
+    maximum, which accept it and say what is wrong otherwise.
+    """
+    return array.dtype == np.float32 and int(array.view(np.uint32).max()) <= _ONE_BITS
 
 
 def _plain_array(array: Any, source: str) -> np.ndarray:
@@ -74,6 +90,8 @@ def to_float_image(array: Any, *, source: str = "image", check_range: bool = Tru
         return (array / np.float32(np.iinfo(array.dtype).max)).astype(np.float32)
     if np.issubdtype(array.dtype, np.floating):
         result = array.astype(np.float32, copy=False)
+        if check_range and in_unit_range(result):
+            return result
         low, high = float(np.min(result)), float(np.max(result))
         if not (np.isfinite(low) and np.isfinite(high)):
             raise PortValueError(f"{source} has NaN or infinite values")

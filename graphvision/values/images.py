@@ -8,7 +8,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from graphvision.errors import PortValueError
-from graphvision.values.dtype_policy import to_float_image, to_labels, to_mask
+from graphvision.values.dtype_policy import in_unit_range, to_float_image, to_labels, to_mask
 from graphvision.values.ports import ArrayPort, _fail
 
 __all__ = [
@@ -65,6 +65,8 @@ class ImagePort(FloatImagePort):
     @classmethod
     def validate(cls, value: Any) -> np.ndarray:
         value = super().validate(value)
+        if in_unit_range(value):  # one pass; else the minimum and maximum say what is wrong
+            return value
         low, high = float(value.min()), float(value.max())
         if not (low >= 0.0 and high <= 1.0):  # also rejects NaN
             raise PortValueError(

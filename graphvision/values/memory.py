@@ -33,7 +33,14 @@ from typing import BinaryIO
 
 import numpy as np
 
-__all__ = ["ALIGNMENT", "aligned_bytes", "frozen_copy", "is_aligned", "read_aligned"]
+__all__ = [
+    "ALIGNMENT",
+    "aligned_bytes",
+    "frozen_copies",
+    "frozen_copy",
+    "is_aligned",
+    "read_aligned",
+]
 
 ALIGNMENT = 64
 
@@ -72,6 +79,28 @@ def frozen_copy(array: np.ndarray) -> np.ndarray:
 
     buffer = aligned_bytes(source.nbytes, fill)
     return np.frombuffer(buffer, dtype=source.dtype).reshape(source.shape)
+
+
+def frozen_copies(arrays: list[np.ndarray]) -> list[np.ndarray]:
+    """Copies of ``arrays`` in one immutable buffer, each at a multiple of :data:`ALIGNMENT`
+    (C order, same dtypes and shapes): a value of many arrays (a table's columns) is frozen
+    with one buffer instead of one each."""
+    sources = [np.ascontiguousarray(array) for array in arrays]
+    offsets, total = [], 0
+    for source in sources:
+        offsets.append(total)
+        total += -(-source.nbytes // ALIGNMENT) * ALIGNMENT
+
+    def fill(window: memoryview) -> None:
+        whole = np.frombuffer(window, np.uint8)
+        for source, offset in zip(sources, offsets, strict=True):
+            whole[offset : offset + source.nbytes] = source.reshape(-1).view(np.uint8)
+
+    buffer = aligned_bytes(total, fill)
+    return [
+        np.frombuffer(buffer, source.dtype, source.size, offset).reshape(source.shape)
+        for source, offset in zip(sources, offsets, strict=True)
+    ]
 
 
 def is_aligned(array: np.ndarray) -> bool:

@@ -44,7 +44,7 @@ import numpy as np
 from graphvision.errors import PortValueError
 from graphvision.values.budget import check_array_file
 from graphvision.values.dtype_policy import to_dtype
-from graphvision.values.memory import frozen_copy, is_aligned
+from graphvision.values.memory import frozen_copies, frozen_copy, is_aligned
 
 __all__ = [
     "ArrayPort",
@@ -54,6 +54,8 @@ __all__ = [
     "RecordPort",
     "describe_value",
     "freeze",
+    "freeze_all",
+    "is_frozen",
 ]
 
 
@@ -70,6 +72,21 @@ def freeze(array: np.ndarray) -> np.ndarray:
     copied once into one, unless it already lies, aligned, over immutable
     memory (a value read from the disk cache does).
     """
+    return array if is_frozen(array) else frozen_copy(array)
+
+
+def freeze_all(arrays: Arrays) -> Arrays:
+    """:func:`freeze` of each array; those to copy share one buffer (one allocation for a
+    table's columns instead of one each)."""
+    thawed = [name for name, array in arrays.items() if not is_frozen(array)]
+    if len(thawed) < 2:
+        return {name: freeze(array) for name, array in arrays.items()}
+    copies = dict(zip(thawed, frozen_copies([arrays[name] for name in thawed]), strict=True))
+    return {name: copies.get(name, array) for name, array in arrays.items()}
+
+
+def is_frozen(array: np.ndarray) -> bool:
+    """Whether ``array`` lies, aligned and read-only, over immutable memory already."""
     root: object = array
     while isinstance(root, np.ndarray | memoryview):
         if isinstance(root, memoryview):
@@ -78,9 +95,8 @@ def freeze(array: np.ndarray) -> np.ndarray:
             break
         else:
             root = root.base
-    if isinstance(root, bytes) and is_aligned(array) and not array.flags.writeable:
-        return array  # (an array unpickled over bytes can be writable: it is copied)
-    return frozen_copy(array)
+    # (an array unpickled over bytes can be writable: it is copied)
+    return isinstance(root, bytes) and is_aligned(array) and not array.flags.writeable
 
 
 class PortType:

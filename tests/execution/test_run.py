@@ -655,3 +655,24 @@ def test_an_input_whose_port_check_breaks_on_hostile_data_is_named(tmp_path):
     graph.output("same", graph.input("x", "Fragile"))
     with pytest.raises(gv.InputError, match=r"input 'x': not a valid Fragile \(AttributeError"):
         gv.run(graph, registry, inputs={"x": 1.0})
+
+
+def test_a_compiled_graph_run_again_keys_each_run_by_its_own_inputs(registry, tmp_path):
+    """The keys of a compiled graph's last run are reused only for inputs of the same keys:
+    a run on other inputs, or of fewer outputs, keys its values as a fresh graph would."""
+    compiled = gv.compile_graph(chain(registry), registry)
+
+    def keys(result):
+        return {n.name: n.keys for n in result.record.nodes}
+
+    fresh = {x: keys(gv.run(chain(registry), registry, inputs={"x": x})) for x in (1.0, 2.0)}
+    assert fresh[1.0] != fresh[2.0]
+    for x in (1.0, 2.0, 1.0):
+        assert keys(gv.run(compiled, registry, inputs={"x": x})) == fresh[x]
+    alone = keys(gv.run(compiled, registry, inputs={"x": 2.0}, outputs=["c"]))
+    assert alone == {"c": fresh[2.0]["c"]}
+    cache = gv.Cache.at(tmp_path / "cache")
+    gv.run(compiled, registry, inputs={"x": 1.0}, cache=cache)
+    warm = gv.run(compiled, registry, inputs={"x": 2.0}, cache=cache)
+    assert statuses(warm.record) == {"a": "computed", "b": "computed", "c": "computed"}
+    assert warm.outputs == {"b": 9.0, "c": 14.0}

@@ -5,7 +5,9 @@ from __future__ import annotations
 import threading
 from concurrent.futures import Future
 
-from graphvision.execution.scheduler import run_tasks
+import pytest
+
+from graphvision.execution.scheduler import EVERY_TASK, run_tasks
 
 CHAIN = {"a": set(), "b": {"a"}, "c": {"b"}}
 
@@ -127,3 +129,45 @@ def test_nothing_starts_ahead_of_a_task_refused_at_once():
 
     skipped = run_tasks(CHAIN, start, lambda name, future: False, ahead=True)
     assert started == ["a"] and skipped == ["b", "c"]
+
+
+def _diamond_with_failure() -> dict[str, set[str]]:
+    """A graph where ``b`` fails: ``d`` reads it, ``c`` and ``e`` do not, ``f`` joins late."""
+    return {
+        "a": set(),
+        "b": {"a"},
+        "c": {"a"},
+        "d": {"b"},
+        "e": {"c"},
+        "f": {"c", "e"},
+        "g": set(),
+    }
+
+
+def _run_here(order: list[str], fails: str):
+    return lambda name: order.append(name) or name != fails
+
+
+def _never_started(name: str) -> Future:
+    raise AssertionError(f"{name} was handed to the executor")
+
+
+@pytest.mark.parametrize("keep_going", [False, True])
+def test_every_task_here_runs_as_the_loop_would(keep_going):
+    """With ``quick=EVERY_TASK`` (sync) the tasks run one by one without the loop: the same
+    order, the same tasks skipped after a failure, with and without keep_going."""
+    by_loop: list[str] = []
+    by_one: list[str] = []
+    skipped_by_loop = run_tasks(
+        _diamond_with_failure(), _never_started, lambda n, f: True, keep_going=keep_going,
+        run_here=_run_here(by_loop, "b"), quick=lambda name: True,
+    )  # fmt: skip
+    skipped_by_one = run_tasks(
+        _diamond_with_failure(), _never_started, lambda n, f: True, keep_going=keep_going,
+        run_here=_run_here(by_one, "b"), quick=EVERY_TASK,
+    )  # fmt: skip
+    assert by_one == by_loop
+    assert skipped_by_one == skipped_by_loop
+    expected = ["a", "g", "b", "c"] + (["e", "f"] if keep_going else [])
+    assert by_one == expected
+    assert skipped_by_one == (["d"] if keep_going else ["d", "e", "f"])

@@ -149,3 +149,54 @@ def test_boxes_refuse_a_nan_score_naming_the_row():
     with pytest.raises(gv.PortValueError, match="box 1 has a NaN score"):
         gv.BoxesPort.validate(boxes)
     gv.BoxesPort.validate(gv.BoxSet(boxes.xyxy, np.array([np.inf, -np.inf])))
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        (np.float32(np.nan), r"range \[nan, nan\]"),
+        (np.float32(-1e-45), r"range \[-1.4013e-45, -1.4013e-45\]"),
+        (np.nextafter(np.float32(1), np.float32(2)), r"range \[1, 1\]"),
+        (np.float32(np.inf), r"range \[inf, inf\]"),
+    ],
+)
+def test_an_image_check_in_one_pass_refuses_what_the_minimum_and_maximum_did(value, message):
+    image = np.full((4, 5), 0.5, np.float32)
+    image[2, 3] = value
+    with pytest.raises(gv.PortValueError, match=r"expected GrayImage values in \[0, 1\], got "):
+        gv.GrayImagePort.validate(image)
+    with pytest.raises(gv.PortValueError, match=message):
+        gv.GrayImagePort.validate(np.full((4, 5), value, np.float32))
+
+
+def test_an_image_check_in_one_pass_takes_zero_one_minus_zero_and_the_smallest_numbers():
+    image = np.array([[0.0, -0.0, 1.0], [1e-45, 0.5, np.nextafter(1, 0)]], np.float32)
+    assert gv.GrayImagePort.validate(image) is image
+    assert gv.ImagePort.validate(image[:, ::-1]) is not None  # a strided view too
+
+
+def test_a_tables_columns_are_frozen_into_one_buffer_each_aligned_and_read_only():
+    from graphvision.execution.inputs import freeze_value
+    from graphvision.values.memory import ALIGNMENT
+
+    table = {
+        "area": np.array([3, 1, 2], np.int64),
+        "name_id": np.array([1, 2, 3], np.int16),
+        "score": np.array([0.5, 0.25, 1.0]),
+    }
+    frozen = freeze_value(gv.TablePort, table)
+    roots = set()
+    for name, column in frozen.items():
+        np.testing.assert_array_equal(column, table[name])
+        assert column.dtype == table[name].dtype
+        assert column.ctypes.data % ALIGNMENT == 0
+        with pytest.raises(ValueError, match="WRITEABLE"):
+            column.flags.writeable = True
+        root = column
+        while isinstance(root, np.ndarray | memoryview):
+            root = root.obj if isinstance(root, memoryview) else root.base
+        assert isinstance(root, bytes)
+        roots.add(id(root))
+    assert len(roots) == 1  # one buffer
+    again = freeze_value(gv.TablePort, frozen)
+    assert all(again[name] is frozen[name] for name in frozen)  # frozen already: kept
