@@ -28,9 +28,9 @@ from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
-from graphvision.execution.crash_note import call_named
 from graphvision.execution.limits import ended_by_limit
-from graphvision.execution.warnings import running, show_warning
+from graphvision.execution.node_call import call_labelled, call_node
+from graphvision.execution.warnings import show_warning
 from graphvision.execution.worker_start import ClientStdio, context, start_server
 from graphvision.nodes.spec import FunctionRef
 from graphvision.values.ports import PortType, freeze_all
@@ -321,66 +321,6 @@ def make_executor(name: str = "threads", workers: int | None = None) -> Executor
     if name == "processes":
         return _Processes(workers)
     raise ValueError(f"unknown executor '{name}'; choose one of {', '.join(EXECUTORS)}")
-
-
-def call_node(
-    func: Callable[..., Any], params: dict[str, Any], inputs: dict[str, Any], name: str = ""
-) -> tuple[Any, float]:
-    """Call a node function; return its result and wall time in seconds.
-
-    A node that forks (``os.fork()``, or a library that does) and whose child
-    returns here would have the child go on running the graph (on ``sync`` it
-    wrote the output folder a second time; on threads its idle pool kept the
-    command's pipes open, so the run never ended): the child is ended here,
-    with one line naming the node. The node runs in a frame named after it
-    (:mod:`~graphvision.execution.crash_note`: a fault handler's traceback names it).
-    """
-    mark = getattr(func, "__graphvision_node__", None)
-    op = mark.id if mark is not None else getattr(func, "__qualname__", "")
-    label = f"node '{name}' ({op})" if name else f"node {op}"
-    return call_labelled(func, {**inputs, **params}, label, op)
-
-
-_FORKS = [0]
-"""How many forks made this process (``os.register_at_fork``): a forked child's count is
-one more than its parent's was when it forked. Read per node instead of ``os.getpid()``,
-a system call (1.2 µs here, two per node were a tenth of a trivial node's cost). A child
-made by a C library's own ``fork()`` without ``PyOS_AfterFork_Child`` is not counted:
-such a child cannot run Python safely anyway."""
-
-
-def _count_fork() -> None:
-    _FORKS[0] += 1
-
-
-os.register_at_fork(after_in_child=_count_fork)
-
-
-def call_labelled(
-    func: Callable[..., Any], kwargs: dict[str, Any], label: str, op: str
-) -> tuple[Any, float]:
-    """:func:`call_node` with its arguments merged and its names made (a run makes them once
-    per step): ``label`` names the frame, ``op`` the warnings."""
-    forks = _FORKS[0]
-    running.op = op
-    began = time.perf_counter()
-    try:
-        result = call_named(label, func, kwargs)
-    finally:
-        if _FORKS[0] != forks:
-            _end_forked_child(op)
-        running.op = ""
-    return result, time.perf_counter() - began
-
-
-def _end_forked_child(op: str) -> None:
-    """In a process a node forked that returned into graphvision: say so and exit."""
-    os.write(
-        2,
-        f"graphvision: node op {op} forked a process that returned from the node; the "
-        "child may not run the graph and is ended (exit its child itself: os._exit)\n".encode(),
-    )
-    os._exit(70)  # EX_SOFTWARE
 
 
 Payload = dict[str, tuple[type[PortType], dict, dict]]

@@ -45,7 +45,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any
 
-from graphvision.cache.keys import content_key, output_keys
+from graphvision.cache.keys import content_key
 from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, Schedule, Step
 from graphvision.errors import (
@@ -64,7 +64,7 @@ from graphvision.execution.executors import (
 )
 from graphvision.execution.inputs import freeze_value, value_bytes
 from graphvision.execution.limits import current_limits, start_on_own_thread
-from graphvision.execution.plan import plan_steps
+from graphvision.execution.plan import chain_keys, plan_steps
 from graphvision.execution.record import NodeRecord, RunHooks, RunRecord, RunResult
 from graphvision.values.scalars import _ScalarPort
 
@@ -137,28 +137,8 @@ class RunState:
             self.keys[(name, "")] = content_key(self.compiled.input_types[name], value)
 
     def key_steps(self, names: list[str]) -> None:
-        """Chain the output keys of the steps ``names`` from the graph inputs' keys (those of
-        the last run of the same steps on inputs of the same keys are taken as they are)."""
-        given = tuple(sorted((n, k) for (n, p), k in self.keys.items() if not p))
-        memo = self.compiled.last_keys
-        found = memo.get(given)
-        if found is not None and found[0] == names:
-            self.keys.update(found[1])
-            return
-        made = self._chain_keys(names)
-        memo.clear()  # the last run's only: a graph run on many inputs keeps one
-        memo[given] = (list(names), made)
-        self.keys.update(made)
-
-    def _chain_keys(self, names: list[str]) -> dict[tuple[str, str], str]:
-        keys, steps = dict(self.keys), self.compiled.steps
-        for name in names:
-            step = steps[name]
-            inputs = {port: keys[source] for port, source in step.inputs.items()}
-            made = output_keys(step.fingerprint, inputs, step.outputs)
-            for port, key in zip(step.outputs, made, strict=True):
-                keys[(name, port)] = key
-        return {source: key for source, key in keys.items() if source[0] in steps}
+        """Chain the output keys of the steps ``names`` (:func:`chain_keys`)."""
+        self.keys.update(chain_keys(self.compiled, self.keys, names))
 
     def plan(self, needed: list[str], wanted: list[tuple[str, str]]) -> list[str]:
         """Apply :func:`plan_steps`: record the loaded values as cached nodes (and tell the
