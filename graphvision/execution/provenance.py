@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import os
 import platform
+import stat
 import subprocess
 from collections.abc import Collection, Mapping
 from datetime import UTC, datetime
@@ -41,13 +43,47 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
+_HASHED: dict[tuple[Any, ...], str] = {}
+"""SHA-256 of the files and plugin folders hashed in this process, by the stamp (path, device,
+inode, size, modification time in ns) of each file: a run hashes again only what changed
+since (the pipeline file and each local plugin were read whole on every run)."""
+
+
+def _stamp(path: str, info: os.stat_result) -> tuple[Any, ...]:
+    return (path, info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns)
+
+
+def _known_sha256(path: str, info: os.stat_result) -> str:
+    """:func:`file_sha256` of ``path`` (whose ``os.stat`` is ``info``), kept while its stamp
+    is unchanged."""
+    stamp = _stamp(path, info)
+    known = _HASHED.get(stamp)
+    if known is None:
+        known = file_sha256(Path(path))
+        _remember(stamp, known)
+    return known
+
+
+def _remember(stamp: tuple[Any, ...], digest: str) -> None:
+    if len(_HASHED) > 256:
+        _HASHED.clear()
+    _HASHED[stamp] = digest
+
+
 def _folder_sha256(folder: Path) -> str:
-    """SHA-256 over the names and bytes of the ``.py`` files under ``folder`` (a plugin package)."""
-    digest = hashlib.sha256()
-    for path in sorted(folder.rglob("*.py")):
-        digest.update(str(path.relative_to(folder)).encode() + b"\0")
-        digest.update(path.read_bytes())
-    return digest.hexdigest()
+    """SHA-256 over the names and bytes of the ``.py`` files under ``folder`` (a plugin package),
+    kept while every file's stamp is unchanged (a file added or removed changes the list)."""
+    files = sorted(folder.rglob("*.py"))
+    stamp = tuple(_stamp(str(path), path.stat()) for path in files)
+    known = _HASHED.get(stamp)
+    if known is None:
+        digest = hashlib.sha256()
+        for path in files:
+            digest.update(str(path.relative_to(folder)).encode() + b"\0")
+            digest.update(path.read_bytes())
+        known = digest.hexdigest()
+        _remember(stamp, known)
+    return known
 
 
 def git_state(file: Path) -> tuple[str, bool]:
@@ -89,7 +125,11 @@ def _git_files(folder: Path) -> list[Path] | None:
     elsewhere)."""
     for parent in (folder, *folder.parents):
         git_dir = parent / ".git"
-        if git_dir.is_dir():
+        try:  # one system call per folder: a directory, a file, or nothing
+            mode = os.stat(git_dir).st_mode
+        except OSError:
+            continue
+        if stat.S_ISDIR(mode):
             files = [git_dir / "HEAD", git_dir / "index"]
             try:
                 head = (git_dir / "HEAD").read_text().strip()
@@ -98,7 +138,7 @@ def _git_files(folder: Path) -> list[Path] | None:
             if head.startswith("ref: "):
                 files.append(git_dir / head[5:])
             return files
-        if git_dir.is_file():
+        if stat.S_ISREG(mode):
             return None
     return []
 
@@ -156,23 +196,40 @@ def package_versions(registry: Registry, ops: Collection[str] | None = None) -> 
     for name, plugin in sorted(registry.plugins.items()):
         if used is not None and not (plugin.sources or used.intersection(plugin.nodes)):
             continue
-        origin = Path(plugin.origin)
-        if origin.is_file():
-            versions[f"plugin {name}"] = f"sha256 {file_sha256(origin)}"
-        elif origin.is_dir():
-            versions[f"plugin {name}"] = f"sha256 {_folder_sha256(origin)}"
-        else:
-            versions[f"plugin {name}"] = _distribution_of(plugin.origin) or "unknown"
+        versions[f"plugin {name}"] = _plugin_version(plugin.origin)
     return versions
+
+
+def _plugin_version(origin: str) -> str:
+    """A local plugin file's or folder's SHA-256, else the version of the distribution of the
+    module ``origin`` names."""
+    try:
+        info = os.stat(origin)
+    except (OSError, ValueError):  # a module's name, not a path
+        info = None
+    if info is not None and stat.S_ISREG(info.st_mode):
+        return f"sha256 {_known_sha256(origin, info)}"
+    if info is not None and stat.S_ISDIR(info.st_mode):
+        return f"sha256 {_folder_sha256(Path(origin))}"
+    return _distribution_of(origin) or "unknown"
+
+
+def _file_stat(path: str) -> os.stat_result | None:
+    """``os.stat(path)`` if it is a file, else None."""
+    try:
+        info = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    return info if stat.S_ISREG(info.st_mode) else None
 
 
 def _describe_input(given: Any, key: str) -> dict[str, str]:
     """What was given for an input, a file's path and SHA-256 if it is one, its content key."""
     if isinstance(given, str):
         entry = {"given": given, "key": key}
-        path = Path(given)
-        if path.is_file():
-            entry |= {"path": str(path.resolve()), "sha256": file_sha256(path)}
+        info = _file_stat(given)
+        if info is not None:
+            entry |= {"path": str(Path(given).resolve()), "sha256": _known_sha256(given, info)}
         return entry
     shape = getattr(given, "shape", None)
     dtype = getattr(given, "dtype", None)
@@ -191,10 +248,11 @@ def describe_run(
     """Fill ``record``'s provenance fields (each node's record holds its parameters and
     cache keys from the start)."""
     record.date = datetime.now(UTC).isoformat(timespec="seconds")
-    source = Path(compiled.graph.source) if compiled.graph.source else None
-    if source is not None and source.is_file():
+    info = _file_stat(compiled.graph.source) if compiled.graph.source else None
+    if info is not None:
+        source = Path(compiled.graph.source)
         record.pipeline_file = str(source.resolve())
-        record.pipeline_sha256 = file_sha256(source)
+        record.pipeline_sha256 = _known_sha256(compiled.graph.source, info)
         record.git_commit, record.git_dirty = git_state(source)
     record.inputs = {
         name: _describe_input(value, keys.get((name, ""), "")) for name, value in given.items()

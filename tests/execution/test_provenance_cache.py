@@ -1,0 +1,77 @@
+"""A run's provenance hashes each file once while it is unchanged (pipeline file, input files,
+local plugin files and folders), and again as soon as it changes."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+
+import graphvision as gv
+from graphvision.execution import provenance
+
+PLUGIN = '''
+from graphvision import Image, node
+
+@node("cachedprov.brighter")
+def brighter(image: Image, *, amount: float = 0.1) -> Image:
+    """The image plus ``amount``, clipped to [0, 1]."""
+    return (image + amount).clip(0, 1)
+'''
+
+
+def _pipeline(folder: Path) -> Path:
+    path = folder / "p.yaml"
+    path.write_text(
+        "version: 1\nname: p\ninputs:\n  image: {type: Image}\n"
+        "nodes:\n  b: {op: cachedprov.brighter, in: {image: image}}\noutputs:\n  out: b\n"
+    )
+    return path
+
+
+def _counting_reads(monkeypatch) -> list[str]:
+    read: list[str] = []
+    original = provenance.file_sha256
+
+    def counted(path: Path) -> str:
+        read.append(Path(path).name)
+        return original(path)
+
+    monkeypatch.setattr(provenance, "file_sha256", counted)
+    return read
+
+
+def test_unchanged_files_are_hashed_once_and_again_after_an_edit(tmp_path, monkeypatch):
+    plugin = tmp_path / "cachedprov.py"
+    plugin.write_text(PLUGIN)
+    registry = gv.discover([plugin], entry_points=False)
+    pipeline = _pipeline(tmp_path)
+    image = np.random.default_rng(0).random((6, 5)).astype(np.float32)
+    read = _counting_reads(monkeypatch)
+    first = gv.run(gv.load_pipeline(pipeline), registry, inputs={"image": image}).record
+    second = gv.run(gv.load_pipeline(pipeline), registry, inputs={"image": image}).record
+    assert sorted(read) == ["cachedprov.py", "p.yaml"]  # the second run read neither
+    assert second.pipeline_sha256 == first.pipeline_sha256
+    plugin_key = f"plugin {plugin}"  # a plugin loaded from a path is named by it
+    assert second.versions[plugin_key] == first.versions[plugin_key]
+    assert first.versions[plugin_key] == f"sha256 {hashlib.sha256(PLUGIN.encode()).hexdigest()}"
+    pipeline.write_text(pipeline.read_text() + "# edited\n")  # another size: another stamp
+    third = gv.run(gv.load_pipeline(pipeline), registry, inputs={"image": image}).record
+    assert read.count("p.yaml") == 2
+    assert third.pipeline_sha256 == hashlib.sha256(pipeline.read_bytes()).hexdigest()
+    assert third.pipeline_sha256 != first.pipeline_sha256
+
+
+def test_a_local_plugin_folder_is_hashed_again_when_a_file_is_added(tmp_path):
+    folder = tmp_path / "pkg"
+    folder.mkdir()
+    (folder / "__init__.py").write_text("A = 1\n")
+    before = provenance._plugin_version(str(folder))
+    assert provenance._plugin_version(str(folder)) == before
+    (folder / "more.py").write_text("B = 2\n")
+    after = provenance._plugin_version(str(folder))
+    digest = hashlib.sha256()
+    for name in ("__init__.py", "more.py"):
+        digest.update(name.encode() + b"\0" + (folder / name).read_bytes())
+    assert after == f"sha256 {digest.hexdigest()}" != before
