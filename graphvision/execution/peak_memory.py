@@ -28,6 +28,7 @@ counted (scikit-image's samples are small).
 from __future__ import annotations
 
 import os
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -152,7 +153,7 @@ def check_peak_memory(
     InputError
         Naming the estimate, what it comes from, what is allowed and what to do.
     """
-    estimate = estimate_peak(compiled, schedule, values, running)
+    estimate = _known_estimate(compiled, schedule, values, running)
     allowed, where = memory_allowed(max_memory)
     if estimate is None or allowed is None or estimate.peak <= allowed:
         return estimate
@@ -164,6 +165,32 @@ def check_peak_memory(
         f"{estimate.running} node(s) running), and {_gib(allowed)} is {where}. Use a "
         "smaller input, fewer --workers, or --max-memory SIZE (max_memory= in Python)"
     )
+
+
+_ESTIMATES: dict[tuple[Any, ...], tuple[Any, Any, Estimate | None]] = {}
+"""The estimates of the last runs, by graph, schedule, the array inputs' shapes and dtypes and
+the nodes running at once (all it depends on): the runs of one compiled graph on inputs of
+one size (a batch, a sweep, a script calling ``run`` in a loop) play the run through once.
+The memory allowed is read for every run."""
+
+
+def _known_estimate(
+    compiled: CompiledGraph, schedule: Schedule, values: dict[str, Any], running: int
+) -> Estimate | None:
+    """:func:`estimate_peak`, kept for runs of the same graph and schedule objects (held
+    weakly: a key whose objects are gone never matches) on arrays of the same shapes."""
+    shapes = tuple(
+        (n, v.shape, v.dtype.str) for n, v in values.items() if isinstance(v, np.ndarray)
+    )
+    key = (id(compiled), id(schedule), shapes, running)
+    known = _ESTIMATES.get(key)
+    if known is not None and known[0]() is compiled and known[1]() is schedule:
+        return known[2]
+    estimate = estimate_peak(compiled, schedule, values, running)
+    if len(_ESTIMATES) > 32:
+        _ESTIMATES.clear()
+    _ESTIMATES[key] = (weakref.ref(compiled), weakref.ref(schedule), estimate)
+    return estimate
 
 
 def _gib(count: int) -> str:

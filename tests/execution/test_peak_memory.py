@@ -91,3 +91,30 @@ def test_a_small_allowance_is_named_in_a_unit_that_shows_it(allowed, shown):
     graph = gv.load_pipeline(PIPELINES / "edges.yaml")
     with pytest.raises(gv.InputError, match=shown):
         gv.run(graph, inputs={"image": _image((30, 40, 3))}, max_memory=allowed, cache=None)
+
+
+def test_a_compiled_graph_run_again_is_estimated_again_for_larger_inputs(monkeypatch):
+    """The estimate is kept per graph and input shapes: a second run on the same shapes plays
+    the run once, and a larger input on the same compiled graph is still refused."""
+    from graphvision.execution import peak_memory
+
+    compiled = gv.compile_graph(gv.load_pipeline(PIPELINES / "edges.yaml"), REGISTRY)
+    played: list[int] = []
+    original = peak_memory.estimate_peak
+
+    def counted(*args):
+        played.append(1)
+        return original(*args)
+
+    monkeypatch.setattr(peak_memory, "estimate_peak", counted)
+    small = {"image": _image((24, 32, 3))}
+    for _ in range(2):
+        gv.run(compiled, REGISTRY, inputs=small, executor="sync", max_memory=2**40)
+    assert len(played) == 1
+    fits = _estimate("edges", small)
+    with pytest.raises(gv.InputError, match="this run cannot fit: it must hold at least"):
+        gv.run(
+            compiled, REGISTRY, inputs={"image": _image((48, 64, 3))}, executor="sync",
+            max_memory=fits + 1,
+        )  # fmt: skip
+    assert len(played) == 2
