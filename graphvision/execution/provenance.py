@@ -95,10 +95,10 @@ def git_state(file: Path) -> tuple[str, bool]:
     modification times), so a batch of many runs of one pipeline asks once.
     """
     file = file.resolve()
-    watched = _git_files(file.parent)
+    watched = _git_files(str(file.parent))
     if watched is None:  # a worktree or a submodule: ask git every time
         return _ask_git(file)
-    stamp = (file, _stat(file), *(_stat(p) for p in watched))
+    stamp = (file, _stat(str(file)), *(_stat(p) for p in watched))
     known = _GIT_STATES.get(stamp)
     if known is None:
         known = _ask_git(file)
@@ -111,36 +111,60 @@ def git_state(file: Path) -> tuple[str, bool]:
 _GIT_STATES: dict[tuple[Any, ...], tuple[str, bool]] = {}
 
 
-def _stat(path: Path) -> tuple[int, int]:
+def _stat(path: str) -> tuple[int, int]:
     try:
-        info = path.stat()
+        info = os.stat(path)
     except OSError:
         return (0, 0)
     return (info.st_mtime_ns, info.st_size)
 
 
-def _git_files(folder: Path) -> list[Path] | None:
+def _git_files(folder: str) -> list[str] | None:
     """``HEAD``, the checked-out branch's ref and the index of the repository above
-    ``folder`` ([] outside a repository; None when ``.git`` is a file, which points
-    elsewhere)."""
-    for parent in (folder, *folder.parents):
-        git_dir = parent / ".git"
-        try:  # one system call per folder: a directory, a file, or nothing
+    ``folder`` (absolute; [] outside a repository; None when ``.git`` is a file, which
+    points elsewhere). One system call per folder looked at; ``HEAD`` is read again only
+    when its stamp changed."""
+    parent = folder
+    while True:
+        git_dir = os.path.join(parent, ".git")
+        try:
             mode = os.stat(git_dir).st_mode
         except OSError:
-            continue
+            mode = 0
         if stat.S_ISDIR(mode):
-            files = [git_dir / "HEAD", git_dir / "index"]
-            try:
-                head = (git_dir / "HEAD").read_text().strip()
-            except OSError:
-                return files
+            files = [os.path.join(git_dir, "HEAD"), os.path.join(git_dir, "index")]
+            head = _head_of(files[0])
             if head.startswith("ref: "):
-                files.append(git_dir / head[5:])
+                files.append(os.path.join(git_dir, head[5:]))
             return files
         if stat.S_ISREG(mode):
             return None
-    return []
+        parent, child = os.path.dirname(parent), parent
+        if parent == child:
+            return []
+
+
+_HEADS: dict[tuple[Any, ...], str] = {}
+
+
+def _head_of(path: str) -> str:
+    """The text of a repository's ``HEAD`` ("" when unreadable), kept while its stamp holds."""
+    try:
+        info = os.stat(path)
+    except OSError:
+        return ""
+    stamp = _stamp(path, info)
+    known = _HEADS.get(stamp)
+    if known is None:
+        try:
+            with open(path, encoding="utf-8") as handle:
+                known = handle.read().strip()
+        except (OSError, UnicodeDecodeError):
+            return ""
+        if len(_HEADS) > 64:
+            _HEADS.clear()
+        _HEADS[stamp] = known
+    return known
 
 
 def _ask_git(file: Path) -> tuple[str, bool]:

@@ -75,3 +75,28 @@ def test_a_local_plugin_folder_is_hashed_again_when_a_file_is_added(tmp_path):
     for name in ("__init__.py", "more.py"):
         digest.update(name.encode() + b"\0" + (folder / name).read_bytes())
     assert after == f"sha256 {digest.hexdigest()}" != before
+
+
+def test_the_commit_follows_a_new_branch_and_a_new_commit(tmp_path):
+    """``HEAD`` is read again when it changes (another branch checked out), and the branch's
+    ref is watched (a new commit on it)."""
+    import subprocess
+
+    (tmp_path / "p.yaml").write_text("version: 1\n")
+    git = ["git", "-C", str(tmp_path), "-c", "user.name=t", "-c", "user.email=t@t"]
+
+    def commit(message: str) -> str:
+        subprocess.run([*git, "commit", "-q", "--allow-empty", "-m", message], check=True)
+        return subprocess.run(
+            [*git, "rev-parse", "HEAD"], capture_output=True, text=True, check=True
+        ).stdout.strip()
+
+    subprocess.run([*git, "init", "-q"], check=True)
+    subprocess.run([*git, "add", "p.yaml"], check=True)
+    first = commit("first")
+    assert provenance.git_state(tmp_path / "p.yaml") == (first, False)
+    subprocess.run([*git, "checkout", "-q", "-b", "other"], check=True)
+    second = commit("second")
+    assert provenance.git_state(tmp_path / "p.yaml") == (second, False)
+    third = commit("third")
+    assert provenance.git_state(tmp_path / "p.yaml") == (third, False)
