@@ -19,8 +19,8 @@ the OpenCV backend, and the engine's cost on top of OpenCV against a plain scrip
    (the issue's bar: at most 10 %). Where it goes is measured on 15 more runs of the
    engine, per run: the BLAS limit a run holds (threadpoolctl, set and lifted in a
    helper thread: :mod:`graphvision.execution.blas`), accepting the nodes' outputs
-   (validated, then frozen: copied read-only, :func:`graphvision.execution.inputs.
-   freeze_value`), the run's provenance
+   (validated, then frozen: copied read-only,
+   :func:`graphvision.execution.inputs.freeze_value`), the run's provenance
    (:func:`graphvision.execution.provenance.describe_run`) and the peak-memory check
    (:func:`graphvision.execution.peak_memory.check_peak_memory`).
 
