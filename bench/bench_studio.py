@@ -83,6 +83,9 @@ def main() -> list[str]:
                 found["server"] = began - found["sent"]  # the same clock: this machine's
                 found["compute"] = ended - began
                 found["computed"] = sorted(computed)
+                for node in ("fit", "error", "drawing"):  # when each ended, what its op took
+                    found[f"{node} ended"] = studio_run.nodes[node]["ended"] * 1e3 - began
+                    found[f"{node} op"] = studio_run.nodes[node]["seconds"] * 1e3
                 rows.append(found)
             browser.close()
     finally:
@@ -100,7 +103,8 @@ def _table(rows: list[dict]) -> list[str]:
         r["paint"] = max(0.0, r["total"] - r["server"] - r["compute"] - r["png"])
     lines = [
         f"{len(rows)} changes of fit.threshold on homography.yaml; recomputed each time: "
-        f"{', '.join(rows[-1]['computed'])}",
+        f"{', '.join(rows[-1]['computed'])}; load average (1 min) at the end: "
+        f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores",
         "",
         "| part | median ms | p90 ms |",
         "| --- | ---: | ---: |",
@@ -108,6 +112,11 @@ def _table(rows: list[dict]) -> list[str]:
     for key in ("server", "compute", "encode", "transfer", "paint", "total", "made"):
         median, p90 = stats(key)
         lines.append(f"| {key} | {median:.1f} | {p90:.1f} |")
+    lines += ["", "compute, by node (from the run's start; the op's own time):", ""]
+    lines += ["| node | ended median ms | op median ms |", "| --- | ---: | ---: |"]
+    for node in ("fit", "error", "drawing"):
+        ended, took = stats(f"{node} ended")[0], stats(f"{node} op")[0]
+        lines.append(f"| {node} | {ended:.1f} | {took:.1f} |")
     return lines
 
 
