@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import multiprocessing
+import os
 import threading
 import urllib.error
 import urllib.request
@@ -21,7 +22,7 @@ from graphvision.studio.payload import rgba_of, shrunk
 from graphvision.studio.pictures import Descriptions, Pictures
 from graphvision.studio.server import studio
 from graphvision.studio.session import Session
-from graphvision.studio.workers import receive, send
+from graphvision.studio.transport import receive, send
 
 TOY = Path(__file__).parents[1] / "fixtures" / "toy.py"
 
@@ -142,8 +143,14 @@ def test_values_cross_the_pipe_unchanged() -> None:
     assert got["picture"].dtype == np.float32 and np.array_equal(got["columns"], sent["columns"])
 
 
-@pytest.mark.parametrize("duplex", [True, False])  # a socket pair: shared memory; a pipe: inline
-def test_large_values_cross_the_pipe_unchanged(duplex: bool) -> None:
+@pytest.mark.parametrize(
+    ("duplex", "memory_files"), [(True, True), (False, True), (True, False)]
+)  # a socket pair: shared memory; a pipe, or no memfd_create (not Linux): inline
+def test_large_values_cross_the_pipe_unchanged(
+    duplex: bool, memory_files: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    if not memory_files:
+        monkeypatch.delattr(os, "memfd_create", raising=False)
     reader, writer = multiprocessing.Pipe(duplex)
     big = np.random.default_rng(0).random((256, 512, 3)).astype(np.float32)  # 1.5 MB: shared
     sent = {"big": big, "small": np.arange(5.0), "again": big[::2]}
