@@ -1,8 +1,10 @@
-"""Shared fixtures: registries with the built-in and toy plugins, graphs, caches."""
+"""Shared fixtures: registries with the built-in and toy plugins, graphs, caches, and a
+real browser (Debian's Chromium driven by Playwright; nothing downloads one)."""
 
 from __future__ import annotations
 
 import os
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -13,6 +15,22 @@ import graphvision as gv
 FIXTURES = Path(__file__).parent / "fixtures"
 TOY = FIXTURES / "toy.py"
 PIPELINES = Path(__file__).parent.parent / "pipelines"
+CHROMIUM = next(
+    (shutil.which(name) for name in ("chromium", "chromium-browser") if shutil.which(name)), None
+)
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[object]:
+    """The installed Chromium, launched once per test module; the test is skipped, with
+    the reason, when Playwright or Chromium is missing (CI installs both)."""
+    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+    if CHROMIUM is None:
+        pytest.skip("no Chromium installed (CI installs one)")
+    with sync_api.sync_playwright() as playwright:
+        launched = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        yield launched
+        launched.close()
 
 
 @pytest.fixture(scope="session")

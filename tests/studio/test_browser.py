@@ -4,33 +4,19 @@ a browser): tuning coins.yaml, the graph of every shipped pipeline, the token.""
 from __future__ import annotations
 
 import os
-import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 pytest.importorskip("starlette")
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 
-from graphvision.studio.server import StudioServer, studio  # noqa: E402
+from graphvision.studio.server import StudioServer, studio
 
 PIPELINES = Path(__file__).parents[2] / "pipelines"
-BROWSER = next(
-    (shutil.which(name) for name in ("chromium", "chromium-browser") if shutil.which(name)), None
-)
-pytestmark = pytest.mark.skipif(BROWSER is None, reason="no Chromium installed (CI installs one)")
 # The README's picture, written again when GRAPHVISION_UPDATE_SCREENSHOT=1 (else to a
 # temporary folder: a test run leaves the work tree as it was).
 SCREENSHOT = Path(__file__).parents[2] / "docs" / "assets" / "studio.png"
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[object]:
-    with sync_api.sync_playwright() as playwright:
-        launched = playwright.chromium.launch(executable_path=BROWSER, args=["--no-sandbox"])
-        yield launched
-        launched.close()
 
 
 @pytest.fixture

@@ -7,10 +7,8 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 import signal
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import imageio.v3 as iio
@@ -18,25 +16,12 @@ import numpy as np
 import pytest
 
 pytest.importorskip("starlette")
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 
-import graphvision as gv  # noqa: E402
-from graphvision.studio.server import studio  # noqa: E402
+import graphvision as gv
+from graphvision.studio.server import studio
 
 PLUGIN = Path(__file__).parent / "stopping_plugin.py"
 TOY = Path(__file__).parents[1] / "fixtures" / "toy.py"
-BROWSER = next(
-    (shutil.which(name) for name in ("chromium", "chromium-browser") if shutil.which(name)), None
-)
-pytestmark = pytest.mark.skipif(BROWSER is None, reason="no Chromium installed (CI installs one)")
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[object]:
-    with sync_api.sync_playwright() as playwright:
-        launched = playwright.chromium.launch(executable_path=BROWSER, args=["--no-sandbox"])
-        yield launched
-        launched.close()
 
 
 @pytest.fixture(scope="module")

@@ -6,68 +6,59 @@ a picture shown twice is fetched once, on the canvas it was drawn on before."""
 
 from __future__ import annotations
 
-import shutil
 from collections import Counter
 from pathlib import Path
 
 import pytest
 
 pytest.importorskip("starlette")
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 
-from graphvision.studio.server import studio  # noqa: E402
+from graphvision.studio.server import studio
 
 PIPELINES = Path(__file__).parents[2] / "pipelines"
-BROWSER = next(
-    (shutil.which(name) for name in ("chromium", "chromium-browser") if shutil.which(name)), None
-)
-pytestmark = pytest.mark.skipif(BROWSER is None, reason="no Chromium installed (CI installs one)")
 
 
 _CHANGE = """fetch("api/change", {method: "POST", headers: {"Content-Type": "application/json"},
   body: JSON.stringify({overrides: {"binary.k": -0.3}})})"""
 
 
-def test_a_streamed_inspector_is_kept_and_its_value_asked_for_once() -> None:
+def test_a_streamed_inspector_is_kept_and_its_value_asked_for_once(browser) -> None:
     server = studio(PIPELINES / "coins.yaml")
     try:
-        with sync_api.sync_playwright() as playwright:
-            browser = playwright.chromium.launch(executable_path=BROWSER, args=["--no-sandbox"])
-            page = browser.new_page(viewport={"width": 1500, "height": 950})
-            errors: list[str] = []
-            page.on("pageerror", lambda error: errors.append(str(error)))
-            asked: Counter[str] = Counter()
-            page.on("request", lambda r: asked.update([r.url.split("/api/", 1)[-1]]))
-            page.goto(server.url)
-            page.wait_for_selector("body[data-painted-run='1']", timeout=120_000)
-            page.click("[data-node=overlay]")  # an output too: shown twice
-            panel = "[data-inspect=overlay]"
-            page.wait_for_selector(f"{panel} [data-port='overlay.out'] canvas")
-            page.evaluate(f"document.querySelector('{panel}').dataset.mark = 'kept'")
-            output = "[data-output=overlay] canvas"
-            page.evaluate(f"document.querySelector('{output}').dataset.mark = 'same'")
-            page.evaluate(_CHANGE)
-            page.wait_for_selector("body[data-painted-run='2']", timeout=120_000)
-            # coins computed in run 2: its cards were repainted as it finished (streamed)...
-            for card in (f"{panel} [data-port='overlay.out']", "[data-output=overlay]"):
-                assert page.get_attribute(card, "data-streamed") == "2"
-            # ...and the run's end updated the panel's status and keys, nothing else
-            assert page.get_attribute(panel, "data-mark") == "kept"
-            assert page.inner_text(f"{panel} .gv-meta").startswith("status computed")
-            keys = server.session.runs[-1].nodes["overlay"]["keys"]
-            assert page.inner_text(f"{panel} .gv-key") == "\n".join(
-                f"{p}: {k}" for p, k in keys.items()
-            )
-            assert page.inner_text(f"{panel} td[data-shape=out]") == "303×384×3"
-            # the overlay's description, asked for in run 1, rode its node's event in run 2;
-            # its picture was asked for once per step, shared by the output and the inspector
-            assert asked["value/2/overlay/out"] == 0
-            steps = [k for k in asked if k.startswith("rgba/2/overlay/out?")]
-            assert steps and all(asked[k] == 1 for k in steps), asked
-            # the same picture's new value was drawn on the same canvas (no card made again)
-            assert page.get_attribute(output, "data-mark") == "same"
-            assert page.get_attribute(output, "data-value") == "2/overlay/out"
-            assert errors == []
-            browser.close()
+        page = browser.new_page(viewport={"width": 1500, "height": 950})
+        errors: list[str] = []
+        page.on("pageerror", lambda error: errors.append(str(error)))
+        asked: Counter[str] = Counter()
+        page.on("request", lambda r: asked.update([r.url.split("/api/", 1)[-1]]))
+        page.goto(server.url)
+        page.wait_for_selector("body[data-painted-run='1']", timeout=120_000)
+        page.click("[data-node=overlay]")  # an output too: shown twice
+        panel = "[data-inspect=overlay]"
+        page.wait_for_selector(f"{panel} [data-port='overlay.out'] canvas")
+        page.evaluate(f"document.querySelector('{panel}').dataset.mark = 'kept'")
+        output = "[data-output=overlay] canvas"
+        page.evaluate(f"document.querySelector('{output}').dataset.mark = 'same'")
+        page.evaluate(_CHANGE)
+        page.wait_for_selector("body[data-painted-run='2']", timeout=120_000)
+        # coins computed in run 2: its cards were repainted as it finished (streamed)...
+        for card in (f"{panel} [data-port='overlay.out']", "[data-output=overlay]"):
+            assert page.get_attribute(card, "data-streamed") == "2"
+        # ...and the run's end updated the panel's status and keys, nothing else
+        assert page.get_attribute(panel, "data-mark") == "kept"
+        assert page.inner_text(f"{panel} .gv-meta").startswith("status computed")
+        keys = server.session.runs[-1].nodes["overlay"]["keys"]
+        assert page.inner_text(f"{panel} .gv-key") == "\n".join(
+            f"{p}: {k}" for p, k in keys.items()
+        )
+        assert page.inner_text(f"{panel} td[data-shape=out]") == "303×384×3"
+        # the overlay's description, asked for in run 1, rode its node's event in run 2;
+        # its picture was asked for once per step, shared by the output and the inspector
+        assert asked["value/2/overlay/out"] == 0
+        steps = [k for k in asked if k.startswith("rgba/2/overlay/out?")]
+        assert steps and all(asked[k] == 1 for k in steps), asked
+        # the same picture's new value was drawn on the same canvas (no card made again)
+        assert page.get_attribute(output, "data-mark") == "same"
+        assert page.get_attribute(output, "data-value") == "2/overlay/out"
+        assert errors == []
     finally:
         server.stop()

@@ -8,40 +8,31 @@ and screenshotted (to a temporary folder; GRAPHVISION_VIEWER_SHOTS=DIR keeps the
 from __future__ import annotations
 
 import os
-import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 pytest.importorskip("starlette")
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 
-from graphvision.studio.server import StudioServer, studio  # noqa: E402
+from graphvision.studio.server import StudioServer, studio
 
 PIPELINES = Path(__file__).parents[2] / "pipelines"
-BROWSER = next(
-    (shutil.which(name) for name in ("chromium", "chromium-browser") if shutil.which(name)), None
-)
-pytestmark = pytest.mark.skipif(BROWSER is None, reason="no Chromium installed (CI installs one)")
 
 
 @pytest.fixture(scope="module")
-def page(tmp_path_factory) -> Iterator[object]:
+def page(browser, tmp_path_factory) -> Iterator[object]:
     server: StudioServer = studio(PIPELINES / "coins.yaml", run=False)
     try:
-        with sync_api.sync_playwright() as playwright:
-            browser = playwright.chromium.launch(executable_path=BROWSER, args=["--no-sandbox"])
-            opened = browser.new_page(viewport={"width": 900, "height": 900})
-            errors: list[str] = []
-            opened.on("pageerror", lambda error: errors.append(str(error)))
-            opened.goto(server.url)
-            opened.wait_for_selector("body[data-ready='1']", timeout=60_000)
-            opened.add_script_tag(url=f"http://127.0.0.1:{server.port}/static/viewers.js")
-            opened.add_script_tag(content=_SETUP)
-            yield opened
-            assert errors == []
-            browser.close()
+        opened = browser.new_page(viewport={"width": 900, "height": 900})
+        errors: list[str] = []
+        opened.on("pageerror", lambda error: errors.append(str(error)))
+        opened.goto(server.url)
+        opened.wait_for_selector("body[data-ready='1']", timeout=60_000)
+        opened.add_script_tag(url=f"http://127.0.0.1:{server.port}/static/viewers.js")
+        opened.add_script_tag(content=_SETUP)
+        yield opened
+        assert errors == []
     finally:
         server.stop()
 

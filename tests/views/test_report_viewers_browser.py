@@ -9,12 +9,9 @@ Checked from the canvas's pixels and the DOM; each wait has a deadline
 from __future__ import annotations
 
 import os
-import shutil
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from .report_values import (
     GRAY,
@@ -25,20 +22,7 @@ from .report_values import (
     stereo_page,
 )
 
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
-BROWSER = next(
-    (shutil.which(name) for name in ("chromium", "chromium-browser") if shutil.which(name)), None
-)
-pytestmark = pytest.mark.skipif(BROWSER is None, reason="no Chromium installed (CI installs one)")
 DEADLINE = 30_000  # ms
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[object]:
-    with sync_api.sync_playwright() as playwright:
-        launched = playwright.chromium.launch(executable_path=BROWSER, args=["--no-sandbox"])
-        yield launched
-        launched.close()
 
 
 def _open(browser, html: str, folder: Path) -> object:
