@@ -47,5 +47,5 @@ def cmd_studio(args: argparse.Namespace) -> int:
     session.start()
     if not args.no_browser:
         webbrowser.open(server.url)
-    server.server.run()
+    server.serve()
     return EXIT_OK

@@ -38,6 +38,11 @@ class StudioServer:
     token: str
     server: Any = field(repr=False, default=None)
     thread: threading.Thread | None = field(repr=False, default=None)
+    bound: socket.socket | None = field(repr=False, default=None)  # port 0's, held open
+
+    def serve(self) -> None:
+        """Serve until stopped (in this thread), on the socket bound for a free port."""
+        self.server.run(sockets=[self.bound] if self.bound is not None else None)
 
     @property
     def url(self) -> str:
@@ -70,20 +75,21 @@ def make_server(session: Session, host: str = "127.0.0.1", port: int = 0) -> Stu
     except ImportError as error:
         raise ImportError(f"{MISSING_EXTRA} ({error})") from None
     token = secrets.token_urlsafe(24)
-    if port == 0:
-        with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as probe:
-            probe.bind((host, 0))
-            port = probe.getsockname()[1]
+    bound = None
+    if port == 0:  # bound here and kept: a port probed and let go can be taken before use
+        bound = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET)
+        bound.bind((host, 0))
+        port = bound.getsockname()[1]
     config = uvicorn.Config(
         make_app(session, token), host=host, port=port, log_level="warning", lifespan="off",
         timeout_graceful_shutdown=1,
     )  # fmt: skip
-    return StudioServer(session, host, port, token, uvicorn.Server(config))
+    return StudioServer(session, host, port, token, uvicorn.Server(config), bound=bound)
 
 
 def serve_in_background(studio_server: StudioServer, timeout: float = 20.0) -> StudioServer:
     """Start serving in a daemon thread; return once the server accepts connections."""
-    thread = threading.Thread(target=studio_server.server.run, daemon=True, name="studio")
+    thread = threading.Thread(target=studio_server.serve, daemon=True, name="studio")
     thread.start()
     studio_server.thread = thread
     deadline = time.monotonic() + timeout

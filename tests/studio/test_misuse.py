@@ -81,3 +81,23 @@ def test_an_input_deleted_while_the_studio_runs(registry, tmp_path: Path) -> Non
     mended = session.start()
     session.wait()
     assert mended.status == "done"
+
+
+def test_the_free_port_is_held_from_the_moment_it_is_chosen(registry) -> None:
+    """A port probed and let go could be taken by another process before the server bound
+    it (two studios started at once failed with 'address already in use')."""
+    import socket
+
+    from graphvision.studio.server import make_server, serve_in_background
+
+    graph = gv.Graph("held")
+    graph.add("y", "toy.const", params={"value": 2.0})
+    graph.output("y", "y")
+    server = make_server(Session(graph, registry))
+    with socket.socket() as other, pytest.raises(OSError):
+        other.bind(("127.0.0.1", server.port))
+    serve_in_background(server)
+    try:
+        assert server.server.started
+    finally:
+        server.stop()
