@@ -15,7 +15,7 @@ from graphvision.errors import OutputFolderError, PipelineError, Problem, did_yo
 from graphvision.execution.sweep import SweepResult
 from graphvision.views.sweep_runs import run_page, run_page_name
 
-__all__ = ["check_sweep_folder", "sweep_html", "sweep_plot_svg", "write_sweep"]
+__all__ = ["check_sweep_folder", "nice_ticks", "sweep_html", "sweep_plot_svg", "write_sweep"]
 
 MANIFEST = "sweep.json"
 
@@ -85,10 +85,11 @@ def _chart(
         return height - pad - (y - y0) / (y1 - y0) * (height - 1.7 * pad)
 
     parts = _axes((key, output), (width, height, pad), [sx(position[v]) for v in levels], levels)
+    whole = all(float(y).is_integer() for y in ys)
     parts += [
         _line(pad - 3, sy(y), pad, sy(y))
-        + f'<text x="{pad - 5}" y="{sy(y) + 4:.1f}" text-anchor="end">{y:.3g}</text>'
-        for y in (y0 + (y1 - y0) * step / 4 for step in range(5))
+        + f'<text x="{pad - 5}" y="{sy(y) + 4:.1f}" text-anchor="end">{y:.4g}</text>'
+        for y in nice_ticks(y0, y1, whole=whole)
     ]
     groups: dict[tuple, list[tuple[float, float]]] = {}
     for x, y, group in points:
@@ -112,6 +113,26 @@ def _chart(
         y = height + _LEGEND_PITCH * _LEGEND_ROWS
         parts.append(f'<text x="12" y="{y:.0f}">and {len(groups) - _LEGEND_ROWS} more lines</text>')
     return "".join(parts)
+
+
+def nice_ticks(low: float, high: float, *, whole: bool = False, count: int = 5) -> list[float]:
+    """Round values from ``low`` to ``high``, as near ``count`` of them as round steps
+    allow (more when tied): steps of 1, 2 or 5 times a power of ten (Heckbert's "nice
+    numbers", Graphics Gems, 1990), and of at least 1 when the values are whole (a
+    count is never labelled 20.5)."""
+    if not high > low:
+        return [low]
+    power = 10.0 ** math.floor(math.log10((high - low) / count))
+    steps = [m * power * 10.0**p for p in (-1, 0, 1) for m in (1, 2, 5)]
+    steps = [step for step in steps if step >= 1 or not whole] or [1.0]
+    candidates = [_ticks_at(low, high, step) for step in steps]
+    return min(candidates, key=lambda ticks: (abs(len(ticks) - count), -len(ticks)))
+
+
+def _ticks_at(low: float, high: float, step: float) -> list[float]:
+    first = math.ceil(low / step - 1e-9)
+    last = math.floor(high / step + 1e-9)
+    return [float(f"{k * step:.12g}") for k in range(first, last + 1)]
 
 
 def _axes(

@@ -13,7 +13,7 @@ import pytest
 
 import graphvision as gv
 from graphvision.execution.sweep import sweep
-from graphvision.views.sweep_page import sweep_plot_svg, write_sweep
+from graphvision.views.sweep_page import nice_ticks, sweep_plot_svg, write_sweep
 
 PIPELINES = Path(__file__).parents[2] / "pipelines"
 SVG = "{http://www.w3.org/2000/svg}"
@@ -35,6 +35,31 @@ def test_each_chart_labels_its_axes_and_names_its_lines(line_sweep):
         assert legend == [f"{other}={value}" for value in GRID[other]]
         colours = [g.find(f"{SVG}line").get("stroke") for g in chart.findall(f"{SVG}g")]
         assert colours == [p.get("stroke") for p in chart.findall(f"{SVG}polyline")]
+
+
+def test_a_count_is_labelled_with_whole_numbers_only():
+    counts = gv.SweepResult(
+        keys=["smooth.sigma"],
+        outputs=["count"],
+        rows=[{"smooth.sigma": s, "count": c} for s, c in ((1.0, 20), (2.0, 21), (3.0, 22))],
+    )
+    root = ET.fromstring(sweep_plot_svg(counts, "count"))
+    labels = [t.text for t in root.iter(f"{SVG}text") if t.get("text-anchor") == "end"]
+    assert labels == ["20", "21", "22"]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_ticks_are_round_steps_inside_the_range(seed):
+    rng = np.random.default_rng(seed)
+    low = float(rng.uniform(-1e3, 1e3)) * 10.0 ** int(rng.integers(-6, 4))
+    high = low + float(rng.uniform(1e-3, 1e3)) * 10.0 ** int(rng.integers(-6, 4))
+    ticks = nice_ticks(low, high)
+    assert 3 <= len(ticks) <= 11
+    assert low - 1e-9 * abs(high - low) <= ticks[0] and ticks[-1] <= high + 1e-9 * abs(high - low)
+    step = ticks[1] - ticks[0]
+    mantissa = step / 10.0 ** np.floor(np.log10(step))
+    assert min(abs(mantissa - m) for m in (1, 2, 5, 10)) < 1e-6
+    assert np.allclose(np.diff(ticks), step, rtol=1e-6)
 
 
 def test_each_row_links_the_page_of_its_run(line_sweep, tmp_path):
