@@ -41,7 +41,8 @@ class FloatImagePort(ArrayPort):
         value = super().validate(value)
         if value.ndim == 3 and value.shape[2] != 3:
             raise _fail(cls, cls.expected, value)
-        if cls is FloatImagePort and not np.isfinite(value.min() + value.max()):
+        # Each end apart: their sum overflows float32 for finite values beyond 1.7e38.
+        if cls is FloatImagePort and not (np.isfinite(value.min()) and np.isfinite(value.max())):
             raise PortValueError(f"expected {cls.type_name()} with finite values, got NaN or inf")
         return value
 

@@ -40,6 +40,19 @@ def test_validation_messages(port, value, message):
         port.validate(value)
 
 
+@pytest.mark.parametrize("ends", [(3e38, 3e38), (-3e38, -3e38), (-3.4e38, 3.4e38)])
+def test_a_float_map_of_huge_finite_values_is_accepted(ends):
+    value = np.array([ends], np.float32)
+    assert gv.FloatImagePort.validate(value) is value
+
+
+@pytest.mark.parametrize("bad", [np.nan, -np.inf, np.inf])
+def test_a_float_map_with_one_bad_value_among_huge_ones_is_refused(bad):
+    value = np.array([[3e38, bad], [3e38, 1.0]], np.float32)
+    with pytest.raises(gv.PortValueError, match="finite values, got NaN or inf"):
+        gv.FloatImagePort.validate(value)
+
+
 def test_scalars_normalise():
     assert gv.FloatPort.validate(np.float32(0.5)) == 0.5 and isinstance(
         gv.FloatPort.validate(2), float
