@@ -37,7 +37,7 @@ from typing import Any
 
 from graphvision.execution.executors import WorkerDiedError
 from graphvision.execution.limits import ended_by_limit
-from graphvision.studio.transport import receive, send
+from graphvision.studio.transport import Channel
 
 __all__ = [
     "NodeStoppedError",
@@ -168,8 +168,8 @@ class WorkerPool:
             stdin=subprocess.DEVNULL,
         )
         theirs.close()
-        connection = Connection(mine.detach())
-        send(connection, (os.getpid(), sys.path, self.warm))
+        connection = Channel(Connection(mine.detach()))
+        connection.send((os.getpid(), sys.path, self.warm))
         worker = _Worker(process, connection)
         with self.lock:
             self.workers.append(worker)
@@ -218,14 +218,14 @@ class WorkerPool:
     def _run_on(self, worker: _Worker, task: _Task) -> bool:
         """Run ``task`` on ``worker`` and settle its future; False when the worker died."""
         try:
-            send(worker.connection, (task.fn, task.args))
+            worker.connection.send((task.fn, task.args))
         except (OSError, EOFError, ValueError):  # the worker died before it got the node
             return self._died(worker, task)
         except Exception as error:  # what the node was given could not travel
             task.future.set_exception(error)
             return True
         try:
-            failed, answer = receive(worker.connection)
+            failed, answer = worker.connection.receive()
         except (OSError, EOFError):
             return self._died(worker, task)
         except Exception as error:  # the result could not be read back
@@ -296,8 +296,8 @@ def serve() -> None:
     from graphvision.execution.blas import one_blas_thread_for_good
     from graphvision.execution.warnings import show_warning
 
-    connection = Connection(int(sys.argv[1]))
-    parent, path, warm = receive(connection)
+    connection = Channel(Connection(int(sys.argv[1])))
+    parent, path, warm = connection.receive()
     sys.path[:] = path  # plugins found where the studio found them
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the server's to handle
     warnings.showwarning = show_warning
@@ -308,7 +308,7 @@ def serve() -> None:
             ref.resolve()
     while True:
         try:
-            fn, args = receive(connection)
+            fn, args = connection.receive()
         except (EOFError, OSError):
             return
         try:
@@ -316,9 +316,9 @@ def serve() -> None:
         except BaseException as error:  # the parent fails the node with it
             answer = (True, error)
         try:
-            send(connection, answer)
+            connection.send(answer)
         except Exception as error:  # a result or an exception that cannot be pickled
-            send(connection, (True, RuntimeError(f"{type(error).__name__}: {error}")))
+            connection.send((True, RuntimeError(f"{type(error).__name__}: {error}")))
 
 
 def _watch_parent(parent: int) -> None:

@@ -22,7 +22,8 @@ from graphvision.studio.payload import rgba_of, shrunk
 from graphvision.studio.pictures import Descriptions, Pictures
 from graphvision.studio.server import studio
 from graphvision.studio.session import Session
-from graphvision.studio.transport import receive, send
+from graphvision.studio.transport import Channel
+from graphvision.values.ports import is_frozen
 
 TOY = Path(__file__).parents[1] / "fixtures" / "toy.py"
 
@@ -137,8 +138,8 @@ def test_values_cross_the_pipe_unchanged() -> None:
     mine, theirs = multiprocessing.Pipe()
     sent = {"picture": np.arange(12, dtype=np.float32).reshape(3, 4), "n": 3,
             "columns": np.asfortranarray(np.ones((2, 3)))}  # fmt: skip
-    send(mine, sent)
-    got = receive(theirs)
+    Channel(mine).send(sent)
+    got = Channel(theirs).receive()
     assert got["n"] == 3 and np.array_equal(got["picture"], sent["picture"])
     assert got["picture"].dtype == np.float32 and np.array_equal(got["columns"], sent["columns"])
 
@@ -154,9 +155,48 @@ def test_large_values_cross_the_pipe_unchanged(
     reader, writer = multiprocessing.Pipe(duplex)
     big = np.random.default_rng(0).random((256, 512, 3)).astype(np.float32)  # 1.5 MB: shared
     sent = {"big": big, "small": np.arange(5.0), "again": big[::2]}
-    sender = threading.Thread(target=send, args=(writer, sent))  # a pipe holds 64 kB
+    sender = threading.Thread(target=Channel(writer).send, args=(sent,))  # a pipe holds 64 kB
     sender.start()
-    got = receive(reader)
+    got = Channel(reader).receive()
     sender.join()
     assert np.array_equal(got["big"], big) and got["big"].dtype == np.float32
     assert np.array_equal(got["small"], np.arange(5.0)) and np.array_equal(got["again"], big[::2])
+
+
+def _exchange(size: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    return rng.random(size, dtype=np.float32), rng.random(size // 2, dtype=np.float32)
+
+
+def test_the_arena_is_reused_and_what_was_received_stays_as_it_came() -> None:
+    a, b = (Channel(end) for end in multiprocessing.Pipe(duplex=True))
+    first, second = _exchange(100_000, 1), _exchange(100_000, 2)  # 400 and 200 kB: shared
+    a.send(first)
+    got_first = b.receive()
+    arena = a.out
+    b.send("answer")  # the peer answers: the arena may be written again
+    assert a.receive() == "answer"
+    a.send(second)
+    got_second = b.receive()
+    assert arena is not None and a.out is arena  # the same memory file, not a new one
+    for got, sent in zip((*got_first, *got_second), (*first, *second), strict=True):
+        assert np.array_equal(got, sent)  # the first message's values were copied out
+        assert is_frozen(got)  # immutable and aligned as received: no copy to freeze them
+    a.close()
+    b.close()
+
+
+def test_a_message_sent_before_the_answer_does_not_write_over_the_last() -> None:
+    a, b = (Channel(end) for end in multiprocessing.Pipe(duplex=True))
+    first, second = _exchange(100_000, 3), _exchange(300_000, 4)  # the second grows it
+    a.send(first)
+    a.send(second)  # no answer in between: the first is still unread
+    got_first, got_second = b.receive(), b.receive()
+    for got, sent in zip((*got_first, *got_second), (*first, *second), strict=True):
+        assert np.array_equal(got, sent)
+    b.send("answer")
+    a.receive()
+    a.send(second)  # the arena grows to hold it
+    assert all(np.array_equal(g, s) for g, s in zip(b.receive(), second, strict=True))
+    a.close()
+    b.close()
