@@ -39,6 +39,7 @@ from graphvision.studio.workers import WorkerPool
 __all__ = ["KEPT_RUNS", "Session", "StudioRun", "Superseded"]
 
 KEPT_RUNS = 12  # runs whose values stay in memory (for the viewers and comparisons)
+_UNFINISHED = ("queued", "running")
 _PREFIX = "studio__"
 
 
@@ -107,6 +108,9 @@ class _Hooks(RunHooks):
 
     def __init__(self, session: Session, studio_run: StudioRun) -> None:
         self.session, self.run = session, studio_run
+        # node -> the nodes it reads that have not finished: it was handed to the workers
+        # ahead of them (it starts when they finish), and stays queued until then
+        self.ahead: dict[str, set[str]] = {}
 
     def _check(self) -> None:
         if self.run.stop:
@@ -120,6 +124,16 @@ class _Hooks(RunHooks):
 
     def node_started(self, *, name: str, op: str) -> None:
         self._check()
+        compiled, nodes = self.run.compiled, self.run.nodes
+        if compiled is not None:
+            sources = {source for source, _ in compiled.steps[name].inputs.values()}
+            unfinished = {s for s in sources if nodes.get(s, {}).get("status") in _UNFINISHED}
+            if unfinished:
+                self.ahead[name] = unfinished
+                return
+        self._running(name)
+
+    def _running(self, name: str) -> None:
         self.run.nodes[name] = {"status": "running", "since": time.time()}
         self.session.emit({"event": "node", "run": self.run.id, "node": name, "status": "running"})
 
@@ -145,6 +159,12 @@ class _Hooks(RunHooks):
             event["values"] = self.session.describer(self.run, name)
         self.session.emit(event)
         self._check()
+        if status == "computed":  # the nodes handed over ahead of it that now run
+            for waiting, unfinished in list(self.ahead.items()):
+                unfinished.discard(name)
+                if not unfinished:
+                    del self.ahead[waiting]
+                    self._running(waiting)
 
 
 class Session:

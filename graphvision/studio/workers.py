@@ -20,7 +20,6 @@ bits as there; each worker holds one BLAS thread (:mod:`graphvision.execution.bl
 
 from __future__ import annotations
 
-import contextlib
 import os
 import queue
 import signal
@@ -28,7 +27,7 @@ import socket
 import subprocess
 import sys
 import threading
-import time
+from collections import deque
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
@@ -44,10 +43,9 @@ __all__ = [
     "RunExecutor",
     "WorkerPool",
     "how_it_ended",
-    "serve",
 ]
 
-_MAIN = "from graphvision.studio.workers import serve; serve()"
+_MAIN = "from graphvision.studio.worker_main import serve; serve()"
 
 
 class NodeStoppedError(RuntimeError):
@@ -59,8 +57,21 @@ class _Task:
     run: int
     fn: Callable[..., Any]
     args: tuple[Any, ...]
-    future: Future = field(default_factory=Future)
+    future: Future = field(init=False)
     stopped: bool = False
+    waits: set[_Task] = field(default_factory=set)  # submitted ahead of these tasks' results
+    dependents: list[_Task] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.future = _TaskFuture(self)
+
+
+class _TaskFuture(Future):
+    """A node's future; its ``task`` stands for its result in a later node's arguments."""
+
+    def __init__(self, task: _Task) -> None:
+        super().__init__()
+        self.task = task
 
 
 @dataclass(eq=False)
@@ -68,6 +79,7 @@ class _Worker:
     process: Any
     connection: Any
     task: _Task | None = None
+    sent: queue.SimpleQueue[_Task | None] = field(default_factory=queue.SimpleQueue)
 
 
 class WorkerPool:
@@ -85,10 +97,12 @@ class WorkerPool:
     def __init__(self, size: int | None = None, warm: list[Any] | None = None) -> None:
         self.size = max(1, size or os.cpu_count() or 1)
         self.warm = list(warm or [])
-        self.tasks: queue.SimpleQueue[_Task | None] = queue.SimpleQueue()
+        self.pending: deque[_Task] = deque()  # ready, waiting for a free worker
+        self.held: set[_Task] = set()  # waiting for the results of the nodes they read
         self.lock = threading.Lock()
         self.workers: list[_Worker] = []
         self.closed = False
+        self.broken = ""  # why no worker could start, when none could
         self.ended: dict[int, str] = {}  # runs ended, and why
         self.feeders = [
             threading.Thread(target=self._feed, daemon=True, name=f"studio-worker-{i}")
@@ -102,18 +116,30 @@ class WorkerPool:
         return RunExecutor(self, run)
 
     def submit(self, run: int, fn: Callable[..., Any], args: tuple[Any, ...]) -> Future:
+        """Hand a node over: sent at once, from this thread, to a free worker; else kept
+        until one is free, or until the nodes whose tasks stand in ``args`` have results."""
         task = _Task(run, fn, args)
         task.future.set_running_or_notify_cancel()
         with self.lock:  # a node handed over just after its run ended never starts
             refused = "the studio is closing" if self.closed else self.ended.get(run)
             if refused is None:
-                self.tasks.put(task)
+                for upstream in _handles(args):
+                    if not upstream.future.done():
+                        task.waits.add(upstream)
+                        upstream.dependents.append(task)
+                    elif upstream.future.exception() is not None:
+                        refused = "a node it reads failed"
+            if refused is None and task.waits:
+                self.held.add(task)
+            placed = self._place(task) if refused is None and not task.waits else None
         if refused is not None:
             task.future.set_exception(NodeStoppedError(refused))
+        elif placed is not None:
+            self._send(placed, task)
         return task.future
 
     def end_run(self, run: int, why: str) -> list[int]:
-        """Stop every node of ``run``: queued ones never start, running ones have their
+        """Stop every node of ``run``: waiting ones never start, running ones have their
         worker killed. Returns the process ids killed."""
         killed = []
         with self.lock:
@@ -124,7 +150,9 @@ class WorkerPool:
                     task.stopped = True
                     worker.process.kill()
                     killed.append(worker.process.pid)
-        self._drop_queued(run, why)
+            dropped = self._drop(lambda task: task.run == run)
+        for task in dropped:
+            task.future.set_exception(NodeStoppedError(why))
         return killed
 
     def running(self) -> dict[int, int]:
@@ -134,27 +162,79 @@ class WorkerPool:
 
     def close(self) -> None:
         """End every worker (the session is over)."""
-        self.closed = True
-        for _ in self.feeders:
-            self.tasks.put(None)
         with self.lock:
+            self.closed = True
             for worker in self.workers:
                 worker.process.kill()
-        self._drop_queued(None, "the studio is closing")
+            dropped = self._drop(lambda task: True)
+        for worker in list(self.workers):
+            worker.sent.put(None)
+        for task in dropped:
+            task.future.set_exception(NodeStoppedError("the studio is closing"))
 
-    def _drop_queued(self, run: int | None, why: str) -> None:
-        kept = []
-        while True:
-            try:
-                task = self.tasks.get_nowait()
-            except queue.Empty:
-                break
-            if task is not None and (run is None or task.run == run):
-                task.future.set_exception(NodeStoppedError(why))
+    def _drop(self, which: Callable[[_Task], bool]) -> list[_Task]:
+        """Take the waiting tasks ``which`` selects out of the pool (under the lock)."""
+        dropped = [t for t in (*self.pending, *self.held) if which(t)]
+        self.pending = deque(t for t in self.pending if not which(t))
+        self.held.difference_update(dropped)
+        return dropped
+
+    # -- placing nodes on workers ------------------------------------------------------
+
+    def _place(self, task: _Task, prefer: _Worker | None = None) -> _Worker | None:
+        """A free worker now taken by ``task`` (under the lock), or None: it then waits."""
+        free = [w for w in self.workers if w.task is None and w.process.poll() is None]
+        worker = prefer if prefer in free else (free[0] if free else None)
+        if worker is None:
+            if self.broken and not self.workers:
+                task.future.set_exception(RuntimeError(self.broken))
             else:
-                kept.append(task)
-        for task in kept:
-            self.tasks.put(task)
+                self.pending.append(task)
+            return None
+        worker.task = task
+        return worker
+
+    def _send(self, worker: _Worker, task: _Task) -> None:
+        """Send ``task`` to ``worker`` (it has taken it), the results it reads in place of
+        their tasks; the worker's thread then waits for its answer."""
+        try:
+            worker.connection.send((task.fn, _resolved(task.args)))
+        except (OSError, EOFError, ValueError):  # the worker died before it got the node
+            worker.sent.put(task)  # its thread finds it dead, and says so
+            return
+        except Exception as error:  # what the node was given could not travel
+            with self.lock:
+                worker.task = None
+            task.future.set_exception(error)
+            self._released(task, worker)
+            return
+        worker.sent.put(task)
+
+    def _released(self, done: _Task, worker: _Worker) -> None:
+        """``done`` has settled: the nodes waiting for it start (on ``worker`` first, which is
+        free and awake), or fail with it; then a waiting node takes a free worker."""
+        failed = done.future.exception() is not None
+        starting: list[_Task] = []
+        stopped: list[_Task] = []
+        with self.lock:
+            for task in done.dependents:
+                task.waits.discard(done)
+                if task in self.held and (failed or not task.waits):
+                    self.held.discard(task)
+                    (stopped if failed else starting).append(task)
+            placed = [(self._place(t, worker), t) for t in starting]
+            while self.pending and not self.closed:
+                waiting = self.pending.popleft()
+                found = self._place(waiting)
+                if found is None:
+                    break
+                placed.append((found, waiting))
+        for task in stopped:
+            task.future.set_exception(NodeStoppedError("a node it reads failed"))
+            self._released(task, worker)
+        for target, task in placed:
+            if target is not None:
+                self._send(target, task)
 
     # -- one thread per worker ----------------------------------------------------------
 
@@ -170,63 +250,66 @@ class WorkerPool:
         theirs.close()
         connection = Channel(Connection(mine.detach()))
         connection.send((os.getpid(), sys.path, self.warm))
-        worker = _Worker(process, connection)
-        with self.lock:
-            self.workers.append(worker)
-        return worker
+        return _Worker(process, connection)
 
     def _retire(self, worker: _Worker) -> None:
-        worker.connection.close()
-        worker.process.wait()
         with self.lock:
             self.workers.remove(worker)
+            worker.task = None
+        worker.connection.close()
+        worker.process.wait()
+
+    def _join(self, worker: _Worker) -> None:
+        """A new worker joins the pool and takes a waiting node, if any."""
+        with self.lock:
+            self.workers.append(worker)
+            task = self.pending.popleft() if self.pending and not self.closed else None
+            if task is not None:
+                worker.task = task
+        if task is not None:
+            self._send(worker, task)
 
     def _feed(self) -> None:
+        worker = self._new_worker()
+        while worker is not None:
+            task = worker.sent.get()
+            if task is None or self.closed:
+                break
+            alive = self._run_on(worker, task)
+            if alive and not task.stopped:
+                with self.lock:
+                    worker.task = None
+                self._released(task, worker)
+                continue
+            self._retire(worker)  # out of the pool first: no node is placed on it
+            self._released(task, worker)
+            worker = None if self.closed else self._new_worker()
+        if worker is not None:
+            self._retire(worker)
+
+    def _new_worker(self) -> _Worker | None:
+        """A worker started and in the pool; None when none can start (nodes then fail,
+        saying why, once no worker is left)."""
         try:
             worker = self._start_worker()
         except Exception as error:  # e.g. no process can start: the runs fail, saying why
-            self._refuse_all(f"no worker process could start: {type(error).__name__}: {error}")
-            return
-        while True:
-            task = self.tasks.get()
-            if task is None or self.closed:
-                break
-            if task.future.done():  # dropped while queued
-                continue
             with self.lock:
-                worker.task = task
-            alive = self._run_on(worker, task)
-            with self.lock:
-                worker.task = None
-            if not alive or task.stopped:
-                self._retire(worker)
-                if self.closed:
-                    return
-                try:
-                    worker = self._start_worker()
-                except Exception as error:
-                    self._refuse_all(f"no new worker process could start: {error}")
-                    return
-        self._retire(worker)
-
-    def _refuse_all(self, why: str) -> None:
-        """This feeder has no worker: fail each node it takes (the server goes on)."""
-        while (task := self.tasks.get()) is not None and not self.closed:
-            if not task.future.done():
-                task.future.set_exception(RuntimeError(why))
+                self.broken = f"no worker process could start: {type(error).__name__}: {error}"
+                dropped = list(self.pending) if not self.workers else []
+                if dropped:
+                    self.pending.clear()
+            for task in dropped:
+                task.future.set_exception(RuntimeError(self.broken))
+            return None
+        self._join(worker)
+        return worker
 
     def _run_on(self, worker: _Worker, task: _Task) -> bool:
-        """Run ``task`` on ``worker`` and settle its future; False when the worker died."""
-        try:
-            worker.connection.send((task.fn, task.args))
-        except (OSError, EOFError, ValueError):  # the worker died before it got the node
-            return self._died(worker, task)
-        except Exception as error:  # what the node was given could not travel
-            task.future.set_exception(error)
-            return True
+        """Take ``task``'s answer from ``worker`` (it was sent) and settle its future; False
+        when the worker died."""
         try:
             failed, answer = worker.connection.receive()
-        except (OSError, EOFError):
+        except (OSError, EOFError, ValueError):
             return self._died(worker, task)
         except Exception as error:  # the result could not be read back
             task.future.set_exception(RuntimeError(f"its result could not be read: {error}"))
@@ -243,7 +326,7 @@ class WorkerPool:
             stopped = "its run was superseded or cancelled: its worker was ended"
             task.future.set_exception(NodeStoppedError(stopped))
             return False
-        ended = ended_by_limit(task.fn, task.args)
+        ended = ended_by_limit(task.fn, _resolved(task.args))
         task.future.set_exception(
             ended
             or WorkerDiedError(
@@ -255,9 +338,15 @@ class WorkerPool:
 
 
 class RunExecutor:
-    """One run's view of the pool: what :func:`graphvision.execution.run.run` submits to."""
+    """One run's view of the pool: what :func:`graphvision.execution.run.run` submits to.
+
+    It chains tasks (``chains_tasks``): a node is handed over as soon as the nodes it reads
+    are, their futures' tasks in its arguments; the pool sends it to a worker, with their
+    results, from the thread that takes the last of them, not through the run's thread.
+    """
 
     encodes_values = True
+    chains_tasks = True
     name = "processes"
 
     def __init__(self, pool: WorkerPool, run: int) -> None:
@@ -272,6 +361,28 @@ class RunExecutor:
             self.pool.end_run(self.run, "the run was interrupted")
 
 
+def _handles(args: Any) -> list[_Task]:
+    """The tasks standing for results in ``args`` (in tuples, lists and dicts)."""
+    if isinstance(args, _Task):
+        return [args]
+    if isinstance(args, tuple | list):
+        return [t for a in args for t in _handles(a)]
+    if isinstance(args, dict):
+        return [t for a in args.values() for t in _handles(a)]
+    return []
+
+
+def _resolved(args: Any) -> Any:
+    """``args`` with each task in it replaced by its result."""
+    if isinstance(args, _Task):
+        return args.future.result()
+    if isinstance(args, tuple | list) and _handles(args):
+        return type(args)(_resolved(a) for a in args)
+    if isinstance(args, dict) and _handles(args):
+        return {k: _resolved(a) for k, a in args.items()}
+    return args
+
+
 def how_it_ended(exitcode: int | None) -> str:
     """A worker's exit code in words: ``killed by signal 9 (SIGKILL)``, ``exited with status 3``."""
     if exitcode is None:
@@ -283,46 +394,3 @@ def how_it_ended(exitcode: int | None) -> str:
             name = "unknown signal"
         return f"killed by signal {-exitcode} ({name})"
     return f"exited with status {exitcode}"
-
-
-# -- in the worker process -------------------------------------------------------------
-
-
-def serve() -> None:
-    """A worker's loop (``python -c`` runs it, on the socket whose descriptor is its
-    argument): take ``(fn, args)``, answer ``(failed, result or exception)``."""
-    import warnings
-
-    from graphvision.execution.blas import one_blas_thread_for_good
-    from graphvision.execution.warnings import show_warning
-
-    connection = Channel(Connection(int(sys.argv[1])))
-    parent, path, warm = connection.receive()
-    sys.path[:] = path  # plugins found where the studio found them
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the server's to handle
-    warnings.showwarning = show_warning
-    one_blas_thread_for_good()
-    threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
-    for ref in warm:
-        with contextlib.suppress(Exception):  # the node fails when it runs, saying why
-            ref.resolve()
-    while True:
-        try:
-            fn, args = connection.receive()
-        except (EOFError, OSError):
-            return
-        try:
-            answer: tuple[bool, Any] = (False, fn(*args))
-        except BaseException as error:  # the parent fails the node with it
-            answer = (True, error)
-        try:
-            connection.send(answer)
-        except Exception as error:  # a result or an exception that cannot be pickled
-            connection.send((True, RuntimeError(f"{type(error).__name__}: {error}")))
-
-
-def _watch_parent(parent: int) -> None:
-    """End this worker when the studio's process is gone (even after its ``kill -9``)."""
-    while os.getppid() == parent:
-        time.sleep(0.5)
-    os._exit(0)

@@ -10,6 +10,7 @@ runs for 10 minutes unless it is ended.
 
 from __future__ import annotations
 
+import operator
 import os
 import re
 import signal
@@ -208,3 +209,47 @@ def test_a_node_handed_over_after_its_run_ended_never_starts() -> None:
         assert pool.executor(8).submit(abs, -3).result(timeout=120) == 3  # other runs go on
     finally:
         pool.close()
+
+
+@pytest.fixture(scope="module")
+def pool() -> Iterator[WorkerPool]:
+    workers = WorkerPool(2)
+    yield workers
+    workers.close()
+
+
+def test_a_node_handed_over_ahead_of_its_input_runs_with_its_result(pool) -> None:
+    """The studio's runs chain their nodes: a node is handed over with the task of the node
+    it reads in place of its value, and runs once that value is made."""
+    executor = pool.executor(1)
+    assert executor.chains_tasks
+    made = executor.submit(operator.add, 2, 3)
+    reader = executor.submit(dict, {"x": (made.task, "out")})
+    assert reader.result(timeout=120) == {"x": (5, "out")}
+
+
+def test_a_node_whose_input_failed_never_runs(pool) -> None:
+    executor = pool.executor(2)
+    failing = executor.submit(operator.truediv, 1, 0)
+    reader = executor.submit(abs, failing.task)
+    with pytest.raises(ZeroDivisionError):
+        failing.result(timeout=120)
+    with pytest.raises(NodeStoppedError, match="a node it reads failed"):
+        reader.result(timeout=10)
+    assert executor.submit(abs, -4).result(timeout=120) == 4  # the worker is not lost
+
+
+def test_ending_a_run_drops_its_nodes_waiting_for_their_inputs(pool) -> None:
+    executor = pool.executor(3)
+    slow = executor.submit(time.sleep, MINUTES)
+    reader = executor.submit(abs, slow.task)
+    deadline = time.monotonic() + 120
+    while 3 not in pool.running().values():  # the slow node is on a worker
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    [pid] = pool.end_run(3, "its run was cancelled")
+    with pytest.raises(NodeStoppedError, match="its run was cancelled"):
+        reader.result(timeout=10)
+    with pytest.raises(NodeStoppedError, match="superseded or cancelled"):
+        slow.result(timeout=60)
+    assert _ends_soon(pid)
