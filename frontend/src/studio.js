@@ -276,14 +276,30 @@ async function renderValue(container, run, node, port, picture = null) {
   return d;
 }
 
-// A picture drawn on its viewer: a preview (step > 1) first, then the picture itself,
-// unless the viewer shows another run's value by then.
+// A picture drawn on its viewer: a preview (step > 1) first; the picture itself once the
+// viewer is zoomed in past what the preview holds (more than one canvas pixel per preview
+// pixel), unless the viewer shows another run's value by then. At the zoom the picture
+// is shown, the preview has all it shows: a change costs the server, the connection and
+// the page the preview alone (a quarter of the bytes at step 2), not the full picture too.
 function showPicture(viewer, base, step, bitmap) {
   viewer.setSource(bitmap);
+  viewer.full = null;
   if (step <= 1) { delete viewer.canvas.dataset.preview; return; }
   viewer.canvas.dataset.preview = String(step);
-  fetchPicture(base).then((full) => {
-    if (!full || viewer.canvas.dataset.value !== base) return;
+  viewer.full = { base, step };
+  if (!viewer.zoomWatched) {
+    viewer.zoomWatched = true;  // after the viewer's own wheel handler: its new scale
+    viewer.canvas.addEventListener("wheel", () => sharpen(viewer));
+  }
+  sharpen(viewer);
+}
+
+function sharpen(viewer) {
+  const want = viewer.full;
+  if (!want || viewer.scale * want.step <= 1) return;
+  viewer.full = null;
+  fetchPicture(want.base).then((full) => {
+    if (!full || viewer.canvas.dataset.value !== want.base) return;
     viewer.setSource(full);
     delete viewer.canvas.dataset.preview;
   });
