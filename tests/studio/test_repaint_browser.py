@@ -9,13 +9,16 @@ from __future__ import annotations
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 pytest.importorskip("starlette")
 
+import graphvision as gv
 from graphvision.studio.server import studio
 
 PIPELINES = Path(__file__).parents[2] / "pipelines"
+TOY = Path(__file__).parents[1] / "fixtures" / "toy.py"
 
 
 _CHANGE = """fetch("api/change", {method: "POST", headers: {"Content-Type": "application/json"},
@@ -60,5 +63,34 @@ def test_a_streamed_inspector_is_kept_and_its_value_asked_for_once(browser) -> N
         assert page.get_attribute(output, "data-mark") == "same"
         assert page.get_attribute(output, "data-value") == "2/overlay/out"
         assert errors == []
+    finally:
+        server.stop()
+
+
+def test_a_picture_shown_smaller_travels_as_a_preview_until_the_viewer_zooms_in(browser) -> None:
+    graph = gv.Graph("wide")
+    wide = np.linspace(0, 1, 32 * 4096, dtype=np.float32).reshape(32, 4096)  # shown smaller
+    graph.input("image", "GrayImage", default=wide)
+    graph.add("dark", "toy.darken", image="image", params={"factor": 0.5})
+    graph.output("dark", "dark")
+    server = studio(graph, registry=gv.discover([TOY]))
+    try:
+        page = browser.new_page(viewport={"width": 1500, "height": 950})
+        asked: Counter[str] = Counter()
+        page.on("request", lambda r: asked.update([r.url.split("/api/", 1)[-1]]))
+        page.goto(server.url)
+        page.wait_for_selector("body[data-painted-run='1']", timeout=120_000)
+        page.evaluate(_CHANGE.replace('"binary.k": -0.3', '"dark.factor": 0.25'))
+        page.wait_for_selector("body[data-painted-run='2']", timeout=120_000)
+        canvas = "[data-output=dark] canvas"
+        step = int(page.get_attribute(canvas, "data-preview") or 1)
+        assert step > 1  # 4096 pixels across a card narrower than 2048
+        assert asked[f"rgba/2/dark/out?step={step}"] == 1 and "rgba/2/dark/out?step=1" not in asked
+        box = page.locator(canvas).bounding_box()
+        assert box is not None
+        page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+        page.mouse.wheel(0, -400 * step)  # zoomed in past the preview's pixels: the full one
+        page.wait_for_selector(f"{canvas}:not([data-preview])", timeout=30_000)
+        assert asked["rgba/2/dark/out?step=1"] == 1
     finally:
         server.stop()
