@@ -299,17 +299,26 @@ def rgba_of(kind: type[PortType], value: Any, step: int = 1) -> tuple[bytes, lis
 
     Each channel is ``trunc(clip(255 v + 0.5, 0, 255))`` in float32, NaN as 0: the bytes
     of ``round(255 clip(v, 0, 1))``, made in three passes over the picture in place.
-    ``step`` > 1 makes a preview :func:`shrunk` that many times (the page shows it first
-    when the picture is drawn smaller than it is, then the picture itself).
+    ``step`` > 1 makes a preview :func:`shrunk` that many times (the page shows it
+    instead when the picture is drawn smaller than it is), one channel at a time
+    (:func:`_preview_planes`).
     """
     picture = _preview(kind, value)
     if picture is None or picture.ndim not in (2, 3) or min(picture.shape[:2]) == 0:
         return None
-    picture = shrunk(picture, min(max(1, step), MAX_STEP))
-    scaled = np.multiply(picture, 255.0, dtype=np.float32)
-    np.add(scaled, 0.5, out=scaled)
-    np.fmax(scaled, 0.0, out=scaled)  # fmax and fmin take the number over a NaN: NaN is 0
-    np.fmin(scaled, 255.0, out=scaled)
+    step = min(max(1, step), MAX_STEP)
+    if step > 1 and min(picture.shape[0], picture.shape[1]) >= step:
+        planes = _preview_planes(picture if picture.ndim == 3 else picture[:, :, None], step)
+        _to_levels(planes)
+        channels, height, width = planes.shape
+        rgba = np.empty((height, width, 4), np.uint8)
+        rgba[:, :, 3] = 255
+        for k in range(channels):  # a plane at a time: long loops, not one of 3 per pixel
+            rgba[:, :, k] = planes[k]
+        if channels < 3:  # gray (or gray and alpha): the same value in red, green and blue
+            rgba[:, :, 1] = rgba[:, :, 2] = planes[0]
+        return rgba.tobytes(), [height, width]
+    scaled = _to_levels(np.array(picture, np.float32))
     if scaled.ndim == 2:
         scaled = scaled[:, :, None]
     height, width, channels = scaled.shape
@@ -319,3 +328,27 @@ def rgba_of(kind: type[PortType], value: Any, step: int = 1) -> tuple[bytes, lis
     if channels < 3:  # gray (or gray and alpha): the same value in red, green and blue
         rgba[:, :, 1:3] = scaled[:, :, :1]
     return rgba.tobytes(), [height, width]
+
+
+def _to_levels(picture: np.ndarray) -> np.ndarray:
+    """``trunc``-ready levels in place: ``clip(255 v + 0.5, 0, 255)`` in float32, NaN as 0."""
+    np.multiply(picture, np.float32(255.0), out=picture)
+    np.add(picture, np.float32(0.5), out=picture)
+    np.fmax(picture, 0.0, out=picture)  # fmax and fmin take the number over a NaN: NaN is 0
+    np.fmin(picture, 255.0, out=picture)
+    return picture
+
+
+def _preview_planes(picture: np.ndarray, step: int) -> np.ndarray:
+    """:func:`shrunk` of an ``H×W×C`` picture as ``C×h×w`` planes (at most 4), the same sums
+    in the same order: one channel at a time, each block's pixels added along whole rows
+    (half the time of the 3-channel sums for the matches picture, whose inner loops were 3
+    elements long)."""
+    height, width = picture.shape[0] // step, picture.shape[1] // step
+    planes = np.zeros((min(picture.shape[2], 4), height, width), np.float32)
+    for k, plane in enumerate(planes):
+        for i in range(step):
+            for j in range(step):
+                plane += picture[i : height * step : step, j : width * step : step, k]
+    planes *= np.float32(1.0 / (step * step))
+    return planes

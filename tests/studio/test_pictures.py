@@ -72,6 +72,34 @@ def test_a_preview_is_the_mean_of_each_block() -> None:
     assert shape == [10, 15] and len(data) == 10 * 15 * 4
 
 
+def _rgba_as_before(picture: np.ndarray, step: int) -> bytes:
+    """The RGBA bytes as rgba_of made them before previews were summed a channel at a time."""
+    scaled = np.multiply(shrunk(picture, step), 255.0, dtype=np.float32)
+    np.add(scaled, 0.5, out=scaled)
+    np.fmax(scaled, 0.0, out=scaled)
+    np.fmin(scaled, 255.0, out=scaled)
+    scaled = scaled if scaled.ndim == 3 else scaled[:, :, None]
+    rgba = np.empty((*scaled.shape[:2], 4), np.uint8)
+    rgba[:, :, 3] = 255
+    rgba[:, :, : min(scaled.shape[2], 4)] = scaled[:, :, :4]
+    if scaled.shape[2] < 3:
+        rgba[:, :, 1:3] = scaled[:, :, :1]
+    return rgba.tobytes()
+
+
+@pytest.mark.parametrize("channels", [0, 1, 2, 3, 4, 5])
+def test_a_preview_has_the_bytes_it_had_when_summed_all_channels_at_once(channels) -> None:
+    rng = np.random.default_rng(channels)
+    shape = (37, 53) if channels == 0 else (37, 53, channels)
+    picture = (rng.random(shape, dtype=np.float32) * 1.4 - 0.2).astype(np.float32)
+    picture.flat[::97] = np.nan  # NaN is 0, below 0 is 0, above 1 is 255
+    for step in (1, 2, 3, 5, 16):
+        data, _ = rgba_of(_Shown, picture, step=step)
+        assert data == _rgba_as_before(picture, step), step
+    doubles = rng.random((9, 12, 3))  # a float64 picture is summed as before too
+    assert rgba_of(_Shown, doubles, step=2)[0] == _rgba_as_before(doubles, 2)
+
+
 def test_the_picture_the_page_shows_is_made_when_its_node_finishes() -> None:
     graph = gv.Graph("darkening")
     graph.input("image", "GrayImage", default=np.full((6, 8), 0.8, np.float32))
