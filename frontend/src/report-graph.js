@@ -1,12 +1,13 @@
 // The report's script: its graph laid out by the studio's layout (dagre), as a static SVG
 // whose viewBox report.html's own zoom and fit drive, and its values drawn by the studio's
 // viewers (viewers.js, pairs.js, charts.js, colormap.js, composed by panels.js) from the
-// data the page holds (graphvision/views/scripted.py). Built by build.mjs into
+// data the page holds (graphvision/views/scripted.py): images, float maps, label maps and
+// masks too, with zoom to single pixels and the value under the cursor. Built by build.mjs into
 // graphvision/views/static/graph.js (window.GraphvisionGraph) and inlined in each report:
 // no network.
 import { LINE, layoutGraph } from "./layout.js";
 import { classifierPanel, cloudPanel, curvesPanel, epipolarPanel, maskLayer, matchesPanel } from "./panels.js";
-import { ImageViewer, el } from "./viewers.js";
+import { ImageViewer, canvasOf, el, floatMapViewer, tint } from "./viewers.js";
 
 const NS = "http://www.w3.org/2000/svg";
 export const STATUS_FILL = { computed: "#bbf7d0", cached: "#dbeafe", failed: "#fecaca",
@@ -93,13 +94,65 @@ export function pageSource(data) {
 
 const ARRAYS = { uint8: Uint8Array, uint16: Uint16Array, int32: Int32Array, float32: Float32Array };
 
-// An array of the page: base64 of its little-endian bytes, deflated (zlib).
+// An array of the page: base64 of its little-endian bytes, deflated (zlib). `planes`: the
+// bytes were sent plane by plane (every value's first byte, then every second...);
+// `scale`: bytes standing for the real values byte / scale (an 8-bit image's levels).
 export async function decodeRaw(entry) {
   if (!entry || !ARRAYS[entry.dtype]) return null;
   const packed = Uint8Array.from(atob(entry.deflate), (c) => c.charCodeAt(0));
   const stream = new Blob([packed]).stream().pipeThrough(new DecompressionStream("deflate"));
-  const bytes = await new Response(stream).arrayBuffer();
-  return { values: new ARRAYS[entry.dtype](bytes), shape: entry.shape };
+  let bytes = new Uint8Array(await new Response(stream).arrayBuffer());
+  if (entry.planes) {
+    const k = entry.planes, n = bytes.length / k, joined = new Uint8Array(bytes.length);
+    for (let p = 0; p < k; p++) for (let i = 0; i < n; i++) joined[i * k + p] = bytes[p * n + i];
+    bytes = joined;
+  }
+  const values = new ARRAYS[entry.dtype](bytes.buffer);
+  return { values: entry.scale ? Float32Array.from(values, (v) => v / entry.scale) : values, shape: entry.shape };
+}
+
+// RGBA of an image's values in [0, 1] (gray H×W or RGB H×W×3).
+export function imageRgba(values, shape) {
+  const n = shape[0] * shape[1], ch = shape.length === 3 ? shape[2] : 1;
+  const out = new Uint8ClampedArray(4 * n);
+  for (let i = 0; i < n; i++) {
+    for (let k = 0; k < 3; k++) out[4 * i + k] = Math.round(255 * values[i * ch + (ch === 3 ? k : 0)]);
+    out[4 * i + 3] = 255;
+  }
+  return out;
+}
+
+// The cursor of a map sent reduced (every `step`-th pixel) names the full map's pixel, and
+// the page says that it was reduced.
+function fullPixels(viewer, d, container) {
+  if (!(d.step > 1)) return;
+  const own = viewer.describe.bind(viewer);
+  viewer.describe = (x, y) => own(x, y).replace(`x ${x}, y ${y}`, `x ${x * d.step}, y ${y * d.step}`);
+  const nth = d.step === 2 ? "2nd" : d.step === 3 ? "3rd" : `${d.step}th`;
+  container.append(el("div", { class: "gv-caption", "data-reduced": String(d.step) },
+    `sent reduced: every ${nth} pixel on each axis (${d.shape[1]}×${d.shape[0]} of ${d.full[1]}×${d.full[0]}); ` +
+    "x, y under the cursor are the full map's, the output's file has every pixel"));
+}
+
+// An image, float map, label map or mask with its values: zoom and pan to single pixels
+// and the value under the cursor; a float map through viridis with its colour bar and
+// range box, a label map in distinct colours, a mask white.
+export async function mapPanel(container, d, source) {
+  const raw = await source.raw(d.node, d.port);
+  if (!raw) return false;
+  const [h, w] = raw.shape;
+  let viewer;
+  if (d.view === "floatmap") {
+    viewer = floatMapViewer(container, { ...d, shape: raw.shape }, raw.values);
+  } else {
+    viewer = new ImageViewer(container, { width: w, height: h, label: d.summary });
+    const rgba = d.view === "image" ? imageRgba(raw.values, raw.shape) : tint(raw.values, d.view === "labels", [255, 255, 255]);
+    viewer.setSource(canvasOf(rgba, w, h));
+    viewer.setValues(raw.values, raw.shape);
+  }
+  viewer.root.dataset.map = d.view;
+  fullPixels(viewer, d, container);
+  return true;
 }
 
 async function loadPicture(url) {
@@ -117,10 +170,17 @@ async function loadPicture(url) {
 export async function drawValue(box, d, source) {
   const drawn = el("div", { class: "gv-drawn" });
   let done = false;
-  if (d.view === "mask" || d.view === "labels") {
+  if ((d.view === "mask" || d.view === "labels") && d.over) {
     const viewer = new ImageViewer(drawn, { width: d.shape[1], height: d.shape[0], label: d.summary });
     box.prepend(drawn); // the viewer sizes its canvas to its box: in the page first
     done = await maskLayer(viewer, d, source);
+    if (done) {
+      viewer.setValues((await source.raw(d.node, d.port)).values, d.shape);
+      fullPixels(viewer, d, drawn);
+    }
+  } else if (d.view === "mask" || d.view === "labels" || d.view === "image" || d.view === "floatmap") {
+    box.prepend(drawn);
+    done = await mapPanel(drawn, d, source);
   } else if (d.view === "table" && d.confusion) {
     await classifierPanel(drawn, d, source);
     done = true;

@@ -21,7 +21,14 @@ arrays, base64) of the values it draws with. So the report and the studio draw:
   report holds the images, keypoints or points: with ``--keep-intermediates``);
 - a point cloud in a 3-D view turned by dragging (at most ``MAX_POINTS``, evenly
   taken), coloured by depth, or by its points' image colours with a switch between
-  the two when the node gives them.
+  the two when the node gives them;
+- an image, a float map (disparity, depth, a filter response), a label map or a mask
+  with zoom and pan to single pixels and the value under the cursor (an image's float
+  value, an RGB image's three); a float map through viridis with its colour bar, units
+  and a range box (auto, or a fixed low and high), a label map in distinct colours.
+  Their values ride the page (float32, or an image's exact ``k / 255`` levels as
+  bytes); a map of more than ``MAX_PIXELS`` pixels is sent reduced to every
+  ``step``-th pixel on both axes, and the page says so (the output's file has all).
 
 Each is drawn into its box in place of the page's own HTML drawing of the value, which
 stays as the page without script.
@@ -41,12 +48,13 @@ import numpy as np
 
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.values.geometry import Points3DPort
-from graphvision.values.images import BinaryImagePort, LabelImagePort
+from graphvision.values.images import BinaryImagePort, ImagePort, LabelImagePort
 from graphvision.values.ports import PortType
 from graphvision.values.records import MatchesPort
 from graphvision.values.scalars import TablePort
 from graphvision.views import pairing
 from graphvision.views.pairing import Ref
+from graphvision.views.viewers import is_float_map, units_of
 
 __all__ = [
     "LONGEST",
@@ -59,6 +67,7 @@ __all__ = [
 
 MAX_POINTS = 20_000  # points of a cloud in the 3-D view (as many as the studio sends)
 LONGEST = 1600  # a tinted map and its image are drawn at most this many pixels on a side
+MAX_PIXELS = 1 << 18  # a map's pixels sent with their values (512²); more are sent reduced
 SHOWN_PREDICTIONS = 8  # right and wrong predictions shown, each (as the studio shows)
 _RAW_TYPES = (np.uint8, np.uint16, np.int32)
 
@@ -79,6 +88,10 @@ SCRIPTED_STYLE = """
 .gv-samples canvas.gv-right { border-color: #16a34a; }
 .gv-samples canvas.gv-wrong { border-color: #dc2626; }
 .gv-curves { display: flex; flex-wrap: wrap; gap: 8px; }
+.gv-colourbar { font-size: 11px; margin-top: 4px; }
+.gv-bar { width: 256px; height: 12px; display: block; }
+.gv-ticks { display: flex; justify-content: space-between; width: 256px; font: 10px monospace; }
+.gv-rangebox { font-size: 12px; margin: 4px 0; } .gv-range { width: 90px; }
 """
 
 
@@ -154,14 +167,40 @@ class PageValues:
         if issubclass(kind, TablePort) and is_classifier(value):
             return {**found, "view": "table", **self._classifier(node, value)}
         if issubclass(kind, LabelImagePort | BinaryImagePort):
-            return self._tinted(found, kind, value)
+            return self._tinted(found, kind, value) or self._map(found, kind, value)
         if issubclass(kind, Points3DPort):
             return self._cloud(found, value)
         if issubclass(kind, MatchesPort):
             return self._matches(found, value)
         if kind.type_name() == "Fundamental":
             return self._epipolar(found, value)
+        if issubclass(kind, ImagePort) or is_float_map(kind, value):
+            return self._map(found, kind, value)
         return None
+
+    def _map(
+        self, found: dict[str, Any], kind: type[PortType], value: Any
+    ) -> dict[str, Any] | None:
+        """An image, float map, label map or mask with its values (every ``step``-th pixel
+        on both axes when it has more than ``MAX_PIXELS``), for the pixel viewer."""
+        values = np.asarray(value)
+        gray_or_rgb = values.ndim == 2 or (values.ndim == 3 and values.shape[2] == 3)
+        if not gray_or_rgb or values.size == 0 or values.dtype.kind not in "biuf":
+            return None
+        rows, cols = values.shape[:2]
+        step = max(1, math.isqrt(rows * cols // MAX_PIXELS))
+        while -(-rows // step) * -(-cols // step) > MAX_PIXELS:
+            step += 1
+        shown = values[::step, ::step]
+        views = ((LabelImagePort, "labels"), (BinaryImagePort, "mask"), (ImagePort, "image"))
+        view = next((name for base, name in views if issubclass(kind, base)), "floatmap")
+        if view == "labels" and (values.min() < 0 or values.max() > np.iinfo(np.int32).max):
+            return None
+        self.raw[f"{found['node']}.{found['port']}"] = _raw(shown, levels=view == "image")
+        described = {**found, "view": view, "shape": list(shown.shape), "step": step}
+        if view == "floatmap":
+            described["units"] = units_of(kind)
+        return {**described, "full": [rows, cols]}
 
     def _keep(self, ref: list[str] | tuple[str, str], data: dict[str, Any]) -> None:
         """``data`` of a value a viewer draws with (a box's own description wins)."""
@@ -250,7 +289,8 @@ class PageValues:
         self.raw[key] = _raw(values)
         self.pictures[f"{over[0]}.{over[1]}"] = _png_uri(picture)
         view = "labels" if issubclass(kind, LabelImagePort) else "mask"
-        return {**found, "view": view, "shape": list(values.shape), "over": list(over)}
+        described = {**found, "view": view, "shape": list(values.shape), "over": list(over)}
+        return {**described, "step": step, "full": list(value.shape)}
 
     def _classifier(self, node: str, table: Mapping[str, Any]) -> dict[str, Any]:
         """The confusion matrix, the first right and wrong rows, and their samples when
@@ -300,20 +340,32 @@ def _pairs(matches: Any) -> dict[str, list[int]]:
     return {"a": pairs[:, 0].tolist(), "b": pairs[:, 1].tolist()}
 
 
-def _raw(values: np.ndarray) -> dict[str, Any]:
+def _raw(values: np.ndarray, levels: bool = False) -> dict[str, Any]:
     """An array as little-endian bytes, deflated (``zlib``), base64 (the script inflates
     it with ``DecompressionStream``): an integer map in the smallest of uint8, uint16,
-    int32 that holds it, real values in float32."""
+    int32 that holds it; real values in float32, their bytes in ``planes`` (each value's
+    first bytes, then the second ones...: a quarter smaller deflated on a disparity map),
+    or with ``levels`` (an image), as bytes with ``scale`` 255 when every value is
+    exactly ``float32(k) / 255`` (an 8-bit image read from a file)."""
+    extra: dict[str, Any] = {}
+    if values.dtype.kind == "f" and levels:
+        bytes_ = np.round(np.clip(values, 0, 1) * 255).astype(np.uint8)
+        if np.array_equal(bytes_.astype(np.float32) / np.float32(255), values):
+            values, extra = bytes_, {"scale": 255}
     if values.dtype.kind == "f":
         dtype: type = np.float32
+        extra = {"planes": 4}
     else:
         high = int(values.max()) if values.size else 0
         dtype = next(t for t in _RAW_TYPES if high <= np.iinfo(t).max)
-    data = np.ascontiguousarray(values, np.dtype(dtype).newbyteorder("<")).tobytes()
+    array = np.ascontiguousarray(values, np.dtype(dtype).newbyteorder("<"))
+    if "planes" in extra:
+        array = np.ascontiguousarray(array.view(np.uint8).reshape(-1, 4).T)
     return {
         "dtype": np.dtype(dtype).name,
         "shape": list(values.shape),
-        "deflate": base64.b64encode(zlib.compress(data, 6)).decode("ascii"),
+        "deflate": base64.b64encode(zlib.compress(array.tobytes(), 6)).decode("ascii"),
+        **extra,
     }
 
 

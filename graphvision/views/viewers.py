@@ -28,7 +28,15 @@ from graphvision.values.ports import PortType
 from graphvision.values.scalars import TablePort, _ScalarPort
 from graphvision.views.pairing import confusion_counts
 
-__all__ = ["colour_scale", "float_map_range", "picture_html", "table_parts", "value_html"]
+__all__ = [
+    "colour_scale",
+    "float_map_range",
+    "is_float_map",
+    "picture_html",
+    "table_parts",
+    "units_of",
+    "value_html",
+]
 
 _TABLE_ROWS = 50
 # viridis (van der Walt and Smith, matplotlib 2.0) at nine even stops: perceptually
@@ -92,9 +100,14 @@ def _colour_bar(low: float, high: float, units: str) -> str:
     )
 
 
-def _float_map_html(kind: type[PortType], value: np.ndarray, name: str) -> str:
+def units_of(kind: type[PortType]) -> str:
+    """What a float map's values measure, for its colour bar: its port type's ``units``."""
     kernel = issubclass(kind, KernelPort)
-    units = getattr(kind, "units", "") or ("weights" if kernel else "no unit (a filter response)")
+    return getattr(kind, "units", "") or ("weights" if kernel else "no unit (a filter response)")
+
+
+def _float_map_html(kind: type[PortType], value: np.ndarray, name: str) -> str:
+    units = units_of(kind)
     span = float_map_range(value)
     invalid = int(np.count_nonzero(~np.isfinite(value)))
     note = f", {invalid} invalid pixels (NaN) drawn black" if invalid else ""

@@ -4,9 +4,11 @@ with its samples, a network with its training curves."""
 
 from __future__ import annotations
 
+import base64
 import functools
 import json
 import re
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -122,3 +124,32 @@ def homography_page() -> str:
         step = graph.steps[node]
         kept[where] = (step.outputs[port or next(iter(step.outputs))], value)
     return html_report(graph, {}, RunRecord("homography", "threads"), intermediates=kept)
+
+
+def decoded(raw: dict[str, Any]) -> np.ndarray:
+    """An array of the page's JSON as its script decodes it (views/scripted.py ``_raw``)."""
+    data = np.frombuffer(zlib.decompress(base64.b64decode(raw["deflate"])), np.uint8)
+    if raw.get("planes"):  # the bytes plane by plane: every value's first byte, then...
+        data = np.ascontiguousarray(data.reshape(raw["planes"], -1).T)
+    values = data.view(np.dtype(raw["dtype"]).newbyteorder("<")).reshape(raw["shape"])
+    return values / np.float32(raw["scale"]) if raw.get("scale") else values
+
+
+def stereo_maps() -> dict[str, np.ndarray]:
+    """stereo.yaml's maps: a 30×40 disparity in quarter pixels (each value printed exactly
+    at 4 digits) with one invalid pixel, a 60×80 depth of whole numbers, a 12×16 RGB
+    picture in eighths (not 8-bit levels) and a 12×16 one of 8-bit levels."""
+    rng = np.random.default_rng(7)
+    disparity = (rng.integers(4, 256, (30, 40)) / 4).astype(np.float32)
+    disparity[0, 0] = np.nan
+    depth = rng.integers(1000, 9000, (60, 80)).astype(np.float32)
+    eighths = (rng.integers(0, 9, (12, 16, 3)) / 8).astype(np.float32)
+    levels = rng.integers(0, 256, (12, 16, 3)).astype(np.float32) / np.float32(255)
+    return {"disparity": disparity, "depth": depth, "disparity_picture": eighths,
+            "cloud_picture": levels}  # fmt: skip
+
+
+def stereo_maps_page() -> str:
+    """stereo.yaml's report of :func:`stereo_maps` (with ``scripted.MAX_PIXELS`` as set)."""
+    graph = compiled("stereo.yaml")
+    return html_report(graph, stereo_maps(), RunRecord("stereo", "threads"))

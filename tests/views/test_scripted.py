@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import base64
 import io
-import zlib
 
 import imageio.v3 as iio
 import numpy as np
 
+from graphvision.values.images import FloatImagePort
+from graphvision.views import scripted
 from graphvision.views.graph_view import layout_script
+from graphvision.views.scripted import PageValues
 
 from .report_values import (
     GRAY,
@@ -19,9 +21,13 @@ from .report_values import (
     cloud_points,
     cnn_page,
     coins_page,
+    compiled,
+    decoded,
     homography_page,
     labels_map,
     page_data,
+    stereo_maps,
+    stereo_maps_page,
     stereo_page,
 )
 
@@ -32,9 +38,7 @@ def test_a_label_map_is_kept_with_the_image_it_is_tinted_over():
     described = data["values"]["coins.labels"]
     assert described["view"] == "labels" and described["over"] == ["gray", "out"]
     assert described["shape"] == [24, 32]
-    raw = data["raw"]["coins.labels"]
-    values = np.frombuffer(zlib.decompress(base64.b64decode(raw["deflate"])), raw["dtype"])
-    np.testing.assert_array_equal(values.reshape(raw["shape"]), labels_map())
+    np.testing.assert_array_equal(decoded(data["raw"]["coins.labels"]), labels_map())
     png = data["pictures"]["gray.out"].split(",", 1)[1]
     picture = iio.imread(io.BytesIO(base64.b64decode(png)))
     assert picture.shape[:2] == (24, 32) and np.all(picture == round(255 * GRAY))
@@ -42,10 +46,46 @@ def test_a_label_map_is_kept_with_the_image_it_is_tinted_over():
     assert "GraphvisionGraph.showValues()" in layout_script()  # the page draws them
 
 
-def test_a_label_map_without_its_image_is_the_pages_own_picture():
+def test_a_label_map_without_its_image_is_drawn_alone_its_picture_kept_underneath():
     page = coins_page(with_image=False)
-    assert 'data-view="coins.labels"' not in page and 'data-values="1"' not in page
-    assert "each its own colour" in page  # the labels' picture, as before
+    described = page_data(page)["values"]["coins.labels"]
+    assert described["view"] == "labels" and "over" not in described and described["step"] == 1
+    np.testing.assert_array_equal(decoded(page_data(page)["raw"]["coins.labels"]), labels_map())
+    assert "each its own colour" in page  # the labels' picture, without script
+
+
+def test_float_maps_and_images_ride_the_page_with_their_values_reduced_over_the_cap(
+    monkeypatch,
+):
+    monkeypatch.setattr(scripted, "MAX_PIXELS", 2_000)
+    maps = stereo_maps()
+    data = page_data(stereo_maps_page())
+    values, raw = data["values"], data["raw"]
+    assert values["disparity.out"]["view"] == "floatmap" and values["disparity.out"]["step"] == 1
+    assert values["disparity.out"]["units"] == "disparity, pixels"
+    np.testing.assert_array_equal(decoded(raw["disparity.out"]), maps["disparity"])  # NaN too
+    assert raw["disparity.out"]["planes"] == 4  # float32 sent byte plane by byte plane
+    # 60×80 = 4800 pixels over 2000: every 2nd pixel on each axis, 30×40 = 1200
+    assert values["depth.out"]["step"] == 2 and values["depth.out"]["full"] == [60, 80]
+    np.testing.assert_array_equal(decoded(raw["depth.out"]), maps["depth"][::2, ::2])
+    assert values["picture.out"]["view"] == "image" and "scale" not in raw["picture.out"]
+    np.testing.assert_array_equal(decoded(raw["picture.out"]), maps["disparity_picture"])
+    # an image of 8-bit levels travels as its bytes and decodes to the same float32 values
+    assert raw["view.out"]["dtype"] == "uint8" and raw["view.out"]["scale"] == 255
+    np.testing.assert_array_equal(decoded(raw["view.out"]), maps["cloud_picture"])
+
+
+def test_a_map_is_reduced_to_at_most_the_cap_and_no_further():
+    for rows, cols in ((512, 512), (500, 741), (1, 300_000), (513, 512)):
+        found = PageValues(compiled("stereo.yaml"), {})._map(
+            {"node": "depth", "port": "out"}, FloatImagePort, np.zeros((rows, cols), np.float32)
+        )
+        assert found is not None
+        shown = found["shape"][0] * found["shape"][1]
+        assert shown <= scripted.MAX_PIXELS, (rows, cols)
+        step = found["step"]
+        if step > 1:  # one pixel fewer skipped would be over the cap
+            assert -(-rows // (step - 1)) * -(-cols // (step - 1)) > scripted.MAX_PIXELS
 
 
 def test_a_classifiers_matrix_and_first_right_and_wrong_samples_are_in_the_page():
@@ -85,10 +125,9 @@ def test_a_cloud_is_kept_for_the_3d_view_with_its_colours_evenly_taken():
     described = data["values"]["cloud.points"]
     assert described["view"] == "points3d" and described["colours"] == ["cloud", "colours"]
     assert described["count"] == 21_000
-    raw = data["raw"]["cloud.points"]
-    points = np.frombuffer(zlib.decompress(base64.b64decode(raw["deflate"])), raw["dtype"])
     # 21 000 points, at most 20 000 shown: every second one
-    np.testing.assert_array_equal(points.reshape(raw["shape"]), cloud_points()[::2].astype("<f4"))
+    points = decoded(data["raw"]["cloud.points"])
+    np.testing.assert_array_equal(points, cloud_points()[::2].astype("<f4"))
     colours = data["raw"]["cloud.colours"]
     assert colours["shape"] == [10_500, 3]
 
