@@ -27,8 +27,9 @@ arrays, base64) of the values it draws with. So the report and the studio draw:
   value, an RGB image's three); a float map through viridis with its colour bar, units
   and a range box (auto, or a fixed low and high), a label map in distinct colours.
   Their values ride the page (float32, or an image's exact ``k / 255`` levels as
-  bytes); a map of more than ``MAX_PIXELS`` pixels is sent reduced to every
-  ``step``-th pixel on both axes, and the page says so (the output's file has all).
+  bytes); a map of more than ``MAX_VALUES`` values (pixels × channels: 512² gray,
+  295² RGB) is sent reduced to every ``step``-th pixel on both axes, and the page says
+  so (the output's file has them all).
 
 Each is drawn into its box in place of the page's own HTML drawing of the value, which
 stays as the page without script.
@@ -67,7 +68,7 @@ __all__ = [
 
 MAX_POINTS = 20_000  # points of a cloud in the 3-D view (as many as the studio sends)
 LONGEST = 1600  # a tinted map and its image are drawn at most this many pixels on a side
-MAX_PIXELS = 1 << 18  # a map's pixels sent with their values (512²); more are sent reduced
+MAX_VALUES = 1 << 18  # a map's values sent (pixels × channels); more are sent reduced
 SHOWN_PREDICTIONS = 8  # right and wrong predictions shown, each (as the studio shows)
 _RAW_TYPES = (np.uint8, np.uint16, np.int32)
 
@@ -182,14 +183,14 @@ class PageValues:
         self, found: dict[str, Any], kind: type[PortType], value: Any
     ) -> dict[str, Any] | None:
         """An image, float map, label map or mask with its values (every ``step``-th pixel
-        on both axes when it has more than ``MAX_PIXELS``), for the pixel viewer."""
+        on both axes when it has more than ``MAX_VALUES`` values), for the pixel viewer."""
         values = np.asarray(value)
         gray_or_rgb = values.ndim == 2 or (values.ndim == 3 and values.shape[2] == 3)
         if not gray_or_rgb or values.size == 0 or values.dtype.kind not in "biuf":
             return None
-        rows, cols = values.shape[:2]
-        step = max(1, math.isqrt(rows * cols // MAX_PIXELS))
-        while -(-rows // step) * -(-cols // step) > MAX_PIXELS:
+        (rows, cols), channels = values.shape[:2], values[0, 0].size
+        step = max(1, math.isqrt(values.size // MAX_VALUES))
+        while -(-rows // step) * -(-cols // step) * channels > MAX_VALUES:
             step += 1
         shown = values[::step, ::step]
         views = ((LabelImagePort, "labels"), (BinaryImagePort, "mask"), (ImagePort, "image"))
@@ -263,7 +264,8 @@ class PageValues:
         ref = pairing.cloud_colours(self.compiled, found["node"])
         colours = self.found.get(ref) if ref else None
         if colours is not None and np.shape(colours) == points.shape:
-            self.raw[f"{ref[0]}.{ref[1]}"] = _raw(np.asarray(colours)[::step])  # type: ignore[index]
+            taken = np.asarray(colours)[::step]  # an image's colours: its 8-bit levels as bytes
+            self.raw[f"{ref[0]}.{ref[1]}"] = _raw(taken, levels=True)  # type: ignore[index]
         else:
             ref = None
         described = {**found, "view": "points3d", "count": len(points), "step": 1}

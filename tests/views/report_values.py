@@ -150,6 +150,6 @@ def stereo_maps() -> dict[str, np.ndarray]:
 
 
 def stereo_maps_page() -> str:
-    """stereo.yaml's report of :func:`stereo_maps` (with ``scripted.MAX_PIXELS`` as set)."""
+    """stereo.yaml's report of :func:`stereo_maps` (with ``scripted.MAX_VALUES`` as set)."""
     graph = compiled("stereo.yaml")
     return html_report(graph, stereo_maps(), RunRecord("stereo", "threads"))

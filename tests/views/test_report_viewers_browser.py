@@ -161,13 +161,13 @@ def test_matches_are_drawn_over_their_pair_inliers_and_outliers_apart(browser, t
     assert page.errors == []
 
 
-MAX_PIXELS = 2_000  # the 30×40 disparity is sent whole, the 60×80 depth reduced (every 2nd)
+MAX_VALUES = 2_000  # the 30×40 disparity is sent whole, the 60×80 depth reduced (every 2nd)
 VIRIDIS_LOW, VIRIDIS_HIGH = [0x44, 0x01, 0x54], [0xFD, 0xE7, 0x25]  # matplotlib's ends
 
 
 @pytest.fixture(scope="module")
 def report(tmp_path_factory) -> Path:
-    with mock.patch.object(scripted, "MAX_PIXELS", MAX_PIXELS):
+    with mock.patch.object(scripted, "MAX_VALUES", MAX_VALUES):
         html = stereo_maps_page()
     path = tmp_path_factory.mktemp("maps") / "report.html"
     path.write_text(html, encoding="utf-8")

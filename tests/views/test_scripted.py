@@ -10,7 +10,7 @@ import io
 import imageio.v3 as iio
 import numpy as np
 
-from graphvision.values.images import FloatImagePort
+from graphvision.values.images import FloatImagePort, ImagePort
 from graphvision.views import scripted
 from graphvision.views.graph_view import layout_script
 from graphvision.views.scripted import PageValues
@@ -57,7 +57,7 @@ def test_a_label_map_without_its_image_is_drawn_alone_its_picture_kept_underneat
 def test_float_maps_and_images_ride_the_page_with_their_values_reduced_over_the_cap(
     monkeypatch,
 ):
-    monkeypatch.setattr(scripted, "MAX_PIXELS", 2_000)
+    monkeypatch.setattr(scripted, "MAX_VALUES", 2_000)
     maps = stereo_maps()
     data = page_data(stereo_maps_page())
     values, raw = data["values"], data["raw"]
@@ -76,16 +76,17 @@ def test_float_maps_and_images_ride_the_page_with_their_values_reduced_over_the_
 
 
 def test_a_map_is_reduced_to_at_most_the_cap_and_no_further():
-    for rows, cols in ((512, 512), (500, 741), (1, 300_000), (513, 512)):
-        found = PageValues(compiled("stereo.yaml"), {})._map(
-            {"node": "depth", "port": "out"}, FloatImagePort, np.zeros((rows, cols), np.float32)
-        )
+    page = PageValues(compiled("stereo.yaml"), {})
+    for shape in ((512, 512), (500, 741), (1, 300_000), (513, 512), (295, 295, 3), (296, 296, 3)):
+        kind = ImagePort if len(shape) == 3 else FloatImagePort
+        found = page._map({"node": "n", "port": "out"}, kind, np.zeros(shape, np.float32))
         assert found is not None
-        shown = found["shape"][0] * found["shape"][1]
-        assert shown <= scripted.MAX_PIXELS, (rows, cols)
+        rows, cols, channels = (*shape, 1)[:3]
+        assert np.prod(found["shape"]) <= scripted.MAX_VALUES, shape
         step = found["step"]
+        assert step == (1 if shape in ((512, 512), (295, 295, 3)) else 2), shape
         if step > 1:  # one pixel fewer skipped would be over the cap
-            assert -(-rows // (step - 1)) * -(-cols // (step - 1)) > scripted.MAX_PIXELS
+            assert -(-rows // (step - 1)) * -(-cols // (step - 1)) * channels > scripted.MAX_VALUES
 
 
 def test_a_classifiers_matrix_and_first_right_and_wrong_samples_are_in_the_page():
