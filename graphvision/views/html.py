@@ -4,7 +4,8 @@ The page holds the graph drawn as SVG, scaled to fit the page with zoom and
 pan (each node coloured by what happened to it, with its time), every
 output shown by its viewer (:mod:`graphvision.views.viewers`: float maps
 with a colour bar, label maps in distinct colours, point clouds coloured by
-depth, a classifier's confusion matrix) with links to its files, the
+depth, a classifier's confusion matrix; with script, images and float maps in
+the pixel viewer of :mod:`graphvision.views.scripted`) with links to its files, the
 intermediate values when they were kept, the node table (time, computed or
 cached, bytes), the run's provenance and the folder's earlier runs, newest
 first. Pictures are inline PNG (``data:`` URLs) and the page loads nothing

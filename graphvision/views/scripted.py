@@ -28,8 +28,9 @@ arrays, base64) of the values it draws with. So the report and the studio draw:
   and a range box (auto, or a fixed low and high), a label map in distinct colours.
   Their values ride the page (float32, or an image's exact ``k / 255`` levels as
   bytes); a map of more than ``MAX_VALUES`` values (pixels × channels: 512² gray,
-  295² RGB) is sent reduced to every ``step``-th pixel on both axes, and the page says
-  so (the output's file has them all).
+  295² RGB), or whose values take more than ``MAX_MAP_BYTES`` of the page (noisy
+  float values compress badly), is sent reduced to every ``step``-th pixel on both
+  axes, and the page says so (the output's file has them all).
 
 Each is drawn into its box in place of the page's own HTML drawing of the value, which
 stays as the page without script.
@@ -69,6 +70,7 @@ __all__ = [
 MAX_POINTS = 20_000  # points of a cloud in the 3-D view (as many as the studio sends)
 LONGEST = 1600  # a tinted map and its image are drawn at most this many pixels on a side
 MAX_VALUES = 1 << 18  # a map's values sent (pixels × channels); more are sent reduced
+MAX_MAP_BYTES = 512 << 10  # and the page's characters they take; more are sent reduced
 SHOWN_PREDICTIONS = 8  # right and wrong predictions shown, each (as the studio shows)
 _RAW_TYPES = (np.uint8, np.uint16, np.int32)
 
@@ -182,23 +184,29 @@ class PageValues:
     def _map(
         self, found: dict[str, Any], kind: type[PortType], value: Any
     ) -> dict[str, Any] | None:
-        """An image, float map, label map or mask with its values (every ``step``-th pixel
-        on both axes when it has more than ``MAX_VALUES`` values), for the pixel viewer."""
+        """An image, float map, label map or mask with its values, for the pixel viewer:
+        every ``step``-th pixel on both axes when it has more than ``MAX_VALUES`` values
+        or they take more than ``MAX_MAP_BYTES`` in the page."""
         values = np.asarray(value)
         gray_or_rgb = values.ndim == 2 or (values.ndim == 3 and values.shape[2] == 3)
         if not gray_or_rgb or values.size == 0 or values.dtype.kind not in "biuf":
+            return None
+        views = ((LabelImagePort, "labels"), (BinaryImagePort, "mask"), (ImagePort, "image"))
+        view = next((name for base, name in views if issubclass(kind, base)), "floatmap")
+        if view == "labels" and (values.min() < 0 or values.max() > np.iinfo(np.int32).max):
             return None
         (rows, cols), channels = values.shape[:2], values[0, 0].size
         step = max(1, math.isqrt(values.size // MAX_VALUES))
         while -(-rows // step) * -(-cols // step) * channels > MAX_VALUES:
             step += 1
-        shown = values[::step, ::step]
-        views = ((LabelImagePort, "labels"), (BinaryImagePort, "mask"), (ImagePort, "image"))
-        view = next((name for base, name in views if issubclass(kind, base)), "floatmap")
-        if view == "labels" and (values.min() < 0 or values.max() > np.iinfo(np.int32).max):
-            return None
-        self.raw[f"{found['node']}.{found['port']}"] = _raw(shown, levels=view == "image")
-        described = {**found, "view": view, "shape": list(shown.shape), "step": step}
+        raw = _raw(values[::step, ::step], levels=view == "image")
+        while len(raw["deflate"]) > MAX_MAP_BYTES and min(raw["shape"][:2]) > 1:
+            # the bytes go with the pixels sent: the next step that should fit, then check
+            over = math.sqrt(len(raw["deflate"]) / MAX_MAP_BYTES)
+            step = max(step + 1, math.ceil(step * over))
+            raw = _raw(values[::step, ::step], levels=view == "image")
+        self.raw[f"{found['node']}.{found['port']}"] = raw
+        described = {**found, "view": view, "shape": raw["shape"], "step": step}
         if view == "floatmap":
             described["units"] = units_of(kind)
         return {**described, "full": [rows, cols]}

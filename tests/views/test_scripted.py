@@ -145,3 +145,15 @@ def test_matches_are_kept_with_their_pair_keypoints_and_full_size_images():
     for key, url in data["pictures"].items():
         sizes[key] = iio.imread(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))).shape[:2]
     assert sizes == {"gray.out": (70, 40), "warp.image": (80, 60)}  # keypoints' pixels
+
+
+def test_a_map_whose_values_take_too_many_bytes_is_sent_reduced_under_the_cap(monkeypatch):
+    monkeypatch.setattr(scripted, "MAX_MAP_BYTES", 4_000)
+    noise = np.random.default_rng(3).uniform(0, 100, (64, 64)).astype(np.float32)
+    page = PageValues(compiled("stereo.yaml"), {})
+    found = page._map({"node": "depth", "port": "out"}, FloatImagePort, noise)
+    assert found is not None and found["step"] > 1  # 4096 values: under MAX_VALUES
+    raw = page.raw["depth.out"]
+    assert len(raw["deflate"]) <= 4_000
+    np.testing.assert_array_equal(decoded(raw), noise[:: found["step"], :: found["step"]])
+    assert found["shape"] == list(decoded(raw).shape) and found["full"] == [64, 64]
