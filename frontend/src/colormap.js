@@ -26,6 +26,24 @@ export function finiteRange(values) {
   return lo <= hi ? [lo, hi] : [0, 1];
 }
 
+// The range a float map is coloured over when it is auto: its finite values' 1st to
+// 99th percentile (linear interpolation, as numpy.percentile), so that a few outliers
+// do not wash the map out; their full range when those two are equal. The report's
+// picture without script (graphvision/views/viewers.py, float_map_range) uses the same.
+export function autoRange(values, low = 1, high = 99) {
+  const finite = Float64Array.from(Array.prototype.filter.call(values, Number.isFinite));
+  if (finite.length === 0) return [0, 1];
+  finite.sort();
+  const at = (q) => {
+    const x = (q / 100) * (finite.length - 1);
+    const i = Math.floor(x);
+    const j = Math.min(i + 1, finite.length - 1);
+    return finite[i] + (x - i) * (finite[j] - finite[i]);
+  };
+  const [lo, hi] = [at(low), at(high)];
+  return hi > lo ? [lo, hi] : [finite[0], finite[finite.length - 1]];
+}
+
 // RGBA bytes of `values` (row-major, width × height) through viridis over [lo, hi];
 // NaN and infinities are drawn transparent black.
 export function colourise(values, lo, hi) {

@@ -2,7 +2,7 @@
 // that inline it, such as report.html: no network, no module loader.
 export { GraphView, STATE_COLOURS } from "./graphview.js";
 export { layoutGraph, overlaps, downstream } from "./layout.js";
-export { colourise, finiteRange, labelColour, ticks, viridis } from "./colormap.js";
+export { autoRange, colourise, finiteRange, labelColour, ticks, viridis } from "./colormap.js";
 export { docHtml } from "./tex.js";
 export { canvasOf, cloudColours, drawColourBar, floatMapViewer, ImageViewer, pointCloudViewer, scalarViewer,
   tableViewer, tint } from "./viewers.js";

@@ -1,6 +1,6 @@
 // Viewers for values, one per kind of port (shared by the studio and report.html).
 // Each takes a container element and a description (see graphvision/studio/payload.py).
-import { colourise, finiteRange, labelColour, ticks, viridis } from "./colormap.js";
+import { autoRange, colourise, finiteRange, labelColour, ticks, viridis } from "./colormap.js";
 
 const el = (tag, attrs = {}, ...children) => {
   const e = document.createElement(tag);
@@ -248,7 +248,7 @@ export function floatMapViewer(container, desc, values) {
     lo.value = fmt(a);
     hi.value = fmt(b);
   };
-  const [a, b] = finiteRange(values);
+  const [a, b] = autoRange(values);
   paint(a, b);
   const fixed = () => paint(Number(lo.value), Number(hi.value));
   lo.addEventListener("change", fixed);

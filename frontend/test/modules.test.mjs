@@ -69,6 +69,17 @@ test("viridis runs dark purple to yellow; NaN is transparent", () => {
   assert.deepEqual(V.ticks(0, 1, 3).map((t) => t.text), ["0", "0.5", "1"]);
 });
 
+test("a float map's auto range is its 1st to 99th percentile, as the report's picture", () => {
+  // 0, 1, ..., 100 and one outlier, with NaN and inf left out:
+  // numpy.percentile(list(range(101)) + [1e6], [1, 99]) gives [1.01, 99.99].
+  const values = new Float32Array([...Array.from({ length: 101 }, (_, i) => i), 1e6, NaN, Infinity]);
+  const [lo, hi] = V.autoRange(values);
+  assert.ok(Math.abs(lo - 1.01) < 1e-9 && Math.abs(hi - 99.99) < 1e-9, `${lo} ${hi}`);
+  // numpy.percentile([2] * 100 + [7], [1, 99]) gives [2, 2]: widened to the minimum and maximum.
+  assert.deepEqual(V.autoRange(new Float32Array([...Array(100).fill(2), 7])), [2, 7]);
+  assert.deepEqual(V.autoRange([NaN]), [0, 1]);
+});
+
 test("label colours are distinct and the background is black", () => {
   assert.deepEqual(V.labelColour(0), [0, 0, 0]);
   const colours = new Set(Array.from({ length: 50 }, (_, i) => V.labelColour(i + 1).join(",")));
