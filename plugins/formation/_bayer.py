@@ -85,14 +85,21 @@ def _kernel_at(method: str, channel: int, letter: str, row_letters: str) -> np.n
     return _RB_AT_G_ROW if "RGB"[channel] in row_letters else _RB_AT_G_COLUMN
 
 
+def _power_of_two(weight: float) -> bool:
+    """Whether ``±weight`` is a power of two (a product by it is exact in any float)."""
+    mantissa, _ = np.frexp(abs(weight))
+    return bool(mantissa == 0.5)
+
+
 @cache
 def _tap_lists(pattern: str, method: str) -> tuple[np.ndarray, np.ndarray]:
-    """Taps ``(dy, dx, weight)`` per channel and tile place, in the order the array formulas
-    added them (row-major over the kernel), and their counts (−1: copy the sample).
+    """Taps ``(dy, dx, weight, 1 if the weight is a power of two)`` per channel and tile
+    place, in the order the array formulas added them (row-major over the kernel), and their
+    counts (−1: copy the sample).
 
     Bilinear keeps only the taps on samples of the channel's colour (the others read a
     masked zero)."""
-    taps = np.zeros((3, 4, 25, 3))
+    taps = np.zeros((3, 4, 25, 4))
     counts = np.full((3, 4), -1, dtype=np.int64)
     for tile, letter in enumerate(pattern):
         ty, tx = divmod(tile, 2)
@@ -103,7 +110,7 @@ def _tap_lists(pattern: str, method: str) -> tuple[np.ndarray, np.ndarray]:
                 continue
             half = kernel.shape[0] // 2
             kept = [
-                (dy - half, dx - half, kernel[dy, dx])
+                (dy - half, dx - half, kernel[dy, dx], _power_of_two(kernel[dy, dx]))
                 for dy, dx in zip(*np.nonzero(kernel), strict=True)
                 if method != "bilinear"
                 or pattern[2 * ((ty + dy - half) % 2) + (tx + dx - half) % 2] == "RGB"[channel]
@@ -170,6 +177,6 @@ def demosaic(
 
     taps, counts = _tap_lists(pattern, method)
     out = np.empty((*raw.shape, 3), dtype=np.float32)
-    even, odd = split_padded(np.ascontiguousarray(raw, dtype=np.float32))
-    demosaic_taps(even, odd, taps, counts, out)
+    even, odd, tiny = split_padded(np.ascontiguousarray(raw, dtype=np.float32))
+    demosaic_taps(even, odd, taps, counts, tiny, out)
     return out
