@@ -71,3 +71,15 @@ def test_compiled_demosaic_equals_the_array_formulas(pattern, method):
         np.testing.assert_array_equal(
             demosaic(raw, pattern=pattern, method=method), _reference(raw, pattern, method)
         )
+
+
+@pytest.mark.parametrize("method", ["bilinear", "malvar"])
+def test_demosaic_of_values_below_the_normal_range_equals_the_array_formulas(method):
+    # a product by a weight of 1/16 to 1/2 of a value near float32's smallest loses bits
+    # in float32 (not in float64): such a mosaic is summed in float64 throughout
+    rng = np.random.default_rng(5)
+    raw = (rng.integers(1, 2**20, (12, 14)) * np.float32(2.0**-149)).astype(np.float32)
+    raw[::3, ::2] = rng.random((4, 7)).astype(np.float32)  # normal values beside them
+    np.testing.assert_array_equal(
+        demosaic(raw, pattern="GBRG", method=method), _reference(raw, "GBRG", method)
+    )
