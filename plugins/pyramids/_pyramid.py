@@ -47,29 +47,33 @@ def expand(coarse: np.ndarray, shape: tuple[int, ...], sigma: float) -> np.ndarr
 def gaussian_levels(image: np.ndarray, levels: int, sigma: float) -> list[np.ndarray]:
     """``blur(level, sigma)[::2, ::2]`` level after level, only the kept pixels computed.
 
-    Every level of a plane comes from one compiled call (``_pyramid_kernels``), written into
-    one buffer (the levels are views of it); a colour image is done plane by plane.
+    Level 0 is ``image`` itself, read-only (a float32 array is not copied); the others of a
+    plane come from one compiled call (``_pyramid_kernels``) into one buffer, views of it.
+    A colour image is done plane by plane.
     """
     from ..shared.separable import gaussian_taps
     from ._pyramid_kernels import gaussian_chain
 
+    first = np.ascontiguousarray(image, dtype=np.float32).view()
+    first.flags.writeable = False
     shapes = [image.shape[:2]]
     while len(shapes) < levels and min(shapes[-1]) >= 2:
         shapes.append(((shapes[-1][0] + 1) // 2, (shapes[-1][1] + 1) // 2))
-    taps = gaussian_taps(sigma, 3.0).astype(np.float32)
     table = np.array(shapes, dtype=np.int64)
-    sizes = table[:, 0] * table[:, 1]
+    sizes = table[1:, 0] * table[1:, 1]
     ends = np.cumsum(sizes)
-    planes = [image] if image.ndim == 2 else [image[..., c] for c in range(image.shape[2])]
+    if not len(sizes):
+        return [first]
+    taps = gaussian_taps(sigma, 3.0).astype(np.float32)
+    planes = [first] if first.ndim == 2 else [first[..., c] for c in range(first.shape[2])]
     buffers = []
     for plane in planes:
-        buffer = np.empty(int(ends[-1]), dtype=np.float32)
-        gaussian_chain(np.ascontiguousarray(plane, dtype=np.float32), taps, table, buffer)
-        buffers.append(buffer)
-    result = []
-    for (rows, cols), end, size in zip(shapes, ends, sizes, strict=True):
+        buffers.append(np.empty(int(ends[-1]), dtype=np.float32))
+        gaussian_chain(np.ascontiguousarray(plane), taps, table, buffers[-1])
+    result = [first]
+    for (rows, cols), end, size in zip(shapes[1:], ends, sizes, strict=True):
         views = [buffer[end - size : end].reshape(rows, cols) for buffer in buffers]
-        result.append(views[0] if image.ndim == 2 else np.stack(views, axis=2))
+        result.append(views[0] if first.ndim == 2 else np.stack(views, axis=2))
     return result
 
 

@@ -39,23 +39,15 @@ def _halve(
     even: np.ndarray,
     odd: np.ndarray,
     out: np.ndarray,
-    copy: np.ndarray,
 ) -> None:  # pragma: no cover
     """``out`` = ``source`` blurred by ``taps`` (symmetric, odd length) at its even rows and
-    columns; ``line``, ``even`` and ``odd`` are scratch of at least ``cols + 2 half``.
-
-    A ``copy`` of ``source``'s shape receives ``source`` on the way, rows ``2r`` and
-    ``2r + 1`` while output row ``r`` reads them (an empty one: no copy)."""
+    columns; ``line``, ``even`` and ``odd`` are scratch of at least ``cols + 2 half``."""
     rows, cols = source.shape
     size = taps.size
     half = size // 2
     width = cols + 2 * half
     centre = line[half : half + cols]
     for r in range(out.shape[0]):
-        if copy.size > 0:
-            copy[2 * r] = source[2 * r]
-            if 2 * r + 1 < rows:
-                copy[2 * r + 1] = source[2 * r + 1]
         mid = source[_mirror(2 * r, rows)]
         weight = taps[half]
         for c in range(cols):
@@ -93,22 +85,17 @@ def _halve(
 def gaussian_chain(
     image: np.ndarray, taps: np.ndarray, shapes: np.ndarray, buffer: np.ndarray
 ) -> None:  # pragma: no cover
-    """Level 0 (a copy of ``image``, made while the first halving reads it) and each next
-    level, of shape ``shapes[k]``, the previous one halved, one after the other in ``buffer``."""
+    """The levels after ``image``, of shapes ``shapes[1:]``, each the previous one halved,
+    one after the other in ``buffer``."""
     half = taps.size // 2
     scratch = np.empty(image.shape[1] + 2 * half + 1, dtype=buffer.dtype)
     even = np.empty(scratch.size // 2 + 1, dtype=buffer.dtype)
     odd = np.empty(scratch.size // 2 + 1, dtype=buffer.dtype)
-    start = image.size
-    first = buffer[:start].reshape(image.shape)
-    if shapes.shape[0] == 1:
-        first[:, :] = image
-        return
     previous = image
+    start = 0
     for k in range(1, shapes.shape[0]):
         rows, cols = shapes[k, 0], shapes[k, 1]
         level = buffer[start : start + rows * cols].reshape((rows, cols))
-        copy = first if k == 1 else first[:0]
-        _halve(previous, taps, scratch, even, odd, level, copy)
+        _halve(previous, taps, scratch, even, odd, level)
         start += rows * cols
         previous = level

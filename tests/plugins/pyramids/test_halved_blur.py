@@ -36,3 +36,12 @@ def test_halved_blur_equals_blur_then_subsample(sigma):
         for got, want in zip(found, expected, strict=True):
             assert got.shape == want.shape
             np.testing.assert_array_equal(got, want)
+
+
+def test_level_zero_is_the_image_read_only_not_a_copy():
+    image = np.random.default_rng(2).random((9, 12)).astype(np.float32)
+    first = pyramids.gaussian_pyramid(image, levels=3).levels[0]
+    assert np.shares_memory(first, image)
+    with pytest.raises(ValueError, match="read-only"):
+        first[0, 0] = 0.5
+    assert image.flags.writeable  # the caller's array is left as it was
