@@ -7,9 +7,9 @@ SGBM). OpenCV runs with ``cv2.setNumThreads(1)``, numba with one thread and BLAS
 thread (``threadpoolctl``). Inputs are scikit-image's astronaut and camera resized to
 512² and 2048² and rounded to 8-bit levels, as an image read from a file is (float32 in
 [0, 1] for graphvision; the dtype OpenCV's call takes, noted in the row, for OpenCV).
-graphvision is called as a user calls a node directly, its port checks included; the median,
-correlation and SGM rows are repeated with the node's own function (``__wrapped__``, no port
-checks), the kernel's time alone. The calls compared:
+graphvision is called as a user calls a node directly, its port checks included; the colour,
+median, correlation, pyramid, demosaicing and SGM rows are repeated with the node's own
+function (``__wrapped__``, no port checks), the kernel's time alone. The calls compared:
 
 * colour: ``colour.from_rgb`` against ``cv2.cvtColor`` (RGB2HSV, RGB2Lab, RGB2YCrCb) on float32;
 * median 3/5/7: ``filters.median`` against ``cv2.medianBlur`` (float32 for 3 and 5; uint8
@@ -67,14 +67,15 @@ def _image_rows(cv2, size: int) -> list[Row]:
     rows: list[Row] = []
     for space, code in (("hsv", "RGB2HSV"), ("lab", "RGB2Lab"), ("ycbcr", "RGB2YCrCb")):
         flag = getattr(cv2, f"COLOR_{code}")
-        rows.append(
-            (
-                f"RGB → {space}",
-                f"`cv2.cvtColor({code})` float32",
-                lambda space=space: colour.from_rgb(rgb, space=space),
-                lambda flag=flag: cv2.cvtColor(rgb, flag),
+        for label, convert in (("", colour.from_rgb), (_KERNEL_ONLY, colour.from_rgb.__wrapped__)):
+            rows.append(
+                (
+                    f"RGB → {space}{label}",
+                    f"`cv2.cvtColor({code})` float32",
+                    lambda space=space, convert=convert: convert(rgb, space=space),
+                    lambda flag=flag: cv2.cvtColor(rgb, flag),
+                )
             )
-        )
     for k in (3, 5, 7):
         src = gray if k < 7 else gray8
         for label, median in (("", filters.median), (_KERNEL_ONLY, filters.median.__wrapped__)):
@@ -104,26 +105,35 @@ def _image_rows(cv2, size: int) -> list[Row]:
             levels.append(cv2.pyrDown(levels[-1]))
         return levels
 
-    rows.append(
-        (
-            "Gaussian pyramid, 4 levels",
-            "`cv2.pyrDown` ×3 float32",
-            lambda: pyramids.gaussian_pyramid(gray, levels=4),
-            pyr_down,
-        )
+    pyramid = (
+        ("", pyramids.gaussian_pyramid),
+        (_KERNEL_ONLY, pyramids.gaussian_pyramid.__wrapped__),
     )
+    for label, build in pyramid:
+        rows.append(
+            (
+                f"Gaussian pyramid, 4 levels{label}",
+                "`cv2.pyrDown` ×3 float32",
+                lambda build=build: build(gray, levels=4),
+                pyr_down,
+            )
+        )
     raw = formation.mosaic(rgb, pattern="RGGB")
     raw16 = np.round(raw * 65535).astype(np.uint16)
     for method, code in (("bilinear", "BayerBG2RGB"), ("malvar", "BayerBG2RGB_EA")):
         flag = getattr(cv2, f"COLOR_{code}")
-        rows.append(
-            (
-                f"demosaic {method}",
-                f"`cv2.cvtColor({code})` uint16",
-                lambda method=method: formation.demosaic(raw, method=method),
-                lambda flag=flag: cv2.cvtColor(raw16, flag),
+        for label, demosaic in (
+            ("", formation.demosaic),
+            (_KERNEL_ONLY, formation.demosaic.__wrapped__),
+        ):
+            rows.append(
+                (
+                    f"demosaic {method}{label}",
+                    f"`cv2.cvtColor({code})` uint16",
+                    lambda method=method, demosaic=demosaic: demosaic(raw, method=method),
+                    lambda flag=flag: cv2.cvtColor(raw16, flag),
+                )
             )
-        )
     top = size * 200 // 512
     patch = gray[top : top + size * 40 // 512, top : top + size * 60 // 512].copy()
     rows.append(
