@@ -36,8 +36,8 @@ def rgb_to_hsv(rgb: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
         red, green = value == r, value != r and value == g
         numerator = g - b if red else (b - r if green else r - g)
         offset = 0.0 if red else (2.0 if green else 4.0)
-        hue = numerator / chroma + offset  # in [-1, 1] for red: ``% 6.0`` by hand
-        hue = hue + 6.0 if hue < 0 else (hue if hue > 0 or not red else 0.0)
+        sector = numerator / chroma + offset  # in [-1, 1] for red: ``% 6.0`` by hand
+        hue = sector + 6.0 if sector < 0 else (sector if sector > 0 or not red else 0.0)
         result[3 * i] = hue / 6.0 if chroma > 0 else 0.0
         result[3 * i + 1] = saturation
         result[3 * i + 2] = value

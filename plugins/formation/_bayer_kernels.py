@@ -144,7 +144,7 @@ def demosaic_taps(
 
 @njit(cache=True, nogil=True)
 def _interleave(
-    sums: np.ndarray, low: float, high: float, out: np.ndarray
+    sums: np.ndarray, low: np.float32, high: np.float32, out: np.ndarray
 ) -> None:  # pragma: no cover
     """One output row, RGB per pixel, from the six runs ``sums[channel, column parity]``,
     clipped to [``low``, ``high``]: one loop over the pixel pairs, six loads and six stores
