@@ -101,7 +101,7 @@ def gaussian_pyramid(image: Image, *, levels: Levels = 4, sigma: Sigma = 1.0) ->
 
     Returns
     -------
-    pyramid : Pyramid, finest first
+    pyramid : Pyramid, finest first; level 0 is the image itself, read-only (not a copy)
 
     References
     ----------
