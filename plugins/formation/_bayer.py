@@ -173,10 +173,10 @@ def demosaic(
     """
     if min(raw.shape) < 5:
         raise ValueError(f"raw must be at least 5×5 to demosaic, got {raw.shape}")
-    from ._bayer_kernels import demosaic_taps, split_padded
+    from ._bayer_kernels import demosaic_taps, has_tiny
 
     taps, counts = _tap_lists(pattern, method)
     out = np.empty((*raw.shape, 3), dtype=np.float32)
-    even, odd, tiny = split_padded(np.ascontiguousarray(raw, dtype=np.float32))
-    demosaic_taps(even, odd, taps, counts, tiny, out)
+    samples = np.ascontiguousarray(raw, dtype=np.float32)
+    demosaic_taps(samples, taps, counts, has_tiny(samples), out)
     return out

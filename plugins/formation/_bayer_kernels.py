@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["demosaic_taps", "split_padded"]
+__all__ = ["demosaic_taps", "has_tiny"]
 
 TINY = 2.0**-100  # below it, a product by a weight ≥ 1/16 could leave float32's normal range
 
@@ -50,23 +50,25 @@ def _every_second(source: np.ndarray, first: int, out: np.ndarray) -> None:  # p
 
 
 @njit(cache=True, nogil=True)
-def split_padded(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:  # pragma: no cover
-    """The even and the odd columns of ``raw`` padded by 2 (``numpy.pad``'s ``reflect``),
-    and whether a value lies in (0, TINY) (in magnitude)."""
-    rows, cols = raw.shape
-    width = cols + 4
-    even = np.empty((rows + 4, (width + 1) // 2), dtype=np.float32)
-    odd = np.empty((rows + 4, width // 2), dtype=np.float32)
-    for p in range(rows + 4):
-        source = raw[_mirror(p - 2, rows)]
-        _every_second(source, -2, even[p])
-        _every_second(source, -1, odd[p])
+def has_tiny(raw: np.ndarray) -> bool:  # pragma: no cover
+    """Whether a value of ``raw`` lies in (0, TINY) in magnitude."""
     tiny = 0
-    for y in range(rows):
-        for x in range(cols):
+    for y in range(raw.shape[0]):
+        for x in range(raw.shape[1]):
             size = abs(raw[y, x])
             tiny += (size > 0) & (size < TINY)
-    return even, odd, tiny > 0
+    return tiny > 0
+
+
+@njit(cache=True, nogil=True)
+def _fill_padded(
+    raw: np.ndarray, p: int, even: np.ndarray, odd: np.ndarray
+) -> None:  # pragma: no cover
+    """Row ``p`` of ``raw`` padded by 2 (``numpy.pad``'s ``reflect``), its even columns into
+    ``even[p % 5]`` and its odd ones into ``odd[p % 5]``."""
+    source = raw[_mirror(p - 2, raw.shape[0])]
+    _every_second(source, -2, even[p % 5])
+    _every_second(source, -1, odd[p % 5])
 
 
 @njit(cache=True, nogil=True)
@@ -85,9 +87,8 @@ def _add_taps(
     n = total.size
     for t in range(count):
         start = column + np.int64(taps[t, 1])
-        line = (
-            even[row + np.int64(taps[t, 0])] if start % 2 == 0 else odd[row + np.int64(taps[t, 0])]
-        )
+        slot = (row + np.int64(taps[t, 0])) % 5
+        line = even[slot] if start % 2 == 0 else odd[slot]
         source = line[start // 2 : start // 2 + n]
         weight = taps[t, 2]
         if t == 0 and single and taps[t, 3] > 0:
@@ -108,26 +109,33 @@ def _add_taps(
 
 @njit(cache=True, nogil=True)
 def demosaic_taps(
-    even: np.ndarray,
-    odd: np.ndarray,
+    raw: np.ndarray,
     taps: np.ndarray,
     counts: np.ndarray,
     tiny: bool,
     out: np.ndarray,
 ) -> None:  # pragma: no cover
     """``out[y, x, c]`` from ``taps[c, tile, :counts[c, tile]]`` (``tile = 2 (y % 2) + x % 2``;
-    each tap ``(dy, dx, weight, power of two)``) over the mosaic padded by 2 (``reflect``),
-    given as its even and its odd columns; a count of −1 copies the sample. Results are
-    clipped to [0, 1].
+    each tap ``(dy, dx, weight, power of two)``) over ``raw`` padded by 2 (``reflect``); a
+    count of −1 copies the sample. Results are clipped to [0, 1]. ``tiny``: ``raw`` has
+    values below float32's normal range (see the module docstring).
 
-    Per output row, the six runs (channel × column parity) are summed tap after tap, each
-    a loop over one contiguous row of ``even`` or ``odd``, then interleaved into the row.
+    The five padded rows an output row reads are kept split into their even and their odd
+    columns, in a ring (padded row ``p`` in slot ``p % 5``, one new row per output row), so
+    nothing the size of the mosaic is made beside the output. Per output row, the six runs
+    (channel × column parity) are summed tap after tap, each a loop over one contiguous row
+    of the ring, then interleaved into the row.
     """
     rows, cols = out.shape[0], out.shape[1]
-    half = (cols + 1) // 2
-    sums = np.empty((3, 2, half), dtype=np.float32)
+    width = cols + 4
+    even = np.empty((5, (width + 1) // 2), dtype=np.float32)
+    odd = np.empty((5, width // 2), dtype=np.float32)
+    for p in range(4):
+        _fill_padded(raw, p, even, odd)
+    sums = np.empty((3, 2, (cols + 1) // 2), dtype=np.float32)
     low, high = np.float32(0.0), np.float32(1.0)
     for y in range(rows):
+        _fill_padded(raw, y + 4, even, odd)
         for c in range(3):
             for tx in range(2):
                 tile = 2 * (y % 2) + tx
@@ -135,7 +143,7 @@ def demosaic_taps(
                 n = (cols - tx + 1) // 2
                 total = sums[c, tx, :n]
                 if count < 0:
-                    source = even[y + 2] if tx == 0 else odd[y + 2]
+                    source = even[(y + 2) % 5] if tx == 0 else odd[(y + 2) % 5]
                     total[:] = source[1 : 1 + n]
                 else:
                     _add_taps(total, even, odd, y + 2, tx + 2, taps[c, tile], count, not tiny)
