@@ -54,6 +54,7 @@ from graphvision.execution.batch_files import (
     replace_text,
     write_summary,
 )
+from graphvision.execution.batch_lanes import FileLanes
 from graphvision.execution.batch_run import BatchRun
 from graphvision.execution.executors import (
     Executor,
@@ -211,7 +212,7 @@ def _run_files(
     out_dir, stale, made = where
     items: list[BatchItem | None] = [None] * len(batch.paths)
     try:
-        stream = _stream(batch.run_one, len(batch.paths), width)
+        stream = _stream(batch, width)
         for done, (index, item) in enumerate(stream, start=1):
             items[index] = item
             if on_item is not None:
@@ -283,14 +284,19 @@ def _summarise(
     return summary
 
 
-def _stream(
-    run_one: Callable[[int], BatchItem], count: int, at_once: int
-) -> Iterator[tuple[int, BatchItem]]:
+def _stream(batch: BatchRun, at_once: int) -> Iterator[tuple[int, BatchItem]]:
     """``(index, item)`` as items complete: item 0 alone (it fills the cache with the shared
-    nodes), then the rest ``at_once`` at a time on client threads that wait on the executor."""
+    nodes), then the rest ``at_once`` at a time on client threads that wait on the executor
+    (with one task per file, the client runs files itself while the workers start:
+    :mod:`graphvision.execution.batch_lanes`)."""
+    run_one, count = batch.run_one, len(batch.paths)
     if count == 0:
         return
     yield 0, run_one(0)
+    if batch.one_task_per_file and at_once > 1:
+        lanes = FileLanes(count, at_once, batch.workers_ready, lambda: batch.stopped)
+        yield from lanes.stream(run_one, batch.run_in_client)
+        return
     if at_once <= 1:
         for index in range(1, count):
             yield index, run_one(index)

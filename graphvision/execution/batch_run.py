@@ -5,9 +5,11 @@ others in this process's threads or as one task each of the executor
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import pickle
 import threading
 import uuid
+from concurrent.futures import Future
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +29,7 @@ from graphvision.execution.file_task import (
     Seed,
     local_plugin_paths,
     preload_modules,
+    run_file_task,
     shared_seeds,
     warm_worker,
 )
@@ -68,8 +71,21 @@ class BatchRun:
         self.outcomes: list[FileOutcome] = []  # what the file tasks sent back
         self.started: set[int] = set()
         self.stopped = False
+        self.workers_ready = threading.Event()  # a worker has started (or could not)
 
     def run_one(self, index: int) -> BatchItem:
+        if index > 0 or not self.one_task_per_file:
+            return self._run_one(index)
+        self._warm_workers()  # while the first file runs here
+        try:
+            return self._run_one(0)
+        finally:  # a first file that failed early: the others' job has no shared values
+            if self.job is None:
+                with contextlib.suppress(Exception):
+                    self.job_sent = self._file_job(None)
+                    self.job = self._share(self.job_sent)
+
+    def _run_one(self, index: int) -> BatchItem:
         self.started.add(index)
         path, folder = self.paths[index], self.folders[index]
         reason = unreadable_reason(path)
@@ -87,13 +103,29 @@ class BatchRun:
         except Exception as error:  # whatever it is, it fails this file alone
             return BatchItem(path, folder, "failed", error=failure_reason(error))
 
+    def run_in_client(self, index: int) -> BatchItem:
+        """A further file run here as a worker would run it (while the workers start: see
+        :mod:`graphvision.execution.batch_lanes`); its folder is not written once stopped."""
+        self.started.add(index)
+        path, folder = self.paths[index], self.folders[index]
+        reason = unreadable_reason(path)
+        if reason:
+            return BatchItem(path, folder, "failed", error=f"{path} {reason}")
+        try:
+            if self.job_sent is None:
+                raise RuntimeError("the batch's first file did not prepare the other files' job")
+            name = f"{executor_name(self.pool)}, in the client while the workers started"
+            job = dataclasses.replace(self.job_sent, executor=name)
+            return run_file_task(job, str(path), str(folder), lambda: self.stopped).item
+        except Exception as error:  # whatever it is, it fails this file alone
+            return BatchItem(path, folder, "failed", error=failure_reason(error))
+
     def _run(self, index: int) -> tuple[BatchItem, RunResult | None]:
         """A file run in this process (the first one; all of them without one task per file)."""
         item_inputs = {**self.inputs, self.input: str(self.paths[index])}
         path, folder, options = self.paths[index], self.folders[index], self.options
         options = {**options, "inputs": item_inputs}
         if index == 0 and self.one_task_per_file:  # here, while the workers load the plugins
-            self._warm_workers()
             options["executor"] = SyncExecutor()
             options["executor"].name = f"{executor_name(self.pool)}, first file in this process"
         elif index > 0 and self.file_threads:  # each file in its thread, one node at a time
@@ -144,7 +176,8 @@ class BatchRun:
 
     def _warm_workers(self) -> None:
         """Have each worker start and load the plugins now, while the first file runs here
-        (from a thread: a worker's start may wait for the executor's server to import)."""
+        (from a thread: a worker's start may wait for the executor's server to import);
+        ``workers_ready`` is set as the first worker is ready, or could not start."""
         registry, graph = self.options["registry"], plain_graph(self.graph)
         preload = getattr(self.pool, "preload", None)
         paths = tuple(local_plugin_paths(registry))
@@ -155,12 +188,17 @@ class BatchRun:
                 with contextlib.suppress(Exception):  # else workers do it on their first file
                     warm_server(graph, paths, (*self.inputs, self.input))
                     preload(preload_modules(registry, graph, tuple(self.pages.run)))
+            futures: list[Future] = []
             with contextlib.suppress(Exception):  # a worker that failed shows on its first file
                 if warm is not None:  # on every worker (Dask)
-                    warm(warm_worker, graph, paths)
-                    return
-                for _ in range(executor_width(self.pool)):
-                    self.pool.submit(warm_worker, graph, paths)
+                    futures = list(warm(warm_worker, graph, paths) or ())
+                else:
+                    for _ in range(executor_width(self.pool)):
+                        futures.append(self.pool.submit(warm_worker, graph, paths))
+            for future in futures:
+                future.add_done_callback(lambda _: self.workers_ready.set())
+            if not futures:
+                self.workers_ready.set()
 
         threading.Thread(target=start, daemon=True, name="graphvision-warm-workers").start()
 

@@ -140,18 +140,25 @@ class DaskExecutor:
         """
         return self.client.submit(_shared, value, pure=False, retries=self.retries)
 
-    def warm(self, fn: Callable[..., Any], /, *args: Any) -> None:
-        """Have every worker run ``fn(*args)`` now, as a task of its own that nothing waits
-        for (a batch's imports and plugin loading, done on each worker while its first file
-        runs in the client). A task, not ``Client.run``: that runs in the worker's event
-        loop, which stopped answering the scheduler for the seconds it took."""
+    def warm(self, fn: Callable[..., Any], /, *args: Any) -> list[Future]:
+        """Have every worker run ``fn(*args)`` now, as a task of its own (a batch's imports
+        and plugin loading, done on each worker while its first file runs in the client);
+        a future for each, done as that worker is. A task, not ``Client.run``: that runs in
+        the worker's event loop, which stopped answering the scheduler for the seconds it
+        took."""
         from distributed import fire_and_forget
 
+        futures: list[Future] = []
         for address in self.client.scheduler_info()["workers"]:
             task = self.client.submit(
                 fn, *args, workers=[address], allow_other_workers=True, pure=False
             )
             fire_and_forget(task)
+            future = TaskFuture(task)
+            future.set_running_or_notify_cancel()
+            task.add_done_callback(lambda done, future=future: _settle(done, future))
+            futures.append(future)
+        return futures
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         """Run ``fn(*args)`` as a Dask task; a ``concurrent.futures`` future of its result.

@@ -37,6 +37,7 @@ from __future__ import annotations
 import threading
 import time
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -243,9 +244,12 @@ def _prepared(job: FileJob) -> _Prepared:
         return found
 
 
-def run_file_task(job: FileJob, path: str, folder: str) -> FileOutcome:
+def run_file_task(
+    job: FileJob, path: str, folder: str, stopped: Callable[[], bool] | None = None
+) -> FileOutcome:
     """On a worker: run the job's pipeline for the file at ``path`` (the shared values from
-    the job's seeds, the values computed written to the job's store) and write ``folder``."""
+    the job's seeds, the values computed written to the job's store) and write ``folder``
+    (unless ``stopped()`` says by then that the batch has stopped: the client's own files)."""
     from graphvision.execution.run import run
 
     prepared = _prepared(job)
@@ -274,6 +278,8 @@ def run_file_task(job: FileJob, path: str, folder: str) -> FileOutcome:
     item.seconds = time.perf_counter() - began
     if result is not None:
         result.record.executor = job.executor
+    if stopped is not None and stopped():  # the batch stopped meanwhile: no folder written
+        return FileOutcome(item)
     outcome = FileOutcome(finish_item(item, result, job.pages))
     if result is not None:
         outcome.keys, outcome.value_bytes = _output_keys(result.record, result.compiled)
