@@ -31,6 +31,7 @@ from graphvision.execution.file_task import (
     preload_modules,
     run_file_task,
     shared_seeds,
+    use_registry,
     warm_worker,
 )
 from graphvision.execution.record import RunResult
@@ -149,7 +150,7 @@ class BatchRun:
         if first is not None and cache is not None:
             seeds = shared_seeds(first.compiled, first.record, cache, self.input)
         graph, overrides = plain_graph(self.graph), options["overrides"]
-        return FileJob(
+        job = FileJob(
             token=uuid.uuid4().hex,
             graph=graph.with_overrides(overrides) if overrides else graph,
             plugin_paths=tuple(local_plugin_paths(options["registry"])),
@@ -162,6 +163,8 @@ class BatchRun:
             store=cache.disk if cache is not None else None,
             executor=f"{executor_name(self.pool)}, one task per file",
         )
+        use_registry(job, options["registry"])  # for the client's own files
+        return job
 
     def transferred(self) -> tuple[int, int]:
         """The bytes of the values the file tasks computed, and of what passed through the

@@ -63,6 +63,7 @@ __all__ = [
     "run_file_task",
     "shared_seeds",
     "shared_steps",
+    "use_registry",
     "warm_graph",
     "warm_worker",
 ]
@@ -188,12 +189,27 @@ _PREPARED_LOCK = threading.Lock()
 _KEEP_JOBS = 4
 
 
-def _registry(graph: Graph, plugin_paths: tuple[str, ...]) -> Registry:
-    """The plugins ``graph`` needs, loaded once per process (call with the lock held)."""
-    from graphvision.nodes.plugins import Needs, discover_for
+def _registry_key(
+    graph: Graph, plugin_paths: tuple[str, ...]
+) -> tuple[tuple[str, ...], frozenset[str], frozenset[str]]:
+    from graphvision.nodes.plugins import Needs
 
     needs = Needs.of(graph)
-    key = ((*plugin_paths, *graph.plugins), needs.ops, needs.port_types)
+    return ((*plugin_paths, *graph.plugins), needs.ops, needs.port_types)
+
+
+def use_registry(job: FileJob, registry: Registry) -> None:
+    """Run ``job``'s files in this process with ``registry`` (the client's, which has loaded
+    the plugins already) rather than loading the plugins again."""
+    with _PREPARED_LOCK:
+        _REGISTRIES.setdefault(_registry_key(job.graph, job.plugin_paths), registry)
+
+
+def _registry(graph: Graph, plugin_paths: tuple[str, ...]) -> Registry:
+    """The plugins ``graph`` needs, loaded once per process (call with the lock held)."""
+    from graphvision.nodes.plugins import discover_for
+
+    key = _registry_key(graph, plugin_paths)
     found = _REGISTRIES.get(key)
     if found is None:
         found = _REGISTRIES[key] = discover_for(graph, plugin_paths)
