@@ -96,6 +96,7 @@ def run_batch(
     on_item: Callable[[int, int, BatchItem], None] | None = None,
     files_at_once: int | None = None,
     one_task_per_file: bool | None = None,
+    client_files: bool | None = None,
     pages: BatchPages = NO_PAGES,
     backends: Sequence[str] | str | None = None,
 ) -> BatchResult:
@@ -125,6 +126,13 @@ def run_batch(
         executor, the shared nodes' values sent along (see
         :mod:`graphvision.execution.file_task`); default: on executors whose nodes run in
         other processes (``processes``, Dask), where a task costs most.
+    client_files : bool, optional
+        With one task per file, the client runs files itself until the first worker is
+        ready (:mod:`graphvision.execution.batch_lanes`): the seconds a worker takes to
+        start are no longer seconds lost, but a node that crashes its process in one of
+        those files ends the batch, as on the first file. Default: on for ``processes``
+        (workers forked on this machine, whose start costs seconds), off on Dask (a
+        cluster's workers are already running, and need not see the client's storage).
     pages : BatchPages
         Report pages to write besides outputs, records and ``batch.csv``
         (``graphvision.run_batch`` writes ``report.md``, ``report.html`` and
@@ -181,6 +189,9 @@ def run_batch(
     own = isinstance(executor, str)
     width = files_at_once or executor_width(pool) * (2 if one_task_per_file else 1)
     batch.file_threads = width > 1 and not one_task_per_file and not encodes_values(pool)
+    batch.client_files = one_task_per_file and (
+        hasattr(pool, "preload") if client_files is None else client_files
+    )
     finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
     if own:
         pool.shutdown()
@@ -295,7 +306,7 @@ def _stream(batch: BatchRun, at_once: int) -> Iterator[tuple[int, BatchItem]]:
     yield 0, run_one(0)
     if batch.one_task_per_file and at_once > 1:
         lanes = FileLanes(count, at_once, batch.workers_ready, lambda: batch.stopped)
-        yield from lanes.stream(run_one, batch.run_in_client)
+        yield from lanes.stream(run_one, batch.run_in_client if batch.client_files else None)
         return
     if at_once <= 1:
         for index in range(1, count):

@@ -67,6 +67,7 @@ class BatchRun:
         self.options: dict[str, Any] = {}
         self.compiled: CompiledGraph | None = None
         self.file_threads = False  # files at once in this process: each one runs on ``sync``
+        self.client_files = False  # the client runs files while the workers start
         self.job_sent: FileJob | None = None
         self.job: Any = None  # the FileJob of further files, or the executor's handle on it
         self.outcomes: list[FileOutcome] = []  # what the file tasks sent back
@@ -187,17 +188,20 @@ class BatchRun:
         warm = getattr(self.pool, "warm", None)
 
         def start() -> None:
+            modules: tuple[str, ...] = ()
+            with contextlib.suppress(Exception):  # else workers import them on their first file
+                modules = tuple(preload_modules(registry, graph, tuple(self.pages.run)))
             if preload is not None:  # the server imports them and compiles the graph, once
-                with contextlib.suppress(Exception):  # else workers do it on their first file
+                with contextlib.suppress(Exception):
                     warm_server(graph, paths, (*self.inputs, self.input))
-                    preload(preload_modules(registry, graph, tuple(self.pages.run)))
+                    preload(list(modules))
             futures: list[Future] = []
             with contextlib.suppress(Exception):  # a worker that failed shows on its first file
                 if warm is not None:  # on every worker (Dask)
-                    futures = list(warm(warm_worker, graph, paths) or ())
+                    futures = list(warm(warm_worker, graph, paths, modules) or ())
                 else:
                     for _ in range(executor_width(self.pool)):
-                        futures.append(self.pool.submit(warm_worker, graph, paths))
+                        futures.append(self.pool.submit(warm_worker, graph, paths, modules))
             for future in futures:
                 future.add_done_callback(lambda _: self.workers_ready.set())
             if not futures:

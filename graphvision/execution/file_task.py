@@ -216,16 +216,23 @@ def _registry(graph: Graph, plugin_paths: tuple[str, ...]) -> Registry:
     return found
 
 
-def warm_worker(graph: Graph, plugin_paths: tuple[str, ...]) -> int:
-    """Load the plugins ``graph`` needs in this worker process ahead of its first file, and
-    set up numba's compiler (a batch sends one per worker while its first file runs in the
-    client); its pid."""
+def warm_worker(graph: Graph, plugin_paths: tuple[str, ...], modules: tuple[str, ...] = ()) -> int:
+    """Load the plugins ``graph`` needs in this worker process ahead of its first file,
+    import ``modules`` (what its node functions import in their bodies:
+    :func:`preload_modules`) and, when they use numba, set up numba's compiler and load
+    their kernels from numba's cache (a batch sends one per worker while its first file runs
+    in the client; on a worker forked from the server all of it is done already); its pid."""
     import os
+    import sys
+
+    from graphvision.execution.batch_preload import import_modules, load_kernels
 
     with _PREPARED_LOCK:
         _registry(graph, plugin_paths)
-    import graphvision.execution._numba_setup  # noqa: F401 - numba's compiler, once
-
+    found = import_modules(list(modules))
+    if "numba" in sys.modules:
+        import graphvision.execution._numba_setup  # noqa: F401 - numba's compiler, once
+    load_kernels(found)
     return os.getpid()
 
 

@@ -63,6 +63,7 @@ def test_the_client_runs_files_until_a_worker_is_ready_and_leaves_the_last_to_wo
         cache=None,
         executor=pool,
         files_at_once=2,
+        client_files=True,
         on_item=lambda number, total, item: number == 2 and pool.released.set(),
     )
     pool.shutdown()
@@ -98,3 +99,23 @@ def test_a_first_file_that_cannot_be_read_does_not_fail_the_others(tmp_path):
     assert [item.status for item in batch.items] == ["failed", "ok", "ok"], batch.items
     assert "is not a readable image" in batch.items[0].error
     assert batch.items[2].scalars["score"] == pytest.approx(2.0 * 110 / 255.0, abs=1e-6)
+
+
+def test_without_client_files_every_further_file_waits_for_the_workers(tmp_path):
+    graph, registry, _ = _counting_graph(tmp_path)
+    files = [photo(tmp_path / "in" / f"{k}.png", 40 * k) for k in range(5)]
+    pool = _SlowToStart()
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        cache=None,
+        executor=pool,
+        files_at_once=2,
+        on_item=lambda number, total, item: number == 1 and pool.released.set(),
+    )
+    pool.shutdown()
+    assert [item.status for item in batch.items] == ["ok"] * len(files), batch.items
+    assert _executors(batch)[1:] == ["slow-start, one task per file"] * 4
