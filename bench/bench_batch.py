@@ -176,11 +176,15 @@ def scaling(sizes: tuple[int, ...] = (50, 200, 1000)) -> list[str]:
     return rows
 
 
-def startup(files: int = 12) -> list[str]:
+def startup(files: int = 200) -> list[str]:
     """Where a processes batch's start-up goes: seconds from the batch's start until its
-    first file (run in the client) and its first file done on a worker (the fork server
-    started, a worker forked and its first file run), then per further file. Meaningful
-    for the first processes batch of a process (the server then starts): run it alone."""
+    first file (run in the client), the files the client ran itself while the workers
+    started, the first file done on a worker (the fork server started, a worker forked and
+    its first file run), then per further file; and the fork server's steps, replayed one
+    by one in a fresh interpreter (:func:`server_steps`). Meaningful for the first
+    processes batch of a process (the server then starts): run it alone."""
+    import json
+
     global FILES
     graph, saved, FILES = gv.load_pipeline(PIPELINE), FILES, files
     try:
@@ -190,7 +194,7 @@ def startup(files: int = 12) -> list[str]:
             gv.run_batch(  # the plugin index and the client's imports, as in main()
                 graph, [str(paths[0])], input="image", output_dir=Path(scratch) / "w", cache=None
             )
-            done: list[float] = []
+            done: list[tuple[float, Path]] = []
             began = time.perf_counter()
             gv.run_batch(
                 graph,
@@ -201,19 +205,80 @@ def startup(files: int = 12) -> list[str]:
                 executor="processes",
                 workers=2,
                 cache=None,
-                on_item=lambda *_: done.append(time.perf_counter() - began),
+                on_item=lambda *a: done.append((time.perf_counter() - began, a[2].output_dir)),
             )
+            total = time.perf_counter() - began
+            where = [
+                json.loads((folder / "record.json").read_text())["executor"] for _, folder in done
+            ]
     finally:
         FILES = saved
-    rest = (done[-1] - done[1]) / max(len(done) - 2, 1)
+    client = [t for (t, _), w in zip(done, where, strict=True) if "in the client while" in w]
+    workers = [t for (t, _), w in zip(done, where, strict=True) if "one task per file" in w]
+    rest = (workers[-1] - workers[0]) / max(len(workers) - 1, 1)
+    last_client = f"{client[-1]:.2f}" if client else "-"
     return [
         f"| processes (2), {files} files, first batch of the process | seconds | load 1 min |",
         "| --- | ---: | ---: |",
-        f"| first file done (in the client) | {done[0]:.2f} | {_load()} |",
-        f"| first file done on a worker (server start, fork, first file) | {done[1]:.2f} | "
+        f"| first file done (in the client) | {done[0][0]:.2f} | {_load()} |",
+        f"| files the client ran while the workers started: {len(client)}, the last done at "
+        f"| {last_client} | {_load()} |",
+        f"| first file done on a worker (server start, fork, first file) | {workers[0]:.2f} | "
         f"{_load()} |",
-        f"| each further file (2 workers) | {rest:.3f} | {_load()} |",
+        f"| each further file on the workers ({len(workers)} files, 2 workers) | {rest:.3f} | "
+        f"{_load()} |",
+        f"| whole batch | {total:.2f} | {_load()} |",
+        "",
+        *server_steps(graph),
     ]
+
+
+STEPS = """
+import importlib, sys, time
+began = time.perf_counter()
+def mark(label):
+    print(f"{time.perf_counter() - began:.3f} {label}", flush=True)
+import graphvision.execution.file_task
+mark("interpreter, numpy, graphvision (the file task)")
+import numba
+mark("import numba")
+import graphvision.execution._numba_setup
+mark("numba's compiler set up (CPU target refresh)")
+from graphvision.execution.batch_preload import import_modules, load_kernels
+found = import_modules(sys.argv[2:])
+mark(f"the batch's {len(sys.argv) - 2} modules (plugins, scipy.ndimage, kernels, pages)")
+load_kernels(found)
+mark("their numba kernels loaded from numba's cache")
+import graphvision as gv
+from graphvision.execution.file_task import warm_graph
+warm_graph(gv.load_pipeline(sys.argv[1]), (), ("image",))
+mark("the batch's graph loaded and compiled (registry, parameter models, fingerprints)")
+"""
+
+
+def server_steps(graph: gv.Graph) -> list[str]:
+    """The fork server's start for a coins batch, step by step: the same imports, numba
+    set-up, kernel loads and graph compile, timed in a fresh interpreter (seconds since
+    its first line; the interpreter's own start before that is not counted)."""
+    import subprocess
+    import sys
+
+    from graphvision.execution.batch import _checked_pipeline
+    from graphvision.execution.file_task import preload_modules
+    from graphvision.views.batch_page import BATCH_PAGES
+
+    registry = _checked_pipeline(graph, None, {}, "image", ["count"], {})
+    modules = preload_modules(registry, graph, tuple(BATCH_PAGES.run))
+    command = [sys.executable, "-c", STEPS, str(PIPELINE), *modules]
+    lines = subprocess.run(command, capture_output=True, text=True, check=True).stdout
+    rows = ["| the fork server's steps (fresh interpreter) | seconds at its end | step |"]
+    rows.append("| --- | ---: | ---: |")
+    last = 0.0
+    for line in lines.splitlines():
+        at, _, label = line.partition(" ")
+        rows.append(f"| {label} | {float(at):.2f} | {float(at) - last:.2f} |")
+        last = float(at)
+    return [*rows, f"(load 1 min {_load()})"]
 
 
 def client_bytes(files: int = 200) -> list[str]:
