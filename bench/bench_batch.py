@@ -17,7 +17,10 @@ time per file and the client's peak traced memory (``tracemalloc``) should
 stay flat.
 
 :func:`startup` times a processes batch's start-up (run it alone, in a fresh
-process: ``python bench/bench_batch.py startup``).
+process: ``python bench/bench_batch.py startup``): when its first file is done
+in the client, how many files the client ran itself while the workers started
+(``batch_lanes``), when the first file is done on a worker, and the fork
+server's steps one by one.
 
 Run: ``python bench/bench_batch.py [startup] [main] [client_bytes] [scaling]`` (all
 four without an argument; ``make bench`` runs every benchmark).

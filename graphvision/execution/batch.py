@@ -176,15 +176,8 @@ def run_batch(
     one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
     cache = Cache(MemoryStore()) if one_task_per_file and cache is None else cache  # for seeds
     batch = BatchRun(graph, paths, folders, input, inputs or {}, pool, one_task_per_file, pages)
-    batch.options = {
-        "registry": registry,
-        "outputs": outputs,
-        "overrides": overrides,
-        "executor": pool,
-        "cache": cache,
-        "keep_going": keep_going,
-        "hooks": hooks,
-    }
+    batch.options = dict(registry=registry, outputs=outputs, overrides=overrides, executor=pool)
+    batch.options.update(cache=cache, keep_going=keep_going, hooks=hooks)
     made = missing_folders(out_dir, *folders)
     own = isinstance(executor, str)
     width = files_at_once or executor_width(pool) * (2 if one_task_per_file else 1)
