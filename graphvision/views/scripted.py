@@ -374,7 +374,7 @@ def _raw(values: np.ndarray, levels: bool = False) -> dict[str, Any]:
     return {
         "dtype": np.dtype(dtype).name,
         "shape": list(values.shape),
-        "deflate": base64.b64encode(zlib.compress(array.tobytes(), 6)).decode("ascii"),
+        "deflate": base64.b64encode(zlib.compress(array.tobytes(), 1)).decode("ascii"),
         **extra,
     }
 
