@@ -9,7 +9,14 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["bucket_points", "line_peaks", "line_support", "select_lines", "vote_lines"]
+__all__ = [
+    "line_peaks",
+    "line_support",
+    "pruned_support",
+    "select_lines",
+    "support_bounds",
+    "vote_lines",
+]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -86,54 +93,78 @@ def _peak_3x3(extended, t, r, value):
     return True
 
 
-@numba.njit(cache=True, nogil=True)
-def bucket_points(x, y, cos, sin, rho0, n_rho):
-    """For each θ bin ``k`` (``cos``, ``sin`` of its angle over the ρ step; ``rho0`` ρ of
-    bin 0 in steps), the points ordered by their ρ bin: ``order[k, starts[k, b]:starts[k,
-    b + 1]]`` are the points whose ρ at that angle falls in bin ``b`` (clipped to the grid).
-    Lets a line's support visit only the points near it instead of all of them."""
-    n_theta = cos.size
-    starts = np.zeros((n_theta, n_rho + 1), dtype=np.int64)
-    order = np.empty((n_theta, x.size), dtype=np.int64)
-    bins = np.empty(x.size, dtype=np.int64)
-    fill = np.empty(n_rho, dtype=np.int64)
-    for k in range(n_theta):
-        c, s = cos[k], sin[k]
-        for i in range(x.size):  # no stores to the counts here: the compiler vectorises it
-            bins[i] = min(max(int(np.floor(x[i] * c + y[i] * s - rho0)), 0), n_rho - 1)
-        count = starts[k]
-        for i in range(x.size):
-            count[bins[i] + 1] += 1
-        for b in range(n_rho):
-            count[b + 1] += count[b]
-        fill[:] = count[:n_rho]
-        points = order[k]
-        for i in range(x.size):
-            points[fill[bins[i]]] = i
-            fill[bins[i]] += 1
-    return order, starts
+@numba.njit(cache=True, nogil=True, inline="always")
+def _visit(
+    i, x, y, orientation, check, free, c, s, t, rho, tolerance, window, cells, stamp, on, mark
+):
+    """Point ``i`` supports the line (``_gather``): marks it and returns 1 when it covers a
+    new cell along the line, else 0."""
+    if not free[i] or abs(x[i] * c + y[i] * s - rho) > tolerance:
+        return 0
+    if check:
+        gap = abs(orientation[i] - t)
+        if min(gap, np.pi - gap) > window:
+            return 0
+    if mark:
+        on[i] = True
+    cell = int(np.floor(y[i] * c - x[i] * s)) + cells.size // 2
+    if cells[cell] == stamp:
+        return 0
+    cells[cell] = stamp
+    return 1
 
 
 @numba.njit(cache=True, nogil=True)
-def _near_line(theta, rho, tolerance, buckets, cos, sin, rho0, reach):
-    """The slice bounds ``(k, first, last)`` into ``buckets[0][k]`` holding every point
-    that can lie within ``tolerance`` of the line ``(rho, theta)``: θ bin ``k`` nearest to
-    ``theta`` (modulo π, where ρ changes sign), ρ bins widened by how far ρ of a point at
-    distance ``reach`` from the origin moves between ``theta`` and the bin's angle, plus
-    one bin for rounding."""
-    starts = buckets[1]
-    n_theta = cos.size
-    n_rho = starts.shape[1] - 1
-    step = np.pi / n_theta
-    nearest = int(np.round(theta / step))
-    k = nearest % n_theta
-    sign = 1.0 if (nearest - k) // n_theta % 2 == 0 else -1.0
-    scale = np.hypot(cos[0], sin[0])  # 1 / ρ step
-    margin = (tolerance + abs(theta - nearest * step) * reach) * scale + 1.0
-    centre = sign * rho * scale - rho0
-    first = min(max(int(np.floor(centre - margin)), 0), n_rho - 1)
-    last = min(max(int(np.floor(centre + margin)), 0), n_rho - 1)
-    return k, starts[k, first], starts[k, last + 1]
+def _band(x, y, free, rho, theta, tolerance, cells, stamp, on, mark, index):
+    """``_gather`` without the orientation check, visiting only the points within
+    ``tolerance`` (plus a pixel for rounding) of the line: ``index`` (``_lines._point_index``)
+    holds the points by row and by column, each line sorted; a line nearer to the x axis
+    is taken row by row (the columns each row's stretch of the band covers, found by
+    bisection), one nearer to the y axis column by column."""
+    c, s = np.cos(theta), np.sin(theta)
+    if abs(s) >= abs(c):  # v = row, u = column: v s + u c = rho
+        starts, order, keys, a, b, extent = index[0], index[1], index[2], s, c, index[6]
+    else:
+        starts, order, keys, a, b, extent = index[3], index[4], index[5], c, s, index[7]
+    majors = starts.size - 1
+    ends = ((rho - tolerance) / a, (rho + tolerance) / a, (rho - tolerance - extent * b) / a)
+    low = min(min(ends[0], ends[1]), min(ends[2], (rho + tolerance - extent * b) / a))
+    high = max(max(ends[0], ends[1]), max(ends[2], (rho + tolerance - extent * b) / a))
+    first = int(max(np.floor(low) - 1.0, 0.0))
+    last = int(min(np.ceil(high) + 1.0, majors - 1.0))
+    covered = 0
+    for v in range(first, last + 1):
+        begin, end = starts[v], starts[v + 1]
+        if begin == end:
+            continue
+        if abs(b) > 1e-9:
+            one, two = (rho - tolerance - v * a) / b, (rho + tolerance - v * a) / b
+            u0, u1 = min(one, two) - 1.0, max(one, two) + 1.0
+            begin += np.searchsorted(keys[begin:end], u0)
+        else:
+            u1 = np.inf
+        for j in range(begin, end):
+            if keys[j] > u1:
+                break
+            covered += _visit(
+                order[j],
+                x,
+                y,
+                x,
+                False,
+                free,
+                c,
+                s,
+                0.0,
+                rho,
+                tolerance,
+                0.0,
+                cells,
+                stamp,
+                on,
+                mark,
+            )
+    return covered
 
 
 @numba.njit(cache=True, nogil=True)
@@ -155,45 +186,48 @@ def _scan_ranges(orientation, check, theta, window):
 
 @numba.njit(cache=True, nogil=True)
 def _gather(
-    x, y, orientation, check, free, rho, theta, tolerance, window, cells, stamp, on, mark, near
+    x, y, orientation, check, free, rho, theta, tolerance, window, cells, stamp, on, mark, index
 ):
     """Mark in ``on`` (if ``mark``; cleared first) the free points supporting the line
     ``(rho, theta)``: within ``tolerance`` of it and, where ``check``, with ``orientation``
     within ``window`` of ``theta`` mod π. Returns how many 1-px cells along the line they
     cover (``cells`` holds ``stamp`` where covered; positions are offset by half its size).
-    Without ``check``, ``near`` (:func:`bucket_points` and the arguments of
-    :func:`_near_line`) limits the scan to the points near the line.
+    Without ``check``, only the pixels near the line are visited (:func:`_band` on
+    ``index``); with it, the points whose orientation is near ``theta``.
     """
-    c, s = np.cos(theta), np.sin(theta)
-    t = theta % np.pi
-    offset = cells.size // 2
-    covered = 0
     if mark:
         on[:] = False
-    a0, a1, b0, b1 = _scan_ranges(orientation, check, theta, window)
-    k = 0
     if not check:
-        k, a0, a1 = _near_line(theta, rho, tolerance, *near)
+        return _band(x, y, free, rho, theta, tolerance, cells, stamp, on, mark, index)
+    c, s = np.cos(theta), np.sin(theta)
+    t = theta % np.pi
+    covered = 0
+    a0, a1, b0, b1 = _scan_ranges(orientation, check, theta, window)
     for first, last in ((a0, a1), (b0, b1)):
-        for j in range(first, last):
-            i = near[0][0][k, j] if not check else j
-            if not free[i] or abs(x[i] * c + y[i] * s - rho) > tolerance:
-                continue
-            if check:
-                gap = abs(orientation[i] - t)
-                if min(gap, np.pi - gap) > window:
-                    continue
-            if mark:
-                on[i] = True
-            cell = int(np.floor(y[i] * c - x[i] * s)) + offset
-            if cells[cell] != stamp:
-                cells[cell] = stamp
-                covered += 1
+        for i in range(first, last):
+            covered += _visit(
+                i,
+                x,
+                y,
+                orientation,
+                True,
+                free,
+                c,
+                s,
+                t,
+                rho,
+                tolerance,
+                window,
+                cells,
+                stamp,
+                on,
+                mark,
+            )
     return covered
 
 
 @numba.njit(cache=True, nogil=True)
-def line_support(x, y, orientation, check, rho, theta, tolerance, window, extent, near):
+def line_support(x, y, orientation, check, rho, theta, tolerance, window, extent, index):
     """Length in pixels of each line ``(rho[k], theta[k])`` covered by edge points: the number
     of 1-px cells along it holding the projection of a point within ``tolerance`` of it (and,
     where ``check``, of ``orientation`` within ``window`` radians of ``theta`` mod π). Points
@@ -217,8 +251,56 @@ def line_support(x, y, orientation, check, rho, theta, tolerance, window, extent
             k + 1,
             on,
             False,
-            near,
+            index,
         )
+    return counts
+
+
+@numba.njit(cache=True, nogil=True)
+def support_bounds(raw, pad, rho, theta, rho0, rho_step, tolerance, reach):
+    """An upper bound of each line's support from unit votes ``raw`` (:func:`vote_lines`,
+    every point voting for every θ, unsmoothed): every point within ``tolerance`` of the
+    line ``(rho[k], theta[k])`` has, at the θ bin nearest to ``theta[k]``, its ρ within
+    ``tolerance`` plus how far ρ of a point ``reach`` from the origin moves between the
+    two angles (plus a bin for rounding), and puts its whole vote into those ρ bins and the
+    next one; the support (distinct cells covered) is at most the number of such points.
+    ``rho0`` is ρ of bin 0 in steps."""
+    n_theta = raw.shape[0] - 2 * pad
+    n_rho = raw.shape[1]
+    step = np.pi / n_theta
+    bounds = np.empty(rho.size)
+    for k in range(rho.size):
+        nearest = int(np.round(theta[k] / step))
+        row = nearest % n_theta
+        sign = 1.0 if (nearest - row) // n_theta % 2 == 0 else -1.0
+        margin = (tolerance + abs(theta[k] - nearest * step) * reach) / rho_step + 2.0
+        centre = sign * rho[k] / rho_step - rho0
+        first = min(max(int(np.floor(centre - margin)), 0), n_rho - 1)
+        last = min(max(int(np.floor(centre + margin)) + 1, 0), n_rho - 1)
+        total = 0.0
+        for b in range(first, last + 1):
+            total += raw[pad + row, b]
+        bounds[k] = total
+    return bounds
+
+
+@numba.njit(cache=True, nogil=True)
+def pruned_support(x, y, index, bounds, rho, theta, tolerance, extent, threshold):
+    """:func:`line_support` without the orientation check, where only the lines that can
+    reach ``threshold`` × the largest support matter: lines are taken by decreasing
+    ``bounds`` (:func:`support_bounds`) and the rest are left at 0 once a bound falls
+    below ``threshold`` × the largest support found (so are all their supports: the
+    largest support and every support at least ``threshold`` × it are exact)."""
+    counts = np.zeros(rho.size, dtype=np.int64)
+    cells = np.zeros(2 * int(np.ceil(extent)) + 4, dtype=np.int64)
+    free = np.ones(x.size, dtype=np.bool_)
+    on = np.zeros(0, dtype=np.bool_)
+    largest = 0
+    for k in np.argsort(-bounds, kind="mergesort"):
+        if bounds[k] + 1e-6 < threshold * largest:
+            break
+        counts[k] = _band(x, y, free, rho[k], theta[k], tolerance, cells, k + 1, on, False, index)
+        largest = max(largest, counts[k])
     return counts
 
 
@@ -239,7 +321,7 @@ def select_lines(
     min_distance,
     theta_step,
     rho_step,
-    near,
+    index,
 ):
     """Greedy selection of lines ``(ρ, θ, covered length)`` from candidates ``order``: each
     candidate is refitted twice by total least squares to its free supporting points, kept
@@ -257,7 +339,7 @@ def select_lines(
         r, t = rho[k], theta[k]
         stamp += 1
         covered = _gather(
-            x, y, orientation, check, free, r, t, tolerance, window, cells, stamp, on, True, near
+            x, y, orientation, check, free, r, t, tolerance, window, cells, stamp, on, True, index
         )
         if covered < floor:
             continue
@@ -304,7 +386,7 @@ def select_lines(
                 stamp,
                 on,
                 True,
-                near,
+                index,
             )
         if covered < floor:
             continue

@@ -86,6 +86,7 @@ def _vote(
 
 def _select_lines(
     extended: np.ndarray,
+    raw: np.ndarray,
     pad: int,
     shape: tuple[int, ...],
     points: tuple[np.ndarray, np.ndarray, np.ndarray | None],
@@ -96,8 +97,9 @@ def _select_lines(
     min_distance: int,
     max_lines: int,
 ) -> np.ndarray:
-    """``(ρ, θ, support)`` rows of the lines kept (see :func:`hough_lines`), best first."""
-    from ._kernels import line_peaks, line_support, select_lines
+    """``(ρ, θ, support)`` rows of the lines kept (see :func:`hough_lines`), best first;
+    ``raw`` is the unsmoothed ``extended``, bounding the support of unit votes."""
+    from ._kernels import line_peaks, line_support, pruned_support, select_lines, support_bounds
 
     x, y, orientation = points
     peaks = line_peaks(extended, pad, theta_bins)  # every peak: one line can mask another's
@@ -117,8 +119,13 @@ def _select_lines(
     window = max(SUPPORT_ORIENTATION, math.radians(orientation_window) + 0.5 * step)
     tolerance = max(1.0, rho_step)
     extent = math.hypot(shape[0], shape[1]) + 1.0
-    near = _buckets(x, y, check, shape, theta_bins, rho_step)
-    support = line_support(x, y, angles, check, rho, theta, tolerance, window, extent, near)
+    index = _point_index(x, y, shape, check)
+    if check:
+        support = line_support(x, y, angles, check, rho, theta, tolerance, window, extent, index)
+    else:  # unit votes bound the support: only the lines that can be kept are measured
+        reach = float(np.hypot(x, y).max())
+        bounds = support_bounds(raw, pad, rho, theta, rho0 / rho_step, rho_step, tolerance, reach)
+        support = pruned_support(x, y, index, bounds, rho, theta, tolerance, extent, threshold)
     floor = threshold * float(support.max())
     if floor <= 0:
         return np.zeros((0, 3))
@@ -140,27 +147,25 @@ def _select_lines(
         float(min_distance),
         step,
         rho_step,
-        near,
+        index,
     )
     return lines[np.argsort(-lines[:, 2], kind="stable")]
 
 
-def _buckets(
-    x: np.ndarray, y: np.ndarray, check: bool, shape: tuple[int, ...], theta_bins: int, step: float
-) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray, np.ndarray, float, float]:
-    """The points bucketed by ρ bin at every θ bin (``_kernels.bucket_points``), so that a
-    line's support scans only the points near it; empty when ``check`` (points sorted by
-    orientation are scanned by their orientation range instead)."""
-    from ._kernels import bucket_points
-
-    n_rho, rho0 = _rho_grid(shape, step)
-    table = np.arange(theta_bins) * (math.pi / theta_bins)
-    cos, sin = np.cos(table) / step, np.sin(table) / step
-    if check or len(x) == 0:
-        empty = np.zeros((1, 1), dtype=np.int64)
-        return (empty, empty), cos, sin, rho0 / step, 0.0
-    reach = float(np.hypot(x, y).max())
-    return bucket_points(x, y, cos, sin, rho0 / step, n_rho), cos, sin, rho0 / step, reach
+def _point_index(x: np.ndarray, y: np.ndarray, shape: tuple[int, ...], check: bool) -> tuple:
+    """The points by row and by column (``_kernels._band``): ``(row starts, order, columns,
+    column starts, order, rows, width - 1, height - 1)``, each row's points by column and
+    each column's by row (``starts[v]:starts[v + 1]`` of ``order`` is row or column v).
+    Empty when ``check`` (the points are then scanned by orientation)."""
+    if check:
+        x = y = np.zeros(0)
+    by_row, by_column = np.lexsort((x, y)), np.lexsort((y, x))
+    rows = np.searchsorted(y[by_row], np.arange(shape[0] + 1) - 0.5)
+    columns = np.searchsorted(x[by_column], np.arange(shape[1] + 1) - 0.5)
+    return (
+        rows, by_row, x[by_row], columns, by_column, y[by_column],
+        float(shape[1] - 1), float(shape[0] - 1),
+    )  # fmt: skip
 
 
 class HoughLines(NamedTuple):
@@ -291,6 +296,7 @@ def hough_lines(
     extended = _vote(
         edges.shape, x, y, gx, gy, theta_bins, rho_step, orientation_window, weighted, pad
     )
+    raw = extended
     if vote_sigma > 0:
         extended = smooth_gaussian(extended, vote_sigma, "nearest")
     smoothed = extended[pad:-pad]
@@ -301,6 +307,7 @@ def hough_lines(
         orientation = np.mod(np.arctan2(gy, gx), math.pi)
     lines = _select_lines(
         extended,
+        raw,
         pad,
         edges.shape,
         (x, y, orientation),

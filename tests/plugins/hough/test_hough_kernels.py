@@ -10,8 +10,14 @@ import pytest
 from scipy import ndimage
 
 from graphvision_plugins.hough._circle_kernels import window_maxima
-from graphvision_plugins.hough._kernels import line_peaks, line_support
-from graphvision_plugins.hough._lines import _buckets, _rho_grid
+from graphvision_plugins.hough._kernels import (
+    line_peaks,
+    line_support,
+    pruned_support,
+    support_bounds,
+    vote_lines,
+)
+from graphvision_plugins.hough._lines import _point_index, _rho_grid
 from graphvision_plugins.hough._peaks import suppress_close
 
 
@@ -44,22 +50,60 @@ def _covered(x, y, rho, theta, tolerance, extent):
     return len(np.unique(along))
 
 
-def test_bucketed_support_equals_a_scan_of_every_point():
-    rng = np.random.default_rng(11)
-    shape, bins, step = (120, 160), 90, 1.0
-    x, y = rng.uniform(0, 159, 3000), rng.uniform(0, 119, 3000)
-    x[:200], y[:200] = np.linspace(0, 159, 200), 30 + 0.3 * np.linspace(0, 159, 200)  # a line
-    _, rho0 = _rho_grid(shape, step)
-    # θ across [0, π) and beyond it (the padded rows and refits): ρ changes sign there
+def _scene(seed):
+    """Edge pixels of a 120×160 image (a line of 200 and 1,500 scattered) and 400 lines
+    across θ in [0, π) and beyond it (the padded rows and refits: ρ changes sign there)."""
+    rng = np.random.default_rng(seed)
+    shape = (120, 160)
+    mask = rng.random(shape) < 0.08
+    u = np.arange(160)
+    mask[np.round(30 + 0.3 * u).astype(int), u] = True
+    y, x = (v.astype(np.float64) for v in np.nonzero(mask))
+    _, rho0 = _rho_grid(shape, 1.0)
     theta = rng.uniform(-0.3, math.pi + 0.3, 400)
     rho = rng.uniform(rho0, -rho0, 400)
     theta[:2], rho[:2] = math.atan2(1, -0.3), 30 / math.hypot(1, 0.3)
-    extent = math.hypot(*shape) + 1.0
-    near = _buckets(x, y, False, shape, bins, step)
-    support = line_support(x, y, np.zeros(len(x)), False, rho, theta, 1.0, 0.0, extent, near)
+    theta[2:6] = (0.0, math.pi / 2, math.pi, math.pi / 4)  # axis-parallel and diagonal
+    return shape, x, y, rho, theta, math.hypot(*shape) + 1.0
+
+
+def test_support_of_the_points_by_row_and_column_equals_a_scan_of_every_point():
+    """Replaces the points bucketed by ρ at every θ: the same support, visiting only the
+    band around each line."""
+    shape, x, y, rho, theta, extent = _scene(11)
+    index = _point_index(x, y, shape, False)
+    support = line_support(x, y, np.zeros(len(x)), False, rho, theta, 1.0, 0.0, extent, index)
     expected = [_covered(x, y, r, t, 1.0, extent) for r, t in zip(rho, theta, strict=True)]
     np.testing.assert_array_equal(support, expected)
     assert support[0] > 150
+
+
+@pytest.mark.parametrize("threshold", [0.0, 0.3, 1.0])
+def test_pruned_support_is_exact_where_a_line_can_be_kept(threshold):
+    """Unit votes bound every line's support, so the lines measured by decreasing bound
+    until one falls under ``threshold`` × the largest support give every support at least
+    that exactly (and the largest); the others are 0."""
+    shape, x, y, rho, theta, extent = _scene(5)
+    bins, pad = 90, 4
+    rho[6:] = rho[6:] * 0.2 + 50  # many lines through the points, not only beyond them
+    _, rho0 = _rho_grid(shape, 1.0)
+    table = np.arange(bins) * (math.pi / bins)
+    n_rho = _rho_grid(shape, 1.0)[0]
+    args = (x, y, np.ones(len(x)), np.zeros(len(x), np.int64), bins, np.cos(table))
+    raw = vote_lines(*args, np.sin(table), rho0, n_rho, pad)
+    index = _point_index(x, y, shape, False)
+    reach = float(np.hypot(x, y).max())
+    bounds = support_bounds(raw, pad, rho, theta, rho0, 1.0, 1.0, reach)
+    expected = np.array(
+        [_covered(x, y, r, t, 1.0, extent) for r, t in zip(rho, theta, strict=True)]
+    )
+    assert (bounds >= expected).all()
+    support = pruned_support(x, y, index, bounds, rho, theta, 1.0, extent, threshold)
+    kept = expected >= threshold * expected.max()
+    np.testing.assert_array_equal(support[kept], expected[kept])
+    assert ((support == expected) | (support == 0)).all()
+    if threshold == 0.3:
+        assert 0 < (support > 0).sum() < 0.8 * len(rho)  # lines were skipped
 
 
 def test_suppress_close_keeps_strongest_first_apart():
@@ -124,8 +168,6 @@ def test_radii_in_one_call_equal_the_stack_smoothed_plane_by_plane(vote_sigma):
 def test_votes_extended_in_place_equal_the_wrapped_copy(width):
     """``vote_lines`` with ``pad`` rows equals the accumulator without them wrapped by
     ``np.concatenate`` (θ + π is θ with ρ negated), as ``hough.lines`` extended it before."""
-    from graphvision_plugins.hough._kernels import vote_lines
-
     rng = np.random.default_rng(7)
     x, y, weights = rng.uniform(0, 40, 300), rng.uniform(0, 30, 300), rng.uniform(0, 2, 300)
     first = rng.integers(0, 30, 300)
