@@ -257,14 +257,19 @@ def line_support(x, y, orientation, check, rho, theta, tolerance, window, extent
 
 
 @numba.njit(cache=True, nogil=True)
-def support_bounds(raw, pad, rho, theta, rho0, rho_step, tolerance, reach):
-    """An upper bound of each line's support from unit votes ``raw`` (:func:`vote_lines`,
-    every point voting for every θ, unsmoothed): every point within ``tolerance`` of the
-    line ``(rho[k], theta[k])`` has, at the θ bin nearest to ``theta[k]``, its ρ within
-    ``tolerance`` plus how far ρ of a point ``reach`` from the origin moves between the
-    two angles (plus a bin for rounding), and puts its whole vote into those ρ bins and the
-    next one; the support (distinct cells covered) is at most the number of such points.
-    ``rho0`` is ρ of bin 0 in steps."""
+def support_bounds(raw, pad, rho, theta, rho0, rho_step, tolerance, xmax, ymax):
+    r"""An upper bound of each line's support from unit votes ``raw`` (:func:`vote_lines`,
+    every point voting for every θ, unsmoothed; ``rho0`` is ρ of bin 0 in steps).
+
+    A point of ``[0, xmax] × [0, ymax]`` within ``tolerance`` of the line ``(ρ, θ)`` is
+    :math:`p = \rho_p n(\theta) + a\, t(\theta)`, :math:`|\rho_p - \rho| \le` tolerance
+    and :math:`a` between the least and largest of the image corners' :math:`a`; at the θ
+    bin nearest to θ, :math:`\theta + \Delta`, its ρ is
+    :math:`\rho_p \cos\Delta + a \sin\Delta` (negated past π), in an interval whose
+    ρ bins (two more each side for rounding) and the next one receive its whole vote. The
+    support (distinct cells covered) is at most the number of such points, so at most the
+    sum of those cells.
+    """
     n_theta = raw.shape[0] - 2 * pad
     n_rho = raw.shape[1]
     step = np.pi / n_theta
@@ -272,11 +277,16 @@ def support_bounds(raw, pad, rho, theta, rho0, rho_step, tolerance, reach):
     for k in range(rho.size):
         nearest = int(np.round(theta[k] / step))
         row = nearest % n_theta
-        sign = 1.0 if (nearest - row) // n_theta % 2 == 0 else -1.0
-        margin = (tolerance + abs(theta[k] - nearest * step) * reach) / rho_step + 2.0
-        centre = sign * rho[k] / rho_step - rho0
-        first = min(max(int(np.floor(centre - margin)), 0), n_rho - 1)
-        last = min(max(int(np.floor(centre + margin)) + 1, 0), n_rho - 1)
+        c, s = np.cos(theta[k]), np.sin(theta[k])
+        a_low = min(0.0, -xmax * s) + min(0.0, ymax * c)  # a = y cos θ - x sin θ
+        a_high = max(0.0, -xmax * s) + max(0.0, ymax * c)
+        cd, sd = np.cos(nearest * step - theta[k]), np.sin(nearest * step - theta[k])
+        low = (rho[k] - tolerance) * cd + min(a_low * sd, a_high * sd)
+        high = (rho[k] + tolerance) * cd + max(a_low * sd, a_high * sd)
+        if (nearest - row) // n_theta % 2 != 0:  # θ + π: ρ negated
+            low, high = -high, -low
+        first = int(min(max(np.floor(low / rho_step - rho0) - 2.0, 0.0), n_rho - 1.0))
+        last = int(min(max(np.floor(high / rho_step - rho0) + 3.0, 0.0), n_rho - 1.0))
         total = 0.0
         for b in range(first, last + 1):
             total += raw[pad + row, b]

@@ -123,8 +123,8 @@ def _select_lines(
     if check:
         support = line_support(x, y, angles, check, rho, theta, tolerance, window, extent, index)
     else:  # unit votes bound the support: only the lines that can be kept are measured
-        reach = float(np.hypot(x, y).max())
-        bounds = support_bounds(raw, pad, rho, theta, rho0 / rho_step, rho_step, tolerance, reach)
+        size = (rho0 / rho_step, rho_step, tolerance, shape[1] - 1.0, shape[0] - 1.0)
+        bounds = support_bounds(raw, pad, rho, theta, *size)
         support = pruned_support(x, y, index, bounds, rho, theta, tolerance, extent, threshold)
     floor = threshold * float(support.max())
     if floor <= 0:

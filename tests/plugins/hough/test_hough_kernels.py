@@ -92,8 +92,7 @@ def test_pruned_support_is_exact_where_a_line_can_be_kept(threshold):
     args = (x, y, np.ones(len(x)), np.zeros(len(x), np.int64), bins, np.cos(table))
     raw = vote_lines(*args, np.sin(table), rho0, n_rho, pad)
     index = _point_index(x, y, shape, False)
-    reach = float(np.hypot(x, y).max())
-    bounds = support_bounds(raw, pad, rho, theta, rho0, 1.0, 1.0, reach)
+    bounds = support_bounds(raw, pad, rho, theta, rho0, 1.0, 1.0, 159.0, 119.0)
     expected = np.array(
         [_covered(x, y, r, t, 1.0, extent) for r, t in zip(rho, theta, strict=True)]
     )
