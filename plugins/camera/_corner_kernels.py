@@ -187,11 +187,44 @@ def _forstner_sums(gx, gy, qx, qy, half, weight, columns, rows):  # pragma: no c
     return axx, axy, ayy, bx, by
 
 
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _forstner_sums_inside(gx, gy, qx, qy, half, weight):  # pragma: no cover
+    """:func:`_forstner_sums` of a window whose samples and their right and lower pixels
+    all lie inside the image: every sample has the same weights (``q`` minus its floor),
+    so a row is one vectorised loop over consecutive pixels (sums reassociated: the
+    result differs from the sample-by-sample sums by rounding)."""
+    fx, fy = np.floor(qx), np.floor(qy)
+    wx, wy = qx - fx, qy - fy
+    left, top = int(fx) - half, int(fy) - half
+    side = 2 * half + 1
+    axx = axy = ayy = bx = by = 0.0
+    for r in range(side):
+        py = qy + float(r - half)
+        x0, x1 = gx[top + r, left : left + side + 1], gx[top + r + 1, left : left + side + 1]
+        y0, y1 = gy[top + r, left : left + side + 1], gy[top + r + 1, left : left + side + 1]
+        w_row = weight[r * side : (r + 1) * side]
+        for c in range(side):
+            w = w_row[c]
+            px = qx + float(c - half)
+            sx = (1.0 - wy) * ((1.0 - wx) * x0[c] + wx * x0[c + 1]) + wy * (
+                (1.0 - wx) * x1[c] + wx * x1[c + 1]
+            )
+            sy = (1.0 - wy) * ((1.0 - wx) * y0[c] + wx * y0[c + 1]) + wy * (
+                (1.0 - wx) * y1[c] + wx * y1[c + 1]
+            )
+            axx += w * sx * sx
+            axy += w * sx * sy
+            ayy += w * sy * sy
+            bx += w * (sx * sx * px + sx * sy * py)
+            by += w * (sx * sy * px + sy * sy * py)
+    return axx, axy, ayy, bx, by
+
+
 @numba.njit(cache=True, nogil=True)
-def forstner(gx, gy, corners, half, weight, iterations):  # pragma: no cover
+def forstner(gx, gy, corners, half, weight, which, iterations):  # pragma: no cover
     """Förstner's iteration for every corner at once (see ``refine_corners``): the window's
-    offsets are the ``(2 half + 1)²`` integer ones, row-major (x fastest), ``weight`` their
-    ``corners × offsets`` weights; stops when no corner moves by 1e-4 px or more. The
+    offsets are the ``(2 half + 1)²`` integer ones, row-major (x fastest), corner ``i``'s
+    weights ``weight[which[i]]``; stops when no corner moves by 1e-4 px or more. The
     samples' pixels and weights are found once per row and column of a window, not once
     per sample; the arithmetic is :func:`bilinear`'s."""
     height, width = gx.shape
@@ -213,11 +246,17 @@ def forstner(gx, gy, corners, half, weight, iterations):  # pragma: no cover
     for _ in range(iterations):
         shift = 0.0
         for i in range(q.shape[0]):
-            _axis_samples(q[i, 0], half, width, *columns)
-            _axis_samples(q[i, 1], half, height, *rows)
-            axx, axy, ayy, bx, by = _forstner_sums(
-                gx, gy, q[i, 0], q[i, 1], half, weight[i], columns, rows
-            )
+            left, top = np.floor(q[i, 0]) - half, np.floor(q[i, 1]) - half
+            if left >= 0 and top >= 0 and left + side < width and top + side < height:
+                axx, axy, ayy, bx, by = _forstner_sums_inside(
+                    gx, gy, q[i, 0], q[i, 1], half, weight[which[i]]
+                )
+            else:
+                _axis_samples(q[i, 0], half, width, *columns)
+                _axis_samples(q[i, 1], half, height, *rows)
+                axx, axy, ayy, bx, by = _forstner_sums(
+                    gx, gy, q[i, 0], q[i, 1], half, weight[which[i]], columns, rows
+                )
             det = axx * ayy - axy * axy
             new[i, 0], new[i, 1] = q[i, 0], q[i, 1]
             if det > 1e-12:

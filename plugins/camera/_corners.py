@@ -351,10 +351,10 @@ def _refine(
     radii, which = np.unique(radius, return_inverse=True)  # clipped: often one radius
     r = radii[:, None]
     inside = (np.abs(ox) <= r) & (np.abs(oy) <= r)
-    weight = (np.exp(-(ox**2 + oy**2) / (2 * r**2)) * inside)[which.ravel()]
+    weight = np.exp(-(ox**2 + oy**2) / (2 * r**2)) * inside  # one row per radius
     weight[:, (ox == 0) & (oy == 0)] = 0.0  # the centre's gradient carries no position
     q = np.ascontiguousarray(corners, dtype=np.float64)
-    return forstner(gx, gy, q, half, np.ascontiguousarray(weight), iterations)
+    return forstner(gx, gy, q, half, weight, which.ravel().astype(np.int64), iterations)
 
 
 class BoardCorners(NamedTuple):
