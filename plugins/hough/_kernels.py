@@ -12,6 +12,8 @@ import numpy as np
 __all__ = [
     "line_peaks",
     "line_support",
+    "peak_offsets",
+    "points_by_row_and_column",
     "pruned_support",
     "select_lines",
     "support_bounds",
@@ -423,3 +425,75 @@ def select_lines(
         out[count, 2] = covered
         count += 1
     return out[:count]
+
+
+@numba.njit(cache=True, nogil=True)
+def _counting_order(keys, size, within):
+    """The order of ``within`` (a permutation) stably sorted by ``keys`` in [0, size), and
+    where each key's run starts (``size + 1`` entries)."""
+    starts = np.zeros(size + 1, dtype=np.int64)
+    for i in range(keys.size):
+        starts[keys[i] + 1] += 1
+    for k in range(size):
+        starts[k + 1] += starts[k]
+    fill = starts[:size].copy()
+    order = np.empty(within.size, dtype=np.int64)
+    for i in within:
+        order[fill[keys[i]]] = i
+        fill[keys[i]] += 1
+    return order, starts
+
+
+@numba.njit(cache=True, nogil=True)
+def points_by_row_and_column(x, y, height, width):
+    """The points (on the pixel grid) by row, each row's by column, and by column, each
+    column's by row: ``(row starts, order, columns, column starts, order, rows)``, row or
+    column ``v`` being ``order[starts[v]:starts[v + 1]]`` (``np.lexsort`` of ``(x, y)`` and
+    ``(y, x)`` by two stable counting sorts each)."""
+    rows = y.astype(np.int64)
+    columns = x.astype(np.int64)
+    everyone = np.arange(x.size)
+    by_row, row_starts = _counting_order(rows, height, _counting_order(columns, width, everyone)[0])
+    by_column, column_starts = _counting_order(
+        columns, width, _counting_order(rows, height, everyone)[0]
+    )
+    return row_starts, by_row, x[by_row], column_starts, by_column, y[by_column]
+
+
+@numba.njit(cache=True, nogil=True)
+def _parabola(left, centre, right):
+    """``_peaks.parabolic_offset`` of one peak."""
+    curvature = left - 2.0 * centre + right
+    if curvature < 0:
+        return min(max((left - right) / (2.0 * curvature), -0.5), 0.5)
+    return 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def peak_offsets(array, rows, cols, solve):
+    """``_peaks.quadratic_peak_2d`` peak by peak (``solve`` its 6×9 pseudo-inverse; each
+    coefficient summed in the patch's order, so equal to it up to rounding)."""
+    out = np.empty((rows.size, 2))
+    patch = np.empty(9)
+    coef = np.empty(6)
+    for k in range(rows.size):
+        r, c = rows[k], cols[k]
+        for m in range(9):
+            patch[m] = array[r + m // 3 - 1, c + m % 3 - 1]
+        coef[:] = 0.0
+        for j in range(1, 6):
+            for m in range(9):
+                coef[j] += solve[j, m] * patch[m]
+        b, cc, d, e, g = coef[1], coef[2], coef[3], coef[4], coef[5]
+        det = 4.0 * d * e - g * g
+        du = dv = 0.0
+        maximum = d < 0 and det > 0
+        if maximum:
+            du = (-2.0 * e * b + g * cc) / det
+            dv = (-2.0 * d * cc + g * b) / det
+        if not (maximum and abs(du) <= 1 and abs(dv) <= 1):
+            du = _parabola(patch[1], patch[4], patch[7])
+            dv = _parabola(patch[3], patch[4], patch[5])
+        out[k, 0] = min(max(du, -0.5), 0.5)
+        out[k, 1] = min(max(dv, -0.5), 0.5)
+    return out

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Annotated, NamedTuple
 
@@ -12,7 +13,6 @@ from graphvision import BinaryImage, Conformance, FloatImage, GrayImage, Int, no
 
 from ..edges import gradient_images
 from ..shared.params import Count
-from ._peaks import quadratic_peak_2d
 from ._ports import Lines
 
 __all__ = ["HoughLines", "hough_lines", "line_accumulator"]
@@ -99,14 +99,21 @@ def _select_lines(
 ) -> np.ndarray:
     """``(ρ, θ, support)`` rows of the lines kept (see :func:`hough_lines`), best first;
     ``raw`` is the unsmoothed ``extended``, bounding the support of unit votes."""
-    from ._kernels import line_peaks, line_support, pruned_support, select_lines, support_bounds
+    from ._kernels import (
+        line_peaks,
+        line_support,
+        peak_offsets,
+        pruned_support,
+        select_lines,
+        support_bounds,
+    )
 
     x, y, orientation = points
     peaks = line_peaks(extended, pad, theta_bins)  # every peak: one line can mask another's
     if len(peaks) == 0 or len(x) == 0:
         return np.zeros((0, 3))
     t, r = peaks[:, 0], peaks[:, 1]
-    d_theta, d_rho = quadratic_peak_2d(extended, t, r).T
+    d_theta, d_rho = peak_offsets(extended, t, r, _quadratic_solve()).T
     step = math.pi / theta_bins
     _, rho0 = _rho_grid(shape, rho_step)
     theta = (t - pad + d_theta) * step
@@ -153,19 +160,22 @@ def _select_lines(
 
 
 def _point_index(x: np.ndarray, y: np.ndarray, shape: tuple[int, ...], check: bool) -> tuple:
-    """The points by row and by column (``_kernels._band``): ``(row starts, order, columns,
-    column starts, order, rows, width - 1, height - 1)``, each row's points by column and
-    each column's by row (``starts[v]:starts[v + 1]`` of ``order`` is row or column v).
-    Empty when ``check`` (the points are then scanned by orientation)."""
+    """The points by row and by column (``_kernels.points_by_row_and_column``) and the
+    image's last column and row, for ``_kernels._band``; empty when ``check`` (the points
+    are then scanned by orientation)."""
+    from ._kernels import points_by_row_and_column
+
     if check:
         x = y = np.zeros(0)
-    by_row, by_column = np.lexsort((x, y)), np.lexsort((y, x))
-    rows = np.searchsorted(y[by_row], np.arange(shape[0] + 1) - 0.5)
-    columns = np.searchsorted(x[by_column], np.arange(shape[1] + 1) - 0.5)
-    return (
-        rows, by_row, x[by_row], columns, by_column, y[by_column],
-        float(shape[1] - 1), float(shape[0] - 1),
-    )  # fmt: skip
+    found = points_by_row_and_column(x, y, shape[0], shape[1])
+    return (*found, float(shape[1] - 1), float(shape[0] - 1))
+
+
+@functools.cache
+def _quadratic_solve() -> np.ndarray:
+    """The pseudo-inverse ``_peaks.quadratic_peak_2d`` fits a 3×3 patch with."""
+    u, v = np.repeat([-1.0, 0.0, 1.0], 3), np.tile([-1.0, 0.0, 1.0], 3)
+    return np.linalg.pinv(np.column_stack([np.ones(9), u, v, u * u, v * v, u * v]))
 
 
 class HoughLines(NamedTuple):

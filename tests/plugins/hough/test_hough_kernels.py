@@ -177,3 +177,35 @@ def test_votes_extended_in_place_equal_the_wrapped_copy(width):
         wrapped = np.concatenate([plain[-pad:, ::-1], plain, plain[:pad, ::-1]], axis=0)
         np.testing.assert_array_equal(vote_lines(*args, pad), wrapped)
     assert plain.sum() > 0
+
+
+def test_peak_offsets_equal_the_quadratic_fit_they_replace():
+    from graphvision_plugins.hough._kernels import peak_offsets
+    from graphvision_plugins.hough._lines import _quadratic_solve
+    from graphvision_plugins.hough._peaks import quadratic_peak_2d
+
+    rng = np.random.default_rng(2)
+    array = ndimage.gaussian_filter(rng.random((40, 60)), 1.5)
+    array[10:13, 20:23] = 0.5  # a flat top: no maximum, the parabolas' fallback
+    rows, cols = np.meshgrid(np.arange(1, 39), np.arange(1, 59), indexing="ij")
+    rows, cols = rows.ravel(), cols.ravel()
+    expected = quadratic_peak_2d(array, rows, cols)
+    found = peak_offsets(array, rows, cols, _quadratic_solve())
+    np.testing.assert_allclose(found, expected, rtol=0, atol=1e-12)
+    assert (np.abs(expected) == 0.5).any() and (np.abs(expected) < 0.5).any()
+
+
+def test_points_by_row_and_column_equal_lexsort():
+    from graphvision_plugins.hough._kernels import points_by_row_and_column
+
+    rng = np.random.default_rng(4)
+    y, x = (v.astype(np.float64) for v in np.nonzero(rng.random((30, 40)) < 0.2))
+    shuffled = rng.permutation(len(x))
+    x, y = x[shuffled], y[shuffled]
+    rows, by_row, keys, columns, by_column, column_keys = points_by_row_and_column(x, y, 30, 40)
+    np.testing.assert_array_equal(by_row, np.lexsort((x, y)))
+    np.testing.assert_array_equal(by_column, np.lexsort((y, x)))
+    np.testing.assert_array_equal(rows, np.searchsorted(y[by_row], np.arange(31) - 0.5))
+    np.testing.assert_array_equal(columns, np.searchsorted(x[by_column], np.arange(41) - 0.5))
+    np.testing.assert_array_equal(keys, x[by_row])
+    np.testing.assert_array_equal(column_keys, y[by_column])
