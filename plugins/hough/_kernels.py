@@ -268,7 +268,7 @@ def support_bounds(raw, pad, rho, theta, rho0, rho_step, tolerance, xmax, ymax):
     and :math:`a` between the least and largest of the image corners' :math:`a`; at the θ
     bin nearest to θ, :math:`\theta + \Delta`, its ρ is
     :math:`\rho_p \cos\Delta + a \sin\Delta` (negated past π), in an interval whose
-    ρ bins (two more each side for rounding) and the next one receive its whole vote. The
+    ρ bins (widened by 1e-6 bin for rounding) and the next one receive its whole vote. The
     support (distinct cells covered) is at most the number of such points, so at most the
     sum of those cells.
     """
@@ -287,8 +287,8 @@ def support_bounds(raw, pad, rho, theta, rho0, rho_step, tolerance, xmax, ymax):
         high = (rho[k] + tolerance) * cd + max(a_low * sd, a_high * sd)
         if (nearest - row) // n_theta % 2 != 0:  # θ + π: ρ negated
             low, high = -high, -low
-        first = int(min(max(np.floor(low / rho_step - rho0) - 2.0, 0.0), n_rho - 1.0))
-        last = int(min(max(np.floor(high / rho_step - rho0) + 3.0, 0.0), n_rho - 1.0))
+        first = int(min(max(np.floor(low / rho_step - rho0 - 1e-6), 0.0), n_rho - 1.0))
+        last = int(min(max(np.floor(high / rho_step - rho0 + 1e-6) + 1.0, 0.0), n_rho - 1.0))
         total = 0.0
         for b in range(first, last + 1):
             total += raw[pad + row, b]
