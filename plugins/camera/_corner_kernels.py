@@ -14,7 +14,15 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["bilinear", "forstner", "gradient", "saddle_peaks", "saddle_response", "sample"]
+__all__ = [
+    "bilinear",
+    "forstner",
+    "gradient",
+    "gradient_samples",
+    "saddle_peaks",
+    "saddle_response",
+    "sample",
+]
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -139,6 +147,30 @@ def sample(values, xs, ys):  # pragma: no cover
 
 
 @numba.njit(cache=True, nogil=True)
+def gradient_samples(smooth, xs, ys):  # pragma: no cover
+    """:func:`sample` of both images of :func:`gradient` of ``smooth`` at the points, the
+    four pixels' gradients computed where read: ``(d/dx, d/dy)``."""
+    height, width = smooth.shape
+    gx = np.zeros(xs.size)
+    gy = np.zeros(xs.size)
+    for i in range(xs.size):
+        x, y = xs[i], ys[i]
+        if not (0.0 <= x <= width - 1 and 0.0 <= y <= height - 1):
+            continue
+        x0 = min(int(np.floor(x)), width - 1)
+        y0 = min(int(np.floor(y)), height - 1)
+        wx, wy = x - x0, y - y0
+        x1, y1 = min(x0 + 1, width - 1), min(y0 + 1, height - 1)
+        top = (1.0 - wx) * _dx(smooth, y0, x0) + wx * _dx(smooth, y0, x1)
+        bottom = (1.0 - wx) * _dx(smooth, y1, x0) + wx * _dx(smooth, y1, x1)
+        gx[i] = (1.0 - wy) * top + wy * bottom
+        top = (1.0 - wx) * _dy(smooth, y0, x0) + wx * _dy(smooth, y0, x1)
+        bottom = (1.0 - wx) * _dy(smooth, y1, x0) + wx * _dy(smooth, y1, x1)
+        gy[i] = (1.0 - wy) * top + wy * bottom
+    return gx, gy
+
+
+@numba.njit(cache=True, nogil=True)
 def _axis_samples(q, half, length, first, second, weight, inside):  # pragma: no cover
     """For the ``2 half + 1`` positions ``q + o`` (o = −half … half) along one axis of
     ``length`` pixels, what :func:`bilinear` derives from each: the lower and upper pixel
@@ -154,10 +186,11 @@ def _axis_samples(q, half, length, first, second, weight, inside):  # pragma: no
 
 
 @numba.njit(cache=True, nogil=True)
-def _forstner_sums(gx, gy, qx, qy, half, weight, columns, rows):  # pragma: no cover
-    """Förstner's normal equations ``(axx, axy, ayy, bx, by)`` of one corner at ``(qx,
-    qy)``: the window's samples in row-major order, each as :func:`bilinear` gives it
-    at ``q + offset`` (``columns`` and ``rows`` hold :func:`_axis_samples` of each axis)."""
+def _forstner_sums(smooth, qx, qy, half, weight, columns, rows):  # pragma: no cover
+    """Förstner's normal equations ``(axx, axy, ayy, bx, by)`` of one corner at
+    ``(qx, qy)``: the window's samples in row-major order, each as :func:`bilinear` gives
+    it at ``q + offset`` from :func:`gradient` of ``smooth`` (its values computed where
+    read; ``columns`` and ``rows`` hold :func:`_axis_samples` of each axis)."""
     x0, x1, wxs, xin = columns
     y0, y1, wys, yin = rows
     side = 2 * half + 1
@@ -173,11 +206,11 @@ def _forstner_sums(gx, gy, qx, qy, half, weight, columns, rows):  # pragma: no c
             sx = sy = 0.0
             if yin[r] and xin[c]:
                 wx, left, right = wxs[c], x0[c], x1[c]
-                upper = (1.0 - wx) * gx[top, left] + wx * gx[top, right]
-                lower = (1.0 - wx) * gx[bottom, left] + wx * gx[bottom, right]
+                upper = (1.0 - wx) * _dx(smooth, top, left) + wx * _dx(smooth, top, right)
+                lower = (1.0 - wx) * _dx(smooth, bottom, left) + wx * _dx(smooth, bottom, right)
                 sx = (1.0 - wy) * upper + wy * lower
-                upper = (1.0 - wx) * gy[top, left] + wx * gy[top, right]
-                lower = (1.0 - wx) * gy[bottom, left] + wx * gy[bottom, right]
+                upper = (1.0 - wx) * _dy(smooth, top, left) + wx * _dy(smooth, top, right)
+                lower = (1.0 - wx) * _dy(smooth, bottom, left) + wx * _dy(smooth, bottom, right)
                 sy = (1.0 - wy) * upper + wy * lower
             axx += w * sx * sx
             axy += w * sx * sy
@@ -188,11 +221,12 @@ def _forstner_sums(gx, gy, qx, qy, half, weight, columns, rows):  # pragma: no c
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
-def _forstner_sums_inside(gx, gy, qx, qy, half, weight):  # pragma: no cover
-    """:func:`_forstner_sums` of a window whose samples and their right and lower pixels
-    all lie inside the image: every sample has the same weights (``q`` minus its floor),
-    so a row is one vectorised loop over consecutive pixels (sums reassociated: the
-    result differs from the sample-by-sample sums by rounding)."""
+def _forstner_sums_inside(smooth, qx, qy, half, weight):  # pragma: no cover
+    """:func:`_forstner_sums` of a window whose samples, their right and lower pixels and
+    those pixels' neighbours all lie inside the image: every sample has the same weights
+    (``q`` minus its floor) and every gradient is a central difference, so a row is one
+    vectorised loop over consecutive pixels (sums reassociated: the result differs from
+    the sample-by-sample sums by rounding)."""
     fx, fy = np.floor(qx), np.floor(qy)
     wx, wy = qx - fx, qy - fy
     left, top = int(fx) - half, int(fy) - half
@@ -200,18 +234,22 @@ def _forstner_sums_inside(gx, gy, qx, qy, half, weight):  # pragma: no cover
     axx = axy = ayy = bx = by = 0.0
     for r in range(side):
         py = qy + float(r - half)
-        x0, x1 = gx[top + r, left : left + side + 1], gx[top + r + 1, left : left + side + 1]
-        y0, y1 = gy[top + r, left : left + side + 1], gy[top + r + 1, left : left + side + 1]
+        above, upper = smooth[top + r - 1, left - 1 :], smooth[top + r, left - 1 :]
+        lower, below = smooth[top + r + 1, left - 1 :], smooth[top + r + 2, left - 1 :]
         w_row = weight[r * side : (r + 1) * side]
-        for c in range(side):
+        for c in range(side):  # pixel left + c is element c + 1 of these rows
             w = w_row[c]
             px = qx + float(c - half)
-            sx = (1.0 - wy) * ((1.0 - wx) * x0[c] + wx * x0[c + 1]) + wy * (
-                (1.0 - wx) * x1[c] + wx * x1[c + 1]
-            )
-            sy = (1.0 - wy) * ((1.0 - wx) * y0[c] + wx * y0[c + 1]) + wy * (
-                (1.0 - wx) * y1[c] + wx * y1[c + 1]
-            )
+            x00 = (upper[c + 2] - upper[c]) / 2.0
+            x01 = (upper[c + 3] - upper[c + 1]) / 2.0
+            x10 = (lower[c + 2] - lower[c]) / 2.0
+            x11 = (lower[c + 3] - lower[c + 1]) / 2.0
+            y00 = (lower[c + 1] - above[c + 1]) / 2.0
+            y01 = (lower[c + 2] - above[c + 2]) / 2.0
+            y10 = (below[c + 1] - upper[c + 1]) / 2.0
+            y11 = (below[c + 2] - upper[c + 2]) / 2.0
+            sx = (1.0 - wy) * ((1.0 - wx) * x00 + wx * x01) + wy * ((1.0 - wx) * x10 + wx * x11)
+            sy = (1.0 - wy) * ((1.0 - wx) * y00 + wx * y01) + wy * ((1.0 - wx) * y10 + wx * y11)
             axx += w * sx * sx
             axy += w * sx * sy
             ayy += w * sy * sy
@@ -221,13 +259,13 @@ def _forstner_sums_inside(gx, gy, qx, qy, half, weight):  # pragma: no cover
 
 
 @numba.njit(cache=True, nogil=True)
-def forstner(gx, gy, corners, half, weight, which, iterations):  # pragma: no cover
+def forstner(smooth, corners, half, weight, which, iterations):  # pragma: no cover
     """Förstner's iteration for every corner at once (see ``refine_corners``): the window's
     offsets are the ``(2 half + 1)²`` integer ones, row-major (x fastest), corner ``i``'s
     weights ``weight[which[i]]``; stops when no corner moves by 1e-4 px or more. The
     samples' pixels and weights are found once per row and column of a window, not once
     per sample; the arithmetic is :func:`bilinear`'s."""
-    height, width = gx.shape
+    height, width = smooth.shape
     side = 2 * half + 1
     columns = (
         np.empty(side, np.int64),
@@ -247,15 +285,15 @@ def forstner(gx, gy, corners, half, weight, which, iterations):  # pragma: no co
         shift = 0.0
         for i in range(q.shape[0]):
             left, top = np.floor(q[i, 0]) - half, np.floor(q[i, 1]) - half
-            if left >= 0 and top >= 0 and left + side < width and top + side < height:
+            if left >= 1 and top >= 1 and left + side + 1 < width and top + side + 1 < height:
                 axx, axy, ayy, bx, by = _forstner_sums_inside(
-                    gx, gy, q[i, 0], q[i, 1], half, weight[which[i]]
+                    smooth, q[i, 0], q[i, 1], half, weight[which[i]]
                 )
             else:
                 _axis_samples(q[i, 0], half, width, *columns)
                 _axis_samples(q[i, 1], half, height, *rows)
                 axx, axy, ayy, bx, by = _forstner_sums(
-                    gx, gy, q[i, 0], q[i, 1], half, weight[which[i]], columns, rows
+                    smooth, q[i, 0], q[i, 1], half, weight[which[i]], columns, rows
                 )
             det = axx * ayy - axy * axy
             new[i, 0], new[i, 1] = q[i, 0], q[i, 1]

@@ -127,21 +127,12 @@ def sigma_ladder(shape: tuple[int, ...], columns: int, rows: int) -> list[float]
 
 
 class _Photo:
-    """The image smoothed by σ = 1 and its gradient, sampled at sub-pixel points."""
+    """The image smoothed by σ = 1, sampled (and its gradient) at sub-pixel points."""
 
     def __init__(self, image: np.ndarray) -> None:
         from ..shared.separable import smooth_gaussian
-        from ._corner_kernels import gradient
 
         self.smooth = np.ascontiguousarray(smooth_gaussian(np.asarray(image, np.float64), 1.0))
-        self.gy, self.gx = gradient(self.smooth)
-
-    @staticmethod
-    def _at(values: np.ndarray, points: np.ndarray) -> np.ndarray:
-        from ._corner_kernels import sample
-
-        flat = np.ascontiguousarray(points.reshape(-1, 2))
-        return sample(values, flat[:, 0].copy(), flat[:, 1].copy()).reshape(points.shape[:-1])
 
     def x_junctions(self, points: np.ndarray, radius: np.ndarray) -> bool:
         """Every point is point-symmetric at ``radius`` (an X-junction, not an L or T):
@@ -162,8 +153,12 @@ class _Photo:
 
     def on_edges(self, a: np.ndarray, b: np.ndarray, contrast: float) -> bool:
         """Every segment a–b crosses an edge at its midpoint (two neighbouring corners)."""
-        middle = (a + b) / 2
-        gradient = np.hypot(self._at(self.gx, middle), self._at(self.gy, middle))
+        from ._corner_kernels import gradient_samples
+
+        middle = np.ascontiguousarray(((a + b) / 2).reshape(-1, 2))
+        gradient = np.hypot(
+            *gradient_samples(self.smooth, middle[:, 0].copy(), middle[:, 1].copy())
+        )
         return bool((gradient >= MIN_EDGE * contrast).all())
 
     def contrast(self, point: np.ndarray) -> float:
@@ -306,7 +301,7 @@ def find_board(
             continue
         # the window grows with the squares (0.45 of the spacing), within [3, max_window]
         radius = np.clip(0.45 * grid_spacing(best, columns, rows), 3.0, max_window)
-        return _refine(photo.gx, photo.gy, best, radius, 20)
+        return _refine(photo.smooth, best, radius, 20)
     return None
 
 
@@ -332,16 +327,16 @@ def refine_corners(
     weights of σ = ``radius[i]``, on the gradient of the image smoothed by σ = 1.
     """
     from ..shared.separable import smooth_gaussian
-    from ._corner_kernels import gradient
 
-    gy, gx = gradient(np.ascontiguousarray(smooth_gaussian(image.astype(np.float64), 1.0)))
-    return _refine(gx, gy, corners, radius, iterations)
+    smooth = np.ascontiguousarray(smooth_gaussian(image.astype(np.float64), 1.0))
+    return _refine(smooth, corners, radius, iterations)
 
 
 def _refine(
-    gx: np.ndarray, gy: np.ndarray, corners: np.ndarray, radius: np.ndarray, iterations: int
+    smooth: np.ndarray, corners: np.ndarray, radius: np.ndarray, iterations: int
 ) -> np.ndarray:
-    """:func:`refine_corners` on the gradient ``gx, gy`` of the image smoothed by σ = 1."""
+    """:func:`refine_corners` on the image smoothed by σ = 1 (its gradient by
+    ``np.gradient``, computed where the windows read it)."""
     from ._corner_kernels import forstner
 
     half = int(np.ceil(radius.max()))
@@ -354,7 +349,7 @@ def _refine(
     weight = np.exp(-(ox**2 + oy**2) / (2 * r**2)) * inside  # one row per radius
     weight[:, (ox == 0) & (oy == 0)] = 0.0  # the centre's gradient carries no position
     q = np.ascontiguousarray(corners, dtype=np.float64)
-    return forstner(gx, gy, q, half, weight, which.ravel().astype(np.int64), iterations)
+    return forstner(smooth, q, half, weight, which.ravel().astype(np.int64), iterations)
 
 
 class BoardCorners(NamedTuple):

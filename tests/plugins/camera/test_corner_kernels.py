@@ -107,7 +107,7 @@ def test_forstner_equals_the_per_sample_iteration():
     corners = np.array([[21.0, 17.0], [2.5, 37.2], [30.4, 18.9]])
     radius = np.array([4.0, 5.0, 4.0])  # two corners share their weights
     expected = _forstner_per_sample(gx, gy, corners, radius, 8)
-    refined = _refine(gx, gy, corners, radius, 8)
+    refined = _refine(smooth, corners, radius, 8)
     np.testing.assert_allclose(refined, expected, rtol=0, atol=1e-9)
     np.testing.assert_array_equal(refined[1], expected[1])  # the border's: unchanged
     assert np.abs(expected[0] - (20.3, 17.6)).max() < 0.05
@@ -178,10 +178,24 @@ def test_coarse_candidates_lead_to_the_corners_the_full_resolution_ones_give():
     assert cdist(truth, coarse).min(axis=1).max() < 1.0
     corners = _oriented(full[_Grower(full, photo, 9, 6).grid()], photo.smooth)
     radius = np.clip(0.45 * grid_spacing(corners, 9, 6), 3.0, 15)
-    expected = _refine(photo.gx, photo.gy, corners, radius, 20)  # the full-resolution path
+    expected = _refine(photo.smooth, corners, radius, 20)  # the full-resolution path
     found = find_board(view, 9, 6, sigma=2.0)
     # the iteration stops when no corner moves by 1e-4 px: from other starts it stops
     # a few thousandths of a pixel apart, as near to the truth
     np.testing.assert_allclose(found, expected, atol=0.01)
     error, reference = (np.linalg.norm(c - truth, axis=1).mean() for c in (found, expected))
     assert error < reference + 0.002
+
+
+def test_gradient_samples_equal_samples_of_the_gradient_images_to_the_bit():
+    """Replaces the two full-size gradient images the board's sides were sampled in."""
+    from graphvision_plugins.camera._corner_kernels import gradient_samples
+
+    rng = np.random.default_rng(6)
+    smooth = rng.random((30, 40))
+    xs = np.concatenate([rng.uniform(-1, 40, 200), [0.0, 39.0, 20.0]])
+    ys = np.concatenate([rng.uniform(-1, 30, 200), [0.0, 29.0, 29.0]])  # borders too
+    gy, gx = gradient(smooth)
+    found_x, found_y = gradient_samples(smooth, xs, ys)
+    np.testing.assert_array_equal(found_x, sample(gx, xs, ys))
+    np.testing.assert_array_equal(found_y, sample(gy, xs, ys))
