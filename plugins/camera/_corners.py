@@ -25,7 +25,9 @@ r"""Checkerboard inner corners: saddle detection, grid growing, sub-pixel refine
    (between corners (0,0) and (1,1)) dark.
 3. **Scale.** With ``sigma=None`` the detector tries σ = 2 px, then larger
    steps of √2 up to a sixth of the largest square the image can hold, then
-   1.4 and 1 px: the first scale at which the grid is found. A corner blurred
+   1.4 and 1 px: the first scale at which the grid is found; from σ = 2 on, the
+   response is computed at half the resolution (``coarse_saddle_candidates``:
+   the candidates only seed the grid and the refinement). A corner blurred
    over more than σ has a flat-topped response that noise splits; a sixth of
    the square keeps neighbouring corners apart.
 4. **Sub-pixel refinement.** For a corner q and every pixel p around it, the
