@@ -130,7 +130,10 @@ def correlate(image: FloatImage, kernel: Kernel, *, boundary: Boundary = "mirror
     :math:`H = c\, r^\top` and applied as two 1-D passes by the compiled
     separable core, :math:`O(k)` instead of :math:`O(k^2)` per pixel; any
     other kernel is applied tap by tap over whole rows by a compiled loop
-    that accumulates in float64, as scipy does.
+    that accumulates in float32, as OpenCV's ``filter2D`` does: an output
+    differs from scipy's float64 sum by at most about
+    :math:`(k_h \lceil k_w / 5 \rceil + 5)\, 2^{-24} \sum |H|\, \max |F|`
+    (3·10⁻⁶ for a 5×5 kernel of total weight 1 on a [0, 1] image).
 
     Parameters
     ----------
