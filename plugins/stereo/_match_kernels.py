@@ -136,20 +136,63 @@ def _clamped_sum(row: np.ndarray, x: int, half: int) -> np.uint16:  # pragma: no
     return total
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _add_shifted(
+    middle: np.ndarray, row: np.ndarray, first: int, taps: int, start: bool
+) -> None:  # pragma: no cover
+    """``middle[i] (= 0 when start) + Σ row[i + first + t]`` over ``t < taps ≤ 5``, one
+    SIMD pass (the partial sum stays in a register across the taps; modulo 2¹⁶)."""
+    n = middle.size
+    a, b, c = row[first:], row[first + 1 :], row[first + 2 :]
+    d, e = row[first + 3 :], row[first + 4 :]
+    if taps == 5:
+        if start:
+            for i in range(n):
+                middle[i] = np.uint16(a[i] + b[i] + c[i] + d[i] + e[i])
+        else:
+            for i in range(n):
+                middle[i] = np.uint16(middle[i] + a[i] + b[i] + c[i] + d[i] + e[i])
+    elif taps == 4:
+        if start:
+            for i in range(n):
+                middle[i] = np.uint16(a[i] + b[i] + c[i] + d[i])
+        else:
+            for i in range(n):
+                middle[i] = np.uint16(middle[i] + a[i] + b[i] + c[i] + d[i])
+    elif taps == 3:
+        if start:
+            for i in range(n):
+                middle[i] = np.uint16(a[i] + b[i] + c[i])
+        else:
+            for i in range(n):
+                middle[i] = np.uint16(middle[i] + a[i] + b[i] + c[i])
+    elif taps == 2:
+        if start:
+            for i in range(n):
+                middle[i] = np.uint16(a[i] + b[i])
+        else:
+            for i in range(n):
+                middle[i] = np.uint16(middle[i] + a[i] + b[i])
+    elif start:
+        middle[:] = a[:n]
+    else:
+        for i in range(n):
+            middle[i] = np.uint16(middle[i] + a[i])
+
+
 @njit(cache=True, nogil=True)
 def _across(columns: np.ndarray, half: int, out: np.ndarray) -> None:  # pragma: no cover
-    """``out[k, x] = Σ columns[k, clamp(x + dx)]`` over ``|dx| ≤ half``: shifted rows
-    added whole inside, the clamped ends apart."""
+    """``out[k, x] = Σ columns[k, clamp(x + dx)]`` over ``|dx| ≤ half``: inside, up to five
+    shifted rows summed in one SIMD pass (two passes for a block of 9, not eight
+    read-modify-write passes); the clamped ends apart."""
     count, cols = columns.shape
     inner = max(cols - half, half)
+    width = 2 * half + 1
     for k in range(count):
         row, sums = columns[k], out[k]
         middle = sums[half:inner]
-        middle[:] = row[: inner - half]
-        for dx in range(1, 2 * half + 1):
-            shifted = row[dx:]
-            for i in range(inner - half):
-                middle[i] = np.uint16(middle[i] + shifted[i])
+        for first in range(0, width, 5):
+            _add_shifted(middle, row, first, min(width - first, 5), first == 0)
         for x in range(min(half, cols)):
             sums[x] = _clamped_sum(row, x, half)
         for x in range(inner, cols):
@@ -168,34 +211,48 @@ def _lower(a: np.uint32, b: np.uint32) -> np.uint32:  # pragma: no cover
     return a if a < b else b
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _least(a: np.uint16, b: np.uint16) -> np.uint16:  # pragma: no cover
+    """The smaller, a select on 16-bit lanes (``min`` of unsigned integers widens)."""
+    return a if a < b else b
+
+
 @njit(cache=True, nogil=True)
-def _winner_keys(costs: np.ndarray, d_min: int, keys: np.ndarray) -> None:  # pragma: no cover
-    """``keys[x] = (least << 10) | k`` of the first least cost of ``x`` over the disparities
-    whose right pixel is inside (``k ≤ x − d_min``): one min over keys per disparity row."""
+def _winners(
+    costs: np.ndarray, d_min: int, least: np.ndarray, which: np.ndarray
+) -> None:  # pragma: no cover
+    """``least[x]``, ``which[x]``: the first least cost of ``x`` and its ``k`` over the
+    disparities whose right pixel is inside (``k ≤ x − d_min``; 65535 and 0 where none
+    is): a min over the disparity rows, then the rows that reach it, last to first, each
+    a select on 16-bit lanes."""
     count, cols = costs.shape
-    keys[:] = 0xFFFFFFFF
+    keys = np.full(cols, 0xFFFFFFFF, dtype=np.uint32)
     for k in range(count):
         start = max(0, min(d_min + k, cols))
         row, found = costs[k, start:], keys[start:]
         for i in range(cols - start):
             found[i] = _lower(found[i], _key(row[i], k))
+    for x in range(cols):
+        least[x] = np.uint16(min(keys[x] >> np.uint32(10), np.uint32(0xFFFF)))
+        which[x] = np.uint16(keys[x] & np.uint32(1023)) if keys[x] != np.uint32(0xFFFFFFFF) else 0
 
 
 @njit(cache=True, nogil=True)
 def _rivals(
-    costs: np.ndarray, d_min: int, keys: np.ndarray, rivals: np.ndarray
+    costs: np.ndarray, d_min: int, which: np.ndarray, rivals: np.ndarray
 ) -> None:  # pragma: no cover
-    """``rivals[x]``: least cost of ``x`` more than one step from its winner."""
+    """``rivals[x]``: least cost of ``x`` more than one step from its winner (65535 when
+    there is none: the caller tells that case apart), on 16-bit lanes."""
     count, cols = costs.shape
-    rivals[:] = 0xFFFFFFFF
+    rivals[:] = 0xFFFF
     for k in range(count):
         start = max(0, min(d_min + k, cols))
-        row, winners, found = costs[k, start:], keys[start:], rivals[start:]
+        row, winners, found = costs[k, start:], which[start:], rivals[start:]
         for i in range(cols - start):
-            offset = np.uint32(np.uint32(k + 1) - (winners[i] & np.uint32(1023)))
+            offset = np.uint16(np.uint16(k + 1) - winners[i])
             # |k − best| ≤ 1 (a negative offset wraps high): all ones, else none
-            mask = np.uint32(0) - np.uint32(offset <= np.uint32(2))
-            found[i] = _lower(found[i], np.uint32(row[i]) | mask)
+            mask = np.uint16(np.uint16(0) - np.uint16(offset <= np.uint16(2)))
+            found[i] = _least(found[i], np.uint16(row[i] | mask))
 
 
 @njit(cache=True, nogil=True)
@@ -229,18 +286,20 @@ def resolve_row(
     at the range's ends or when a rival more than a step away is within ``uniqueness``;
     the parabola's vertex) and right, from its disparity-major costs ``(count, cols)``."""
     count, cols = costs.shape
-    keys = np.empty(cols, dtype=np.uint32)
-    rivals = np.empty(cols, dtype=np.uint32)
-    _winner_keys(costs, d_min, keys)
-    _rivals(costs, d_min, keys, rivals)
+    least = np.empty(cols, dtype=np.uint16)
+    which = np.empty(cols, dtype=np.uint16)
+    rivals = np.empty(cols, dtype=np.uint16)
+    _winners(costs, d_min, least, which)
+    _rivals(costs, d_min, which, rivals)
     for x in range(cols):
         top = min(count - 1, x - d_min)
-        best_k = np.int64(keys[x] & np.uint32(1023))
+        best_k = np.int64(which[x])
         if top < 0 or best_k == top or best_k == 0:
             out[x] = np.nan
             continue
-        best = float(keys[x] >> np.uint32(10))
-        second = float(rivals[x]) if rivals[x] != np.uint32(0xFFFFFFFF) else np.inf
+        best = float(least[x])
+        # a disparity more than one step from the winner exists (else no rival)
+        second = float(rivals[x]) if best_k >= 2 or best_k + 2 <= top else np.inf
         if second < best + abs(best) * uniqueness:
             out[x] = np.nan
             continue
