@@ -50,12 +50,11 @@ def census_sgm(
     along ``paths`` paths in 16-bit integers; ``search`` is ``(d_min, count, window,
     block)``, ``penalties`` are ``(P1, P2, edge)`` already
     scaled by the block's area, ``select`` is ``(uniqueness, subpixel)``."""
-    from ._match_kernels import census_volume, jump_penalties
-    from ._sgm_kernels import sweep_paths
+    from ._match_kernels import jump_penalties
+    from ._sgm_kernels import census_sweep_paths
 
     d_min, count, window, block = search
     outside = int(maximum_cost("census", window))
-    volume = census_volume(*_signatures(left, right, window), d_min, count, outside, block // 2)
     small, large, edge = penalties
     jumps = []
     for sign in (1, -1):
@@ -63,8 +62,12 @@ def census_sgm(
         jumps.append(
             jump_penalties(left, steps, float(small), float(large), -1.0 if edge is None else edge)
         )
-    uniqueness, subpixel = select
-    found: tuple[np.ndarray, np.ndarray] = sweep_paths(
-        volume, small, jumps[0], jumps[1], d_min, uniqueness, subpixel
+    found: tuple[np.ndarray, np.ndarray] = census_sweep_paths(
+        _signatures(left, right, window),
+        (d_min, count, outside, block // 2),
+        small,
+        jumps[0],
+        jumps[1],
+        select,
     )
     return found

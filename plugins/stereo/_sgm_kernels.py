@@ -1,26 +1,29 @@
 """numba kernels of semi-global matching in two sweeps (imported on first use).
 
 The volume and the sum are disparity-major, ``(rows, count, cols)``. The forward sweep
-goes down the rows and aggregates the paths whose predecessor it has already visited,
-``(0, 1)``, ``(1, 0)``, ``(1, 1)`` and ``(1, −1)``; the backward sweep goes up with the
-opposite four (with 4 paths: the horizontal and vertical ones only). A vertical or
-diagonal path advances a whole row at once from its previous row's costs (one SIMD loop
-over the row's pixels per disparity, a sentinel row at each end of the range); the
-horizontal path goes pixel by pixel on the row turned pixel-major, one SIMD loop over
-the disparities per pixel (a band of rows advanced together, SIMD over the rows, was
-slower: turning a 16-row band pixel-major misses the cache where a row fits). The sum is in 16-bit
-integers (the caller checks that it fits), so the order of the paths does not change it:
-the result is ``_kernels.aggregate_path``'s over ``PATHS`` to the bit.
-"""
+goes down the rows: it makes each row's block-summed census costs
+(``_match_kernels``' running sums, :func:`census_sweep_paths`), aggregates the two paths
+along the row and the paths whose predecessor it has already visited, ``(1, 0)``,
+``(1, 1)`` and ``(1, −1)``, while the row is in cache; the backward sweep goes up with
+the opposite three (with 4 paths: the vertical ones only) and resolves each row as soon
+as it is final. Two passes over the volume, not the four of separate volume, horizontal,
+forward and backward passes. A vertical or diagonal path advances a whole row at once
+from its previous row's costs (one SIMD loop over the row's pixels per disparity, a
+sentinel row at each end of the range); the horizontal path goes pixel by pixel on the
+row turned pixel-major, one SIMD loop over the disparities per pixel (a band of rows
+advanced together, SIMD over the rows, was slower: turning a 16-row band pixel-major
+misses the cache where a row fits). The sum is in 16-bit integers (the caller checks
+that it fits), so the order of the paths does not change it: the result is
+``_kernels.aggregate_path``'s over ``PATHS`` to the bit."""
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from ._match_kernels import resolve_row
+from ._match_kernels import _across, _block_rows, _next_columns, resolve_row
 
-__all__ = ["sweep_paths"]
+__all__ = ["census_sweep_paths", "sweep_paths"]
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -97,49 +100,90 @@ def _transpose(source: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
 
 
 @njit(cache=True, nogil=True)
-def _along_row(
-    costs: np.ndarray,
-    step_x: int,
-    small: int,
-    jumps: np.ndarray,
-    work: tuple[np.ndarray, np.ndarray, np.ndarray],
-) -> None:  # pragma: no cover
-    """The path along a pixel-major row ``costs`` ``(cols, count)`` whose predecessor of
-    ``x`` is ``x − step_x`` (visited in that order), added to ``work[2]`` (``work``: path
-    costs, their minima, the sum)."""
-    cols = costs.shape[0]
-    found, found_min, added = work
-    for j in range(cols):
-        x = j if step_x > 0 else cols - 1 - j
-        if j == 0:
-            found_min[x] = _start(costs[x], found[x], added[x])
-        else:
-            px = x - step_x
-            low = found_min[px]
-            found_min[x] = _step(
-                costs[x], found[px], low, found[x], added[x], small, np.int64(jumps[x])
+def _to_pixels(source: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
+    """``out = source.T`` (``(count, cols)`` → ``(cols, count)``): four disparity rows
+    packed into one 64-bit word per pixel (one store for four values, little-endian as
+    the uint16 row of ``out`` reads it), the rows beyond a multiple of four one by one."""
+    count, cols = source.shape
+    words = count // 4 if count % 4 == 0 else 0  # else a row of ``out`` is no whole word
+    wide = np.empty((cols, 0), dtype=np.uint64)
+    if words > 0:
+        wide = out.reshape(-1).view(np.uint64).reshape((cols, words))
+    for w in range(words):
+        a, b = source[4 * w], source[4 * w + 1]
+        c, d = source[4 * w + 2], source[4 * w + 3]
+        column = wide[:, w]
+        for x in range(cols):
+            column[x] = (
+                np.uint64(a[x])
+                | (np.uint64(b[x]) << np.uint64(16))
+                | (np.uint64(c[x]) << np.uint64(32))
+                | (np.uint64(d[x]) << np.uint64(48))
             )
+    for k in range(4 * words, count):
+        line, column = source[k], out[:, k]
+        for x in range(cols):
+            column[x] = line[x]
 
 
 @njit(cache=True, nogil=True)
-def _horizontal(
-    volume: np.ndarray, total: np.ndarray, small: int, jumps: tuple[np.ndarray, np.ndarray]
+def _along_both(
+    costs: np.ndarray,
+    small: int,
+    jumps: tuple[np.ndarray, np.ndarray],
+    work: tuple[np.ndarray, ...],
 ) -> None:  # pragma: no cover
-    """``total`` = the two paths along the rows, ``(0, 1)`` and ``(0, −1)`` (``jumps``:
-    theirs), each row turned pixel-major once for both (the paths stay within a row)."""
-    rows, count, cols = volume.shape
-    costs = np.empty((cols, count), dtype=np.uint16)
-    work = (
+    """The paths ``(0, 1)`` and ``(0, −1)`` along a pixel-major row ``costs``
+    ``(cols, count)``, added to ``work[4]`` (``work``: each path's costs and minima, the
+    sum): one step of each per iteration, from either end, so that the processor
+    overlaps the two chains of dependent steps."""
+    cols = costs.shape[0]
+    forward, forward_min, backward, backward_min, added = work
+    last = cols - 1
+    forward_min[0] = _start(costs[0], forward[0], added[0])
+    backward_min[last] = _start(costs[last], backward[last], added[last])
+    ahead, behind = jumps
+    for j in range(1, cols):
+        x, y = j, last - j
+        forward_min[x] = _step(
+            costs[x], forward[x - 1], forward_min[x - 1], forward[x], added[x], small,
+            np.int64(ahead[x]),
+        )  # fmt: skip
+        backward_min[y] = _step(
+            costs[y], backward[y + 1], backward_min[y + 1], backward[y], added[y], small,
+            np.int64(behind[y]),
+        )  # fmt: skip
+
+
+@njit(cache=True, nogil=True)
+def _horizontal_buffers(count: int, cols: int) -> tuple[np.ndarray, ...]:  # pragma: no cover
+    """The pixel-major row, each path's costs and minima, and the row's sum."""
+    return (
+        np.empty((cols, count), dtype=np.uint16),
+        np.empty((cols, count), dtype=np.uint16),
+        np.empty(cols, dtype=np.uint16),
         np.empty((cols, count), dtype=np.uint16),
         np.empty(cols, dtype=np.uint16),
         np.empty((cols, count), dtype=np.uint16),
     )
-    for y in range(rows):
-        _transpose(volume[y], costs)
-        work[2][:] = 0
-        _along_row(costs, 1, small, jumps[0][y], work)
-        _along_row(costs, -1, small, jumps[1][y], work)
-        _transpose(work[2], total[y])
+
+
+@njit(cache=True, nogil=True)
+def _horizontal_row(
+    cost: np.ndarray,
+    total: np.ndarray,
+    small: int,
+    jumps: tuple[np.ndarray, np.ndarray],
+    buffers: tuple[np.ndarray, ...],
+) -> None:  # pragma: no cover
+    """``total`` (a disparity-major row) = the two paths along the row, ``(0, 1)`` and
+    ``(0, −1)`` (``jumps``: this row's of each), the row turned pixel-major once for both
+    (the paths stay within a row)."""
+    costs, added = buffers[0], buffers[5]
+    _to_pixels(cost, costs)
+    added[:] = 0
+    _along_both(costs, small, jumps, buffers[1:])
+    _transpose(added, total)
 
 
 @njit(cache=True, nogil=True)
@@ -195,35 +239,67 @@ def _across_rows(
 
 
 @njit(cache=True, nogil=True)
-def _sweep(
-    volume: np.ndarray, total: np.ndarray, sign: int, small: int, jumps: np.ndarray
-) -> None:  # pragma: no cover
-    """Add the paths across rows of one sweep (``sign`` 1 forward, −1 backward) to
-    ``total``, row by row: ``(sign, 0)``, ``(sign, sign)``, ``(sign, −sign)`` for
-    ``jumps[1:]`` (``jumps[0]``, along the row, is :func:`_horizontal`'s). ``volume`` and
-    ``total`` are disparity-major ``(rows, count, cols)``."""
-    rows, count, cols = volume.shape
-    paths = jumps.shape[0]
-    steps_x = (0, 0, sign, -sign)
+def _sweep_state(
+    paths: int, count: int, cols: int, small: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """A sweep's previous and current path costs (rows 0 and ``count + 1``: sentinels that
+    never win) and their minima, per path."""
     previous = np.full((paths, count + 2, cols), 65535 - small, dtype=np.uint16)
-    current = previous.copy()  # rows 0 and count + 1: sentinels that never win
-    previous_min = np.empty((paths, cols), dtype=np.uint16)
-    current_min = np.empty((paths, cols), dtype=np.uint16)
+    minima = np.empty((paths, cols), dtype=np.uint16)
+    return previous, previous.copy(), minima, minima.copy()
+
+
+@njit(cache=True, nogil=True)
+def _sweep_row(
+    cost: np.ndarray,
+    total: np.ndarray,
+    i: int,
+    y: int,
+    sign: int,
+    small: int,
+    jumps: np.ndarray,
+    state: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """Add row ``y`` (the sweep's ``i``-th; ``sign`` 1 forward, −1 backward) of the paths
+    across rows, ``(sign, 0)``, ``(sign, sign)``, ``(sign, −sign)`` for ``jumps[1:]``
+    (``jumps[0]``, along the row, is :func:`_horizontal_row`'s), to ``total``; returns
+    the state for the next row."""
+    previous, current, previous_min, current_min = state
+    steps_x = (0, 0, sign, -sign)
+    for p in range(1, jumps.shape[0]):
+        _across_rows(
+            cost,
+            total,
+            steps_x[p],
+            small,
+            jumps[p, y],
+            i == 0,
+            (previous[p], previous_min[p]),
+            (current[p], current_min[p]),
+        )
+    return current, previous, current_min, previous_min
+
+
+@njit(cache=True, nogil=True)
+def _backward_resolve(
+    volume: np.ndarray,
+    total: np.ndarray,
+    small: int,
+    jumps: np.ndarray,
+    d_min: int,
+    select: tuple[float, bool],
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
+    """The backward sweep, each row resolved (left and right winners) as soon as it is
+    final, while it is in cache."""
+    rows, count, cols = volume.shape
+    out = np.empty((rows, cols), dtype=np.float32)
+    right_out = np.empty((rows, cols), dtype=np.float32)
+    state = _sweep_state(jumps.shape[0], count, cols, small)
     for i in range(rows):
-        y = i if sign > 0 else rows - 1 - i
-        for p in range(1, paths):
-            _across_rows(
-                volume[y],
-                total[y],
-                steps_x[p],
-                small,
-                jumps[p, y],
-                i == 0,
-                (previous[p], previous_min[p]),
-                (current[p], current_min[p]),
-            )
-        previous, current = current, previous
-        previous_min, current_min = current_min, previous_min
+        y = rows - 1 - i
+        state = _sweep_row(volume[y], total[y], i, y, -1, small, jumps, state)
+        resolve_row(total[y], d_min, select[0], select[1], out[y], right_out[y])
+    return out, right_out
 
 
 @njit(cache=True, nogil=True)
@@ -238,13 +314,44 @@ def sweep_paths(
 ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
     """Left and right disparities of the path-aggregated disparity-major ``volume``
     ``(rows, count, cols)``, uint16."""
-    rows, _, cols = volume.shape
+    rows, count, cols = volume.shape
     total = np.empty_like(volume)
-    _horizontal(volume, total, small, (forward_jumps[0], backward_jumps[0]))
-    _sweep(volume, total, 1, small, forward_jumps)
-    _sweep(volume, total, -1, small, backward_jumps)
-    out = np.empty((rows, cols), dtype=np.float32)
-    right_out = np.empty((rows, cols), dtype=np.float32)
+    buffers = _horizontal_buffers(count, cols)
+    state = _sweep_state(forward_jumps.shape[0], count, cols, small)
     for y in range(rows):
-        resolve_row(total[y], d_min, uniqueness, subpixel, out[y], right_out[y])
-    return out, right_out
+        _horizontal_row(
+            volume[y], total[y], small, (forward_jumps[0, y], backward_jumps[0, y]), buffers
+        )
+        state = _sweep_row(volume[y], total[y], y, y, 1, small, forward_jumps, state)
+    return _backward_resolve(volume, total, small, backward_jumps, d_min, (uniqueness, subpixel))
+
+
+@njit(cache=True, nogil=True)
+def census_sweep_paths(
+    signatures: tuple[np.ndarray, np.ndarray],
+    search: tuple[int, int, int, int],
+    small: int,
+    forward_jumps: np.ndarray,
+    backward_jumps: np.ndarray,
+    select: tuple[float, bool],
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
+    """:func:`sweep_paths` of ``census_volume(*signatures, *search)`` (``search``:
+    ``d_min, count, outside, half``), each row's block sums made in the forward sweep,
+    just before its paths along and down the row: two passes over the volume, not four."""
+    left, right = signatures
+    d_min, count, outside, half = search
+    rows, cols = left.shape
+    volume = np.empty((rows, count, cols), dtype=np.uint16)
+    total = np.empty_like(volume)
+    ring, columns = _block_rows(left, right, d_min, count, outside, half)
+    buffers = _horizontal_buffers(count, cols)
+    state = _sweep_state(forward_jumps.shape[0], count, cols, small)
+    for y in range(rows):
+        if y > 0:
+            _next_columns(left, right, d_min, outside, half, y, ring, columns)
+        _across(columns, half, volume[y])
+        _horizontal_row(
+            volume[y], total[y], small, (forward_jumps[0, y], backward_jumps[0, y]), buffers
+        )
+        state = _sweep_row(volume[y], total[y], y, y, 1, small, forward_jumps, state)
+    return _backward_resolve(volume, total, small, backward_jumps, d_min, select)

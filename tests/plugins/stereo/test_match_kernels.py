@@ -83,6 +83,12 @@ def test_sgm_sweeps_equal_the_path_kernels(pair, paths, edge, d_min, count):
     found, found_right = _sgm_kernels.sweep_paths(by_disparity, p1, *jumps, d_min, 0.05, True)
     np.testing.assert_array_equal(found, _kernels.winner_take_all(total, d_min, 0.05, True))
     np.testing.assert_array_equal(found_right, _kernels.right_disparity(total, d_min))
+    # the block sums made row by row inside the forward sweep: the same disparities
+    fused = _sgm_kernels.census_sweep_paths(
+        _signatures(pair, 3), (d_min, count, 48, 2), p1, *jumps, (0.05, True)
+    )
+    np.testing.assert_array_equal(fused[0], found)
+    np.testing.assert_array_equal(fused[1], found_right)
 
 
 def _left_right_reference(disparity, right_disparity, tolerance):
