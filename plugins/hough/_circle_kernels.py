@@ -91,33 +91,85 @@ def fold_plane(plane, k, last, spread, circumference, best, k_best, below, above
 
 
 @numba.njit(cache=True, nogil=True)
+def _votes_by_row(rows, cols, ux, uy, radii, signs, height, width):  # pragma: no cover
+    """Every vote of :func:`vote_plane` for every radius, sorted by radius and row:
+    columns ``xs[first[k, y] : first[k, y + 1]]`` are the votes of radius ``k`` in row
+    ``y`` (same rounding as :func:`vote_plane`)."""
+    count = np.zeros((radii.size, height + 1), dtype=np.int64)
+    cells = np.empty((radii.size * signs.size * rows.size, 3), dtype=np.int64)
+    n = 0
+    for k in range(radii.size):
+        for sign in signs:
+            step = sign * radii[k]
+            for i in range(rows.size):
+                cx = int(np.rint(cols[i] + step * ux[i]))
+                cy = int(np.rint(rows[i] + step * uy[i]))
+                if 0 <= cx < width and 0 <= cy < height:
+                    cells[n, 0], cells[n, 1], cells[n, 2] = k, cy, cx
+                    count[k, cy + 1] += 1
+                    n += 1
+    # running count over radius then row: ``first[k, height]`` ends radius k, and
+    # ``first[k + 1, 0]`` (no vote counted there) starts radius k + 1 at the same place
+    first = np.cumsum(count.reshape(-1)).reshape(count.shape)
+    fill = first.copy()
+    xs = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        k, cy = cells[i, 0], cells[i, 1]
+        xs[fill[k, cy]] = cells[i, 2]
+        fill[k, cy] += 1
+    return first, xs
+
+
+@numba.njit(cache=True, nogil=True)
 def best_over_radii(voters, radii, signs, spread, shape, smoothing):  # pragma: no cover
     """:func:`vote_plane`, the spreading of its votes and :func:`fold_plane` for every
     radius in one call: ``voters`` the points' ``(rows, cols, ux, uy)``, ``smoothing``
     the arguments of ``shared.separable_kernels.correlate_both`` after the image and the
     output (no spreading when its taps are empty). Returns ``(best, k_best, below,
-    above)``."""
+    above)``.
+
+    A band of rows at a time, every radius folded into it before the next band, so that
+    the band's votes, spread votes and running maxima stay in the processor's cache
+    (radius by radius over the whole image streamed seven image-sized arrays per
+    radius); each output row is computed by the same arithmetic, so the results are
+    those of whole planes to the bit."""
     rows, cols, ux, uy = voters
     height, width = shape
-    plane = np.empty((height, width))
-    spread_votes = np.empty((height, width))
+    taps, symmetry, row_index, column_index = smoothing
+    half = taps.size // 2
+    first, xs = _votes_by_row(rows, cols, ux, uy, radii, signs, height, width)
+    band = 16
+    plane = np.empty((band + 2 * half, width))
+    spread_votes = np.empty((band, width))
     best = np.empty((height, width))
     below = np.empty((height, width))
     above = np.empty((height, width))
     previous = np.empty((height, width))
     k_best = np.zeros((height, width), dtype=np.int64)
-    taps, symmetry, row_index, column_index = smoothing
     last = radii.size - 1
-    for k in range(radii.size):
-        vote_plane(rows, cols, ux, uy, radii[k], signs, plane)
-        votes = plane
-        if taps.size > 0:
-            correlate_both(
-                plane, taps, symmetry, row_index, taps, symmetry, column_index, spread_votes
-            )
-            votes = spread_votes
-        circumference = 2.0 * np.pi * radii[k]
-        fold_plane(votes, k, last, spread, circumference, best, k_best, below, above, previous)
+    local = np.empty(band + 2 * half, dtype=np.int64)
+    for top in range(0, height, band):
+        bottom = min(top + band, height)
+        low_row, high_row = max(top - half, 0), min(bottom + half, height)
+        if taps.size > 0:  # band rows of the padded index, counted from row top - half
+            for t in range(bottom - top + 2 * half):
+                source = row_index[top + t]
+                local[t] = source - (top - half) if source >= 0 else -1
+        for k in range(radii.size):
+            plane[:] = 0.0
+            for y in range(low_row, high_row):
+                for i in range(first[k, y], first[k, y + 1]):
+                    plane[y - (top - half), xs[i]] += 1.0
+            votes = plane[half : half + bottom - top]
+            if taps.size > 0:
+                votes = spread_votes[: bottom - top]
+                correlate_both(plane, taps, symmetry, local, taps, symmetry, column_index, votes)
+            circumference = 2.0 * np.pi * radii[k]
+            fold_plane(
+                votes, k, last, spread, circumference, best[top:bottom],
+                k_best[top:bottom], below[top:bottom], above[top:bottom],
+                previous[top:bottom],
+            )  # fmt: skip
     return best, k_best, below, above
 
 
