@@ -12,13 +12,18 @@ __all__ = ["correlate_2d"]
 
 @njit(cache=True, fastmath=True, nogil=True)
 def _add_taps(
-    total: np.ndarray, line: np.ndarray, weights: np.ndarray, first: int, cols: int
+    total: np.ndarray, line: np.ndarray, weights: np.ndarray, first: int, cols: int, keep: bool
 ) -> None:  # pragma: no cover
     """``total[c] += Σ weights[first + t] · line[c + first + t]`` for up to five taps ``t``
-    in one pass, in float32 (the running sum stays in a register across them; a SIMD loop)."""
+    in one pass, in float32 (the running sum stays in a register across them; a SIMD loop);
+    ``keep`` False: ``total[c] =`` instead (the first pass of a row, no zeroing pass)."""
     taps = min(weights.size - first, 5)
-    w = np.zeros(5, dtype=np.float32)
-    w[:taps] = weights[first : first + taps]
+    zero = np.float32(0.0)  # scalars, not a small array allocated per call (per row)
+    w0 = np.float32(weights[first])
+    w1 = np.float32(weights[first + 1]) if taps > 1 else zero
+    w2 = np.float32(weights[first + 2]) if taps > 2 else zero
+    w3 = np.float32(weights[first + 3]) if taps > 3 else zero
+    w4 = np.float32(weights[first + 4]) if taps > 4 else zero
     a, b, c, d, e = (
         line[first:],
         line[first + 1 :],
@@ -26,22 +31,25 @@ def _add_taps(
         line[first + 3 :],
         line[first + 4 :],
     )
-    w0, w1, w2, w3, w4 = w[0], w[1], w[2], w[3], w[4]
     if taps == 5:
         for x in range(cols):
-            total[x] += w0 * a[x] + w1 * b[x] + w2 * c[x] + w3 * d[x] + w4 * e[x]
+            total[x] = (w0 * a[x] + w1 * b[x] + w2 * c[x] + w3 * d[x] + w4 * e[x]) + (
+                total[x] if keep else zero
+            )
     elif taps == 4:
         for x in range(cols):
-            total[x] += w0 * a[x] + w1 * b[x] + w2 * c[x] + w3 * d[x]
+            total[x] = (w0 * a[x] + w1 * b[x] + w2 * c[x] + w3 * d[x]) + (
+                total[x] if keep else zero
+            )
     elif taps == 3:
         for x in range(cols):
-            total[x] += w0 * a[x] + w1 * b[x] + w2 * c[x]
+            total[x] = (w0 * a[x] + w1 * b[x] + w2 * c[x]) + (total[x] if keep else zero)
     elif taps == 2:
         for x in range(cols):
-            total[x] += w0 * a[x] + w1 * b[x]
+            total[x] = (w0 * a[x] + w1 * b[x]) + (total[x] if keep else zero)
     else:
         for x in range(cols):
-            total[x] += w0 * a[x]
+            total[x] = (w0 * a[x]) + (total[x] if keep else zero)
 
 
 @njit(cache=True, fastmath=True, nogil=True)
@@ -71,7 +79,6 @@ def correlate_2d(
         for p in range(0 if r == 0 else r + kh - 1, r + kh):
             fill_line(lines[p % kh, :width], image, row_index[p], column_index, before)
         total = out[r]
-        total[:] = 0.0
         for i in range(kh):
             for first in range(0, kw, 5):
-                _add_taps(total, lines[(r + i) % kh], kernel[i], first, cols)
+                _add_taps(total, lines[(r + i) % kh], kernel[i], first, cols, i + first > 0)
