@@ -38,7 +38,6 @@ submitted, their tasks standing for their values),
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import time
 from collections.abc import Callable, Sequence
@@ -52,9 +51,10 @@ from graphvision.errors import (
     UnknownNameError,
     did_you_mean,
 )
-from graphvision.execution.blas import one_blas_thread
+from graphvision.execution.blas import BlasLimit
 from graphvision.execution.executors import (
     Executor,
+    encodes_values,
     executor_name,
     executor_width,
     make_executor,
@@ -153,6 +153,39 @@ def run(
     graph, inputs, outputs, overrides = _checked_arguments(
         graph, inputs, outputs, overrides, cache, executor, workers
     )
+    limit = BlasLimit()  # one BLAS thread while nodes run here (see graphvision.execution.blas)
+    if cache is None and _runs_here(executor):  # every node runs in this process: ask now
+        limit.request()
+    try:
+        return _run(
+            graph, registry, inputs, outputs, overrides, executor, workers, cache, keep_going,
+            hooks, keep_intermediates, max_pixels, node_timeout, node_memory, max_memory,
+            backends, limit,
+        )  # fmt: skip
+    finally:
+        limit.restored()  # BLAS has its threads back when the run returns
+
+
+def _run(
+    graph: Graph | CompiledGraph,
+    registry: Registry | None,
+    inputs: dict[str, Any],
+    outputs: list[str] | None,
+    overrides: dict[str, Any],
+    executor: str | Executor,
+    workers: int | None,
+    cache: Cache | None,
+    keep_going: bool,
+    hooks: Sequence[RunHooks],
+    keep_intermediates: bool,
+    max_pixels: int | None,
+    node_timeout: float | None,
+    node_memory: int | None,
+    max_memory: int | None,
+    backends: Sequence[str] | str | None,
+    limit: BlasLimit,
+) -> RunResult:
+    """:func:`run` after its arguments are checked, its BLAS limit asked for."""
     compiled, registry = _compiled(graph, registry, inputs, overrides, backends)
     wanted = _wanted_outputs(compiled, outputs, inputs)
     wanted = outputs_with_truth(compiled, wanted, set(inputs), asked=outputs is not None)
@@ -183,6 +216,7 @@ def run(
             hooks,
             keep_intermediates,
             reference_keys,
+            limit,
         )
     describe_run(state.record, compiled, registry, given, state.keys, overrides)
     result = state.result(wanted)
@@ -191,6 +225,13 @@ def run(
         failure.result = result  # type: ignore[attr-defined]  # read by callers as error.result
         raise failure
     return result
+
+
+def _runs_here(executor: str | Executor) -> bool:
+    """Whether the executor runs nodes in this process."""
+    if isinstance(executor, str):
+        return executor in ("sync", "threads")
+    return not encodes_values(executor)
 
 
 def _checked_arguments(
@@ -311,12 +352,16 @@ def _execute(
     hooks: Sequence[RunHooks],
     keep_intermediates: bool = False,
     reference_keys: dict[str, str] | None = None,
+    limit: BlasLimit | None = None,
 ) -> RunState:
     """Steps 4 to 6: key, plan, schedule; the run's state, with its record, whatever happens.
 
     An executor made here is shut down here: after the run, or at once
-    (without waiting for running nodes) when the run is interrupted.
+    (without waiting for running nodes) when the run is interrupted. BLAS runs on one
+    thread from the first node to the last (``limit``; lifted after them, restored for
+    sure by the caller).
     """
+    limit = limit or BlasLimit()
     own = isinstance(executor, str)
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     state = RunState(
@@ -337,7 +382,9 @@ def _execute(
         here = not state.encoded  # nodes run in this process: some may run in this thread
         # one BLAS thread while nodes run here, so a node's bits do not depend on its
         # neighbours (worker processes hold it for good; see graphvision.execution.blas)
-        with one_blas_thread() if here and compute else contextlib.nullcontext():
+        if here and compute:
+            limit.hold()
+        try:
             skipped = run_tasks(
                 dependencies,
                 state.start,
@@ -348,6 +395,8 @@ def _execute(
                 limit=2 * executor_width(pool) if here else None,
                 ahead=state.chained,
             )
+        finally:
+            limit.release()
         _mark_skipped(state, skipped, hooks)
         failed = bool(state.failures)
     except BaseException:  # Ctrl-C, or a bug: do not wait for the nodes still running
