@@ -48,6 +48,19 @@ class Step:
         return f"node '{self.name}' ({op})", op
 
     @cached_property
+    def output_sources(self) -> tuple[tuple[str, tuple[str, str]], ...]:
+        """Each output port with the value it makes, ``(port, (node, port))``, made once for
+        every run."""
+        return tuple((port, (self.name, port)) for port in self.outputs)
+
+    @cached_property
+    def scalar_outputs(self) -> frozenset[str]:
+        """The output ports whose values are scalars (no arrays: nothing to count or freeze)."""
+        return frozenset(
+            port for port, kind in self.outputs.items() if issubclass(kind, _ScalarPort)
+        )
+
+    @cached_property
     def only_output(self) -> tuple[str, type[PortType], bool] | None:
         """The port and type of the node's one output when it returns it alone (no tuple),
         and whether it is a scalar (a value with no arrays to freeze)."""
@@ -72,6 +85,21 @@ class Schedule:
     dependencies: dict[str, frozenset[str]]
     readers: dict[tuple[str, str], int]
 
+    @cached_property
+    def dependents(self) -> dict[str, tuple[str, ...]]:
+        """Each step's readers among the steps, in the steps' order (made once; the
+        scheduler walks it)."""
+        found: dict[str, list[str]] = {name: [] for name in self.steps}
+        for name in self.steps:
+            for dependency in self.dependencies[name]:
+                found[dependency].append(name)
+        return {name: tuple(readers) for name, readers in found.items()}
+
+    @cached_property
+    def waiting(self) -> dict[str, int]:
+        """How many steps each step waits for (the scheduler counts a copy down)."""
+        return {name: len(self.dependencies[name]) for name in self.steps}
+
 
 @dataclass(frozen=True)
 class CompiledGraph:
@@ -93,6 +121,16 @@ class CompiledGraph:
         """The ops the runs of this graph found quicker than handing them to a thread costs
         (:mod:`graphvision.execution.state` keeps it): where the next run starts."""
         return set()
+
+    @cached_property
+    def has_timeouts(self) -> bool:
+        """Whether some node declares its own ``timeout:``."""
+        return any(node.timeout is not None for node in self.graph.nodes.values())
+
+    @cached_property
+    def ops(self) -> frozenset[str]:
+        """The ops the steps run (a run's provenance lists their plugins' versions)."""
+        return frozenset(step.spec.id for step in self.steps.values())
 
     @cached_property
     def truth_marks(self) -> list[tuple[str, tuple[str, ...]]]:

@@ -4,10 +4,12 @@ warnings naming it, and a child it forks ended instead of running the graph on."
 from __future__ import annotations
 
 import os
+import threading
 import time
 from collections.abc import Callable
 from typing import Any
 
+from graphvision.execution import crash_note
 from graphvision.execution.crash_note import call_named
 from graphvision.execution.warnings import running
 
@@ -32,6 +34,8 @@ def call_node(
     return call_labelled(func, {**inputs, **params}, label, op)
 
 
+_TRAMPOLINES = crash_note._TRAMPOLINES  # the frames named after nodes, made once per label
+
 _FORKS = [0]
 """How many forks made this process (``os.register_at_fork``): a forked child's count is
 one more than its parent's was when it forked. Read per node instead of ``os.getpid()``,
@@ -51,7 +55,30 @@ def call_labelled(
     func: Callable[..., Any], kwargs: dict[str, Any], label: str, op: str
 ) -> tuple[Any, float]:
     """:func:`call_node` with its arguments merged and its names made (a run makes them once
-    per step): ``label`` names the frame, ``op`` the warnings."""
+    per step): ``label`` names the frame, ``op`` the warnings.
+
+    What :func:`~graphvision.execution.crash_note.call_named` does, one call less per node
+    (after the first, which installs its ``os._exit`` note through it).
+    """
+    if not crash_note._INSTALLED_IN:
+        return _first_call(func, kwargs, label, op)
+    forks, ident, named = _FORKS[0], threading.get_ident(), crash_note._RUNNING
+    running.op, named[ident] = op, label
+    trampoline = _TRAMPOLINES.get(label) or crash_note._trampoline(label)
+    began = time.perf_counter()
+    try:
+        result = trampoline(func, kwargs)
+    finally:
+        if _FORKS[0] != forks:
+            _end_forked_child(op)
+        running.op = ""
+        named.pop(ident, None)
+    return result, time.perf_counter() - began
+
+
+def _first_call(
+    func: Callable[..., Any], kwargs: dict[str, Any], label: str, op: str
+) -> tuple[Any, float]:
     forks = _FORKS[0]
     running.op = op
     began = time.perf_counter()

@@ -283,4 +283,4 @@ def describe_run(
     }
     record.params = dict(compiled.graph.params)
     record.overrides = dict(overrides)
-    record.versions = package_versions(registry, {s.spec.id for s in compiled.steps.values()})
+    record.versions = package_versions(registry, compiled.ops)

@@ -394,6 +394,9 @@ def _execute(
                 quick=_quick(state) if here else None,
                 limit=2 * executor_width(pool) if here else None,
                 ahead=state.chained,
+                counted=(schedule.waiting, schedule.dependents)
+                if dependencies is schedule.dependencies
+                else None,
             )
         finally:
             limit.release()
@@ -408,7 +411,7 @@ def _execute(
         if own:
             pool.shutdown(wait=True)
         state.record.seconds = time.perf_counter() - began
-        state.record.nodes = [state.nodes[n] for n in compiled.steps if n in state.nodes]
+        state.record.nodes = state.records()
         for hook in hooks:
             hook.run_finished(record=state.record, failed=failed)
     return state
@@ -423,9 +426,7 @@ def _mark_skipped(state: RunState, skipped: list[str], hooks: Sequence[RunHooks]
     """Nodes downstream of a failure are skipped; one sent ahead (Dask) had its start
     reported, so its end is too."""
     for step in skipped:
-        state.nodes[step].status = "skipped"
+        node = state.record_of(state.compiled.steps[step], "skipped")
         if step in state.started:
             for hook in hooks:
-                hook.node_finished(
-                    name=step, op=state.nodes[step].op, status="skipped", seconds=0.0
-                )
+                hook.node_finished(name=step, op=node.op, status="skipped", seconds=0.0)

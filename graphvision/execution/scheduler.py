@@ -37,10 +37,10 @@ from __future__ import annotations
 
 import queue
 from collections import deque
-from collections.abc import Callable, Mapping, Set
+from collections.abc import Callable, Mapping, Sequence, Set
 from concurrent.futures import Future
 
-__all__ = ["EVERY_TASK", "run_tasks"]
+__all__ = ["EVERY_TASK", "count_dependencies", "run_tasks"]
 
 
 def run_tasks(
@@ -53,6 +53,7 @@ def run_tasks(
     quick: Callable[[str], bool] | None = None,
     limit: int | None = None,
     ahead: bool = False,
+    counted: tuple[Mapping[str, int], Mapping[str, Sequence[str]]] | None = None,
 ) -> list[str]:
     """Run every task once its dependencies succeeded; return the tasks skipped.
 
@@ -87,10 +88,16 @@ def run_tasks(
         (for an executor that passes results from task to task itself). A
         task that completes before a dependency has finished waits for it; one
         whose dependency failed is skipped, whatever its own future says.
+    counted : (waiting, dependents), optional
+        How many dependencies each task has and each task's dependents, as
+        :func:`count_dependencies` makes them from ``dependencies``, made once
+        for many runs (a compiled graph's schedule keeps them).
     """
+    waiting, dependents = counted or count_dependencies(dependencies)
     if run_here is not None and quick is EVERY_TASK:
-        return _one_by_one(dependencies, run_here, keep_going)
+        return _one_by_one(dependencies, waiting, dependents, run_here, keep_going)
     loop = _Loop(dependencies, start, finish, keep_going, run_here, quick, limit, ahead)
+    loop.waiting, loop.unstarted, loop.dependents = dict(waiting), dict(waiting), dependents
     loop.ready.extend(name for name, count in loop.waiting.items() if count == 0)
     loop.launch()
     while loop.running:
@@ -104,17 +111,29 @@ def EVERY_TASK(name: str) -> bool:  # a constant that is a function
     return True
 
 
-def _one_by_one(
-    dependencies: Mapping[str, Set[str]], run_here: Callable[[str], bool], keep_going: bool
-) -> list[str]:
-    """:func:`run_tasks` when every task is quick: first in, first out, as the loop runs them
-    (a task is ready once its dependencies succeeded; after a failure without
-    ``keep_going`` the tasks ready already still run, no other starts)."""
+def count_dependencies(
+    dependencies: Mapping[str, Set[str]],
+) -> tuple[dict[str, int], dict[str, list[str]]]:
+    """How many dependencies each task has, and each task's dependents."""
     waiting = {name: len(deps) for name, deps in dependencies.items()}
     dependents: dict[str, list[str]] = {name: [] for name in dependencies}
     for name, deps in dependencies.items():
         for dep in deps:
             dependents[dep].append(name)
+    return waiting, dependents
+
+
+def _one_by_one(
+    dependencies: Mapping[str, Set[str]],
+    counts: Mapping[str, int],
+    dependents: Mapping[str, Sequence[str]],
+    run_here: Callable[[str], bool],
+    keep_going: bool,
+) -> list[str]:
+    """:func:`run_tasks` when every task is quick: first in, first out, as the loop runs them
+    (a task is ready once its dependencies succeeded; after a failure without
+    ``keep_going`` the tasks ready already still run, no other starts)."""
+    waiting = dict(counts)
     ready = deque([name for name, count in waiting.items() if count == 0])
     started, blocked, stopping = set(), set(), False
     while ready:
@@ -152,12 +171,9 @@ class _Loop:
     ) -> None:
         self.start, self.finish, self.keep_going = start, finish, keep_going
         self.run_here, self.quick, self.limit, self.ahead = run_here, quick, limit, ahead
-        self.waiting = {name: len(deps) for name, deps in dependencies.items()}
-        self.unstarted = dict(self.waiting)  # dependencies not started yet (for ``ahead``)
-        self.dependents: dict[str, list[str]] = {name: [] for name in dependencies}
-        for name, deps in dependencies.items():
-            for dep in deps:
-                self.dependents[dep].append(name)
+        self.waiting: dict[str, int] = {}  # (set by run_tasks)
+        self.unstarted: dict[str, int] = {}  # dependencies not started yet (for ``ahead``)
+        self.dependents: Mapping[str, Sequence[str]] = {}
         self.finished: queue.SimpleQueue[tuple[str, Future]] = queue.SimpleQueue()
         self.here: list[str] = []  # started, to run in this thread (``run_here``)
         # Tasks held back until their dependencies finished come back to the loop here.

@@ -1,39 +1,17 @@
 r"""The state of one run (``RunState``): keys, plan, hand-out, finish.
 
-:func:`run` does, in order:
-
-1. compile the graph (every problem reported at once, before anything runs);
-2. prune it to what the requested outputs need;
-3. resolve graph inputs (literals, paths, ``sample:NAME``...) and key them by
-   content;
-4. chain the Merkle keys of every node output without computing anything;
-5. plan from the outputs backwards: an output found in the cache is loaded
-   and its producers are not visited, so a fully cached re-run reads only the
-   requested outputs; everything else is computed;
-6. hand the computed steps to :func:`~graphvision.execution.scheduler.run_tasks` with
-   the chosen executor, validating, freezing and caching each result, and
-   releasing each intermediate value once its last consumer has run.
-
-Hooks (:class:`RunHooks`) observe it; the run record is always produced.
-
-Each node of the run moves through these states (``NodeRecord.status``)::
-
-    (planned) --cache hit--> cached
-        |
-        +--> pending --started by the scheduler--> running --> computed
-                |                                        \--> failed
-                +--an upstream node failed--> skipped
-                +--the run was interrupted--> pending (stays)
-
-(``running`` is known to the scheduler and the hooks, not written in the
-record.) The state lives in one dataclass, ``RunState``; :func:`plan_steps` (a function
-of the graph, the keys and the cache, changing nothing) decides cached or pending,
-``RunState.plan`` records its decision, ``start`` hands a pending node to the executor
-(encoded values for other processes, the values themselves in this one; to an
-executor that chains tasks, such as Dask's, as soon as the nodes it reads are
-submitted, their tasks standing for their values),
-``finish`` validates, freezes, stores and releases, and the scheduler
-(:func:`~graphvision.execution.scheduler.run_tasks`) only orders them.
+The steps of a run and the states each node moves through are described in
+:mod:`graphvision.execution.run`. The state lives in one dataclass, ``RunState``;
+:func:`~graphvision.execution.plan.plan_steps` (a function of the graph, the keys and
+the cache, changing nothing) decides cached or pending, ``RunState.plan`` records its
+decision, ``start`` hands a pending node to the executor (encoded values for other
+processes, the values themselves in this one; to an executor that chains tasks, such
+as Dask's, as soon as the nodes it reads are submitted, their tasks standing for their
+values), ``run_here`` runs a quick one in this thread, ``finish`` validates, freezes,
+stores and releases, and the scheduler
+(:func:`~graphvision.execution.scheduler.run_tasks`) only orders them. A node's record
+(:class:`~graphvision.execution.record.NodeRecord`) is made when it ends; those that did
+not start are made pending at the end (:meth:`RunState.records`).
 """
 
 from __future__ import annotations
@@ -66,7 +44,7 @@ from graphvision.execution.inputs import freeze_value, value_bytes
 from graphvision.execution.limits import current_limits, start_on_own_thread
 from graphvision.execution.plan import chain_keys, plan_steps
 from graphvision.execution.record import NodeRecord, RunHooks, RunRecord, RunResult
-from graphvision.values.scalars import _ScalarPort
+from graphvision.values.ports import PortType
 
 __all__ = ["RunState"]
 
@@ -100,6 +78,7 @@ class RunState:
     pinned: set[tuple[str, str]] = field(default_factory=set)
     deferred: dict[str, Any] = field(default_factory=dict)
     keep_intermediates: bool = False
+    pending: set[str] = field(default_factory=set)
 
     def __post_init__(self) -> None:
         self.encoded = encodes_values(self.executor)  # the transport, read once
@@ -109,8 +88,7 @@ class RunState:
         # ops whose last call here took under _QUICK_SECONDS (learnt by the graph's last runs)
         self.quick_ops: set[str] = self.compiled.quick_ops
         self.limits = current_limits()  # time and memory per node (execution.limits)
-        nodes = self.compiled.graph.nodes.values()
-        self.timed = self.limits.timeout is not None or any(n.timeout is not None for n in nodes)
+        self.timed = self.limits.timeout is not None or self.compiled.has_timeouts
         # sync runs tasks in this thread anyway: each node without a time limit runs here
         self.inline = bool(getattr(self.executor, "in_calling_thread", False))
 
@@ -168,20 +146,18 @@ class RunState:
     def prepare(
         self, compute: list[str], wanted: list[tuple[str, str]], schedule: Schedule
     ) -> Mapping[str, AbstractSet[str]]:
-        """The steps to compute get their records (pending); count how many of them read
+        """The steps to compute are pending (:meth:`records`); count how many of them read
         each value (so intermediates are dropped after their last reader), load the
         inputs keyed by reference that they read; return their dependencies among
         themselves. With nothing cached that is the graph's ``schedule`` as it is."""
-        steps, nodes = self.compiled.steps, self.nodes
+        steps = self.compiled.steps
         if len(compute) == len(schedule.steps):  # compute is a part of the schedule's steps
-            dependencies: Mapping[str, AbstractSet[str]] = schedule.dependencies
+            dependencies: Mapping[str, AbstractSet[str]] = schedule.dependencies  # as it is
             self.consumers = dict(schedule.readers)
             read = set(schedule.inputs)
         else:
             dependencies, read = self.count_readers(compute, wanted)
-        new_record = self.new_record
-        for name in compute:
-            nodes[name] = new_record(steps[name], "pending")
+        self.pending = set(compute)  # their records are made when they end (records())
         self.pinned = set(wanted)
         if self.keep_intermediates:
             self.pinned.update((name, port) for name in compute for port in steps[name].outputs)
@@ -208,9 +184,32 @@ class RunState:
 
     def new_record(self, step: Step, status: str) -> NodeRecord:
         """A node's record, with the parameters it runs with and its outputs' keys."""
-        name, keys, spec = step.name, self.keys, step.spec
-        made = {port: keys[(name, port)] for port in step.outputs}
-        return NodeRecord(name, spec.id, status, 0.0, 0, "", dict(step.params), made, spec.backend)
+        keys, spec = self.keys, step.spec
+        made = {port: keys[source] for port, source in step.output_sources}
+        return NodeRecord(
+            step.name, spec.id, status, 0.0, 0, "", dict(step.params), made, spec.backend
+        )
+
+    def record_of(self, step: Step, status: str) -> NodeRecord:
+        """The node's record (made now if it has none), with ``status``."""
+        node = self.nodes.get(step.name)
+        if node is None:
+            node = self.nodes[step.name] = self.new_record(step, status)
+        node.status = status
+        return node
+
+    def records(self) -> list[NodeRecord]:
+        """Every node's record in the graph's order: those still pending made now."""
+        nodes, pending, listed = self.nodes, self.pending, []
+        if pending <= nodes.keys():  # every node that was to run has its record
+            return [nodes[name] for name in self.compiled.steps if name in nodes]
+        for name, step in self.compiled.steps.items():
+            node = nodes.get(name)
+            if node is None and name in pending:
+                node = nodes[name] = self.new_record(step, "pending")
+            if node is not None:
+                listed.append(node)
+        return listed
 
     # -- execution --------------------------------------------------------------------
 
@@ -244,8 +243,9 @@ class RunState:
         step = self.compiled.steps[name]
         for hook in self.hooks:
             hook.node_started(name=name, op=step.spec.id)
-        values = self.values
-        kwargs = {port: values[source] for port, source in step.inputs.items()}
+        values, kwargs = self.values, {}
+        for port, source in step.inputs.items():  # (a loop: a comprehension is a call more)
+            kwargs[port] = values[source]
         kwargs.update(step.params)
         began = time.perf_counter()
         try:  # as on a worker: warnings and a fault name the node, a forked child is ended
@@ -302,8 +302,8 @@ class RunState:
         return self.computed(step, outputs, seconds)
 
     def failed(self, step: Step, error: BaseException) -> bool:
-        node = self.nodes[step.name]
-        node.status, node.seconds = "failed", time.perf_counter() - self.started[step.name]
+        node = self.record_of(step, "failed")
+        node.seconds = time.perf_counter() - self.started[step.name]
         node.error = f"{type(error).__name__}: {error}"
         self.failures[step.name] = self.wrap(step, error)
         self.release_inputs(step)
@@ -314,30 +314,28 @@ class RunState:
         return False
 
     def computed(self, step: Step, outputs: dict[str, Any], seconds: float) -> bool:
-        """Store a step's accepted outputs (and in the cache), release its inputs."""
-        name, op = step.name, step.spec.id
-        node = self.nodes[name]
-        node.status, node.seconds = "computed", seconds
-        if seconds < _QUICK_SECONDS:
-            self.quick_ops.add(op)
-        else:
-            self.quick_ops.discard(op)
-        cache = self.cache if step.spec.cache else None
-        values = self.values
-        for port, value in outputs.items():
-            kind = step.outputs[port]
-            values[(name, port)] = value
+        """Store a step's accepted outputs (and in the cache), record it, release its inputs."""
+        name, spec = step.name, step.spec
+        (self.quick_ops.add if seconds < _QUICK_SECONDS else self.quick_ops.discard)(spec.id)
+        cache = self.cache if spec.cache else None
+        values, keys, made, size = self.values, self.keys, {}, 0
+        for port, source in step.output_sources:
+            value = values[source] = outputs[port]
+            key = made[port] = keys[source]
             if cache is not None:
-                node.output_bytes += cache.put(self.keys[(name, port)], kind, value)
-            elif not issubclass(kind, _ScalarPort):
-                node.output_bytes += value_bytes(kind, value)
+                size += cache.put(key, step.outputs[port], value)
+            elif port not in step.scalar_outputs:
+                size += value_bytes(step.outputs[port], value)
+        self.nodes[name] = NodeRecord(
+            name, spec.id, "computed", seconds, size, "", dict(step.params), made, spec.backend
+        )
         consumers, pinned = self.consumers, self.pinned  # release the inputs it read
         for source in step.inputs.values():
-            consumers[source] -= 1
-            if consumers[source] == 0 and source not in pinned:
+            left = consumers[source] = consumers[source] - 1
+            if not left and source not in pinned:
                 values.pop(source, None)
         for hook in self.hooks:
-            hook.node_finished(name=name, op=op, status="computed", seconds=seconds)
+            hook.node_finished(name=name, op=spec.id, status="computed", seconds=seconds)
         return True
 
     def accept(self, step: Step, result: Any) -> dict[str, Any]:
@@ -371,17 +369,20 @@ class RunState:
             if source in self.values:
                 produced[name] = self.values[source]
                 self.record.outputs[name] = self.compiled.output_type(name).summary(produced[name])
-        kept = {
-            (f"{name}.{port}" if len(self.compiled.steps[name].outputs) > 1 else name): (
-                self.compiled.steps[name].outputs[port],
+        kept = self.intermediates() if self.keep_intermediates else {}
+        return RunResult(produced, self.record, self.compiled, self.failures, kept)
+
+    def intermediates(self) -> dict[str, tuple[type[PortType], Any]]:
+        """Every node output held that is not a graph output (``keep_intermediates``)."""
+        steps, outputs = self.compiled.steps, set(self.compiled.outputs.values())
+        return {
+            (f"{name}.{port}" if len(steps[name].outputs) > 1 else name): (
+                steps[name].outputs[port],
                 value,
             )
             for (name, port), value in self.values.items()
-            if self.keep_intermediates
-            and name in self.compiled.steps
-            and (name, port) not in self.compiled.outputs.values()
+            if name in steps and (name, port) not in outputs
         }
-        return RunResult(produced, self.record, self.compiled, self.failures, kept)
 
     def wrap(self, step: Step, error: BaseException) -> NodeExecutionError:
         summary = {}
