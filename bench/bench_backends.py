@@ -18,7 +18,8 @@ the OpenCV backend, and the engine's cost on top of OpenCV against a plain scrip
    the same load), best of each; the engine's overhead is ``engine / script - 1``
    (the issue's bar: at most 10 %). Where it goes is measured on 15 more runs of the
    engine, per run: the BLAS limit a run holds (threadpoolctl, set and lifted in a
-   helper thread: :mod:`graphvision.execution.blas`), accepting the nodes' outputs
+   helper thread: :mod:`graphvision.execution.blas`; the time the run waits for it, sent
+   when the run starts and after its last node), accepting the nodes' outputs
    (validated, then frozen: copied read-only,
    :func:`graphvision.execution.inputs.freeze_value`), the run's provenance
    (:func:`graphvision.execution.provenance.describe_run`) and the peak-memory check
@@ -148,8 +149,8 @@ def _where_it_goes(run: Callable[[], Any], repeats: int = 15) -> dict[str, float
         setattr(owner, name, wrapper)
         return lambda: setattr(owner, name, original)
 
-    limit = blas._LIMIT
-    undo = [timed(limit, "enter", "blas"), timed(limit, "leave", "blas")]
+    limit = blas.BlasLimit  # what a run waits for: the lowering before its first node, the
+    undo = [timed(limit, "hold", "blas"), timed(limit, "restored", "blas")]  # restore at its end
     undo.append(timed(state.RunState, "accept", "accept"))
     undo.append(timed(run_module, "describe_run", "provenance"))
     undo.append(timed(run_module, "check_peak_memory", "peak"))
@@ -159,8 +160,6 @@ def _where_it_goes(run: Callable[[], Any], repeats: int = 15) -> dict[str, float
     finally:
         for restore in undo:
             restore()
-        for name in ("enter", "leave"):
-            limit.__dict__.pop(name, None)
     return {label: seconds / repeats for label, seconds in spent.items()}
 
 

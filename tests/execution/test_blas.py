@@ -100,3 +100,29 @@ def test_a_limit_entered_in_the_main_thread_and_left_in_another_restores():
     worker.start()
     worker.join()
     assert blas_threads() == before
+
+
+def test_a_user_entering_while_a_restore_is_on_its_way_still_gets_one_thread():
+    """A run sends the restore after its last node and waits for it only before it returns
+    (execution.blas.BlasLimit): a user who enters in between, seeing one thread still set,
+    must not take the limit for held; the helper restores, then lowers again, in order."""
+    from graphvision.execution.blas import BlasLimit
+
+    before = blas_threads()
+    run = BlasLimit()
+    run.hold()
+    assert set(blas_threads()) == {1}
+    run.release()  # the restore is sent, not waited for
+    with gv.one_blas_thread():
+        assert set(blas_threads()) == {1}
+    run.restored()
+    assert blas_threads() == before
+
+
+def test_a_run_that_fails_to_compile_gives_the_blas_threads_back(blas_registry):
+    before = blas_threads()
+    g = gv.Graph("bad")
+    g.output("x", g.add("x", "blas.no_such_op"))
+    with pytest.raises(gv.PipelineError):
+        gv.run(g, blas_registry, executor="sync", cache=None)
+    assert blas_threads() == before

@@ -213,3 +213,19 @@ def test_a_tables_columns_are_frozen_into_one_buffer_each_aligned_and_read_only(
     assert len(roots) == 1  # one buffer
     again = freeze_value(gv.TablePort, frozen)
     assert all(again[name] is frozen[name] for name in frozen)  # frozen already: kept
+
+
+def test_a_strided_array_is_frozen_into_one_aligned_c_ordered_copy():
+    from graphvision.values.memory import ALIGNMENT, frozen_copies, frozen_copy
+    from graphvision.values.ports import is_frozen
+
+    base = np.arange(2 * 5 * 6, dtype=np.float32).reshape(2, 5, 6)
+    strided = base[:, ::2, 1::3].transpose(1, 0, 2)  # neither C nor F ordered
+    frozen = frozen_copy(strided)
+    np.testing.assert_array_equal(frozen, strided)
+    assert frozen.flags.c_contiguous and frozen.ctypes.data % ALIGNMENT == 0
+    assert is_frozen(frozen) and not frozen.flags.writeable
+    columns = frozen_copies([strided, np.array([7, 8, 9], np.int16)[::-1]])
+    np.testing.assert_array_equal(columns[0], strided)
+    np.testing.assert_array_equal(columns[1], [9, 8, 7])
+    assert all(is_frozen(column) for column in columns)
