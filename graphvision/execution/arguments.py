@@ -8,15 +8,24 @@ the rest with a ``TypeError`` naming the argument, instead of an
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from graphvision.errors import UnknownNameError, did_you_mean
+
 if TYPE_CHECKING:
-    from graphvision.compiler.compile import CompiledGraph
+    from graphvision.compiler.compile import CompiledGraph, Schedule
     from graphvision.graph.model import Graph
 
-__all__ = ["graph_argument", "mapping_argument", "names_argument", "run_arguments"]
+__all__ = [
+    "given_inputs",
+    "graph_argument",
+    "mapping_argument",
+    "names_argument",
+    "run_arguments",
+    "wanted_outputs",
+]
 
 
 def graph_argument(graph: Any, backends: Any = None) -> Graph | CompiledGraph:
@@ -84,3 +93,34 @@ def run_arguments(cache: Any, executor: Any, workers: Any) -> None:
         raise TypeError(f"workers must be a whole number, got {workers!r}")
     if isinstance(workers, int) and workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
+
+
+def wanted_outputs(
+    compiled: CompiledGraph, outputs: Sequence[str] | None, inputs: dict[str, Any]
+) -> list[str]:
+    """The outputs asked for, after checking every output and input name given."""
+    wanted = list(outputs) if outputs is not None else list(compiled.outputs)
+    for name in wanted:
+        if name not in compiled.outputs:
+            raise UnknownNameError(
+                f"unknown output '{name}'{did_you_mean(name, compiled.outputs)}"
+                f"; outputs: {', '.join(compiled.outputs)}"
+            )
+    for name in inputs:
+        if name not in compiled.input_types:
+            raise UnknownNameError(
+                f"unknown input '{name}'{did_you_mean(name, compiled.input_types)}; "
+                f"inputs: {', '.join(compiled.input_types) or 'none'}"
+            )
+    return wanted
+
+
+def given_inputs(
+    compiled: CompiledGraph, schedule: Schedule, inputs: dict[str, Any]
+) -> dict[str, Any]:
+    """What is given for each graph input the wanted outputs read (step 2): value or default."""
+    return {
+        name: inputs.get(name, compiled.graph.inputs[name].default)
+        for name in compiled.input_types
+        if name in schedule.inputs
+    }

@@ -128,7 +128,9 @@ class _Request:
     __slots__ = ("call", "done", "error", "finished", "value")
 
     def __init__(self, call: Callable[[], Any]) -> None:
-        self.call, self.value, self.error = call, None, None
+        self.call = call
+        self.value: Any = None
+        self.error: BaseException | None = None
         self.finished = False
         self.done = threading.Event()
 

@@ -3,6 +3,7 @@ compute (pure functions of the graph, the keys and the cache)."""
 
 from __future__ import annotations
 
+import hashlib
 import time
 from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass
@@ -10,9 +11,11 @@ from typing import Any
 
 from graphvision.cache.keys import output_keys
 from graphvision.compiler.compile import CompiledGraph
+from graphvision.nodes.registry import Registry
 from graphvision.values.ports import PortType
+from graphvision.values.scalars import TextPort
 
-__all__ = ["Plan", "chain_keys", "plan_steps"]
+__all__ = ["Plan", "chain_keys", "plan_steps", "referenced_inputs"]
 
 
 @dataclass(frozen=True)
@@ -87,3 +90,29 @@ def chain_keys(
     memo.clear()  # the last chain only: a graph run on many inputs keeps one
     memo[given] = (list(names), chained)
     return chained
+
+
+def referenced_inputs(
+    compiled: CompiledGraph, given: dict[str, Any], registry: Registry
+) -> dict[str, str]:
+    """Input name -> key, for inputs given as a reference whose source keys it without loading.
+
+    ``sample:astronaut`` is fixed by its name and scikit-image's version: the
+    run keys it by that and loads it only if a node that reads it must run.
+    """
+    keys = {}
+    for name, value in given.items():
+        if not isinstance(value, str) or issubclass(compiled.input_types[name], TextPort):
+            continue
+        scheme, sep, rest = value.partition(":")
+        spec = registry.sources.get(scheme) if sep else None
+        if spec is None or spec.key is None:
+            continue
+        try:
+            text = spec.key(rest)
+        except Exception:  # loading reports the problem, with its message
+            continue
+        kind = compiled.input_types[name].type_name()
+        digest = hashlib.blake2b(f"{kind}|{text}".encode(), digest_size=16).hexdigest()
+        keys[name] = "r" + digest
+    return keys

@@ -38,9 +38,9 @@ submitted, their tasks standing for their values),
 
 from __future__ import annotations
 
-import hashlib
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from functools import partial
 from typing import Any
 
@@ -49,8 +49,9 @@ from graphvision.compiler.compile import CompiledGraph, Schedule, compile_graph
 from graphvision.errors import (
     RunError,
     UnknownNameError,
-    did_you_mean,
 )
+from graphvision.execution.arguments import given_inputs as _given_inputs
+from graphvision.execution.arguments import wanted_outputs as _wanted_outputs
 from graphvision.execution.blas import BlasLimit
 from graphvision.execution.executors import (
     Executor,
@@ -62,6 +63,7 @@ from graphvision.execution.executors import (
 from graphvision.execution.inputs import resolve_input
 from graphvision.execution.limits import current_limits, node_limits, refuse_declared_limits
 from graphvision.execution.peak_memory import check_peak_memory, running_at_once
+from graphvision.execution.plan import referenced_inputs as _referenced_inputs
 from graphvision.execution.provenance import describe_run
 from graphvision.execution.record import RunHooks, RunRecord, RunResult
 from graphvision.execution.scheduler import EVERY_TASK, run_tasks
@@ -70,7 +72,6 @@ from graphvision.execution.truth import outputs_with_truth
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
 from graphvision.values.budget import pixel_budget
-from graphvision.values.scalars import TextPort
 
 __all__ = ["run"]
 
@@ -283,63 +284,6 @@ def _discover_for(graph: Graph) -> Registry:
     return discover_for(graph)
 
 
-def _wanted_outputs(
-    compiled: CompiledGraph, outputs: Sequence[str] | None, inputs: dict[str, Any]
-) -> list[str]:
-    """The outputs asked for, after checking every output and input name given."""
-    wanted = list(outputs) if outputs is not None else list(compiled.outputs)
-    for name in wanted:
-        if name not in compiled.outputs:
-            raise UnknownNameError(
-                f"unknown output '{name}'{did_you_mean(name, compiled.outputs)}"
-                f"; outputs: {', '.join(compiled.outputs)}"
-            )
-    for name in inputs:
-        if name not in compiled.input_types:
-            raise UnknownNameError(
-                f"unknown input '{name}'{did_you_mean(name, compiled.input_types)}; "
-                f"inputs: {', '.join(compiled.input_types) or 'none'}"
-            )
-    return wanted
-
-
-def _given_inputs(
-    compiled: CompiledGraph, schedule: Schedule, inputs: dict[str, Any]
-) -> dict[str, Any]:
-    """What is given for each graph input the wanted outputs read (step 2): value or default."""
-    return {
-        name: inputs.get(name, compiled.graph.inputs[name].default)
-        for name in compiled.input_types
-        if name in schedule.inputs
-    }
-
-
-def _referenced_inputs(
-    compiled: CompiledGraph, given: dict[str, Any], registry: Registry
-) -> dict[str, str]:
-    """Input name -> key, for inputs given as a reference whose source keys it without loading.
-
-    ``sample:astronaut`` is fixed by its name and scikit-image's version: the
-    run keys it by that and loads it only if a node that reads it must run.
-    """
-    keys = {}
-    for name, value in given.items():
-        if not isinstance(value, str) or issubclass(compiled.input_types[name], TextPort):
-            continue
-        scheme, sep, rest = value.partition(":")
-        spec = registry.sources.get(scheme) if sep else None
-        if spec is None or spec.key is None:
-            continue
-        try:
-            text = spec.key(rest)
-        except Exception:  # loading reports the problem, with its message
-            continue
-        kind = compiled.input_types[name].type_name()
-        digest = hashlib.blake2b(f"{kind}|{text}".encode(), digest_size=16).hexdigest()
-        keys[name] = "r" + digest
-    return keys
-
-
 def _execute(
     compiled: CompiledGraph,
     values: dict[str, Any],
@@ -379,27 +323,7 @@ def _execute(
         dependencies = state.prepare(compute, sources, schedule)
         for hook in hooks:
             hook.run_started(pipeline=compiled.graph.name, steps=compute)
-        here = not state.encoded  # nodes run in this process: some may run in this thread
-        # one BLAS thread while nodes run here, so a node's bits do not depend on its
-        # neighbours (worker processes hold it for good; see graphvision.execution.blas)
-        if here and compute:
-            limit.hold()
-        try:
-            skipped = run_tasks(
-                dependencies,
-                state.start,
-                state.finish,
-                keep_going=keep_going,
-                run_here=state.run_here if here else None,
-                quick=_quick(state) if here else None,
-                limit=2 * executor_width(pool) if here else None,
-                ahead=state.chained,
-                counted=(schedule.waiting, schedule.dependents)
-                if dependencies is schedule.dependencies
-                else None,
-            )
-        finally:
-            limit.release()
+        skipped = _run_steps(state, schedule, dependencies, compute, keep_going, limit)
         _mark_skipped(state, skipped, hooks)
         failed = bool(state.failures)
     except BaseException:  # Ctrl-C, or a bug: do not wait for the nodes still running
@@ -415,6 +339,38 @@ def _execute(
         for hook in hooks:
             hook.run_finished(record=state.record, failed=failed)
     return state
+
+
+def _run_steps(
+    state: RunState,
+    schedule: Schedule,
+    dependencies: Mapping[str, AbstractSet[str]],
+    compute: list[str],
+    keep_going: bool,
+    limit: BlasLimit,
+) -> list[str]:
+    """Step 6: the steps to compute through the scheduler; the steps skipped."""
+    here = not state.encoded  # nodes run in this process: some may run in this thread
+    # one BLAS thread while nodes run here, so a node's bits do not depend on its
+    # neighbours (worker processes hold it for good; see graphvision.execution.blas)
+    if here and compute:
+        limit.hold()
+    try:
+        return run_tasks(
+            dependencies,
+            state.start,
+            state.finish,
+            keep_going=keep_going,
+            run_here=state.run_here if here else None,
+            quick=_quick(state) if here else None,
+            limit=2 * executor_width(state.executor) if here else None,
+            ahead=state.chained,
+            counted=(schedule.waiting, schedule.dependents)
+            if dependencies is schedule.dependencies
+            else None,
+        )
+    finally:
+        limit.release()
 
 
 def _quick(state: RunState) -> Callable[[str], bool]:
