@@ -54,8 +54,7 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
             what = told if str(value) in told else f"cannot load '{value}': {told}"
             raise InputError(f"input '{name}': {what}") from error
     try:
-        value = port_type.coerce(value, origin)
-        return freeze_value(port_type, port_type.validate(value))
+        return freeze_value(port_type, port_type.admit(value, origin))
     except PortValueError as error:
         raise InputError(f"input '{name}': {error}") from None
     except (Exception, RecursionError) as error:  # a port type's check undone by hostile data

@@ -90,7 +90,7 @@ class InputPort:
         failures: dict[PortClass, str] = {}
         for choice in self.choices or (self.type,):
             try:
-                return choice.validate(choice.coerce(value, where)), choice
+                return choice.admit(value, where), choice
             except PortValueError as error:  # the policy's messages start with ``where``
                 failures[choice] = str(error).removeprefix(where).lstrip()
         # The common type's message covers the choices when it is one of them.

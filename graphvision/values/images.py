@@ -37,6 +37,18 @@ class FloatImagePort(ArrayPort):
         return to_float_image(value, source=source, check_range=False)
 
     @classmethod
+    def admit(cls, value: Any, source: str) -> Any:
+        """A ``float32`` array is checked once, by :meth:`validate`: the dtype policy
+        would return it as it is after checking its values the same way. When that check
+        fails, the policy's own message (naming ``source``) is the one raised."""
+        if isinstance(value, np.ndarray) and value.dtype == np.float32:
+            try:
+                return cls.validate(value)
+            except PortValueError:
+                pass
+        return cls.validate(cls.coerce(value, source))
+
+    @classmethod
     def validate(cls, value: Any) -> np.ndarray:
         value = super().validate(value)
         if value.ndim == 3 and value.shape[2] != 3:

@@ -137,6 +137,14 @@ class PortType:
         return value
 
     @classmethod
+    def admit(cls, value: Any, source: str) -> Any:
+        """A value from outside, in this type's convention and checked:
+        ``validate(coerce(value, source))``, which a port type may do in fewer passes
+        over the data (an image already in the convention is checked once, not by the
+        policy and again by :meth:`validate`). Raises what those two raise."""
+        return cls.validate(cls.coerce(value, source))
+
+    @classmethod
     def encode(cls, value: Any) -> tuple[Arrays, Meta]:
         """Named arrays and a JSON-able header that :meth:`decode` turns back into ``value``."""
         raise NotImplementedError

@@ -229,3 +229,46 @@ def test_a_strided_array_is_frozen_into_one_aligned_c_ordered_copy():
     np.testing.assert_array_equal(columns[0], strided)
     np.testing.assert_array_equal(columns[1], [9, 8, 7])
     assert all(is_frozen(column) for column in columns)
+
+
+_IMAGE_PORTS = [gv.FloatImagePort, gv.ImagePort, gv.GrayImagePort, gv.ColorImagePort]
+_rng = np.random.default_rng(7)
+_SAMPLES = {
+    "gray": _rng.random((5, 6)).astype(np.float32),
+    "rgb": _rng.random((5, 6, 3)).astype(np.float32),
+    "rgba": _rng.random((5, 6, 4)).astype(np.float32),
+    "one channel": _rng.random((5, 6, 1)).astype(np.float32),
+    "response": (_rng.standard_normal((5, 6)) * 40).astype(np.float32),
+    "negative zero": np.full((2, 2), -0.0, np.float32),
+    "nan": np.array([[0.5, np.nan]], np.float32),
+    "inf": np.array([[0.5, np.inf]], np.float32),
+    "empty": np.zeros((0, 3), np.float32),
+    "float64": _rng.random((5, 6)),
+    "uint8": _rng.integers(0, 256, (5, 6), dtype=np.uint8),
+    "strided": _rng.random((6, 8)).astype(np.float32)[::2, ::2],
+}
+
+
+@pytest.mark.parametrize("port", _IMAGE_PORTS, ids=lambda p: p.type_name())
+@pytest.mark.parametrize("name", list(_SAMPLES))
+def test_admitting_a_value_is_the_policy_then_the_checks(port, name):
+    value = _SAMPLES[name]
+    try:
+        expected = port.validate(port.coerce(value, "input 'x'"))
+    except gv.PortValueError as error:
+        with pytest.raises(gv.PortValueError) as raised:
+            port.admit(value, "input 'x'")
+        assert str(raised.value) == str(error)
+    else:
+        got = port.admit(value, "input 'x'")
+        assert got.dtype == expected.dtype and np.array_equal(got, expected)
+
+
+@pytest.mark.parametrize("port", _IMAGE_PORTS, ids=lambda p: p.type_name())
+def test_an_image_in_the_convention_is_checked_once(port, monkeypatch):
+    def policy_again(value, source):
+        raise AssertionError("the dtype policy ran on a float32 image it would keep as it is")
+
+    monkeypatch.setattr(port, "coerce", policy_again)
+    value = _SAMPLES["rgb"] if port is gv.ColorImagePort else _SAMPLES["gray"]
+    assert port.admit(value, "input 'x'") is value
