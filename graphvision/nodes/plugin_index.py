@@ -82,7 +82,10 @@ def environment_key(entries: list[EntryPoint]) -> str:
     import xxhash
 
     hasher = xxhash.xxh3_128()
-    hasher.update(f"{FORMAT}|{sys.version}|{sys.executable}\n".encode())
+    # The interpreter's path normalised: one interpreter started as .venv/bin/python and as
+    # bench/../.venv/bin/python is one environment, with one index.
+    interpreter = os.path.normpath(os.path.abspath(sys.executable))
+    hasher.update(f"{FORMAT}|{sys.version}|{interpreter}\n".encode())
     for folder in _path_folders():
         with contextlib.suppress(OSError):
             hasher.update(f"{folder}|{os.stat(folder or '.').st_mtime_ns}\n".encode())

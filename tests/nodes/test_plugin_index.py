@@ -169,6 +169,15 @@ def test_the_key_changes_with_a_files_bytes_alone(tmp_path, monkeypatch):
     assert _plugin_index.environment_key(entries) not in (key, edited)
 
 
+def test_one_interpreter_spelled_two_ways_has_one_key(monkeypatch):
+    entries = _plugin_index.installed_entry_points()
+    key = _plugin_index.environment_key(entries)
+    folder, name = os.path.split(sys.executable)
+    roundabout = os.path.join(folder, "..", os.path.basename(folder), name)
+    monkeypatch.setattr(sys, "executable", roundabout)
+    assert _plugin_index.environment_key(entries) == key
+
+
 def test_a_parameter_model_left_to_first_use_is_the_one_registration_builds():
     @gv.node("lazy.scale")
     def scale(x: gv.Float, *, factor: Annotated[float, Field(gt=0)] = 2.0) -> gv.Float:
