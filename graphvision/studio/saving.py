@@ -1,16 +1,21 @@
 """Tuned parameters written back into a pipeline file, keeping its comments and layout.
 
 ruamel.yaml reads the file as a round-trip document (comments, key order, flow style
-kept); each override ``node.param`` or ``params.NAME`` is set in it and the document
-is written again, to the same file or a new one (written whole, then renamed into place).
-The result is read back by the pipeline loader before it replaces anything, so a save
-never leaves an invalid pipeline behind.
+kept) and says where each value stands in the text. An override ``node.param`` or
+``params.NAME`` of a value the file already writes as a single scalar is written over
+that scalar's characters alone, so every other character of the file (aligned columns,
+line breaks, inline comments) stays as it was; the text is read back and must hold
+exactly the document with the overrides set. Otherwise (a new key, a list) the override
+is set in the document and the document is written again, which keeps comments and key
+order but lays the lines out anew. The file is written whole, then renamed into place,
+after the pipeline loader has read it, so a save never leaves an invalid pipeline behind.
 """
 
 from __future__ import annotations
 
 import io
 import os
+import re
 import shlex
 import tempfile
 from pathlib import Path
@@ -31,26 +36,76 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
 
     yaml = YAML()  # round trip: comments and layout kept
     yaml.preserve_quotes = True
-    document = yaml.load(source.read_text(encoding="utf-8"))
+    original = source.read_text(encoding="utf-8")
+    document = yaml.load(original)
+    places = []  # (mapping, key) of each value set, while the positions are the file's
     for key, value in overrides.items():
         target_name, _, param = key.partition(".")
         if target_name == "params":
             if param not in (document.get("params") or {}):
                 raise KeyError(f"the pipeline has no param '{param}'")
-            document["params"][param] = value
+            places.append((document["params"], param, value))
             continue
         node = (document.get("nodes") or {}).get(target_name)
         if node is None:
             raise KeyError(f"the pipeline has no node '{target_name}'")
         if node.get("params") is None:
             node["params"] = {}
-        node["params"][param] = value
+        places.append((node["params"], param, value))
+    text = _edited_in_place(original, places)
+    for mapping, param, value in places:
+        mapping[param] = value
+    if text is None or _loaded(yaml, text) != _loaded(yaml, _dumped(yaml, document)):
+        text = _dumped(yaml, document)
+    destination = target or source
+    _check_pipeline(text, destination)
+    _write_atomically(destination, text)
+    return destination
+
+
+_SCALAR = re.compile(r"""'(?:[^']|'')*'|"(?:[^"\\]|\\.)*"|[^,\]\}#\n]*[^,\]\}#\s]""")
+
+
+def _edited_in_place(text: str, places: list[tuple[Any, str, Any]]) -> str | None:
+    """``text`` with each value written over the scalar it replaces, or None when one of
+    them is not a single scalar already in the file (a new key, a list, a mapping)."""
+    import yaml as pyyaml
+
+    lines = text.splitlines(keepends=True)
+    starts = [0]
+    for line in lines:
+        starts.append(starts[-1] + len(line))
+    edits = []
+    for mapping, param, value in places:
+        if param not in mapping or isinstance(value, (list, dict)):
+            return None
+        if isinstance(mapping[param], (list, dict)):
+            return None
+        row, column = mapping.lc.value(param)
+        found = _SCALAR.match(lines[row], column)
+        if found is None:
+            return None
+        written = pyyaml.safe_dump(value, default_flow_style=True, width=1 << 16)
+        written = written.removesuffix("\n").removesuffix("\n...")
+        edits.append((starts[row] + column, starts[row] + found.end(), written))
+    for begin, end, written in sorted(edits, reverse=True):
+        text = text[:begin] + written + text[end:]
+    return text
+
+
+def _dumped(yaml: Any, document: Any) -> str:
     buffer = io.StringIO()
     yaml.dump(document, buffer)
-    destination = target or source
-    _check_pipeline(buffer.getvalue(), destination)
-    _write_atomically(destination, buffer.getvalue())
-    return destination
+    return buffer.getvalue()
+
+
+def _loaded(yaml: Any, text: str) -> Any:
+    import json
+
+    try:
+        return json.dumps(yaml.load(text), sort_keys=True, default=str)
+    except Exception:  # a substitution that does not read back: write the document anew
+        return None
 
 
 def _check_pipeline(text: str, where: Path) -> None:

@@ -112,8 +112,38 @@ def test_parameters_are_saved_back_with_the_comments(tmp_path: Path) -> None:
     assert graph.nodes["binary"].params["k"] == -0.3 and graph.params["window"] == 41
     copy = save_parameters(source, {"binary.k": -0.2}, tmp_path / "copy.yaml")
     assert gv.load_pipeline(copy).nodes["binary"].params["k"] == -0.2
+    # a parameter the file does not write yet: the document is written anew, comments kept
+    save_parameters(source, {"binary.method": "sauvola"})
+    assert "# tuned in the studio" in source.read_text()
+    assert gv.load_pipeline(source).nodes["binary"].params["method"] == "sauvola"
     with pytest.raises(KeyError, match="no node 'nope'"):
         save_parameters(source, {"nope.k": 1})
+
+
+@pytest.mark.parametrize(
+    ("overrides", "line", "before", "after"),
+    [
+        ({"binary.k": -0.3}, 16, "k: 0.0,", "k: -0.3,"),
+        ({"binary.foreground": "dark"}, 16, "foreground: bright}}", "foreground: dark}}"),
+        ({"params.window": 41}, 12, "window: 51  # pixels", "window: 41  # pixels"),
+        ({"disk.size": 7, "disk.shape": "square"}, 17, "{shape: disk, size: 5}",
+         "{shape: square, size: 7}"),
+    ],
+)  # fmt: skip
+def test_a_saved_value_changes_its_own_characters_alone(tmp_path, overrides, line, before, after):
+    source = tmp_path / "coins.yaml"
+    text = (PIPELINES / "coins.yaml").read_text().replace("window: 51", "window: 51  # pixels")
+    source.write_text(text)
+    save_parameters(source, overrides)
+    old, new = text.splitlines(), source.read_text().splitlines()
+    assert len(new) == len(old)
+    assert [i for i, (a, b) in enumerate(zip(old, new, strict=True)) if a != b] == [line]
+    assert before in old[line] and new[line] == old[line].replace(before, after)
+    graph = gv.load_pipeline(source)
+    for key, value in overrides.items():
+        target, _, param = key.partition(".")
+        got = graph.params[param] if target == "params" else graph.nodes[target].params[param]
+        assert got == value
 
 
 def test_the_command_line_reruns_the_tuned_values() -> None:
