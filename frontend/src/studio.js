@@ -37,6 +37,7 @@ function onEvent(event) {
     if (event.status === "running") {
       S.latest = Math.max(S.latest, event.run);
       showRunning(event.run);
+      if (event.diff && Object.keys(event.diff).length) followParams(event.run, Object.keys(event.diff));
     } else if (event.run === S.latest) {
       showStatus(event);
       if (event.status === "done" || event.status === "failed") showRun(event.run);
@@ -58,6 +59,24 @@ function onEvent(event) {
     // the descriptions the page asked for before ride the event: none is asked for again
     for (const [port, d] of Object.entries(event.values || {})) pushed(event.run, event.node, port, d);
     if (event.value) repaintNode(event.run, event.node);
+  }
+}
+
+// Another tab's change (or this one's) started a run: the widgets show the session's values
+// from now on, so that no tab shows one run's pictures beside another run's parameters.
+async function followParams(run, keys) {
+  const found = await api("api/graph");
+  if (!found.ok || run < S.latest) return;  // a newer run follows with its own values
+  S.graph.nodes = found.data.nodes;
+  const shown = $("#inspector").firstElementChild;
+  const node = S.graph.nodes.find((n) => n.id === shown?.dataset.inspect);
+  for (const p of node?.params || []) {
+    if (!keys.includes(p.key)) continue;
+    for (const input of shown.querySelectorAll(`.gv-param[data-param="${p.name}"] :is(input, select)`)) {
+      if (input.type === "checkbox") input.checked = Boolean(p.value);
+      else if (input.classList.contains("gv-text") && p.value !== null && typeof p.value === "object") input.value = JSON.stringify(p.value);
+      else input.value = p.value ?? "";
+    }
   }
 }
 

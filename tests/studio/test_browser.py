@@ -26,6 +26,11 @@ def coins() -> Iterator[StudioServer]:
     server.stop()
 
 
+# true once the inspector's number box of node.param reads the value
+_BOX_READS = """([node, param, value]) => document.querySelector(
+    `[data-inspect=${node}] [data-param=${param}] input.gv-number`)?.value === value"""
+
+
 def _painted(page, run: int) -> None:
     page.wait_for_selector(f"body[data-painted-run='{run}']", timeout=120_000)
 
@@ -48,6 +53,7 @@ def test_tuning_the_threshold_repaints_the_count_and_labels(browser, coins, tmp_
     other = browser.new_page()  # a second tab on the same session
     other.goto(coins.url)
     _painted(other, 1)
+    other.click("[data-node=binary]")
     page.click("[data-node=binary]")
     box = page.locator("[data-inspect=binary] [data-param=k] input.gv-number")
     box.fill("-0.3")
@@ -55,8 +61,9 @@ def test_tuning_the_threshold_repaints_the_count_and_labels(browser, coins, tmp_
     _painted(page, 2)
     assert page.inner_text("[data-output=count] .gv-scalar") == "23"
     assert _labels_png(page, coins) != before
-    _painted(other, 2)  # the other tab follows the session
+    _painted(other, 2)  # the other tab follows the session, its widgets too
     assert other.inner_text("[data-output=count] .gv-scalar") == "23"
+    other.wait_for_function(_BOX_READS, arg=["binary", "k", "-0.3"], timeout=10_000)
     other.close()
     assert page.get_attribute("[data-node=gray]", "data-state") == "cached"
     assert page.get_attribute("[data-node=overlay]", "data-state") == "computed"
@@ -91,6 +98,7 @@ def test_tuning_the_threshold_repaints_the_count_and_labels(browser, coins, tmp_
     coins.session.wait()
     assert coins.session.runs[-1].status == "done"
     _painted(page, 3)
+    page.wait_for_function(_BOX_READS, arg=["binary", "k", "-0.2"], timeout=10_000)
     page.evaluate("document.querySelector('#side').scrollTop = 0")
     update = os.environ.get("GRAPHVISION_UPDATE_SCREENSHOT") == "1"
     shot = SCREENSHOT if update else tmp_path / "studio.png"
