@@ -126,7 +126,10 @@ export class ImageViewer {
     const c = this.canvas;
     c.addEventListener("wheel", (ev) => {
       ev.preventDefault();
-      const f = Math.exp(-ev.deltaY * 0.0015);
+      // from a quarter of the fitted size down to a pixel a sixth of the canvas wide
+      const fitted = Math.min((c.width || 400) / this.width, (c.height || 300) / this.height);
+      const wanted = this.scale * Math.exp(-ev.deltaY * 0.0015);
+      const f = Math.min(Math.max(wanted, fitted / 4), Math.max(fitted, (c.width || 400) / 6)) / this.scale;
       const r = c.getBoundingClientRect();
       const x = ev.clientX - r.left, y = ev.clientY - r.top;
       this.tx = x - (x - this.tx) * f;
@@ -250,7 +253,10 @@ export function floatMapViewer(container, desc, values) {
   };
   const [a, b] = autoRange(values);
   paint(a, b);
-  const fixed = () => paint(Number(lo.value), Number(hi.value));
+  const fixed = () => {  // the ends typed the wrong way round are taken the right way round
+    const [a, b] = [Number(lo.value), Number(hi.value)];
+    paint(Math.min(a, b), Math.max(a, b));
+  };
   lo.addEventListener("change", fixed);
   hi.addEventListener("change", fixed);
   auto.addEventListener("click", () => paint(a, b));

@@ -287,11 +287,31 @@ def test_the_range_box_recolours_the_map(maps_page, tmp_path):
 
     assert fix(value + 1, value + 2) == VIRIDIS_LOW  # under the range: its low end
     assert fix(value - 2, value - 1) == VIRIDIS_HIGH  # over it: its high end
+    middle = fix(value - 1, value + 1)
+    assert middle not in (VIRIDIS_LOW, VIRIDIS_HIGH)
+    assert fix(value + 1, value - 1) == middle  # the ends typed the wrong way round
     page.locator(f"{view} .gv-rangebox button").click()
     assert _pixel(page, "disparity", x, y, disparity.shape) == automatic
     assert automatic not in (VIRIDIS_LOW, VIRIDIS_HIGH)  # 1.25 … 63.75: inside the range
     folder = Path(os.environ.get("GRAPHVISION_VIEWER_SHOTS", tmp_path))
     page.locator(view).screenshot(path=str(folder / "report-floatmap.png"))
+    assert page.errors == []
+
+
+def test_zooming_in_stops_at_a_pixel_a_sixth_of_the_canvas_wide(maps_page):
+    page = maps_page
+    box = _fitted(page, "disparity")
+    status = page.locator('.gv-view[data-view="disparity.out"] .gv-status').first
+    centre_x, centre_y = box["left"] + box["w"] / 2, box["top"] + box["h"] / 2
+    page.mouse.move(centre_x, centre_y)
+    for _ in range(80):  # unbounded, this made one pixel wider than the whole canvas
+        page.mouse.wheel(0, -400)
+    page.mouse.move(centre_x, centre_y)
+    here = STATUS.fullmatch(status.text_content())
+    page.mouse.move(centre_x + box["w"] / 5, centre_y)
+    right = STATUS.fullmatch(status.text_content())
+    assert here and right and int(right[1]) > int(here[1])
+    page.mouse.dblclick(centre_x, centre_y)  # fitted again for the other tests
     assert page.errors == []
 
 
