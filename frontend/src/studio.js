@@ -37,7 +37,7 @@ function onEvent(event) {
     if (event.status === "running") {
       S.latest = Math.max(S.latest, event.run);
       showRunning(event.run);
-      if (event.diff && Object.keys(event.diff).length) followParams(event.run, Object.keys(event.diff));
+      if (event.diff && Object.keys(event.diff).length) followParams(event.run, event.diff);
     } else if (event.run === S.latest) {
       showStatus(event);
       if (event.status === "done" || event.status === "failed") showRun(event.run);
@@ -63,15 +63,22 @@ function onEvent(event) {
 }
 
 // Another tab's change (or this one's) started a run: the widgets show the session's values
-// from now on, so that no tab shows one run's pictures beside another run's parameters.
-async function followParams(run, keys) {
-  const found = await api("api/graph");
-  if (!found.ok || run < S.latest) return;  // a newer run follows with its own values
-  S.graph.nodes = found.data.nodes;
+// from now on, so that no tab shows one run's pictures beside another run's parameters. The
+// run's diff holds the new values; only a value set back to the file's is asked of the server.
+async function followParams(run, diff) {
+  let nodes = S.graph.nodes;
+  if (Object.values(diff).some(([, now]) => now === null)) {
+    const found = await api("api/graph");
+    if (!found.ok) return;
+    nodes = found.data.nodes;
+  }
+  if (run < S.latest) return;  // a newer run follows with its own values
+  for (const n of nodes) for (const p of n.params || []) if (diff[p.key] && diff[p.key][1] !== null) p.value = diff[p.key][1];
+  S.graph.nodes = nodes;
   const shown = $("#inspector").firstElementChild;
-  const node = S.graph.nodes.find((n) => n.id === shown?.dataset.inspect);
+  const node = nodes.find((n) => n.id === shown?.dataset.inspect);
   for (const p of node?.params || []) {
-    if (!keys.includes(p.key)) continue;
+    if (!(p.key in diff)) continue;
     for (const input of shown.querySelectorAll(`.gv-param[data-param="${p.name}"] :is(input, select)`)) {
       if (input.type === "checkbox") input.checked = Boolean(p.value);
       else if (input.classList.contains("gv-text") && p.value !== null && typeof p.value === "object") input.value = JSON.stringify(p.value);

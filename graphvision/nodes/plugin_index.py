@@ -84,7 +84,7 @@ def environment_key(entries: list[EntryPoint]) -> str:
     hasher = xxhash.xxh3_128()
     # The interpreter's path normalised: one interpreter started as .venv/bin/python and as
     # bench/../.venv/bin/python is one environment, with one index.
-    interpreter = os.path.normpath(os.path.abspath(sys.executable))
+    interpreter = os.path.abspath(sys.executable)  # abspath normalises "a/../b" too
     hasher.update(f"{FORMAT}|{sys.version}|{interpreter}\n".encode())
     for folder in _path_folders():
         with contextlib.suppress(OSError):

@@ -38,7 +38,7 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
     yaml.preserve_quotes = True
     original = source.read_text(encoding="utf-8")
     document = yaml.load(original)
-    places = []  # (mapping, key) of each value set, while the positions are the file's
+    places = []  # (mapping, key, value) to set, found while the positions are the file's
     for key, value in overrides.items():
         target_name, _, param = key.partition(".")
         if target_name == "params":
@@ -55,8 +55,9 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
     text = _edited_in_place(original, places)
     for mapping, param, value in places:
         mapping[param] = value
-    if text is None or _loaded(yaml, text) != _loaded(yaml, _dumped(yaml, document)):
-        text = _dumped(yaml, document)
+    dumped = _dumped(yaml, document)
+    if text is None or _loaded(yaml, text) != _loaded(yaml, dumped):
+        text = dumped
     destination = target or source
     _check_pipeline(text, destination)
     _write_atomically(destination, text)

@@ -40,6 +40,23 @@ class _SlowToStart:
         self._pool.shutdown(wait=wait, cancel_futures=cancel_futures)
 
 
+def _run(graph, registry, files, tmp_path, pool: _SlowToStart, **options: Any) -> Any:
+    """The batch of ``files`` on ``pool``, two files at once, then the pool shut down."""
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        cache=None,
+        executor=pool,
+        files_at_once=2,
+        **options,
+    )
+    pool.shutdown()
+    return batch
+
+
 def _executors(batch: Any) -> list[str]:
     return [
         json.loads((item.output_dir / "record.json").read_text())["executor"]
@@ -54,19 +71,10 @@ def test_the_client_runs_files_until_a_worker_is_ready_and_leaves_the_last_to_wo
     levels = [10, 60, 110, 160, 210]
     files = [photo(tmp_path / "in" / f"{k}.png", level) for k, level in enumerate(levels)]
     pool = _SlowToStart()
-    batch = gv.run_batch(
-        graph,
-        [str(f) for f in files],
-        input="image",
-        output_dir=tmp_path / "out",
-        registry=registry,
-        cache=None,
-        executor=pool,
-        files_at_once=2,
-        client_files=True,
+    batch = _run(
+        graph, registry, files, tmp_path, pool, client_files=True,
         on_item=lambda number, total, item: number == 2 and pool.released.set(),
-    )
-    pool.shutdown()
+    )  # fmt: skip
     assert [item.status for item in batch.items] == ["ok"] * len(files), batch.items
     for item, level in zip(batch.items, levels, strict=True):
         assert item.scalars["score"] == pytest.approx(2.0 * level / 255.0, abs=1e-6)
@@ -85,17 +93,7 @@ def test_a_first_file_that_cannot_be_read_does_not_fail_the_others(tmp_path):
     files = [bad, photo(tmp_path / "in" / "1.png", 60), photo(tmp_path / "in" / "2.png", 110)]
     pool = _SlowToStart()
     pool.released.set()
-    batch = gv.run_batch(
-        graph,
-        [str(f) for f in files],
-        input="image",
-        output_dir=tmp_path / "out",
-        registry=registry,
-        cache=None,
-        executor=pool,
-        files_at_once=2,
-    )
-    pool.shutdown()
+    batch = _run(graph, registry, files, tmp_path, pool)
     assert [item.status for item in batch.items] == ["failed", "ok", "ok"], batch.items
     assert "is not a readable image" in batch.items[0].error
     assert batch.items[2].scalars["score"] == pytest.approx(2.0 * 110 / 255.0, abs=1e-6)
@@ -105,17 +103,9 @@ def test_without_client_files_every_further_file_waits_for_the_workers(tmp_path)
     graph, registry, _ = _counting_graph(tmp_path)
     files = [photo(tmp_path / "in" / f"{k}.png", 40 * k) for k in range(5)]
     pool = _SlowToStart()
-    batch = gv.run_batch(
-        graph,
-        [str(f) for f in files],
-        input="image",
-        output_dir=tmp_path / "out",
-        registry=registry,
-        cache=None,
-        executor=pool,
-        files_at_once=2,
+    batch = _run(
+        graph, registry, files, tmp_path, pool,
         on_item=lambda number, total, item: number == 1 and pool.released.set(),
-    )
-    pool.shutdown()
+    )  # fmt: skip
     assert [item.status for item in batch.items] == ["ok"] * len(files), batch.items
     assert _executors(batch)[1:] == ["slow-start, one task per file"] * 4
