@@ -33,6 +33,7 @@ graphvision[dask]``), imported only when this executor is made.
 
 from __future__ import annotations
 
+import functools
 import logging
 import multiprocessing
 import os
@@ -218,9 +219,9 @@ def _settle(task: Any, future: Future) -> None:
 
 
 _MMAP_THRESHOLD, _TRIM_THRESHOLD = -3, -1  # glibc's mallopt parameters (malloc.h)
-_HEAP_SET: list[bool] = []
 
 
+@functools.cache  # once per process
 def _keep_freed_memory() -> None:
     """In a worker started with ``MALLOC_TRIM_THRESHOLD_`` (Dask's nanny sets 64 KiB, to give
     freed memory back to the system): glibc's allocator keeps up to 64 MiB of freed memory
@@ -232,9 +233,8 @@ def _keep_freed_memory() -> None:
     and a batch's file on a Dask worker about twice that of a ``processes`` worker. Memory
     over 64 MiB freed at the heap's top is still given back.
     """
-    if _HEAP_SET or "MALLOC_TRIM_THRESHOLD_" not in os.environ:
+    if "MALLOC_TRIM_THRESHOLD_" not in os.environ:
         return
-    _HEAP_SET.append(True)
     import ctypes
 
     try:
