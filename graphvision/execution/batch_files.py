@@ -3,12 +3,14 @@ folder per file, the items and their summary (``batch.csv``)."""
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import errno
 import glob
 import io
 import os
 import stat
+import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -245,11 +247,17 @@ def write_summary(items: Sequence[BatchItem], out_dir: Path) -> Path:
 
 
 def replace_text(path: Path, text: str) -> None:
-    """Write ``path`` whole or not at all (a temporary file beside it, then a rename)."""
-    temp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    """Write ``path`` whole or not at all (a temporary file beside it, then a rename).
+
+    A file replaced keeps its permissions; a new one gets the process's default (its
+    umask). The temporary file's name is this thread's own, so two threads writing the
+    same path at once each publish a whole file."""
+    temp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
     try:
         with temp.open("w", encoding="utf-8", newline="") as handle:
             handle.write(text)
+        with contextlib.suppress(FileNotFoundError):
+            os.chmod(temp, stat.S_IMODE(path.stat().st_mode))
         os.replace(temp, path)
     finally:
         temp.unlink(missing_ok=True)

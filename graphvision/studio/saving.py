@@ -14,12 +14,12 @@ after the pipeline loader has read it, so a save never leaves an invalid pipelin
 from __future__ import annotations
 
 import io
-import os
 import re
 import shlex
-import tempfile
 from pathlib import Path
 from typing import Any
+
+from graphvision.execution.batch_files import replace_text
 
 __all__ = ["command_line", "save_parameters"]
 
@@ -60,7 +60,8 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
         text = dumped
     destination = target or source
     _check_pipeline(text, destination)
-    _write_atomically(destination, text)
+    destination.parent.mkdir(parents=True, exist_ok=True)
+    replace_text(destination, text)
     return destination
 
 
@@ -113,18 +114,6 @@ def _check_pipeline(text: str, where: Path) -> None:
     from graphvision.graph.pipeline_file import parse_pipeline
 
     parse_pipeline(text, file=str(where))
-
-
-def _write_atomically(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as file:
-            file.write(text)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
 
 
 def command_line(pipeline: str, overrides: dict[str, Any], inputs: dict[str, Any]) -> str:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import stat
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -144,6 +146,19 @@ def test_a_saved_value_changes_its_own_characters_alone(tmp_path, overrides, lin
         target, _, param = key.partition(".")
         got = graph.params[param] if target == "params" else graph.nodes[target].params[param]
         assert got == value
+
+
+def test_a_saved_file_keeps_its_permissions_and_a_new_one_gets_the_default(tmp_path):
+    source = tmp_path / "coins.yaml"
+    source.write_text((PIPELINES / "coins.yaml").read_text())
+    source.chmod(0o640)
+    save_parameters(source, {"binary.k": -0.3})
+    assert stat.S_IMODE(source.stat().st_mode) == 0o640
+    umask = os.umask(0o022)
+    os.umask(umask)
+    copy = save_parameters(source, {"binary.k": -0.2}, tmp_path / "copy.yaml")
+    assert stat.S_IMODE(copy.stat().st_mode) == 0o666 & ~umask
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["coins.yaml", "copy.yaml"]
 
 
 def test_the_command_line_reruns_the_tuned_values() -> None:
