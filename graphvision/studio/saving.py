@@ -19,6 +19,9 @@ import shlex
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+import yaml
+
 from graphvision.execution.batch_files import replace_text
 
 __all__ = ["command_line", "save_parameters"]
@@ -31,8 +34,14 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
     ------
     KeyError
         An override names a node or a pipeline param the file does not have.
+    PipelineError
+        A value would read back from the written file as another (the pipeline loader
+        reads YAML 1.1, the round trip writes YAML 1.2: ``no``, ``1e-05``): nothing is
+        written.
     """
     from ruamel.yaml import YAML
+
+    overrides = {k: v.item() if isinstance(v, np.generic) else v for k, v in overrides.items()}
 
     yaml = YAML()  # round trip: comments and layout kept
     yaml.preserve_quotes = True
@@ -59,6 +68,7 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
     if text is None or _loaded(yaml, text) != _loaded(yaml, dumped):
         text = dumped
     destination = target or source
+    _check_read_back(text, overrides, destination)
     _check_pipeline(text, destination)
     destination.parent.mkdir(parents=True, exist_ok=True)
     replace_text(destination, text)
@@ -71,8 +81,6 @@ _SCALAR = re.compile(r"""'(?:[^']|'')*'|"(?:[^"\\]|\\.)*"|[^,\]\}#\n]*[^,\]\}#\s
 def _edited_in_place(text: str, places: list[tuple[Any, str, Any]]) -> str | None:
     """``text`` with each value written over the scalar it replaces, or None when one of
     them is not a single scalar already in the file (a new key, a list, a mapping)."""
-    import yaml as pyyaml
-
     lines = text.splitlines(keepends=True)
     starts = [0]
     for line in lines:
@@ -87,7 +95,7 @@ def _edited_in_place(text: str, places: list[tuple[Any, str, Any]]) -> str | Non
         found = _SCALAR.match(lines[row], column)
         if found is None:
             return None
-        written = pyyaml.safe_dump(value, default_flow_style=True, width=1 << 16)
+        written = yaml.safe_dump(value, default_flow_style=True, width=1 << 16)
         written = written.removesuffix("\n").removesuffix("\n...")
         edits.append((starts[row] + column, starts[row] + found.end(), written))
     for begin, end, written in sorted(edits, reverse=True):
@@ -108,6 +116,26 @@ def _loaded(yaml: Any, text: str) -> Any:
         return json.dumps(yaml.load(text), sort_keys=True, default=str)
     except Exception:  # a substitution that does not read back: write the document anew
         return None
+
+
+def _check_read_back(text: str, overrides: dict[str, Any], where: Path) -> None:
+    """Each override read back from ``text`` as the pipeline loader reads it, or
+    PipelineError naming those that would read back as another value."""
+    from graphvision.errors import PipelineError, Problem
+    from graphvision.graph.yaml_reader import _Loader
+
+    document = yaml.load(text, Loader=_Loader) or {}
+    problems = []
+    for key, value in overrides.items():
+        target, _, param = key.partition(".")
+        holder = document if target == "params" else (document.get("nodes") or {}).get(target)
+        got = ((holder or {}).get("params") or {}).get(param)
+        same_kind = all(isinstance(got, t) == isinstance(value, t) for t in (bool, str))
+        if got != value or not same_kind:
+            message = f"{value!r} would be read back from the file as {got!r}; not saved"
+            problems.append(Problem(0, key, message, str(where)))
+    if problems:
+        raise PipelineError(problems)
 
 
 def _check_pipeline(text: str, where: Path) -> None:

@@ -161,6 +161,27 @@ def test_a_saved_file_keeps_its_permissions_and_a_new_one_gets_the_default(tmp_p
     assert sorted(p.name for p in tmp_path.iterdir()) == ["coins.yaml", "copy.yaml"]
 
 
+def test_a_value_the_loader_would_read_as_another_is_refused_and_nothing_written(tmp_path):
+    source = tmp_path / "coins.yaml"
+    text = (PIPELINES / "coins.yaml").read_text()
+    source.write_text(text)
+    # a new key (the document is written anew, in YAML 1.2) holding YAML 1.1's "no"
+    with pytest.raises(
+        PipelineError,
+        match=r"binary.method in .*coins.yaml: 'no' would be read back from the file as False",
+    ):
+        save_parameters(source, {"binary.method": "no"})
+    assert source.read_text() == text
+
+
+def test_numpy_scalars_are_saved_as_their_values(tmp_path):
+    source = tmp_path / "coins.yaml"
+    source.write_text((PIPELINES / "coins.yaml").read_text())
+    save_parameters(source, {"binary.k": np.float64(-0.25), "params.window": np.int64(41)})
+    graph = gv.load_pipeline(source)
+    assert graph.nodes["binary"].params["k"] == -0.25 and graph.params["window"] == 41
+
+
 def test_the_command_line_reruns_the_tuned_values() -> None:
     text = command_line("pipelines/coins.yaml", {"binary.k": -0.3, "binary.method": "sauvola"},
                         {"image": "coins.png"})  # fmt: skip
