@@ -48,6 +48,8 @@ def in_unit_range(array: np.ndarray) -> bool:
 def _plain_array(array: Any, source: str) -> np.ndarray:
     if not isinstance(array, np.ndarray) or array.dtype.hasobject:
         raise PortValueError(f"{source} must be a numeric numpy array, got {type(array).__name__}")
+    if type(array) is not np.ndarray:  # a masked array's or a matrix's values, all of them
+        array = np.asarray(array)
     if array.size == 0:
         raise PortValueError(f"{source} is empty (shape {array.shape})")
     return array

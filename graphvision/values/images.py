@@ -41,7 +41,7 @@ class FloatImagePort(ArrayPort):
         """A ``float32`` array is checked once, by :meth:`validate`: the dtype policy
         would return it as it is after checking its values the same way. When that check
         fails, the policy's own message (naming ``source``) is the one raised."""
-        if isinstance(value, np.ndarray) and value.dtype == np.float32:
+        if type(value) is np.ndarray and value.dtype == np.float32:  # not a masked array
             try:
                 return cls.validate(value)
             except PortValueError:

@@ -272,3 +272,16 @@ def test_an_image_in_the_convention_is_checked_once(port, monkeypatch):
     monkeypatch.setattr(port, "coerce", policy_again)
     value = _SAMPLES["rgb"] if port is gv.ColorImagePort else _SAMPLES["gray"]
     assert port.admit(value, "input 'x'") is value
+
+
+@pytest.mark.parametrize("port", _IMAGE_PORTS[:2], ids=lambda p: p.type_name())
+def test_a_masked_array_is_checked_on_all_its_values(port):
+    hidden = np.ma.masked_invalid(np.array([[np.nan, 0.5], [np.inf, 0.2]], np.float32))
+    with pytest.raises(gv.PortValueError, match="input 'x' has NaN or infinite values"):
+        port.admit(hidden, "input 'x'")
+
+
+def test_a_masked_value_out_of_range_is_still_out_of_range():
+    hidden = np.ma.masked_greater(np.array([[5.0, 0.5]], np.float32), 1.0)
+    with pytest.raises(gv.PortValueError, match=r"float values in \[0.5, 5\]"):
+        gv.ImagePort.admit(hidden, "input 'x'")
