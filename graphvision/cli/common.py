@@ -285,11 +285,14 @@ def node_limit_options(args: argparse.Namespace) -> None:
             os.environ[variable] = str(value)
 
 
-def note_unread_plugins(graph: Graph) -> None:
-    """Say which local plugins a pipeline names that reading it does not import."""
-    if graph.plugins:
+def note_unread_plugins(graph: Graph, passed: Sequence[str | Path] = ()) -> None:
+    """Say which local plugins a pipeline names that reading it does not import: those
+    not also given with ``--plugins`` (``passed``; the same file, however it is spelled)."""
+    given = {Path(path).resolve() for path in passed}
+    unread = [plugin for plugin in graph.plugins if Path(plugin).resolve() not in given]
+    if unread:
         print(
-            f"note: {graph.source} names local plugins {', '.join(graph.plugins)}; they are "
+            f"note: {graph.source} names local plugins {', '.join(unread)}; they are "
             "not imported to check or draw it (nothing in a pipeline runs until `run`): "
             "pass --plugins PATH to load and check their ops",
             file=sys.stderr,

@@ -17,7 +17,7 @@ def cmd_graph(args: argparse.Namespace) -> int:
     from graphvision.graph.render import render
 
     graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
-    note_unread_plugins(graph)
+    note_unread_plugins(graph, args.plugins)
     compile_graph(graph, registry_for(args, graph, run_its_plugins=False))
     print(render(graph, args.format))
     return EXIT_OK

@@ -21,7 +21,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     for path in args.pipelines:
         try:
             graph = load_pipeline(path, allow_outside_plugins=args.allow_outside_plugins)
-            note_unread_plugins(graph)
+            note_unread_plugins(graph, args.plugins)
             compile_graph(graph, registry_for(args, graph, run_its_plugins=False))
             print(f"{path}: ok")
         except PipelineError as error:

@@ -61,6 +61,20 @@ def test_checking_or_drawing_a_pipeline_imports_none_of_its_plugins(capsys, tmp_
     assert status == 2 and "unknown op 'evil.one'" in err  # its ops cannot be checked
     status, _, err = run_cli(capsys, command, pipeline, "--plugins", pipeline.parent / "evil.py")
     assert status == 0 and marker.exists()  # asked for by name: loaded and checked
+    assert "names local plugins" not in err and "pass --plugins" not in err
+
+
+@pytest.mark.parametrize("command", ["validate", "graph"])
+def test_the_unread_plugins_note_names_only_plugins_not_given_with_plugins(
+    capsys, tmp_path, monkeypatch, command
+):
+    pipeline, _marker = setup(tmp_path, "evil.py", op="pyramids.zone_plate")
+    other = pipeline.parent / "other.py"
+    other.write_text("")
+    pipeline.write_text(pipeline.read_text().replace("  - evil.py", "  - evil.py\n  - other.py"))
+    monkeypatch.chdir(tmp_path)  # the same file spelled relative to the working folder
+    _status, _, err = run_cli(capsys, command, pipeline, "--plugins", "p/./evil.py")
+    assert "names local plugins" in err and "other.py" in err and "evil.py" not in err
 
 
 def test_a_pipeline_that_uses_no_op_of_its_plugins_validates_without_them(capsys, tmp_path):
