@@ -96,7 +96,7 @@ def to_float_image(array: Any, *, source: str = "image", check_range: bool = Tru
             return result
         low, high = float(np.min(result)), float(np.max(result))
         if not (np.isfinite(low) and np.isfinite(high)):
-            raise PortValueError(f"{source} has NaN or infinite values")
+            raise _not_finite(array, source)
         if check_range and not (low >= 0.0 and high <= 1.0):
             raise PortValueError(
                 f"{source} has float values in [{low:g}, {high:g}]; expected [0, 1] "
@@ -105,6 +105,23 @@ def to_float_image(array: Any, *, source: str = "image", check_range: bool = Tru
         return result
     raise PortValueError(
         f"{source} has dtype {array.dtype}; expected unsigned integers, bool or float"
+    )
+
+
+def _not_finite(array: np.ndarray, source: str) -> PortValueError:
+    """What is wrong with a float array that is not finite as ``float32``: NaN or
+    infinity of its own, or finite values (float64 and wider) beyond float32's range,
+    the largest of which is named with where it is."""
+    if not np.isfinite(array).all():
+        return PortValueError(f"{source} has NaN or infinite values")
+    index = np.unravel_index(int(np.argmax(np.abs(array))), array.shape)
+    axes = ("row", "column", "channel")[: array.ndim]
+    where = ", ".join(f"{axis} {i}" for axis, i in zip(axes, index, strict=True))
+    limit = float(np.finfo(np.float32).max)
+    return PortValueError(
+        f"{source} has {array.dtype} values outside float32's range (±{limit:.4g}): "
+        f"the largest, {float(array[index]):g}, is at {where}; scale the data down "
+        "(divide by its maximum) before passing it"
     )
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -285,3 +287,18 @@ def test_a_masked_value_out_of_range_is_still_out_of_range():
     hidden = np.ma.masked_greater(np.array([[5.0, 0.5]], np.float32), 1.0)
     with pytest.raises(gv.PortValueError, match=r"float values in \[0.5, 5\]"):
         gv.ImagePort.admit(hidden, "input 'x'")
+
+
+@pytest.mark.parametrize("port", _IMAGE_PORTS[:2], ids=lambda p: p.type_name())
+def test_a_finite_float64_beyond_float32_is_refused_as_out_of_range_not_as_infinite(port):
+    wide = np.zeros((4, 5, 3))
+    wide[2, 3, 1] = -1e300
+    wide[0, 0, 0] = 1e299
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # numpy's overflow in the cast
+        with pytest.raises(
+            gv.PortValueError,
+            match=r"input 'x' has float64 values outside float32's range \(±3\.403e\+38\): "
+            r"the largest, -1e\+300, is at row 2, column 3, channel 1",
+        ):
+            port.admit(wide, "input 'x'")
