@@ -61,6 +61,7 @@ def _model_problems(
     problems = []
     for item in error.errors():
         loc = [str(p) for p in item["loc"] if p != "[key]"]
+        at_key = item["loc"][-1:] == ("[key]",)  # the key itself, not the value under it
         where = ".".join(loc) or "pipeline"
         message = item["msg"]
         if item["type"] == "extra_forbidden":
@@ -73,10 +74,13 @@ def _model_problems(
                 message += f"; allowed: {', '.join(options)}"
         elif item["type"] == "missing":
             message = f"missing required key '{loc[-1]}'"
-        elif item["type"] == "string_pattern_mismatch" and loc[0] == "outputs" and len(loc) == 2:
+        elif item["type"] == "string_pattern_mismatch" and loc[0] == "outputs" and at_key:
             message = output_name_problem(loc[1])
         elif item["type"] == "string_pattern_mismatch":
-            message = _PATTERN_MESSAGES.get(item.get("ctx", {}).get("pattern", ""), message)
+            pattern = item.get("ctx", {}).get("pattern", "")
+            message = _PATTERN_MESSAGES.get(pattern, message)
+            if pattern == REF_PATTERN:  # a value: the place names its key, not it
+                message += f", got {item['input']!r}"
         elif item["type"] == "too_short" and isinstance(item.get("input"), list):
             message = "an empty list: name at least one, or leave the key out"
         elif item["type"].endswith("_type") and isinstance(

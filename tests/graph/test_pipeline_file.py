@@ -89,6 +89,20 @@ def test_node_names_must_be_identifiers():
         gv.parse_pipeline(text)
 
 
+@pytest.mark.parametrize("bad", ["c</script>", "c d"])
+def test_a_bad_output_name_and_a_bad_reference_are_each_listed_once_for_what_they_are(bad):
+    text = GOOD.replace("  c:   {op", f'  "{bad}": {{op').replace("b: c}", f'b: "{bad}"}}')
+    text = text.replace("  total: sum", f'  "{bad}": "{bad}"\n  fine: "{bad}"')
+    with pytest.raises(gv.PipelineError) as info:
+        gv.parse_pipeline(text)
+    message = str(info.value)
+    assert message.count(f"output name '{bad}' must be a plain name") == 1
+    assert (
+        message.count(f"a reference must be 'node' or 'node.port' (identifiers), got '{bad}'") == 3
+    )
+    assert "output name 'fine'" not in message  # its value is wrong, not its name
+
+
 def test_unreadable_file(tmp_path):
     with pytest.raises(
         gv.PipelineError, match=r"^cannot read pipeline .*missing.yaml: No such file"
