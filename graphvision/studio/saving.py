@@ -36,8 +36,10 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
         An override names a node or a pipeline param the file does not have.
     PipelineError
         A value would read back from the written file as another (the pipeline loader
-        reads YAML 1.1, the round trip writes YAML 1.2: ``no``, ``1e-05``): nothing is
-        written.
+        reads YAML 1.1, the round trip writes YAML 1.2: ``no``, ``1e-05``), or a value
+        the file shares through a YAML anchor would change another node's parameter too:
+        nothing is written. A value a node takes through a merge key (``<<: *x``) is
+        written in the node's own mapping.
     """
     from ruamel.yaml import YAML
 
@@ -69,7 +71,8 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
         text = dumped
     destination = target or source
     _check_read_back(text, overrides, destination)
-    _check_pipeline(text, destination)
+    anchors = sorted({m.anchor.value for m, _, _ in places if m.anchor.value})
+    _check_pipeline(original, text, overrides, destination, anchors or ["name"])
     destination.parent.mkdir(parents=True, exist_ok=True)
     replace_text(destination, text)
     return destination
@@ -87,8 +90,8 @@ def _edited_in_place(text: str, places: list[tuple[Any, str, Any]]) -> str | Non
         starts.append(starts[-1] + len(line))
     edits = []
     for mapping, param, value in places:
-        if param not in mapping or isinstance(value, (list, dict)):
-            return None
+        if param not in dict(mapping.non_merged_items()) or isinstance(value, (list, dict)):
+            return None  # a new key, or one the mapping takes through a merge key (<<: *x)
         if isinstance(mapping[param], (list, dict)):
             return None
         row, column = mapping.lc.value(param)
@@ -138,10 +141,42 @@ def _check_read_back(text: str, overrides: dict[str, Any], where: Path) -> None:
         raise PipelineError(problems)
 
 
-def _check_pipeline(text: str, where: Path) -> None:
+def _check_pipeline(
+    original: str, text: str, overrides: dict[str, Any], where: Path, anchors: list[str]
+) -> None:
+    """``text`` is a valid pipeline whose parameters are the original file's with the
+    overrides set, and no other changed: PipelineError naming a parameter that a save
+    would change too, because the file shares it with an overridden one through a YAML
+    anchor (``&x``) and an alias (``*x``, ``<<: *x``)."""
+    from graphvision.errors import PipelineError, Problem
     from graphvision.graph.pipeline_file import parse_pipeline
 
-    parse_pipeline(text, file=str(where))
+    before, after = parse_pipeline(original, file=str(where)), parse_pipeline(text, str(where))
+    problems = []
+    for key, old in _parameters(before).items():
+        new = _parameters(after).get(key, old)
+        if key in overrides or new == old:
+            continue
+        param = key.partition(".")[2]
+        causes = [k for k in overrides if k.partition(".")[2] == param] or list(overrides)
+        anchor, node = anchors[0], causes[0].partition(".")[0]
+        message = (
+            f"saving {', '.join(causes)} would change it too ({old!r} → {new!r}): the file "
+            f"shares the value through the YAML anchor &{anchor} and its aliases; not saved. "
+            f"Set them all to the same value, or give {node} a mapping of its own "
+            f"(params: {{<<: *{anchor}, {param}: ...}})"
+        )
+        problems.append(Problem(0, key, message, str(where)))
+    if problems:
+        raise PipelineError(problems)
+
+
+def _parameters(graph: Any) -> dict[str, Any]:
+    """Every parameter of a graph by its override key (``node.param``, ``params.NAME``)."""
+    found = {f"params.{name}": value for name, value in graph.params.items()}
+    for name, node in graph.nodes.items():
+        found.update({f"{name}.{param}": value for param, value in node.params.items()})
+    return found
 
 
 def command_line(pipeline: str, overrides: dict[str, Any], inputs: dict[str, Any]) -> str:
