@@ -4,7 +4,7 @@ import { downstream } from "./layout.js";
 import { docHtml } from "./tex.js";
 import { classifierPanel, cloudPanel, curvesPanel, epipolarPanel, maskLayer, matchesPanel } from "./panels.js";
 import { el, floatMapViewer, ImageViewer, scalarViewer, tableViewer } from "./viewers.js";
-import { readValue, widgetSpec } from "./widgets.js";
+import { changeText, readValue, widgetSpec } from "./widgets.js";
 
 const S = { graph: null, view: null, selected: null, latest: 0, shown: 0, runs: {}, states: {},
   timers: {}, showing: new Set(), queued: {}, repainting: new Map() };
@@ -445,7 +445,8 @@ function widget(param) {
     control.addEventListener("change", () => send(control.checked));
   } else if (spec.kind === "slider") {
     const range = el("input", { type: "range", min: spec.min, max: spec.max, step: spec.step || "any" });
-    const number = el("input", { type: "number", step: spec.integer ? spec.step : "any", class: "gv-number" });
+    // a text box: a number box empties itself when it cannot hold what was typed (1e400)
+    const number = el("input", { type: "text", class: "gv-number" });
     range.value = number.value = param.value;
     const go = (text) => {
       const read = readValue(spec, text);
@@ -455,6 +456,13 @@ function widget(param) {
     };
     range.addEventListener("input", () => go(range.value));
     number.addEventListener("change", () => go(number.value));
+    number.addEventListener("keydown", (event) => {  // the arrows step as a number box's do
+      const by = { ArrowUp: 1, ArrowDown: -1 }[event.key];
+      const now = Number(number.value);
+      if (!by || number.value.trim() === "" || !Number.isFinite(now)) return;
+      event.preventDefault();
+      go(String(Number((now + by * spec.step).toPrecision(12))));
+    });
     control = el("span", { class: "gv-slider" }, range, number);
   } else {
     const json = spec.kind === "json";
@@ -580,7 +588,7 @@ async function refreshRuns(ask = true) {
     const a = el("input", { type: "radio", name: "cmp-a", value: r.id });
     const b = el("input", { type: "radio", name: "cmp-b", value: r.id });
     if (!r.kept) { a.disabled = b.disabled = true; }
-    const diff = Object.entries(r.diff).map(([k, [o, n]]) => `${k}: ${o ?? "file"} → ${n ?? "file"}`).join("; ");
+    const diff = Object.entries(r.diff).map(([k, pair]) => changeText(k, pair, r.file)).join("; ");
     const metrics = Object.entries(r.metrics).map(([k, v]) => `${k} ${typeof v === "number" ? Number(v.toPrecision(4)) : v}`).join(", ");
     if (r.kept && r.id === S.latest && r.status !== "running" && r.id > S.shown) showRun(r.id);
     if (r.id === S.latest) {  // a start or an end this tab missed (it opened meanwhile)

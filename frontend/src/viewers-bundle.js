@@ -9,4 +9,4 @@ export { canvasOf, cloudColours, drawColourBar, floatMapViewer, ImageViewer, poi
 export { clipLine, epipolarLine, epipolarSegments, matchSegments, pairViewer, PAIR_GAP, sideBySide, spread } from "./pairs.js";
 export { confusionShares, confusionViewer, curvesViewer, niceTicks, samplesRow } from "./charts.js";
 export { classifierPanel, cloudPanel, curvesPanel, epipolarPanel, maskLayer, matchesPanel } from "./panels.js";
-export { readValue, widgetSpec } from "./widgets.js";
+export { changeText, readValue, widgetSpec } from "./widgets.js";

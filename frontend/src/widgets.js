@@ -34,9 +34,15 @@ export function readValue(spec, text) {
   if (spec.kind === "switch") return { value: Boolean(text) };
   if (spec.kind === "menu" || spec.kind === "text") return { value: text };
   if (spec.kind === "slider") {
-    const v = Number(text);
-    if (text === "" || !Number.isFinite(v)) return { error: `not a number: '${text}'` };
+    const typed = String(text).trim();
+    const v = Number(typed);
+    const range = outOfRange(typed, v);
+    if (range) return { error: range };
+    if (typed === "" || !Number.isFinite(v)) return { error: `not a number: '${text}'` };
     if (spec.integer && !Number.isInteger(v)) return { error: `not a whole number: ${text}` };
+    if (spec.integer && !Number.isSafeInteger(v)) {
+      return { error: `out of range: ${typed} is beyond ±${Number.MAX_SAFE_INTEGER}, the largest whole number sent exactly` };
+    }
     return { value: v };
   }
   try {
@@ -44,4 +50,28 @@ export function readValue(spec, text) {
   } catch (e) {
     return { error: `not JSON: ${e.message}` };
   }
+}
+
+// Why a number written well (1e400, -1e-400) cannot be held: beyond ±1.8e308 it would be
+// sent as infinity, closer to 0 than 5e-324 as 0. "" when it can be held, or is no number.
+function outOfRange(typed, v) {
+  if (!/^[+-]?(\d+\.?\d*|\.\d+)(e[+-]?\d+)?$/i.test(typed)) return "";
+  if (!Number.isFinite(v)) {
+    return `out of range: ${typed} is beyond ±${Number.MAX_VALUE.toPrecision(2)}, the largest number the studio can send`;
+  }
+  if (v === 0 && /[1-9]/.test(typed.split(/e/i)[0])) {
+    return `out of range: ${typed} is closer to 0 than ${Number.MIN_VALUE.toPrecision(1)}, the smallest number the studio can send (it would be sent as 0)`;
+  }
+  return "";
+}
+
+// A run's change of one parameter, as the runs table writes it: null (the pipeline file's
+// value) is shown as that value, from the run's ``file`` ("0.2 → 0.5", not "file → 0.5").
+export function changeText(key, [before, after], file = {}) {
+  const shown = (v) => (v === null || v === undefined ? (key in file ? show(file[key]) : "file") : show(v));
+  return `${key}: ${shown(before)} → ${shown(after)}`;
+}
+
+function show(value) {
+  return value !== null && typeof value === "object" ? JSON.stringify(value) : String(value);
 }

@@ -59,6 +59,27 @@ test("widgets read what is typed, and refuse what is not a value", () => {
   assert.deepEqual({ ...V.readValue({ kind: "json" }, "[1, 2]") }.value.length, 2);
 });
 
+test("a number beyond what the page can send is out of range, not 'not a number'", () => {
+  const spec = V.widgetSpec({ type: "number" }, 0.5);
+  assert.match(V.readValue(spec, "1e400").error, /^out of range: 1e400 is beyond ±1\.8e\+308/);
+  assert.match(V.readValue(spec, " -1E400 ").error, /^out of range: -1E400 is beyond/);
+  assert.match(V.readValue(spec, "1e-400").error, /^out of range: 1e-400 is closer to 0 than 5e-324/);
+  assert.equal(V.readValue(spec, "0e-400").value, 0);  // zero written small is zero
+  assert.equal(V.readValue(spec, "1e300").value, 1e300);
+  assert.match(V.readValue(spec, "").error, /not a number: ''/);
+  assert.match(V.readValue(spec, "Infinity").error, /not a number: 'Infinity'/);
+  const whole = V.widgetSpec({ type: "integer" }, 5);
+  assert.match(V.readValue(whole, "1e17").error, /^out of range: 1e17 is beyond ±9007199254740991/);
+});
+
+test("the runs table writes a change from the file's value as that value", () => {
+  assert.equal(V.changeText("binary.k", [null, 0.5], { "binary.k": 0.2 }), "binary.k: 0.2 → 0.5");
+  assert.equal(V.changeText("binary.k", [0.5, null], { "binary.k": 0 }), "binary.k: 0.5 → 0");
+  assert.equal(V.changeText("coins.ranges", [null, { area: [1, null] }], { "coins.ranges": { area: [400, null] } }),
+    'coins.ranges: {"area":[400,null]} → {"area":[1,null]}');
+  assert.equal(V.changeText("binary.k", [null, 0.5]), "binary.k: file → 0.5");  // an older server
+});
+
 test("viridis runs dark purple to yellow; NaN is transparent", () => {
   assert.deepEqual(V.viridis(0), [68, 1, 84]);
   assert.deepEqual(V.viridis(1), [253, 231, 37]);

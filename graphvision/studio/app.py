@@ -11,7 +11,8 @@ other request gets 403. Routes:
 ``POST /api/change``                    ``{"overrides": {...}, "inputs": {...}}``: validate,
                                         then run; 422 with every problem if refused
 ``POST /api/cancel``                    stop the run in flight
-``GET /api/runs``                       every run of the session: diff, metrics, states
+``GET /api/runs``                       every run of the session: diff (None: the file's
+                                        value, given in ``file``), metrics, states
 ``GET /api/value/RUN/NODE/PORT``        a value's description (:mod:`.payload`)
 ``GET /api/png/RUN/NODE/PORT``          its picture; ``/api/raw/...`` its float32 values;
                                         ``/api/rgba/...?step=N`` its picture as RGBA bytes,

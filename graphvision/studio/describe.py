@@ -18,7 +18,7 @@ import pydantic
 from graphvision.compiler.compile import CompiledGraph, Step
 from graphvision.graph.model import Graph
 
-__all__ = ["describe_graph", "param_widgets"]
+__all__ = ["describe_graph", "file_values", "param_widgets"]
 
 _REFERENCE = re.compile(r"^\$\{params\.(\w+)\}$")
 
@@ -83,6 +83,20 @@ def param_widgets(graph: Graph, step: Step) -> list[dict[str, Any]]:
         widgets.append({"name": param, "schema": prop, "value": step.params.get(param),
                         "key": key})  # fmt: skip
     return widgets
+
+
+def file_values(graph: Graph, compiled: CompiledGraph, keys: list[str]) -> dict[str, Any]:
+    """The value each key (``node.param``, ``params.NAME``) has in the pipeline file (its
+    default when the file does not write it): what a change set back to the file runs with,
+    for the runs table (``0.2 → 0.5``). ``compiled`` is the file's graph, without overrides."""
+    found = {}
+    for key in keys:
+        target, _, param = key.partition(".")
+        if target == "params":
+            found[key] = graph.params.get(param)
+        elif target in compiled.steps:
+            found[key] = compiled.steps[target].params.get(param)
+    return found
 
 
 def _resolved(prop: dict[str, Any], schema: dict[str, Any]) -> dict[str, Any]:

@@ -34,6 +34,7 @@ from graphvision.execution.record import RunHooks, RunRecord
 from graphvision.execution.run import run
 from graphvision.graph.model import Graph, Ref
 from graphvision.nodes.registry import Registry
+from graphvision.studio.describe import file_values
 from graphvision.studio.workers import WorkerPool
 
 __all__ = ["KEPT_RUNS", "Session", "StudioRun", "Superseded"]
@@ -75,6 +76,7 @@ class StudioRun:
     overrides: dict[str, Any]
     inputs: dict[str, Any]
     diff: dict[str, list[Any]]
+    file: dict[str, Any] = field(default_factory=dict)  # the file's value of a diff's None
     status: str = "running"  # running, done, failed, superseded, cancelled
     began: float = field(default_factory=time.time)
     seconds: float = 0.0
@@ -94,6 +96,7 @@ class StudioRun:
             "status": self.status,
             "overrides": self.overrides,
             "diff": self.diff,
+            "file": self.file,
             "seconds": self.seconds,
             "began": self.began,
             "metrics": self.metrics,
@@ -204,6 +207,7 @@ class Session:
         self.cache = _TapCache(cache or Cache(MemoryStore(2**30)))
         self.studio_graph = _every_port_an_output(graph, registry)
         self.compiled = self.check(self.overrides)
+        self.file_compiled = self.check({}) if self.overrides else self.compiled
         self.runs: list[StudioRun] = []
         self.listeners: list[Callable[[dict[str, Any]], None]] = []
         # run, node -> the descriptions its ``node`` event carries, by port (set by the app)
@@ -259,8 +263,10 @@ class Session:
                 self._end_workers(previous, "superseded")
                 self.emit({"event": "run", "run": previous.id, "status": "superseded"})
             diff = _diff(previous.overrides if previous else {}, self.overrides)
+            keys = [key for key, pair in diff.items() if None in pair]
+            file = file_values(self.graph, self.file_compiled, keys)
             studio_run = StudioRun(
-                len(self.runs) + 1, dict(self.overrides), dict(self.inputs), diff
+                len(self.runs) + 1, dict(self.overrides), dict(self.inputs), diff, file
             )
             self.runs.append(studio_run)
             for old in self.runs[:-KEPT_RUNS]:
@@ -270,7 +276,8 @@ class Session:
                 target=self._run, args=(studio_run, compiled), daemon=True, name="studio-run"
             )
             self.threads = [t for t in self.threads if t.is_alive()] + [thread]
-        self.emit({"event": "run", "run": studio_run.id, "status": "running", "diff": diff})
+        self.emit({"event": "run", "run": studio_run.id, "status": "running", "diff": diff,
+                   "file": file})  # fmt: skip
         thread.start()
         return studio_run
 

@@ -81,7 +81,19 @@ def test_tuning_the_threshold_repaints_the_count_and_labels(browser, coins, tmp_
     message = page.locator("[data-inspect=binary] [data-param=window] .gv-invalid")
     message.wait_for(state="visible")
     assert "greater than or equal to 3" in message.inner_text()
+    # a number too large for the page: the box keeps what was typed and says why it is refused
+    box.fill("1e400")
+    box.press("Enter")
+    refused = page.locator("[data-inspect=binary] [data-param=k] .gv-invalid")
+    refused.wait_for(state="visible")
+    assert refused.inner_text().startswith("out of range: 1e400 is beyond ±1.8e+308")
     assert len(coins.session.runs) == 2
+    # the runs table writes the change from the file's number (k: 0.0 in coins.yaml)
+    page.wait_for_function(
+        "document.querySelector('#runs tr[data-run=\"2\"]')?.textContent.includes("
+        "'binary.k: 0 → -0.3')",
+        timeout=10_000,
+    )
     # a tab that goes away in the middle of a run: the run finishes, the server serves on
     leaving = browser.new_page()
     leaving.goto(coins.url)

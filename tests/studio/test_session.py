@@ -48,6 +48,7 @@ def test_a_change_recomputes_only_what_is_downstream(coins: Session) -> None:
     assert all(statuses[name] == "computed" for name in downstream)
     assert run.metrics["count"] == 23  # one coin lost to the lower threshold (24 before)
     assert run.diff == {"binary.k": [None, -0.3]}
+    assert run.summary()["file"] == {"binary.k": 0.0}  # coins.yaml's k: the runs table shows it
     assert ("labels", "out") in run.values and ("gray", "out") in run.values  # every node's value
 
 
