@@ -32,7 +32,7 @@ from graphvision.values.scalars import TablePort
 from graphvision.views import pairing
 from graphvision.views.pairing import Ref
 from graphvision.views.scripted import PageValues, is_classifier
-from graphvision.views.viewers import _points3d_html, table_parts, value_html
+from graphvision.views.viewers import _points3d_html, picture_longest, table_parts, value_html
 
 __all__ = ["LINKED_STYLE", "linked_html", "pair_svg", "shown_html"]
 
@@ -57,7 +57,8 @@ LINKED_STYLE = """
 def _png_uri(picture: np.ndarray) -> str:
     from graphvision.values.pictures import png_bytes, thumbnail
 
-    data = base64.b64encode(png_bytes(thumbnail(picture, 1024), smallest=1)).decode("ascii")
+    shrunk = thumbnail(picture, picture_longest(1024))
+    data = base64.b64encode(png_bytes(shrunk, smallest=1)).decode("ascii")
     return f"data:image/png;base64,{data}"
 
 
@@ -234,13 +235,17 @@ def shown_html(
     :func:`linked_html` adds; a coloured cloud replaces the cloud coloured by depth alone
     (the switch shows that one too). With ``page``, a value the studio's viewers draw in
     the page (:mod:`graphvision.views.scripted`) is in its box, this drawing its fallback."""
-    extra = linked_html(compiled, found, where, kind, value, name)
-    if extra and issubclass(kind, Points3DPort):
-        shown = f"<p>{escape(kind.summary(value))}</p>{extra}"
-        return shown if page is None else page.wrap(where, kind, value, shown)
-    if page is None:
+
+    def drawn() -> str:  # drawn smaller when it is the fallback of the page's script
+        extra = linked_html(compiled, found, where, kind, value, name)
+        if extra and issubclass(kind, Points3DPort):
+            return f"<p>{escape(kind.summary(value))}</p>{extra}"
         return value_html(kind, value, name) + extra
+
+    if page is None:
+        return drawn()
     if issubclass(kind, TablePort) and is_classifier(value):
         confusion, rows = table_parts(value)
-        return page.wrap(where, kind, value, confusion) + rows + extra
-    return page.wrap(where, kind, value, value_html(kind, value, name) + extra)
+        extra = linked_html(compiled, found, where, kind, value, name)
+        return page.wrap(where, kind, value, lambda: confusion) + rows + extra
+    return page.wrap(where, kind, value, drawn)

@@ -16,7 +16,9 @@ fetched from the network.
 from __future__ import annotations
 
 import base64
-from collections.abc import Mapping
+import contextlib
+from collections.abc import Iterator, Mapping
+from contextvars import ContextVar
 from html import escape
 from typing import Any
 
@@ -33,6 +35,8 @@ __all__ = [
     "float_map_range",
     "is_float_map",
     "picture_html",
+    "picture_longest",
+    "pictures_at_most",
     "table_parts",
     "units_of",
     "value_html",
@@ -46,11 +50,34 @@ _STOPS = ("#440154", "#482878", "#3e4989", "#31688e", "#26828e", "#1f9e89", "#35
 _ANCHORS = np.array([[int(h[i : i + 2], 16) / 255 for i in (1, 3, 5)] for h in _STOPS])
 
 
+_CAP: ContextVar[int | None] = ContextVar("picture_cap", default=None)
+
+
+@contextlib.contextmanager
+def pictures_at_most(longest: int) -> Iterator[None]:
+    """Pictures drawn meanwhile at most ``longest`` pixels on a side: the drawing of a
+    value that the page's script draws over (:mod:`graphvision.views.scripted`), seen
+    only without script, need not hold the pixels the script draws from its values."""
+    cap = _CAP.get()
+    token = _CAP.set(longest if cap is None else min(cap, longest))
+    try:
+        yield
+    finally:
+        _CAP.reset(token)
+
+
+def picture_longest(own: int) -> int:
+    """The longest side of a picture that is drawn at ``own`` pixels at most, or less
+    within :func:`pictures_at_most`."""
+    cap = _CAP.get()
+    return own if cap is None else min(cap, own)
+
+
 def picture_html(picture: np.ndarray, alt: str) -> str:
     """An ``<img>`` holding ``picture`` (a [0, 1] array) as an inline PNG thumbnail."""
     from graphvision.values.pictures import png_bytes, thumbnail
 
-    data = base64.b64encode(png_bytes(thumbnail(picture))).decode("ascii")
+    data = base64.b64encode(png_bytes(thumbnail(picture, picture_longest(512)))).decode("ascii")
     return f'<img alt="{escape(alt)}" src="data:image/png;base64,{data}">'
 
 

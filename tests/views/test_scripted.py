@@ -6,14 +6,18 @@ from __future__ import annotations
 
 import base64
 import io
+import re
 
 import imageio.v3 as iio
 import numpy as np
 
+from graphvision.execution.record import RunRecord
 from graphvision.values.images import FloatImagePort, ImagePort
 from graphvision.views import scripted
 from graphvision.views.graph_view import layout_script
+from graphvision.views.html import html_report
 from graphvision.views.scripted import PageValues
+from graphvision.views.viewers import picture_html
 
 from .report_values import (
     GRAY,
@@ -157,3 +161,34 @@ def test_a_map_whose_values_take_too_many_bytes_is_sent_reduced_under_the_cap(mo
     assert len(raw["deflate"]) <= 4_000
     np.testing.assert_array_equal(decoded(raw), noise[:: found["step"], :: found["step"]])
     assert found["shape"] == list(decoded(raw).shape) and found["full"] == [64, 64]
+
+
+def _fallback_pictures(page: str, key: str) -> list[np.ndarray]:
+    """The pictures of the page's own drawing of value ``key`` (seen without script)."""
+    box = re.search(rf'<div class="gv-view" data-view="{key}">(.*?)</div></div>', page, re.S)
+    assert box, key
+    found = re.findall(r'src="data:image/png;base64,([^"]+)"', box.group(1))
+    return [iio.imread(io.BytesIO(base64.b64decode(png))) for png in found]
+
+
+def test_a_value_the_script_draws_keeps_a_small_picture_for_the_page_without_script():
+    rng = np.random.default_rng(3)
+    disparity = (rng.integers(16, 240, (300, 450)) / 4).astype(np.float32)  # quarter pixels
+    picture = (rng.integers(0, 9, (200, 300, 3)) / 8).astype(np.float32)  # eighths
+    page = html_report(
+        compiled("stereo.yaml"),
+        {"disparity": disparity, "disparity_picture": picture},
+        RunRecord("stereo", "threads"),
+    )
+    data = page_data(page)
+    for key, values in (("disparity.out", disparity), ("picture.out", picture)):
+        # the viewer's values: every pixel, exactly (what the script draws and reads out)
+        assert data["values"][key]["step"] == 1
+        np.testing.assert_array_equal(decoded(data["raw"][key]), values)
+        pictures = _fallback_pictures(page, key)
+        assert pictures and all(max(p.shape[:2]) <= 200 for p in pictures)  # FALLBACK_LONGEST
+    # a drawing no viewer of the script replaces keeps its size (512 at most, as before)
+    alone = PageValues(compiled("stereo.yaml"), {})
+    shown = alone.wrap(None, ImagePort, picture, lambda: picture_html(picture, "p"))
+    png = re.search(r'base64,([^"]+)"', shown).group(1)
+    assert iio.imread(io.BytesIO(base64.b64decode(png))).shape[:2] == (200, 300)
