@@ -35,10 +35,10 @@ export function readValue(spec, text) {
   if (spec.kind === "menu" || spec.kind === "text") return { value: text };
   if (spec.kind === "slider") {
     const typed = String(text).trim();
+    if (!DECIMAL.test(typed)) return { error: `not a number: '${text}'` };
     const v = Number(typed);
     const range = outOfRange(typed, v);
     if (range) return { error: range };
-    if (typed === "" || !Number.isFinite(v)) return { error: `not a number: '${text}'` };
     if (spec.integer && !Number.isInteger(v)) return { error: `not a whole number: ${text}` };
     if (spec.integer && !Number.isSafeInteger(v)) {
       return { error: `out of range: ${typed} is beyond ±${Number.MAX_SAFE_INTEGER}, the largest whole number sent exactly` };
@@ -52,10 +52,12 @@ export function readValue(spec, text) {
   }
 }
 
+// A number as a person writes one: digits, a point, an exponent (not hex, not Infinity).
+const DECIMAL = /^[+-]?(\d+\.?\d*|\.\d+)(e[+-]?\d+)?$/i;
+
 // Why a number written well (1e400, -1e-400) cannot be held: beyond ±1.8e308 it would be
-// sent as infinity, closer to 0 than 5e-324 as 0. "" when it can be held, or is no number.
+// sent as infinity, closer to 0 than 5e-324 as 0. "" when it can be held.
 function outOfRange(typed, v) {
-  if (!/^[+-]?(\d+\.?\d*|\.\d+)(e[+-]?\d+)?$/i.test(typed)) return "";
   if (!Number.isFinite(v)) {
     return `out of range: ${typed} is beyond ±${Number.MAX_VALUE.toPrecision(2)}, the largest number the studio can send`;
   }

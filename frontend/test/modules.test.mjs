@@ -68,6 +68,8 @@ test("a number beyond what the page can send is out of range, not 'not a number'
   assert.equal(V.readValue(spec, "1e300").value, 1e300);
   assert.match(V.readValue(spec, "").error, /not a number: ''/);
   assert.match(V.readValue(spec, "Infinity").error, /not a number: 'Infinity'/);
+  assert.match(V.readValue(spec, "0x10").error, /not a number: '0x10'/);  // a box of decimals
+  assert.equal(V.readValue(spec, " -.5e1 ").value, -5);
   const whole = V.widgetSpec({ type: "integer" }, 5);
   assert.match(V.readValue(whole, "1e17").error, /^out of range: 1e17 is beyond ±9007199254740991/);
 });
