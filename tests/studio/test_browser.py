@@ -116,6 +116,10 @@ def test_tuning_the_threshold_repaints_the_count_and_labels(browser, coins, tmp_
     shot = SCREENSHOT if update else tmp_path / "studio.png"
     page.screenshot(path=str(shot))
     assert shot.stat().st_size > 10_000
+    box.press("ArrowDown")  # the arrows step the box, as a number box's did
+    _painted(page, 4)
+    stepped = coins.session.overrides["binary.k"]
+    assert stepped < -0.2 and box.input_value() == repr(stepped)
     assert errors == []
 
 
