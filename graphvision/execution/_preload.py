@@ -25,9 +25,12 @@ from __future__ import annotations
 
 import base64
 import contextlib
+import json
 import os
 import pickle
+import signal
 import sys
+import threading
 from typing import Any
 
 from graphvision.execution.batch_preload import import_modules, load_kernels
@@ -43,12 +46,19 @@ def _quiet_start_failure(kind: type[BaseException], error: BaseException, trace:
 
 
 sys.excepthook = _quiet_start_failure
+if threading.current_thread() is threading.main_thread():  # the server's start (see module doc)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C that came meanwhile is dropped
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def start_batch(value: str) -> None:
     """Import the modules ``value`` names, load their numba kernels, then compile the graph
     it holds (``modules;pickled warm-up``: see ``worker_start._encoded``)."""
-    names, _, data = value.partition(";")
+    names, _, rest = value.partition(";")
+    data, _, path = rest.partition(";")
+    if path:  # the client's, as a spawned worker has it (see worker_start._encoded)
+        with contextlib.suppress(Exception):
+            sys.path[:] = [str(folder) for folder in json.loads(base64.b64decode(path))]
     if names:
         load_kernels(import_modules(names.split(",")))
     if data:

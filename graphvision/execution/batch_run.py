@@ -9,6 +9,7 @@ import dataclasses
 import pickle
 import threading
 import uuid
+import warnings
 from concurrent.futures import Future
 from pathlib import Path
 from typing import Any
@@ -35,7 +36,7 @@ from graphvision.execution.file_task import (
     warm_worker,
 )
 from graphvision.execution.record import RunResult
-from graphvision.execution.worker_start import warm_server
+from graphvision.execution.worker_start import fork_context, warm_server
 from graphvision.graph.model import Graph
 
 __all__ = ["BatchRun"]
@@ -78,14 +79,19 @@ class BatchRun:
     def run_one(self, index: int) -> BatchItem:
         if index > 0 or not self.one_task_per_file:
             return self._run_one(index)
-        self._warm_workers()  # while the first file runs here
+        fork = hasattr(self.pool, "fork_workers") and fork_context() is not None
+        if not fork:
+            self._warm_workers()  # while the first file runs here
         try:
-            return self._run_one(0)
+            item = self._run_one(0)
         finally:  # a first file that failed early: the others' job has no shared values
             if self.job is None:
                 with contextlib.suppress(Exception):
                     self.job_sent = self._file_job(None)
                     self.job = self._share(self.job_sent)
+        if fork:  # not after Ctrl-C: only when the first file returned
+            self._fork_workers()
+        return item
 
     def _run_one(self, index: int) -> BatchItem:
         self.started.add(index)
@@ -208,6 +214,25 @@ class BatchRun:
                 self.workers_ready.set()
 
         threading.Thread(target=start, daemon=True, name="graphvision-warm-workers").start()
+
+    def _fork_workers(self) -> None:
+        """Start the workers now as forks of this process, which has run the first file
+        (its modules imported, kernels loaded, plugins and graph ready), from this thread
+        while no other runs (:func:`~graphvision.execution.worker_start.fork_context`);
+        else from the server, as :meth:`_warm_workers` does."""
+        if not self.pool.fork_workers():  # type: ignore[attr-defined]  # checked by run_one
+            self._warm_workers()
+            return
+        graph, width = plain_graph(self.graph), executor_width(self.pool)
+        paths = tuple(local_plugin_paths(self.options["registry"]))
+        futures: list[Future] = []
+        with warnings.catch_warnings(), contextlib.suppress(Exception):
+            warnings.simplefilter("ignore", DeprecationWarning)  # 3.12's os.fork note on threads
+            futures = [self.pool.submit(warm_worker, graph, paths) for _ in range(width)]
+        for future in futures:
+            future.add_done_callback(lambda _: self.workers_ready.set())
+        if not futures:
+            self.workers_ready.set()
 
     def _share(self, job: FileJob) -> Any:
         """The job, or the executor's handle on it once sent to every worker (Dask)."""

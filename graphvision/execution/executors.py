@@ -31,7 +31,12 @@ from typing import Any, Protocol
 from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.node_call import call_labelled, call_node
 from graphvision.execution.warnings import show_warning
-from graphvision.execution.worker_start import ClientStdio, context, start_server
+from graphvision.execution.worker_start import (
+    ClientStdio,
+    context,
+    fork_context,
+    start_server,
+)
 from graphvision.nodes.spec import FunctionRef
 from graphvision.values.ports import PortType, freeze_all
 
@@ -137,6 +142,9 @@ class _Threads(ThreadPoolExecutor):
         return int(self._max_workers)
 
 
+_DIED = "the worker process running this node died (killed, or out of memory)"
+
+
 class WorkerDiedError(RuntimeError):
     """The worker process running a node died (killed, out of memory), also on the retry."""
 
@@ -175,6 +183,22 @@ class _Processes:
         plugin modules a batch uses) when it has not started yet."""
         start_server(modules)
 
+    def fork_workers(self) -> bool:
+        """Have the workers be forks of this process, all started at the next task (when it
+        is safe now: :func:`~graphvision.execution.worker_start.fork_context`; a pool made
+        again after a worker died uses the server); False when not."""
+        forked = fork_context()
+        if forked is None:
+            return False
+        setup = (dict(os.environ), ClientStdio())
+        with self._lock:
+            old, self._pool = (
+                self._pool,
+                ProcessPoolExecutor(self._workers, forked, _worker_setup, setup),
+            )
+        old.shutdown(wait=False)
+        return True
+
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         outer: Future = Future()
         outer.set_running_or_notify_cancel()
@@ -184,6 +208,9 @@ class _Processes:
         except BrokenProcessPool:
             pool = self._replace(pool)
             inner = pool.submit(fn, *args)
+        except (OSError, EOFError) as error:  # no worker starts (the fork server killed, say)
+            outer.set_exception(WorkerDiedError(f"no worker process could start ({error!r})"))
+            return outer
 
         def settle(done: Future) -> None:
             if isinstance(done.exception(), BrokenProcessPool):
@@ -207,17 +234,22 @@ class _Processes:
         at fault and fails; the others complete.
         """
         alone = self._new_pool(workers=1)
-        retry = alone.submit(fn, *args)
+        try:
+            retry = alone.submit(fn, *args)
+        except Exception as error:  # no worker starts (the fork server killed, say): say so
+            alone.shutdown(wait=False)
+            why = f"{type(error).__name__}: {error}"
+            outer.set_exception(
+                WorkerDiedError(f"{_DIED}, and no worker could start again ({why})")
+            )
+            return
 
         def settle(done: Future) -> None:
             alone.shutdown(wait=False)
             if isinstance(done.exception(), BrokenProcessPool):
                 outer.set_exception(
                     ended_by_limit(fn, args)
-                    or WorkerDiedError(
-                        "the worker process running this node died (killed, or out of "
-                        "memory), and again when retried alone"
-                    )
+                    or WorkerDiedError(f"{_DIED}, and again when retried alone")
                 )
             else:
                 _copy(done, outer)

@@ -48,6 +48,8 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import os
+import signal
+import sys
 import threading
 from collections.abc import Iterable
 from multiprocessing.context import BaseContext
@@ -56,8 +58,10 @@ from typing import Any
 __all__ = [
     "BASE_PRELOAD",
     "PRELOAD_VARIABLE",
+    "START_VARIABLE",
     "ClientStdio",
     "context",
+    "fork_context",
     "start_server",
     "warm_server",
 ]
@@ -66,6 +70,8 @@ BASE_PRELOAD = ("__main__", "graphvision.execution.file_task")
 PRELOAD_VARIABLE = "GRAPHVISION_WORKER_PRELOAD"  # the server's start only: see _ensure_running
 _NUMBA = "graphvision.execution._numba_setup"
 _LAST = "graphvision.execution._preload"
+START_VARIABLE = "GRAPHVISION_WORKER_START"  # "forkserver": never fork from the client
+_FORK_SAFE_THREADS = ("graphvision-blas-limit",)  # idle between runs, made again in a child
 _MOST_BYTES = 100_000  # Linux refuses one environment string over 128 KiB
 _WARM: tuple[Any, ...] = ()  # see warm_server
 
@@ -75,6 +81,26 @@ def context() -> BaseContext:
     if "forkserver" in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("forkserver")
     return multiprocessing.get_context("spawn")  # pragma: no cover - not on Linux
+
+
+def fork_context() -> BaseContext | None:
+    """The ``fork`` start method, when forking this process now is safe (else None): on
+    Linux, from a thread with no other thread beside it but graphvision's BLAS helper
+    (idle between runs and made again in a child), numba's parallel threads not started,
+    and ``GRAPHVISION_WORKER_START`` not ``forkserver``. A batch forks its workers from the
+    client this way after its first file, from the main thread (see the module docstring)."""
+    if sys.platform != "linux" or os.environ.get(START_VARIABLE) == "forkserver":
+        return None
+    if "fork" not in multiprocessing.get_all_start_methods():  # pragma: no cover - Linux has it
+        return None
+    here = threading.current_thread()
+    others = [t for t in threading.enumerate() if t is not here]
+    if any(t.name not in _FORK_SAFE_THREADS for t in others):
+        return None
+    parallel = sys.modules.get("numba.np.ufunc.parallel")
+    if parallel is not None and getattr(parallel, "_is_initialized", False):
+        return None  # a threading layer (OpenMP, TBB) whose threads a fork does not carry
+    return multiprocessing.get_context("fork")
 
 
 def warm_server(*arguments: Any) -> None:
@@ -87,8 +113,8 @@ def warm_server(*arguments: Any) -> None:
 
 def start_server(modules: Iterable[str] = (), *, start: bool = True) -> None:
     """Have the fork server preload ``modules`` too (when it has not started yet) and, with
-    ``start``, start it in a background thread, so that the first worker's start does not
-    wait for it."""
+    ``start``, start it now (milliseconds: it imports in its own process, while the client
+    goes on), so that the first worker's start does not wait for it."""
     found = context()
     if found.get_start_method() != "forkserver":  # pragma: no cover - not on Linux
         return
@@ -97,23 +123,29 @@ def start_server(modules: Iterable[str] = (), *, start: bool = True) -> None:
     if start:
         if extra:  # a batch's: its workers will run kernels; for the server's start only
             os.environ[PRELOAD_VARIABLE] = _encoded(extra, _WARM)
-        name = "graphvision-forkserver"
-        threading.Thread(target=_ensure_running, daemon=True, name=name).start()
+        _ensure_running()  # milliseconds: the server imports after it has started
 
 
 def _encoded(modules: list[str], warm: tuple[Any, ...]) -> str:
-    """What the server's :mod:`~graphvision.execution._preload` reads: the modules, and the
+    """What the server's :mod:`~graphvision.execution._preload` reads: the modules, the
     warm-up's arguments pickled (left out when they do not pickle or are too long for one
-    environment variable)."""
+    environment variable) and the client's ``sys.path`` (Python 3.11's fork server drops
+    it: the plugin index's key, which covers the path, then differed from the client's, and
+    the server imported every plugin, then removed the client's index for its own)."""
     import base64
+    import json
     import pickle
+    import sys
 
     text = ",".join(modules)
+    path = base64.b64encode(json.dumps(sys.path).encode()).decode("ascii")
     try:
         data = base64.b64encode(pickle.dumps(warm)).decode("ascii") if warm else ""
     except Exception:  # a graph that does not pickle: the workers compile it themselves
         data = ""
-    return f"{text};{data}" if len(text) + len(data) < _MOST_BYTES else text
+    if len(text) + len(data) + len(path) >= _MOST_BYTES:
+        data = ""
+    return f"{text};{data};{path}"
 
 
 class ClientStdio:
@@ -144,16 +176,23 @@ def _use_stdio(out: Any, err: Any) -> ClientStdio:
     return ClientStdio()
 
 
-def _ensure_running() -> None:
+def _ensure_running(server: Any = None) -> None:
     """Start the server if it is not running (whoever starts it, this thread or a pool's
     first worker, sees the batch's modules in the environment: removed once it runs).
     :mod:`graphvision.execution._preload` imports them in the server, each on its own (one
     that fails to import fails its nodes, not the server), and loads the compiled code of
-    their numba kernels from numba's cache."""
+    their numba kernels from numba's cache.
+
+    The server starts with Ctrl-C blocked (a thread's signal mask passes to the process it
+    starts): it is in the client's process group, and a Ctrl-C while it imported printed a
+    ``KeyboardInterrupt`` traceback of its own beside the client's one line; ``_preload``
+    ignores Ctrl-C, as the server does once it serves, then unblocks it."""
     from multiprocessing import forkserver
 
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         with contextlib.suppress(Exception):  # the pool's first worker start reports it
-            forkserver.ensure_running()
+            (server or forkserver._forkserver).ensure_running()
     finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
         os.environ.pop(PRELOAD_VARIABLE, None)
