@@ -56,6 +56,7 @@ from graphvision.execution.batch_files import (
 )
 from graphvision.execution.batch_lanes import FileLanes
 from graphvision.execution.batch_run import BatchRun
+from graphvision.execution.batch_stop import INTERRUPTED
 from graphvision.execution.executors import (
     Executor,
     encodes_values,
@@ -185,7 +186,11 @@ def run_batch(
     batch.client_files = one_task_per_file and (
         hasattr(pool, "preload") if client_files is None else client_files
     )
-    finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
+    try:
+        finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
+    finally:
+        if batch.stop is not None:
+            batch.stop.remove()
     if own:
         pool.shutdown()
     return BatchResult(finished, _summarise(finished, out_dir, pages, stale), *batch.transferred())
@@ -222,7 +227,9 @@ def _run_files(
             if on_item is not None:
                 on_item(done, len(batch.paths), item)
     except BaseException:
-        batch.stopped = True  # a file still running writes nothing more
+        finished = batch.stop_writers()  # no folder is started now; those half-written finish
+        for index, item in finished.items():
+            items[index] = items[index] or item
         if own:  # nodes still running are not waited for
             batch.pool.shutdown(wait=False, cancel_futures=True)
         if any(item is not None for item in items):
@@ -266,8 +273,7 @@ def _not_run(
         if item is not None:
             marked.append(item)
         elif index in started:
-            reason = "the batch stopped while this file ran; re-run the batch to finish it"
-            marked.append(BatchItem(path, folder, "interrupted", error=reason))
+            marked.append(BatchItem(path, folder, "interrupted", error=INTERRUPTED))
         else:
             reason = "the batch stopped before this file started"
             marked.append(BatchItem(path, folder, "not run", error=reason))

@@ -17,6 +17,7 @@ from typing import Any
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.execution.batch_files import BatchItem, BatchPages, unreadable_reason
 from graphvision.execution.batch_items import plain_graph, run_file, run_item
+from graphvision.execution.batch_stop import StopFlag
 from graphvision.execution.batch_write import failure_reason, finish_item
 from graphvision.execution.executors import (
     Executor,
@@ -73,7 +74,9 @@ class BatchRun:
         self.job: Any = None  # the FileJob of further files, or the executor's handle on it
         self.outcomes: list[FileOutcome] = []  # what the file tasks sent back
         self.started: set[int] = set()
+        self.finished: dict[int, BatchItem] = {}  # as they complete, whoever runs them
         self.stopped = False
+        self.stop = None if hasattr(pool, "share") else StopFlag.make()  # not on Dask
         self.workers_ready = threading.Event()  # a worker has started (or could not)
 
     def run_one(self, index: int) -> BatchItem:
@@ -103,13 +106,32 @@ class BatchRun:
             if index > 0 and self.one_task_per_file:  # the worker writes the folder
                 outcome = run_file(self.pool, self.job, path, folder)
                 self.outcomes.append(outcome)
+                self.finished[index] = outcome.item
                 return outcome.item
             item, result = self._run(index)
-            if self.stopped:  # the batch was interrupted meanwhile: its folder is not written
+            with self._writing(folder) as allowed:
+                if not allowed:  # the batch was interrupted meanwhile: its folder is not written
+                    return item
+                self.finished[index] = item = finish_item(item, result, self.pages.run)
                 return item
-            return finish_item(item, result, self.pages.run)
         except Exception as error:  # whatever it is, it fails this file alone
             return BatchItem(path, folder, "failed", error=failure_reason(error))
+
+    def _writing(self, folder: Path) -> Any:
+        if self.stop is None:
+            return contextlib.nullcontext(not self.stopped)
+        return self.stop.writing(folder, lambda: self.stopped)
+
+    def stop_writers(self) -> dict[int, BatchItem]:
+        """The batch has stopped: no folder is started from now on; those being written are
+        finished first. Every file finished so far, by its index (see
+        :mod:`graphvision.execution.batch_stop`)."""
+        self.stopped = True
+        if self.stop is not None:
+            self.stop.raise_()
+            index = {StopFlag.name(folder): k for k, folder in enumerate(self.folders)}
+            self.stop.wait(lambda names: {n for n in names if index.get(n) in self.finished})
+        return dict(self.finished)
 
     def run_in_client(self, index: int) -> BatchItem:
         """A further file run here as a worker would run it (while the workers start: see
@@ -124,7 +146,9 @@ class BatchRun:
                 raise RuntimeError("the batch's first file did not prepare the other files' job")
             name = f"{executor_name(self.pool)}, in the client while the workers started"
             job = dataclasses.replace(self.job_sent, executor=name)
-            return run_file_task(job, str(path), str(folder), lambda: self.stopped).item
+            item = run_file_task(job, str(path), str(folder), lambda: self.stopped).item
+            self.finished[index] = item
+            return item
         except Exception as error:  # whatever it is, it fails this file alone
             return BatchItem(path, folder, "failed", error=failure_reason(error))
 
@@ -169,6 +193,7 @@ class BatchRun:
             pages=tuple(self.pages.run),
             store=cache.disk if cache is not None else None,
             executor=f"{executor_name(self.pool)}, one task per file",
+            stop=self.stop,
         )
         use_registry(job, options["registry"])  # for the client's own files
         return job

@@ -1,0 +1,101 @@
+"""A stopped batch's folders are whole or absent, as batch.csv says
+(graphvision.execution.batch_stop): a file a worker finishes after the stop writes nothing,
+and one being written when the batch stops is finished and counted."""
+
+from __future__ import annotations
+
+import csv
+import threading
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import Any
+
+import pytest
+
+import graphvision as gv
+from graphvision.execution.batch_stop import StopFlag
+
+from .test_batch import _counting_graph, photo
+
+
+class _Workers:
+    """Two 'worker' threads whose file tasks travel as to other processes
+    (``encodes_values``); the task of the file named ``held`` waits for ``gate``."""
+
+    encodes_values = True
+    name = "held"
+    width = 2
+
+    def __init__(self, held: str) -> None:
+        self.held, self.gate = held, threading.Event()
+        self.tasks: list[Future] = []
+        self._pool = ThreadPoolExecutor(2)
+
+    def submit(self, fn: Any, /, *args: Any) -> Future:
+        def run() -> Any:
+            if len(args) > 1 and str(args[1]).endswith(self.held) and not self.gate.wait(60):
+                raise TimeoutError("never released")
+            return fn(*args)
+
+        self.tasks.append(self._pool.submit(run))
+        return self.tasks[-1]
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        self.gate.set()
+        self._pool.shutdown(wait=wait, cancel_futures=cancel_futures)
+
+
+def test_a_file_a_worker_finishes_after_the_stop_leaves_no_folder(tmp_path):
+    graph, registry, _ = _counting_graph(tmp_path)
+    files = [photo(tmp_path / "in" / f"{name}.png", 50) for name in "abc"]
+    pool = _Workers("c.png")
+
+    def stop_at_second(number: int, total: int, item: Any) -> None:
+        if number == 2:  # a and b done, c still on its worker: Ctrl-C
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        gv.run_batch(
+            graph,
+            [str(f) for f in files],
+            input="image",
+            output_dir=tmp_path / "out",
+            registry=registry,
+            cache=None,
+            executor=pool,
+            on_item=stop_at_second,
+        )
+    pool.shutdown()  # c's worker goes on, after the client has summarised
+    for task in pool.tasks:
+        task.result(timeout=60)
+    rows = {r["file"]: r["status"] for r in csv.DictReader((tmp_path / "out" / "batch.csv").open())}
+    assert rows == {str(files[0]): "ok", str(files[1]): "ok", str(files[2]): "interrupted"}
+    assert (tmp_path / "out" / "a" / "record.json").is_file()
+    assert not (tmp_path / "out" / "c").exists()  # not whole: absent
+
+
+def test_a_folder_being_written_at_the_stop_is_finished_and_counted(tmp_path):
+    flag = StopFlag.make()
+    finished: set[str] = set()
+    claimed, release = threading.Event(), threading.Event()
+
+    def writer() -> None:
+        with flag.writing(tmp_path / "a", None) as allowed:
+            assert allowed  # claimed before the stop: it writes
+            claimed.set()
+            release.wait(60)
+        finished.add(StopFlag.name(tmp_path / "a"))  # its result reaches the client
+
+    thread = threading.Thread(target=writer)
+    thread.start()
+    try:
+        assert claimed.wait(60)
+        flag.raise_()
+        with flag.writing(tmp_path / "b", None) as allowed:
+            assert not allowed  # after the stop: nothing is started
+        threading.Timer(0.05, release.set).start()
+        flag.wait(lambda names: names & finished)
+        assert finished == {StopFlag.name(tmp_path / "a")}  # waited for, not left half-way
+    finally:
+        release.set()
+        thread.join()
+        flag.remove()
