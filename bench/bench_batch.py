@@ -19,8 +19,10 @@ stay flat.
 :func:`startup` times a processes batch's start-up (run it alone, in a fresh
 process: ``python bench/bench_batch.py startup``): when its first file is done
 in the client, how many files the client ran itself while the workers started
-(``batch_lanes``), when the first file is done on a worker, and the fork
-server's steps one by one.
+(``batch_lanes``), when the first file is done on a worker, with the workers
+forked from the client (the default) and from the fork server, and the fork
+server's steps one by one. :func:`main` also runs the first 50 files alone on
+sync and processes.
 
 Run: ``python bench/bench_batch.py [startup] [main] [client_bytes] [scaling]`` (all
 four without an argument; ``make bench`` runs every benchmark).
@@ -121,31 +123,51 @@ def main() -> list[str]:
             f"| graphvision batch, sync | {sync:.1f} | {FILES / sync:.1f} | 1.00× | {good} | "
             f"{_load()} |"
         )
-        executors: list[tuple[str, object]] = [
-            ("threads (2)", "threads"),
-            ("processes (2)", "processes"),
-        ]
-        dask_client = None
-        try:
-            import distributed
+        for name, executor in (("threads (2)", "threads"), ("processes (2)", "processes")):
+            rows.append(_row(name, _batch(graph, paths, folder / name[:5], executor), sync))
+        fewer = _fewer(graph, paths[:50], folder)
+        rows.append(_dask_row(graph, paths, folder, sync))  # last: its client's threads stay
+    return [*rows, *fewer]
 
-            cluster = distributed.LocalCluster(
-                n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
-            )
-            dask_client = distributed.Client(cluster)
-            executors.append(("Dask LocalCluster (2 workers)", gv.DaskExecutor(dask_client)))
-        except ImportError:
-            rows.append("(Dask not installed: pip install 'graphvision[dask]')")
-        for k, (name, executor) in enumerate(executors):
-            seconds, good = _batch(graph, paths, folder / f"out{k}", executor)
-            rows.append(
-                f"| graphvision batch, {name} | {seconds:.1f} | {FILES / seconds:.1f} | "
-                f"{sync / seconds:.2f}× | {good} | {_load()} |"
-            )
-        if dask_client is not None:
-            dask_client.close()
-            cluster.close()
-    return rows
+
+def _row(name: str, measured: tuple[float, int], sync: float) -> str:
+    seconds, good = measured
+    return (
+        f"| graphvision batch, {name} | {seconds:.1f} | {FILES / seconds:.1f} | "
+        f"{sync / seconds:.2f}× | {good} | {_load()} |"
+    )
+
+
+def _dask_row(graph: gv.Graph, paths: list[Path], folder: Path, sync: float) -> str:
+    """The batch on a Dask ``LocalCluster`` of 2 worker processes. Run after the others:
+    the threads of a Dask client stay in the process after it closes, and a client with
+    other threads does not fork its workers (``worker_start.fork_context``)."""
+    try:
+        import distributed
+    except ImportError:
+        return "(Dask not installed: pip install 'graphvision[dask]')"
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        measured = _batch(graph, paths, folder / "dask", gv.DaskExecutor(client))
+    return _row("Dask LocalCluster (2 workers)", measured, sync)
+
+
+def _fewer(graph: gv.Graph, paths: list[Path], folder: Path) -> list[str]:
+    """The first ``len(paths)`` files alone, on sync and on processes (the start-up weighs
+    more in a shorter batch)."""
+    sync, good = _batch(graph, paths, folder / "sync-fewer", "sync")
+    seconds, good_processes = _batch(graph, paths, folder / "processes-fewer", "processes")
+    files = len(paths)
+    return [
+        f"| {files} files, graphvision batch, sync | {sync:.1f} | {files / sync:.1f} | 1.00× | "
+        f"{good} | {_load()} |",
+        f"| {files} files, graphvision batch, processes (2) | {seconds:.1f} | "
+        f"{files / seconds:.1f} | {sync / seconds:.2f}× | {good_processes} | {_load()} |",
+    ]
 
 
 def scaling(sizes: tuple[int, ...] = (50, 200, 1000)) -> list[str]:
@@ -182,14 +204,33 @@ def scaling(sizes: tuple[int, ...] = (50, 200, 1000)) -> list[str]:
 def startup(files: int = 200) -> list[str]:
     """Where a processes batch's start-up goes: seconds from the batch's start until its
     first file (run in the client), the files the client ran itself while the workers
-    started, the first file done on a worker (the fork server started, a worker forked and
-    its first file run), then per further file; and the fork server's steps, replayed one
-    by one in a fresh interpreter (:func:`server_steps`). Meaningful for the first
-    processes batch of a process (the server then starts): run it alone."""
+    started, the first file done on a worker, then per further file; once with the workers
+    forked from the client after its first file (the default), once from the fork server
+    (``GRAPHVISION_WORKER_START=forkserver``, what a client with other threads gets); and
+    the fork server's steps, replayed one by one in a fresh interpreter
+    (:func:`server_steps`). Meaningful for the first processes batch of a process (the
+    server then starts): run it alone."""
+    graph = gv.load_pipeline(PIPELINE)
+    rows = [
+        f"| processes (2), {files} files, first batch of the process | workers forked from "
+        "the client | from the fork server | load 1 min |",
+        "| --- | ---: | ---: | ---: |",
+    ]
+    forked = _startup_run(graph, files, "")
+    served = _startup_run(graph, files, "forkserver")
+    for (label, one), (_, two) in zip(forked, served, strict=True):
+        rows.append(f"| {label} | {one} | {two} | {_load()} |")
+    return [*rows, "", *server_steps(graph)]
+
+
+def _startup_run(graph: gv.Graph, files: int, start: str) -> list[tuple[str, str]]:
+    """One processes batch of ``files``, its workers started as ``start`` says (see
+    :func:`startup`): its rows' labels and values."""
     import json
 
     global FILES
-    graph, saved, FILES = gv.load_pipeline(PIPELINE), FILES, files
+    saved, FILES = FILES, files
+    os.environ["GRAPHVISION_WORKER_START"] = start
     try:
         with tempfile.TemporaryDirectory() as scratch:
             paths = _write_images(Path(scratch) / "in")
@@ -216,29 +257,24 @@ def startup(files: int = 200) -> list[str]:
             ]
     finally:
         FILES = saved
+        os.environ.pop("GRAPHVISION_WORKER_START")
     client = [t for (t, _), w in zip(done, where, strict=True) if "in the client while" in w]
     workers = [t for (t, _), w in zip(done, where, strict=True) if "one task per file" in w]
     rest = (workers[-1] - workers[0]) / max(len(workers) - 1, 1)
-    last_client = f"{client[-1]:.2f}" if client else "-"
     return [
-        f"| processes (2), {files} files, first batch of the process | seconds | load 1 min |",
-        "| --- | ---: | ---: |",
-        f"| first file done (in the client) | {done[0][0]:.2f} | {_load()} |",
-        f"| files the client ran while the workers started: {len(client)}, the last done at "
-        f"| {last_client} | {_load()} |",
-        f"| first file done on a worker (server start, fork, first file) | {workers[0]:.2f} | "
-        f"{_load()} |",
-        f"| each further file on the workers ({len(workers)} files, 2 workers) | {rest:.3f} | "
-        f"{_load()} |",
-        f"| whole batch | {total:.2f} | {_load()} |",
-        "",
-        *server_steps(graph),
+        ("first file done (in the client), s", f"{done[0][0]:.2f}"),
+        ("files the client ran while the workers started", f"{len(client)}"),
+        ("the last of them done at, s", f"{client[-1]:.2f}" if client else "-"),
+        ("first file done on a worker, s", f"{workers[0]:.2f}"),
+        (f"each further file on the workers ({len(workers)} files, 2 workers), s", f"{rest:.3f}"),
+        ("whole batch, s", f"{total:.2f}"),
     ]
 
 
 STEPS = """
-import importlib, sys, time
+import importlib, json, os, sys, time
 began = time.perf_counter()
+sys.path[:] = json.loads(os.environ["BENCH_CLIENT_PATH"])  # as the server takes it
 def mark(label):
     print(f"{time.perf_counter() - began:.3f} {label}", flush=True)
 import graphvision.execution.file_task
@@ -261,8 +297,12 @@ mark("the batch's graph loaded and compiled (registry, parameter models, fingerp
 
 def server_steps(graph: gv.Graph) -> list[str]:
     """The fork server's start for a coins batch, step by step: the same imports, numba
-    set-up, kernel loads and graph compile, timed in a fresh interpreter (seconds since
-    its first line; the interpreter's own start before that is not counted)."""
+    set-up, kernel loads and graph compile, timed in a fresh interpreter with the client's
+    ``sys.path``, as the server has it (seconds since its first line; the interpreter's own
+    start before that is not counted). Without the client's path, the plugin index's key
+    differed: the replay imported every plugin (0.9 s of the 2 s it measured), then
+    removed the client's index for its own."""
+    import json
     import subprocess
     import sys
 
@@ -273,7 +313,8 @@ def server_steps(graph: gv.Graph) -> list[str]:
     registry = _checked_pipeline(graph, None, {}, "image", ["count"], {})
     modules = preload_modules(registry, graph, tuple(BATCH_PAGES.run))
     command = [sys.executable, "-c", STEPS, str(PIPELINE), *modules]
-    lines = subprocess.run(command, capture_output=True, text=True, check=True).stdout
+    env = {**os.environ, "BENCH_CLIENT_PATH": json.dumps(sys.path)}  # the plugin index's key
+    lines = subprocess.run(command, capture_output=True, text=True, check=True, env=env).stdout
     rows = ["| the fork server's steps (fresh interpreter) | seconds at its end | step |"]
     rows.append("| --- | ---: | ---: |")
     last = 0.0

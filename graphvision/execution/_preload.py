@@ -14,6 +14,11 @@ compiled here. Last, the batch's graph (pickled after the modules, when the
 batch sends it) is loaded and compiled as each file's task will, so that its
 plugins' registry, parameter models and code fingerprints are built once.
 
+The server starts with Ctrl-C blocked (``worker_start._ensure_running``): here
+it ignores Ctrl-C, as the fork server does once it serves, then unblocks it,
+so that a Ctrl-C during its imports neither stops it nor prints a traceback
+(the client reports it). It takes the client's ``sys.path`` first.
+
 The server's ``sys.excepthook`` is each forked worker's until it runs its
 first line: a worker whose start was asked for just before the client ended
 (Ctrl-C while the server was still importing) finds the client's semaphores
@@ -53,7 +58,7 @@ if threading.current_thread() is threading.main_thread():  # the server's start 
 
 def start_batch(value: str) -> None:
     """Import the modules ``value`` names, load their numba kernels, then compile the graph
-    it holds (``modules;pickled warm-up``: see ``worker_start._encoded``)."""
+    it holds (``modules;pickled warm-up;client's path``: see ``worker_start._encoded``)."""
     names, _, rest = value.partition(";")
     data, _, path = rest.partition(";")
     if path:  # the client's, as a spawned worker has it (see worker_start._encoded)

@@ -8,13 +8,26 @@ plugins and numba's compiler before its first task: seconds per worker (on
 two loaded cores, 6 s to start two workers and 10 s more for each one's first
 coins file, numba's compiler set-up alone over 3 s), paid again by every batch.
 
-Why not ``fork``
-----------------
-A fork of the client would be nearly free, but it is unsafe once the client
-has threads: a lock one of them holds at the fork (a logging handler's, the
-import lock, a BLAS or numba thread pool's) stays held in the child for good.
-A graphvision client has threads by then (the pool's manager thread, Dask's
-client, the studio's server, a notebook's), so a fork could hang a worker.
+``fork``, when it is safe
+-------------------------
+A fork of the client is nearly free, and a batch's client, once it has run
+the first file, has everything a worker needs (the plugins and what their
+node functions import, the kernels' machine code, the compiled graph): on two
+loaded cores its workers began their first file 0.5 s after the batch's start,
+against 6.2 s from the fork server. But a fork is unsafe while another thread
+runs: a lock it holds at the fork (a logging handler's, a BLAS or numba thread
+pool's, the pool's own queues') stays held in the child for good. So a batch
+forks its workers (:func:`fork_context`) only from its main thread, right
+after the first file, before it starts any thread of its own, and only when no
+other thread runs but graphvision's BLAS helper (idle between runs, made again
+in a child: :mod:`graphvision.execution.blas`) and tqdm's progress-bar monitor
+(asleep but for microseconds every 10 s, holding a lock no worker takes), and
+numba's parallel threading layer has not started; on Linux only (macOS's system libraries are not
+fork-safe). A client with other threads (a studio's server, Dask's client, a
+notebook's), ``GRAPHVISION_WORKER_START=forkserver``, ``gv.run`` and a pool
+made again after a worker died use the fork server. Python 3.12 warns at any
+fork of a process with threads (OpenBLAS's idle ones included, which its own
+fork handler stops): that warning is silenced for this fork alone.
 
 ``forkserver`` with a preload list
 ----------------------------------
@@ -34,10 +47,13 @@ for every worker (on two loaded cores, a worker's first coins file went from
 over 2 s to 0.6 s). The list also names the client's ``__main__``, which
 Python 3.11's fork server does not import (it drops the script's path): each
 worker imports it, as ``spawn`` does, so that nodes a script defines are
-found. The server is started in the background (while the client runs a
-batch's first file), lives as long as the client and serves every later pool
-(its preload list is the first one's); it exits when the client does, even
-after ``kill -9``. Each worker takes the client's environment variables,
+found. The server is started while the client runs a batch's first file (its
+start takes milliseconds; it imports in its own process) with Ctrl-C blocked,
+which it ignores once it has imported (the client reports Ctrl-C in one line;
+the server printed a ``KeyboardInterrupt`` traceback of its own); it takes the
+client's ``sys.path`` (Python 3.11's drops it), lives as long as the client and
+serves every later pool (its preload list is the first one's); it exits when
+the client does, even after ``kill -9``. Each worker takes the client's environment variables,
 standard output and error as they are at its start, as under ``spawn``
 (:class:`ClientStdio`). Where the platform has no fork server (Windows),
 workers are spawned.
@@ -95,12 +111,19 @@ def fork_context() -> BaseContext | None:
         return None
     here = threading.current_thread()
     others = [t for t in threading.enumerate() if t is not here]
-    if any(t.name not in _FORK_SAFE_THREADS for t in others):
+    if not all(t.name in _FORK_SAFE_THREADS or _is_bar_monitor(t) for t in others):
         return None
     parallel = sys.modules.get("numba.np.ufunc.parallel")
     if parallel is not None and getattr(parallel, "_is_initialized", False):
         return None  # a threading layer (OpenMP, TBB) whose threads a fork does not carry
     return multiprocessing.get_context("fork")
+
+
+def _is_bar_monitor(thread: Any) -> bool:
+    """tqdm's monitor (the command line's progress bar on a terminal starts it): it wakes
+    every 10 s and holds tqdm's lock for microseconds, which a worker never takes."""
+    kind = type(thread)
+    return kind.__name__ == "TMonitor" and kind.__module__.startswith("tqdm")
 
 
 def warm_server(*arguments: Any) -> None:

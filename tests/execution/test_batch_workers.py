@@ -10,6 +10,7 @@ import signal
 import sys
 import threading
 import time
+from types import SimpleNamespace
 
 import pytest
 
@@ -17,7 +18,13 @@ from graphvision.execution.executors import WorkerDiedError, make_executor
 from graphvision.execution.worker_start import fork_context
 
 
-def test_workers_are_forks_of_the_client_when_no_other_thread_runs():
+@pytest.fixture
+def alone(monkeypatch):
+    """No thread but this one (earlier tests of this process may have left some)."""
+    monkeypatch.setattr(threading, "enumerate", lambda: [threading.current_thread()])
+
+
+def test_workers_are_forks_of_the_client_when_no_other_thread_runs(alone):
     pool = make_executor("processes", 1)
     try:
         assert pool.fork_workers()  # type: ignore[attr-defined]
@@ -27,15 +34,14 @@ def test_workers_are_forks_of_the_client_when_no_other_thread_runs():
 
 
 def test_the_client_is_not_forked_beside_another_thread_or_when_told_not_to(monkeypatch):
+    here = threading.current_thread()
+    blas = SimpleNamespace(name="graphvision-blas-limit")  # idle, made again in the child
+    user = SimpleNamespace(name="user-thread")  # may hold a lock the child keeps for good
+    monkeypatch.setattr(threading, "enumerate", lambda: [here, blas])
     assert fork_context() is not None
-    release = threading.Event()
-    other = threading.Thread(target=release.wait, name="user-thread")
-    other.start()
-    try:
-        assert fork_context() is None  # it may hold a lock the child would keep for good
-    finally:
-        release.set()
-        other.join()
+    monkeypatch.setattr(threading, "enumerate", lambda: [here, blas, user])
+    assert fork_context() is None
+    monkeypatch.setattr(threading, "enumerate", lambda: [here])
     monkeypatch.setenv("GRAPHVISION_WORKER_START", "forkserver")
     assert fork_context() is None
 
@@ -63,7 +69,9 @@ class _NoStart:
         return None
 
 
-def test_a_dead_worker_whose_retry_cannot_start_fails_its_task_and_hangs_nothing(monkeypatch):
+def test_a_dead_worker_whose_retry_cannot_start_fails_its_task_and_hangs_nothing(
+    alone, monkeypatch
+):
     pool = make_executor("processes", 1)
     try:
         assert pool.fork_workers()  # type: ignore[attr-defined]
