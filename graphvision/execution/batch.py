@@ -189,8 +189,7 @@ def run_batch(
     try:
         finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
     finally:
-        if batch.stop is not None:
-            batch.stop.remove()
+        batch.remove_stop_flag()
     if own:
         pool.shutdown()
     return BatchResult(finished, _summarise(finished, out_dir, pages, stale), *batch.transferred())

@@ -122,6 +122,10 @@ class BatchRun:
             return contextlib.nullcontext(not self.stopped)
         return self.stop.writing(folder, lambda: self.stopped)
 
+    def remove_stop_flag(self) -> None:
+        if self.stop is not None:
+            self.stop.remove()
+
     def stop_writers(self) -> dict[int, BatchItem]:
         """The batch has stopped: no folder is started from now on; those being written are
         finished first. Every file finished so far, by its index (see
