@@ -10,6 +10,7 @@ import numba
 import numpy as np
 
 __all__ = [
+    "edge_points",
     "line_peaks",
     "line_support",
     "peak_offsets",
@@ -18,6 +19,7 @@ __all__ = [
     "select_lines",
     "support_bounds",
     "vote_lines",
+    "vote_lines_into",
 ]
 
 
@@ -28,16 +30,31 @@ def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho, pad):
     divided by the ρ step and ``rho0`` is ρ of bin 0 in steps. With ``pad`` > 0 it comes
     extended by ``pad`` rows each way, θ wrapping with ρ negated (θ + π is the line of θ
     with ρ negated: row ``-1`` is the last row reversed along ρ), written in place."""
+    extended = np.empty((cos.size + 2 * pad, n_rho))
+    vote_lines_into(extended, x, y, weights, first, width, cos, sin, rho0, pad)
+    return extended
+
+
+@numba.njit(cache=True, nogil=True)
+def vote_lines_into(extended, x, y, weights, first, width, cos, sin, rho0, pad):
+    """:func:`vote_lines` written into ``extended`` (``len(cos) + 2 pad`` rows, zeroed
+    here): a caller that reuses one array pays no page faults for a fresh one."""
     n_theta = cos.size
-    extended = np.zeros((n_theta + 2 * pad, n_rho))
+    n_rho = extended.shape[1]
+    extended[:] = 0.0
     accumulator = extended[pad : pad + n_theta]
     if width == n_theta:  # every point votes for every θ: one θ row at a time (in cache),
-        for t in range(n_theta):  # each cell's votes still summed in the points' order
+        fracs = np.empty(x.size)  # each cell's votes still summed in the points' order;
+        lowers = np.empty(x.size, dtype=np.int64)  # positions first, in a loop free of
+        for t in range(n_theta):  # stores to the row (SIMD), then the votes
             row = accumulator[t]
             for i in range(x.size):
                 position = x[i] * cos[t] + y[i] * sin[t] - rho0
-                lower = int(np.floor(position))
-                frac = position - lower
+                lower = np.floor(position)
+                fracs[i] = position - lower
+                lowers[i] = int(lower)
+            for i in range(x.size):
+                lower, frac = lowers[i], fracs[i]
                 if lower >= 0 and lower + 1 < n_rho:
                     row[lower] += weights[i] * (1.0 - frac)
                     row[lower + 1] += weights[i] * frac
@@ -55,7 +72,6 @@ def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho, pad):
         for r in range(n_rho):
             extended[i, r] = extended[n_theta + i, n_rho - 1 - r]
             extended[pad + n_theta + i, r] = extended[pad + i, n_rho - 1 - r]
-    return extended
 
 
 @numba.njit(cache=True, nogil=True)
@@ -63,16 +79,25 @@ def line_peaks(extended, pad, theta_bins):
     """``(θ row, ρ column)`` of the cells of ``extended`` (θ padded by ``pad`` rows each way)
     in rows ``[pad, pad + theta_bins)`` and columns ``(0, n_rho - 1)`` that are positive and
     the maximum of their 3×3 neighbourhood, row-major (``local_maxima(extended, 3, 0)``
-    restricted to those cells, where the window lies inside the array)."""
+    restricted to those cells, where the window lies inside the array).
+
+    A cell is such a maximum when it is at least the largest of its 3×3 (no NaN in votes):
+    each row's maximum over 3 columns is computed once, branch-free over whole rows, and a
+    cell compares with the largest of the three rows' (the test of every neighbour one by
+    one mispredicted a branch at most cells)."""
     n_rho = extended.shape[1]
+    across = np.empty((3, n_rho))
+    for k in range(2):
+        _max3(extended[pad - 1 + k], across[k])
     rows = []
     cols = []
     for t in range(pad, pad + theta_bins):
+        _max3(extended[t + 1], across[(t - pad + 2) % 3])  # rows t - 1 … t + 1, rotating
+        one, two, three = across[0], across[1], across[2]
+        row = extended[t]
         for r in range(1, n_rho - 1):
-            value = extended[t, r]
-            if value <= 0.0:
-                continue
-            if _peak_3x3(extended, t, r, value):
+            value = row[r]
+            if value > 0.0 and value >= max(max(one[r], two[r]), three[r]):
                 rows.append(t)
                 cols.append(r)
     out = np.empty((len(rows), 2), dtype=np.int64)
@@ -83,16 +108,10 @@ def line_peaks(extended, pad, theta_bins):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _peak_3x3(extended, t, r, value):
-    """No cell of the 3×3 around ``(t, r)`` exceeds ``value`` (the first larger one ends
-    the scan)."""
-    if extended[t, r + 1] > value or extended[t, r - 1] > value:
-        return False
-    for v in (t - 1, t + 1):
-        for u in range(r - 1, r + 2):
-            if extended[v, u] > value:
-                return False
-    return True
+def _max3(row, out):
+    """``out[r] = max(row[r - 1], row[r], row[r + 1])`` for ``0 < r < len(row) - 1``."""
+    for r in range(1, row.size - 1):
+        out[r] = max(max(row[r - 1], row[r]), row[r + 1])
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -497,3 +516,24 @@ def peak_offsets(array, rows, cols, solve):
         out[k, 0] = min(max(du, -0.5), 0.5)
         out[k, 1] = min(max(dv, -0.5), 0.5)
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def edge_points(edges):
+    """Columns ``x`` and rows ``y`` (float64) of the true pixels of ``edges``, row-major:
+    ``np.nonzero`` in one pass, without its index arrays and their conversions."""
+    height, width = edges.shape
+    count = 0
+    for r in range(height):
+        for c in range(width):
+            count += edges[r, c]
+    x = np.empty(count)
+    y = np.empty(count)
+    k = 0
+    for r in range(height):
+        for c in range(width):
+            if edges[r, c]:
+                x[k] = c
+                y[k] = r
+                k += 1
+    return x, y

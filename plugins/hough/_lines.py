@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 from typing import Annotated, NamedTuple
 
 import numpy as np
@@ -13,6 +14,7 @@ from graphvision import BinaryImage, Conformance, FloatImage, GrayImage, Int, no
 
 from ..edges import gradient_images
 from ..shared.params import Count
+from ..shared.separable import gaussian_taps
 from ._ports import Lines
 
 __all__ = ["HoughLines", "hough_lines", "line_accumulator"]
@@ -29,10 +31,12 @@ def _edge_points(
     edges: np.ndarray, image: np.ndarray | None, sigma: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
     """Edge points ``x`` (column), ``y`` (row) and, with ``image``, their gradient ``gx, gy``."""
-    rows, cols = np.nonzero(edges)
-    x, y = cols.astype(np.float64), rows.astype(np.float64)
+    from ._kernels import edge_points
+
+    x, y = edge_points(np.ascontiguousarray(edges, dtype=np.bool_))
     if image is None:
         return x, y, None, None
+    rows, cols = y.astype(np.intp), x.astype(np.intp)
     dx, dy = gradient_images(image, "gaussian", sigma)
     return x, y, dx[rows, cols].astype(np.float64), dy[rows, cols].astype(np.float64)
 
@@ -62,9 +66,11 @@ def _vote(
     orientation_window: float,
     weighted: bool,
     pad: int,
+    reuse: bool = False,
 ) -> np.ndarray:
     """The votes, extended by ``pad`` θ rows each way: θ + π is the line of θ with ρ
-    negated, so row ``-1`` is the last row reversed along ρ."""
+    negated, so row ``-1`` is the last row reversed along ρ. With ``reuse``, written into
+    the thread's workspace (:func:`_workspace`), else into a new array."""
     n_rho, rho0 = _rho_grid(shape, rho_step)
     step = math.pi / theta_bins
     weights = np.ones(len(x))
@@ -77,11 +83,52 @@ def _vote(
         half = min(int(round(math.radians(orientation_window) / step)), theta_bins // 2)
         width = min(2 * half + 1, theta_bins)
         first = np.mod(centre - half, theta_bins) if width < theta_bins else np.zeros_like(centre)
-    from ._kernels import vote_lines
+    from ._kernels import vote_lines_into
 
     table = np.arange(theta_bins) * step
     cos, sin = np.cos(table) / rho_step, np.sin(table) / rho_step
-    return vote_lines(x, y, weights, first, width, cos, sin, rho0 / rho_step, n_rho, pad)
+    size = (theta_bins + 2 * pad, n_rho)
+    extended = _workspace(size)[0] if reuse else np.empty(size)
+    vote_lines_into(extended, x, y, weights, first, width, cos, sin, rho0 / rho_step, pad)
+    return extended
+
+
+_THREAD = threading.local()
+
+
+def _workspace(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """The calling thread's two float64 arrays of ``shape`` (votes and smoothed votes),
+    kept from its previous call of the same shape: a 512² image's pair is 2 × 2.3 MB, whose
+    fresh pages (above glibc's mmap threshold) cost a third of the node's time in page
+    faults. Nothing returned by a node refers to them."""
+    held = getattr(_THREAD, "arrays", None)
+    if held is None or held[0].shape != shape:
+        held = (np.empty(shape), np.empty(shape))
+        _THREAD.arrays = held
+    return held
+
+
+@functools.lru_cache(maxsize=16)
+def _smoothing(
+    sigma: float, rows: int, cols: int
+) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
+    """Gaussian taps of ``sigma``, their symmetry and the ``nearest`` boundary indices of
+    ``rows`` and ``cols`` (``shared.separable.smooth_gaussian``'s, computed once)."""
+    taps = gaussian_taps(sigma)
+    half = taps.size // 2
+    row_index = np.clip(np.arange(-half, rows + half), 0, rows - 1)
+    column_index = np.clip(np.arange(-half, cols + half), 0, cols - 1)
+    return taps, int(np.array_equal(taps, taps[::-1])), row_index, column_index
+
+
+def _smooth_votes(votes: np.ndarray, sigma: float, out: np.ndarray) -> np.ndarray:
+    """``shared.separable.smooth_gaussian(votes, sigma, "nearest")`` written into ``out``
+    (the same compiled kernel on the same input: equal to the bit)."""
+    from ..shared.separable_kernels import correlate_both
+
+    taps, symmetry, row_index, column_index = _smoothing(sigma, *votes.shape)
+    correlate_both(votes, taps, symmetry, row_index, taps, symmetry, column_index, out)
+    return out
 
 
 def _select_lines(
@@ -295,8 +342,6 @@ def hough_lines(
     .. [3] scikit-image, ``skimage.transform.hough_line_peaks`` (threshold
        0.5 × the accumulator's maximum).
     """
-    from ..shared.separable import smooth_gaussian
-
     if image is not None and image.shape != edges.shape:
         raise ValueError(
             f"edges and image must have the same size, got {edges.shape} and {image.shape}"
@@ -304,11 +349,11 @@ def hough_lines(
     x, y, gx, gy = _edge_points(edges, image, sigma)
     pad = min(theta_bins, min_distance + 3 * math.ceil(vote_sigma) + 1)
     extended = _vote(
-        edges.shape, x, y, gx, gy, theta_bins, rho_step, orientation_window, weighted, pad
+        edges.shape, x, y, gx, gy, theta_bins, rho_step, orientation_window, weighted, pad, True
     )
     raw = extended
     if vote_sigma > 0:
-        extended = smooth_gaussian(extended, vote_sigma, "nearest")
+        extended = _smooth_votes(raw, vote_sigma, _workspace(raw.shape)[1])
     smoothed = extended[pad:-pad]
     orientation = None
     if gx is not None and gy is not None:

@@ -184,3 +184,31 @@ def test_drawings_mark_what_was_found():
     circle = hough.draw_circles(image, np.array([[20.0, 15.0, 8.0, 1.0]]))
     np.testing.assert_allclose(circle[15, 28], [0.1, 0.95, 0.1], rtol=1e-6)
     np.testing.assert_allclose(circle[15, 20], [0.95, 0.15, 0.1], rtol=1e-6)
+
+
+def test_lines_reusing_the_threads_votes_equal_a_fresh_accumulator_smoothed():
+    """``hough.lines`` votes and smooths into arrays its thread keeps between calls: its
+    accumulator equals ``line_accumulator`` (a new array) smoothed by the shared Gaussian,
+    to the bit, and a result keeps its values after later calls, in this or another thread."""
+    import threading
+
+    from graphvision_plugins.hough._lines import line_accumulator
+    from graphvision_plugins.shared.separable import smooth_gaussian
+
+    rng = np.random.default_rng(5)
+    masks = [rng.random((48, 64)) < 0.05 for _ in range(2)]
+    first = hough.hough_lines(masks[0])
+    kept = first.accumulator.copy()
+    for mask in masks:
+        votes = line_accumulator(mask, None, 180, 1.0, 5.0, False, 1.0)
+        pad = 5 + 3 + 1  # min_distance + 3 vote_sigma + 1, the node's padding
+        wrapped = np.concatenate([votes[-pad:, ::-1], votes, votes[:pad, ::-1]], axis=0)
+        smoothed = smooth_gaussian(wrapped, 1.0, "nearest")[pad:-pad].astype(np.float32)
+        np.testing.assert_array_equal(hough.hough_lines(mask).accumulator, smoothed)
+    other: list = []
+    worker = threading.Thread(target=lambda: other.append(hough.hough_lines(masks[1])))
+    worker.start()
+    worker.join(timeout=60)
+    assert not worker.is_alive()
+    np.testing.assert_array_equal(first.accumulator, kept)
+    np.testing.assert_array_equal(other[0].lines, hough.hough_lines(masks[1]).lines)

@@ -209,3 +209,28 @@ def test_points_by_row_and_column_equal_lexsort():
     np.testing.assert_array_equal(columns, np.searchsorted(x[by_column], np.arange(41) - 0.5))
     np.testing.assert_array_equal(keys, x[by_row])
     np.testing.assert_array_equal(column_keys, y[by_column])
+
+
+@pytest.mark.parametrize("width", [5, 24])
+def test_votes_equal_np_add_at_in_the_points_order(width):
+    """Every point's two ρ shares, summed into each cell in the points' order (np.add.at
+    applies them one by one): the kernel's two-pass rows (positions, then votes) change no
+    bit; ``width`` 24 of 24 bins is the all-θ path."""
+    rng = np.random.default_rng(11)
+    x, y = rng.integers(0, 40, 400).astype(float), rng.integers(0, 30, 400).astype(float)
+    weights, first = rng.uniform(0, 2, 400), rng.integers(0, 24, 400)
+    table = np.arange(24) * (math.pi / 24)
+    cos, sin, rho0, n_rho = np.cos(table) / 0.7, np.sin(table) / 0.7, -73.0, 147
+    expected = np.zeros((24, n_rho))
+    for i in range(400):
+        for t in (first[i] + np.arange(width)) % 24 if width < 24 else range(24):
+            position = x[i] * cos[t] + y[i] * sin[t] - rho0
+            lower = int(np.floor(position))
+            np.add.at(
+                expected[t],
+                [lower, lower + 1],
+                weights[i] * np.array([1 - (position - lower), position - lower]),
+            )
+    np.testing.assert_array_equal(
+        vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho, 0), expected
+    )
