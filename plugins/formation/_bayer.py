@@ -173,10 +173,10 @@ def demosaic(
     """
     if min(raw.shape) < 5:
         raise ValueError(f"raw must be at least 5×5 to demosaic, got {raw.shape}")
-    from ._bayer_kernels import demosaic_taps, has_tiny
+    from ._bayer_kernels import demosaic_taps
 
     taps, counts = _tap_lists(pattern, method)
     out = np.empty((*raw.shape, 3), dtype=np.float32)
     samples = np.ascontiguousarray(raw, dtype=np.float32)
-    demosaic_taps(samples, taps, counts, has_tiny(samples), out)
+    demosaic_taps(samples, taps, counts, out)
     return out

@@ -12,8 +12,9 @@ product that is exact in float32 too, and the float64 sum of two float32 numbers
 to float32 is their float32 sum (53 ≥ 2·24 + 2 bits: the double rounding is innocuous),
 so those taps are added in float32, eight lanes to a SIMD step and no conversions, with
 the same bits. The others (5/8, 3/16, 3/4) keep the float64 product. A product can only
-lose bits in float32 below the normal range: a mosaic with a value in (0, 2⁻¹⁰⁰) takes
-the float64 path for every tap.
+lose bits in float32 below the normal range: an output row whose 5×5 windows read a value
+in (0, 2⁻¹⁰⁰) takes the float64 path for every tap (each value depends on its own window
+only, so the other rows keep the float32 path and their bits).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["demosaic_taps", "has_tiny"]
+__all__ = ["demosaic_taps"]
 
 TINY = 2.0**-100  # below it, a product by a weight ≥ 1/16 could leave float32's normal range
 
@@ -50,25 +51,20 @@ def _every_second(source: np.ndarray, first: int, out: np.ndarray) -> None:  # p
 
 
 @njit(cache=True, nogil=True)
-def has_tiny(raw: np.ndarray) -> bool:  # pragma: no cover
-    """Whether a value of ``raw`` lies in (0, TINY) in magnitude."""
-    tiny = 0
-    for y in range(raw.shape[0]):
-        for x in range(raw.shape[1]):
-            size = abs(raw[y, x])
-            tiny += (size > 0) & (size < TINY)
-    return tiny > 0
-
-
-@njit(cache=True, nogil=True)
 def _fill_padded(
-    raw: np.ndarray, p: int, even: np.ndarray, odd: np.ndarray
+    raw: np.ndarray, p: int, even: np.ndarray, odd: np.ndarray, tiny: np.ndarray
 ) -> None:  # pragma: no cover
     """Row ``p`` of ``raw`` padded by 2 (``numpy.pad``'s ``reflect``), its even columns into
-    ``even[p % 5]`` and its odd ones into ``odd[p % 5]``."""
+    ``even[p % 5]`` and its odd ones into ``odd[p % 5]``; ``tiny[p % 5]``: whether it holds
+    a value in (0, TINY) in magnitude (checked while the row is in cache)."""
     source = raw[_mirror(p - 2, raw.shape[0])]
     _every_second(source, -2, even[p % 5])
     _every_second(source, -1, odd[p % 5])
+    found = 0
+    for x in range(source.size):
+        size = abs(source[x])
+        found += (size > 0) & (size < TINY)
+    tiny[p % 5] = found > 0
 
 
 @njit(cache=True, nogil=True)
@@ -112,13 +108,14 @@ def demosaic_taps(
     raw: np.ndarray,
     taps: np.ndarray,
     counts: np.ndarray,
-    tiny: bool,
     out: np.ndarray,
 ) -> None:  # pragma: no cover
     """``out[y, x, c]`` from ``taps[c, tile, :counts[c, tile]]`` (``tile = 2 (y % 2) + x % 2``;
     each tap ``(dy, dx, weight, power of two)``) over ``raw`` padded by 2 (``reflect``); a
-    count of −1 copies the sample. Results are clipped to [0, 1]. ``tiny``: ``raw`` has
-    values below float32's normal range (see the module docstring).
+    count of −1 copies the sample. Results are clipped to [0, 1]. An output row whose five
+    padded rows hold a value below float32's normal range (see the module docstring) is
+    summed in float64 throughout: the choice is made row by row, as the rows are read
+    (each value depends on its own 5×5 only), not by a pass over the whole mosaic first.
 
     The five padded rows an output row reads are kept split into their even and their odd
     columns, in a ring (padded row ``p`` in slot ``p % 5``, one new row per output row), so
@@ -130,12 +127,14 @@ def demosaic_taps(
     width = cols + 4
     even = np.empty((5, (width + 1) // 2), dtype=np.float32)
     odd = np.empty((5, width // 2), dtype=np.float32)
+    tiny = np.zeros(5, dtype=np.bool_)
     for p in range(4):
-        _fill_padded(raw, p, even, odd)
+        _fill_padded(raw, p, even, odd, tiny)
     sums = np.empty((3, 2, (cols + 1) // 2), dtype=np.float32)
     low, high = np.float32(0.0), np.float32(1.0)
     for y in range(rows):
-        _fill_padded(raw, y + 4, even, odd)
+        _fill_padded(raw, y + 4, even, odd, tiny)
+        single = not tiny.any()
         for c in range(3):
             for tx in range(2):
                 tile = 2 * (y % 2) + tx
@@ -146,7 +145,7 @@ def demosaic_taps(
                     source = even[(y + 2) % 5] if tx == 0 else odd[(y + 2) % 5]
                     total[:] = source[1 : 1 + n]
                 else:
-                    _add_taps(total, even, odd, y + 2, tx + 2, taps[c, tile], count, not tiny)
+                    _add_taps(total, even, odd, y + 2, tx + 2, taps[c, tile], count, single)
         _interleave(sums, low, high, out[y].reshape(-1))
 
 

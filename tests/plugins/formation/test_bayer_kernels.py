@@ -83,3 +83,16 @@ def test_demosaic_of_values_below_the_normal_range_equals_the_array_formulas(met
     np.testing.assert_array_equal(
         demosaic(raw, pattern="GBRG", method=method), _reference(raw, "GBRG", method)
     )
+
+
+@pytest.mark.parametrize("method", ["bilinear", "malvar"])
+def test_rows_near_values_below_the_normal_range_alone_are_summed_in_float64(method):
+    # the float32-or-float64 choice is made per output row from the five rows it reads:
+    # rows 0-9 below the normal range, rows 10-19 normal, each row exact either way
+    rng = np.random.default_rng(6)
+    raw = rng.random((20, 14)).astype(np.float32)
+    raw[:10] = rng.integers(1, 2**20, (10, 14)) * np.float32(2.0**-149)
+    for pattern in ("RGGB", "GRBG"):
+        np.testing.assert_array_equal(
+            demosaic(raw, pattern=pattern, method=method), _reference(raw, pattern, method)
+        )
