@@ -221,16 +221,16 @@ def test_votes_equal_np_add_at_in_the_points_order(width):
     weights, first = rng.uniform(0, 2, 400), rng.integers(0, 24, 400)
     table = np.arange(24) * (math.pi / 24)
     cos, sin, rho0, n_rho = np.cos(table) / 0.7, np.sin(table) / 0.7, -73.0, 147
-    expected = np.zeros((24, n_rho))
-    for i in range(400):
-        for t in (first[i] + np.arange(width)) % 24 if width < 24 else range(24):
-            position = x[i] * cos[t] + y[i] * sin[t] - rho0
-            lower = int(np.floor(position))
-            np.add.at(
-                expected[t],
-                [lower, lower + 1],
-                weights[i] * np.array([1 - (position - lower), position - lower]),
-            )
+    point = np.repeat(np.arange(400), width)  # point-major: each cell's shares in order
+    t = (np.repeat(first, width) + np.tile(np.arange(width), 400)) % 24
+    position = x[point] * cos[t] + y[point] * sin[t] - rho0
+    lower = np.floor(position)
+    frac = position - lower
+    cells = t[:, None] * n_rho + lower.astype(int)[:, None] + [0, 1]  # lower, upper share
+    shares = weights[point][:, None] * np.column_stack([1.0 - frac, frac])
+    expected = np.zeros(24 * n_rho)
+    np.add.at(expected, cells.ravel(), shares.ravel())
+    expected = expected.reshape(24, n_rho)
     np.testing.assert_array_equal(
         vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho, 0), expected
     )
