@@ -326,13 +326,41 @@ def pruned_support(x, y, index, bounds, rho, theta, tolerance, extent, threshold
     cells = np.zeros(2 * int(np.ceil(extent)) + 4, dtype=np.int64)
     free = np.ones(x.size, dtype=np.bool_)
     on = np.zeros(0, dtype=np.bool_)
+    near = np.empty(x.size, dtype=np.bool_)
+    # few points for the image's rows and columns: a branch-free pass over all of them
+    # costs less than walking the band's rows (the same points pass the same test)
+    scan = x.size <= 4 * (index[0].size + index[3].size)
     largest = 0
     for k in np.argsort(-bounds, kind="mergesort"):
         if bounds[k] + 1e-6 < threshold * largest:
             break
-        counts[k] = _band(x, y, free, rho[k], theta[k], tolerance, cells, k + 1, on, False, index)
+        if scan:
+            counts[k] = _scan(x, y, rho[k], theta[k], tolerance, cells, k + 1, near)
+        else:
+            counts[k] = _band(
+                x, y, free, rho[k], theta[k], tolerance, cells, k + 1, on, False, index
+            )
         largest = max(largest, counts[k])
     return counts
+
+
+@numba.njit(cache=True, nogil=True)
+def _scan(x, y, rho, theta, tolerance, cells, stamp, near):
+    """:func:`_band` with every point free (as in :func:`pruned_support`), by a scan of
+    every point: first which lie within ``tolerance`` of the line (one branch-free loop,
+    :func:`_visit`'s test), then the cells those cover (the count of distinct cells does
+    not depend on the order the points are visited in)."""
+    c, s = np.cos(theta), np.sin(theta)
+    for i in range(x.size):
+        near[i] = abs(x[i] * c + y[i] * s - rho) <= tolerance
+    covered = 0
+    for i in range(x.size):
+        if near[i]:
+            cell = int(np.floor(y[i] * c - x[i] * s)) + cells.size // 2
+            if cells[cell] != stamp:
+                cells[cell] = stamp
+                covered += 1
+    return covered
 
 
 @numba.njit(cache=True, nogil=True)

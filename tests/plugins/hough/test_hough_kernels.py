@@ -50,12 +50,13 @@ def _covered(x, y, rho, theta, tolerance, extent):
     return len(np.unique(along))
 
 
-def _scene(seed):
-    """Edge pixels of a 120×160 image (a line of 200 and 1,500 scattered) and 400 lines
-    across θ in [0, π) and beyond it (the padded rows and refits: ρ changes sign there)."""
+def _scene(seed, density=0.08):
+    """Edge pixels of a 120×160 image (a line of 200 and 1,500 scattered at ``density``
+    0.08) and 400 lines across θ in [0, π) and beyond it (the padded rows and refits: ρ
+    changes sign there)."""
     rng = np.random.default_rng(seed)
     shape = (120, 160)
-    mask = rng.random(shape) < 0.08
+    mask = rng.random(shape) < density
     u = np.arange(160)
     mask[np.round(30 + 0.3 * u).astype(int), u] = True
     y, x = (v.astype(np.float64) for v in np.nonzero(mask))
@@ -78,12 +79,16 @@ def test_support_of_the_points_by_row_and_column_equals_a_scan_of_every_point():
     assert support[0] > 150
 
 
+@pytest.mark.parametrize("density", [0.08, 0.02])
 @pytest.mark.parametrize("threshold", [0.0, 0.3, 1.0])
-def test_pruned_support_is_exact_where_a_line_can_be_kept(threshold):
+def test_pruned_support_is_exact_where_a_line_can_be_kept(threshold, density):
     """Unit votes bound every line's support, so the lines measured by decreasing bound
     until one falls under ``threshold`` × the largest support give every support at least
-    that exactly (and the largest); the others are 0."""
-    shape, x, y, rho, theta, extent = _scene(5)
+    that exactly (and the largest); the others are 0. At density 0.02 the points are few
+    for the image's size (at most 4 per row and column) and every line scans them all;
+    at 0.08 only its band's rows."""
+    shape, x, y, rho, theta, extent = _scene(5, density)
+    assert (len(x) <= 4 * (shape[0] + shape[1] + 2)) == (density == 0.02)
     bins, pad = 90, 4
     rho[6:] = rho[6:] * 0.2 + 50  # many lines through the points, not only beyond them
     _, rho0 = _rho_grid(shape, 1.0)
