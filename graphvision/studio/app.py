@@ -27,6 +27,7 @@ import asyncio
 import hmac
 import json
 import time
+import weakref
 from collections import OrderedDict
 from collections.abc import AsyncIterator
 from pathlib import Path
@@ -108,7 +109,7 @@ def make_app(session: Session, token: str) -> ASGIApp:
 class _Api:
     def __init__(self, session: Session) -> None:
         self.session = session
-        self.pngs: OrderedDict[tuple[int, str, str], bytes] = OrderedDict()
+        self.pngs: OrderedDict[tuple[int, str, str], tuple[Any, bytes]] = OrderedDict()
         self.pictures = Pictures(session)
         self.descriptions = Descriptions(session)
 
@@ -196,14 +197,18 @@ class _Api:
         if isinstance(found, Response):
             return found
         _, node, port, kind, value = found
+        # Keyed by the value's id so that runs sharing a value share its PNG; a freed
+        # value's id can be reused, so the entry is taken only if it names this value.
         key = (id(value), node, port)
-        data = self.pngs.get(key)
+        cached = self.pngs.get(key)
         began = time.perf_counter()
-        if data is None:
+        if cached is not None and _same(cached[0], value):
+            data = cached[1]
+        else:
             data = await run_in_threadpool(png_of, kind, value)
             if data is None:
                 return JSONResponse({"error": f"{kind.type_name()} has no picture"}, 404)
-            self.pngs[key] = data
+            self.pngs[key] = (_reference(value), data)
             while len(self.pngs) > 64:
                 self.pngs.popitem(last=False)
         timing = f"encode;dur={(time.perf_counter() - began) * 1e3:.1f}"
@@ -275,3 +280,17 @@ async def _json_body(request: Request) -> dict[str, Any] | None:
     except ValueError:
         return None
     return body if isinstance(body, dict) else None
+
+
+def _reference(value: Any) -> Any:
+    """A weak reference to ``value`` where it takes one (arrays do), else ``value`` itself."""
+    try:
+        return weakref.ref(value)
+    except TypeError:
+        return value
+
+
+def _same(reference: Any, value: Any) -> bool:
+    """Whether ``reference`` (from :func:`_reference`) still names ``value``."""
+    held = reference() if isinstance(reference, weakref.ref) else reference
+    return held is value

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 import os
 import stat
 import urllib.error
 import urllib.request
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -17,6 +19,7 @@ pytest.importorskip("uvicorn")
 
 import graphvision as gv
 from graphvision.errors import PipelineError
+from graphvision.studio.app import _Api, _reference
 from graphvision.studio.payload import describe_value, view_of
 from graphvision.studio.saving import command_line, save_parameters
 from graphvision.studio.session import Session
@@ -229,3 +232,17 @@ def test_a_node_value_is_at_hand_as_soon_as_the_node_finishes(coins: Session) ->
         coins.listeners.remove(listener)
     downstream = ["binary", "closed", "filled", "opened", "labels", "measured", "coins", "overlay"]
     assert seen == dict.fromkeys(downstream, True)
+
+
+def test_a_cached_png_is_served_only_for_the_value_it_was_made_from(coins: Session) -> None:
+    """PNGs are cached by the value's id, which CPython reuses once a value is freed."""
+    api = _Api(coins)
+    run = coins.latest_with_values()
+    assert run is not None
+    request = SimpleNamespace(path_params={"run": run.id, "node": "gray", "port": "out"})
+    fresh = asyncio.run(api.png(request)).body  # type: ignore[arg-type]
+    value = run.values[("gray", "out")]
+    other = np.zeros(3)  # another live value under the same id, as after a reuse
+    api.pngs[(id(value), "gray", "out")] = (_reference(other), b"stale")
+    assert asyncio.run(api.png(request)).body == fresh  # type: ignore[arg-type]
+    assert fresh.startswith(b"\x89PNG")
