@@ -202,6 +202,7 @@ class _Api:
         key = (id(value), node, port)
         cached = self.pngs.get(key)
         began = time.perf_counter()
+        data: bytes | None = None
         if cached is not None and _same(cached[0], value):
             data = cached[1]
         else:
