@@ -132,8 +132,9 @@ def run_batch(
         ready (:mod:`graphvision.execution.batch_lanes`): the seconds a worker takes to
         start are no longer seconds lost, but a node that crashes its process in one of
         those files ends the batch, as on the first file. Default: on for ``processes``
-        (workers forked on this machine, whose start costs seconds), off on Dask (a
-        cluster's workers are already running, and need not see the client's storage).
+        (workers forked on this machine, whose start costs seconds) and on an executor
+        whose ``client_files`` attribute says so (Dask: a worker's first batch imports
+        the plugins, scipy and numba's compiler, seconds before its first file).
     pages : BatchPages
         Report pages to write besides outputs, records and ``batch.csv``
         (``graphvision.run_batch`` writes ``report.md``, ``report.html`` and
@@ -184,7 +185,9 @@ def run_batch(
     width = files_at_once or executor_width(pool) * (2 if one_task_per_file else 1)
     batch.file_threads = width > 1 and not one_task_per_file and not encodes_values(pool)
     batch.client_files = one_task_per_file and (
-        hasattr(pool, "preload") if client_files is None else client_files
+        getattr(pool, "client_files", hasattr(pool, "preload"))
+        if client_files is None
+        else client_files
     )
     try:
         finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))

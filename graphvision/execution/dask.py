@@ -78,6 +78,7 @@ class DaskExecutor:
 
     encodes_values = True
     chains_tasks = True
+    client_files = True  # a batch's client runs files while the workers warm up
     name = "dask"
 
     def __init__(
@@ -100,36 +101,64 @@ class DaskExecutor:
         self._in_flight = 0
         self._in_flight_lock = threading.Lock()
         self._cluster: Any = None
+        self._client: Any = client
         self._owns_client = client is None
+        self._width = 0  # a local cluster's, known before it has started
+        self._started = threading.Event()
+        self._start_error: BaseException | None = None
+        self._closing = False
         address = address or os.environ.get(SCHEDULER_VARIABLE) or None
-        if client is not None:
-            self.client = client
-        elif address:
+        if client is None and address:
             try:
-                self.client = distributed.Client(address, timeout=timeout)
+                self._client = distributed.Client(address, timeout=timeout)
             except Exception as error:  # unreachable, refused, or not an address at all
                 raise DaskUnavailableError(
                     f"cannot reach the Dask scheduler at {address} within {timeout:g} s "
                     f"({type(error).__name__}); check the address, or leave out "
                     f"--scheduler and ${SCHEDULER_VARIABLE} to start a local cluster"
                 ) from None
-        else:
-            self._cluster = distributed.LocalCluster(
-                n_workers=workers,
-                threads_per_worker=threads_per_worker,
-                processes=True,
-                scheduler_port=0,
-                dashboard_address=":0",
-                # a failing node is reported once, by the run, naming it: not also as
-                # each worker's "Compute Failed" traceback
-                silence_logs=logging.CRITICAL,
-            )
-            self.client = distributed.Client(self._cluster)
+        if self._client is not None:
+            self._started.set()
+            return
+        self._width = workers * threads_per_worker
+        self._starter = threading.Thread(
+            target=self._start_local,
+            args=(workers, threads_per_worker),
+            daemon=True,
+            name="graphvision-dask-cluster",
+        )
+        self._starter.start()
+
+    def _start_local(self, workers: int, threads_per_worker: int) -> None:
+        """Start the local cluster (in the background: a batch's client runs files
+        meanwhile); a cluster that started after :meth:`shutdown` is closed at once."""
+        try:
+            self._cluster, self._client = start_local_cluster(workers, threads_per_worker)
+        except BaseException as error:  # reported where the client is first needed
+            self._start_error = error
+        finally:
+            self._started.set()
+        if self._closing:
+            self._close()
+
+    @property
+    def client(self) -> Any:
+        """The ``distributed.Client`` (a local cluster's, once it has started)."""
+        if not self._started.is_set():
+            self._started.wait()
+        if self._client is None:
+            error = self._start_error
+            if error is None:
+                raise DaskUnavailableError("this Dask executor has been shut down")
+            raise DaskUnavailableError(
+                f"the local Dask cluster did not start ({type(error).__name__}: {error})"
+            ) from error
+        return self._client
 
     @property
     def width(self) -> int:
         """Tasks the cluster runs at once: the threads of all its workers."""
-        return max(1, sum(self.client.nthreads().values()))
+        return self._width or max(1, sum(self.client.nthreads().values()))
 
     def share(self, value: Any) -> Any:
         """``value`` sent to the cluster once; the handle stands for it in :meth:`submit`'s
@@ -137,9 +166,21 @@ class DaskExecutor:
 
         It is the result of a task that returns it, not scattered data: a worker
         that dies holding it loses nothing, the scheduler runs the task again
-        (scattered data lost with its worker failed every file still to run).
+        (scattered data lost with its worker failed every file still to run). A
+        local cluster still starting gets it with the first task that reads it.
         """
-        return self.client.submit(_shared, value, pure=False, retries=self.retries)
+        if self._started.is_set():
+            return self.client.submit(_shared, value, pure=False, retries=self.retries)
+        return _Later(value)
+
+    def _sent(self, arg: Any) -> Any:
+        """``arg``, or the task that holds it on the cluster when it is a :class:`_Later`."""
+        if not isinstance(arg, _Later):
+            return arg
+        with self._in_flight_lock:
+            if arg.task is None:
+                arg.task = self.client.submit(_shared, arg.value, pure=False, retries=self.retries)
+            return arg.task
 
     def warm(self, fn: Callable[..., Any], /, *args: Any) -> list[Future]:
         """Have every worker run ``fn(*args)`` now, as a task of its own (a batch's imports
@@ -168,6 +209,7 @@ class DaskExecutor:
         later ``submit``'s arguments: Dask passes the result from worker to
         worker, without waiting for the client.
         """
+        args = tuple(self._sent(arg) for arg in args)
         task = self.client.submit(_on_worker, fn, *args, pure=False, retries=self.retries)
         future = TaskFuture(task)
         future.set_running_or_notify_cancel()
@@ -195,11 +237,61 @@ class DaskExecutor:
             self._in_flight -= 1
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
-        """Close the client and the local cluster this executor started (not a given client)."""
-        if self._owns_client:
-            self.client.close()
-        if self._cluster is not None:
-            self._cluster.close()
+        """Close the client and the local cluster this executor started (not a given client);
+        a local cluster still starting is closed as soon as it has (waited for with
+        ``wait``)."""
+        self._closing = True
+        if not self._started.is_set():
+            if not wait:
+                return  # the starting thread closes it
+            self._started.wait()
+        self._close()
+
+    def _close(self) -> None:
+        with self._in_flight_lock:  # once, whoever gets here first
+            client, cluster, self._cluster = self._client, self._cluster, None
+            if self._owns_client:
+                self._client = None
+        if self._owns_client and client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+class _Later:
+    """A value :meth:`DaskExecutor.share` got before its local cluster had started: sent
+    with the first task that reads it, its task then standing for it."""
+
+    def __init__(self, value: Any) -> None:
+        self.value, self.task = value, None
+
+    def __reduce__(self) -> tuple[Any, ...]:  # never sent as such: see DaskExecutor._sent
+        raise TypeError("a shared value travels as its task, not as the placeholder")
+
+
+def start_local_cluster(workers: int, threads_per_worker: int) -> tuple[Any, Any]:
+    """A ``LocalCluster`` of ``workers`` processes and its client. Its workers do not run
+    Dask's statistical profiler (``distributed.worker.profile``: a thread that took the GIL
+    every 10 ms to walk the stack, 7 % of a batch's worker time on coins files)."""
+    import dask
+    import distributed
+
+    with dask.config.set({"distributed.worker.profile.enabled": False}):
+        cluster = distributed.LocalCluster(
+            n_workers=workers,
+            threads_per_worker=threads_per_worker,
+            processes=True,
+            scheduler_port=0,
+            dashboard_address=":0",
+            # a failing node is reported once, by the run, naming it: not also as
+            # each worker's "Compute Failed" traceback
+            silence_logs=logging.CRITICAL,
+        )
+    try:
+        return cluster, distributed.Client(cluster)
+    except BaseException:
+        cluster.close()
+        raise
 
 
 class TaskFuture(Future):

@@ -170,6 +170,7 @@ def test_a_batch_on_dask_survives_a_dying_worker_and_retries_its_file(dask_execu
         registry=registry,
         executor=dask_executor,
         cache=None,
+        client_files=False,  # file 1 kills its process: a worker's, never the test's
     )
     assert (tmp_path / "died").exists()  # a worker did die, on file 1
     assert [item.status for item in batch.items] == ["ok"] * len(levels), batch.items
