@@ -25,6 +25,15 @@ submitted alone (a chain) is fetched by Dask's callback thread, one thread
 hop fewer (an interleaved A/B on a 200-task chain: 11.1 against 13.0 ms a
 task).
 
+Without a client or an address, the executor starts a ``LocalCluster`` in a
+background thread and returns at once: a batch's first file, and the files its
+client runs while the workers are not ready
+(:mod:`graphvision.execution.batch_lanes`: ``client_files``, on for Dask, whose
+workers each import the plugins, scipy and numba's compiler on their first
+batch), run meanwhile; what needs the cluster waits for it. A value shared
+before it has started (:meth:`DaskExecutor.share`) travels with the first task
+that reads it.
+
 A worker that dies while it runs a node is replaced by Dask and the node is
 run again on another worker (``retries``), so one lost worker costs one node,
 not the run. Dask is an optional dependency (``pip install
@@ -33,11 +42,13 @@ graphvision[dask]``), imported only when this executor is made.
 
 from __future__ import annotations
 
+import atexit
 import functools
 import logging
 import multiprocessing
 import os
 import threading
+import weakref
 from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
@@ -65,7 +76,7 @@ class DaskExecutor:
     address : str, optional
         Connect to the scheduler at this address (``tcp://host:port``);
         default ``$GRAPHVISION_DASK_SCHEDULER``. Without either, a
-        ``LocalCluster`` is started and closed by :meth:`shutdown`.
+        ``LocalCluster`` is started (in the background) and closed by :meth:`shutdown`.
     workers : int
         Worker processes of a local cluster.
     threads_per_worker : int
@@ -107,6 +118,7 @@ class DaskExecutor:
         self._started = threading.Event()
         self._start_error: BaseException | None = None
         self._closing = False
+        self._starter: threading.Thread | None = None
         address = address or os.environ.get(SCHEDULER_VARIABLE) or None
         if client is None and address:
             try:
@@ -121,6 +133,8 @@ class DaskExecutor:
             self._started.set()
             return
         self._width = workers * threads_per_worker
+        _STARTING.add(self)
+        _wait_for_starts_at_exit()
         self._starter = threading.Thread(
             target=self._start_local,
             args=(workers, threads_per_worker),
@@ -138,8 +152,11 @@ class DaskExecutor:
             self._start_error = error
         finally:
             self._started.set()
-        if self._closing:
-            self._close()
+        try:
+            if self._closing:
+                self._close()
+        finally:
+            _STARTING.discard(self)
 
     @property
     def client(self) -> Any:
@@ -241,10 +258,11 @@ class DaskExecutor:
         a local cluster still starting is closed as soon as it has (waited for with
         ``wait``)."""
         self._closing = True
-        if not self._started.is_set():
+        starter = self._starter
+        if starter is not None and starter.is_alive():
             if not wait:
-                return  # the starting thread closes it
-            self._started.wait()
+                return  # the starting thread closes it (the interpreter's exit waits for it)
+            starter.join()
         self._close()
 
     def _close(self) -> None:
@@ -256,6 +274,22 @@ class DaskExecutor:
             client.close()
         if cluster is not None:
             cluster.close()
+
+
+_STARTING: weakref.WeakSet[DaskExecutor] = weakref.WeakSet()  # local clusters still starting
+
+
+@functools.cache  # once, after distributed's own exit hook: exit hooks run last first
+def _wait_for_starts_at_exit() -> None:
+    atexit.register(_let_clusters_start)
+
+
+def _let_clusters_start() -> None:
+    """At the interpreter's exit, wait for local clusters still starting, so that Dask's exit
+    hook closes them whole (a half-started one raised there)."""
+    for executor in list(_STARTING):
+        if executor._starter is not None:
+            executor._starter.join(timeout=60)
 
 
 class _Later:

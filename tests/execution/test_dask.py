@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -316,3 +317,105 @@ def test_a_node_workers_cannot_import_fails_alone_and_its_readers_are_skipped(
         ("a", "failed"),
         ("b", "skipped"),
     ]
+
+
+def test_a_batch_runs_files_in_the_client_while_the_workers_are_not_ready(dask_executor, tmp_path):
+    """Each worker is held busy until the fourth file is done: the client runs files 1 to 3
+    itself (the last ``files_at_once`` = 4 are always the workers'), then the workers the
+    rest."""
+    from .test_batch import _counting_graph, photo
+
+    client, name = dask_executor.client, f"hold-{tmp_path.name}"
+
+    def hold(event_name: str) -> bool:
+        return distributed.Event(event_name).wait(timeout=30)
+
+    for address in client.scheduler_info()["workers"]:  # queued before the batch's warm-up
+        client.submit(hold, name, workers=[address], pure=False)
+
+    def release(done: int, total: int, item: object) -> None:
+        if done == 4:
+            distributed.Event(name, client=client).set()
+
+    graph, registry, _ = _counting_graph(tmp_path)
+    levels = [10, 40, 70, 100, 130, 160, 190, 220]
+    files = [photo(tmp_path / "in" / f"{k}.png", level) for k, level in enumerate(levels)]
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        executor=dask_executor,
+        cache=None,
+        on_item=release,
+    )
+    assert [item.scalars["score"] for item in batch.items] == pytest.approx(
+        [2.0 * level / 255.0 for level in levels], abs=1e-6
+    )
+    where = [json.loads((item.output_dir / "record.json").read_text())["executor"]
+             for item in batch.items]  # fmt: skip
+    assert where == [
+        "dask, first file in this process",
+        *["dask, in the client while the workers started"] * 3,
+        *["dask, one task per file"] * 4,
+    ]
+
+
+class _Borrowed:
+    """The module's cluster's client, which the executor under test may not close."""
+
+    def __init__(self, client: object) -> None:
+        self._client = client
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._client, name)
+
+    def close(self) -> None:
+        pass
+
+
+def test_a_local_cluster_starts_in_the_background_and_shared_values_wait_for_it(
+    dask_executor, monkeypatch
+):
+    import operator
+    import threading
+
+    from graphvision.execution import dask as dask_module
+
+    go = threading.Event()
+
+    def slow_start(workers: int, threads_per_worker: int) -> tuple[object, object]:
+        assert go.wait(timeout=60)
+        return None, _Borrowed(dask_executor.client)
+
+    monkeypatch.setattr(dask_module, "start_local_cluster", slow_start)
+    executor = DaskExecutor(workers=3)
+    assert executor.width == 3  # known before the cluster has started
+    shared = executor.share(41.0)  # held until the cluster is there
+    go.set()
+    first = executor.submit(operator.add, shared, 1.0)
+    second = executor.submit(operator.sub, shared, 1.0)
+    assert (first.result(timeout=60), second.result(timeout=60)) == (42.0, 40.0)
+    assert first.task.client is dask_executor.client
+    executor.shutdown()
+    with pytest.raises(DaskUnavailableError, match="this Dask executor has been shut down"):
+        executor.submit(operator.add, 1.0, 1.0)
+
+
+def test_a_local_cluster_that_cannot_start_is_named_where_it_is_first_needed(monkeypatch):
+    import operator
+
+    from graphvision.execution import dask as dask_module
+
+    def no_start(workers: int, threads_per_worker: int) -> tuple[object, object]:
+        raise OSError("no free port")
+
+    monkeypatch.setattr(dask_module, "start_local_cluster", no_start)
+    executor = DaskExecutor()
+    with pytest.raises(
+        DaskUnavailableError,
+        match=r"the local Dask cluster did not start \(OSError: no free port\)",
+    ):
+        executor.submit(operator.add, 1.0, 1.0)
+    executor.shutdown()
