@@ -184,11 +184,8 @@ def run_batch(
     own = isinstance(executor, str)
     width = files_at_once or executor_width(pool) * (2 if one_task_per_file else 1)
     batch.file_threads = width > 1 and not one_task_per_file and not encodes_values(pool)
-    batch.client_files = one_task_per_file and (
-        getattr(pool, "client_files", hasattr(pool, "preload"))
-        if client_files is None
-        else client_files
-    )
+    default = getattr(pool, "client_files", hasattr(pool, "preload"))
+    batch.client_files = one_task_per_file and (default if client_files is None else client_files)
     try:
         finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
     finally:
