@@ -18,10 +18,19 @@ from graphvision.execution.executors import WorkerDiedError, make_executor
 from graphvision.execution.worker_start import fork_context
 
 
+def _no_parallel_layer(monkeypatch) -> None:
+    """As if numba's threading layer had not started: an earlier test in this process may
+    have run a parallel kernel (the children here run no numba code)."""
+    parallel = sys.modules.get("numba.np.ufunc.parallel")
+    if parallel is not None:
+        monkeypatch.setattr(parallel, "_is_initialized", False, raising=False)
+
+
 @pytest.fixture
 def alone(monkeypatch):
     """No thread but this one (earlier tests of this process may have left some)."""
     monkeypatch.setattr(threading, "enumerate", lambda: [threading.current_thread()])
+    _no_parallel_layer(monkeypatch)
 
 
 def test_workers_are_forks_of_the_client_when_no_other_thread_runs(alone):
@@ -37,11 +46,16 @@ def test_the_client_is_not_forked_beside_another_thread_or_when_told_not_to(monk
     here = threading.current_thread()
     blas = SimpleNamespace(name="graphvision-blas-limit")  # idle, made again in the child
     user = SimpleNamespace(name="user-thread")  # may hold a lock the child keeps for good
+    _no_parallel_layer(monkeypatch)
     monkeypatch.setattr(threading, "enumerate", lambda: [here, blas])
     assert fork_context() is not None
     monkeypatch.setattr(threading, "enumerate", lambda: [here, blas, user])
     assert fork_context() is None
     monkeypatch.setattr(threading, "enumerate", lambda: [here])
+    started = SimpleNamespace(_is_initialized=True)  # numba's threading layer has threads
+    monkeypatch.setitem(sys.modules, "numba.np.ufunc.parallel", started)
+    assert fork_context() is None
+    _no_parallel_layer(monkeypatch)
     monkeypatch.setenv("GRAPHVISION_WORKER_START", "forkserver")
     assert fork_context() is None
 
