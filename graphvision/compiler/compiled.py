@@ -13,7 +13,7 @@ from typing import Any
 from graphvision.graph.model import Graph
 from graphvision.nodes.fingerprint import node_fingerprint
 from graphvision.nodes.spec import NodeSpec
-from graphvision.values.ports import PortType
+from graphvision.values.ports import ArrayPort, PortType
 from graphvision.values.scalars import _ScalarPort
 
 __all__ = ["CompiledGraph", "Schedule", "Step"]
@@ -61,13 +61,20 @@ class Step:
         )
 
     @cached_property
-    def only_output(self) -> tuple[str, type[PortType], bool] | None:
+    def only_output(self) -> tuple[str, type[PortType], bool, bool] | None:
         """The port and type of the node's one output when it returns it alone (no tuple),
-        and whether it is a scalar (a value with no arrays to freeze)."""
+        whether it is a scalar (a value with no arrays to freeze), and whether the value is
+        its one array (an ``ArrayPort`` that encodes it as it is: it may be frozen in place,
+        :func:`~graphvision.values.memory.frozen_in_place`)."""
         if self.spec.output_tuple is not None:
             return None
         [(port, kind)] = self.outputs.items()
-        return port, kind, issubclass(kind, _ScalarPort)
+        plain = (
+            issubclass(kind, ArrayPort)
+            and kind.encode.__func__ is ArrayPort.encode.__func__  # type: ignore[attr-defined]
+            and kind.decode.__func__ is ArrayPort.decode.__func__  # type: ignore[attr-defined]
+        )
+        return port, kind, issubclass(kind, _ScalarPort), plain
 
 
 @dataclass(frozen=True)

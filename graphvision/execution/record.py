@@ -9,20 +9,23 @@ from typing import Any
 
 import numpy as np
 
-from graphvision.compiler.compile import CompiledGraph
+from graphvision.compiler.compile import CompiledGraph, Step
 from graphvision.errors import (
     GraphvisionError,
+    NodeExecutionError,
 )
 from graphvision.execution.display import html_of
 from graphvision.values.ports import PortType
 
-__all__ = ["NodeRecord", "RunHooks", "RunRecord", "RunResult"]
+__all__ = ["NodeRecord", "RunHooks", "RunRecord", "RunResult", "intermediates", "wrapped_failure"]
 
 
 @dataclass(slots=True)
 class NodeRecord:
     """What happened to one node: ``computed``, ``cached`` (loaded), ``failed``, ``skipped``
-    (downstream of a failure) or ``pending`` (the run stopped before it ran).
+    (downstream of a failure), ``pending`` (the run stopped before it ran) or ``unneeded``
+    (the requested outputs need it, but only through values loaded from the cache: a
+    warm run does not run it; its ``keys`` are those its outputs would have).
 
     ``params`` are the validated parameters it ran with and ``keys`` the cache
     key of each output port; ``output_bytes`` counts loaded outputs too.
@@ -95,8 +98,9 @@ class RunRecord:
         ]
         lines.append(
             f"{self.count('computed')} computed, {self.count('cached')} cached, "
-            f"{self.count('failed')} failed, {self.count('skipped')} skipped "
-            f"in {self.seconds:.3f} s ({self.executor})"
+            f"{self.count('failed')} failed, {self.count('skipped')} skipped"
+            + (f", {unneeded} unneeded" if (unneeded := self.count("unneeded")) else "")
+            + f" in {self.seconds:.3f} s ({self.executor})"
         )
         return "\n".join(lines)
 
@@ -143,3 +147,34 @@ class RunHooks:
 
     def run_finished(self, *, record: RunRecord, failed: bool) -> None:
         """After the run, whatever happened."""
+
+
+def intermediates(
+    compiled: CompiledGraph, values: dict[tuple[str, str], Any]
+) -> dict[str, tuple[type[PortType], Any]]:
+    """Every node output held that is not a graph output (``keep_intermediates``), by
+    ``node`` or ``node.port``."""
+    steps, outputs = compiled.steps, set(compiled.outputs.values())
+    return {
+        (f"{name}.{port}" if len(steps[name].outputs) > 1 else name): (
+            steps[name].outputs[port],
+            value,
+        )
+        for (name, port), value in values.items()
+        if name in steps and (name, port) not in outputs
+    }
+
+
+def wrapped_failure(
+    step: Step, error: BaseException, values: dict[tuple[str, str], Any]
+) -> NodeExecutionError:
+    """A node's error as the run reports it: the node, its parameters, its inputs' summaries."""
+    summary = {}
+    for port, source in step.inputs.items():
+        value = values.get(source)
+        summary[port] = step.spec.inputs[port].type.summary(value) if value is not None else "?"
+    wrapped = NodeExecutionError(
+        step.name, step.spec.id, step.params, summary, f"{type(error).__name__}: {error}"
+    )
+    wrapped.__cause__ = error
+    return wrapped

@@ -16,6 +16,7 @@ not start are made pending at the end (:meth:`RunState.records`).
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Mapping, Sequence
 from collections.abc import Set as AbstractSet
@@ -28,7 +29,6 @@ from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, Schedule, Step
 from graphvision.errors import (
     GraphvisionError,
-    NodeExecutionError,
     PortValueError,
 )
 from graphvision.execution.executors import (
@@ -43,14 +43,27 @@ from graphvision.execution.executors import (
 from graphvision.execution.inputs import freeze_value, value_bytes
 from graphvision.execution.limits import current_limits, start_on_own_thread
 from graphvision.execution.plan import chain_keys, plan_steps
-from graphvision.execution.record import NodeRecord, RunHooks, RunRecord, RunResult
-from graphvision.values.ports import PortType
+from graphvision.execution.record import (
+    NodeRecord,
+    RunHooks,
+    RunRecord,
+    RunResult,
+    intermediates,
+    wrapped_failure,
+)
+from graphvision.values.memory import frozen_in_place
 
 __all__ = ["RunState"]
 
 # About what handing a node to a thread and taking its result back costs (measured on
 # a fan-out of trivial nodes): a node faster than this gains nothing from a thread.
 _QUICK_SECONDS = 25e-6
+
+getrefcount = sys.getrefcount
+# References ``accept`` itself holds to a node's result when it counts them: its argument,
+# the validated value and getrefcount's argument (Python 3.14 counts references on the
+# stack otherwise: there, nothing is frozen in place).
+_OWN_REFS = 3 if sys.version_info < (3, 14) else -(2**20)
 
 
 @dataclass(eq=False)
@@ -120,7 +133,8 @@ class RunState:
 
     def plan(self, needed: list[str], wanted: list[tuple[str, str]]) -> list[str]:
         """Apply :func:`plan_steps`: record the loaded values as cached nodes (and tell the
-        hooks); return the steps to compute in order (all ``needed`` without a cache)."""
+        hooks), the steps only they read as unneeded; return the steps to compute in order
+        (all ``needed`` without a cache)."""
         if self.cache is None:
             return needed
         found = plan_steps(
@@ -141,6 +155,11 @@ class RunState:
                 hook.node_finished(
                     name=node.name, op=node.op, status="cached", seconds=node.seconds
                 )
+        compute = set(found.compute)
+        if len(compute | self.nodes.keys()) < len(needed):  # ancestors of loaded values only
+            for name in needed:
+                if name not in compute and name not in self.nodes:
+                    self.nodes[name] = self.new_record(self.compiled.steps[name], "unneeded")
         return found.compute
 
     def prepare(
@@ -250,7 +269,7 @@ class RunState:
         began = time.perf_counter()
         try:  # as on a worker: warnings and a fault name the node, a forked child is ended
             result, seconds = call_labelled(step.spec.func, kwargs, *step.call_names)
-            outputs = self.accept(step, result)
+            outputs = self.accept(step, result, 1)
         except NODE_ERRORS as error:
             self.started[name] = began
             return self.failed(step, error)
@@ -295,8 +314,8 @@ class RunState:
         if self.chained:
             self.in_flight.pop(name, None)
         try:
-            result, seconds = future.result()
-            outputs = self.accept(step, result)
+            result, seconds = future.result()  # (the future holds the result too)
+            outputs = self.accept(step, result, 2)
         except NODE_ERRORS as error:
             return self.failed(step, error)
         return self.computed(step, outputs, seconds)
@@ -305,7 +324,7 @@ class RunState:
         node = self.record_of(step, "failed")
         node.seconds = time.perf_counter() - self.started[step.name]
         node.error = f"{type(error).__name__}: {error}"
-        self.failures[step.name] = self.wrap(step, error)
+        self.failures[step.name] = wrapped_failure(step, error, self.values)
         self.release_inputs(step)
         for hook in self.hooks:
             hook.node_finished(
@@ -338,7 +357,9 @@ class RunState:
             hook.node_finished(name=name, op=spec.id, status="computed", seconds=seconds)
         return True
 
-    def accept(self, step: Step, result: Any) -> dict[str, Any]:
+    def accept(self, step: Step, result: Any, held: int = 0) -> dict[str, Any]:
+        """Validated, frozen outputs; an array only the caller (``held`` references) holds
+        is frozen without a copy."""
         if self.encoded:
             return {
                 port: freeze_value(kind, kind.decode(arrays, meta))
@@ -346,12 +367,18 @@ class RunState:
             }
         only = step.only_output
         if only is not None:  # one output: no tuple to split
-            port, kind, scalar = only
+            port, kind, scalar, plain = only
             try:
                 value = kind.validate(result)
-                return {port: value if scalar else freeze_value(kind, value)}
             except PortValueError as error:
                 raise PortValueError(f"node returned an invalid output '{port}': {error}") from None
+            if scalar:
+                return {port: value}
+            if plain and value is result and getrefcount(value) <= held + _OWN_REFS:
+                frozen = frozen_in_place(value)  # nothing else holds it: no copy
+                if frozen is not None:
+                    return {port: frozen}
+            return {port: freeze_value(kind, value)}
         outputs = {}
         for port, value in step.spec.split_outputs(result).items():
             kind = step.outputs[port]
@@ -369,28 +396,5 @@ class RunState:
             if source in self.values:
                 produced[name] = self.values[source]
                 self.record.outputs[name] = self.compiled.output_type(name).summary(produced[name])
-        kept = self.intermediates() if self.keep_intermediates else {}
+        kept = intermediates(self.compiled, self.values) if self.keep_intermediates else {}
         return RunResult(produced, self.record, self.compiled, self.failures, kept)
-
-    def intermediates(self) -> dict[str, tuple[type[PortType], Any]]:
-        """Every node output held that is not a graph output (``keep_intermediates``)."""
-        steps, outputs = self.compiled.steps, set(self.compiled.outputs.values())
-        return {
-            (f"{name}.{port}" if len(steps[name].outputs) > 1 else name): (
-                steps[name].outputs[port],
-                value,
-            )
-            for (name, port), value in self.values.items()
-            if name in steps and (name, port) not in outputs
-        }
-
-    def wrap(self, step: Step, error: BaseException) -> NodeExecutionError:
-        summary = {}
-        for port, source in step.inputs.items():
-            value = self.values.get(source)
-            summary[port] = step.spec.inputs[port].type.summary(value) if value is not None else "?"
-        wrapped = NodeExecutionError(
-            step.name, step.spec.id, step.params, summary, f"{type(error).__name__}: {error}"
-        )
-        wrapped.__cause__ = error
-        return wrapped

@@ -32,6 +32,7 @@ never read).
 from __future__ import annotations
 
 import ctypes
+import weakref
 from collections.abc import Callable
 from typing import BinaryIO
 
@@ -42,7 +43,9 @@ __all__ = [
     "aligned_bytes",
     "frozen_copies",
     "frozen_copy",
+    "frozen_in_place",
     "is_aligned",
+    "is_frozen_owner",
     "read_aligned",
 ]
 
@@ -108,6 +111,48 @@ def frozen_copy(array: np.ndarray) -> np.ndarray:
     if array.nbytes:  # (a few microseconds less than a ctypes window for a small array)
         ctypes.memmove(start + offset, array.__array_interface__["data"][0], array.nbytes)
     return np.frombuffer(owner, dtype, array.size, offset).reshape(shape)
+
+
+IN_PLACE_BYTES = 16384
+"""Arrays smaller than this are copied: a copy costs no more than freezing in place."""
+
+_OWNERS: weakref.WeakValueDictionary[int, np.ndarray] = weakref.WeakValueDictionary()
+
+
+def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
+    """``array``'s own memory, made immutable without a copy, when it can be (else None).
+
+    For an array that a node has just returned and that nothing but the caller holds (the
+    caller checks that: ``sys.getrefcount``): a plain ``ndarray`` that owns C-ordered
+    memory at a multiple of :data:`ALIGNMENT`. Its ``writeable`` flag is cleared and what
+    the caller keeps is a read-only view through a ``memoryview``: the view and its bases
+    cannot be made writable by their flags (the owner is no base of the view, only the
+    object under its buffer), as an array over ``bytes`` cannot; the copy into ``bytes``
+    (0.8 ms of a 12 ms pipeline's run for 3.3 MB of images) is saved.
+    """
+    flags = array.flags
+    if (
+        type(array) is not np.ndarray
+        or array.base is not None
+        or not (flags.writeable and flags.c_contiguous)
+        or array.nbytes < IN_PLACE_BYTES
+        or array.dtype.hasobject
+        or array.__array_interface__["data"][0] % ALIGNMENT
+    ):
+        return None
+    flags.writeable = False
+    try:
+        window = memoryview(array).cast("B")
+    except (TypeError, ValueError, BufferError):  # a dtype without a buffer format
+        flags.writeable = True
+        return None
+    _OWNERS[id(array)] = array
+    return np.frombuffer(window, array.dtype).reshape(array.shape)
+
+
+def is_frozen_owner(root: object) -> bool:
+    """Whether ``root`` is an array :func:`frozen_in_place` froze (the owner of a view)."""
+    return isinstance(root, np.ndarray) and _OWNERS.get(id(root)) is root
 
 
 def frozen_copies(arrays: list[np.ndarray]) -> list[np.ndarray]:

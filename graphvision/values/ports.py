@@ -44,7 +44,7 @@ import numpy as np
 from graphvision.errors import PortValueError
 from graphvision.values.budget import check_array_file
 from graphvision.values.dtype_policy import to_dtype
-from graphvision.values.memory import frozen_copies, frozen_copy, is_aligned
+from graphvision.values.memory import frozen_copies, frozen_copy, is_aligned, is_frozen_owner
 
 __all__ = [
     "ArrayPort",
@@ -96,7 +96,11 @@ def is_frozen(array: np.ndarray) -> bool:
         else:
             root = root.base
     # (an array unpickled over bytes can be writable: it is copied)
-    return isinstance(root, bytes) and is_aligned(array) and not array.flags.writeable
+    return (
+        (isinstance(root, bytes) or is_frozen_owner(root))
+        and is_aligned(array)
+        and not array.flags.writeable
+    )
 
 
 class PortType:
