@@ -16,6 +16,7 @@ import os
 import platform
 import stat
 import subprocess
+import sys
 from collections.abc import Collection, Mapping
 from datetime import UTC, datetime
 from importlib import metadata
@@ -94,7 +95,11 @@ def git_state(file: Path) -> tuple[str, bool]:
     the repository's ``HEAD`` and index are unchanged (their sizes and
     modification times), so a batch of many runs of one pipeline asks once.
     """
-    file = file.resolve()
+    return _git_state_of(file.resolve())
+
+
+def _git_state_of(file: Path) -> tuple[str, bool]:
+    """:func:`git_state` of a resolved path."""
     watched = _git_files(str(file.parent))
     if watched is None:  # a worktree or a submodule: ask git every time
         return _ask_git(file)
@@ -213,7 +218,7 @@ def package_versions(registry: Registry, ops: Collection[str] | None = None) -> 
     happened to be imported (all of them when the plugin index was missing).
     """
     versions = {
-        "python": platform.python_version(),
+        "python": _PYTHON,
         **{name: _version(name) for name in ("graphvision", "numpy", "scipy")},
     }
     used = set(ops) if ops is not None else None
@@ -224,9 +229,14 @@ def package_versions(registry: Registry, ops: Collection[str] | None = None) -> 
     return versions
 
 
+_PYTHON = platform.python_version()
+
+
 def _plugin_version(origin: str) -> str:
     """A local plugin file's or folder's SHA-256, else the version of the distribution of the
-    module ``origin`` names."""
+    module ``origin`` names (an imported module's name is no path: not looked up as one)."""
+    if origin in sys.modules:
+        return _distribution_of(origin) or "unknown"
     try:
         info = os.stat(origin)
     except (OSError, ValueError):  # a module's name, not a path
@@ -236,6 +246,23 @@ def _plugin_version(origin: str) -> str:
     if info is not None and stat.S_ISDIR(info.st_mode):
         return f"sha256 {_folder_sha256(Path(origin))}"
     return _distribution_of(origin) or "unknown"
+
+
+_RESOLVED: dict[tuple[Any, ...], Path] = {}
+
+
+def _resolved(path: str, info: os.stat_result) -> Path:
+    """``Path(path).resolve()`` (a system call per folder of it), kept while ``path`` (from
+    the same working folder, if relative) names the same file: its device and inode."""
+    where = "" if os.path.isabs(path) else os.getcwd()
+    stamp = (path, where, info.st_dev, info.st_ino)
+    known = _RESOLVED.get(stamp)
+    if known is None:
+        known = Path(path).resolve()
+        if len(_RESOLVED) > 64:
+            _RESOLVED.clear()
+        _RESOLVED[stamp] = known
+    return known
 
 
 def _file_stat(path: str) -> os.stat_result | None:
@@ -274,10 +301,10 @@ def describe_run(
     record.date = datetime.now(UTC).isoformat(timespec="seconds")
     info = _file_stat(compiled.graph.source) if compiled.graph.source else None
     if info is not None:
-        source = Path(compiled.graph.source)
-        record.pipeline_file = str(source.resolve())
+        source = _resolved(compiled.graph.source, info)
+        record.pipeline_file = str(source)
         record.pipeline_sha256 = _known_sha256(compiled.graph.source, info)
-        record.git_commit, record.git_dirty = git_state(source)
+        record.git_commit, record.git_dirty = _git_state_of(source)
     record.inputs = {
         name: _describe_input(value, keys.get((name, ""), "")) for name, value in given.items()
     }

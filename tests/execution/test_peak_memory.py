@@ -118,3 +118,19 @@ def test_a_compiled_graph_run_again_is_estimated_again_for_larger_inputs(monkeyp
             max_memory=fits + 1,
         )  # fmt: skip
     assert len(played) == 2
+
+
+def test_the_memory_available_is_read_only_when_the_free_memory_does_not_settle_it(monkeypatch):
+    """``/proc/meminfo`` (0.1-0.2 ms) is read only for a peak above the free memory less a
+    sixteenth of the total (the kernel's reserves are far less); never under a limit."""
+    from graphvision.execution import peak_memory
+
+    pages = {"SC_AVPHYS_PAGES": 1000, "SC_PHYS_PAGES": 1600, "SC_PAGE_SIZE": 4096}
+    monkeypatch.setattr(peak_memory.os, "sysconf", lambda name: pages[name])
+    monkeypatch.setattr(peak_memory, "_PAGE_SIZE", 4096)
+    monkeypatch.delenv("GRAPHVISION_MAX_MEMORY", raising=False)
+    sure = (1000 - 1600 // 16) * 4096
+    assert peak_memory._surely_available(sure)
+    assert not peak_memory._surely_available(sure + 1)
+    monkeypatch.setenv("GRAPHVISION_MAX_MEMORY", "1e12")
+    assert not peak_memory._surely_available(0)

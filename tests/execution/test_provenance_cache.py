@@ -100,3 +100,23 @@ def test_the_commit_follows_a_new_branch_and_a_new_commit(tmp_path):
     assert provenance.git_state(tmp_path / "p.yaml") == (second, False)
     third = commit("third")
     assert provenance.git_state(tmp_path / "p.yaml") == (third, False)
+
+
+def test_the_pipeline_files_resolved_path_follows_a_retargeted_link(tmp_path):
+    """The resolved path is kept while the name leads to the same file (a run resolved it
+    twice: a system call per folder each time); a link pointed elsewhere is resolved again."""
+    plugin = tmp_path / "cachedprov.py"
+    plugin.write_text(PLUGIN)
+    registry = gv.discover([plugin], entry_points=False)
+    first, second = tmp_path / "a", tmp_path / "b"
+    first.mkdir(), second.mkdir()
+    link = tmp_path / "link.yaml"
+    link.symlink_to(_pipeline(first))
+    _pipeline(second)
+    image = np.zeros((4, 4), np.float32)
+    graph = gv.load_pipeline(link)
+    before = gv.run(graph, registry, inputs={"image": image}).record.pipeline_file
+    link.unlink()
+    link.symlink_to(second / "p.yaml")
+    after = gv.run(graph, registry, inputs={"image": image}).record.pipeline_file
+    assert (before, after) == (str(first.resolve() / "p.yaml"), str(second.resolve() / "p.yaml"))
