@@ -48,6 +48,21 @@ class Step:
         return f"node '{self.name}' ({op})", op
 
     @cached_property
+    def call_plan(
+        self,
+    ) -> tuple[Any, tuple[tuple[str, tuple[str, str]], ...], dict[str, Any], str, str, Any]:
+        """What a run reads to call the node, in one tuple made once: the function, each
+        input port with the value it reads, the parameters, the frame's label, the op its
+        warnings name, and :attr:`only_output`."""
+        label, op = self.call_names
+        return self.spec.func, tuple(self.inputs.items()), self.params, label, op, self.only_output
+
+    @cached_property
+    def read(self) -> tuple[tuple[str, str], ...]:
+        """The values the node reads, one per input port (a value read twice counts twice)."""
+        return tuple(self.inputs.values())
+
+    @cached_property
     def output_sources(self) -> tuple[tuple[str, tuple[str, str]], ...]:
         """Each output port with the value it makes, ``(port, (node, port))``, made once for
         every run."""
@@ -145,6 +160,16 @@ class CompiledGraph:
         graph = self.graph
         marked = [(n, tuple(d.truth_of)) for n, d in graph.inputs.items() if d.truth_of]
         return marked + [(n, tuple(d.truth_of)) for n, d in graph.nodes.items() if d.truth_of]
+
+    @cached_property
+    def step_ops(self) -> dict[str, str]:
+        """Each step's op id (what a run learns is quick is an op), made once."""
+        return {name: step.spec.id for name, step in self.steps.items()}
+
+    @cached_property
+    def output_types(self) -> dict[str, type[PortType]]:
+        """Each output's port type (:meth:`output_type`), made once."""
+        return {name: self.output_type(name) for name in self.outputs}
 
     def output_type(self, name: str) -> type[PortType]:
         producer, port = self.outputs[name]

@@ -368,6 +368,9 @@ def _run_steps(
             counted=(schedule.waiting, schedule.dependents)
             if dependencies is schedule.dependencies
             else None,
+            quick_ops=(state.compiled.step_ops, state.quick_ops)
+            if here and not state.inline and not state.timed
+            else None,
         )
     finally:
         limit.release()

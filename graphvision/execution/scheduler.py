@@ -54,6 +54,7 @@ def run_tasks(
     limit: int | None = None,
     ahead: bool = False,
     counted: tuple[Mapping[str, int], Mapping[str, Sequence[str]]] | None = None,
+    quick_ops: tuple[Mapping[str, str], Set[str]] | None = None,
 ) -> list[str]:
     """Run every task once its dependencies succeeded; return the tasks skipped.
 
@@ -92,13 +93,20 @@ def run_tasks(
         How many dependencies each task has and each task's dependents, as
         :func:`count_dependencies` makes them from ``dependencies``, made once
         for many runs (a compiled graph's schedule keeps them).
+    quick_ops : (op of each task, the quick ops), optional
+        What ``quick`` says, read without a call: a task is quick when its op is in
+        the set (read as it changes). The tasks then run one by one in this thread,
+        without the loop, as long as the next is quick; the loop takes over at the
+        first that is not.
     """
     waiting, dependents = counted or count_dependencies(dependencies)
-    if run_here is not None and quick is EVERY_TASK:
-        return _one_by_one(dependencies, waiting, dependents, run_here, keep_going)
     loop = _Loop(dependencies, start, finish, keep_going, run_here, quick, limit, ahead)
-    loop.waiting, loop.unstarted, loop.dependents = dict(waiting), dict(waiting), dependents
+    loop.waiting, loop.dependents = dict(waiting), dependents
     loop.ready.extend(name for name, count in loop.waiting.items() if count == 0)
+    fast = None if quick is EVERY_TASK else quick_ops
+    if run_here and (fast or quick is EVERY_TASK) and _one_by_one(loop, run_here, fast):
+        return [n for n in dependencies if n not in loop.started or n in loop.blocked]
+    loop.unstarted = dict(loop.waiting)  # (only ``ahead`` reads it: never after one by one)
     loop.launch()
     while loop.running:
         loop.step()
@@ -124,20 +132,23 @@ def count_dependencies(
 
 
 def _one_by_one(
-    dependencies: Mapping[str, Set[str]],
-    counts: Mapping[str, int],
-    dependents: Mapping[str, Sequence[str]],
+    loop: _Loop,
     run_here: Callable[[str], bool],
-    keep_going: bool,
-) -> list[str]:
-    """:func:`run_tasks` when every task is quick: first in, first out, as the loop runs them
-    (a task is ready once its dependencies succeeded; after a failure without
-    ``keep_going`` the tasks ready already still run, no other starts)."""
-    waiting = dict(counts)
-    ready = deque([name for name, count in waiting.items() if count == 0])
-    started, blocked, stopping = set(), set(), False
+    quick_ops: tuple[Mapping[str, str], Set[str]] | None,
+) -> bool:
+    """:func:`run_tasks` while the next task is quick (every task without ``quick_ops``):
+    first in, first out, as the loop runs them (a task is ready once its dependencies
+    succeeded; after a failure without ``keep_going`` the tasks ready already still run, no
+    other starts), without the loop's steps. False when a task that is not quick is next:
+    the loop (its state kept up to date here) goes on from there."""
+    waiting, dependents, ready, started = loop.waiting, loop.dependents, loop.ready, loop.started
+    blocked, stopping, ops, quick = loop.blocked, loop.stopping, *(quick_ops or ({}, set()))
     while ready:
-        name = ready.popleft()
+        name = ready[0]
+        if quick_ops is not None and ops[name] not in quick:
+            loop.stopping = stopping
+            return False
+        ready.popleft()
         started.add(name)
         if run_here(name):
             for child in dependents[name]:
@@ -151,8 +162,8 @@ def _one_by_one(
                 if child not in blocked:
                     blocked.add(child)
                     stack.append(child)
-        stopping = stopping or not keep_going
-    return [name for name in dependencies if name not in started or name in blocked]
+        stopping = stopping or not loop.keep_going
+    return True
 
 
 class _Loop:

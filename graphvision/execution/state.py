@@ -260,16 +260,24 @@ class RunState:
         """Run a step in this thread and finish it (the scheduler does for a quick one);
         False when it failed."""
         step = self.compiled.steps[name]
+        func, inputs, params, label, op, only = step.call_plan
         for hook in self.hooks:
-            hook.node_started(name=name, op=step.spec.id)
+            hook.node_started(name=name, op=op)
         values, kwargs = self.values, {}
-        for port, source in step.inputs.items():  # (a loop: a comprehension is a call more)
+        for port, source in inputs:  # (a loop: a comprehension is a call more)
             kwargs[port] = values[source]
-        kwargs.update(step.params)
+        if params:
+            kwargs.update(params)
         began = time.perf_counter()
         try:  # as on a worker: warnings and a fault name the node, a forked child is ended
-            result, seconds = call_labelled(step.spec.func, kwargs, *step.call_names)
-            outputs = self.accept(step, result, 1)
+            result, seconds = call_labelled(func, kwargs, label, op)
+            if only is None or not only[2]:
+                outputs = self.accept(step, result, 1)
+            else:  # one scalar: nothing to split or freeze
+                try:
+                    outputs = {only[0]: only[1].validate(result)}
+                except PortValueError as error:
+                    raise _invalid(only[0], error) from None
         except NODE_ERRORS as error:
             self.started[name] = began
             return self.failed(step, error)
@@ -335,7 +343,10 @@ class RunState:
     def computed(self, step: Step, outputs: dict[str, Any], seconds: float) -> bool:
         """Store a step's accepted outputs (and in the cache), record it, release its inputs."""
         name, spec = step.name, step.spec
-        (self.quick_ops.add if seconds < _QUICK_SECONDS else self.quick_ops.discard)(spec.id)
+        if seconds < _QUICK_SECONDS:
+            self.quick_ops.add(spec.id)
+        else:
+            self.quick_ops.discard(spec.id)
         cache = self.cache if spec.cache else None
         values, keys, made, size = self.values, self.keys, {}, 0
         for port, source in step.output_sources:
@@ -345,11 +356,13 @@ class RunState:
                 size += cache.put(key, step.outputs[port], value)
             elif port not in step.scalar_outputs:
                 size += value_bytes(step.outputs[port], value)
+        params = step.params
         self.nodes[name] = NodeRecord(
-            name, spec.id, "computed", seconds, size, "", dict(step.params), made, spec.backend
-        )
+            name, spec.id, "computed", seconds, size, "", dict(params) if params else {}, made,
+            spec.backend,
+        )  # fmt: skip
         consumers, pinned = self.consumers, self.pinned  # release the inputs it read
-        for source in step.inputs.values():
+        for source in step.read:
             left = consumers[source] = consumers[source] - 1
             if not left and source not in pinned:
                 values.pop(source, None)
@@ -371,7 +384,7 @@ class RunState:
             try:
                 value = kind.validate(result)
             except PortValueError as error:
-                raise PortValueError(f"node returned an invalid output '{port}': {error}") from None
+                raise _invalid(port, error) from None
             if scalar:
                 return {port: value}
             if plain and value is result and getrefcount(value) <= held + _OWN_REFS:
@@ -385,16 +398,21 @@ class RunState:
             try:
                 outputs[port] = freeze_value(kind, kind.validate(value))
             except PortValueError as error:
-                raise PortValueError(f"node returned an invalid output '{port}': {error}") from None
+                raise _invalid(port, error) from None
         return outputs
 
     def result(self, wanted: list[str]) -> RunResult:
         """The outputs produced (with their summaries in the record) as a :class:`RunResult`."""
-        produced = {}
+        values, summaries, produced = self.values, self.record.outputs, {}
+        sources, types = self.compiled.outputs, self.compiled.output_types
         for name in wanted:
-            source = self.compiled.outputs[name]
-            if source in self.values:
-                produced[name] = self.values[source]
-                self.record.outputs[name] = self.compiled.output_type(name).summary(produced[name])
+            source = sources[name]
+            if source in values:
+                value = produced[name] = values[source]
+                summaries[name] = types[name].summary(value)
         kept = intermediates(self.compiled, self.values) if self.keep_intermediates else {}
         return RunResult(produced, self.record, self.compiled, self.failures, kept)
+
+
+def _invalid(port: str, error: PortValueError) -> PortValueError:
+    return PortValueError(f"node returned an invalid output '{port}': {error}")

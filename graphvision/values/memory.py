@@ -142,7 +142,7 @@ def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
         return None
     flags.writeable = False
     try:
-        window = memoryview(array).cast("B")
+        window = memoryview(array).cast("B")  # type: ignore[arg-type]  # ndarray is a buffer
     except (TypeError, ValueError, BufferError):  # a dtype without a buffer format
         flags.writeable = True
         return None
