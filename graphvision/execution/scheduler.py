@@ -39,6 +39,8 @@ import queue
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence, Set
 from concurrent.futures import Future
+from itertools import compress
+from operator import not_
 
 __all__ = ["EVERY_TASK", "count_dependencies", "run_tasks"]
 
@@ -102,7 +104,7 @@ def run_tasks(
     waiting, dependents = counted or count_dependencies(dependencies)
     loop = _Loop(dependencies, start, finish, keep_going, run_here, quick, limit, ahead)
     loop.waiting, loop.dependents = dict(waiting), dependents
-    loop.ready.extend(name for name, count in loop.waiting.items() if count == 0)
+    loop.ready.extend(compress(loop.waiting, map(not_, loop.waiting.values())))  # (in C)
     fast = None if quick is EVERY_TASK else quick_ops
     if run_here and (fast or quick is EVERY_TASK) and _one_by_one(loop, run_here, fast):
         return [n for n in dependencies if n not in loop.started or n in loop.blocked]

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import sys
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from collections.abc import Set as AbstractSet
 from concurrent.futures import Future
 from dataclasses import dataclass, field
@@ -36,9 +36,9 @@ from graphvision.execution.executors import (
     Executor,
     call_labelled,
     call_node,
-    call_node_encoded,
     chains_tasks,
     encodes_values,
+    submit_encoded,
 )
 from graphvision.execution.inputs import freeze_value, value_bytes
 from graphvision.execution.limits import current_limits, start_on_own_thread
@@ -60,9 +60,8 @@ __all__ = ["RunState"]
 _QUICK_SECONDS = 25e-6
 
 getrefcount = sys.getrefcount
-# References ``accept`` itself holds to a node's result when it counts them: its argument,
-# the validated value and getrefcount's argument (Python 3.14 counts references on the
-# stack otherwise: there, nothing is frozen in place).
+# What ``accept`` holds of a node's result: its argument, the value and getrefcount's
+# (Python 3.14 counts the stack otherwise: there, nothing is frozen in place)
 _OWN_REFS = 3 if sys.version_info < (3, 14) else -(2**20)
 
 
@@ -220,8 +219,11 @@ class RunState:
     def records(self) -> list[NodeRecord]:
         """Every node's record in the graph's order: those still pending made now."""
         nodes, pending, listed = self.nodes, self.pending, []
-        if pending <= nodes.keys():  # every node that was to run has its record
-            return [nodes[name] for name in self.compiled.steps if name in nodes]
+        if pending <= nodes.keys():  # every node that was to run has its record (in C: no
+            steps: Iterable[str] = self.compiled.steps  # Python step per node)
+            if len(nodes) < len(self.compiled.steps):
+                steps = filter(nodes.__contains__, steps)
+            return list(map(nodes.__getitem__, steps))
         for name, step in self.compiled.steps.items():
             node = nodes.get(name)
             if node is None and name in pending:
@@ -284,33 +286,13 @@ class RunState:
         return self.computed(step, outputs, seconds)
 
     def _submit_encoded(self, name: str, step: Step) -> Future:
-        if step.spec.ref.module == "__main__" and not step.spec.ref.path:
-            refused: Future = Future()
-            refused.set_exception(
-                RuntimeError(
-                    "the node is defined in __main__ (a script or a notebook), which "
-                    "worker processes cannot import: put it in a module file and load "
-                    "that with gv.discover([path]) or --plugins PATH, or use threads"
-                )
-            )
-            return refused
-        payload, upstream = {}, {}
-        for port, source in step.inputs.items():
-            if source in self.values:
-                kind = step.spec.inputs[port].type
-                payload[port] = (kind, *kind.encode(self.values[source]))
-            else:  # submitted ahead: the producer's task stands for its result
-                upstream[port] = (self.in_flight[source[0]].task, source[1])
-        call = self.limits.worker_call(self.seconds_for(name), f"node '{name}' ({step.spec.id})")
-        future = self.executor.submit(
-            *call,
-            call_node_encoded,
-            step.spec.ref,
-            step.params,
-            payload,
-            step.outputs,
-            step.spec.output_tuple is not None,
-            upstream,
+        label = f"node '{name}' ({step.spec.id})"
+        future = submit_encoded(
+            self.executor,
+            lambda: self.limits.worker_call(self.seconds_for(name), label),
+            step,
+            self.values,
+            self.in_flight,
         )
         if self.chained:
             self.in_flight[name] = future
