@@ -35,6 +35,10 @@ def call_node(
 
 
 _TRAMPOLINES = crash_note._TRAMPOLINES  # the frames named after nodes, made once per label
+# crash_note's running nodes and the process it noted its os._exit in (objects it changes in
+# place, never rebinds), and the clock and thread id, read per node without a lookup more
+_RUNNING, _INSTALLED_IN = crash_note._RUNNING, crash_note._INSTALLED_IN
+_clock, _get_ident = time.perf_counter, threading.get_ident
 
 _FORKS = [0]
 """How many forks made this process (``os.register_at_fork``): a forked child's count is
@@ -60,20 +64,20 @@ def call_labelled(
     What :func:`~graphvision.execution.crash_note.call_named` does, one call less per node
     (after the first, which installs its ``os._exit`` note through it).
     """
-    if not crash_note._INSTALLED_IN:
+    if not _INSTALLED_IN:
         return _first_call(func, kwargs, label, op)
-    forks, ident, named = _FORKS[0], threading.get_ident(), crash_note._RUNNING
-    running.op, named[ident] = op, label
+    forks, ident = _FORKS[0], _get_ident()
+    running.op, _RUNNING[ident] = op, label
     trampoline = _TRAMPOLINES.get(label) or crash_note._trampoline(label)
-    began = time.perf_counter()
+    began = _clock()
     try:
         result = trampoline(func, kwargs)
     finally:
         if _FORKS[0] != forks:
             _end_forked_child(op)
         running.op = ""
-        named.pop(ident, None)
-    return result, time.perf_counter() - began
+        _RUNNING.pop(ident, None)
+    return result, _clock() - began
 
 
 def _first_call(

@@ -146,11 +146,11 @@ def _one_by_one(
     waiting, dependents, ready, started = loop.waiting, loop.dependents, loop.ready, loop.started
     blocked, stopping, ops, quick = loop.blocked, loop.stopping, *(quick_ops or ({}, set()))
     while ready:
-        name = ready[0]
+        name = ready.popleft()
         if quick_ops is not None and ops[name] not in quick:
+            ready.appendleft(name)
             loop.stopping = stopping
             return False
-        ready.popleft()
         started.add(name)
         if run_here(name):
             for child in dependents[name]:

@@ -333,9 +333,9 @@ class RunState:
         values, keys, made, size = self.values, self.keys, {}, 0
         for port, source in step.output_sources:
             value = values[source] = outputs[port]
-            key = made[port] = keys[source]
+            made[port] = keys[source]
             if cache is not None:
-                size += cache.put(key, step.outputs[port], value)
+                size += cache.put(made[port], step.outputs[port], value)
             elif port not in step.scalar_outputs:
                 size += value_bytes(step.outputs[port], value)
         params = step.params

@@ -171,3 +171,29 @@ def test_every_task_here_runs_as_the_loop_would(keep_going):
     expected = ["a", "g", "b", "c"] + (["e", "f"] if keep_going else [])
     assert by_one == expected
     assert skipped_by_one == (["d"] if keep_going else ["d", "e", "f"])
+
+
+def test_quick_tasks_run_here_one_by_one_until_the_next_is_not_quick():
+    """On threads, quick tasks run in this thread without the loop's steps; the loop takes
+    over at the first task whose op is not (or no longer) known quick."""
+    dependencies = {"a": set(), "b": {"a"}, "c": {"b"}, "d": {"c"}, "e": {"d"}}
+    ops = {"a": "fast", "b": "fast", "c": "slow", "d": "fast", "e": "later"}
+    quick, here, handed = {"fast", "later"}, [], []
+
+    def run_here(name: str) -> bool:
+        here.append(name)
+        if name == "d":
+            quick.discard("later")  # what a run learns: this op took long
+        return True
+
+    def start(name: str) -> Future:
+        handed.append(name)
+        done: Future = Future()
+        done.set_result(name)
+        return done
+
+    skipped = run_tasks(
+        dependencies, start, lambda name, future: True, run_here=run_here,
+        quick=lambda name: ops[name] in quick, quick_ops=(ops, quick), limit=4,
+    )  # fmt: skip
+    assert (here, handed, skipped) == (["a", "b", "d"], ["c", "e"], [])
