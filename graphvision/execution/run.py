@@ -20,6 +20,8 @@ Each node of the run moves through these states (``NodeRecord.status``)::
 
     (planned) --cache hit--> cached
         |
+        +--only values loaded from the cache read it--> unneeded
+        |
         +--> pending --started by the scheduler--> running --> computed
                 |                                        \--> failed
                 +--an upstream node failed--> skipped
