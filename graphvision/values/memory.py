@@ -116,7 +116,13 @@ def frozen_copy(array: np.ndarray) -> np.ndarray:
 IN_PLACE_BYTES = 16384
 """Arrays smaller than this are copied: a copy costs no more than freezing in place."""
 
-_OWNERS: weakref.WeakValueDictionary[int, np.ndarray] = weakref.WeakValueDictionary()
+_OWNERS: dict[int, weakref.ref[np.ndarray]] = {}
+"""The arrays :func:`frozen_in_place` froze, by ``id`` (an entry goes with its array)."""
+
+
+def _forget(ref: weakref.ref[np.ndarray], key: int) -> None:
+    if _OWNERS.get(key) is ref:
+        del _OWNERS[key]
 
 
 def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
@@ -146,13 +152,15 @@ def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
     except (TypeError, ValueError, BufferError):  # a dtype without a buffer format
         flags.writeable = True
         return None
-    _OWNERS[id(array)] = array
+    key = id(array)
+    _OWNERS[key] = weakref.ref(array, lambda ref: _forget(ref, key))
     return np.frombuffer(window, array.dtype).reshape(array.shape)
 
 
 def is_frozen_owner(root: object) -> bool:
     """Whether ``root`` is an array :func:`frozen_in_place` froze (the owner of a view)."""
-    return isinstance(root, np.ndarray) and _OWNERS.get(id(root)) is root
+    ref = _OWNERS.get(id(root))
+    return ref is not None and ref() is root
 
 
 def frozen_copies(arrays: list[np.ndarray]) -> list[np.ndarray]:

@@ -87,6 +87,8 @@ def freeze_all(arrays: Arrays) -> Arrays:
 
 def is_frozen(array: np.ndarray) -> bool:
     """Whether ``array`` lies, aligned and read-only, over immutable memory already."""
+    if array.flags.writeable:  # (a node's fresh array: no walk to its root)
+        return False
     root: object = array
     while isinstance(root, np.ndarray | memoryview):
         if isinstance(root, memoryview):
@@ -96,11 +98,7 @@ def is_frozen(array: np.ndarray) -> bool:
         else:
             root = root.base
     # (an array unpickled over bytes can be writable: it is copied)
-    return (
-        (isinstance(root, bytes) or is_frozen_owner(root))
-        and is_aligned(array)
-        and not array.flags.writeable
-    )
+    return (isinstance(root, bytes) or is_frozen_owner(root)) and is_aligned(array)
 
 
 class PortType:
