@@ -20,8 +20,9 @@ the OpenCV backend, and the engine's cost on top of OpenCV against a plain scrip
    engine, per run: the BLAS limit a run holds (threadpoolctl, set and lifted in a
    helper thread: :mod:`graphvision.execution.blas`; the time the run waits for it, sent
    when the run starts and after its last node), accepting the nodes' outputs
-   (validated, then frozen: copied read-only,
-   :func:`graphvision.execution.inputs.freeze_value`), the run's provenance
+   (validated, then frozen: an aligned array the node returned and holds no more
+   in place, read-only, :func:`graphvision.values.memory.frozen_in_place`; others copied
+   read-only, :func:`graphvision.execution.inputs.freeze_value`), the run's provenance
    (:func:`graphvision.execution.provenance.describe_run`) and the peak-memory check
    (:func:`graphvision.execution.peak_memory.check_peak_memory`).
 

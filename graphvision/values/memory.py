@@ -45,7 +45,7 @@ __all__ = [
     "frozen_copy",
     "frozen_in_place",
     "is_aligned",
-    "is_frozen_owner",
+    "is_frozen_window",
     "read_aligned",
 ]
 
@@ -116,13 +116,20 @@ def frozen_copy(array: np.ndarray) -> np.ndarray:
 IN_PLACE_BYTES = 16384
 """Arrays smaller than this are copied: a copy costs no more than freezing in place."""
 
-_OWNERS: dict[int, weakref.ref[np.ndarray]] = {}
-"""The arrays :func:`frozen_in_place` froze, by ``id`` (an entry goes with its array)."""
+_from_memory = ctypes.pythonapi.PyMemoryView_FromMemory
+_from_memory.restype = ctypes.py_object
+_from_memory.argtypes = (ctypes.c_void_p, ctypes.c_ssize_t, ctypes.c_int)
+_READ_ONLY = 0x100  # PyBUF_READ
+
+_KEPT: dict[int, tuple[np.ndarray, weakref.ref[memoryview]]] = {}
+"""The arrays :func:`frozen_in_place` froze, by the ``id`` of the read-only window every
+view of them rests on: each is kept alive by its window, and only by it."""
 
 
-def _forget(ref: weakref.ref[np.ndarray], key: int) -> None:
-    if _OWNERS.get(key) is ref:
-        del _OWNERS[key]
+def _release(key: int, ref: weakref.ref[memoryview]) -> None:
+    entry = _KEPT.get(key)
+    if entry is not None and entry[1] is ref:  # (not a newer window at the same address)
+        del _KEPT[key]
 
 
 def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
@@ -131,10 +138,12 @@ def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
     For an array that a node has just returned and that nothing but the caller holds (the
     caller checks that: ``sys.getrefcount``): a plain ``ndarray`` that owns C-ordered
     memory at a multiple of :data:`ALIGNMENT`. Its ``writeable`` flag is cleared and what
-    the caller keeps is a read-only view through a ``memoryview``: the view and its bases
-    cannot be made writable by their flags (the owner is no base of the view, only the
-    object under its buffer), as an array over ``bytes`` cannot; the copy into ``bytes``
-    (0.8 ms of a 12 ms pipeline's run for 3.3 MB of images) is saved.
+    the caller keeps is a view through a read-only ``memoryview`` over that memory that
+    refers to no object (``PyMemoryView_FromMemory``): the array is no base of the view
+    and the window does not name it, so no flag set on the view or anything it refers to
+    makes it writable, as with a copy in ``bytes``; the array is kept alive by the window
+    (held by every view of it) and freed with it. The copy (0.8 ms of a 12 ms pipeline's
+    run for 3.3 MB of images) is saved.
     """
     flags = array.flags
     if (
@@ -143,24 +152,24 @@ def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
         or not (flags.writeable and flags.c_contiguous)
         or array.nbytes < IN_PLACE_BYTES
         or array.dtype.hasobject
-        or array.__array_interface__["data"][0] % ALIGNMENT
+        or (address := array.__array_interface__["data"][0]) % ALIGNMENT
     ):
         return None
     flags.writeable = False
-    try:
-        window = memoryview(array).cast("B")  # type: ignore[arg-type]  # ndarray is a buffer
-    except (TypeError, ValueError, BufferError):  # a dtype without a buffer format
+    frozen = np.frombuffer(_from_memory(address, array.nbytes, _READ_ONLY), array.dtype)
+    window = frozen.base  # the memoryview numpy holds (every view of ``frozen`` rests on it)
+    if not isinstance(window, memoryview):  # (not how numpy holds a buffer: copy instead)
         flags.writeable = True
         return None
-    key = id(array)
-    _OWNERS[key] = weakref.ref(array, lambda ref: _forget(ref, key))
-    return np.frombuffer(window, array.dtype).reshape(array.shape)
+    key = id(window)
+    _KEPT[key] = (array, weakref.ref(window, lambda ref: _release(key, ref)))
+    return frozen.reshape(array.shape)
 
 
-def is_frozen_owner(root: object) -> bool:
-    """Whether ``root`` is an array :func:`frozen_in_place` froze (the owner of a view)."""
-    ref = _OWNERS.get(id(root))
-    return ref is not None and ref() is root
+def is_frozen_window(window: memoryview) -> bool:
+    """Whether ``window`` is the read-only window of an array :func:`frozen_in_place` froze."""
+    entry = _KEPT.get(id(window))
+    return entry is not None and entry[1]() is window
 
 
 def frozen_copies(arrays: list[np.ndarray]) -> list[np.ndarray]:

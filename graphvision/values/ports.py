@@ -44,7 +44,7 @@ import numpy as np
 from graphvision.errors import PortValueError
 from graphvision.values.budget import check_array_file
 from graphvision.values.dtype_policy import to_dtype
-from graphvision.values.memory import frozen_copies, frozen_copy, is_aligned, is_frozen_owner
+from graphvision.values.memory import frozen_copies, frozen_copy, is_aligned, is_frozen_window
 
 __all__ = [
     "ArrayPort",
@@ -92,13 +92,15 @@ def is_frozen(array: np.ndarray) -> bool:
     root: object = array
     while isinstance(root, np.ndarray | memoryview):
         if isinstance(root, memoryview):
+            if is_frozen_window(root):  # a node's own array, frozen where it lies
+                return is_aligned(array)
             root = root.obj
         elif root.base is None:
             break
         else:
             root = root.base
     # (an array unpickled over bytes can be writable: it is copied)
-    return (isinstance(root, bytes) or is_frozen_owner(root)) and is_aligned(array)
+    return isinstance(root, bytes) and is_aligned(array)
 
 
 class PortType:
