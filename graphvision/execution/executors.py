@@ -28,7 +28,6 @@ from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
-from graphvision.compiler.compiled import Step
 from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.node_call import call_labelled, call_node
 from graphvision.execution.warnings import show_warning
@@ -55,7 +54,6 @@ __all__ = [
     "executor_name",
     "executor_width",
     "make_executor",
-    "submit_encoded",
 ]
 
 EXECUTORS: tuple[str, ...] = ("sync", "threads", "processes", "dask")
@@ -390,42 +388,3 @@ def call_node_encoded(
         arrays, meta = kind.encode(kind.validate(value))
         encoded[port] = (kind, arrays, meta)
     return encoded, seconds
-
-
-def submit_encoded(
-    executor: Executor,
-    call: Callable[[], tuple[Any, ...]],
-    step: Step,
-    values: dict[tuple[str, str], Any],
-    in_flight: dict[str, Any],
-) -> Future:
-    """Hand ``step`` to an executor of other processes: its inputs encoded (or, submitted
-    ahead of them, their producers' tasks from ``in_flight``), after what ``call()`` puts
-    first (the node's limits); a node defined in ``__main__`` is refused."""
-    if step.spec.ref.module == "__main__" and not step.spec.ref.path:
-        refused: Future = Future()
-        refused.set_exception(
-            RuntimeError(
-                "the node is defined in __main__ (a script or a notebook), which "
-                "worker processes cannot import: put it in a module file and load "
-                "that with gv.discover([path]) or --plugins PATH, or use threads"
-            )
-        )
-        return refused
-    payload, upstream = {}, {}
-    for port, source in step.inputs.items():
-        if source in values:
-            kind = step.spec.inputs[port].type
-            payload[port] = (kind, *kind.encode(values[source]))
-        else:  # submitted ahead: the producer's task stands for its result
-            upstream[port] = (in_flight[source[0]].task, source[1])
-    return executor.submit(
-        *call(),
-        call_node_encoded,
-        step.spec.ref,
-        step.params,
-        payload,
-        step.outputs,
-        step.spec.output_tuple is not None,
-        upstream,
-    )

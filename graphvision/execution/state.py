@@ -31,6 +31,7 @@ from graphvision.errors import (
     GraphvisionError,
     PortValueError,
 )
+from graphvision.execution.encoded import submit_encoded
 from graphvision.execution.executors import (
     NODE_ERRORS,
     Executor,
@@ -38,7 +39,6 @@ from graphvision.execution.executors import (
     call_node,
     chains_tasks,
     encodes_values,
-    submit_encoded,
 )
 from graphvision.execution.inputs import freeze_value, value_bytes
 from graphvision.execution.limits import current_limits, start_on_own_thread
