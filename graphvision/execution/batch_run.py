@@ -17,7 +17,7 @@ from typing import Any
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.execution.batch_files import BatchItem, BatchPages, unreadable_reason
 from graphvision.execution.batch_items import plain_graph, run_file, run_item
-from graphvision.execution.batch_stop import StopFlag
+from graphvision.execution.batch_stop import StopFlag, writing
 from graphvision.execution.batch_write import failure_reason, finish_item
 from graphvision.execution.executors import (
     Executor,
@@ -109,18 +109,13 @@ class BatchRun:
                 self.finished[index] = outcome.item
                 return outcome.item
             item, result = self._run(index)
-            with self._writing(folder) as allowed:
+            with writing(self.stop, folder, lambda: self.stopped) as allowed:
                 if not allowed:  # the batch was interrupted meanwhile: its folder is not written
                     return item
                 self.finished[index] = item = finish_item(item, result, self.pages.run)
                 return item
         except Exception as error:  # whatever it is, it fails this file alone
             return BatchItem(path, folder, "failed", error=failure_reason(error))
-
-    def _writing(self, folder: Path) -> Any:
-        if self.stop is None:
-            return contextlib.nullcontext(not self.stopped)
-        return self.stop.writing(folder, lambda: self.stopped)
 
     def remove_stop_flag(self) -> None:
         if self.stop is not None:

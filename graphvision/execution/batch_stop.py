@@ -33,7 +33,7 @@ import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-__all__ = ["INTERRUPTED", "StopFlag"]
+__all__ = ["INTERRUPTED", "StopFlag", "writing"]
 
 INTERRUPTED = "the batch stopped while this file ran; re-run the batch to finish it"
 
@@ -97,3 +97,16 @@ class StopFlag:
 
     def remove(self) -> None:
         shutil.rmtree(self.folder, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def writing(
+    stop: StopFlag | None, folder: str | Path, stopped: Callable[[], bool] | None
+) -> Iterator[bool]:
+    """Whether to write a file's ``folder`` now, claimed meanwhile when there is a flag
+    (:meth:`StopFlag.writing`); without one (Dask), whether ``stopped()`` is still false."""
+    if stop is None:
+        yield not (stopped is not None and stopped())
+        return
+    with stop.writing(folder, stopped) as allowed:
+        yield allowed

@@ -161,8 +161,7 @@ class DaskExecutor:
     @property
     def client(self) -> Any:
         """The ``distributed.Client`` (a local cluster's, once it has started)."""
-        if not self._started.is_set():
-            self._started.wait()
+        self._started.wait()
         if self._client is None:
             error = self._start_error
             if error is None:

@@ -34,11 +34,10 @@ machine, or storage the workers share) and import the plugins (see
 
 from __future__ import annotations
 
-import contextlib
 import threading
 import time
 from collections import OrderedDict
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -49,7 +48,7 @@ from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, compile_graph
 from graphvision.errors import InputError, RunError
 from graphvision.execution.batch_files import BatchItem
-from graphvision.execution.batch_stop import INTERRUPTED, StopFlag
+from graphvision.execution.batch_stop import INTERRUPTED, StopFlag, writing
 from graphvision.execution.batch_write import finish_item
 from graphvision.execution.folders import RunPage
 from graphvision.execution.record import RunRecord
@@ -305,7 +304,7 @@ def run_file_task(
     item.seconds = time.perf_counter() - began
     if result is not None:
         result.record.executor = job.executor
-    with _writing(job.stop, folder, stopped) as allowed:
+    with writing(job.stop, folder, stopped) as allowed:
         if not allowed:  # the batch stopped meanwhile: no folder written
             item.status, item.error = "interrupted", INTERRUPTED
             return FileOutcome(item)
@@ -313,18 +312,6 @@ def run_file_task(
     if result is not None:
         outcome.keys, outcome.value_bytes = _output_keys(result.record, result.compiled)
     return outcome
-
-
-@contextlib.contextmanager
-def _writing(
-    stop: StopFlag | None, folder: str, stopped: Callable[[], bool] | None
-) -> Iterator[bool]:
-    """Whether to write the file's folder (see :class:`StopFlag`), claimed meanwhile."""
-    if stop is not None:
-        with stop.writing(folder, stopped) as allowed:
-            yield allowed
-    else:
-        yield not (stopped is not None and stopped())
 
 
 def _output_keys(record: RunRecord, compiled: CompiledGraph) -> tuple[dict[str, str], int]:

@@ -152,9 +152,9 @@ def _check_pipeline(
     from graphvision.graph.pipeline_file import parse_pipeline
 
     before, after = parse_pipeline(original, file=str(where)), parse_pipeline(text, str(where))
-    problems = []
+    problems, saved = [], _parameters(after)
     for key, old in _parameters(before).items():
-        new = _parameters(after).get(key, old)
+        new = saved.get(key, old)
         if key in overrides or new == old:
             continue
         param = key.partition(".")[2]
