@@ -277,7 +277,9 @@ def _copy(source: Future, target: Future) -> None:
 
 def _worker_setup(environment: dict[str, str], _: ClientStdio) -> None:
     """In each worker: the client's environment variables, standard output and error (a
-    worker forked from the server has the server's), leave Ctrl-C to the client, exit when
+    worker forked from the server has the server's), leave Ctrl-C to the client, end on
+    SIGTERM as a worker does (a fork of the client carries its handler, which stopped the
+    whole batch when one worker was sent SIGTERM), exit when
     the client is gone (even after ``kill -9``), and print warnings as the command line
     does (one line naming the node)."""
     import warnings
@@ -288,6 +290,7 @@ def _worker_setup(environment: dict[str, str], _: ClientStdio) -> None:
         os.environ.clear()
         os.environ.update(environment)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the client's handler a fork carries
     warnings.showwarning = show_warning
     one_blas_thread_for_good()  # the same bits as in the parent's runs (execution.blas)
     threading.Thread(target=_exit_with_client, daemon=True, name="graphvision-parent-watch").start()

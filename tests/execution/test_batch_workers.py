@@ -42,6 +42,17 @@ def test_workers_are_forks_of_the_client_when_no_other_thread_runs(alone):
         pool.shutdown()
 
 
+def test_a_forked_worker_ends_on_sigterm_without_the_clients_handler(alone):
+    before = signal.signal(signal.SIGTERM, lambda *_: None)  # as the command line's
+    pool = make_executor("processes", 1)
+    try:
+        assert pool.fork_workers()  # type: ignore[attr-defined]
+        assert pool.submit(signal.getsignal, signal.SIGTERM).result(timeout=60) == signal.SIG_DFL
+    finally:
+        pool.shutdown()
+        signal.signal(signal.SIGTERM, before)
+
+
 def test_the_client_is_not_forked_beside_another_thread_or_when_told_not_to(monkeypatch):
     here = threading.current_thread()
     blas = SimpleNamespace(name="graphvision-blas-limit")  # idle, made again in the child
