@@ -152,9 +152,9 @@ def _check_pipeline(
     from graphvision.graph.pipeline_file import parse_pipeline
 
     before, after = parse_pipeline(original, file=str(where)), parse_pipeline(text, str(where))
-    problems, saved = [], _parameters(after)
-    for key, old in _parameters(before).items():
-        new = saved.get(key, old)
+    problems, kept = [], _parameters(before)
+    for key, new in _parameters(after).items():  # a save adds keys, and never removes one
+        old = kept.get(key, _UNSET)
         if key in overrides or new == old:
             continue
         param = key.partition(".")[2]
@@ -169,6 +169,16 @@ def _check_pipeline(
         problems.append(Problem(0, key, message, str(where)))
     if problems:
         raise PipelineError(problems)
+
+
+class _Unset:
+    """A parameter the file did not set before the save (a key it added to a shared mapping)."""
+
+    def __repr__(self) -> str:
+        return "unset"
+
+
+_UNSET = _Unset()
 
 
 def _parameters(graph: Any) -> dict[str, Any]:

@@ -84,3 +84,15 @@ def test_values_shared_through_an_alias_are_saved_when_all_are_set_alike(tmp_pat
     save_parameters(source, {"fine.low": 0.7, "same.low": 0.7, "coarse.low": 0.7})
     params = _params(source)
     assert params["fine"]["low"] == params["same"]["low"] == params["coarse"]["low"] == 0.7
+
+
+def test_a_new_key_in_a_mapping_shared_through_an_alias_is_refused(tmp_path):
+    source = tmp_path / "shared.yaml"
+    source.write_text(SHARED)
+    with pytest.raises(
+        PipelineError,
+        match=r"fine.boundary in .*shared.yaml: saving same.boundary would change it too "
+        r"\(unset → 'zero'\)",
+    ):
+        save_parameters(source, {"same.boundary": "zero"})  # added to &canny itself
+    assert source.read_text() == SHARED  # nothing written
