@@ -91,7 +91,11 @@ def to_float_image(array: Any, *, source: str = "image", check_range: bool = Tru
     if np.issubdtype(array.dtype, np.unsignedinteger):
         return (array / np.float32(np.iinfo(array.dtype).max)).astype(np.float32)
     if np.issubdtype(array.dtype, np.floating):
-        result = array.astype(np.float32, copy=False)
+        if array.dtype.itemsize > 4:  # beyond float32's range is refused below, with where
+            with np.errstate(over="ignore"):
+                result = array.astype(np.float32)
+        else:
+            result = array.astype(np.float32, copy=False)
         if check_range and in_unit_range(result):
             return result
         low, high = float(np.min(result)), float(np.max(result))
