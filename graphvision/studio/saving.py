@@ -50,12 +50,14 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
     original = source.read_text(encoding="utf-8")
     document = yaml.load(original)
     places = []  # (mapping, key, value) to set, found while the positions are the file's
+    shared_through: list[tuple[str, str]] = []  # (anchor, "params" or "node") of edited places
     for key, value in overrides.items():
         target_name, _, param = key.partition(".")
         if target_name == "params":
             if param not in (document.get("params") or {}):
                 raise KeyError(f"the pipeline has no param '{param}'")
             places.append((document["params"], param, value))
+            shared_through += [(document["params"].anchor.value, "params")]
             continue
         node = (document.get("nodes") or {}).get(target_name)
         if node is None:
@@ -63,6 +65,7 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
         if node.get("params") is None:
             node["params"] = {}
         places.append((node["params"], param, value))
+        shared_through += [(node["params"].anchor.value, "params"), (node.anchor.value, "node")]
     text = _edited_in_place(original, places)
     for mapping, param, value in places:
         mapping[param] = value
@@ -71,8 +74,8 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
         text = dumped
     destination = target or source
     _check_read_back(text, overrides, destination)
-    anchors = sorted({m.anchor.value for m, _, _ in places if m.anchor.value})
-    _check_pipeline(original, text, overrides, destination, anchors or ["name"])
+    anchors = sorted({(anchor, kind) for anchor, kind in shared_through if anchor})
+    _check_pipeline(original, text, overrides, destination, anchors)
     destination.parent.mkdir(parents=True, exist_ok=True)
     replace_text(destination, text)
     return destination
@@ -142,7 +145,11 @@ def _check_read_back(text: str, overrides: dict[str, Any], where: Path) -> None:
 
 
 def _check_pipeline(
-    original: str, text: str, overrides: dict[str, Any], where: Path, anchors: list[str]
+    original: str,
+    text: str,
+    overrides: dict[str, Any],
+    where: Path,
+    anchors: list[tuple[str, str]],
 ) -> None:
     """``text`` is a valid pipeline whose parameters are the original file's with the
     overrides set, and no other changed: PipelineError naming a parameter that a save
@@ -159,16 +166,34 @@ def _check_pipeline(
             continue
         param = key.partition(".")[2]
         causes = [k for k in overrides if k.partition(".")[2] == param] or list(overrides)
-        anchor, node = anchors[0], causes[0].partition(".")[0]
+        node = causes[0].partition(".")[0]
         message = (
             f"saving {', '.join(causes)} would change it too ({old!r} → {new!r}): the file "
-            f"shares the value through the YAML anchor &{anchor} and its aliases; not saved. "
-            f"Set them all to the same value, or give {node} a mapping of its own "
-            f"(params: {{<<: *{anchor}, {param}: ...}})"
+            f"shares the value through {_shared(anchors)} and its aliases; not saved. "
+            f"Set them all to the same value, or give {node} {_own_mapping(anchors, param)}"
         )
         problems.append(Problem(0, key, message, str(where)))
     if problems:
         raise PipelineError(problems)
+
+
+def _shared(anchors: list[tuple[str, str]]) -> str:
+    """The anchors a save's mappings are shared through, as a message names them."""
+    if not anchors:
+        return "a YAML anchor"
+    names = ", ".join(f"&{anchor}" for anchor, _ in anchors)
+    return f"the YAML anchor{'s' if len(anchors) > 1 else ''} {names}"
+
+
+def _own_mapping(anchors: list[tuple[str, str]], param: str) -> str:
+    """How a node gets a mapping of its own: merge the shared ``params`` and override,
+    or write the node out in full instead of the alias of another node."""
+    if anchors and all(kind == "params" for _, kind in anchors):
+        return f"a mapping of its own (params: {{<<: *{anchors[0][0]}, {param}: ...}})"
+    shared_nodes = [anchor for anchor, kind in anchors if kind == "node"]
+    if shared_nodes:
+        return f"a node mapping of its own instead of the alias *{shared_nodes[0]}"
+    return "a mapping of its own"
 
 
 class _Unset:

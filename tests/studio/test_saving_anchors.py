@@ -96,3 +96,35 @@ def test_a_new_key_in_a_mapping_shared_through_an_alias_is_refused(tmp_path):
     ):
         save_parameters(source, {"same.boundary": "zero"})  # added to &canny itself
     assert source.read_text() == SHARED  # nothing written
+
+
+NODE_ALIAS = """\
+version: 1
+name: node_alias
+inputs:
+  image: {type: Image, default: "sample:camera"}
+nodes:
+  gray: {op: colour.to_gray, in: {image: image}}
+  fine: &detector
+    op: edges.canny
+    in: {image: gray}
+    params: {sigma: 1.5, low: 0.8, high: 0.9, thresholds: quantile}
+  same: *detector
+outputs:
+  fine: fine.edges
+  same: same.edges
+"""
+
+
+def test_a_refusal_names_the_anchor_on_the_node_when_the_node_itself_is_an_alias(tmp_path):
+    source = tmp_path / "node_alias.yaml"
+    source.write_text(NODE_ALIAS)
+    with pytest.raises(
+        PipelineError,
+        match=r"fine.low in .*: saving same.low would change it too \(0.8 → 0.7\): the file "
+        r"shares the value through the YAML anchor &detector and its aliases; not saved\. "
+        r"Set them all to the same value, or give same a node mapping of its own instead of "
+        r"the alias \*detector$",
+    ):
+        save_parameters(source, {"same.low": 0.7})
+    assert source.read_text() == NODE_ALIAS  # nothing written
