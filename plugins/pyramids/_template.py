@@ -43,8 +43,15 @@ Method = Literal["correlation", "zero_mean", "ncc"]
 
 
 def correlation_map(image: np.ndarray, template: np.ndarray, method: str) -> np.ndarray:
-    """Correlation of every valid template placement, float64 ``(H - h + 1, W - w + 1)``."""
-    from scipy.signal import fftconvolve
+    """Correlation of every valid template placement, float64 ``(H - h + 1, W - w + 1)``.
+
+    The numerator is a circular cross-correlation by real FFTs (``numpy.fft``) of a size
+    at least the image's: a valid placement never wraps around, so no padding to
+    ``H + h - 1`` is needed. It matches a linear correlation by ``fftconvolve`` to float64
+    rounding (tested within 1e-12 of the template's energy times the image's largest
+    square).
+    """
+    from scipy.fft import next_fast_len
 
     if template.shape[0] > image.shape[0] or template.shape[1] > image.shape[1]:
         raise ValueError(
@@ -55,9 +62,13 @@ def correlation_map(image: np.ndarray, template: np.ndarray, method: str) -> np.
     kernel = template.astype(np.float64)
     if method != "correlation":
         kernel = kernel - kernel.mean()
-    response = fftconvolve(data, kernel[::-1, ::-1], mode="valid")
+    shape = (next_fast_len(data.shape[0], True), next_fast_len(data.shape[1], True))
+    spectrum = np.fft.rfft2(data, shape)
+    spectrum *= np.fft.rfft2(kernel, shape).conj()
+    rows, cols = data.shape[0] - kernel.shape[0] + 1, data.shape[1] - kernel.shape[1] + 1
+    response = np.fft.irfft2(spectrum, shape)[:rows, :cols]
     if method != "ncc":
-        return response
+        return np.ascontiguousarray(response)
     from ._template_kernels import normalise_response
 
     tiny = float(np.finfo(np.float32).eps)
