@@ -58,6 +58,7 @@ __all__ = [
     "parse_opencv_cascade",
     "read_opencv_cascade",
     "resampled_integral",
+    "scan_step",
     "window_scales",
 ]
 
@@ -385,15 +386,17 @@ def resampled_integral(padded: np.ndarray, scale: float) -> np.ndarray:
     sums kept in input pixels): :math:`S_s(v, u) = F(v s, u s)`, F interpolated
     bilinearly (exact for a piecewise-constant image), float64
     (⌊H / s⌋ + 1, ⌊W / s⌋ + 1)."""
-    height, width = padded.shape[0] - 1, padded.shape[1] - 1
-    rows = np.minimum(np.arange(int(height / scale + 1e-9) + 1) * scale, height)
-    cols = np.minimum(np.arange(int(width / scale + 1e-9) + 1) * scale, width)
-    r0 = np.minimum(np.floor(rows).astype(np.intp), height - 1)
-    c0 = np.minimum(np.floor(cols).astype(np.intp), width - 1)
-    fr, fc = (rows - r0)[:, None], (cols - c0)[None, :]
-    top = padded[r0][:, c0] * (1 - fc) + padded[r0][:, c0 + 1] * fc
-    bottom = padded[r0 + 1][:, c0] * (1 - fc) + padded[r0 + 1][:, c0 + 1] * fc
-    return np.ascontiguousarray(top * (1 - fr) + bottom * fr)
+    from ._lbp_kernels import resample_integral
+
+    return resample_integral(np.ascontiguousarray(padded, np.float64), float(scale))
+
+
+def scan_step(scale: float, step: int) -> int:
+    """The window step at ``scale`` in reduced pixels: ``step`` itself, or with ``step`` 0
+    OpenCV's rule (``detectMultiScale``): 2 while the scale is at most 2, then 1."""
+    if step:
+        return step
+    return 1 if scale > 2.0 else 2
 
 
 def lbp_windows(
@@ -407,22 +410,26 @@ def lbp_windows(
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """Every window of a gray image that passes all stages: boxes (N, 4) (x0, y0, x1, y1)
     in input pixels, the last stage's margin (N,), and the weak classifiers evaluated
-    (see the module for the scales)."""
-    from ._cascade_kernels import corner_offsets, scan_windows
+    (see the module for the scales, :func:`scan_step` for ``step``)."""
+    from ._cascade_kernels import corner_offsets
+    from ._lbp_kernels import padded_integral, resample_integral, scan_level
 
-    padded = integral_image(np.asarray(image, np.float64))
+    padded = padded_integral(np.asarray(image, np.float64))
     window = (model.height, model.width)
     boxes, margins, evaluated = [], [], 0
     stage_end = model.stage_end
+    offsets: dict[int, np.ndarray] = {}
     for scale in window_scales(image.shape, window, scale_factor, min_size, max_size):
-        level = padded if scale == 1 else resampled_integral(padded, scale)
-        offsets = corner_offsets(model.rects, model.feature, level.shape[1])
-        found, margin, count = scan_windows(
+        level = padded if scale == 1 else resample_integral(padded, float(scale))
+        stride = level.shape[1]
+        if stride not in offsets:
+            offsets[stride] = corner_offsets(model.rects, model.feature, stride)
+        found, margin, count = scan_level(
             level,
             model.height,
             model.width,
-            step,
-            offsets,
+            scan_step(scale, step),
+            offsets[stride],
             model.subsets,
             model.leaves,
             stage_end,
@@ -526,6 +533,8 @@ def group_rectangles(
 ScaleStep = Annotated[float, Field(gt=1, le=4)]
 WindowSide = Annotated[float, Field(ge=4, le=MAX_SIDE)]
 Neighbours = Annotated[int, Field(ge=0, le=10_000)]
+ScanStep = Annotated[int, Field(ge=0, le=64)]
+"""A window step in reduced pixels, or 0 for OpenCV's rule (:func:`scan_step`)."""
 
 
 def detect_lbp(
@@ -573,7 +582,7 @@ def lbp_detect(
     cascade: LBPCascade,
     *,
     scale_factor: ScaleStep = 1.1,
-    step: Annotated[int, Field(ge=1, le=64)] = 1,
+    step: ScanStep = 1,
     min_size: WindowSide = 24.0,
     max_size: WindowSide = float(MAX_SIDE),
     min_neighbours: Neighbours = 8,
