@@ -11,7 +11,9 @@
 * Detectors on every scene, the same gray pixels (channel mean; OpenCV gets them as
   uint8):
   - graphvision ``recognition.lbp_detect`` on ``recognition.lbp_cascade()`` (scikit-image's
-    copy of OpenCV's ``lbpcascade_frontalface.xml``), as face_detect.yaml runs it;
+    copy of OpenCV's ``lbpcascade_frontalface.xml``), as face_detect.yaml runs it (step 1,
+    8 neighbours), and as OpenCV scans and is called below (step 0: every second reduced
+    pixel up to scale 2, every one above; 3 neighbours);
   - ``skimage.feature.Cascade(skimage.data.lbp_frontal_face_cascade_filename())
     .detect_multi_scale(gray, scale_factor=1.1, step_ratio=1, min_size=(24, 24),
     max_size=(512, 512))`` (its defaults: 4 neighbours, intersection score 0.5);
@@ -62,6 +64,16 @@ def graphvision_lbp() -> Detector:
 
     def detect(gray: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         found = rec.lbp_detect(gray, cascade, scale_factor=1.1, step=1, min_neighbours=8)
+        return found.xyxy, found.score
+
+    return detect
+
+
+def graphvision_lbp_opencv_scan() -> Detector:
+    cascade = rec.lbp_cascade()
+
+    def detect(gray: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        found = rec.lbp_detect(gray, cascade, scale_factor=1.1, step=0, min_neighbours=3)
         return found.xyxy, found.score
 
     return detect
@@ -154,6 +166,10 @@ def detector_rows(cv2) -> list[str]:
     with tempfile.TemporaryDirectory() as folder:
         detectors = [
             ("graphvision LBP cascade (face_detect.yaml)", graphvision_lbp()),
+            (
+                "graphvision LBP cascade, OpenCV's scan and call (step 0, 3)",
+                graphvision_lbp_opencv_scan(),
+            ),
             ("skimage Cascade.detect_multi_scale, same file", skimage_lbp()),
             ("OpenCV CascadeClassifier, same file", opencv_lbp(cv2, Path(folder))),
             ("graphvision Haar cascade trained on lfw (faces_cascade.yaml)", lfw_haar()),
