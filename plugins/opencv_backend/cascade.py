@@ -113,8 +113,9 @@ def cv_lbp_detect(
     ``minNeighbors=0``), grouped by ``cv2.groupRectangles(min_neighbours', eps)``.
     OpenCV scans every second reduced pixel below scale 2 (``step`` is the reference's),
     so about a quarter of the windows: a group needs more than
-    ``min_neighbours' = ⌊min_neighbours · step² / 4⌋`` of them. Scores are the groups'
-    window counts (OpenCV's)."""
+    ``min_neighbours' = ⌊min_neighbours · step² / 4⌋`` of them, or ``min_neighbours``
+    at ``step`` 0 (the reference's OpenCV scan: the same windows). Scores are the
+    groups' window counts (OpenCV's)."""
     cv2 = cv()
     side = (int(round(min_size)),) * 2
     largest = min(int(max_size), max(image.shape[:2]))
@@ -124,7 +125,7 @@ def cv_lbp_detect(
     )  # fmt: skip
     if len(windows) == 0:
         return BoxSet(np.zeros((0, 4)), np.zeros(0))
-    threshold = min_neighbours * step * step // 4
+    threshold = min_neighbours if step == 0 else min_neighbours * step * step // 4
     boxes, counts = cv2.groupRectangles([list(map(int, w)) for w in windows], threshold, eps)
     if len(boxes) == 0:
         return BoxSet(np.zeros((0, 4)), np.zeros(0))
