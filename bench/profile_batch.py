@@ -1,8 +1,10 @@
 """Where a batch file's time goes: the engine's cost per file beside the nodes' compute.
 
-A ``sync`` batch of coins images (as ``bench_batch.py`` makes them) runs
-under ``cProfile``; the cumulative time of the functions that do each part
-of the engine's work, divided by the files, gives milliseconds per file:
+A ``sync`` batch of coins images (as ``bench_batch.py`` makes them, output
+``count``) runs with ``time.perf_counter`` around the functions that do each part
+of the engine's work (no profiler: a wrapper costs about a microsecond a call,
+where ``cProfile`` slowed Python-heavy parts several times more than array
+kernels). Each part's wall time, divided by the files, gives milliseconds per file:
 
 - compute: the node functions themselves;
 - planning: compiling the graph, keying the steps, the cache plan;
@@ -11,93 +13,192 @@ of the engine's work, divided by the files, gives milliseconds per file:
 - transport: port types' encode/decode (cache entries, values to and from
   other processes);
 - record: the run's provenance (versions, git state) and ``record.json``;
-- report: ``report.md`` and ``report.html`` less their thumbnails;
-- thumbnails: the pictures' thumbnails and their PNG bytes in ``report.html``;
-- outputs: the outputs' files (PNG, ``.npy``, JSON).
+- report: ``report.md`` and ``report.html``, their pictures included;
+- thumbnails: the pictures' thumbnails and their PNG bytes (inside the report);
+- outputs: the outputs' files (PNG, ``.npy``, JSON);
+- write: the whole of a file's folder (``finish_item``: outputs, digests,
+  record, pages, moving them in place).
 
-The parts overlap where one calls another (the report's thumbnails are
-inside the report; outputs' PNG encoding is not a thumbnail). cProfile slows
-Python-heavy parts more than array kernels, so read the split, not the sum.
-Times are CPU time (the profiler's clock is ``time.process_time``), which the
-machine's load inflates far less than wall time.
+A part is timed from its outermost call only (a part that calls itself is not
+counted twice); parts overlap where one calls another (thumbnails are inside the
+report, the report and outputs inside write). "engine" is the whole file less
+its compute. Wall time: run it on a quiet machine, and read ratios within one run.
 
 Run: ``python bench/profile_batch.py [FILES]``.
 """
 
 from __future__ import annotations
 
-import cProfile
+import dataclasses
+import functools
+import importlib
 import os
-import pstats
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from bench_batch import PIPELINE, _write_images
 
 import graphvision as gv
+from graphvision.execution import batch
+from graphvision.views.batch_page import BATCH_PAGES
 
 PARTS: dict[str, list[tuple[str, str]]] = {
-    "compute": [("executors.py", "call_node"), ("state.py", "run_here")],
+    "compute": [("graphvision.execution.node_call", "call_labelled")],
     "planning": [
-        ("run.py", "_compiled"),
-        ("state.py", "key_steps"),
-        ("state.py", "plan"),
-        ("state.py", "prepare"),
+        ("graphvision.execution.run", "_compiled"),
+        ("graphvision.execution.state", "RunState.key_steps"),
+        ("graphvision.execution.state", "RunState.plan"),
+        ("graphvision.execution.state", "RunState.prepare"),
     ],
-    "hashing": [("keys.py", "content_key"), ("provenance.py", "file_sha256")],
-    "transport": [("/values/", "encode"), ("/values/", "decode")],
-    "record": [("provenance.py", "describe_run"), ("record.py", "to_json")],
-    "report": [("report.py", "markdown_page"), ("report.py", "html_page")],
-    "thumbnails": [("pictures.py", "png_bytes"), ("pictures.py", "thumbnail")],
-    "outputs": [("folders.py", "write_outputs")],
+    "hashing": [
+        ("graphvision.cache.keys", "content_key"),
+        ("graphvision.execution.provenance", "file_sha256"),
+    ],
+    "transport": [
+        ("graphvision.values.ports", "*.encode"),
+        ("graphvision.values.ports", "*.decode"),
+    ],
+    "record": [
+        ("graphvision.execution.provenance", "describe_run"),
+        ("graphvision.execution.record", "RunRecord.to_json"),
+    ],
+    "report": [],  # the batch's run pages (BATCH_PAGES.run), wrapped where they are passed
+    "thumbnails": [
+        ("graphvision.values.pictures", "png_bytes"),
+        ("graphvision.values.pictures", "thumbnail"),
+    ],
+    "outputs": [("graphvision.execution.folders", "write_outputs")],
+    "write": [("graphvision.execution.batch_write", "finish_item")],
 }
 
 
-def _cumulative(stats: pstats.Stats, file: str, function: str) -> float:
-    total = 0.0
-    for (path, _, name), (_, _, _, cumulative, _) in stats.stats.items():  # type: ignore[attr-defined]
-        if file in path and name == function:
-            total += cumulative
-    return total
+class _Clock:
+    """Seconds spent in each part, counted at its outermost call only."""
+
+    def __init__(self) -> None:
+        self.seconds = dict.fromkeys(PARTS, 0.0)
+        self.depth = dict.fromkeys(PARTS, 0)
+
+    def wrap(self, part: str, function: Callable[..., Any]) -> Callable[..., Any]:
+        clock, depth, seconds = time.perf_counter, self.depth, self.seconds
+
+        @functools.wraps(function)
+        def timed(*args: Any, **kwargs: Any) -> Any:
+            depth[part] += 1
+            began = clock()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                depth[part] -= 1
+                if not depth[part]:
+                    seconds[part] += clock() - began
+
+        return timed
 
 
-def profile(files: int) -> list[str]:
-    """Per-file milliseconds of each part, under cProfile, for a sync batch of ``files``."""
+def _subclasses(kind: type) -> list[type]:
+    found, todo = [], [kind]
+    while todo:
+        found.append(todo.pop())
+        todo += found[-1].__subclasses__()
+    return found
+
+
+def _install(clock: _Clock) -> Callable[[], None]:
+    """Wrap every part's functions where they are looked up (each module holding the same
+    function object, each class defining the method); return what undoes it."""
+    undo: list[tuple[Any, str, Any]] = []
+
+    def replace(owner: Any, name: str, new: Any) -> None:
+        undo.append((owner, name, owner.__dict__[name]))
+        setattr(owner, name, new)
+
+    for part, functions in PARTS.items():
+        for module_name, qualified in functions:
+            module = importlib.import_module(module_name)
+            if "." in qualified:
+                owner_name, method = qualified.split(".")
+                owners = (
+                    _subclasses(module.PortType)
+                    if owner_name == "*"
+                    else [getattr(module, owner_name)]
+                )
+                for owner in owners:
+                    if method in owner.__dict__:
+                        raw = owner.__dict__[method]
+                        if isinstance(raw, classmethod):
+                            replace(owner, method, classmethod(clock.wrap(part, raw.__func__)))
+                        else:
+                            replace(owner, method, clock.wrap(part, raw))
+                continue
+            original = getattr(module, qualified)
+            timed = clock.wrap(part, original)
+            for holder in list(sys.modules.values()):
+                if getattr(holder, "__dict__", None) is None:
+                    continue
+                for key, value in list(vars(holder).items()):
+                    if value is original:
+                        replace(holder, key, timed)
+
+    def restore() -> None:
+        for owner, name, value in reversed(undo):
+            setattr(owner, name, value)
+
+    return restore
+
+
+def measure(files: int, outputs: list[str] | None = None) -> tuple[float, dict[str, float]]:
+    """Wall seconds of a sync batch of ``files`` coins images (writing ``outputs``, all
+    of them with None) and each part's seconds."""
     import bench_batch
 
     bench_batch.FILES = files
     graph = gv.load_pipeline(PIPELINE)
-    with tempfile.TemporaryDirectory() as scratch:
+    with tempfile.TemporaryDirectory(dir=Path(__file__).parent) as scratch:
         paths = _write_images(Path(scratch) / "in")
         gv.run_batch(  # plugins loaded, kernels compiled: what follows is per file
             graph, [str(paths[0])], input="image", output_dir=Path(scratch) / "warm", cache=None
         )
-        profiler = cProfile.Profile(time.process_time)  # CPU time: what load cannot inflate
-        began, cpu = time.perf_counter(), time.process_time()
-        profiler.enable()
-        gv.run_batch(
-            graph,
-            [str(p) for p in paths],
-            input="image",
-            output_dir=Path(scratch) / "out",
-            executor="sync",
-            cache=None,
+        clock = _Clock()
+        restore = _install(clock)
+        pages = dataclasses.replace(
+            BATCH_PAGES, run=tuple(clock.wrap("report", page) for page in BATCH_PAGES.run)
         )
-        profiler.disable()
-        wall, cpu = time.perf_counter() - began, time.process_time() - cpu
-    stats = pstats.Stats(profiler)
+        try:
+            began = time.perf_counter()
+            batch.run_batch(
+                graph,
+                [str(p) for p in paths],
+                input="image",
+                output_dir=Path(scratch) / "out",
+                outputs=outputs,
+                executor="sync",
+                cache=None,
+                pages=pages,
+            )
+            wall = time.perf_counter() - began
+        finally:
+            restore()
+    return wall, clock.seconds
+
+
+def profile(files: int) -> list[str]:
+    """Per-file milliseconds of each part (perf_counter), for a sync batch of ``files``."""
+    wall, seconds = measure(files)
     load = f"{os.getloadavg()[0]:.1f}"
+    per = {part: s / files * 1e3 for part, s in seconds.items()}
     rows = [
-        f"| part ({files} files, sync, under cProfile) | CPU ms per file | load 1 min |",
+        f"| part ({files} files, sync, perf_counter) | wall ms per file | load 1 min |",
         "| --- | ---: | ---: |",
-        f"| whole file (profiled; wall {wall / files * 1e3:.1f} ms) | {cpu / files * 1e3:.1f} "
+        f"| whole file | {wall / files * 1e3:.1f} | {load} |",
+        f"| engine (whole file less compute) | {wall / files * 1e3 - per['compute']:.1f} "
         f"| {load} |",
     ]
-    for part, functions in PARTS.items():
-        seconds = sum(_cumulative(stats, f, name) for f, name in functions)
-        rows.append(f"| {part} | {seconds / files * 1e3:.1f} | {load} |")
+    rows += [f"| {part} | {ms:.1f} | {load} |" for part, ms in per.items()]
     return rows
 
 

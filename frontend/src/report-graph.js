@@ -96,7 +96,8 @@ const ARRAYS = { uint8: Uint8Array, uint16: Uint16Array, int32: Int32Array, floa
 
 // An array of the page: base64 of its little-endian bytes, deflated (zlib). `planes`: the
 // bytes were sent plane by plane (every value's first byte, then every second...);
-// `scale`: bytes standing for the real values byte / scale (an 8-bit image's levels).
+// `scale`: codes standing for the real values offset + code / scale (an 8-bit image's
+// levels: byte / 255; a float map's 16-bit codes over its range), the code `nan` for NaN.
 export async function decodeRaw(entry) {
   if (!entry || !ARRAYS[entry.dtype]) return null;
   const packed = Uint8Array.from(atob(entry.deflate), (c) => c.charCodeAt(0));
@@ -108,7 +109,9 @@ export async function decodeRaw(entry) {
     bytes = joined;
   }
   const values = new ARRAYS[entry.dtype](bytes.buffer);
-  return { values: entry.scale ? Float32Array.from(values, (v) => v / entry.scale) : values, shape: entry.shape };
+  if (!entry.scale) return { values, shape: entry.shape };
+  const offset = entry.offset ?? 0, scale = entry.scale, nan = entry.nan;
+  return { values: Float32Array.from(values, (v) => (v === nan ? NaN : offset + v / scale)), shape: entry.shape };
 }
 
 // RGBA of an image's values in [0, 1] (gray H×W or RGB H×W×3).

@@ -32,7 +32,13 @@ from graphvision.values.scalars import TablePort
 from graphvision.views import pairing
 from graphvision.views.pairing import Ref
 from graphvision.views.scripted import PageValues, is_classifier
-from graphvision.views.viewers import _points3d_html, picture_longest, table_parts, value_html
+from graphvision.views.viewers import (
+    _points3d_html,
+    picture_longest,
+    shrunk,
+    table_parts,
+    value_html,
+)
 
 __all__ = ["LINKED_STYLE", "linked_html", "pair_svg", "shown_html"]
 
@@ -55,10 +61,10 @@ LINKED_STYLE = """
 
 
 def _png_uri(picture: np.ndarray) -> str:
-    from graphvision.values.pictures import png_bytes, thumbnail
+    from graphvision.values.pictures import png_bytes
 
-    shrunk = thumbnail(picture, picture_longest(1024))
-    data = base64.b64encode(png_bytes(shrunk, smallest=1)).decode("ascii")
+    small = shrunk(picture, picture_longest(1024))
+    data = base64.b64encode(png_bytes(small, smallest=1)).decode("ascii")
     return f"data:image/png;base64,{data}"
 
 

@@ -37,6 +37,7 @@ __all__ = [
     "picture_html",
     "picture_longest",
     "pictures_at_most",
+    "shrunk",
     "table_parts",
     "units_of",
     "value_html",
@@ -75,21 +76,55 @@ def picture_longest(own: int) -> int:
 
 def picture_html(picture: np.ndarray, alt: str) -> str:
     """An ``<img>`` holding ``picture`` (a [0, 1] array) as an inline PNG thumbnail."""
-    from graphvision.values.pictures import png_bytes, thumbnail
+    from graphvision.values.pictures import png_bytes
 
-    data = base64.b64encode(png_bytes(thumbnail(picture, picture_longest(512)))).decode("ascii")
+    data = base64.b64encode(png_bytes(shrunk(picture, picture_longest(512)))).decode("ascii")
     return f'<img alt="{escape(alt)}" src="data:image/png;base64,{data}">'
 
 
+def shrunk(picture: np.ndarray, longest: int) -> np.ndarray:
+    """:func:`~graphvision.values.pictures.thumbnail` of ``picture`` (block averages until
+    its longer side is at most ``longest``), summed block offset by block offset over
+    strided views in float64: the same averages within a float32 rounding, 2-3 times
+    faster than the mean over a 5-D reshape (a batch file's report spent 10 ms there)."""
+    from graphvision.values.pictures import thumbnail
+
+    if picture.ndim < 2 or picture.size == 0 or max(picture.shape[:2]) <= longest:
+        return thumbnail(picture, longest)  # as it is (or drawn as it is by png_bytes)
+    step = int(np.ceil(max(picture.shape[:2]) / longest))
+    across = [min(step, side) for side in picture.shape[:2]]
+    rows, cols = (
+        side // block * block for side, block in zip(picture.shape[:2], across, strict=True)
+    )
+    whole = picture[:rows, :cols]
+    total = np.zeros((rows // across[0], cols // across[1], *picture.shape[2:]), np.float64)
+    for i in range(across[0]):
+        for j in range(across[1]):
+            total += whole[i :: across[0], j :: across[1]]
+    total /= across[0] * across[1]
+    return total.astype(np.float32)
+
+
 def colour_scale(values: np.ndarray, low: float, high: float) -> np.ndarray:
-    """``values`` as viridis colours, ``low`` dark violet to ``high`` yellow; NaN black."""
+    """``values`` as viridis colours, ``low`` dark violet to ``high`` yellow; NaN black.
+
+    Worked channel by channel over the whole map, the non-finite pixels set apart only when
+    there are any (a fancy-indexed copy of every pixel took most of a float map's report)."""
     values = np.asarray(values, np.float64)
-    rgb = np.zeros((*values.shape, 3), np.float32)
     finite = np.isfinite(values)
-    t = np.clip((values[finite] - low) / max(high - low, 1e-300), 0.0, 1.0) * (len(_STOPS) - 1)
+    whole = bool(finite.all())
+    if not whole:
+        values = np.where(finite, values, low)
+    t = np.clip((values - low) / max(high - low, 1e-300), 0.0, 1.0) * (len(_STOPS) - 1)
     index = np.minimum(t.astype(np.int64), len(_STOPS) - 2)
-    fraction = (t - index)[:, None]
-    rgb[finite] = (1 - fraction) * _ANCHORS[index] + fraction * _ANCHORS[index + 1]
+    fraction = t - index
+    rest = 1 - fraction
+    rgb = np.empty((*values.shape, 3), np.float32)
+    for c in range(3):
+        anchors = _ANCHORS[:, c]
+        rgb[..., c] = rest * anchors[index] + fraction * anchors[index + 1]
+    if not whole:
+        rgb[~finite] = 0.0
     return rgb
 
 

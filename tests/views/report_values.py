@@ -132,7 +132,12 @@ def decoded(raw: dict[str, Any]) -> np.ndarray:
     if raw.get("planes"):  # the bytes plane by plane: every value's first byte, then...
         data = np.ascontiguousarray(data.reshape(raw["planes"], -1).T)
     values = data.view(np.dtype(raw["dtype"]).newbyteorder("<")).reshape(raw["shape"])
-    return values / np.float32(raw["scale"]) if raw.get("scale") else values
+    if not raw.get("scale"):
+        return values
+    real = raw.get("offset", 0) + values.astype(np.float64) / raw["scale"]
+    if "nan" in raw:
+        real[values == raw["nan"]] = np.nan
+    return real.astype(np.float32)
 
 
 def stereo_maps() -> dict[str, np.ndarray]:

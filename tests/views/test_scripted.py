@@ -68,11 +68,13 @@ def test_float_maps_and_images_ride_the_page_with_their_values_reduced_over_the_
     assert values["disparity.out"]["view"] == "floatmap" and values["disparity.out"]["step"] == 1
     assert values["disparity.out"]["units"] == "disparity, pixels"
     np.testing.assert_array_equal(decoded(raw["disparity.out"]), maps["disparity"])  # NaN too
-    assert raw["disparity.out"]["planes"] == 4  # float32 sent byte plane by byte plane
+    # quarter pixels travel exactly as uint16 codes (value × 4), NaN its own code
+    assert raw["disparity.out"]["dtype"] == "uint16" and raw["disparity.out"]["scale"] == 4
     # 60×80 = 4800 pixels over 2000: every 2nd pixel on each axis, 30×40 = 1200
     assert values["depth.out"]["step"] == 2 and values["depth.out"]["full"] == [60, 80]
     np.testing.assert_array_equal(decoded(raw["depth.out"]), maps["depth"][::2, ::2])
-    assert values["picture.out"]["view"] == "image" and "scale" not in raw["picture.out"]
+    assert values["picture.out"]["view"] == "image" and raw["picture.out"]["scale"] == 16
+    assert raw["picture.out"]["dtype"] == "uint8"  # eighths × 16: codes of at most 16
     np.testing.assert_array_equal(decoded(raw["picture.out"]), maps["disparity_picture"])
     # an image of 8-bit levels travels as its bytes and decodes to the same float32 values
     assert raw["view.out"]["dtype"] == "uint8" and raw["view.out"]["scale"] == 255
@@ -159,8 +161,27 @@ def test_a_map_whose_values_take_too_many_bytes_is_sent_reduced_under_the_cap(mo
     assert found is not None and found["step"] > 1  # 4096 values: under MAX_VALUES
     raw = page.raw["depth.out"]
     assert len(raw["deflate"]) <= 4_000
-    np.testing.assert_array_equal(decoded(raw), noise[:: found["step"], :: found["step"]])
+    sent = noise[:: found["step"], :: found["step"]]
+    low, high = float(sent.min()), float(sent.max())  # 16-bit codes over the range
+    np.testing.assert_allclose(decoded(raw), sent, rtol=0, atol=(high - low) / 131070 * 1.01)
     assert found["shape"] == list(decoded(raw).shape) and found["full"] == [64, 64]
+
+
+def test_continuous_values_travel_as_16_bit_codes_within_half_a_step_of_their_own():
+    rng = np.random.default_rng(5)
+    values = rng.uniform(-3.0, 61.0, (40, 50)).astype(np.float32)  # no 1/256 multiples
+    values[3, 4], values[7, 9] = np.nan, -3.5  # NaN rides as its own code; the low end
+    raw = scripted._raw(values, compact=True)
+    assert raw["dtype"] == "uint16" and raw["offset"] == -3.5 and raw["nan"] == 65535
+    step = (61.0 + 3.5) / 65534  # the finite range in 65,534 steps (65,535 is NaN)
+    back = decoded(raw)
+    assert np.isnan(back[3, 4]) and np.isnan(back).sum() == 1
+    np.testing.assert_allclose(back, values, rtol=0, atol=step / 2 * 1.01)
+    assert np.abs(back - values)[np.isfinite(values)].max() > step / 10  # not exact: coded
+    assert len(raw["deflate"]) < len(scripted._raw(values)["deflate"]) * 0.6  # float32 planes
+    # an infinity cannot be coded: float32, exact
+    values[0, 0] = np.inf
+    assert scripted._raw(values, compact=True)["dtype"] == "float32"
 
 
 def _fallback_pictures(page: str, key: str) -> list[np.ndarray]:
