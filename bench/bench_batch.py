@@ -134,9 +134,23 @@ def main() -> list[str]:
         )
         for name, executor in (("threads (2)", "threads"), ("processes (2)", "processes")):
             rows.append(_row(name, _batch(graph, paths, folder / name[:5], executor), sync))
+        engine = _engine_rows(floor, sync)
         fewer = _fewer(graph, paths[:50], folder)
         rows += _dask_rows(graph, paths, folder, sync)  # last: its client's threads stay
-    return [*rows, *fewer]
+    return [*rows, *fewer, "", *engine]
+
+
+def _engine_rows(floor: float, sync: float) -> list[str]:
+    """Per file: the nodes' compute (the plain loop's time) and the engine's cost beside
+    it (the sync batch's time less the loop's: planning, checks, record, outputs, reports;
+    ``profile_batch.py`` splits it)."""
+    return [
+        f"| {FILES} coins images, sync, per file | ms | load 1 min |",
+        "| --- | ---: | ---: |",
+        f"| compute per file, ms (the plain loop) | {floor / FILES * 1e3:.1f} | {_load()} |",
+        f"| engine cost per file, ms (sync batch less the loop) | "
+        f"{(sync - floor) / FILES * 1e3:.1f} | {_load()} |",
+    ]
 
 
 def _row(name: str, measured: tuple[float, int], sync: float) -> str:

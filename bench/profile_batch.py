@@ -186,19 +186,30 @@ def measure(files: int, outputs: list[str] | None = None) -> tuple[float, dict[s
     return wall, clock.seconds
 
 
+CASES = {"output count (bench_batch's batch)": ["count"], "all 4 outputs": None}
+
+
 def profile(files: int) -> list[str]:
-    """Per-file milliseconds of each part (perf_counter), for a sync batch of ``files``."""
-    wall, seconds = measure(files)
+    """Per-file milliseconds of each part (perf_counter), for a sync batch of ``files``
+    writing the output ``count`` (as ``bench_batch.py``), then all four outputs."""
+    measured = {case: measure(files, outputs) for case, outputs in CASES.items()}
     load = f"{os.getloadavg()[0]:.1f}"
-    per = {part: s / files * 1e3 for part, s in seconds.items()}
     rows = [
-        f"| part ({files} files, sync, perf_counter) | wall ms per file | load 1 min |",
-        "| --- | ---: | ---: |",
-        f"| whole file | {wall / files * 1e3:.1f} | {load} |",
-        f"| engine (whole file less compute) | {wall / files * 1e3 - per['compute']:.1f} "
-        f"| {load} |",
+        f"| part ({files} files, sync, perf_counter), wall ms per file | "
+        + " | ".join(CASES)
+        + " | load 1 min |",
+        "| --- | " + "---: | " * len(CASES) + "---: |",
     ]
-    rows += [f"| {part} | {ms:.1f} | {load} |" for part, ms in per.items()]
+    lines: dict[str, list[float]] = {"whole file": [], "engine (whole file less compute)": []}
+    lines.update({part: [] for part in PARTS})
+    for wall, seconds in measured.values():
+        per = {part: s / files * 1e3 for part, s in seconds.items()}
+        lines["whole file"].append(wall / files * 1e3)
+        lines["engine (whole file less compute)"].append(wall / files * 1e3 - per["compute"])
+        for part, ms in per.items():
+            lines[part].append(ms)
+    for name, values in lines.items():
+        rows.append(f"| {name} | " + " | ".join(f"{v:.1f}" for v in values) + f" | {load} |")
     return rows
 
 

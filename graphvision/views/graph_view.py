@@ -18,10 +18,19 @@ from __future__ import annotations
 import functools
 import json
 import re
+from collections.abc import Mapping
+from html import escape
 from pathlib import Path
 from typing import Any
 
-__all__ = ["GRAPH_SCRIPT", "GRAPH_STYLE", "graph_data", "graph_html", "layout_script"]
+__all__ = [
+    "GRAPH_SCRIPT",
+    "GRAPH_STYLE",
+    "graph_data",
+    "graph_drawing",
+    "graph_html",
+    "layout_script",
+]
 
 _BUNDLE = Path(__file__).parent / "static" / "graph.js"
 
@@ -120,3 +129,66 @@ def graph_html(svg: str, data: dict | None = None) -> str:
         f'<div class="graph"><div class="zoom">{buttons}</div>{fitted}'
         f'<script type="application/json" data-graph="1">{text}</script></div>'
     )
+
+
+_DRAWINGS: dict[tuple[Any, ...], tuple[str, dict[str, str]]] = {}
+_KEPT = 8  # drawings kept (a batch draws one graph, a sweep a few)
+
+
+def _time_label(seconds: float) -> str:
+    """A node's time as :func:`~graphvision.graph.svg.graph_svg` writes it under its op."""
+    return f"{seconds * 1e3:.1f} ms" if seconds < 1 else f"{seconds:.2f} s"
+
+
+def _drawn_key(graph: Any, status: Mapping[str, str], labels: Mapping[str, str]) -> tuple:
+    """All that ``graph_svg``'s layout reads: the graph's name, inputs, nodes (op, inputs)
+    and outputs, each node's status and the length of its time label (a box's width)."""
+    nodes = tuple(
+        (name, node.op, tuple((port, ref.node, ref.port) for port, ref in node.inputs.items()))
+        for name, node in graph.nodes.items()
+    )
+    return (
+        graph.name,
+        tuple((name, decl.type) for name, decl in graph.inputs.items()),
+        nodes,
+        tuple((name, ref.node, ref.port) for name, ref in graph.outputs.items()),
+        tuple(sorted(status.items())),
+        tuple(sorted((name, len(label)) for name, label in labels.items())),
+    )
+
+
+def _relabelled(svg: str, old: Mapping[str, str], new: Mapping[str, str]) -> str | None:
+    """``svg`` with each node's time label ``old[name]`` (its box's last line) made
+    ``new[name]``; None when a box does not end with its old label."""
+    parts, at = [], 0
+    for name, label in old.items():
+        start = svg.find(f'<g class="node" data-name="{escape(name)}"', at)
+        tail = f">{escape(label)}</text></g>"
+        end = svg.find("</g>", start) + len("</g>") if start >= 0 else -1
+        if start < 0 or not svg.startswith(tail, end - len(tail)):
+            return None
+        parts += [svg[at : end - len(tail)], f">{escape(new[name])}</text></g>"]
+        at = end
+    return "".join(parts) + svg[at:]
+
+
+def graph_drawing(graph: Any, status: Mapping[str, str], seconds: Mapping[str, float]) -> str:
+    """:func:`~graphvision.graph.svg.graph_svg` of ``graph``, its layout made once per
+    graph, nodes' states and lengths of their time labels: a batch's files draw the same
+    graph with other times (2 ms a file's report), which only change the labels' text."""
+    from graphvision.graph.svg import graph_svg
+
+    labels = {name: _time_label(s) for name, s in seconds.items() if name in graph.nodes}
+    order = {name: labels[name] for name in graph.nodes if name in labels}  # as drawn
+    key = _drawn_key(graph, status, order)
+    kept = _DRAWINGS.get(key)
+    if kept is not None:
+        redrawn = _relabelled(kept[0], kept[1], order)
+        if redrawn is not None:
+            return redrawn
+    svg = graph_svg(graph, status, seconds)
+    if _relabelled(svg, order, order) == svg:  # its labels found where they are replaced
+        if len(_DRAWINGS) >= _KEPT:
+            _DRAWINGS.pop(next(iter(_DRAWINGS)))
+        _DRAWINGS[key] = (svg, order)
+    return svg

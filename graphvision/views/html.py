@@ -31,6 +31,7 @@ from graphvision.views.graph_view import (
     GRAPH_SCRIPT,
     GRAPH_STYLE,
     graph_data,
+    graph_drawing,
     graph_html,
     layout_script,
 )
@@ -96,8 +97,6 @@ def html_report(
     earlier : sequence of Earlier, optional
         The folder's earlier runs, newest first (linked to their kept reports).
     """
-    from graphvision.graph.svg import graph_svg
-
     graph = compiled.graph
     status = {node.name: node.status for node in record.nodes}
     seconds = {node.name: node.seconds for node in record.nodes if node.status == "computed"}
@@ -110,7 +109,7 @@ def html_report(
             for name, message in failures.items()
         )
         body.append(f'<ul class="failed">{items}</ul>')
-    drawn = graph_html(graph_svg(graph, status, seconds), graph_data(compiled, status, seconds))
+    drawn = graph_html(graph_drawing(graph, status, seconds), graph_data(compiled, status, seconds))
     body += ["<h2>Graph</h2>", drawn]
     found = outputs_by_ref(compiled, outputs, intermediates)
     page = PageValues(compiled, found)
