@@ -430,9 +430,9 @@ def _sixteen_bits(values: np.ndarray) -> tuple[np.ndarray, dict[str, Any]] | Non
             codes = np.rint(scaled)
             if np.array_equal(codes[finite], scaled[finite]):
                 return _codes(codes, finite, whole), {"scale": scale, "nan": _NAN, "planes": 2}
-    scale = top / (high - low) if high > low else 1.0
-    codes = np.rint((values.astype(np.float64) - low) * scale)
-    return _codes(codes, finite, whole), {"scale": scale, "offset": low, "nan": _NAN, "planes": 2}
+    steps = top / (high - low) if high > low else 1.0
+    codes = np.rint((values.astype(np.float64) - low) * steps)
+    return _codes(codes, finite, whole), {"scale": steps, "offset": low, "nan": _NAN, "planes": 2}
 
 
 def _codes(codes: np.ndarray, finite: np.ndarray, whole: bool) -> np.ndarray:

@@ -116,3 +116,22 @@ def test_the_graph_scales_to_the_page_with_zoom_buttons(line_fit_folder):
     drawn = re.search(r'viewBox="0 0 ([\d.]+) ', svg).group(1)
     assert f'style="max-width: {drawn}px"' in svg  # shrinks to fit, never enlarged
     assert re.findall(r'<button type="button">([^<]+)</button>', page) == ["+", "\u2212", "fit"]
+
+
+def test_shrunk_pictures_are_the_block_averages_of_thumbnail():
+    from graphvision.values.pictures import thumbnail
+    from graphvision.views.viewers import shrunk
+
+    rng = np.random.default_rng(11)
+    for shape, longest in (((303, 384, 3), 200), ((61, 47), 20), ((1, 4000), 500),
+                           ((7, 9), 200), ((50, 3, 2), 10)):  # fmt: skip
+        picture = rng.random(shape).astype(np.float32)
+        mine, theirs = shrunk(picture, longest), thumbnail(picture, longest)
+        assert mine.dtype == theirs.dtype and mine.shape == theirs.shape, shape
+        np.testing.assert_allclose(mine, theirs, rtol=0, atol=2e-7)  # a float32 rounding
+        # the exactly rounded average of each block (float64 sums)
+        step = int(np.ceil(max(shape[:2]) / longest))
+        if step > 1:
+            across = [min(step, side) for side in shape[:2]]
+            block = picture[: across[0], : across[1]].astype(np.float64).mean(axis=(0, 1))
+            np.testing.assert_array_equal(mine[0, 0], block.astype(np.float32))
