@@ -26,8 +26,9 @@ arrays, base64) of the values it draws with. So the report and the studio draw:
   with zoom and pan to single pixels and the value under the cursor (an image's float
   value, an RGB image's three); a float map through viridis with its colour bar, units
   and a range box (auto, or a fixed low and high), a label map in distinct colours.
-  Their values ride the page (float32, or an image's exact ``k / 255`` levels as
-  bytes); a map of more than ``MAX_VALUES`` values (pixels × channels: 512² gray,
+  Their values ride the page as 16-bit codes (:mod:`graphvision.views.page_arrays`:
+  exact for an image's ``k / 255`` levels and for multiples of 1/4, 1/16...; else
+  within half of 1/65,534 of their range), float32 when one is infinite; a map of more than ``MAX_VALUES`` values (pixels × channels: 512² gray,
   295² RGB), or whose values take more than ``MAX_MAP_BYTES`` of the page (noisy
   float values compress badly), is sent reduced to every ``step``-th pixel on both
   axes, and the page says so (the output's file has them all).
@@ -44,7 +45,6 @@ import base64
 import contextlib
 import json
 import math
-import zlib
 from collections.abc import Callable, Mapping
 from html import escape
 from typing import Any
@@ -58,6 +58,7 @@ from graphvision.values.ports import PortType
 from graphvision.values.records import MatchesPort
 from graphvision.values.scalars import TablePort
 from graphvision.views import pairing
+from graphvision.views.page_arrays import page_array as _raw
 from graphvision.views.pairing import Ref
 from graphvision.views.viewers import is_float_map, pictures_at_most, units_of
 
@@ -77,7 +78,6 @@ MAX_VALUES = 1 << 18  # a map's values sent (pixels × channels); more are sent 
 MAX_MAP_BYTES = 512 << 10  # and the page's characters they take; more are sent reduced
 SHOWN_PREDICTIONS = 8  # right and wrong predictions shown, each (as the studio shows)
 FALLBACK_LONGEST = 200  # the page's own drawing of a value its script draws, without script
-_RAW_TYPES = (np.uint8, np.uint16, np.int32)
 
 SCRIPTED_STYLE = """
 .gv-view[data-drawn]:not([data-keep]) > .gv-fallback { display: none; }
@@ -361,84 +361,6 @@ class PageValues:
 def _pairs(matches: Any) -> dict[str, list[int]]:
     pairs = np.asarray(matches.pairs)
     return {"a": pairs[:, 0].tolist(), "b": pairs[:, 1].tolist()}
-
-
-def _raw(values: np.ndarray, levels: bool = False, compact: bool = False) -> dict[str, Any]:
-    """An array as little-endian bytes, deflated (``zlib``), base64 (the script inflates
-    it with ``DecompressionStream``): an integer map in the smallest of uint8, uint16,
-    int32 that holds it; real values in float32, their bytes in ``planes`` (each value's
-    first bytes, then the second ones...: a quarter smaller deflated on a disparity map),
-    or with ``levels`` (an image), as bytes with ``scale`` 255 when every value is
-    exactly ``float32(k) / 255`` (an 8-bit image read from a file). With ``compact``
-    (a float map or an image the pixel viewer reads out), real values travel as uint16
-    (:func:`_sixteen_bits`): half the bytes of float32 or less."""
-    extra: dict[str, Any] = {}
-    if values.dtype.kind == "f" and levels:
-        bytes_ = np.round(np.clip(values, 0, 1) * 255).astype(np.uint8)
-        if np.array_equal(bytes_.astype(np.float32) / np.float32(255), values):
-            values, extra = bytes_, {"scale": 255}
-    if values.dtype.kind == "f" and compact:
-        found = _sixteen_bits(values)
-        if found is not None:
-            values, extra = found
-    if values.dtype.kind == "f":
-        dtype: type = np.float32
-        extra = {"planes": 4}
-    else:
-        high = int(values.max()) if values.size else 0
-        dtype = next(t for t in _RAW_TYPES if high <= np.iinfo(t).max)
-        if dtype is np.uint8:  # codes of one byte: no planes
-            extra.pop("planes", None)
-    array = np.ascontiguousarray(values, np.dtype(dtype).newbyteorder("<"))
-    if "planes" in extra:
-        size = np.dtype(dtype).itemsize
-        array = np.ascontiguousarray(array.view(np.uint8).reshape(-1, size).T)
-    return {
-        "dtype": np.dtype(dtype).name,
-        "shape": list(values.shape),
-        "deflate": base64.b64encode(zlib.compress(array.tobytes(), 1)).decode("ascii"),
-        **extra,
-    }
-
-
-_EXACT_SCALES = (1, 4, 16, 256)  # whole numbers, quarters (a disparity), sixteenths...
-_NAN = 65535  # the uint16 code of NaN
-
-
-def _sixteen_bits(values: np.ndarray) -> tuple[np.ndarray, dict[str, Any]] | None:
-    """Real values as uint16 codes ``q`` standing for ``offset + q / scale`` (NaN as
-    ``nan``, 65535), sent byte plane by byte plane; None (float32 then) when a value is
-    infinite or none is finite. Exact when every value is a multiple of ``1 / scale`` for
-    a scale of :data:`_EXACT_SCALES` (quarter-pixel disparities, whole millimetres);
-    else the finite range ``[low, high]`` in 65,535 steps: each value within
-    ``(high - low) / 131070`` of its own, far below the 4 digits the viewer reads out
-    but for values many times smaller than the map's range (a float map's colours are
-    its 1st–99th percentiles: 8 bits)."""
-    finite = np.isfinite(values)
-    whole = bool(finite.all())
-    if not whole and (np.isinf(values).any() or not finite.any()):
-        return None
-    shown = values if whole else values[finite]
-    low, high = float(shown.min()), float(shown.max())
-    top = _NAN - 1
-    sample = shown.ravel()[:256]
-    for scale in _EXACT_SCALES if low >= 0 else ():
-        if high * scale > top:
-            break
-        if np.array_equal(np.rint(sample * scale), sample * scale):
-            scaled = values * np.float32(scale)
-            codes = np.rint(scaled)
-            if np.array_equal(codes[finite], scaled[finite]):
-                return _codes(codes, finite, whole), {"scale": scale, "nan": _NAN, "planes": 2}
-    steps = top / (high - low) if high > low else 1.0
-    codes = np.rint((values.astype(np.float64) - low) * steps)
-    return _codes(codes, finite, whole), {"scale": steps, "offset": low, "nan": _NAN, "planes": 2}
-
-
-def _codes(codes: np.ndarray, finite: np.ndarray, whole: bool) -> np.ndarray:
-    if not whole:
-        codes[~finite] = _NAN
-    return codes.astype(np.uint16)
 
 
 def _png_uri(picture: np.ndarray) -> str:
