@@ -28,10 +28,11 @@ arrays, base64) of the values it draws with. So the report and the studio draw:
   and a range box (auto, or a fixed low and high), a label map in distinct colours.
   Their values ride the page as 16-bit codes (:mod:`graphvision.views.page_arrays`:
   exact for an image's ``k / 255`` levels and for multiples of 1/4, 1/16...; else
-  within half of 1/65,534 of their range), float32 when one is infinite; a map of more than ``MAX_VALUES`` values (pixels × channels: 512² gray,
-  295² RGB), or whose values take more than ``MAX_MAP_BYTES`` of the page (noisy
-  float values compress badly), is sent reduced to every ``step``-th pixel on both
-  axes, and the page says so (the output's file has them all).
+  within half of 1/65,534 of their range), float32 when one is infinite; a map of
+  more than ``MAX_VALUES`` values (pixels × channels: 512² gray, 295² RGB), or whose
+  values take more than ``MAX_MAP_BYTES`` of the page (noisy float values compress
+  badly), is sent reduced to every ``step``-th pixel on both axes, and the page says so
+  (the output's file has them all).
 
 Each is drawn into its box in place of the page's own HTML drawing of the value, which
 stays as the page without script: its pictures at most ``FALLBACK_LONGEST`` pixels on a
