@@ -18,6 +18,7 @@ from __future__ import annotations
 import functools
 import json
 import re
+import threading
 from collections.abc import Mapping
 from html import escape
 from pathlib import Path
@@ -133,6 +134,7 @@ def graph_html(svg: str, data: dict | None = None) -> str:
 
 _DRAWINGS: dict[tuple[Any, ...], tuple[str, dict[str, str]]] = {}
 _KEPT = 8  # drawings kept (a batch draws one graph, a sweep a few)
+_KEEPING = threading.Lock()
 
 
 def _time_label(seconds: float) -> str:
@@ -188,7 +190,8 @@ def graph_drawing(graph: Any, status: Mapping[str, str], seconds: Mapping[str, f
             return redrawn
     svg = graph_svg(graph, status, seconds)
     if _relabelled(svg, order, order) == svg:  # its labels found where they are replaced
-        if len(_DRAWINGS) >= _KEPT:
-            _DRAWINGS.pop(next(iter(_DRAWINGS)))
-        _DRAWINGS[key] = (svg, order)
+        with _KEEPING:  # a batch on threads writes reports at once
+            while len(_DRAWINGS) >= _KEPT:
+                _DRAWINGS.pop(next(iter(_DRAWINGS)))
+            _DRAWINGS[key] = (svg, order)
     return svg
