@@ -56,7 +56,7 @@ from graphvision.execution.batch_files import (
 )
 from graphvision.execution.batch_lanes import FileLanes
 from graphvision.execution.batch_run import BatchRun
-from graphvision.execution.batch_stop import INTERRUPTED
+from graphvision.execution.batch_stop import INTERRUPTED, signals_held
 from graphvision.execution.executors import (
     Executor,
     encodes_values,
@@ -217,7 +217,6 @@ def _run_files(
 ) -> list[BatchItem]:
     """Every file of ``batch``, ``width`` at once; on Ctrl-C or an error, the files done
     so far are still summarised and the folders made for unfinished files removed."""
-    out_dir, stale, made = where
     items: list[BatchItem | None] = [None] * len(batch.paths)
     try:
         stream = _stream(batch, width)
@@ -226,17 +225,31 @@ def _run_files(
             if on_item is not None:
                 on_item(done, len(batch.paths), item)
     except BaseException:
-        finished = batch.stop_writers()  # no folder is started now; those half-written finish
-        for index, item in finished.items():
-            items[index] = items[index] or item
-        if own:  # nodes still running are not waited for
-            batch.pool.shutdown(wait=False, cancel_futures=True)
-        if any(item is not None for item in items):
-            not_run = _not_run(items, batch.paths, batch.folders, batch.started)
-            _summarise(not_run, out_dir, batch.pages, stale)
-        remove_empty_folders(made)
+        with signals_held():  # a second Ctrl-C does not cut the stop short
+            _stop(batch, items, own, where)
         raise
     return [item for item in items if item is not None]
+
+
+def _stop(
+    batch: BatchRun,
+    items: list[BatchItem | None],
+    own: bool,
+    where: tuple[Path, set[Path], list[Path]],
+) -> None:
+    """A stopped batch: no folder is started now, those being written are finished (those
+    whose writer died are cleared), the files done so far are summarised and the folders
+    made for unfinished files removed."""
+    out_dir, stale, made = where
+    finished = batch.stop_writers()
+    for index, item in finished.items():
+        items[index] = items[index] or item
+    if own:  # nodes still running are not waited for
+        batch.pool.shutdown(wait=False, cancel_futures=True)
+    if any(item is not None for item in items):
+        not_run = _not_run(items, batch.paths, batch.folders, batch.started)
+        _summarise(not_run, out_dir, batch.pages, stale)
+    remove_empty_folders(made)
 
 
 def _checked_pipeline(

@@ -11,13 +11,14 @@ from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import InputError, RunError
 from graphvision.execution.batch_files import BatchItem
 from graphvision.execution.batch_write import failure_reason, finish_item
-from graphvision.execution.executors import Executor
+from graphvision.execution.executors import Executor, WorkerDiedError
 from graphvision.execution.file_task import FileOutcome, run_file_task
 from graphvision.execution.record import RunResult
 from graphvision.execution.run import run
 from graphvision.graph.model import Graph
 
 __all__ = [
+    "could_not_start",
     "failure_reason",
     "finish_item",
     "plain_graph",
@@ -49,13 +50,22 @@ def run_item(
     return item, result
 
 
-def run_file(pool: Executor, job: Any, path: Path, folder: Path) -> FileOutcome:
+def run_file(
+    pool: Executor, job: Any, path: Path, folder: Path
+) -> tuple[FileOutcome, BaseException | None]:
     """One file as one task of the executor, which writes the file's folder there
     (:func:`~graphvision.execution.file_task.run_file_task`); ``job`` is the batch's
-    :class:`~graphvision.execution.file_task.FileJob`, or the executor's handle on it."""
+    :class:`~graphvision.execution.file_task.FileJob`, or the executor's handle on it. With
+    the error when the task itself failed (a worker that died twice, ...)."""
     try:
         outcome: FileOutcome = pool.submit(run_file_task, job, str(path), str(folder)).result()
     except Exception as error:  # the task itself failed (a worker that died twice, ...)
         item = BatchItem(path, folder, "failed", error=f"{type(error).__name__}: {error}")
-        return FileOutcome(item)
-    return outcome
+        return FileOutcome(item), error
+    return outcome, None
+
+
+def could_not_start(error: BaseException) -> bool:
+    """Whether a task failed because no worker process could start (the fork server killed,
+    say), not because its worker died running it: the file itself is not at fault."""
+    return isinstance(error, WorkerDiedError) and "could start" in str(error)

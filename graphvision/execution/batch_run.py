@@ -16,7 +16,7 @@ from typing import Any
 
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.execution.batch_files import BatchItem, BatchPages, unreadable_reason
-from graphvision.execution.batch_items import plain_graph, run_file, run_item
+from graphvision.execution.batch_items import could_not_start, plain_graph, run_file, run_item
 from graphvision.execution.batch_stop import StopFlag, writing
 from graphvision.execution.batch_write import failure_reason, finish_item
 from graphvision.execution.executors import (
@@ -36,6 +36,7 @@ from graphvision.execution.file_task import (
     use_registry,
     warm_worker,
 )
+from graphvision.execution.folders import clear_unfinished
 from graphvision.execution.record import RunResult
 from graphvision.execution.worker_start import fork_context, warm_server
 from graphvision.graph.model import Graph
@@ -104,18 +105,52 @@ class BatchRun:
             return BatchItem(path, folder, "failed", error=f"{path} {reason}")
         try:
             if index > 0 and self.one_task_per_file:  # the worker writes the folder
-                outcome = run_file(self.pool, self.job, path, folder)
+                outcome = self._on_worker(index)
                 self.outcomes.append(outcome)
-                self.finished[index] = outcome.item
-                return outcome.item
+                return self._received(index, outcome.item)
             item, result = self._run(index)
-            with writing(self.stop, folder, lambda: self.stopped) as allowed:
-                if not allowed:  # the batch was interrupted meanwhile: its folder is not written
+            with writing(self.stop, folder, lambda: self.stopped) as claim:
+                if not claim:  # the batch was interrupted meanwhile: its folder is not written
                     return item
-                self.finished[index] = item = finish_item(item, result, self.pages.run)
-                return item
+                item = finish_item(item, result, self.pages.run)
+                claim.written(item)
+            return self._received(index, item)
         except Exception as error:  # whatever it is, it fails this file alone
             return BatchItem(path, folder, "failed", error=failure_reason(error))
+
+    def _received(self, index: int, item: BatchItem) -> BatchItem:
+        """The file's item has reached the client: counted, its claim dropped (a file not
+        written since the batch stopped is neither)."""
+        if item.status != "interrupted":
+            self.finished[index] = item
+        if self.stop is not None:
+            self.stop.dropped(self.folders[index])
+        return item
+
+    def _on_worker(self, index: int) -> FileOutcome:
+        """One file as one task of the executor. A task whose worker died (and died again,
+        or could not start again: the executor retries once) counts as its claim says: a
+        folder written whole is the file's, one left half-way is cleared; when no worker
+        could start, the file runs once more here, as the client's own files do."""
+        path, folder = self.paths[index], self.folders[index]
+        outcome, died = run_file(self.pool, self.job, path, folder)
+        if died is None or self.stop is None:
+            return outcome
+        name = StopFlag.name(folder)
+        kept = self.stop.left().get(name, "no claim")
+        if isinstance(kept, BatchItem):  # written whole before its worker died
+            return FileOutcome(kept)
+        if kept is None:  # its worker died writing it
+            clear_unfinished(folder, self.wanted_outputs())
+        self.stop.dropped(folder)
+        if could_not_start(died) and self.job_sent is not None and not self.stopped:
+            return FileOutcome(self.run_in_client(index))
+        return outcome
+
+    def wanted_outputs(self) -> list[str]:
+        """The outputs each file's folder holds."""
+        outputs = self.options.get("outputs")
+        return list(outputs) if outputs is not None else list(plain_graph(self.graph).outputs)
 
     def remove_stop_flag(self) -> None:
         if self.stop is not None:
@@ -128,8 +163,16 @@ class BatchRun:
         self.stopped = True
         if self.stop is not None:
             self.stop.raise_()
+            self.stop.wait()
             index = {StopFlag.name(folder): k for k, folder in enumerate(self.folders)}
-            self.stop.wait(lambda names: {n for n in names if index.get(n) in self.finished})
+            for name, kept in self.stop.left().items():
+                k = index.get(name)
+                if k is None or k in self.finished:
+                    continue
+                if kept is not None:  # whole, its result not (yet) here: counted from the claim
+                    self.finished[k] = kept
+                else:  # its writer died half-way: what it wrote goes
+                    clear_unfinished(self.folders[k], self.wanted_outputs())
         return dict(self.finished)
 
     def run_in_client(self, index: int) -> BatchItem:
@@ -146,8 +189,7 @@ class BatchRun:
             name = f"{executor_name(self.pool)}, in the client while the workers started"
             job = dataclasses.replace(self.job_sent, executor=name)
             item = run_file_task(job, str(path), str(folder), lambda: self.stopped).item
-            self.finished[index] = item
-            return item
+            return self._received(index, item)
         except Exception as error:  # whatever it is, it fails this file alone
             return BatchItem(path, folder, "failed", error=failure_reason(error))
 

@@ -10,12 +10,20 @@ record or an empty folder.
 Here the client and the processes writing folders (its workers, its own file
 lanes) share a :class:`StopFlag`, a folder of the client's on this machine:
 
-- a writer claims the folder it is about to write (a ``writing-`` file named
-  after it), then looks at the flag: when the batch has stopped, it writes
+- a writer claims the folder it is about to write: a ``writing-`` file named
+  after it, which appears already locked by the writer (``fcntl.flock``; the
+  operating system drops the lock when the writer's process dies, however it
+  dies), then looks at the flag: when the batch has stopped, it writes
   nothing and drops its claim;
-- the stopping client raises the flag, then waits for the claims made before
-  it to be dropped (each one's folder then whole) and counts those files as
-  finished, with their results.
+- a writer that has written the folder whole writes the file's item (status,
+  seconds, scalar outputs) into its claim before unlocking it; the client
+  drops the claim once it has the file's result;
+- the stopping client raises the flag, then waits while any claim is locked
+  (a live writer: its folder will be whole), never for a dead one. A claim
+  left unlocked holds the item of a whole folder (its writer died, or its
+  result did not reach the client yet: the client counts it as finished, from
+  the claim) or nothing (its writer died half-way: the client removes what it
+  wrote, :func:`~graphvision.execution.folders.clear_unfinished`).
 
 A writer that found the flag down after claiming had claimed before the flag
 was raised, so the client sees its claim. A flag folder that is gone counts as
@@ -26,19 +34,71 @@ stopped batch leaves its workers' files to them.
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import hashlib
+import json
+import os
 import shutil
+import signal
 import tempfile
+import threading
 import time
 from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["INTERRUPTED", "StopFlag", "writing"]
+from graphvision.execution.batch_files import BatchItem
+
+__all__ = ["INTERRUPTED", "Claim", "StopFlag", "signals_held", "writing"]
 
 INTERRUPTED = "the batch stopped while this file ran; re-run the batch to finish it"
 
 _STOPPED = "stopped"
 _CLAIM = "writing-"
+
+
+@dataclass
+class Claim:
+    """A writer's claim on a folder (see the module docstring); true when it may write."""
+
+    allowed: bool
+    path: Path | None = None
+    fd: int = -1
+    done: bool = False
+
+    def __bool__(self) -> bool:
+        return self.allowed
+
+    def written(self, item: BatchItem) -> None:
+        """The folder is written (whole, or cleared when the file failed): ``item`` is kept
+        in the claim, for a client whose result from this writer never comes."""
+        self.done = True
+        if self.fd < 0:
+            return
+        os.ftruncate(self.fd, 0)
+        os.pwrite(self.fd, json.dumps(_item_json(item)).encode(), 0)
+
+
+def _item_json(item: BatchItem) -> dict:
+    return {
+        "file": str(item.file),
+        "output_dir": str(item.output_dir),
+        "status": item.status,
+        "seconds": item.seconds,
+        "error": item.error,
+        "scalars": item.scalars,
+    }
+
+
+def _json_item(text: str) -> BatchItem | None:
+    try:
+        data = json.loads(text)
+        return BatchItem(
+            Path(data["file"]), Path(data["output_dir"]), str(data["status"]),
+            float(data["seconds"]), str(data["error"]), dict(data["scalars"]),
+        )  # fmt: skip
+    except (ValueError, KeyError, TypeError):
+        return None
 
 
 class StopFlag:
@@ -65,35 +125,88 @@ class StopFlag:
         """What a claim on the output folder ``folder`` is called."""
         return _CLAIM + hashlib.blake2b(str(folder).encode(), digest_size=10).hexdigest()
 
-    @contextlib.contextmanager
-    def writing(self, folder: str | Path, stopped: Callable[[], bool] | None) -> Iterator[bool]:
-        """Whether to write ``folder`` now (False once the batch has stopped, by the flag or
-        by ``stopped()``); claimed while the caller writes it."""
-        claim = Path(self.folder, self.name(folder))
+    def _locked_claim(self, folder: str | Path) -> tuple[Path, int] | None:
+        """A new claim on ``folder``, locked by this writer before it has its name (so no
+        reader ever sees it unlocked while its writer lives); None when the flag is gone."""
         try:
-            claim.touch()
+            fd, temp = tempfile.mkstemp(prefix=".claim-", dir=self.folder)
         except OSError:  # the flag's folder is gone: the batch has ended
-            yield False
-            return
+            return None
         try:
-            yield not (self.is_raised() or (stopped is not None and stopped()))
+            fcntl.flock(fd, fcntl.LOCK_EX)
+            claim = Path(self.folder, self.name(folder))
+            os.replace(temp, claim)
+        except OSError:
+            os.close(fd)
+            with contextlib.suppress(OSError):
+                os.unlink(temp)
+            return None
+        return claim, fd
+
+    @contextlib.contextmanager
+    def writing(self, folder: str | Path, stopped: Callable[[], bool] | None) -> Iterator[Claim]:
+        """Whether to write ``folder`` now (false once the batch has stopped, by the flag or
+        by ``stopped()``); claimed while the caller writes it. The caller calls
+        :meth:`Claim.written` once the folder is written; else the claim is dropped."""
+        locked = self._locked_claim(folder)
+        if locked is None:
+            yield Claim(False)
+            return
+        path, fd = locked
+        claim = Claim(not (self.is_raised() or (stopped is not None and stopped())), path, fd)
+        try:
+            if not claim:
+                path.unlink(missing_ok=True)
+            yield claim
         finally:
-            claim.unlink(missing_ok=True)
+            if not claim.done:  # nothing written (or it failed): nothing to count
+                path.unlink(missing_ok=True)
+            os.close(fd)  # the lock goes with it
+
+    def dropped(self, folder: str | Path) -> None:
+        """The client has the result of ``folder``'s file: its claim is no longer needed."""
+        with contextlib.suppress(OSError):
+            Path(self.folder, self.name(folder)).unlink()
 
     def claims(self) -> set[str]:
         with contextlib.suppress(OSError):
             return {p.name for p in Path(self.folder).glob(_CLAIM + "*")}
         return set()
 
-    def wait(self, finished: Callable[[set[str]], set[str]], seconds: float = 30.0) -> None:
-        """After :meth:`raise_`: wait for the claims made until now to be dropped and for
-        ``finished(names)`` (the claims whose files the client has the results of) to hold
-        them all, ``seconds`` at most."""
-        waiting = self.claims()
+    def writer_alive(self, name: str) -> bool:
+        """Whether the claim ``name`` is locked: its writer lives and is writing."""
+        try:
+            fd = os.open(Path(self.folder, name), os.O_RDONLY)
+        except OSError:
+            return False  # dropped
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return True
+        finally:
+            os.close(fd)
+        return False
+
+    def wait(self, seconds: float = 30.0) -> None:
+        """After :meth:`raise_`: wait while a claim is locked (its writer is writing), never
+        for a writer that has died; ``seconds`` at most."""
         deadline = time.monotonic() + seconds
+        waiting = self.claims()
         while waiting and time.monotonic() < deadline:
-            waiting = (waiting & self.claims()) | (waiting - finished(waiting))
-            time.sleep(0.005)
+            waiting = {name for name in waiting if self.writer_alive(name)}
+            if waiting:
+                time.sleep(0.005)
+
+    def left(self) -> dict[str, BatchItem | None]:
+        """The claims no writer holds now, each with the item its writer kept (its folder
+        whole) or None (its writer died half-way through the folder)."""
+        found: dict[str, BatchItem | None] = {}
+        for name in self.claims():
+            if self.writer_alive(name):
+                continue
+            with contextlib.suppress(OSError):
+                found[name] = _json_item(Path(self.folder, name).read_text())
+        return found
 
     def remove(self) -> None:
         shutil.rmtree(self.folder, ignore_errors=True)
@@ -102,11 +215,35 @@ class StopFlag:
 @contextlib.contextmanager
 def writing(
     stop: StopFlag | None, folder: str | Path, stopped: Callable[[], bool] | None
-) -> Iterator[bool]:
+) -> Iterator[Claim]:
     """Whether to write a file's ``folder`` now, claimed meanwhile when there is a flag
     (:meth:`StopFlag.writing`); without one (Dask), whether ``stopped()`` is still false."""
     if stop is None:
-        yield not (stopped is not None and stopped())
+        yield Claim(not (stopped is not None and stopped()))
         return
-    with stop.writing(folder, stopped) as allowed:
-        yield allowed
+    with stop.writing(folder, stopped) as claim:
+        yield claim
+
+
+@contextlib.contextmanager
+def signals_held() -> Iterator[None]:
+    """Ctrl-C and SIGTERM do nothing meanwhile (from the main thread; elsewhere signals do
+    not reach Python code anyway): a stopped batch's second Ctrl-C, pressed while it
+    waits for its writers and writes ``batch.csv``, no longer ends it before the summary
+    and leaves folders half-written. The first stop's exception goes on once it is done."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    held = {s: handler for s, handler in held.items() if handler is not None}
+    for number in held:
+        signal.signal(number, _ignored)
+    try:
+        yield
+    finally:
+        for number, handler in held.items():
+            signal.signal(number, handler)
+
+
+def _ignored(signum: int, frame: object) -> None:
+    """A signal during a batch's stop: the stop already under way is the answer to it."""

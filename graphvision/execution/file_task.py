@@ -304,11 +304,12 @@ def run_file_task(
     item.seconds = time.perf_counter() - began
     if result is not None:
         result.record.executor = job.executor
-    with writing(job.stop, folder, stopped) as allowed:
-        if not allowed:  # the batch stopped meanwhile: no folder written
+    with writing(job.stop, folder, stopped) as claim:
+        if not claim:  # the batch stopped meanwhile: no folder written
             item.status, item.error = "interrupted", INTERRUPTED
             return FileOutcome(item)
         outcome = FileOutcome(finish_item(item, result, job.pages))
+        claim.written(outcome.item)  # the client counts it, should this process die now
     if result is not None:
         outcome.keys, outcome.value_bytes = _output_keys(result.record, result.compiled)
     return outcome

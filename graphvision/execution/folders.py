@@ -35,6 +35,7 @@ __all__ = [
     "STAGING",
     "RunPage",
     "check_output_folder",
+    "clear_unfinished",
     "missing_folders",
     "owned_files",
     "remove_empty_folders",
@@ -152,6 +153,38 @@ def remove_empty_folders(folders: Iterable[Path]) -> None:
     for folder in folders:
         with contextlib.suppress(OSError):
             folder.rmdir()
+
+
+def clear_unfinished(directory: Path, outputs: Iterable[str]) -> None:
+    """Leave ``directory`` as it was before a writer that died half-way through it: its
+    staging folders removed, the files it placed (output files of ``outputs`` and pages that
+    the record there does not list, or all of them when the record's own files no longer
+    match their digests: the previous run stays in ``history/``), then the folder itself
+    when nothing is left in it."""
+    if not directory.is_dir() or directory.is_symlink():
+        return
+    for left in directory.glob(f"{STAGING}*"):
+        shutil.rmtree(left, ignore_errors=True)
+    try:
+        owned = owned_files(directory)
+    except OutputFolderError:
+        owned = set()
+    record = _previous_record(directory)
+    found = record.get("file_sha256")
+    digests: dict[str, Any] = found if isinstance(found, dict) else {}
+    intact = bool(owned) and all(
+        (directory / name).is_file() and digests.get(name) == file_sha256(directory / name)
+        for name in owned - {RECORD, REPORT, REPORT_HTML}
+        if name in digests
+    )
+    stems = set(outputs)
+    for path in directory.iterdir():
+        ours = path.name in (RECORD, REPORT, REPORT_HTML) or (
+            path.stem in stems and path.suffix in OUTPUT_SUFFIXES
+        )
+        if ours and path.is_file() and not (intact and path.name in owned):
+            path.unlink()
+    remove_empty_folders([directory])
 
 
 def write_run(

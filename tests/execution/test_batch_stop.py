@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 
 import graphvision as gv
+from graphvision.execution.batch_files import BatchItem
 from graphvision.execution.batch_stop import StopFlag
 
 from .test_batch import _counting_graph, photo
@@ -79,11 +80,12 @@ def test_a_folder_being_written_at_the_stop_is_finished_and_counted(tmp_path):
     claimed, release = threading.Event(), threading.Event()
 
     def writer() -> None:
-        with flag.writing(tmp_path / "a", None) as allowed:
-            assert allowed  # claimed before the stop: it writes
+        with flag.writing(tmp_path / "a", None) as claim:
+            assert claim  # claimed before the stop: it writes
             claimed.set()
             release.wait(60)
-        finished.add(StopFlag.name(tmp_path / "a"))  # its result reaches the client
+            finished.add(StopFlag.name(tmp_path / "a"))  # its folder is written
+            claim.written(BatchItem(tmp_path / "a.png", tmp_path / "a"))
 
     thread = threading.Thread(target=writer)
     thread.start()
@@ -93,8 +95,9 @@ def test_a_folder_being_written_at_the_stop_is_finished_and_counted(tmp_path):
         with flag.writing(tmp_path / "b", None) as allowed:
             assert not allowed  # after the stop: nothing is started
         threading.Timer(0.05, release.set).start()
-        flag.wait(lambda names: names & finished)
+        flag.wait()
         assert finished == {StopFlag.name(tmp_path / "a")}  # waited for, not left half-way
+        assert flag.left()[StopFlag.name(tmp_path / "a")].status == "ok"  # counted from it
     finally:
         release.set()
         thread.join()
