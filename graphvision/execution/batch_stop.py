@@ -34,7 +34,6 @@ stopped batch leaves its workers' files to them.
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import hashlib
 import json
 import os
@@ -48,6 +47,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from graphvision.execution.batch_files import BatchItem
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - Windows: a claim is a live writer's until it is written
+    fcntl = None  # type: ignore[assignment]
 
 __all__ = ["INTERRUPTED", "Claim", "StopFlag", "signals_held", "writing"]
 
@@ -133,7 +137,8 @@ class StopFlag:
         except OSError:  # the flag's folder is gone: the batch has ended
             return None
         try:
-            fcntl.flock(fd, fcntl.LOCK_EX)
+            if fcntl is not None:
+                fcntl.flock(fd, fcntl.LOCK_EX)
             claim = Path(self.folder, self.name(folder))
             os.replace(temp, claim)
         except OSError:
@@ -158,9 +163,9 @@ class StopFlag:
             if not claim:
                 path.unlink(missing_ok=True)
             yield claim
-        finally:
-            if not claim.done:  # nothing written (or it failed): nothing to count
+            if not claim.done:  # nothing written: nothing to count
                 path.unlink(missing_ok=True)
+        finally:  # cut short (Ctrl-C in the client's main thread): left for the client to clear
             os.close(fd)  # the lock goes with it
 
     def dropped(self, folder: str | Path) -> None:
@@ -180,6 +185,8 @@ class StopFlag:
         except OSError:
             return False  # dropped
         try:
+            if fcntl is None:  # pragma: no cover - Windows: alive until written
+                return os.fstat(fd).st_size == 0
             fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
         except BlockingIOError:
             return True

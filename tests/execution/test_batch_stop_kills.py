@@ -29,12 +29,13 @@ DEADLINE = 60.0
 
 
 def _one_file_batch(tmp_path: Path) -> BatchRun:
-    graph, _, _ = _counting_graph(tmp_path)
+    """A batch of one file whose folder holds output ``score``, not started."""
     folder = tmp_path / "out" / "a"
+    pool = SyncExecutor()
     batch = BatchRun(
-        graph, [tmp_path / "a.png"], [folder], "image", {}, SyncExecutor(), True, NO_PAGES
+        gv.Graph("g"), [tmp_path / "a.png"], [folder], "image", {}, pool, True, NO_PAGES
     )
-    batch.options = {"outputs": None}
+    batch.options = {"outputs": ["score"]}
     return batch
 
 
@@ -196,3 +197,21 @@ def test_a_second_ctrl_c_during_the_stop_still_leaves_batch_csv(tmp_path, monkey
         signal.signal(signal.SIGINT, before)
     rows = {r["file"]: r["status"] for r in csv.DictReader((tmp_path / "out" / "batch.csv").open())}
     assert rows == {str(f): "ok" for f in files}  # c, being written, finished and counted
+
+
+def test_a_write_cut_short_in_the_client_leaves_its_claim_for_the_stop_to_clear(tmp_path):
+    batch = _one_file_batch(tmp_path)
+    assert batch.stop is not None
+    folder = batch.folders[0]
+    # Ctrl-C while the main thread writes the folder
+    with pytest.raises(KeyboardInterrupt), batch.stop.writing(folder, None) as claim:
+        assert claim
+        folder.mkdir(parents=True)
+        (folder / "score.json").write_text("1.0")
+        raise KeyboardInterrupt
+    try:
+        assert batch.stop.left() == {StopFlag.name(folder): None}  # half-written, no writer
+        assert batch.stop_writers() == {}
+        assert not folder.exists()
+    finally:
+        batch.remove_stop_flag()
