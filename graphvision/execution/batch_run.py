@@ -144,7 +144,7 @@ class BatchRun:
             clear_unfinished(folder, self.wanted_outputs())
         self.stop.dropped(folder)
         if could_not_start(died) and self.job_sent is not None and not self.stopped:
-            return FileOutcome(self.run_in_client(index))
+            return FileOutcome(self.run_in_client(index, "in the client: no worker could start"))
         return outcome
 
     def wanted_outputs(self) -> list[str]:
@@ -175,7 +175,9 @@ class BatchRun:
                     clear_unfinished(self.folders[k], self.wanted_outputs())
         return dict(self.finished)
 
-    def run_in_client(self, index: int) -> BatchItem:
+    def run_in_client(
+        self, index: int, where: str = "in the client while the workers started"
+    ) -> BatchItem:
         """A further file run here as a worker would run it (while the workers start: see
         :mod:`graphvision.execution.batch_lanes`); its folder is not written once stopped."""
         self.started.add(index)
@@ -186,7 +188,7 @@ class BatchRun:
         try:
             if self.job_sent is None:
                 raise RuntimeError("the batch's first file did not prepare the other files' job")
-            name = f"{executor_name(self.pool)}, in the client while the workers started"
+            name = f"{executor_name(self.pool)}, {where}"
             job = dataclasses.replace(self.job_sent, executor=name)
             item = run_file_task(job, str(path), str(folder), lambda: self.stopped).item
             return self._received(index, item)

@@ -6,6 +6,7 @@ whole folder or none; a second Ctrl-C during the stop still leaves batch.csv."""
 from __future__ import annotations
 
 import csv
+import json
 import multiprocessing
 import os
 import signal
@@ -141,6 +142,8 @@ def test_a_file_whose_worker_died_has_a_whole_folder_or_none(tmp_path):
     for name in "abc":  # b: whole before its worker died; c: run again in the client
         assert (tmp_path / "out" / name / "record.json").is_file()
     assert not (tmp_path / "out" / "d").exists()  # failed: no folder, not half of one
+    record = json.loads((tmp_path / "out" / "c" / "record.json").read_text())
+    assert record["executor"] == "dying, in the client: no worker could start"
 
 
 class _HeldWorkers(_DyingWorkers):
