@@ -76,13 +76,13 @@ def test_a_folder_written_whole_whose_result_never_came_counts_as_done(tmp_path)
     batch = _one_file_batch(tmp_path)
     folder = batch.folders[0]
     written = BatchItem(tmp_path / "a.png", folder, seconds=0.5, scalars={"score": 2.5})
-    with batch_stop.writing(batch.stop, folder, None) as claim:  # as a worker writes it
-        assert claim
-        folder.mkdir(parents=True)
-        (folder / "record.json").write_text("{}")
-        claim.written(written)
-    # its worker died before sending the result (SIGTERM to the process group)
     try:
+        with batch_stop.writing(batch.stop, folder, None) as claim:  # as a worker writes it
+            assert claim
+            folder.mkdir(parents=True)
+            (folder / "record.json").write_text("{}")
+            claim.written(written)
+        # its worker died before sending the result (SIGTERM to the process group)
         assert batch.stop_writers() == {0: written}  # whole, so counted, with its outputs
     finally:
         batch.remove_stop_flag()
