@@ -69,8 +69,12 @@ def _weights5(weights: np.ndarray, first: int) -> tuple:  # pragma: no cover
 @njit(cache=True, fastmath=True, nogil=True, inline="always")
 def _dot5(w: tuple, line: np.ndarray, x: int) -> np.float32:  # pragma: no cover
     """``Σ_t w[t] · line[x + t]``, the five products of :func:`_add_taps` in its order."""
-    return w[0] * line[x] + w[1] * line[x + 1] + w[2] * line[x + 2] + w[3] * line[x + 3] + (
-        w[4] * line[x + 4]
+    return (
+        w[0] * line[x]
+        + w[1] * line[x + 1]
+        + w[2] * line[x + 2]
+        + w[3] * line[x + 3]
+        + (w[4] * line[x + 4])
     )
 
 
