@@ -52,64 +52,6 @@ def _add_taps(
             total[x] = (w0 * a[x]) + (total[x] if keep else zero)
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _weights5(weights: np.ndarray, first: int) -> tuple:  # pragma: no cover
-    """Taps ``first … first + 4`` of a kernel row as float32 scalars (zero past its end)."""
-    taps = min(weights.size - first, 5)
-    zero = np.float32(0.0)
-    return (
-        np.float32(weights[first]),
-        np.float32(weights[first + 1]) if taps > 1 else zero,
-        np.float32(weights[first + 2]) if taps > 2 else zero,
-        np.float32(weights[first + 3]) if taps > 3 else zero,
-        np.float32(weights[first + 4]) if taps > 4 else zero,
-    )
-
-
-@njit(cache=True, fastmath=True, nogil=True, inline="always")
-def _dot5(w: tuple, line: np.ndarray, x: int) -> np.float32:  # pragma: no cover
-    """``Σ_t w[t] · line[x + t]``, the five products of :func:`_add_taps` in its order."""
-    return (
-        w[0] * line[x]
-        + w[1] * line[x + 1]
-        + w[2] * line[x + 2]
-        + w[3] * line[x + 3]
-        + (w[4] * line[x + 4])
-    )
-
-
-@njit(cache=True, fastmath=True, nogil=True)
-def _add_rows(
-    total: np.ndarray, lines: tuple, weights: tuple, cols: int, keep: bool
-) -> None:  # pragma: no cover
-    """:func:`_add_taps` of up to five taps of three kernel rows in one pass: the same sums
-    in the same order (row by row onto the running total), which stays in a register
-    instead of being stored and reloaded between rows."""
-    zero = np.float32(0.0)
-    a, b, c = lines
-    wa, wb, wc = weights
-    for x in range(cols):
-        running = _dot5(wa, a, x) + (total[x] if keep else zero)
-        running = _dot5(wb, b, x) + running
-        total[x] = _dot5(wc, c, x) + running
-
-
-@njit(cache=True, fastmath=True, nogil=True)
-def _add_five_rows(
-    total: np.ndarray, lines: tuple, weights: tuple, cols: int, keep: bool
-) -> None:  # pragma: no cover
-    """:func:`_add_rows` for five kernel rows."""
-    zero = np.float32(0.0)
-    a, b, c, d, e = lines
-    wa, wb, wc, wd, we = weights
-    for x in range(cols):
-        running = _dot5(wa, a, x) + (total[x] if keep else zero)
-        running = _dot5(wb, b, x) + running
-        running = _dot5(wc, c, x) + running
-        running = _dot5(wd, d, x) + running
-        total[x] = _dot5(we, e, x) + running
-
-
 @njit(cache=True, fastmath=True, nogil=True)
 def correlate_2d(
     image: np.ndarray,
@@ -137,50 +79,6 @@ def correlate_2d(
         for p in range(0 if r == 0 else r + kh - 1, r + kh):
             fill_line(lines[p % kh, :width], image, row_index[p], column_index, before)
         total = out[r]
-        for first in range(0, kw, 5):
-            _add_row_taps(total, lines, kernel, r, first, cols)
-
-
-@njit(cache=True, fastmath=True, nogil=True)
-def _add_row_taps(
-    total: np.ndarray, lines: np.ndarray, kernel: np.ndarray, r: int, first: int, cols: int
-) -> None:  # pragma: no cover
-    """Taps ``first … first + 4`` of every kernel row onto output row ``r``: five rows a
-    pass while five remain, then three, then one (``lines`` the ring of padded rows)."""
-    kh = kernel.shape[0]
-    i = 0
-    while i < kh:
-        keep = i + first > 0
-        if kh - i >= 5:
-            rows = (
-                lines[(r + i) % kh, first:],
-                lines[(r + i + 1) % kh, first:],
-                lines[(r + i + 2) % kh, first:],
-                lines[(r + i + 3) % kh, first:],
-                lines[(r + i + 4) % kh, first:],
-            )
-            weights = (
-                _weights5(kernel[i], first),
-                _weights5(kernel[i + 1], first),
-                _weights5(kernel[i + 2], first),
-                _weights5(kernel[i + 3], first),
-                _weights5(kernel[i + 4], first),
-            )
-            _add_five_rows(total, rows, weights, cols, keep)
-            i += 5
-        elif kh - i >= 3:
-            three = (
-                lines[(r + i) % kh, first:],
-                lines[(r + i + 1) % kh, first:],
-                lines[(r + i + 2) % kh, first:],
-            )
-            taps = (
-                _weights5(kernel[i], first),
-                _weights5(kernel[i + 1], first),
-                _weights5(kernel[i + 2], first),
-            )
-            _add_rows(total, three, taps, cols, keep)
-            i += 3
-        else:
-            _add_taps(total, lines[(r + i) % kh], kernel[i], first, cols, keep)
-            i += 1
+        for i in range(kh):
+            for first in range(0, kw, 5):
+                _add_taps(total, lines[(r + i) % kh], kernel[i], first, cols, i + first > 0)
