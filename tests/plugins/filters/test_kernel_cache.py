@@ -1,0 +1,54 @@
+"""The compiled kernels of the filters (and of the colour, pyramid, Hough circle and
+demosaicing nodes) are cached on disk by numba, so only the first process of a fresh install
+compiles them: every dispatcher caches, and a call leaves its index file where numba looks
+for it in the next process."""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numba.core.caching import FunctionCache
+from numba.core.registry import CPUDispatcher
+
+from graphvision_plugins import filters
+
+KERNEL_MODULES = [
+    "graphvision_plugins.filters._median_kernels",
+    "graphvision_plugins.filters._median_select5",
+    "graphvision_plugins.filters._correlate_kernels",
+    "graphvision_plugins.filters._padded_rows",
+    "graphvision_plugins.colour._spaces_kernels",
+    "graphvision_plugins.pyramids._pyramid_kernels",
+    "graphvision_plugins.hough._circle_kernels",
+    "graphvision_plugins.formation._bayer_kernels",
+    "graphvision_plugins.shared.separable_kernels",
+]
+
+
+@pytest.mark.parametrize("name", KERNEL_MODULES)
+def test_every_kernel_is_cached_on_disk(name):
+    module = importlib.import_module(name)
+    dispatchers = [
+        value
+        for value in vars(module).values()
+        if isinstance(value, CPUDispatcher) and value.py_func.__module__ == name
+    ]
+    assert dispatchers, f"no numba kernel found in {name}"
+    uncached = [d.py_func.__name__ for d in dispatchers if not isinstance(d._cache, FunctionCache)]
+    assert not uncached, f"{name}: compiled again in every process (no cache=True): {uncached}"
+
+
+@pytest.mark.parametrize("size", [3, 5, 7])
+def test_a_median_call_leaves_the_cache_index_the_next_process_reads(size):
+    from graphvision_plugins.filters._median_kernels import median_3x3, median_by_network
+    from graphvision_plugins.filters._median_select5 import median_5x5
+
+    filters.median(np.zeros((9, 9), np.float32), size=size)
+    kernel = {3: median_3x3, 5: median_5x5, 7: median_by_network}[size]
+    index = Path(kernel._cache._cache_file._index_path)
+    assert index.is_file(), f"no numba cache index at {index}"
+    # the signature of the call is the one saved (a hit now or a miss written then)
+    assert sum(kernel.stats.cache_hits.values()) + sum(kernel.stats.cache_misses.values()) >= 1
