@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from functools import lru_cache
 from typing import Annotated
 
 import numpy as np
@@ -44,6 +45,27 @@ def expand(coarse: np.ndarray, shape: tuple[int, ...], sigma: float) -> np.ndarr
     return blur(fine, sigma) * np.float32(4.0)
 
 
+@lru_cache(maxsize=64)
+def _chain_plan(
+    shape: tuple[int, int], levels: int, sigma: float
+) -> tuple[list[tuple[int, int]], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Shapes of the levels, their table, the end and size of each level after the first in
+    the buffer, and the float32 taps: kept for the next call of the same shape (read-only;
+    at 512² building them cost a quarter of the kernel's time)."""
+    from ..shared.separable import gaussian_taps
+
+    shapes = [shape]
+    while len(shapes) < levels and min(shapes[-1]) >= 2:
+        shapes.append(((shapes[-1][0] + 1) // 2, (shapes[-1][1] + 1) // 2))
+    table = np.array(shapes, dtype=np.int64)
+    sizes = table[1:, 0] * table[1:, 1]
+    ends = np.cumsum(sizes)
+    taps = gaussian_taps(sigma, 3.0).astype(np.float32)
+    for array in (table, sizes, ends, taps):
+        array.flags.writeable = False
+    return shapes, table, ends, sizes, taps
+
+
 def gaussian_levels(image: np.ndarray, levels: int, sigma: float) -> list[np.ndarray]:
     """``blur(level, sigma)[::2, ::2]`` level after level, only the kept pixels computed.
 
@@ -51,20 +73,15 @@ def gaussian_levels(image: np.ndarray, levels: int, sigma: float) -> list[np.nda
     plane come from one compiled call (``_pyramid_kernels``) into one buffer, views of it.
     A colour image is done plane by plane.
     """
-    from ..shared.separable import gaussian_taps
     from ._pyramid_kernels import gaussian_chain
 
     first = np.ascontiguousarray(image, dtype=np.float32).view()
     first.flags.writeable = False
-    shapes = [image.shape[:2]]
-    while len(shapes) < levels and min(shapes[-1]) >= 2:
-        shapes.append(((shapes[-1][0] + 1) // 2, (shapes[-1][1] + 1) // 2))
-    table = np.array(shapes, dtype=np.int64)
-    sizes = table[1:, 0] * table[1:, 1]
-    ends = np.cumsum(sizes)
+    shapes, table, ends, sizes, taps = _chain_plan(
+        (int(image.shape[0]), int(image.shape[1])), levels, float(sigma)
+    )
     if not len(sizes):
         return [first]
-    taps = gaussian_taps(sigma, 3.0).astype(np.float32)
     planes = [first] if first.ndim == 2 else [first[..., c] for c in range(first.shape[2])]
     buffers = []
     for plane in planes:
