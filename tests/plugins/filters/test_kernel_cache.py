@@ -52,3 +52,19 @@ def test_a_median_call_leaves_the_cache_index_the_next_process_reads(size):
     assert index.is_file(), f"no numba cache index at {index}"
     # the signature of the call is the one saved (a hit now or a miss written then)
     assert sum(kernel.stats.cache_hits.values()) + sum(kernel.stats.cache_misses.values()) >= 1
+
+
+def test_the_comparators_are_not_inlined_by_numba_at_each_use():
+    """The 5×5 network calls ``lower``/``upper`` at 200 comparators: as numba functions with
+    ``inline="always"`` numba copied their code at each (20 s of CPU at the first call in a
+    fresh install); as intrinsics they are one compare and select written into the caller."""
+    from numba.core.dispatcher import Dispatcher
+
+    from graphvision_plugins.filters import _median_kernels, _median_select5
+
+    for comparator in (_median_kernels.lower, _median_kernels.upper):
+        inlined = isinstance(comparator, Dispatcher) and (
+            comparator.targetoptions.get("inline") == "always"
+        )
+        assert not inlined
+    assert _median_select5.lower is _median_kernels.lower
