@@ -120,6 +120,24 @@ def _tap_lists(pattern: str, method: str) -> tuple[np.ndarray, np.ndarray]:
     return taps, counts
 
 
+@cache
+def _malvar_kinds(pattern: str, method: str) -> np.ndarray:
+    """Which of Malvar's kernels gives each channel at each tile place (1: ``_G_AT_RB``,
+    2: ``_RB_AT_G_ROW``, 3: ``_RB_AT_G_COLUMN``, 4: ``_RB_AT_BR``; 0: none, or bilinear),
+    for the kernel's written-out runs (``_bayer_kernels._malvar_run``)."""
+    kinds = np.zeros((3, 4), dtype=np.int64)
+    if method != "malvar":
+        return kinds
+    known = (_G_AT_RB, _RB_AT_G_ROW, _RB_AT_G_COLUMN, _RB_AT_BR)
+    for tile, letter in enumerate(pattern):
+        row_letters = pattern[2 * (tile // 2) : 2 * (tile // 2) + 2]
+        for channel in range(3):
+            kernel = _kernel_at(method, channel, letter, row_letters)
+            if kernel is not None:
+                kinds[channel, tile] = 1 + [k is kernel for k in known].index(True)
+    return kinds
+
+
 @node("formation.mosaic", version=1)
 def mosaic(image: ColorImage, *, pattern: Pattern = "RGGB") -> GrayImage:
     """What a Bayer sensor records of an RGB scene: one colour sample per pixel.
@@ -178,5 +196,5 @@ def demosaic(
     taps, counts = _tap_lists(pattern, method)
     out = np.empty((*raw.shape, 3), dtype=np.float32)
     samples = np.ascontiguousarray(raw, dtype=np.float32)
-    demosaic_taps(samples, taps, counts, out)
+    demosaic_taps(samples, taps, counts, _malvar_kinds(pattern, method), out)
     return out

@@ -34,36 +34,32 @@ def _mirror(index: int, length: int) -> int:  # pragma: no cover
 
 
 @njit(cache=True, nogil=True)
-def _every_second(source: np.ndarray, first: int, out: np.ndarray) -> None:  # pragma: no cover
-    """``out[k] = source[mirror(first + 2k)]``: the ends by the rule, the rest one strided
-    loop."""
-    cols = source.size
-    low = 0
-    while low < out.size and first + 2 * low < 0:
-        out[low] = source[_mirror(first + 2 * low, cols)]
-        low += 1
-    high = out.size
-    while high > low and first + 2 * (high - 1) >= cols:
-        high -= 1
-        out[high] = source[_mirror(first + 2 * high, cols)]
-    for k in range(low, high):
-        out[k] = source[first + 2 * k]
-
-
-@njit(cache=True, nogil=True)
 def _fill_padded(
     raw: np.ndarray, p: int, even: np.ndarray, odd: np.ndarray, tiny: np.ndarray
 ) -> None:  # pragma: no cover
     """Row ``p`` of ``raw`` padded by 2 (``numpy.pad``'s ``reflect``), its even columns into
     ``even[p % 5]`` and its odd ones into ``odd[p % 5]``; ``tiny[p % 5]``: whether it holds
-    a value in (0, TINY) in magnitude (checked while the row is in cache)."""
+    a value in (0, TINY) in magnitude. One loop over the row's column pairs does the split
+    and the check at once (``even[k], odd[k] = row[2k − 2], row[2k − 1]``); the few ends
+    the reflection reaches are filled after it."""
     source = raw[_mirror(p - 2, raw.shape[0])]
-    _every_second(source, -2, even[p % 5])
-    _every_second(source, -1, odd[p % 5])
+    cols = source.size
+    low, high = even[p % 5], odd[p % 5]
+    pairs = cols // 2 + 1  # k < pairs: both samples inside the row
     found = 0
-    for x in range(source.size):
-        size = abs(source[x])
+    for k in range(1, pairs):
+        first, second = source[2 * k - 2], source[2 * k - 1]
+        low[k], high[k] = first, second
+        size, other = abs(first), abs(second)
+        found += ((size > 0) & (size < TINY)) + ((other > 0) & (other < TINY))
+    if cols % 2:  # the last sample, not in a pair
+        size = abs(source[cols - 1])
         found += (size > 0) & (size < TINY)
+    low[0], high[0] = source[2], source[1]  # reflected columns −2 and −1
+    for k in range(pairs, low.size):
+        low[k] = source[_mirror(2 * k - 2, cols)]
+    for k in range(pairs, high.size):
+        high[k] = source[_mirror(2 * k - 1, cols)]
     tiny[p % 5] = found > 0
 
 
@@ -108,20 +104,24 @@ def demosaic_taps(
     raw: np.ndarray,
     taps: np.ndarray,
     counts: np.ndarray,
+    kinds: np.ndarray,
     out: np.ndarray,
 ) -> None:  # pragma: no cover
     """``out[y, x, c]`` from ``taps[c, tile, :counts[c, tile]]`` (``tile = 2 (y % 2) + x % 2``;
     each tap ``(dy, dx, weight, power of two)``) over ``raw`` padded by 2 (``reflect``); a
-    count of −1 copies the sample. Results are clipped to [0, 1]. An output row whose five
-    padded rows hold a value below float32's normal range (see the module docstring) is
-    summed in float64 throughout: the choice is made row by row, as the rows are read
-    (each value depends on its own 5×5 only), not by a pass over the whole mosaic first.
+    count of −1 copies the sample; ``kinds[c, tile]`` 1–4 names one of Malvar's four kernels,
+    whose taps (the same, in the same order) are written out in ``_malvar_run``. Results are
+    clipped to [0, 1]. An output row whose five padded rows hold a value below float32's
+    normal range (see the module docstring) is summed in float64 throughout: the choice is
+    made row by row, as the rows are read (each value depends on its own 5×5 only), not by a
+    pass over the whole mosaic first.
 
     The five padded rows an output row reads are kept split into their even and their odd
     columns, in a ring (padded row ``p`` in slot ``p % 5``, one new row per output row), so
     nothing the size of the mosaic is made beside the output. Per output row, the six runs
-    (channel × column parity) are summed tap after tap, each a loop over one contiguous row
-    of the ring, then interleaved into the row.
+    (channel × column parity) are summed tap after tap (bilinear, or a row in float64), each
+    a loop over one contiguous row of the ring, or all taps of a pixel at once (Malvar's
+    written-out kernels: the sum stays in a register), then interleaved into the row.
     """
     rows, cols = out.shape[0], out.shape[1]
     width = cols + 4
@@ -144,6 +144,9 @@ def demosaic_taps(
                 if count < 0:
                     source = even[(y + 2) % 5] if tx == 0 else odd[(y + 2) % 5]
                     total[:] = source[1 : 1 + n]
+                elif single and kinds[c, tile] > 0:
+                    same, other = (even, odd) if tx == 0 else (odd, even)
+                    _malvar_run(kinds[c, tile], total, same, other, y + 2, tx)
                 else:
                     _add_taps(total, even, odd, y + 2, tx + 2, taps[c, tile], count, single)
         _interleave(sums, low, high, out[y].reshape(-1))
@@ -169,3 +172,140 @@ def _interleave(
         out[6 * pairs] = min(max(r0[pairs], low), high)
         out[6 * pairs + 1] = min(max(g0[pairs], low), high)
         out[6 * pairs + 2] = min(max(b0[pairs], low), high)
+
+
+# Malvar's weights that are powers of two, as float32 (a product by them is exact)
+_N8, _S16, _Q, _H = np.float32(-0.125), np.float32(0.0625), np.float32(0.25), np.float32(0.5)
+
+
+@njit(cache=True, nogil=True)
+def _wide(total: np.float32, weight: float, sample: np.float32) -> np.float32:  # pragma: no cover
+    """One tap whose weight is not a power of two: the product in float64, as ``_add_taps``."""
+    return np.float32(np.float64(total) + weight * np.float64(sample))
+
+
+@njit(cache=True, nogil=True)
+def _malvar_run(
+    kind: int, total: np.ndarray, same: np.ndarray, other: np.ndarray, row: int, tx: int
+) -> None:  # pragma: no cover
+    """One run of ``demosaic_taps`` by one of Malvar's kernels (1: G at R/B, 2: R/B at G in
+    their row, 3: in their column, 4: R at B / B at R), its taps written out in the order of
+    ``_tap_lists`` (row-major), power-of-two weights in float32 (for rows with no value below
+    float32's normal range only). The sum stays in a register across the taps instead of
+    being stored and loaded once a tap, with the same bits. ``same``/``other``: the ring's
+    columns of the run's parity / of the other parity; padded row ``row + dy`` is in slot
+    ``(row + dy) % 5``; ``same[:, 1 + j + dx // 2]`` is tap ``dx`` (even) of pixel ``j``,
+    ``other[:, tx + j + (dx + 1) // 2]`` tap ``dx`` (odd)."""
+    slots = ((row - 2) % 5, (row - 1) % 5, row % 5, (row + 1) % 5, (row + 2) % 5)
+    if kind == 1:
+        _green_at_rb(total, same, other, slots, tx)
+    elif kind == 2:
+        _rb_in_row(total, same, other, slots, tx)
+    elif kind == 3:
+        _rb_in_column(total, same, other, slots, tx)
+    else:
+        _rb_at_br(total, same, other, slots, tx)
+
+
+@njit(cache=True, nogil=True)
+def _green_at_rb(
+    total: np.ndarray, a: np.ndarray, b: np.ndarray, slots: tuple[int, ...], tx: int
+) -> None:  # pragma: no cover
+    """G at R or B (kernel 1; its nine weights are powers of two): see ``_malvar_run``."""
+    m2, m1, c0, p1, p2 = slots
+    am2 = a[m2]
+    am1 = a[m1]
+    ac0 = a[c0]
+    bc0 = b[c0, tx:]
+    ap1 = a[p1]
+    ap2 = a[p2]
+    for j in range(total.size):
+        t = _N8 * am2[1 + j]
+        t = t + _Q * am1[1 + j]
+        t = t + _N8 * ac0[j]
+        t = t + _Q * bc0[j]
+        t = t + _H * ac0[1 + j]
+        t = t + _Q * bc0[1 + j]
+        t = t + _N8 * ac0[2 + j]
+        t = t + _Q * ap1[1 + j]
+        t = t + _N8 * ap2[1 + j]
+        total[j] = t
+
+
+@njit(cache=True, nogil=True)
+def _rb_in_row(
+    total: np.ndarray, a: np.ndarray, b: np.ndarray, slots: tuple[int, ...], tx: int
+) -> None:  # pragma: no cover
+    """R (B) at a G whose row holds R (B) samples (kernel 2): see ``_malvar_run``."""
+    m2, m1, c0, p1, p2 = slots
+    am2 = a[m2]
+    bm1 = b[m1, tx:]
+    ac0 = a[c0]
+    bc0 = b[c0, tx:]
+    bp1 = b[p1, tx:]
+    ap2 = a[p2]
+    for j in range(total.size):
+        t = _S16 * am2[1 + j]
+        t = t + _N8 * bm1[j]
+        t = t + _N8 * bm1[1 + j]
+        t = t + _N8 * ac0[j]
+        t = t + _H * bc0[j]
+        t = _wide(t, 0.625, ac0[1 + j])
+        t = t + _H * bc0[1 + j]
+        t = t + _N8 * ac0[2 + j]
+        t = t + _N8 * bp1[j]
+        t = t + _N8 * bp1[1 + j]
+        t = t + _S16 * ap2[1 + j]
+        total[j] = t
+
+
+@njit(cache=True, nogil=True)
+def _rb_in_column(
+    total: np.ndarray, a: np.ndarray, b: np.ndarray, slots: tuple[int, ...], tx: int
+) -> None:  # pragma: no cover
+    """R (B) at a G whose column holds them (kernel 3): see ``_malvar_run``."""
+    m2, m1, c0, p1, p2 = slots
+    am2 = a[m2]
+    am1 = a[m1]
+    bm1 = b[m1, tx:]
+    ac0 = a[c0]
+    ap1 = a[p1]
+    bp1 = b[p1, tx:]
+    ap2 = a[p2]
+    for j in range(total.size):
+        t = _N8 * am2[1 + j]
+        t = t + _N8 * bm1[j]
+        t = t + _H * am1[1 + j]
+        t = t + _N8 * bm1[1 + j]
+        t = t + _S16 * ac0[j]
+        t = _wide(t, 0.625, ac0[1 + j])
+        t = t + _S16 * ac0[2 + j]
+        t = t + _N8 * bp1[j]
+        t = t + _H * ap1[1 + j]
+        t = t + _N8 * bp1[1 + j]
+        t = t + _N8 * ap2[1 + j]
+        total[j] = t
+
+
+@njit(cache=True, nogil=True)
+def _rb_at_br(
+    total: np.ndarray, a: np.ndarray, b: np.ndarray, slots: tuple[int, ...], tx: int
+) -> None:  # pragma: no cover
+    """R at B or B at R (kernel 4): see ``_malvar_run``."""
+    m2, m1, c0, p1, p2 = slots
+    am2 = a[m2]
+    bm1 = b[m1, tx:]
+    ac0 = a[c0]
+    bp1 = b[p1, tx:]
+    ap2 = a[p2]
+    for j in range(total.size):
+        t = np.float32(-0.1875 * np.float64(am2[1 + j]))
+        t = t + _Q * bm1[j]
+        t = t + _Q * bm1[1 + j]
+        t = _wide(t, -0.1875, ac0[j])
+        t = _wide(t, 0.75, ac0[1 + j])
+        t = _wide(t, -0.1875, ac0[2 + j])
+        t = t + _Q * bp1[j]
+        t = t + _Q * bp1[1 + j]
+        t = _wide(t, -0.1875, ap2[1 + j])
+        total[j] = t

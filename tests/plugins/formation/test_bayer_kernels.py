@@ -96,3 +96,15 @@ def test_rows_near_values_below_the_normal_range_alone_are_summed_in_float64(met
         np.testing.assert_array_equal(
             demosaic(raw, pattern=pattern, method=method), _reference(raw, pattern, method)
         )
+
+
+def test_a_value_below_the_normal_range_in_the_last_column_of_an_odd_width_is_seen():
+    # the last sample of an odd-width row is not in a column pair of the row split. Red at
+    # the green (4, 10) of GRBG: its first tap, 16·2⁻¹⁴⁹/16, gives 2⁻¹⁴⁹; its last,
+    # 24·2⁻¹⁴⁹/16 = 1.5·2⁻¹⁴⁹, added in float64 gives 2.5·2⁻¹⁴⁹ → 2·2⁻¹⁴⁹ (ties to even),
+    # but 1 + 2 = 3·2⁻¹⁴⁹ if the product were rounded to float32 first
+    raw = np.zeros((9, 11), dtype=np.float32)
+    raw[2, 10], raw[6, 10] = np.float32(16 * 2.0**-149), np.float32(24 * 2.0**-149)
+    got = demosaic(raw, pattern="GRBG", method="malvar")
+    np.testing.assert_array_equal(got, _reference(raw, "GRBG", "malvar"))
+    assert got[4, 10, 0] == np.float32(2 * 2.0**-149)
