@@ -11,10 +11,12 @@ from typing import Any
 import numpy as np
 import xxhash
 
+from graphvision.values.known import note, recall
 from graphvision.values.ports import PortType
 
 __all__ = [
     "content_key",
+    "known_content_key",
     "output_key",
     "output_keys",
 ]
@@ -38,6 +40,16 @@ def content_key(port_type: type[PortType], value: Any) -> str:
     hasher.update(json.dumps(meta, sort_keys=True, default=str).encode())
     _hash_arrays(hasher, arrays)
     return "i" + hasher.hexdigest()
+
+
+def known_content_key(port_type: type[PortType], value: Any) -> str:
+    """:func:`content_key`, worked out once for a frozen array (then noted with it:
+    :mod:`graphvision.values.known`), so a run given it again does not hash it again."""
+    key = recall(value, (content_key, port_type))
+    if key is None:
+        key = content_key(port_type, value)
+        note(value, (content_key, port_type), key)
+    return key
 
 
 def output_key(fingerprint: str, input_keys: dict[str, str], port: str) -> str:

@@ -13,12 +13,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from graphvision.errors import UnknownNameError, did_you_mean
+from graphvision.execution.inputs import resolve_input
+from graphvision.values.known import note, recall
 
 if TYPE_CHECKING:
     from graphvision.compiler.compile import CompiledGraph, Schedule
     from graphvision.graph.model import Graph
+    from graphvision.nodes.registry import Registry
+    from graphvision.values.ports import PortType
 
 __all__ = [
+    "admitted",
     "given_inputs",
     "graph_argument",
     "mapping_argument",
@@ -124,3 +129,15 @@ def given_inputs(
         for name in compiled.input_types
         if name in schedule.inputs
     }
+
+
+def admitted(name: str, kind: type[PortType], value: Any, registry: Registry) -> Any:
+    """:func:`~graphvision.execution.inputs.resolve_input`; a frozen array given again, that
+    it returned as it was the last time, as it is (:mod:`graphvision.values.known`: no
+    pass over its data)."""
+    if recall(value, (resolve_input, kind)):
+        return value
+    resolved = resolve_input(name, kind, value, registry)
+    if resolved is value:
+        note(value, (resolve_input, kind), True)
+    return resolved

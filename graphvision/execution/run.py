@@ -52,6 +52,7 @@ from graphvision.errors import (
     RunError,
     UnknownNameError,
 )
+from graphvision.execution.arguments import admitted
 from graphvision.execution.arguments import given_inputs as _given_inputs
 from graphvision.execution.arguments import wanted_outputs as _wanted_outputs
 from graphvision.execution.blas import BlasLimit
@@ -202,7 +203,7 @@ def _run(
         values = {
             name: partial(resolve_input, name, compiled.input_types[name], value, registry)
             if name in reference_keys
-            else resolve_input(name, compiled.input_types[name], value, registry)
+            else admitted(name, compiled.input_types[name], value, registry)
             for name, value in given.items()
         }
         width = running_at_once(executor, workers)

@@ -24,13 +24,10 @@ from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any
 
-from graphvision.cache.keys import content_key
+from graphvision.cache.keys import known_content_key
 from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, Schedule, Step
-from graphvision.errors import (
-    GraphvisionError,
-    PortValueError,
-)
+from graphvision.errors import GraphvisionError, PortValueError
 from graphvision.execution.encoded import submit_encoded
 from graphvision.execution.executors import (
     NODE_ERRORS,
@@ -51,6 +48,7 @@ from graphvision.execution.record import (
     intermediates,
     wrapped_failure,
 )
+from graphvision.values.known import checked, frozen_value, note, recall
 from graphvision.values.memory import frozen_in_place
 
 __all__ = ["RunState"]
@@ -124,7 +122,7 @@ class RunState:
                 self.deferred[name] = value  # a loader
                 continue
             self.values[(name, "")] = value
-            self.keys[(name, "")] = content_key(self.compiled.input_types[name], value)
+            self.keys[(name, "")] = known_content_key(self.compiled.input_types[name], value)
 
     def key_steps(self, names: list[str]) -> None:
         """Chain the output keys of the steps ``names`` (:func:`chain_keys`)."""
@@ -363,6 +361,8 @@ class RunState:
         only = step.only_output
         if only is not None:  # one output: no tuple to split
             port, kind, scalar, plain = only
+            if not scalar and recall(result, kind):  # frozen, accepted as ``kind`` before
+                return {port: result}
             try:
                 value = kind.validate(result)
             except PortValueError as error:
@@ -372,13 +372,13 @@ class RunState:
             if plain and value is result and getrefcount(value) <= held + _OWN_REFS:
                 frozen = frozen_in_place(value)  # nothing else holds it: no copy
                 if frozen is not None:
+                    note(frozen, kind, True, frozen=True)
                     return {port: frozen}
-            return {port: freeze_value(kind, value)}
+            return {port: frozen_value(kind, value)}
         outputs = {}
         for port, value in step.spec.split_outputs(result).items():
-            kind = step.outputs[port]
             try:
-                outputs[port] = freeze_value(kind, kind.validate(value))
+                outputs[port] = checked(step.outputs[port], value)
             except PortValueError as error:
                 raise _invalid(port, error) from None
         return outputs

@@ -1,0 +1,66 @@
+"""What is known of a frozen array (graphvision.values.known): kept for its life, for it alone."""
+
+from __future__ import annotations
+
+import gc
+
+import numpy as np
+import pytest
+
+import graphvision as gv
+from graphvision.errors import PortValueError
+from graphvision.values.images import GrayImagePort, ImagePort
+from graphvision.values.known import checked, note, recall
+from graphvision.values.memory import frozen_copy
+
+
+def test_a_frozen_array_accepted_once_is_not_checked_again(monkeypatch):
+    image = frozen_copy(np.full((4, 5), 0.5, dtype=np.float32))
+    first = checked(GrayImagePort, image)
+    assert first is image  # frozen already: not copied
+    calls = []
+    monkeypatch.setattr(GrayImagePort, "validate", classmethod(lambda cls, v: calls.append(v)))
+    assert checked(GrayImagePort, image) is image
+    assert calls == []
+    checked(ImagePort, image)  # another port type: checked by itself
+    assert calls == []  # (ImagePort's own check ran, not GrayImage's)
+
+
+def test_a_writable_array_is_checked_every_time():
+    image = np.full((4, 5), 0.5, dtype=np.float32)
+    frozen = checked(GrayImagePort, image)
+    assert frozen is not image and not frozen.flags.writeable
+    assert recall(image, GrayImagePort) is None  # nothing noted of what can change
+    image[0, 0] = 2.0
+    with pytest.raises(PortValueError, match=r"values in \[0, 1\], got range \[0.5, 2\]"):
+        checked(GrayImagePort, image)
+
+
+def test_a_note_does_not_outlive_its_array_nor_a_change_of_shape():
+    image = frozen_copy(np.zeros((4, 6), dtype=np.float32))
+    note(image, "fact", 1)
+    assert recall(image, "fact") == 1
+    image.shape = (6, 4)  # a shape can be set in place
+    assert recall(image, "fact") is None
+    address = id(image)
+    del image
+    gc.collect()
+    other = frozen_copy(np.zeros((4, 6), dtype=np.float32))
+    assert id(other) != address or recall(other, "fact") is None
+
+
+def test_a_frozen_input_given_again_is_keyed_and_checked_once(monkeypatch):
+    graph = gv.Graph("again")
+    graph.output("out", graph.input("image", "GrayImage"))
+    image = frozen_copy(np.full((8, 8), 0.25, dtype=np.float32))
+    registry = gv.discover([], entry_points=False)
+    first = gv.run(graph, registry, inputs={"image": image}, executor="sync")
+    calls = []
+    original = GrayImagePort.validate.__func__
+    monkeypatch.setattr(
+        GrayImagePort, "validate", classmethod(lambda cls, v: calls.append(1) or original(cls, v))
+    )
+    second = gv.run(graph, registry, inputs={"image": image}, executor="sync")
+    assert calls == []
+    assert second.outputs["out"] is image
+    assert second.record.inputs["image"]["key"] == first.record.inputs["image"]["key"]
