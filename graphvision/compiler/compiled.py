@@ -14,9 +14,14 @@ from graphvision.graph.model import Graph
 from graphvision.nodes.fingerprint import node_fingerprint
 from graphvision.nodes.spec import NodeSpec
 from graphvision.values.ports import ArrayPort, PortType
-from graphvision.values.scalars import _ScalarPort
+from graphvision.values.scalars import FloatPort, _ScalarPort
 
 __all__ = ["CompiledGraph", "Schedule", "Step"]
+
+
+_PLAIN_SCALARS = (_ScalarPort.validate.__func__, FloatPort.validate.__func__)  # type: ignore[attr-defined]
+"""The ``validate`` of the built-in scalar ports: each returns a value of exactly its
+``python_type`` at once."""
 
 
 @dataclass(frozen=True)
@@ -50,12 +55,18 @@ class Step:
     @cached_property
     def call_plan(
         self,
-    ) -> tuple[Any, tuple[tuple[str, tuple[str, str]], ...], dict[str, Any], str, str, Any]:
+    ) -> tuple[Any, tuple[tuple[str, tuple[str, str]], ...], dict[str, Any], str, str, Any, Any]:
         """What a run reads to call the node, in one tuple made once: the function, each
         input port with the value it reads, the parameters, the frame's label, the op its
-        warnings name, and :attr:`only_output`."""
+        warnings name, :attr:`only_output`, and the type whose exact instances its one scalar
+        output port takes as they are (its ``validate`` is a built-in scalar's, which returns
+        them at once), else None."""
         label, op = self.call_names
-        return self.spec.func, tuple(self.inputs.items()), self.params, label, op, self.only_output
+        only, exact = self.only_output, None
+        if only is not None and only[2] and only[1].validate.__func__ in _PLAIN_SCALARS:  # type: ignore[attr-defined]
+            exact = only[1].python_type  # type: ignore[attr-defined]
+        func, inputs = self.spec.func, tuple(self.inputs.items())
+        return func, inputs, self.params, label, op, only, exact
 
     @cached_property
     def read(self) -> tuple[tuple[str, str], ...]:

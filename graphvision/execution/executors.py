@@ -29,7 +29,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
 from graphvision.execution.limits import ended_by_limit
-from graphvision.execution.node_call import call_labelled, call_node
+from graphvision.execution.node_call import began_before, call_labelled, call_node
 from graphvision.execution.warnings import show_warning
 from graphvision.execution.worker_start import (
     ClientStdio,
@@ -46,6 +46,7 @@ __all__ = [
     "Executor",
     "SyncExecutor",
     "WorkerDiedError",
+    "began_before",
     "call_labelled",
     "call_node",
     "call_node_encoded",

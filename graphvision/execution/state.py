@@ -32,6 +32,7 @@ from graphvision.execution.encoded import submit_encoded
 from graphvision.execution.executors import (
     NODE_ERRORS,
     Executor,
+    began_before,
     call_labelled,
     call_node,
     chains_tasks,
@@ -93,10 +94,8 @@ class RunState:
     def __post_init__(self) -> None:
         self.encoded = encodes_values(self.executor)  # the transport, read once
         self.chained = self.encoded and chains_tasks(self.executor)
-        # With a chaining executor, its futures (each with a ``task``) of the steps not finished.
-        self.in_flight: dict[str, Any] = {}
-        # ops whose last call here took under _QUICK_SECONDS (learnt by the graph's last runs)
-        self.quick_ops: set[str] = self.compiled.quick_ops
+        self.in_flight: dict[str, Any] = {}  # a chaining executor's futures not finished
+        self.quick_ops: set[str] = self.compiled.quick_ops  # last ran under _QUICK_SECONDS
         self.limits = current_limits()  # time and memory per node (execution.limits)
         self.timed = self.limits.timeout is not None or self.compiled.has_timeouts
         # sync runs tasks in this thread anyway: each node without a time limit runs here
@@ -260,26 +259,27 @@ class RunState:
         """Run a step in this thread and finish it (the scheduler does for a quick one);
         False when it failed."""
         step = self.compiled.steps[name]
-        func, inputs, params, label, op, only = step.call_plan
+        func, inputs, params, label, op, only, exact = step.call_plan
         for hook in self.hooks:
             hook.node_started(name=name, op=op)
-        values, kwargs = self.values, {}
+        values, kwargs, seconds = self.values, {}, -1.0
         for port, source in inputs:  # (a loop: a comprehension is a call more)
             kwargs[port] = values[source]
         if params:
             kwargs.update(params)
-        began = time.perf_counter()
         try:  # as on a worker: warnings and a fault name the node, a forked child is ended
             result, seconds = call_labelled(func, kwargs, label, op)
-            if only is None or not only[2]:
+            if type(result) is exact:  # a scalar its port takes as it is (no call)
+                outputs = {only[0]: result}
+            elif only is None or not only[2]:
                 outputs = self.accept(step, result, 1)
             else:  # one scalar: nothing to split or freeze
                 try:
                     outputs = {only[0]: only[1].validate(result)}
                 except PortValueError as error:
                     raise _invalid(only[0], error) from None
-        except NODE_ERRORS as error:
-            self.started[name] = began
+        except NODE_ERRORS as error:  # (when it began: read once it failed, not per node)
+            self.started[name] = began_before(seconds)
             return self.failed(step, error)
         return self.computed(step, outputs, seconds)
 

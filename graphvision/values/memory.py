@@ -127,7 +127,7 @@ def _copy(window: memoryview, begin: int, array: np.ndarray, address: int) -> No
     ``__array_interface__`` builds a dict for: most of freezing a table's small columns),
     else through ``ctypes.memmove``."""
     try:
-        window[begin : begin + array.nbytes] = memoryview(array).cast("B")
+        window[begin : begin + array.nbytes] = memoryview(array).cast("B")  # type: ignore[arg-type]
     except (TypeError, ValueError, NotImplementedError):  # a dtype with no buffer format
         source = array.__array_interface__["data"][0]
         ctypes.memmove(address + begin, source, array.nbytes)
