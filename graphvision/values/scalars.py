@@ -47,7 +47,7 @@ class _ScalarPort(PortType):
 
     @classmethod
     def summary(cls, value: Any) -> str:
-        return f"{cls.type_name()} {value!r:.40}"
+        return f"{cls._type_name} {value!r:.40}"  # (the name without a call: one per output)
 
     @classmethod
     def write(cls, value: Any, stem: Path) -> list[Path]:
