@@ -27,7 +27,8 @@ the OpenCV backend, and the engine's cost on top of OpenCV against a plain scrip
    (:func:`graphvision.execution.peak_memory.check_peak_memory`).
 
 Run: ``python bench/bench_backends.py [PIPELINE.yaml ...]`` (all pipelines by default);
-``python bench/bench_backends.py --overhead`` gives part 2 alone, with the load average.
+``python bench/bench_backends.py --overhead [PIPELINE.yaml ...]`` gives part 2 alone (both
+pipelines by default), with the load average.
 """
 
 from __future__ import annotations
@@ -164,14 +165,14 @@ def _where_it_goes(run: Callable[[], Any], repeats: int = 15) -> dict[str, float
     return {label: seconds / repeats for label, seconds in spent.items()}
 
 
-def overhead_rows() -> list[str]:
+def overhead_rows(names: tuple[str, ...] = ("homography.yaml", "coins.yaml")) -> list[str]:
     rows = [
         "| pipeline | engine ms | plain script ms | overhead | of which BLAS limit ms "
         "| accepting outputs ms | provenance ms | peak-memory check ms |",
         "|---|---|---|---|---|---|---|---|",
     ]
     registry = gv.discover()
-    for name in ("homography.yaml", "coins.yaml"):
+    for name in names:
         graph = gv.load_pipeline(PIPELINES / name).with_backends(["opencv", "numpy"])
         compiled = gv.compile_graph(graph, registry)
         inputs = {  # resolved once: both sides start from the same arrays
@@ -207,7 +208,7 @@ if __name__ == "__main__":
         import os
 
         print(f"load average {os.getloadavg()[0]:.1f} (1 min)")
-        print("\n".join(overhead_rows()))
+        print("\n".join(overhead_rows(tuple(sys.argv[2:]) or ("homography.yaml", "coins.yaml"))))
     elif sys.argv[1:2] == ["--table"]:  # the per-pipeline table alone, row by row
         print("\n".join(pipeline_rows(sys.argv[2:] or _all(), echo=True)[:2]))
     else:

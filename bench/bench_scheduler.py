@@ -16,7 +16,8 @@ which load disturbs less than wall time), best of 7 runs: the inputs' and output
 the nodes' records, the scheduler with the nodes themselves, ground-truth checks,
 provenance, and the rest (BLAS limit, executor, outputs).
 
-Run: ``python bench/bench_scheduler.py [--phases]`` (``make bench`` runs every benchmark).
+Run: ``python bench/bench_scheduler.py [--phases | --graphvision]`` (``make bench`` runs every
+benchmark; ``--graphvision`` gives graphvision's columns alone, with the load average).
 """
 
 from __future__ import annotations
@@ -148,6 +149,24 @@ def main() -> list[str]:
     return [*rows, "", *validation_rows(registry)]
 
 
+def graphvision_rows(registry: gv.Registry) -> list[str]:
+    """The µs per node of graphvision's runs alone, as :func:`main` measures them, with the
+    load average (three of these give a min-max at one load in a few seconds)."""
+    import os
+
+    rows = [
+        f"load average {os.getloadavg()[0]:.1f} (1 min)",
+        "| shape | sync µs/node | threads µs/node |",
+        "| --- | ---: | ---: |",
+    ]
+    for name, builder, n in [("chain", chain_graph, 10_000), ("fan-out", fan_graph, 1_000)]:
+        compiled = gv.compile_graph(builder(n), registry)
+        sync = best(lambda c=compiled: gv.run(c, registry, executor="sync"), 7) / n
+        threads = best(lambda c=compiled: gv.run(c, registry, executor="threads"), 7) / n
+        rows.append(f"| {name} | {sync * 1e6:.1f} | {threads * 1e6:.1f} |")
+    return rows
+
+
 def phase_rows(registry: gv.Registry, repeats: int = 7) -> list[str]:
     """CPU µs per node of each phase of a run (see the module docstring)."""
     from graphvision.execution import run as run_module
@@ -209,7 +228,9 @@ def phase_rows(registry: gv.Registry, repeats: int = 7) -> list[str]:
 if __name__ == "__main__":
     import sys
 
-    if sys.argv[1:2] == ["--phases"]:
+    if sys.argv[1:2] == ["--graphvision"]:  # graphvision's columns alone (no Dask, no files)
+        print("\n".join(graphvision_rows(gv.discover([HERE / "trivial_nodes.py"]))))
+    elif sys.argv[1:2] == ["--phases"]:
         print("\n".join(phase_rows(gv.discover([HERE / "trivial_nodes.py"]))))
     else:
         print("\n".join(main()))
