@@ -11,8 +11,8 @@ per run, about 0.2 ms of a 12 ms run).
 
 What is noted is kept by the array's ``id`` with a weak reference to it, dropped when
 the array dies (a new array at the same address is not taken for it), and stamped with
-its shape and dtype: both can be set on an array in place (``array.shape = ...``), its
-memory cannot. Only frozen arrays are noted; everything else is worked out every time.
+its shape, strides and dtype: all can be set on an array in place (``array.shape =
+...``), its memory cannot. Only frozen arrays are noted; everything else is worked out every time.
 """
 
 from __future__ import annotations
@@ -27,7 +27,8 @@ from graphvision.values.scalars import _ScalarPort
 
 __all__ = ["checked", "frozen_value", "note", "recall"]
 
-_NOTES: dict[int, tuple[weakref.ref[np.ndarray], tuple[int, ...], np.dtype, dict[Any, Any]]] = {}
+_Stamp = tuple[tuple[int, ...], tuple[int, ...]]  # shape, strides
+_NOTES: dict[int, tuple[weakref.ref[np.ndarray], _Stamp, np.dtype, dict[Any, Any]]] = {}
 
 
 def _forget(key: int, ref: weakref.ref[np.ndarray]) -> None:
@@ -43,7 +44,7 @@ def recall(value: Any, what: Any) -> Any:
     entry = _NOTES.get(id(value))
     if entry is None or entry[0]() is not value:
         return None
-    if entry[1] != value.shape or entry[2] != value.dtype:  # changed in place since
+    if entry[1] != (value.shape, value.strides) or entry[2] != value.dtype:  # set since
         return None
     return entry[3].get(what)
 
@@ -59,10 +60,10 @@ def note(value: Any, what: Any, fact: Any, frozen: bool = False) -> None:
         if not frozen and not is_frozen(value):
             return
         ref = weakref.ref(value, lambda ref: _forget(key, ref))
-        entry = _NOTES[key] = (ref, value.shape, value.dtype, {})
-    elif entry[1] != value.shape or entry[2] != value.dtype:
+        entry = _NOTES[key] = (ref, (value.shape, value.strides), value.dtype, {})
+    elif entry[1] != (value.shape, value.strides) or entry[2] != value.dtype:
         entry[3].clear()
-        entry = _NOTES[key] = (entry[0], value.shape, value.dtype, entry[3])
+        entry = _NOTES[key] = (entry[0], (value.shape, value.strides), value.dtype, entry[3])
     entry[3][what] = fact
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gc
+import warnings
 
 import numpy as np
 import pytest
@@ -41,6 +42,11 @@ def test_a_note_does_not_outlive_its_array_nor_a_change_of_shape():
     note(image, "fact", 1)
     assert recall(image, "fact") == 1
     image.shape = (6, 4)  # a shape can be set in place
+    assert recall(image, "fact") is None
+    note(image, "fact", 2)
+    with warnings.catch_warnings():  # (setting strides is deprecated)
+        warnings.simplefilter("ignore", DeprecationWarning)
+        image.strides = (0, 4)  # and strides: the same shape and dtype, other values
     assert recall(image, "fact") is None
     address = id(image)
     del image
