@@ -121,7 +121,8 @@ def run_batch(
     files_at_once : int, optional
         Files in flight after the first; default: the tasks the executor runs
         at once (1 for ``sync``), twice that with one task per file (a task
-        queued behind each running one: a worker never waits for the client).
+        queued behind each running one: a worker never waits for the client), or the
+        executor's ``files_at_once`` (Dask's, which sends several files a task).
     one_task_per_file : bool, optional
         After the first file, run each file's whole pipeline as one task of the
         executor, the shared nodes' values sent along (see
@@ -182,7 +183,8 @@ def run_batch(
     batch.options.update(cache=cache, keep_going=keep_going, hooks=hooks)
     made = missing_folders(out_dir, *folders)
     own = isinstance(executor, str)
-    width = files_at_once or executor_width(pool) * (2 if one_task_per_file else 1)
+    grouped = getattr(pool, "files_at_once", 0) if one_task_per_file else 0  # Dask's
+    width = files_at_once or grouped or executor_width(pool) * (2 if one_task_per_file else 1)
     batch.file_threads = width > 1 and not one_task_per_file and not encodes_values(pool)
     default = getattr(pool, "client_files", hasattr(pool, "preload"))
     batch.client_files = one_task_per_file and (default if client_files is None else client_files)

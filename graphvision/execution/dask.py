@@ -45,7 +45,6 @@ from __future__ import annotations
 import atexit
 import functools
 import logging
-import multiprocessing
 import os
 import threading
 import weakref
@@ -54,8 +53,9 @@ from concurrent.futures import Future
 from typing import Any
 
 from graphvision.errors import GraphvisionError
-from graphvision.execution.blas import one_blas_thread, one_blas_thread_for_good
-from graphvision.nodes.spec import FunctionRef
+from graphvision.execution.dask_files import FILES_PER_TASK, GROUPS_PER_THREAD, FileGroups
+from graphvision.execution.dask_worker import keep_freed_memory, on_worker, shared
+from graphvision.execution.file_task import run_file_task
 
 __all__ = ["SCHEDULER_VARIABLE", "DaskExecutor", "DaskUnavailableError", "TaskFuture"]
 
@@ -119,6 +119,7 @@ class DaskExecutor:
         self._start_error: BaseException | None = None
         self._closing = False
         self._starter: threading.Thread | None = None
+        self._files = FileGroups(self)  # a batch's files, a few to a task
         address = address or os.environ.get(SCHEDULER_VARIABLE) or None
         if client is None and address:
             try:
@@ -176,6 +177,12 @@ class DaskExecutor:
         """Tasks the cluster runs at once: the threads of all its workers."""
         return self._width or max(1, sum(self.client.nthreads().values()))
 
+    @property
+    def files_at_once(self) -> int:
+        """Files a batch keeps in flight: enough to fill every task of several files that
+        may be in flight (:mod:`graphvision.execution.dask_files`)."""
+        return self.width * GROUPS_PER_THREAD * FILES_PER_TASK
+
     def share(self, value: Any) -> Any:
         """``value`` sent to the cluster once; the handle stands for it in :meth:`submit`'s
         arguments (a batch's job, sent once rather than with every file).
@@ -186,7 +193,7 @@ class DaskExecutor:
         local cluster still starting gets it with the first task that reads it.
         """
         if self._started.is_set():
-            return self.client.submit(_shared, value, pure=False, retries=self.retries)
+            return self.client.submit(shared, value, pure=False, retries=self.retries)
         return _Later(value)
 
     def _sent(self, arg: Any) -> Any:
@@ -195,7 +202,7 @@ class DaskExecutor:
             return arg
         with self._in_flight_lock:
             if arg.task is None:
-                arg.task = self.client.submit(_shared, arg.value, pure=False, retries=self.retries)
+                arg.task = self.client.submit(shared, arg.value, pure=False, retries=self.retries)
             return arg.task
 
     def warm(self, fn: Callable[..., Any], /, *args: Any) -> list[Future]:
@@ -225,8 +232,10 @@ class DaskExecutor:
         later ``submit``'s arguments: Dask passes the result from worker to
         worker, without waiting for the client.
         """
+        if fn is run_file_task and len(args) == 3:  # a batch's file: a few to a task
+            return self._files.submit(*args)
         args = tuple(self._sent(arg) for arg in args)
-        task = self.client.submit(_on_worker, fn, *args, pure=False, retries=self.retries)
+        task = self.client.submit(on_worker, fn, *args, pure=False, retries=self.retries)
         future = TaskFuture(task)
         future.set_running_or_notify_cancel()
         with self._in_flight_lock:
@@ -257,6 +266,7 @@ class DaskExecutor:
         a local cluster still starting is closed as soon as it has (waited for with
         ``wait``)."""
         self._closing = True
+        self._files.close()
         starter = self._starter
         if starter is not None and starter.is_alive():
             if not wait:
@@ -341,58 +351,3 @@ def _settle(task: Any, future: Future) -> None:
         future.set_result(task.result())
     except BaseException as error:
         future.set_exception(error)
-
-
-_MMAP_THRESHOLD, _TRIM_THRESHOLD = -3, -1  # glibc's mallopt parameters (malloc.h)
-
-
-@functools.cache  # once per process
-def _keep_freed_memory() -> None:
-    """In a worker started with ``MALLOC_TRIM_THRESHOLD_`` (Dask's nanny sets 64 KiB, to give
-    freed memory back to the system): glibc's allocator keeps up to 64 MiB of freed memory
-    and serves arrays up to 32 MiB from it, once per process.
-
-    That variable also pins glibc's mmap threshold at 128 KiB, so every array over 128 KiB
-    a node makes is a fresh mapping, its pages faulted in and zeroed again: the coins
-    pipeline's ``regions.describe`` (a dozen 1 MB temporaries) took twice the CPU time,
-    and a batch's file on a Dask worker about twice that of a ``processes`` worker. Memory
-    over 64 MiB freed at the heap's top is still given back.
-    """
-    if "MALLOC_TRIM_THRESHOLD_" not in os.environ:
-        return
-    import ctypes
-
-    try:
-        libc = ctypes.CDLL("libc.so.6")
-        libc.mallopt(_MMAP_THRESHOLD, 32 * 2**20)
-        libc.mallopt(_TRIM_THRESHOLD, 64 * 2**20)
-    except (OSError, AttributeError):  # not glibc: nothing to undo
-        return
-
-
-def _shared(value: Any) -> Any:
-    """The value a task was given (see :meth:`DaskExecutor.share`)."""
-    return value
-
-
-def _on_worker(fn: Callable[..., Any], *args: Any) -> Any:
-    """``fn(*args)`` on a worker; a node the worker cannot import is named with the worker."""
-    ref = args[0] if args and isinstance(args[0], FunctionRef) else None
-    if ref is not None:
-        try:
-            ref.resolve()
-        except Exception as error:
-            from distributed import get_worker
-
-            where = ref.path or ref.module
-            raise GraphvisionError(
-                f"worker {get_worker().address} cannot import {where} ({error}): install the "
-                "plugin in every worker's environment, or put local plugin files on storage "
-                "the workers share"
-            ) from None
-    if multiprocessing.parent_process() is not None:  # a worker process: nodes only
-        one_blas_thread_for_good()  # set by the first task, a flag read after
-        _keep_freed_memory()
-        return fn(*args)
-    with one_blas_thread():  # a worker thread in the client's process (processes=False)
-        return fn(*args)

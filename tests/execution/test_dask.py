@@ -350,6 +350,7 @@ def test_a_batch_runs_files_in_the_client_while_the_workers_are_not_ready(dask_e
         executor=dask_executor,
         cache=None,
         on_item=release,
+        files_at_once=4,  # one file a task, as many as the workers run and queue
     )
     assert [item.scalars["score"] for item in batch.items] == pytest.approx(
         [2.0 * level / 255.0 for level in levels], abs=1e-6

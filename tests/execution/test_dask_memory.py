@@ -1,5 +1,5 @@
 """A Dask worker (started with ``MALLOC_TRIM_THRESHOLD_``, as Dask's nanny does) serves
-arrays from freed memory instead of a fresh mapping each (graphvision.execution.dask)."""
+arrays from freed memory instead of a fresh mapping each (graphvision.execution.dask_worker)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 FAULTS = """
 import resource
 import numpy as np
-from graphvision.execution.dask import _keep_freed_memory
+from graphvision.execution.dask_worker import keep_freed_memory
 
 def faults():
     began = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
@@ -21,7 +21,7 @@ def faults():
     return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - began
 
 before = faults()
-_keep_freed_memory()
+keep_freed_memory()
 faults()  # the heap grows once
 print(before, faults())
 """

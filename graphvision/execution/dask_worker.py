@@ -1,0 +1,101 @@
+"""What the Dask executor's tasks run on a worker (:mod:`graphvision.execution.dask`): a node
+with the worker's set-up (one BLAS thread, glibc's allocator keeping freed memory), a shared
+value's task, and several files of a batch as one task (:mod:`graphvision.execution.dask_files`)."""
+
+from __future__ import annotations
+
+import functools
+import multiprocessing
+import os
+import pickle
+from collections.abc import Callable
+from typing import Any
+
+from graphvision.errors import GraphvisionError
+from graphvision.execution.blas import one_blas_thread, one_blas_thread_for_good
+from graphvision.execution.file_task import FileJob, FileOutcome, run_file_task
+from graphvision.nodes.spec import FunctionRef
+
+__all__ = ["FileFailed", "keep_freed_memory", "on_worker", "run_files", "shared"]
+
+_MMAP_THRESHOLD, _TRIM_THRESHOLD = -3, -1  # glibc's mallopt parameters (malloc.h)
+
+
+@functools.cache  # once per process
+def keep_freed_memory() -> None:
+    """In a worker started with ``MALLOC_TRIM_THRESHOLD_`` (Dask's nanny sets 64 KiB, to give
+    freed memory back to the system): glibc's allocator keeps up to 64 MiB of freed memory
+    and serves arrays up to 32 MiB from it, once per process.
+
+    That variable also pins glibc's mmap threshold at 128 KiB, so every array over 128 KiB
+    a node makes is a fresh mapping, its pages faulted in and zeroed again: the coins
+    pipeline's ``regions.describe`` (a dozen 1 MB temporaries) took twice the CPU time,
+    and a batch's file on a Dask worker about twice that of a ``processes`` worker. Memory
+    over 64 MiB freed at the heap's top is still given back.
+    """
+    if "MALLOC_TRIM_THRESHOLD_" not in os.environ:
+        return
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(_MMAP_THRESHOLD, 32 * 2**20)
+        libc.mallopt(_TRIM_THRESHOLD, 64 * 2**20)
+    except (OSError, AttributeError):  # not glibc: nothing to undo
+        return
+
+
+def shared(value: Any) -> Any:
+    """The value a task was given (see :meth:`DaskExecutor.share`)."""
+    return value
+
+
+def on_worker(fn: Callable[..., Any], *args: Any) -> Any:
+    """``fn(*args)`` on a worker; a node the worker cannot import is named with the worker."""
+    ref = args[0] if args and isinstance(args[0], FunctionRef) else None
+    if ref is not None:
+        try:
+            ref.resolve()
+        except Exception as error:
+            from distributed import get_worker
+
+            where = ref.path or ref.module
+            raise GraphvisionError(
+                f"worker {get_worker().address} cannot import {where} ({error}): install the "
+                "plugin in every worker's environment, or put local plugin files on storage "
+                "the workers share"
+            ) from None
+    if multiprocessing.parent_process() is not None:  # a worker process: nodes only
+        one_blas_thread_for_good()  # set by the first task, a flag read after
+        keep_freed_memory()
+        return fn(*args)
+    with one_blas_thread():  # a worker thread in the client's process (processes=False)
+        return fn(*args)
+
+
+class FileFailed(Exception):
+    """What a file of a task of several files raised, as its type's name and message (when the
+    exception itself does not pickle: it would have failed the task's other files)."""
+
+
+def run_files(job: FileJob, files: list[tuple[str, str]]) -> list[FileOutcome | FileFailed]:
+    """Several files of a batch in one task: each one's outcome, or what it raised (that file
+    fails alone, named, and the others run)."""
+    found: list[FileOutcome | FileFailed] = []
+    for path, folder in files:
+        try:
+            found.append(run_file_task(job, path, folder))
+        except Exception as error:  # this file fails alone, with its reason
+            found.append(
+                error if _pickles(error) else FileFailed(f"{type(error).__name__}: {error}")
+            )
+    return found
+
+
+def _pickles(error: Exception) -> bool:
+    """Whether ``error`` goes back to the client as it is (else as a :class:`FileFailed`)."""
+    try:
+        pickle.loads(pickle.dumps(error))
+    except Exception:
+        return False
+    return True
