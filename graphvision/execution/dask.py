@@ -54,7 +54,7 @@ from typing import Any
 
 from graphvision.errors import GraphvisionError
 from graphvision.execution.dask_files import FILES_PER_TASK, GROUPS_PER_THREAD, FileGroups
-from graphvision.execution.dask_worker import keep_freed_memory, on_worker, shared
+from graphvision.execution.dask_worker import on_worker, shared
 from graphvision.execution.file_task import run_file_task
 
 __all__ = ["SCHEDULER_VARIABLE", "DaskExecutor", "DaskUnavailableError", "TaskFuture"]

@@ -18,7 +18,7 @@ files at once on Dask (:attr:`DaskExecutor.files_at_once
 <graphvision.execution.dask.DaskExecutor.files_at_once>`), so tasks fill
 up once the first ones are in flight: the first tasks leave with one file each
 (the workers start at once), the next ones with several. Each file keeps its
-own outcome: one that raises fails alone, named (:class:`FileFailed`); a task
+own outcome: one that raises fails alone, named (:class:`FileTaskError`); a task
 whose worker died runs again whole (``retries``) and each of its files is
 written again, whole, as before.
 """
@@ -30,7 +30,7 @@ from collections import deque
 from concurrent.futures import Future
 from typing import Any
 
-from graphvision.execution.dask_worker import FileFailed, on_worker, run_files
+from graphvision.execution.dask_worker import FileTaskError, on_worker, run_files
 
 __all__ = ["FILES_PER_TASK", "GROUPS_PER_THREAD", "FileGroups"]
 
@@ -110,4 +110,4 @@ class FileGroups:
             self._closed = True
             waiting, self._waiting = list(self._waiting), deque()
         for *_, future in waiting:
-            future.set_exception(FileFailed("the Dask executor was shut down"))
+            future.set_exception(FileTaskError("the Dask executor was shut down"))

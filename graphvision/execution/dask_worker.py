@@ -16,7 +16,7 @@ from graphvision.execution.blas import one_blas_thread, one_blas_thread_for_good
 from graphvision.execution.file_task import FileJob, FileOutcome, run_file_task
 from graphvision.nodes.spec import FunctionRef
 
-__all__ = ["FileFailed", "keep_freed_memory", "on_worker", "run_files", "shared"]
+__all__ = ["FileTaskError", "keep_freed_memory", "on_worker", "run_files", "shared"]
 
 _MMAP_THRESHOLD, _TRIM_THRESHOLD = -3, -1  # glibc's mallopt parameters (malloc.h)
 
@@ -73,27 +73,27 @@ def on_worker(fn: Callable[..., Any], *args: Any) -> Any:
         return fn(*args)
 
 
-class FileFailed(Exception):
+class FileTaskError(Exception):
     """What a file of a task of several files raised, as its type's name and message (when the
     exception itself does not pickle: it would have failed the task's other files)."""
 
 
-def run_files(job: FileJob, files: list[tuple[str, str]]) -> list[FileOutcome | FileFailed]:
+def run_files(job: FileJob, files: list[tuple[str, str]]) -> list[FileOutcome | FileTaskError]:
     """Several files of a batch in one task: each one's outcome, or what it raised (that file
     fails alone, named, and the others run)."""
-    found: list[FileOutcome | FileFailed] = []
+    found: list[FileOutcome | FileTaskError] = []
     for path, folder in files:
         try:
             found.append(run_file_task(job, path, folder))
         except Exception as error:  # this file fails alone, with its reason
             found.append(
-                error if _pickles(error) else FileFailed(f"{type(error).__name__}: {error}")
+                error if _pickles(error) else FileTaskError(f"{type(error).__name__}: {error}")
             )
     return found
 
 
 def _pickles(error: Exception) -> bool:
-    """Whether ``error`` goes back to the client as it is (else as a :class:`FileFailed`)."""
+    """Whether ``error`` goes back to the client as it is (else as a :class:`FileTaskError`)."""
     try:
         pickle.loads(pickle.dumps(error))
     except Exception:
