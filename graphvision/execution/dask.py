@@ -54,8 +54,10 @@ from typing import Any
 
 from graphvision.errors import GraphvisionError
 from graphvision.execution.dask_files import FILES_PER_TASK, GROUPS_PER_THREAD, FileGroups
+from graphvision.execution.dask_fork import ForkedWorkers, start_forked_cluster
 from graphvision.execution.dask_worker import on_worker, shared
-from graphvision.execution.file_task import run_file_task
+from graphvision.execution.file_task import run_file_task, warm_worker
+from graphvision.execution.worker_start import fork_context
 
 __all__ = ["SCHEDULER_VARIABLE", "DaskExecutor", "DaskUnavailableError", "TaskFuture"]
 
@@ -111,6 +113,7 @@ class DaskExecutor:
         self.retries = retries
         self._in_flight = 0
         self._in_flight_lock = threading.Lock()
+        self._begin_lock = threading.Lock()  # the cluster started once (not under the above)
         self._cluster: Any = None
         self._client: Any = client
         self._owns_client = client is None
@@ -120,6 +123,8 @@ class DaskExecutor:
         self._closing = False
         self._starter: threading.Thread | None = None
         self._files = FileGroups(self)  # a batch's files, a few to a task
+        self._forked: ForkedWorkers | None = None  # the local cluster's, forked from here
+        self._ready: Future = Future()  # a forked worker has joined the cluster
         address = address or os.environ.get(SCHEDULER_VARIABLE) or None
         if client is None and address:
             try:
@@ -133,22 +138,34 @@ class DaskExecutor:
         if self._client is not None:
             self._started.set()
             return
-        self._width = workers * threads_per_worker
-        _STARTING.add(self)
-        _wait_for_starts_at_exit()
-        self._starter = threading.Thread(
-            target=self._start_local,
-            args=(workers, threads_per_worker),
-            daemon=True,
-            name="graphvision-dask-cluster",
-        )
-        self._starter.start()
+        self._width, self._shape = workers * threads_per_worker, (workers, threads_per_worker)
 
-    def _start_local(self, workers: int, threads_per_worker: int) -> None:
+    def _begin(self) -> None:
+        """Start the local cluster in the background, once (on first need: a batch's first
+        file runs before it, so that its workers can be forked after it)."""
+        with self._begin_lock:
+            if self._starter is not None or self._started.is_set():
+                return
+            if self._closing:  # shut down before it started: the client says so
+                self._started.set()
+                return
+            _STARTING.add(self)
+            _wait_for_starts_at_exit()
+            self._starter = threading.Thread(
+                target=self._start_local, daemon=True, name="graphvision-dask-cluster"
+            )
+            self._starter.start()
+
+    def _start_local(self) -> None:
         """Start the local cluster (in the background: a batch's client runs files
         meanwhile); a cluster that started after :meth:`shutdown` is closed at once."""
         try:
-            self._cluster, self._client = start_local_cluster(workers, threads_per_worker)
+            if self._forked is not None:
+                self._cluster, self._client = start_forked_cluster(
+                    self._forked, self._ready, start_local_cluster
+                )
+            else:
+                self._cluster, self._client = start_local_cluster(*self._shape)
         except BaseException as error:  # reported where the client is first needed
             self._start_error = error
         finally:
@@ -162,6 +179,7 @@ class DaskExecutor:
     @property
     def client(self) -> Any:
         """The ``distributed.Client`` (a local cluster's, once it has started)."""
+        self._begin()
         self._started.wait()
         if self._client is None:
             error = self._start_error
@@ -182,6 +200,18 @@ class DaskExecutor:
         """Files a batch keeps in flight: enough to fill every task of several files that
         may be in flight (:mod:`graphvision.execution.dask_files`)."""
         return self.width * GROUPS_PER_THREAD * FILES_PER_TASK
+
+    def fork_workers(self) -> bool:
+        """Fork the local cluster's workers from this process now, when its cluster has not
+        started and a fork is safe (a batch, after its first file:
+        :mod:`graphvision.execution.dask_fork`); whether it did."""
+        with self._begin_lock:
+            if self._starter is not None or self._started.is_set() or fork_context() is None:
+                return False
+            self._forked = ForkedWorkers(*self._shape)
+        self._ready.set_running_or_notify_cancel()
+        self._begin()
+        return True
 
     def share(self, value: Any) -> Any:
         """``value`` sent to the cluster once; the handle stands for it in :meth:`submit`'s
@@ -234,6 +264,8 @@ class DaskExecutor:
         """
         if fn is run_file_task and len(args) == 3:  # a batch's file: a few to a task
             return self._files.submit(*args)
+        if fn is warm_worker and self._forked is not None:  # warm already: forked after a file
+            return self._ready
         args = tuple(self._sent(arg) for arg in args)
         task = self.client.submit(on_worker, fn, *args, pure=False, retries=self.retries)
         future = TaskFuture(task)
@@ -283,6 +315,8 @@ class DaskExecutor:
             client.close()
         if cluster is not None:
             cluster.close()
+        if self._forked is not None:
+            self._forked.close()
 
 
 _STARTING: weakref.WeakSet[DaskExecutor] = weakref.WeakSet()  # local clusters still starting

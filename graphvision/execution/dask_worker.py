@@ -78,10 +78,10 @@ class FileTaskError(Exception):
     exception itself does not pickle: it would have failed the task's other files)."""
 
 
-def run_files(job: FileJob, files: list[tuple[str, str]]) -> list[FileOutcome | FileTaskError]:
+def run_files(job: FileJob, files: list[tuple[str, str]]) -> list[FileOutcome | Exception]:
     """Several files of a batch in one task: each one's outcome, or what it raised (that file
     fails alone, named, and the others run)."""
-    found: list[FileOutcome | FileTaskError] = []
+    found: list[FileOutcome | Exception] = []
     for path, folder in files:
         try:
             found.append(run_file_task(job, path, folder))

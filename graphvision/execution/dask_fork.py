@@ -1,0 +1,173 @@
+"""The workers of the Dask executor's own ``LocalCluster`` forked from a batch's client
+(:class:`ForkedWorkers`), as the ``processes`` executor's are
+(:mod:`graphvision.execution.worker_start`).
+
+A ``LocalCluster`` spawns each worker: a new interpreter that imports numpy,
+Dask, graphvision, the plugins, scipy and numba's compiler before its first
+file (on 2 cores, each worker spent 2 to 3 s of CPU on it, taken from the
+files). A batch's client, once it has run the first file, has all of that, and
+the batch's registry; a fork of it costs milliseconds. So when the executor's
+own cluster has not started yet and forking the client is safe
+(:func:`~graphvision.execution.worker_start.fork_context`: no other thread runs,
+as before any Dask client exists), the batch forks the workers right after
+its first file (``fork_workers``); the cluster's scheduler then starts in the
+client, as a ``LocalCluster``'s does, and each worker connects to it, a
+``distributed.Worker`` in its own event loop, while the client runs files.
+
+A forked worker ignores Ctrl-C (the client reports it and closes the cluster),
+ends on SIGTERM as any worker does, and exits when the client does (its pipe
+from the client closes, even after ``kill -9``). One that dies is replaced by
+a worker the cluster spawns, and the scheduler runs its tasks again on the
+others (``retries``), as with a nanny's worker.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import signal
+import threading
+import warnings
+from collections.abc import Callable
+from concurrent.futures import Future
+from typing import Any
+
+from graphvision.execution.worker_start import fork_context
+
+__all__ = ["ForkedWorkers", "start_forked_cluster"]
+
+_JOIN_SECONDS = 5.0
+
+
+class ForkedWorkers:
+    """``count`` processes forked from this one now, each waiting for the scheduler's address
+    to become a Dask worker of ``threads`` threads (:meth:`connect`)."""
+
+    def __init__(self, count: int, threads: int) -> None:
+        found = fork_context()
+        if found is None:
+            raise RuntimeError("forking this process is not safe now")
+        self.closing = False
+        self._pipes: list[int] = []
+        self.processes: list[Any] = []
+        mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            for k in range(count):
+                read, write = os.pipe()
+                process = found.Process(  # type: ignore[attr-defined]
+                    target=_serve,
+                    args=(read, threads, tuple(self._pipes)),
+                    name=f"graphvision-dask-worker-{k}",
+                    daemon=True,
+                )
+                with warnings.catch_warnings():  # 3.12's os.fork note on threads
+                    warnings.simplefilter("ignore", DeprecationWarning)
+                    process.start()
+                os.close(read)
+                self._pipes.append(write)
+                self.processes.append(process)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+    def connect(self, address: str) -> None:
+        """Each worker connects to the scheduler at ``address``."""
+        for pipe in self._pipes:
+            with contextlib.suppress(OSError):  # a worker already gone: replaced by watch
+                os.write(pipe, f"{address}\n".encode())
+
+    def watch(self, replace: Callable[[int], None]) -> None:
+        """Call ``replace(n)`` with the number of workers lost so far each time one dies (not
+        once :meth:`close` has begun), from a thread of its own."""
+
+        def run() -> None:
+            from multiprocessing.connection import wait
+
+            alive = {process.sentinel: process for process in self.processes}
+            while alive and not self.closing:
+                for sentinel in wait(list(alive), timeout=1.0):
+                    alive.pop(sentinel)
+                    if not self.closing:
+                        replace(len(self.processes) - len(alive))
+
+        threading.Thread(target=run, daemon=True, name="graphvision-dask-forked").start()
+
+    def close(self) -> None:
+        """The workers' pipes closed: each closes its worker and exits; those still there
+        after a few seconds are ended."""
+        self.closing = True
+        for pipe in self._pipes:
+            with contextlib.suppress(OSError):
+                os.close(pipe)
+        self._pipes = []
+        for process in self.processes:
+            process.join(_JOIN_SECONDS)
+            if process.is_alive():
+                process.kill()
+                process.join(_JOIN_SECONDS)
+
+
+def start_forked_cluster(
+    forked: ForkedWorkers, ready: Future, start: Callable[[int, int], tuple[Any, Any]]
+) -> tuple[Any, Any]:
+    """A ``LocalCluster`` (``start``) of no worker of its own (its scheduler here), the ``forked``
+    workers connected to it, and its client; ``ready`` is done once a worker has joined. A
+    forked worker that dies is replaced by one the cluster spawns."""
+    cluster, client = start(0, 1)
+    try:
+        forked.connect(cluster.scheduler_address)
+        forked.watch(cluster.scale)
+        client.wait_for_workers(1, timeout=60)
+    except BaseException as error:
+        ready.set_exception(error)
+        client.close()
+        cluster.close()
+        raise
+    ready.set_result(None)
+    return cluster, client
+
+
+def _serve(pipe: int, threads: int, inherited: tuple[int, ...]) -> None:
+    """In a forked worker: wait for the scheduler's address, then be a Dask worker until the
+    client closes the pipe or the scheduler closes the worker."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the client reports Ctrl-C
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the command line's handler
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    for other in inherited:  # the other workers' pipes: their end is the client's alone
+        with contextlib.suppress(OSError):
+            os.close(other)
+    address = _read_line(pipe)
+    if not address:  # the client closed before the scheduler started
+        return
+    import asyncio
+
+    import dask
+
+    # a failing node is reported once, by the run, naming it (as LocalCluster's silence_logs)
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
+    with dask.config.set({"distributed.worker.profile.enabled": False}):
+        asyncio.run(_worker(address, threads, pipe))
+
+
+def _read_line(pipe: int) -> str:
+    data = b""
+    while not data.endswith(b"\n"):
+        chunk = os.read(pipe, 256)
+        if not chunk:
+            return ""
+        data += chunk
+    return data.decode().strip()
+
+
+async def _worker(address: str, threads: int, pipe: int) -> None:
+    import asyncio
+
+    import distributed
+
+    gone = asyncio.Event()
+    asyncio.get_running_loop().add_reader(pipe, gone.set)  # readable at EOF: the client left
+    async with distributed.Worker(address, nthreads=threads) as worker:
+        waits = {asyncio.ensure_future(gone.wait()), asyncio.ensure_future(worker.finished())}
+        _, pending = await asyncio.wait(waits, return_when=asyncio.FIRST_COMPLETED)
+        for task in pending:
+            task.cancel()
