@@ -1,0 +1,127 @@
+"""Dask batches: several files to a task, each with its own outcome; the executor's own
+cluster forked from the client after a batch's first file."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import graphvision as gv
+
+distributed = pytest.importorskip(
+    "distributed", reason="Dask is an optional extra: graphvision[dask]"
+)
+
+from graphvision.execution.dask import DaskExecutor  # noqa: E402
+from graphvision.execution.dask_files import FILES_PER_TASK  # noqa: E402
+
+from .test_dask import DYING_FILE_PLUGIN  # noqa: E402
+
+PICKY_PLUGIN = '''
+from graphvision import Float, Image, node
+
+
+@node("picky.mean")
+def mean(image: Image) -> Float:
+    """The image's mean; a dark image is refused.
+
+    Parameters
+    ----------
+    image : the file's image
+    """
+    if float(image.mean()) < 0.1:
+        raise ValueError("too dark to measure")
+    return float(image.mean())
+'''
+
+
+def _images(folder: Path, levels: list[int]) -> list[Path]:
+    import imageio.v3 as iio
+
+    folder.mkdir(parents=True, exist_ok=True)
+    for k, level in enumerate(levels):
+        iio.imwrite(folder / f"{k:02d}.png", np.full((8, 8), level, np.uint8))
+    return sorted(folder.glob("*.png"))
+
+
+def test_files_sent_several_to_a_task_keep_their_own_outcomes(tmp_path):
+    plugin = tmp_path / "picky.py"
+    plugin.write_text(PICKY_PLUGIN)
+    registry = gv.discover([plugin])
+    graph = gv.Graph("picky")
+    graph.output("mean", graph.add("mean", "picky.mean", image=graph.input("image", "Image")))
+    levels = [200, 120, 60, 240, 180, 10, 90, 150, 220, 30, 70, 250]
+    files = _images(tmp_path / "in", levels)
+    with (
+        distributed.LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as c,
+        distributed.Client(c) as client,
+    ):
+        executor = DaskExecutor(client)
+        assert executor.files_at_once == 2 * FILES_PER_TASK  # one thread, two tasks in flight
+        with distributed.get_task_stream(client) as stream:
+            batch = gv.run_batch(
+                graph, [str(f) for f in files], input="image", output_dir=tmp_path / "out",
+                registry=registry, executor=executor, cache=None, client_files=False,
+            )  # fmt: skip
+    statuses = [item.status for item in batch.items]
+    assert statuses == ["failed" if level == 10 else "ok" for level in levels]
+    assert "too dark to measure" in batch.items[5].error
+    for item, level in zip(batch.items, levels, strict=True):
+        if level != 10:
+            assert item.scalars["mean"] == pytest.approx(level / 255.0, abs=1e-6)
+            assert json.loads((item.output_dir / "mean.json").read_text()) == pytest.approx(
+                level / 255.0, abs=1e-6
+            )
+    tasks = [t for t in stream.data if t["key"].startswith("on_worker")]
+    assert len(tasks) < len(levels) - 1  # files 1 to 11 went in fewer tasks than files
+
+
+FORKED = """
+import json, multiprocessing, os, sys
+from pathlib import Path
+import graphvision as gv
+from graphvision.execution.dask import DaskExecutor
+
+folder = Path(sys.argv[1])
+graph = gv.Graph("dying")
+image = graph.input("image", "Image")
+marker = str(folder / "died")
+graph.output("mean", graph.add("mean", "dying.mean", image=image, params={"marker": marker}))
+executor = DaskExecutor(workers=2)
+batch = gv.run_batch(
+    graph, sorted(str(p) for p in (folder / "in").glob("*.png")), input="image",
+    output_dir=folder / "out", registry=gv.discover([folder / "dying.py"]), executor=executor,
+    cache=None, client_files=False,
+)
+names = executor.client.run(lambda: multiprocessing.current_process().name)
+executor.shutdown()
+print(json.dumps({
+    "forked": sum(name.startswith("graphvision-dask-worker") for name in names.values()),
+    "means": [item.scalars.get("mean") for item in batch.items],
+    "statuses": [item.status for item in batch.items],
+}))
+"""
+
+
+def test_a_batch_forks_the_workers_of_its_own_cluster_and_one_that_dies_costs_a_retry(tmp_path):
+    """In a fresh process (no other thread: a fork is safe), the executor's own cluster gets
+    its workers as forks of the client; file 1 kills its worker once and is run again."""
+    (tmp_path / "dying.py").write_text(DYING_FILE_PLUGIN)
+    levels = [200, 10, 120, 60, 240]
+    _images(tmp_path / "in", levels)
+    done = subprocess.run(
+        [sys.executable, "-c", FORKED, str(tmp_path)],
+        capture_output=True, text=True, timeout=300, env={**os.environ, "PYTHONWARNINGS": "ignore"},
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    found = json.loads(done.stdout.splitlines()[-1])
+    assert (tmp_path / "died").exists()  # a worker did die, on file 1
+    assert found["statuses"] == ["ok"] * len(levels)
+    assert found["means"] == pytest.approx([level / 255.0 for level in levels], abs=1e-6)
+    assert found["forked"] >= 1  # the surviving worker is a fork of the client
