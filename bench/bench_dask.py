@@ -14,7 +14,8 @@ same tasks. Aim (issue 15): within
 :func:`timeline` says where a 200-file coins batch's seconds go on a given
 ``LocalCluster(2)``, its workers' first batch and the next: timestamps from the
 client (each file done, and where it ran) and from the workers (each task's
-start and end, from Dask's task stream), and the CPU seconds of the client's
+start and end, from Dask's task stream: a task carries up to four files,
+:mod:`graphvision.execution.dask_files`), and the CPU seconds of the client's
 process (with the cluster's scheduler) and of the workers.
 
 Run: ``python bench/bench_dask.py [timeline]`` (``make bench`` runs :func:`main`).
@@ -127,9 +128,9 @@ def timeline(files: int = 200) -> list[str]:
 
     bench_batch.FILES = files
     graph = gv.load_pipeline(bench_batch.PIPELINE)
-    rows = ["| batch | seconds | client files | warm-up tasks | first file task | "
-            "file task median ms | worker gaps ms | client+scheduler CPU s | workers CPU s |",
-            "| --- | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: |"]  # fmt: skip
+    rows = ["| batch | seconds | client files | warm-up tasks | first file task | tasks | "
+            "task median ms | worker gaps ms | client+scheduler CPU s | workers CPU s |",
+            "| --- | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]  # fmt: skip
     with (
         tempfile.TemporaryDirectory() as scratch,
         distributed.LocalCluster(
@@ -153,12 +154,13 @@ def timeline(files: int = 200) -> list[str]:
                      for i in batch.items]  # fmt: skip
             tasks = _tasks(stream.data, began)
             warm = ", ".join(f"{a:.2f}–{b:.2f}" for a, b, op, _ in tasks if op == "warm_worker")
-            done = [(a, b, w) for a, b, op, w in tasks if op == "_on_worker"]
+            done = [(a, b, w) for a, b, op, w in tasks if op == "on_worker"]
             lengths = sorted(b - a for a, b, _ in done)
             gaps = sorted(_gaps(done))
             rows.append(
                 f"| {name} | {seconds:.2f} | {sum('in the client' in w for w in where)} | "
-                f"{warm} | {done[0][0]:.2f} | {lengths[len(lengths) // 2] * 1e3:.0f} | "
+                f"{warm} | {done[0][0]:.2f} | {len(done)} | "
+                f"{lengths[len(lengths) // 2] * 1e3:.0f} | "
                 f"{gaps[len(gaps) // 2] * 1e3:.1f} | {_cpu() - client_cpu:.2f} | {workers:.2f} |"
             )
     return [*rows, f"(load 1 min {os.getloadavg()[0]:.1f})"]
