@@ -56,7 +56,6 @@ from graphvision.errors import GraphvisionError
 from graphvision.execution.dask_files import FILES_PER_TASK, GROUPS_PER_THREAD, FileGroups
 from graphvision.execution.dask_fork import ForkedWorkers, start_forked_cluster
 from graphvision.execution.dask_worker import on_worker, shared
-from graphvision.execution.file_task import run_file_task, warm_worker
 from graphvision.execution.worker_start import fork_context
 
 __all__ = ["SCHEDULER_VARIABLE", "DaskExecutor", "DaskUnavailableError", "TaskFuture"]
@@ -262,9 +261,9 @@ class DaskExecutor:
         later ``submit``'s arguments: Dask passes the result from worker to
         worker, without waiting for the client.
         """
-        if fn is run_file_task and len(args) == 3:  # a batch's file: a few to a task
-            return self._files.submit(*args)
-        if fn is warm_worker and self._forked is not None:  # warm already: forked after a file
+        if _is(fn, "run_file_task") and len(args) == 3:  # a batch's file: a few to a task
+            return self._files.submit(fn, *args)
+        if _is(fn, "warm_worker") and self._forked is not None:  # warm: forked after a file
             return self._ready
         args = tuple(self._sent(arg) for arg in args)
         task = self.client.submit(on_worker, fn, *args, pure=False, retries=self.retries)
@@ -369,6 +368,13 @@ def start_local_cluster(workers: int, threads_per_worker: int) -> tuple[Any, Any
     except BaseException:
         cluster.close()
         raise
+
+
+def _is(fn: Any, name: str) -> bool:
+    """Whether ``fn`` is :mod:`graphvision.execution.file_task`'s function ``name`` (by name:
+    that module imports the run, which imports the executors)."""
+    module = "graphvision.execution.file_task"
+    return getattr(fn, "__module__", None) == module and getattr(fn, "__name__", None) == name
 
 
 class TaskFuture(Future):

@@ -44,12 +44,15 @@ class FileGroups:
     def __init__(self, executor: Any) -> None:
         self.executor = executor
         self._waiting: deque[tuple[Any, str, str, Future]] = deque()
+        self._task: Any = None  # the function that runs one file (file_task.run_file_task)
         self._flying = 0
         self._lock = threading.Lock()
         self._closed = False
 
-    def submit(self, job: Any, path: str, folder: str) -> Future:
-        """A future of the file's :class:`~graphvision.execution.file_task.FileOutcome`."""
+    def submit(self, task: Any, job: Any, path: str, folder: str) -> Future:
+        """A future of ``task(job, path, folder)``: the file's
+        :class:`~graphvision.execution.file_task.FileOutcome`."""
+        self._task = task
         future: Future = Future()
         future.set_running_or_notify_cancel()
         with self._lock:
@@ -77,7 +80,13 @@ class FileGroups:
                 job = self.executor._sent(taken[0][0])
                 files = [(path, folder) for _, path, folder, _ in taken]
                 task = self.executor.client.submit(
-                    on_worker, run_files, job, files, pure=False, retries=self.executor.retries
+                    on_worker,
+                    run_files,
+                    self._task,
+                    job,
+                    files,
+                    pure=False,
+                    retries=self.executor.retries,
                 )
             except BaseException as error:  # a cluster that did not start, or is closed
                 self._landed(None, taken, error)

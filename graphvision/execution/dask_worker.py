@@ -13,7 +13,6 @@ from typing import Any
 
 from graphvision.errors import GraphvisionError
 from graphvision.execution.blas import one_blas_thread, one_blas_thread_for_good
-from graphvision.execution.file_task import FileJob, FileOutcome, run_file_task
 from graphvision.nodes.spec import FunctionRef
 
 __all__ = ["FileTaskError", "keep_freed_memory", "on_worker", "run_files", "shared"]
@@ -78,13 +77,16 @@ class FileTaskError(Exception):
     exception itself does not pickle: it would have failed the task's other files)."""
 
 
-def run_files(job: FileJob, files: list[tuple[str, str]]) -> list[FileOutcome | Exception]:
-    """Several files of a batch in one task: each one's outcome, or what it raised (that file
-    fails alone, named, and the others run)."""
-    found: list[FileOutcome | Exception] = []
+def run_files(
+    task: Callable[[Any, str, str], Any], job: Any, files: list[tuple[str, str]]
+) -> list[Any]:
+    """Several files of a batch in one task, each run by ``task(job, path, folder)``
+    (:func:`~graphvision.execution.file_task.run_file_task`): each one's outcome, or what it
+    raised (that file fails alone, named, and the others run)."""
+    found: list[Any] = []
     for path, folder in files:
         try:
-            found.append(run_file_task(job, path, folder))
+            found.append(task(job, path, folder))
         except Exception as error:  # this file fails alone, with its reason
             found.append(
                 error if _pickles(error) else FileTaskError(f"{type(error).__name__}: {error}")
