@@ -26,13 +26,15 @@ hop fewer (an interleaved A/B on a 200-task chain: 11.1 against 13.0 ms a
 task).
 
 Without a client or an address, the executor starts a ``LocalCluster`` in a
-background thread and returns at once: a batch's first file, and the files its
-client runs while the workers are not ready
-(:mod:`graphvision.execution.batch_lanes`: ``client_files``, on for Dask, whose
-workers each import the plugins, scipy and numba's compiler on their first
-batch), run meanwhile; what needs the cluster waits for it. A value shared
+background thread when something first needs it: the files a batch's client
+runs while the workers are not ready
+(:mod:`graphvision.execution.batch_lanes`: ``client_files``, on for Dask) run
+meanwhile; what needs the cluster waits for it. A batch runs its first file
+before, then forks the cluster's workers from the client when that is safe
+(:mod:`graphvision.execution.dask_fork`), so they import nothing. A value shared
 before it has started (:meth:`DaskExecutor.share`) travels with the first task
-that reads it.
+that reads it. A batch's files go several to a task
+(:mod:`graphvision.execution.dask_files`).
 
 A worker that dies while it runs a node is replaced by Dask and the node is
 run again on another worker (``retries``), so one lost worker costs one node,
