@@ -22,6 +22,7 @@ __all__ = [
     "saddle_peaks",
     "saddle_response",
     "sample",
+    "smooth_unit",
 ]
 
 
@@ -336,3 +337,22 @@ def forstner(smooth, corners, half, weight, which, iterations):  # pragma: no co
         if shift < 1e-4:
             break
     return q
+
+
+def smooth_unit(image: np.ndarray) -> np.ndarray:
+    """``smooth_gaussian(image.astype(np.float64), 1.0)`` (reflect), the same bits: a
+    ``float32`` image is widened where the filter's first pass reads it
+    (``correlate_both_wide``), not copied to ``float64`` first."""
+    from ..shared.separable import gaussian_taps, smooth_gaussian
+    from ..shared.separable_kernels import correlate_both_wide
+
+    if image.dtype != np.float32 or image.ndim != 2:
+        return np.ascontiguousarray(smooth_gaussian(np.asarray(image, np.float64), 1.0))
+    data = np.ascontiguousarray(image)
+    taps = gaussian_taps(1.0)
+    half = taps.size // 2  # scipy's "reflect" is numpy's "symmetric" padding
+    rows = np.pad(np.arange(data.shape[0], dtype=np.int64), half, mode="symmetric")
+    columns = np.pad(np.arange(data.shape[1], dtype=np.int64), half, mode="symmetric")
+    out = np.empty(data.shape, np.float64)
+    correlate_both_wide(data, taps, 1, rows, taps, 1, columns, out)
+    return out

@@ -132,9 +132,9 @@ class _Photo:
     """The image smoothed by σ = 1, sampled (and its gradient) at sub-pixel points."""
 
     def __init__(self, image: np.ndarray) -> None:
-        from ..shared.separable import smooth_gaussian
+        from ._corner_kernels import smooth_unit
 
-        self.smooth = np.ascontiguousarray(smooth_gaussian(np.asarray(image, np.float64), 1.0))
+        self.smooth = smooth_unit(np.asarray(image))  # a float32 image is not copied
 
     def x_junctions(self, points: np.ndarray, radius: np.ndarray) -> bool:
         """Every point is point-symmetric at ``radius`` (an X-junction, not an L or T):
@@ -243,13 +243,14 @@ class _Grower:
         )
 
 
-def _cell_mean(image: np.ndarray, corners: np.ndarray, columns: int, a: int, b: int) -> float:
-    """Mean intensity at the centre of the cell between corners (a, b) and (a+1, b+1)."""
-    from scipy import ndimage
+def _cell_means(image: np.ndarray, corners: np.ndarray, columns: int, a: int, b: int) -> np.ndarray:
+    """Intensity (interpolated linearly) at the centre of the cell between corners (a, b)
+    and (a+1, b+1) of each labelling in ``corners`` (``labellings × rows·columns × 2``)."""
+    from ._corner_kernels import sample
 
     idx = [b * columns + a, b * columns + a + 1, (b + 1) * columns + a, (b + 1) * columns + a + 1]
-    x, y = corners[idx].mean(axis=0)
-    return float(ndimage.map_coordinates(image, [[y], [x]], order=1)[0])
+    centres = corners[:, idx].mean(axis=1)
+    return sample(image, np.ascontiguousarray(centres[:, 0]), np.ascontiguousarray(centres[:, 1]))
 
 
 def _oriented(grid: np.ndarray, smooth: np.ndarray) -> np.ndarray | None:
@@ -266,10 +267,10 @@ def _oriented(grid: np.ndarray, smooth: np.ndarray) -> np.ndarray | None:
     if not accepted:
         return None
     # a 180° turn also passes: keep the labelling whose first square is dark
-    darkness = [
-        _cell_mean(smooth, c, columns, 0, 0) - _cell_mean(smooth, c, columns, columns - 2, rows - 2)
-        for c in accepted
-    ]
+    labellings = np.stack(accepted)
+    darkness = _cell_means(smooth, labellings, columns, 0, 0) - _cell_means(
+        smooth, labellings, columns, columns - 2, rows - 2
+    )
     return accepted[int(np.argmin(darkness))]
 
 
@@ -284,7 +285,7 @@ def find_board(
 
     ``sigma`` None tries the scales of :func:`sigma_ladder` in turn.
     """
-    image = np.asarray(image, dtype=np.float64)
+    image = np.asarray(image)  # float32 stays float32: _Photo widens it as it reads it
     photo = _Photo(image)
     count = columns * rows
     scales = sigma_ladder(image.shape, columns, rows) if sigma is None else [sigma]
@@ -429,7 +430,7 @@ def board_corners(
         raise ValueError(f"views must be H×W or N×H×W gray images, got shape {views.shape}")
     corners = np.full((len(stack), columns * rows, 2), np.nan)
     for k, image in enumerate(stack):
-        found = find_board(np.asarray(image, np.float64), columns, rows, sigma, max_window)
+        found = find_board(image, columns, rows, sigma, max_window)
         if found is not None:
             corners[k] = found
     found_views = np.isfinite(corners).all(axis=(1, 2))

@@ -202,3 +202,34 @@ def test_gradient_samples_equal_samples_of_the_gradient_images_to_the_bit():
     found_x, found_y = gradient_samples(smooth, xs, ys)
     np.testing.assert_array_equal(found_x, sample(gx, xs, ys))
     np.testing.assert_array_equal(found_y, sample(gy, xs, ys))
+
+
+@pytest.mark.parametrize("shape", [(48, 64), (9, 9), (5, 7), (1, 3)])
+def test_smooth_unit_of_float32_equals_the_float64_copy_smoothed_to_the_bit(shape):
+    """The σ = 1 image of a float32 view, without the float64 copy it was smoothed from."""
+    from graphvision_plugins.camera._corner_kernels import smooth_unit
+    from graphvision_plugins.shared.separable import smooth_gaussian
+
+    rng = np.random.default_rng(7)
+    image = rng.random(shape).astype(np.float32)
+    image.flat[0] = np.float32(1e-40)  # a subnormal widens exactly too
+    expected = smooth_gaussian(image.astype(np.float64), 1.0)
+    np.testing.assert_array_equal(smooth_unit(image), expected)
+    np.testing.assert_array_equal(
+        smooth_unit(image[:, ::-1]), smooth_gaussian(image[:, ::-1].astype(np.float64), 1.0)
+    )  # not contiguous
+    np.testing.assert_array_equal(smooth_unit(image.astype(np.float64)), expected)
+
+
+def test_cell_means_equal_map_coordinates_at_the_cells_centres():
+    """The labellings' first and last cells, sampled in one call (was one map_coordinates
+    per cell)."""
+    from graphvision_plugins.camera._corners import _cell_means
+
+    rng = np.random.default_rng(8)
+    image = rng.random((30, 40))
+    corners = rng.uniform(0, [39, 29], (3, 4 * 3, 2))  # 3 labellings of 4 × 3 corners
+    idx = [1 * 4 + 2, 1 * 4 + 3, 2 * 4 + 2, 2 * 4 + 3]
+    centres = corners[:, idx].mean(axis=1)
+    expected = ndimage.map_coordinates(image, [centres[:, 1], centres[:, 0]], order=1)
+    np.testing.assert_allclose(_cell_means(image, corners, 4, 2, 1), expected, rtol=0, atol=1e-12)
