@@ -235,7 +235,7 @@ class BatchRun:
             seeds=seeds,
             pages=tuple(self.pages.run),
             store=cache.disk if cache is not None else None,
-            executor=f"{executor_name(self.pool)}, one task per file",
+            executor=f"{executor_name(self.pool)}, {_tasks(self.pool)}",
             stop=self.stop,
         )
         use_registry(job, options["registry"])  # for the client's own files
@@ -306,3 +306,10 @@ class BatchRun:
         """The job, or the executor's handle on it once sent to every worker (Dask)."""
         share = getattr(self.pool, "share", None)
         return share(job) if share is not None else job
+
+
+def _tasks(pool: Any) -> str:
+    """How a batch's files go to ``pool``'s workers, as its records say: several a task on
+    an executor that groups them (``files_per_task``, Dask), else one each."""
+    per_task = getattr(pool, "files_per_task", 1)
+    return f"up to {per_task} files a task" if per_task > 1 else "one task per file"

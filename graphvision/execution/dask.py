@@ -20,10 +20,8 @@ per node made a chain cost 1.9 times raw Dask's).
 Results are fetched where it costs least. A task submitted while others are
 in flight has its result awaited on the client's event loop, so many results
 are fetched at once (a blocking fetch per task, one after another, made
-independent tasks cost twice what raw Dask's ``gather`` costs); a task
-submitted alone (a chain) is fetched by Dask's callback thread, one thread
-hop fewer (an interleaved A/B on a 200-task chain: 11.1 against 13.0 ms a
-task).
+independent tasks cost twice what raw Dask's ``gather`` costs); a task submitted
+alone (a chain) is fetched by Dask's callback thread, one thread hop fewer.
 
 Without a client or an address, the executor starts a ``LocalCluster`` in a
 background thread when something first needs it: the files a batch's client
@@ -93,6 +91,7 @@ class DaskExecutor:
     encodes_values = True
     chains_tasks = True
     client_files = True  # a batch's client runs files while the workers warm up
+    files_per_task = FILES_PER_TASK  # a batch's files go several to a task
     name = "dask"
 
     def __init__(
@@ -293,6 +292,12 @@ class DaskExecutor:
     def _landed(self, _: Future) -> None:
         with self._in_flight_lock:
             self._in_flight -= 1
+
+    def __enter__(self) -> DaskExecutor:  # ``with``: shut down at the end, as a pool is
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.shutdown()
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         """Close the client and the local cluster this executor started (not a given client);

@@ -54,6 +54,7 @@ from graphvision.execution.folders import RunPage
 from graphvision.execution.record import RunRecord
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
+from graphvision.values.ports import freeze_all
 
 __all__ = [
     "FileJob",
@@ -262,7 +263,10 @@ def _prepared(job: FileJob) -> _Prepared:
         compiled = compile_graph(job.graph, registry, provided=provided)
         seeds = []
         for key, type_name, arrays, meta in job.seeds:
-            value = registry.port_type(type_name).decode(arrays, meta)
+            # frozen as the client's value is (read-only, aligned): a node sees the same
+            # arrays on every worker, and a numba kernel compiles one signature, not a
+            # second for writable arrays in each worker
+            value = registry.port_type(type_name).decode(freeze_all(arrays), meta)
             seeds.append((key, value, sum(int(getattr(a, "nbytes", 0)) for a in arrays.values())))
         found = _PREPARED[job.token] = _Prepared(registry, compiled, seeds)
         while len(_PREPARED) > _KEEP_JOBS:

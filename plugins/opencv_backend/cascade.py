@@ -111,7 +111,7 @@ def cv_lbp_detect(
 ) -> BoxSet:
     """``cv2.CascadeClassifier.detectMultiScale`` on the 8-bit image (every window kept,
     ``minNeighbors=0``), grouped by ``cv2.groupRectangles(min_neighbours', eps)``.
-    OpenCV scans every second reduced pixel below scale 2 (``step`` is the reference's),
+    OpenCV scans every second reduced pixel up to scale 2 (``step`` is the reference's),
     so about a quarter of the windows: a group needs more than
     ``min_neighbours' = ⌊min_neighbours · step² / 4⌋`` of them, or ``min_neighbours``
     at ``step`` 0 (the reference's OpenCV scan: the same windows). Scores are the

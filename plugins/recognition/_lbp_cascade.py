@@ -564,7 +564,7 @@ def detect_lbp(
 
 _OPENCV = (
     "OpenCV (cv2.CascadeClassifier, in OpenCV 4.x only) scans every second reduced pixel "
-    "below scale 2 on integer window sizes: a group's count is about a quarter of the "
+    "up to scale 2 on integer window sizes: a group's count is about a quarter of the "
     "reference's, its boxes differ by up to about 10 px (x0, y0, x1 of 40-120 px faces) "
     "and it may keep a group the reference drops; boxes are compared by position"
 )
@@ -620,13 +620,14 @@ def lbp_detect(
         Window step in pixels of the reduced image (s pixels of the input at scale s);
         0 scans as OpenCV's ``detectMultiScale`` does: every second reduced pixel while
         s ≤ 2, every pixel above (about 2.6 times fewer windows than step 1 from 24 px
-        on a 512² image, most of them small ones; use it with fewer ``min_neighbours``,
-        e.g. OpenCV's 3).
+        on a 512² image, most of them small ones). OpenCV's own call uses 3
+        ``min_neighbours``; on ``face_detect.yaml``'s scenes the default 8 keeps fewer
+        false positives at step 0 too.
     min_size, max_size : float
         Smallest and largest window (its larger side, in input pixels).
     min_neighbours : int
         A group needs more windows than this. With ``step`` 1 a face gathers about
-        four times as many windows as with OpenCV's step 2 (its step below scale 2);
+        four times as many windows as with OpenCV's step 2 (its step up to scale 2);
         8 was chosen on the tuning scenes of ``synthetic.face_scenes`` (seeds 0–7),
         not on the scenes measured.
     eps : float

@@ -360,7 +360,7 @@ def test_a_batch_runs_files_in_the_client_while_the_workers_are_not_ready(dask_e
     assert where == [
         "dask, first file in this process",
         *["dask, in the client while the workers started"] * 3,
-        *["dask, one task per file"] * 4,
+        *["dask, up to 4 files a task"] * 4,
     ]
 
 
@@ -421,3 +421,11 @@ def test_a_local_cluster_that_cannot_start_is_named_where_it_is_first_needed(mon
     ):
         executor.submit(operator.add, 1.0, 1.0)
     executor.shutdown()
+
+
+def test_a_dask_executor_is_shut_down_at_the_end_of_a_with_block(monkeypatch):
+    closed = []
+    monkeypatch.setattr(gv.DaskExecutor, "shutdown", lambda self, *a, **k: closed.append(self))
+    with gv.DaskExecutor() as pool:  # no cluster yet: it starts on first need
+        assert isinstance(pool, gv.DaskExecutor) and not closed
+    assert closed == [pool]
