@@ -36,7 +36,7 @@ from html import escape
 from itertools import pairwise
 from typing import Protocol
 
-__all__ = ["STATUS_COLOURS", "Drawable", "graph_svg"]
+__all__ = ["STATUS_COLOURS", "Drawable", "graph_svg", "time_label"]
 
 
 class _Reference(Protocol):
@@ -155,6 +155,11 @@ def graph_svg(
     return "\n".join(parts)
 
 
+def time_label(seconds: float) -> str:
+    """A node's time as its box shows it under its op (``12.3 ms``, ``1.25 s``)."""
+    return f"{seconds * 1e3:.1f} ms" if seconds < 1 else f"{seconds:.2f} s"
+
+
 def _vertices(
     graph: Drawable, status: Mapping[str, str], seconds: Mapping[str, float]
 ) -> dict[str, _Vertex]:
@@ -167,9 +172,7 @@ def _vertices(
         state = status.get(name, "")
         lines = [name, node.op]
         if name in seconds:
-            lines.append(
-                f"{seconds[name] * 1e3:.1f} ms" if seconds[name] < 1 else f"{seconds[name]:.2f} s"
-            )
+            lines.append(time_label(seconds[name]))
         tooltip = f"{name}: {node.op}" + (f" ({state})" if state else "")
         fill = STATUS_COLOURS.get(state, "#ffffff")
         vertices[name] = _Vertex(name, tuple(lines), "node", fill, tooltip)

@@ -137,11 +137,6 @@ _KEPT = 8  # drawings kept (a batch draws one graph, a sweep a few)
 _KEEPING = threading.Lock()
 
 
-def _time_label(seconds: float) -> str:
-    """A node's time as :func:`~graphvision.graph.svg.graph_svg` writes it under its op."""
-    return f"{seconds * 1e3:.1f} ms" if seconds < 1 else f"{seconds:.2f} s"
-
-
 def _drawn_key(graph: Any, status: Mapping[str, str], labels: Mapping[str, str]) -> tuple:
     """All that ``graph_svg``'s layout reads: the graph's name, inputs, nodes (op, inputs)
     and outputs, each node's status and the length of its time label (a box's width)."""
@@ -178,9 +173,9 @@ def graph_drawing(graph: Any, status: Mapping[str, str], seconds: Mapping[str, f
     """:func:`~graphvision.graph.svg.graph_svg` of ``graph``, its layout made once per
     graph, nodes' states and lengths of their time labels: a batch's files draw the same
     graph with other times (2 ms a file's report), which only change the labels' text."""
-    from graphvision.graph.svg import graph_svg
+    from graphvision.graph.svg import graph_svg, time_label
 
-    labels = {name: _time_label(s) for name, s in seconds.items() if name in graph.nodes}
+    labels = {name: time_label(s) for name, s in seconds.items() if name in graph.nodes}
     order = {name: labels[name] for name in graph.nodes if name in labels}  # as drawn
     key = _drawn_key(graph, status, order)
     kept = _DRAWINGS.get(key)
