@@ -17,7 +17,7 @@ import graphvision as gv
 from graphvision.values.geometry import Points3DPort
 from graphvision.values.images import FloatImagePort, LabelImagePort
 from graphvision.values.scalars import TablePort
-from graphvision.views.viewers import value_html
+from graphvision.views.viewers import pictures_at_most, value_html
 from graphvision_plugins.stereo._ports import DisparityPort
 
 PIPELINES = Path(__file__).parents[2] / "pipelines"
@@ -41,6 +41,20 @@ def test_a_disparity_map_gets_a_colour_bar_with_its_range_and_units():
     factor = picture.shape[0] // 20  # enlarged to at least 64 pixels
     assert tuple(picture[factor, 0]) == VIOLET and tuple(picture[0, -1]) == YELLOW
     assert tuple(picture[0, 0]) == (0, 0, 0)  # the NaN
+
+
+def test_a_capped_float_map_picture_is_coloured_from_a_sample_of_the_right_size():
+    """Within a cap of 50 pixels, a 400×300 map is coloured from every 8th pixel
+    (50×38, drawn doubled as small pictures are), not block-averaged from all of it (50×37);
+    its ends keep their colours, and the range printed is still the whole map's."""
+    disparity = np.tile(np.linspace(10.0, 60.0, 300, dtype=np.float32), (400, 1))
+    disparity[:, -8:] = np.nan  # the last sampled column (296) falls in the NaN band
+    with pictures_at_most(50):
+        shown = value_html(DisparityPort, disparity, "disparity")
+    (picture,) = _pictures(shown)
+    assert picture.shape[:2] == (2 * 50, 2 * 38)
+    assert tuple(picture[0, 0]) == VIOLET and tuple(picture[0, -1]) == (0, 0, 0)
+    assert "3200 invalid pixels (NaN) drawn black" in shown
 
 
 def test_a_filter_response_says_it_has_no_unit_and_an_image_has_no_bar():
