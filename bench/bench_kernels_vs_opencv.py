@@ -13,7 +13,10 @@ function (``__wrapped__``, no port checks), the kernel's time alone. The calls c
 
 * colour: ``colour.from_rgb`` against ``cv2.cvtColor`` (RGB2HSV, RGB2Lab, RGB2YCrCb) on float32;
 * median 3/5/7: ``filters.median`` against ``cv2.medianBlur`` (float32 for 3 and 5; uint8
-  for 7, the only type OpenCV filters with a window above 5);
+  for 7, the only type OpenCV filters with a window above 5). The 7×7 image holds 8-bit
+  levels, so graphvision takes its sliding histogram, as OpenCV does on uint8; the row
+  "off the 8-bit levels" gives it the same image moved off the levels (``0.999 x + 0.0005``),
+  which takes the selection network (OpenCV still on the uint8 image);
 * correlation 5×5: ``filters.correlate`` against ``cv2.filter2D``;
 * Gaussian pyramid of 4 levels: ``pyramids.gaussian`` against ``cv2.pyrDown`` ×3;
 * demosaicing (RGGB): ``formation.demosaic`` bilinear and Malvar against ``cv2.cvtColor``
@@ -87,6 +90,15 @@ def _image_rows(cv2, size: int) -> list[Row]:
                     lambda k=k, src=src: cv2.medianBlur(src, k),
                 )
             )
+    off_levels = gray * np.float32(0.999) + np.float32(0.0005)  # no value k / 255: the network
+    rows.append(
+        (
+            "median 7×7, off the 8-bit levels (network)",
+            "`cv2.medianBlur` uint8",
+            lambda: filters.median(off_levels, size=7),
+            lambda: cv2.medianBlur(gray8, 7),
+        )
+    )
     kernel = np.random.default_rng(0).random((5, 5)).astype(np.float32)
     correlations = (("", filters.correlate), (_KERNEL_ONLY, filters.correlate.__wrapped__))
     for label, correlate in correlations:

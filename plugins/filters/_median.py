@@ -116,7 +116,11 @@ def median(image: ImageT, *, size: MedianSize = 3, boundary: Boundary = "mirror"
     (14 for 3×3, 82 for 5×5, 205 for 7×7), each run over a block of pixels
     as min/max vector instructions. 3×3 fuses Paeth's network (max of the
     column minima, median of the medians, min of the maxima) into one pass
-    per row. Colour images are filtered per channel.
+    per row. From 7×7 up, an image of 8-bit levels (every value :math:`k/255`,
+    as read from an 8-bit file) takes Huang's sliding histogram over the 256
+    levels instead: ``2 · size`` counter updates a pixel and a
+    short walk from the neighbour's median [4]_, the same median. Colour images
+    are filtered per channel.
 
     Parameters
     ----------
@@ -136,6 +140,8 @@ def median(image: ImageT, *, size: MedianSize = 3, boundary: Boundary = "mirror"
        ACM Trans. Graph. 40(4), 2021.
     .. [2] A. W. Paeth, "Median finding on a 3×3 grid", Graphics Gems, 1990.
     .. [3] Szeliski (2022), section 3.3.1.
+    .. [4] T. S. Huang, G. J. Yang, G. Y. Tang, "A fast two-dimensional median
+       filtering algorithm", IEEE Trans. ASSP 27(1), 1979.
     """
     half = size // 2
     shape = image.shape
