@@ -12,6 +12,8 @@ median, correlation, pyramid, demosaicing and SGM rows are repeated with the nod
 function (``__wrapped__``, no port checks), the kernel's time alone. The calls compared:
 
 * colour: ``colour.from_rgb`` against ``cv2.cvtColor`` (RGB2HSV, RGB2Lab, RGB2YCrCb) on float32;
+  the 8-bit levels take L*a*b*'s linear sRGB from a table, so a row gives the image moved
+  off the levels (``0.999 x + 0.0005``), where each value goes through the C library's ``pow``;
 * median 3/5/7: ``filters.median`` against ``cv2.medianBlur`` (float32 for 3 and 5; uint8
   for 7, the only type OpenCV filters with a window above 5). The 7×7 image holds 8-bit
   levels, so graphvision takes its sliding histogram, as OpenCV does on uint8; the row
@@ -79,6 +81,15 @@ def _image_rows(cv2, size: int) -> list[Row]:
                     lambda flag=flag: cv2.cvtColor(rgb, flag),
                 )
             )
+    rgb_off = rgb * np.float32(0.999) + np.float32(0.0005)  # no value k / 255: sRGB's pow
+    rows.append(
+        (
+            "RGB → lab, off the 8-bit levels (kernel, no port checks)",
+            "`cv2.cvtColor(RGB2Lab)` float32",
+            lambda: colour.from_rgb.__wrapped__(rgb_off, space="lab"),
+            lambda: cv2.cvtColor(rgb_off, cv2.COLOR_RGB2Lab),
+        )
+    )
     for k in (3, 5, 7):
         src = gray if k < 7 else gray8
         for label, median in (("", filters.median), (_KERNEL_ONLY, filters.median.__wrapped__)):
