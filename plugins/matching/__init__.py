@@ -4,18 +4,12 @@ of a model found by Hough voting of SIFT matches and verified by affine and homo
 fits (Lowe 2004, section 7).
 """
 
-from ._constellation import (
-    ConstellationParams,
-    Instances,
-    InstanceSet,
-    InstancesPort,
-    draw_object_scenes,
-    find_instances,
-    find_instances_in_scenes,
-    match_instances,
-    score_instances,
-)
+from ._constellation import find_instances, find_instances_in_scenes
+from ._instances import Instances, InstanceSet, InstancesPort
 from ._match import match, nearest_two
+from ._model_views import ConstellationParams
+from ._pictures import draw_object_scenes
+from ._scores import match_instances, score_instances
 
 __all__ = [
     "ConstellationParams",

@@ -21,21 +21,22 @@ import graphvision as gv
 from graphvision_plugins import geometry, matching, synthetic
 from graphvision_plugins.features import sift
 from graphvision_plugins.matching import InstanceSet
-from graphvision_plugins.matching._constellation import (
+from graphvision_plugins.matching._model_views import (
     ConstellationParams,
     ModelViews,
-    _inside_convex,
-    convex_overlap,
-    locate_instances,
-    log_binomial_tail,
-    match_probability,
     match_to_model,
     model_views,
-    polygon_area,
-    pose_votes,
-    quad_iou,
     simulate_view,
 )
+from graphvision_plugins.matching._polygons import (
+    _inside_convex,
+    convex_overlap,
+    polygon_area,
+    quad_iou,
+)
+from graphvision_plugins.matching._probability import log_binomial_tail, match_probability
+from graphvision_plugins.matching._verify import locate_instances
+from graphvision_plugins.matching._votes import pose_votes
 from graphvision_plugins.synthetic import ObjectSceneSet
 from graphvision_plugins.synthetic._object_scenes import model_corners, object_pose
 
@@ -118,8 +119,9 @@ def test_match_probability_follows_bayes_rule_and_grows_with_the_inliers():
     assert values[0] == 0.01 and np.all(np.diff(values) > 0) and values[-1] > 0.98
 
 
-def test_doctests_of_the_module_hold():
-    module = importlib.import_module("graphvision_plugins.matching._constellation")
+@pytest.mark.parametrize("name", ["_model_views", "_polygons", "_probability"])
+def test_doctests_of_the_modules_hold(name):
+    module = importlib.import_module(f"graphvision_plugins.matching.{name}")
     result = doctest.testmod(module)
     assert result.attempted > 0 and result.failed == 0
 
