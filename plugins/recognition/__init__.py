@@ -32,17 +32,7 @@ from ._detect import (
     non_max_suppression,
 )
 from ._draw import draw_predictions, prediction_mosaic, predictions
-from ._faces import (
-    SceneBoxes,
-    SceneBoxesPort,
-    SceneBoxSet,
-    SceneImages,
-    SceneImagesPort,
-    detect_scenes,
-    draw_scenes,
-    face_scores,
-    lbp_detect_scenes,
-)
+from ._faces import detect_scenes, draw_scenes, face_scores, lbp_detect_scenes
 from ._haar import (
     HAAR_TYPES,
     haar,
@@ -54,30 +44,20 @@ from ._haar import (
     sample_haar_features,
 )
 from ._hog import hog, hog_cells, hog_features, hog_picture
-from ._lbp_cascade import (
-    LBPCascade,
-    LBPCascadeModel,
-    LBPCascadePort,
-    lbp_cascade,
-    lbp_detect,
-    parse_opencv_cascade,
-    read_opencv_cascade,
-)
-from ._subspace import fit_pca, nearest_neighbour, pca, project, reconstruction_error, residual
-from ._svm import fit_linear_svm, linear_svm
-from ._types import (
-    BagsPort,
+from ._lbp_cascade import lbp_cascade, lbp_detect
+from ._lbp_model import LBPCascade, LBPCascadeModel, LBPCascadePort
+from ._models import (
     CascadePort,
     ClassifierPort,
-    FeaturesPort,
     LinearClassifierPort,
     NearestClassifierPort,
-    SamplesPort,
     StumpClassifierPort,
-    SubspacePort,
-    VocabularyPort,
-    mosaic,
 )
+from ._opencv_cascade import parse_opencv_cascade, read_opencv_cascade
+from ._scenes import SceneBoxes, SceneBoxesPort, SceneBoxSet, SceneImages, SceneImagesPort
+from ._subspace import fit_pca, nearest_neighbour, pca, project, reconstruction_error, residual
+from ._svm import fit_linear_svm, linear_svm
+from ._types import BagsPort, FeaturesPort, SamplesPort, SubspacePort, VocabularyPort, mosaic
 
 __all__ = [
     "HAAR_TYPES",

@@ -12,15 +12,9 @@ from pydantic import Field
 from graphvision import Table, node
 
 from ..shared.params import Iterations, Probability
+from ._models import Cascade, CascadeModel, StumpClassifier, StumpModel, stump_votes
 from ._subspace import check_classes
-from ._types import (
-    Cascade,
-    CascadeModel,
-    Features,
-    StumpClassifier,
-    StumpModel,
-    stump_votes,
-)
+from ._types import Features
 
 __all__ = ["Stump", "adaboost", "boost_stumps", "cascade", "cascade_table", "train_cascade"]
 

@@ -6,7 +6,8 @@ import numpy as np
 
 from graphvision import Array, Float, node
 
-from ._types import Classifier, Features
+from ._models import Classifier
+from ._types import Features
 
 __all__ = ["accuracy", "predict"]
 

@@ -12,15 +12,8 @@ import numpy as np
 from graphvision import Array, node
 
 from ..shared.params import Count
-from ._types import (
-    Features,
-    FeatureSet,
-    NearestClassifier,
-    NearestModel,
-    Subspace,
-    SubspaceModel,
-    recipe_of,
-)
+from ._models import NearestClassifier, NearestModel
+from ._types import Features, FeatureSet, Subspace, SubspaceModel, recipe_of
 
 __all__ = [
     "fit_pca",

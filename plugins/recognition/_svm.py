@@ -8,8 +8,9 @@ import numpy as np
 from graphvision import node
 
 from ..shared.params import Iterations, Positive
+from ._models import LinearClassifier, LinearModel
 from ._subspace import check_classes
-from ._types import Features, LinearClassifier, LinearModel
+from ._types import Features
 
 __all__ = ["fit_linear_svm", "linear_svm"]
 

@@ -26,7 +26,7 @@ from pydantic import Field
 
 from graphvision import Boxes, BoxSet, ColorImage, node
 
-from ..recognition._faces import SceneBoxes, SceneBoxSet, SceneImages
+from ..recognition._scenes import SceneBoxes, SceneBoxSet, SceneImages
 from ..shared.checks import all_of, ordered, to_float_image
 from ..shared.params import Seed
 

@@ -12,7 +12,7 @@ import pytest
 
 import graphvision as gv
 from graphvision_plugins.recognition import lbp_cascade
-from graphvision_plugins.recognition._lbp_cascade import parse_opencv_cascade
+from graphvision_plugins.recognition._opencv_cascade import parse_opencv_cascade
 
 cv2 = pytest.importorskip("cv2", reason="the opencv backend needs opencv-python-headless")
 

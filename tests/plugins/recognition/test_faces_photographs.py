@@ -15,14 +15,11 @@ import skimage.data
 import graphvision as gv
 from graphvision_plugins import recognition as rec
 from graphvision_plugins import synthetic as syn
-from graphvision_plugins.recognition._detect import _haar_cascade_windows, _haar_windows, _score
-from graphvision_plugins.recognition._faces import SceneBoxSet
-from graphvision_plugins.recognition._lbp_cascade import (
-    group_rectangles,
-    lbp_windows,
-    resampled_integral,
-)
+from graphvision_plugins.recognition._group_rectangles import group_rectangles
+from graphvision_plugins.recognition._lbp_scan import lbp_windows, resampled_integral
+from graphvision_plugins.recognition._scenes import SceneBoxSet
 from graphvision_plugins.recognition._types import SampleSet, recipe_of
+from graphvision_plugins.recognition._windows import _haar_cascade_windows, _haar_windows, _score
 from graphvision_plugins.synthetic._face_collage import ASTRONAUT_FACE, photograph
 
 from ...conftest import PIPELINES

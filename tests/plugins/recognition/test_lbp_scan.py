@@ -12,7 +12,7 @@ import skimage.data
 from graphvision import ParameterError
 from graphvision_plugins import recognition as rec
 from graphvision_plugins import synthetic as syn
-from graphvision_plugins.recognition._lbp_cascade import lbp_windows, scan_step
+from graphvision_plugins.recognition._lbp_scan import lbp_windows, scan_step
 
 
 def everything_cascade() -> rec.LBPCascadeModel:

@@ -8,13 +8,8 @@ import pytest
 
 import graphvision as gv
 from graphvision_plugins import recognition as rec
-from graphvision_plugins.recognition._types import (
-    FeatureSet,
-    LinearModel,
-    SampleSet,
-    StumpModel,
-    SubspaceModel,
-)
+from graphvision_plugins.recognition._models import LinearModel, StumpModel
+from graphvision_plugins.recognition._types import FeatureSet, SampleSet, SubspaceModel
 
 from ...conftest import PIPELINES
 
