@@ -3,6 +3,7 @@ the fundamental and essential matrices, relative pose, triangulation (linear and
 non-linear), epipolar lines and epipoles with a drawing.
 """
 
+from ._fundamental import essential, essential_from_points, fundamental
 from ._geometry import (
     eight_point,
     essential_from_fundamental,
@@ -13,11 +14,6 @@ from ._geometry import (
 )
 from ._lines import draw_epipolar, epipolar_lines, epipoles, lines_from_coefficients
 from ._nodes import (
-    EssentialPort,
-    FundamentalPort,
-    essential,
-    essential_from_points,
-    fundamental,
     matched_points,
     mean_abs_dy,
     pose_error,
@@ -26,6 +22,7 @@ from ._nodes import (
     reprojection_rms,
     triangulate,
 )
+from ._ports import EssentialPort, FundamentalPort
 
 __all__ = [
     "EssentialPort",

@@ -10,7 +10,7 @@ from pydantic import Field
 from graphvision import Array, ColorImage, Image, Points2D, node
 
 from ..hough import Lines, draw_lines
-from ._nodes import Fundamental
+from ._ports import Fundamental
 
 __all__ = ["Epipoles", "draw_epipolar", "epipolar_lines", "epipoles", "lines_from_coefficients"]
 

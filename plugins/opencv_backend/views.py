@@ -67,8 +67,8 @@ def cv_fundamental(
     Frobenius norm. OpenCV thresholds the distance to the epipolar line
     and refits on the inliers without the reference's Levenberg-Marquardt step. The
     significance (``log_nfa``, ``max_nfa``) is the reference's test on OpenCV's inliers."""
+    from ..epipolar._fundamental import FundamentalFit
     from ..epipolar._geometry import sampson_distance
-    from ..epipolar._nodes import FundamentalFit
 
     cv2 = cv()
     if len(a) != len(b):
@@ -237,8 +237,9 @@ def cv_essential_from_points(
     values forced to (1, 1, 0). The significance is the reference's test on OpenCV's
     inliers."""
     from ..camera import normalise_pixels
+    from ..epipolar._checks import _pairs
+    from ..epipolar._fundamental import EssentialFit
     from ..epipolar._geometry import essential_from_fundamental, sampson_distance
-    from ..epipolar._nodes import EssentialFit, _pairs
 
     cv2 = cv()
     _pairs(a, b, 8, "the essential matrix from points")

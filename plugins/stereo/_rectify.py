@@ -21,7 +21,7 @@ from graphvision import (
 )
 
 from ..camera._projection import cross_matrix
-from ..epipolar._nodes import Fundamental
+from ..epipolar._ports import Fundamental
 from ..geometry import apply_homography, sample_homography
 
 __all__ = [
