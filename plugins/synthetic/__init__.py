@@ -14,21 +14,11 @@ from ._face_collage import face_collage, face_scenes
 from ._instance_scenes import InstanceScenes, instance_scenes, render_instance_scenes
 from ._lines import line_points
 from ._noise import gaussian_noise, impulse_noise, salt_and_pepper
-from ._object_scenes import (
-    ObjectScenes,
-    ObjectSceneSet,
-    ObjectScenesPort,
-    object_scenes,
-    render_object_scenes,
-)
+from ._object_scene_set import ObjectScenes, ObjectSceneSet, ObjectScenesPort
+from ._object_scenes import object_scenes, render_object_scenes
 from ._planar_stereo import PHOTOGRAPHS, planar_stereo_scene
 from ._plane_lines import plane_lines
-from ._shape_scenes import (
-    LabelledScenes,
-    LabelledSceneSet,
-    LabelledScenesPort,
-    shape_scenes,
-)
+from ._shape_scenes import LabelledScenes, LabelledSceneSet, LabelledScenesPort, shape_scenes
 from ._stereo_pair import stereo_pair
 from ._structured_light import gray_code_stripes, structured_light_scene
 from ._turned_view import turned_view

@@ -37,24 +37,21 @@ resampled bilinearly; its edge is blended by its bilinear coverage.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Annotated, Any, Literal, NamedTuple
+from typing import Annotated, Literal, NamedTuple
 
 import numpy as np
 from pydantic import Field
 
-from graphvision import GrayImage, PortValueError, RecordPort, node
+from graphvision import GrayImage, node
 
 from ..shared.checks import all_of, at_most_values, ordered
 from ..shared.params import Fraction, Seed
+from ._compose import _background, _grow, _occlude, _paste, _quad_mask, _random_crop
+from ._object_pose import _map, _rotation_z, _smallest_stretch, _translation, object_pose
+from ._object_scene_set import ObjectScenes, ObjectSceneSet, model_corners
 
 __all__ = [
     "CLUTTER_PHOTOGRAPHS",
-    "ObjectSceneSet",
-    "ObjectScenes",
-    "ObjectScenesPort",
-    "model_corners",
-    "object_pose",
     "object_scenes",
     "render_object_scenes",
 ]
@@ -87,276 +84,6 @@ CLUTTER_PHOTOGRAPHS: tuple[str, ...] = (
     "rocket",
 )
 """The photographs backgrounds, clutter and occluders are cut from by default."""
-
-
-def model_corners(width: int, height: int) -> np.ndarray:
-    """The model's corner pixel centres (0, 0), (w-1, 0), (w-1, h-1), (0, h-1), (4, 2)."""
-    return np.array([[0, 0], [width - 1, 0], [width - 1, height - 1], [0, height - 1]], float)
-
-
-@dataclass(frozen=True, eq=False)
-class ObjectSceneSet:
-    """Scenes (N, H, W) float32 in [0, 1] and the true instances of the model in them
-    (see the module): ``quads`` (M, 4, 2), ``homographies`` (M, 3, 3) model → scene,
-    ``owner`` (M,) int64, ``visible``, ``tilt`` (degrees) and ``scale`` (M,) float64."""
-
-    images: np.ndarray
-    quads: np.ndarray
-    homographies: np.ndarray
-    owner: np.ndarray
-    visible: np.ndarray
-    tilt: np.ndarray
-    scale: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.images)
-
-    def quads_of(self, scene: int) -> np.ndarray:
-        """The true quadrilaterals (K, 4, 2) of one scene."""
-        return self.quads[self.owner == scene]
-
-
-class ObjectScenesPort(RecordPort):
-    """An :class:`ObjectSceneSet`: images float32 (N, H, W) in [0, 1]; quads float64
-    (M, 4, 2) and homographies (M, 3, 3), finite; owner int64 (M,) in [0, N); visible,
-    tilt and scale float64 (M,)."""
-
-    value_class = ObjectSceneSet
-
-    @classmethod
-    def validate(cls, value: Any) -> ObjectSceneSet:
-        value = super().validate(value)
-        images = value.images
-        if not isinstance(images, np.ndarray) or images.dtype != np.float32 or images.ndim != 3:
-            raise PortValueError("ObjectScenes 'images' must be float32 (N, H, W)")
-        count = len(value.owner) if isinstance(value.owner, np.ndarray) else -1
-        shapes = {
-            "quads": (np.float64, (count, 4, 2)),
-            "homographies": (np.float64, (count, 3, 3)),
-            "owner": (np.int64, (count,)),
-            "visible": (np.float64, (count,)),
-            "tilt": (np.float64, (count,)),
-            "scale": (np.float64, (count,)),
-        }
-        for name, (dtype, shape) in shapes.items():
-            column = getattr(value, name)
-            if not isinstance(column, np.ndarray) or column.dtype != dtype or column.shape != shape:
-                raise PortValueError(
-                    f"ObjectScenes '{name}' must be {np.dtype(dtype).name} {shape}: one per "
-                    "instance"
-                )
-        if not (np.isfinite(value.quads).all() and np.isfinite(value.homographies).all()):
-            raise PortValueError("ObjectScenes 'quads' and 'homographies' must be finite")
-        if count and (value.owner.min() < 0 or value.owner.max() >= len(images)):
-            raise PortValueError(f"ObjectScenes 'owner' must index the {len(images)} scenes")
-        return value
-
-    @classmethod
-    def preview(cls, value: ObjectSceneSet) -> np.ndarray | None:
-        """The first four scenes side by side, two white columns apart."""
-        shown = value.images[:4]
-        height, width = shown.shape[1:]
-        canvas = np.ones((height, len(shown) * (width + 2)), np.float32)
-        for index, image in enumerate(shown):
-            canvas[:, index * (width + 2) : index * (width + 2) + width] = image
-        return canvas
-
-    @classmethod
-    def summary(cls, value: ObjectSceneSet) -> str:
-        side = f"{value.images.shape[1]}×{value.images.shape[2]}"
-        return f"ObjectScenes {len(value)} × {side}, {len(value.owner)} instances"
-
-
-ObjectScenes = Annotated[ObjectSceneSet, ObjectScenesPort]
-
-
-def _rotation_z(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def _rotation_x(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def object_pose(
-    width: int,
-    height: int,
-    *,
-    scale: float,
-    tilt: float,
-    axis: float,
-    roll: float,
-    distance: float | None,
-) -> np.ndarray:
-    r"""The homography taking model pixels to scene pixels, the model's centre to (0, 0).
-
-    ``tilt``, ``axis`` and ``roll`` (radians) are :math:`\theta`, :math:`\phi` and
-    :math:`\psi` of the module's pose; ``distance`` is :math:`D` in model diagonals
-    (None: affine, the orthographic limit). Add the position with a translation.
-    """
-    rotation = _rotation_z(roll) @ _rotation_z(axis) @ _rotation_x(tilt) @ _rotation_z(-axis)
-    centre = np.array([[1.0, 0.0, -(width - 1) / 2], [0.0, 1.0, -(height - 1) / 2], [0, 0, 1.0]])
-    if distance is None:
-        plane = np.array([[*rotation[0, :2], 0.0], [*rotation[1, :2], 0.0], [0.0, 0.0, 1.0]])
-        h = np.diag([scale, scale, 1.0]) @ plane @ centre
-    else:
-        depth = distance * math.hypot(width, height)
-        plane = np.column_stack([rotation[:, 0], rotation[:, 1], [0.0, 0.0, depth]])
-        h = np.diag([scale * depth, scale * depth, 1.0]) @ plane @ centre
-    return h / h[2, 2]
-
-
-def _map(h: np.ndarray, points: np.ndarray) -> np.ndarray:
-    mapped = points @ h[:2, :2].T + h[:2, 2]
-    return mapped / (points @ h[2, :2] + h[2, 2])[:, None]
-
-
-def _smallest_stretch(h: np.ndarray, points: np.ndarray) -> float:
-    """The smallest singular value of the warp's Jacobian at ``points`` (model pixels)."""
-    smallest = math.inf
-    for x, y in points:
-        w = h[2, 0] * x + h[2, 1] * y + h[2, 2]
-        u = (h[0, 0] * x + h[0, 1] * y + h[0, 2]) / w
-        v = (h[1, 0] * x + h[1, 1] * y + h[1, 2]) / w
-        jacobian = np.array(
-            [
-                [(h[0, 0] - u * h[2, 0]) / w, (h[0, 1] - u * h[2, 1]) / w],
-                [(h[1, 0] - v * h[2, 0]) / w, (h[1, 1] - v * h[2, 1]) / w],
-            ]
-        )
-        smallest = min(smallest, float(np.linalg.svd(jacobian, compute_uv=False)[-1]))
-    return smallest
-
-
-def _paste(
-    canvas: np.ndarray, source: np.ndarray, h: np.ndarray, coverage: np.ndarray | None = None
-) -> np.ndarray:
-    """Blend ``source`` warped by ``h`` (source pixels → canvas pixels) into ``canvas`` in
-    place, bilinearly, its edge weighted by its bilinear coverage; returns the coverage
-    (canvas-sized, float32). ``coverage`` (the source's own alpha) defaults to ones."""
-    import scipy.ndimage as ndi
-
-    rows, cols = source.shape
-    corners = _map(h, model_corners(cols, rows))
-    low = np.floor(corners.min(axis=0) - 1).astype(int)
-    high = np.ceil(corners.max(axis=0) + 2).astype(int)
-    x0, y0 = max(low[0], 0), max(low[1], 0)
-    x1, y1 = min(high[0], canvas.shape[1]), min(high[1], canvas.shape[0])
-    alpha_full = np.zeros(canvas.shape, np.float32)
-    if x0 >= x1 or y0 >= y1:
-        return alpha_full
-    ys, xs = np.mgrid[y0:y1, x0:x1].astype(np.float64)
-    back = _map(np.linalg.inv(h), np.column_stack([xs.ravel(), ys.ravel()]))
-    where = [back[:, 1].reshape(xs.shape), back[:, 0].reshape(xs.shape)]
-    alpha_source = np.ones_like(source) if coverage is None else coverage
-    alpha = ndi.map_coordinates(alpha_source, where, order=1, mode="constant", cval=0.0)
-    colour = ndi.map_coordinates(source * alpha_source, where, order=1, mode="constant", cval=0.0)
-    window = canvas[y0:y1, x0:x1]
-    canvas[y0:y1, x0:x1] = window * (1.0 - alpha) + colour
-    alpha_full[y0:y1, x0:x1] = alpha
-    return alpha_full
-
-
-def _translation(x: float, y: float) -> np.ndarray:
-    return np.array([[1.0, 0.0, x], [0.0, 1.0, y], [0.0, 0.0, 1.0]])
-
-
-def _random_crop(
-    photographs: list[np.ndarray], side: tuple[int, int], rng: np.random.Generator
-) -> np.ndarray:
-    """A crop of a random photograph of ``side`` (rows, cols) or smaller when it is smaller,
-    its contrast stretched to a random range inside [0, 1]."""
-    photo = photographs[int(rng.integers(len(photographs)))]
-    rows, cols = min(side[0], photo.shape[0]), min(side[1], photo.shape[1])
-    top = int(rng.integers(0, photo.shape[0] - rows + 1))
-    left = int(rng.integers(0, photo.shape[1] - cols + 1))
-    crop = photo[top : top + rows, left : left + cols]
-    low, high = float(crop.min()), float(crop.max())
-    floor = rng.uniform(0.0, 0.3)
-    span = rng.uniform(0.5, 1.0 - floor)
-    return (floor + span * (crop - low) / max(high - low, 1e-6)).astype(np.float32)
-
-
-def _background(
-    photographs: list[np.ndarray], shape: tuple[int, int], rng: np.random.Generator
-) -> np.ndarray:
-    """A crop of half the scene's size of a random photograph, enlarged twice (bilinear) and
-    padded by reflection when the photograph is smaller."""
-    import scipy.ndimage as ndi
-
-    crop = _random_crop(photographs, (shape[0] // 2 + 1, shape[1] // 2 + 1), rng)
-    grown = ndi.zoom(crop, 2.0, order=1)[: shape[0], : shape[1]]
-    pad = ((0, shape[0] - grown.shape[0]), (0, shape[1] - grown.shape[1]))
-    return np.ascontiguousarray(np.pad(grown, pad, mode="reflect"), dtype=np.float32)
-
-
-def _quad_mask(quad: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """The pixels whose centres lie inside the convex quadrilateral (either orientation)."""
-    mask = np.zeros(shape, bool)
-    low = np.maximum(np.floor(quad.min(axis=0)).astype(int), 0)
-    high = np.minimum(np.ceil(quad.max(axis=0)).astype(int) + 1, [shape[1], shape[0]])
-    if (high <= low).any():
-        return mask
-    ys, xs = np.mgrid[low[1] : high[1], low[0] : high[0]]
-    edges = np.roll(quad, -1, axis=0) - quad
-    cross = [
-        edge[0] * (ys - corner[1]) - edge[1] * (xs - corner[0])
-        for corner, edge in zip(quad, edges, strict=True)
-    ]
-    inside = np.all([c >= 0 for c in cross], axis=0) | np.all([c <= 0 for c in cross], axis=0)
-    mask[low[1] : high[1], low[0] : high[0]] = inside
-    return mask
-
-
-def _grow(mask: np.ndarray, margin: int) -> np.ndarray:
-    """``mask`` dilated by ``margin`` pixels (a square), computed over its bounding box."""
-    import scipy.ndimage as ndi
-
-    rows, cols = np.nonzero(mask)
-    grown = np.zeros_like(mask)
-    if len(rows) == 0:
-        return grown
-    r0, r1 = max(rows.min() - margin, 0), min(rows.max() + margin + 1, mask.shape[0])
-    c0, c1 = max(cols.min() - margin, 0), min(cols.max() + margin + 1, mask.shape[1])
-    grown[r0:r1, c0:c1] = ndi.maximum_filter(mask[r0:r1, c0:c1], size=2 * margin + 1)
-    return grown
-
-
-def _occlude(
-    canvas: np.ndarray,
-    mask: np.ndarray,
-    photographs: list[np.ndarray],
-    occlusion: float,
-    rng: np.random.Generator,
-) -> np.ndarray:
-    """Paste a rectangular crop centred on a random point of the instance's outline
-    (``mask``), sized to hide a random fraction up to ``occlusion`` of it (about half the
-    rectangle falls on the instance; shrunk until it hides no more than ``occlusion``);
-    returns the pixels it covers."""
-    import scipy.ndimage as ndi
-
-    hidden = np.zeros(canvas.shape, bool)
-    area = int(mask.sum())
-    goal = rng.uniform(0.0, occlusion)
-    if goal < 0.02 or area == 0:
-        return hidden
-    outline = np.argwhere(mask & ~ndi.minimum_filter(mask, size=3))
-    y, x = outline[int(rng.integers(len(outline)))]
-    side = math.sqrt(2.0 * goal * area)
-    aspect = math.exp(rng.uniform(-0.5, 0.5))
-    while True:
-        height, width = max(int(side / aspect), 4), max(int(side * aspect), 4)
-        top, left = max(y - height // 2, 0), max(x - width // 2, 0)
-        bottom, right = min(top + height, canvas.shape[0]), min(left + width, canvas.shape[1])
-        if mask[top:bottom, left:right].sum() <= occlusion * area or side < 8:
-            break
-        side *= 0.8
-    patch = _random_crop(photographs, (bottom - top, right - left), rng)
-    _paste(canvas, patch, _translation(left, top))
-    hidden[top : top + patch.shape[0], left : left + patch.shape[1]] = True
-    return hidden
 
 
 class _Instance(NamedTuple):
@@ -411,6 +138,47 @@ def _place_instance(
     return None
 
 
+def _clutter(
+    canvas: np.ndarray,
+    photographs: list[np.ndarray],
+    shape: tuple[int, int],
+    clutter: int,
+    rng: np.random.Generator,
+) -> None:
+    """Paste ``clutter`` rotated, zoomed crops of ``photographs`` at random places."""
+    for _ in range(clutter):
+        patch = _random_crop(
+            photographs, (int(rng.integers(24, 120)), int(rng.integers(24, 120))), rng
+        )
+        zoom = rng.uniform(0.7, 1.5)
+        turn = _rotation_z(rng.uniform(-math.pi, math.pi))
+        centre = _translation(-(patch.shape[1] - 1) / 2, -(patch.shape[0] - 1) / 2)
+        place = _translation(rng.uniform(0, shape[1]), rng.uniform(0, shape[0]))
+        _paste(canvas, patch, place @ np.diag([zoom, zoom, 1.0]) @ turn @ centre)
+
+
+def _draw_instances(
+    canvas: np.ndarray,
+    model: np.ndarray,
+    placed: list[_Instance],
+    corners: np.ndarray,
+    rng: np.random.Generator,
+) -> list[np.ndarray]:
+    """Paste each placed instance of ``model`` (blurred against aliasing, its brightness
+    varied) and return the masks of their pixels."""
+    import scipy.ndimage as ndi
+
+    masks = []
+    for instance in placed:
+        shrink = min(_smallest_stretch(instance.homography, corners), 1.0)
+        sigma = 0.5 * math.sqrt(max(1.0 / shrink**2 - 1.0, 0.0))
+        seen = ndi.gaussian_filter(model, sigma) if sigma > 0.05 else model
+        gain, offset = rng.uniform(0.7, 1.2), rng.uniform(-0.1, 0.1)
+        lit = np.clip(gain * seen + offset, 0.0, 1.0).astype(np.float32)
+        masks.append(_paste(canvas, lit, instance.homography) > 0.5)
+    return masks
+
+
 def render_object_scenes(
     model: np.ndarray,
     photographs: list[np.ndarray],
@@ -428,23 +196,13 @@ def render_object_scenes(
 ) -> ObjectSceneSet:
     """``count`` scenes of ``shape`` holding ``instances`` (min, max) instances of ``model``
     each (fewer when no free place is found), on crops of ``photographs`` (see the module)."""
-    import scipy.ndimage as ndi
-
     rng = np.random.default_rng(seed)
     rows, cols = model.shape
     corners = model_corners(cols, rows)
     images, homographies, owners, visible, tilts, scale_of = [], [], [], [], [], []
     for scene in range(count):
         canvas = _background(photographs, shape, rng)
-        for _ in range(clutter):
-            patch = _random_crop(
-                photographs, (int(rng.integers(24, 120)), int(rng.integers(24, 120))), rng
-            )
-            zoom = rng.uniform(0.7, 1.5)
-            turn = _rotation_z(rng.uniform(-math.pi, math.pi))
-            centre = _translation(-(patch.shape[1] - 1) / 2, -(patch.shape[0] - 1) / 2)
-            place = _translation(rng.uniform(0, shape[1]), rng.uniform(0, shape[0]))
-            _paste(canvas, patch, place @ np.diag([zoom, zoom, 1.0]) @ turn @ centre)
+        _clutter(canvas, photographs, shape, clutter, rng)
         taken = np.zeros(shape, bool)
         placed: list[_Instance] = []
         for _ in range(int(rng.integers(instances[0], instances[1] + 1))):
@@ -459,14 +217,7 @@ def render_object_scenes(
             )
             if found is not None:
                 placed.append(found)
-        masks = []
-        for instance in placed:
-            shrink = min(_smallest_stretch(instance.homography, corners), 1.0)
-            sigma = 0.5 * math.sqrt(max(1.0 / shrink**2 - 1.0, 0.0))
-            seen = ndi.gaussian_filter(model, sigma) if sigma > 0.05 else model
-            gain, offset = rng.uniform(0.7, 1.2), rng.uniform(-0.1, 0.1)
-            lit = np.clip(gain * seen + offset, 0.0, 1.0).astype(np.float32)
-            masks.append(_paste(canvas, lit, instance.homography) > 0.5)
+        masks = _draw_instances(canvas, model, placed, corners, rng)
         hidden = np.zeros(shape, bool)
         for mask in masks:
             hidden |= _occlude(canvas, mask, photographs, occlusion, rng)

@@ -38,7 +38,8 @@ from graphvision_plugins.matching._probability import log_binomial_tail, match_p
 from graphvision_plugins.matching._verify import locate_instances
 from graphvision_plugins.matching._votes import pose_votes
 from graphvision_plugins.synthetic import ObjectSceneSet
-from graphvision_plugins.synthetic._object_scenes import model_corners, object_pose
+from graphvision_plugins.synthetic._object_pose import object_pose
+from graphvision_plugins.synthetic._object_scene_set import model_corners
 
 from ...conftest import PIPELINES
 
