@@ -10,7 +10,8 @@ port types.
 
 from ._circles import HoughCircles, circle_accumulator, hough_circles
 from ._draw import draw_circles, draw_lines
-from ._generalized import GeneralizedHough, build_r_table, draw_instances, generalized_hough
+from ._generalized import GeneralizedHough, draw_instances, generalized_hough
+from ._generalized_votes import build_r_table
 from ._lines import HoughLines, hough_lines, line_accumulator
 from ._peaks import local_maxima, parabolic_offset, quadratic_peak_2d, suppress_close
 from ._ports import Circles, CirclesPort, Lines, LinesPort

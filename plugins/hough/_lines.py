@@ -131,6 +131,37 @@ def _smooth_votes(votes: np.ndarray, sigma: float, out: np.ndarray) -> np.ndarra
     return out
 
 
+def _refined_peaks(
+    extended: np.ndarray,
+    t: np.ndarray,
+    r: np.ndarray,
+    pad: int,
+    step: float,
+    rho0: float,
+    rho_step: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """θ and ρ of the peaks at bins ``(t, r)`` of ``extended``, refined by a quadratic fit."""
+    from ._kernels import peak_offsets
+
+    d_theta, d_rho = peak_offsets(extended, t, r, _quadratic_solve()).T
+    theta = (t - pad + d_theta) * step
+    rho = rho0 + (r + d_rho) * rho_step
+    return theta, rho
+
+
+def _by_orientation(
+    x: np.ndarray, y: np.ndarray, orientation: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """The points and their orientations (zeros when there are none), sorted by orientation
+    when there are, and whether there are."""
+    check = orientation is not None
+    angles = np.zeros(len(x))
+    if orientation is not None:  # sorted by orientation, each line scans only its own
+        by_angle = np.argsort(orientation, kind="stable")
+        x, y, angles = x[by_angle], y[by_angle], orientation[by_angle]
+    return x, y, angles, check
+
+
 def _select_lines(
     extended: np.ndarray,
     raw: np.ndarray,
@@ -146,30 +177,19 @@ def _select_lines(
 ) -> np.ndarray:
     """``(ρ, θ, support)`` rows of the lines kept (see :func:`hough_lines`), best first;
     ``raw`` is the unsmoothed ``extended``, bounding the support of unit votes."""
-    from ._kernels import (
-        line_peaks,
-        line_support,
-        peak_offsets,
-        pruned_support,
-        select_lines,
-        support_bounds,
-    )
+    from ._kernels import line_peaks
+    from ._select_kernels import select_lines
+    from ._support_kernels import line_support, pruned_support, support_bounds
 
     x, y, orientation = points
     peaks = line_peaks(extended, pad, theta_bins)  # every peak: one line can mask another's
     if len(peaks) == 0 or len(x) == 0:
         return np.zeros((0, 3))
     t, r = peaks[:, 0], peaks[:, 1]
-    d_theta, d_rho = peak_offsets(extended, t, r, _quadratic_solve()).T
     step = math.pi / theta_bins
     _, rho0 = _rho_grid(shape, rho_step)
-    theta = (t - pad + d_theta) * step
-    rho = rho0 + (r + d_rho) * rho_step
-    check = orientation is not None
-    angles = np.zeros(len(x))
-    if orientation is not None:  # sorted by orientation, each line scans only its own
-        by_angle = np.argsort(orientation, kind="stable")
-        x, y, angles = x[by_angle], y[by_angle], orientation[by_angle]
+    theta, rho = _refined_peaks(extended, t, r, pad, step, rho0, rho_step)
+    x, y, angles, check = _by_orientation(x, y, orientation)
     window = max(SUPPORT_ORIENTATION, math.radians(orientation_window) + 0.5 * step)
     tolerance = max(1.0, rho_step)
     extent = math.hypot(shape[0], shape[1]) + 1.0

@@ -10,15 +10,10 @@ import pytest
 from scipy import ndimage
 
 from graphvision_plugins.hough._circle_kernels import window_maxima
-from graphvision_plugins.hough._kernels import (
-    line_peaks,
-    line_support,
-    pruned_support,
-    support_bounds,
-    vote_lines,
-)
+from graphvision_plugins.hough._kernels import line_peaks, vote_lines
 from graphvision_plugins.hough._lines import _point_index, _rho_grid
 from graphvision_plugins.hough._peaks import suppress_close
+from graphvision_plugins.hough._support_kernels import line_support, pruned_support, support_bounds
 
 
 @pytest.mark.parametrize("size", [3, 5, 17])
