@@ -58,7 +58,7 @@ def cv_block_match(
     rounded up to a multiple of 16 and cut back, uniqueness in whole percent, the
     left-right check in whole pixels (``disp12MaxDiff``), no texture threshold; the
     speckles are removed by the reference's filter. ``cost`` is the reference's alone."""
-    from ..stereo._disparity import check_pair
+    from ..stereo._pair_checks import check_pair
 
     cv2 = cv()
     check_pair(left, right, min_disparity, num_disparities, window)
@@ -101,7 +101,7 @@ def cv_sgm(
     (``MODE_SGBM``, for ``paths=4``), no intensity-adaptive ``edge``; range, uniqueness,
     left-right check and speckles as in :func:`cv_block_match`. ``cost`` and ``edge``
     are the reference's alone."""
-    from ..stereo._disparity import check_pair
+    from ..stereo._pair_checks import check_pair
 
     cv2 = cv()
     check_pair(left, right, min_disparity, num_disparities, window)

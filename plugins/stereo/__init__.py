@@ -6,7 +6,7 @@ ground truth, rectification (calibrated and uncalibrated), structured light, dra
 from ._colour_map import colour_map
 from ._cost import cost_volume
 from ._depth import ColouredPoints, coloured_points, depth_from_disparity, depth_points
-from ._disparity import block_match, left_right_check, sgm
+from ._disparity import block_match, sgm
 from ._draw import draw_disparity, draw_point_cloud
 from ._evaluate import depth_rmse, disparity_error
 from ._ports import (
@@ -26,6 +26,7 @@ from ._rectify import (
     rectify_pair,
     rectify_uncalibrated,
 )
+from ._selection import left_right_check
 from ._speckles import filter_speckles
 from ._structured import Stripes, StripesPort, decode_gray_code, depth_from_stripes
 

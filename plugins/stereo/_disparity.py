@@ -12,23 +12,22 @@ from graphvision import Conformance, GrayImage, node
 
 from ..shared.params import odd
 from ._census import census_block_match, census_sgm
-from ._cost import Cost, cost_volume, maximum_cost
+from ._cost import Cost, maximum_cost
+from ._pair_checks import check_pair
 from ._ports import Disparity
-from ._speckles import SpeckleRange, SpeckleWindow, speckles
+from ._selection import _checked, _select, _volume
+from ._speckles import SpeckleRange, SpeckleWindow
 
-__all__ = ["MAX_VOLUME", "block_match", "check_pair", "left_right_check", "sgm"]
+__all__ = [
+    "block_match",
+    "sgm",
+]
 
 Window = Annotated[int, Field(ge=1, le=31), AfterValidator(odd)]
 
 # The eight path directions (step_y, step_x) of semi-global matching; the first four
 # (horizontal and vertical) are the 4-path variant.
 PATHS = ((0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))
-
-
-MAX_VOLUME = 2**27
-"""Most values of a cost volume (512 MB in float32): semi-global matching keeps a few of
-them at once, so this is what this machine holds; a 500 × 741 pair with 64 disparities
-(stereo.yaml) needs 23.7 million."""
 
 
 def _census_window(**params: Any) -> None:
@@ -47,99 +46,6 @@ def _sgm_params(**params: Any) -> None:
             "than a step"
         )
     _census_window(**params)
-
-
-def check_pair(left: np.ndarray, right: np.ndarray, d_min: int, count: int, window: int) -> None:
-    """Refuse a pair of different sizes, a range wider than the image, and a cost volume
-    (rows × columns × disparities) beyond ``MAX_VOLUME`` values, saying what it needs."""
-    if left.shape != right.shape:
-        raise ValueError(
-            f"the left image is {left.shape[0]}×{left.shape[1]} (rows×columns) but the right is"
-            f" {right.shape[0]}×{right.shape[1]}: a rectified pair has one size"
-        )
-    cols = left.shape[1]
-    if abs(d_min) + count > cols:
-        raise ValueError(
-            f"the disparity range [{d_min}, {d_min + count - 1}] does not fit in the image's "
-            f"{cols} columns: lower num_disparities or min_disparity"
-        )
-    volume = left.shape[0] * cols * count
-    if volume > MAX_VOLUME:
-        raise ValueError(
-            f"the cost volume {left.shape[0]}×{cols}×{count} would hold {volume:,} values "
-            f"({volume * 4 / 2**30:.1f} GiB as float32, more again to aggregate it), at most "
-            f"{MAX_VOLUME:,}: lower num_disparities or match smaller images"
-        )
-
-
-def left_right_check(
-    disparity: np.ndarray, right_disparity: np.ndarray, tolerance: float
-) -> np.ndarray:
-    r"""NaN where the right image's disparity disagrees with the left's by more than
-    ``tolerance`` pixels (occlusions and mismatches; Hirschmüller 2008, section 3.3).
-
-    A sub-pixel disparity :math:`d` points between the right pixels
-    :math:`x - \lfloor d \rfloor` and :math:`x - \lceil d \rceil`; the left pixel is
-    kept when either of them that lies inside the image holds a disparity within
-    ``tolerance`` of :math:`\lfloor d \rfloor` (resp. :math:`\lceil d \rceil`), as
-    OpenCV's StereoSGBM checks (``disp12MaxDiff``). Comparing :math:`d` with the
-    right pixel nearest to :math:`x - d` instead refuses correct pixels of
-    slanted surfaces whose disparity lies half-way between two integers.
-    """
-    from ._match_kernels import left_right_keep
-
-    kept: np.ndarray = left_right_keep(
-        np.ascontiguousarray(disparity, np.float32),
-        np.ascontiguousarray(right_disparity, np.float32),
-        float(tolerance),
-    )
-    return kept
-
-
-def _select(
-    volume: np.ndarray,
-    d_min: int,
-    uniqueness: float,
-    subpixel: bool,
-    lr_tolerance: float | None,
-    speckle_window: int,
-    speckle_range: float,
-) -> np.ndarray:
-    """Winner-take-all with uniqueness and sub-pixel refinement, the left-right check, then
-    the speckle filter."""
-    from ._kernels import right_disparity, winner_take_all
-
-    disparity: np.ndarray = winner_take_all(volume, d_min, uniqueness, subpixel)
-    right = right_disparity(volume, d_min) if lr_tolerance is not None else disparity
-    return _checked(disparity, right, lr_tolerance, speckle_window, speckle_range)
-
-
-def _checked(
-    disparity: np.ndarray,
-    right: np.ndarray,
-    lr_tolerance: float | None,
-    speckle_window: int,
-    speckle_range: float,
-) -> np.ndarray:
-    """The left-right check against the right image's disparity, then the speckle filter."""
-    if lr_tolerance is not None:
-        disparity = left_right_check(disparity, right, lr_tolerance)
-    if speckle_window > 0:
-        disparity = speckles(disparity, speckle_window, speckle_range)
-    return disparity
-
-
-def _volume(
-    left: np.ndarray, right: np.ndarray, d_min: int, count: int, cost: Cost, window: int, block: int
-) -> np.ndarray:
-    """The cost volume with each pixel's cost summed over the ``block × block`` square."""
-    volume = cost_volume(left, right, d_min, count, cost, window)
-    if block == 1:
-        return volume
-    from ._kernels import box_sum
-
-    summed: np.ndarray = box_sum(volume, block // 2)
-    return summed
 
 
 @node(

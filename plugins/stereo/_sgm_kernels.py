@@ -21,7 +21,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._match_kernels import _across, _block_rows, _next_columns, resolve_row
+from ._match_kernels import _across, _block_rows, _next_columns
+from ._resolve_kernels import resolve_row
 
 __all__ = ["census_sweep_paths", "sweep_paths"]
 
