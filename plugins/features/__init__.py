@@ -5,17 +5,11 @@ SIFT and normalised-patch descriptors, and drawings of keypoints and matches.
 
 from ._affine import affine_adapt
 from ._corners import harris, harris_response, hessian, log_blobs
+from ._dog_pyramid import SiftParams, detect_dog
 from ._draw import draw_keypoints, draw_matches
 from ._patch import patch_descriptor
-from ._sift import (
-    SiftParams,
-    assign_orientations,
-    describe_sift,
-    detect_dog,
-    dog,
-    sift,
-    sift_descriptors,
-)
+from ._sift import describe_sift, dog, sift
+from ._sift_descriptors import assign_orientations, sift_descriptors
 
 __all__ = [
     "SiftParams",

@@ -21,7 +21,7 @@ import scipy.ndimage as ndi
 import skimage.data
 
 from graphvision_plugins import features
-from graphvision_plugins.features import _sift
+from graphvision_plugins.features import _dog_pyramid, _sift_descriptors
 from graphvision_plugins.features._dog_kernels import _solve3, upsample_twice
 
 RECORDED = Path(__file__).parent / "data" / "sift_astronaut_crop_e81c6dd.npz"
@@ -52,9 +52,9 @@ def test_doubling_equals_scipy_zoom():
 
 
 def test_gradients_are_computed_where_windows_reach_and_equal_whole_image_ones(crop):
-    keypoints, pyramid, where = _sift.detect_dog(crop)
-    keypoints, where = _sift.assign_orientations(pyramid, where, keypoints)
-    _sift.sift_descriptors(pyramid, where, keypoints.orientation)
+    keypoints, pyramid, where = _dog_pyramid.detect_dog(crop)
+    keypoints, where = _sift_descriptors.assign_orientations(pyramid, where, keypoints)
+    _sift_descriptors.sift_descriptors(pyramid, where, keypoints.orientation)
     assert pyramid.gradients, "no level was described"
     for (octave, layer), (magnitude, angle, done) in pyramid.gradients.items():
         level = pyramid.gaussians[octave][layer]
@@ -88,5 +88,5 @@ def test_the_octave_stack_is_blurred_in_place_as_smooth_gaussian_blurs_it():
     expected = stack.copy()
     for i, step in enumerate(steps, start=1):
         expected[i] = smooth_gaussian(expected[i - 1], step, truncate=3.0)
-    _sift._blur_stack(stack, steps)
+    _dog_pyramid._blur_stack(stack, steps)
     np.testing.assert_array_equal(stack, expected)
