@@ -6,13 +6,7 @@ Pure functions for other families: :mod:`._projection` (``project_points``,
 ``distort_pixels``, ``undistort_pixels``, ``decompose_projection``, ...).
 """
 
-from ._calibrate import (
-    calibrate_board,
-    calibrate_dlt,
-    dlt_projection,
-    focal_error,
-    zhang_intrinsics,
-)
+from ._calibrate import calibrate_board, calibrate_dlt, dlt_projection, focal_error
 from ._corners import board_corners, find_board, grid_spacing, refine_corners, saddle_candidates
 from ._draw import draw_board, intrinsics, roundtrip_residual
 from ._model import (
@@ -38,13 +32,8 @@ from ._projection import (
     undistort_pixels,
     vector_from_rotation,
 )
-from ._vanishing import (
-    draw_vanishing,
-    horizon,
-    vanishing_error,
-    vanishing_point,
-    vanishing_points,
-)
+from ._vanishing import draw_vanishing, horizon, vanishing_error, vanishing_point, vanishing_points
+from ._zhang import zhang_intrinsics
 
 __all__ = [
     "board_corners",
