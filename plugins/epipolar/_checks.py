@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__: list[str] = []  # its helper is private to the family's nodes
+
 
 def _pairs(a: np.ndarray, b: np.ndarray, least: int, what: str) -> None:
     if len(a) != len(b):

@@ -51,6 +51,21 @@ def perimeter_weights(labels: np.ndarray) -> np.ndarray:
     return _WEIGHTS[np.minimum(code, _WEIGHTS.size - 1)]
 
 
+def _bounding_boxes(labels: np.ndarray, present: np.ndarray) -> np.ndarray:
+    """Inclusive boxes ``(x_min, y_min, x_max, y_max)`` (K, 4) int64 of labels ``present``."""
+    import scipy.ndimage as ndi
+
+    boxes = ndi.find_objects(labels)
+    box = np.array(
+        [
+            [b[1].start, b[0].start, b[1].stop - 1, b[0].stop - 1]
+            for b in (boxes[i - 1] for i in present)
+        ],
+        dtype=np.int64,
+    ).reshape(-1, 4)
+    return box
+
+
 @node("regions.describe", version=1)
 def describe(labels: LabelImage, image: GrayImage | None = None) -> Table:
     r"""A table of descriptors, one row per region (label 1..N; absent labels are skipped).
@@ -120,16 +135,7 @@ def describe(labels: LabelImage, image: GrayImage | None = None) -> Table:
     major_var, minor_var = half_trace + spread, np.maximum(half_trace - spread, 0.0)
     perimeter = total(perimeter_weights(labels).ravel())[present]
 
-    import scipy.ndimage as ndi
-
-    boxes = ndi.find_objects(labels)
-    box = np.array(
-        [
-            [b[1].start, b[0].start, b[1].stop - 1, b[0].stop - 1]
-            for b in (boxes[i - 1] for i in present)
-        ],
-        dtype=np.int64,
-    ).reshape(-1, 4)
+    box = _bounding_boxes(labels, present)
     box_area = (box[:, 2] - box[:, 0] + 1) * (box[:, 3] - box[:, 1] + 1)
     with np.errstate(divide="ignore", invalid="ignore"):
         eccentricity = np.where(major_var > 0, np.sqrt(1 - minor_var / major_var), 0.0)

@@ -110,6 +110,30 @@ class BoardViews(NamedTuple):
     camera: Camera
 
 
+def _board_outline(columns: int, rows: int, square: float) -> np.ndarray:
+    """The corners (4, 3) of a rectangle two squares beyond the outermost inner corners, in
+    world units: what must be seen for the whole board to be in the image."""
+    outline = (
+        np.array(
+            [[-2, -2, 0], [columns + 1, -2, 0], [columns + 1, rows + 1, 0], [-2, rows + 1, 0]],
+            float,
+        )
+        * square
+    )
+    return outline
+
+
+def _inside(edge: np.ndarray, width: int, height: int) -> bool:
+    """Whether the projected outline ``edge`` lies 4 px inside the image."""
+    margin = 4.0
+    return bool(
+        np.isfinite(edge).all()
+        and (edge >= margin).all()
+        and (edge[:, 0] <= width - 1 - margin).all()
+        and (edge[:, 1] <= height - 1 - margin).all()
+    )
+
+
 @node("synthetic.board_views", version=1)
 def board_views(
     *,
@@ -192,13 +216,7 @@ def board_views(
     intrinsics = PinholeCamera(K, distortion=distortion, size=np.array([width, height]))
     rays = _pixel_rays(intrinsics, width, height)
     objects = board_object_points(columns, rows, square)
-    outline = (
-        np.array(
-            [[-2, -2, 0], [columns + 1, -2, 0], [columns + 1, rows + 1, 0], [-2, rows + 1, 0]],
-            float,
-        )
-        * square
-    )
+    outline = _board_outline(columns, rows, square)
     distance = (columns + 3) * square * focal / (fill * width)
     images: list[np.ndarray] = []
     corners: list[np.ndarray] = []
@@ -206,13 +224,7 @@ def board_views(
     while len(images) < views:
         R, C = random_board_pose(rng, columns, rows, square, distance, tilt)
         edge = project_points(outline, K, R, C, distortion)
-        margin = 4.0
-        if not (
-            np.isfinite(edge).all()
-            and (edge >= margin).all()
-            and (edge[:, 0] <= width - 1 - margin).all()
-            and (edge[:, 1] <= height - 1 - margin).all()
-        ):
+        if not _inside(edge, width, height):
             continue
         image = render_board(rays, R, C, columns, rows, square)
         if blur > 0:

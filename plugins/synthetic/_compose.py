@@ -10,6 +10,8 @@ import numpy as np
 from ._object_pose import _map, _translation
 from ._object_scene_set import model_corners
 
+__all__: list[str] = []  # its helpers are private to ``_object_scenes``
+
 
 def _paste(
     canvas: np.ndarray, source: np.ndarray, h: np.ndarray, coverage: np.ndarray | None = None
