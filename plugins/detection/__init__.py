@@ -37,18 +37,8 @@ from ._proposals import (
     region_boxes,
     selective_search,
 )
-from ._rcnn import (
-    TrainingRois,
-    class_wise_nms,
-    detect,
-    feature_extractor,
-    feature_map,
-    nms,
-    roi_samples,
-    scene_proposals,
-    train_head,
-    training_rois,
-)
+from ._rcnn import class_wise_nms, detect, feature_extractor, feature_map, nms, train_head
+from ._rcnn_rois import TrainingRois, roi_samples, scene_proposals, training_rois
 from ._roi import feature_rois, pool_rois, roi_pool
 from ._rpn import (
     RegionProposer,
@@ -59,14 +49,7 @@ from ._rpn import (
     train_rpn,
 )
 from ._selective import hierarchical_grouping, selective_search_boxes
-from ._types import (
-    Detections,
-    DetectionSet,
-    DetectionsPort,
-    Detector,
-    DetectorModel,
-    DetectorPort,
-)
+from ._types import Detections, DetectionSet, DetectionsPort, Detector, DetectorModel, DetectorPort
 
 __all__ = [
     "DetectionSet",

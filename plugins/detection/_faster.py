@@ -18,17 +18,11 @@ from ..cnn import Network, check_layer_texts
 from ..shared.boxes import anchor_boxes, decode_boxes
 from ..shared.params import Count, Epochs, Fraction, Positive, Seed
 from ..synthetic._digit_scenes import Scenes
-from ._faster_train import (
-    DELTA_SCALE,
-    Settings,
-    build_nets,
-    initial,
-    propose_boxes,
-    train_joint,
-)
+from ._faster_train import DELTA_SCALE, Settings, build_nets, initial, propose_boxes, train_joint
 from ._faster_types import FasterRcnn, FasterRcnnModel
 from ._proposals import PositiveList
-from ._rcnn import feature_extractor, iou_order
+from ._rcnn import feature_extractor
+from ._rcnn_rois import iou_order
 from ._rpn import check_anchors_fit
 from ._types import Detections, DetectionSet
 

@@ -28,7 +28,8 @@ from ..shared.boxes import anchor_boxes, decode_boxes, encode_boxes, iou_matrix,
 from ..shared.params import Count, Epochs, Fraction, Positive, Seed
 from ..synthetic._digit_scenes import Scenes
 from ._proposals import PositiveList
-from ._rcnn import feature_extractor, feature_map, iou_order
+from ._rcnn import feature_extractor, feature_map
+from ._rcnn_rois import iou_order
 from ._types import Detections, DetectionSet
 
 __all__ = [
@@ -120,6 +121,53 @@ def _scene_anchors(maps: np.ndarray, stride: int, shapes: dict) -> np.ndarray:
     return boxes.reshape(rows * cols, -1, 4)
 
 
+def _anchor_labels(
+    flat: np.ndarray, truth: np.ndarray, positive_iou: float, negative_iou: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The anchors' IoU with the true boxes, which are positive (at least ``positive_iou``,
+    or the best anchor of a true box) and which negative (below ``negative_iou``)."""
+    overlap = iou_matrix(flat, truth) if len(truth) else np.zeros((len(flat), 0))
+    best_iou = overlap.max(axis=1) if len(truth) else np.zeros(len(flat))
+    positive = best_iou >= positive_iou
+    if len(truth):
+        positive[overlap.argmax(axis=0)] = True  # every true box has an anchor
+    negative = best_iou < negative_iou
+    return overlap, positive, negative
+
+
+def _train_scorers(
+    positives: list[list[np.ndarray]],
+    negatives: list[list[np.ndarray]],
+    deltas: list[list[np.ndarray]],
+    dims: int,
+    epochs: int,
+    learning_rate: float,
+    ridge: float,
+    seed: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per anchor shape its objectness scorer (a dense layer, weights then bias) trained on
+    its positives and negatives, and its box regressor (ridge) on the positives' deltas."""
+    from ._rcnn import _ridge
+
+    count = len(positives)
+    objectness = np.zeros((count, dims + 1, 2))
+    regression = np.zeros((count, dims + 1, 4))
+    scorer = build_architecture((dims,), ["dense 2"])
+    for a in range(count):
+        pos, neg = np.concatenate(positives[a]), np.concatenate(negatives[a])
+        if len(pos) == 0:
+            continue
+        x = np.concatenate([pos, neg])
+        y = np.concatenate([np.ones(len(pos), np.int64), np.zeros(len(neg), np.int64)])
+        trained, _ = fit_network(
+            scorer, x, y, epochs=epochs, batch_size=64, learning_rate=learning_rate,
+            momentum=0.9, weight_decay=1e-4, seed=seed + a, what="detection.train_rpn",
+        )  # fmt: skip
+        objectness[a] = np.vstack([trained[: 2 * dims].reshape(dims, 2), trained[2 * dims :]])
+        regression[a] = _ridge(pos, np.concatenate(deltas[a]), ridge)
+    return objectness, regression
+
+
 @node("detection.train_rpn", version=1, check=iou_order)
 def train_rpn(
     backbone: Network,
@@ -177,8 +225,6 @@ def train_rpn(
     S. Ren et al., "Faster R-CNN: towards real-time object detection with region proposal
     networks", NeurIPS 2015, section 3.1.
     """
-    from ._rcnn import _ridge
-
     check_anchors_fit(sizes, ratios, scenes.images.shape[1:])
     layers, weights, stride = feature_extractor(backbone, feature_layers)
     shapes = {"sizes": list(sizes), "ratios": list(ratios)}
@@ -194,12 +240,7 @@ def train_rpn(
             features = cell_features(maps)
             anchors = _scene_anchors(maps, stride, shapes)
             flat = anchors.reshape(-1, 4)
-            overlap = iou_matrix(flat, truth) if len(truth) else np.zeros((len(flat), 0))
-            best_iou = overlap.max(axis=1) if len(truth) else np.zeros(len(flat))
-            positive = best_iou >= positive_iou
-            if len(truth):
-                positive[overlap.argmax(axis=0)] = True  # every true box has an anchor
-            negative = best_iou < negative_iou
+            overlap, positive, negative = _anchor_labels(flat, truth, positive_iou, negative_iou)
             for a in range(count):
                 index = np.arange(a, len(flat), count)
                 cells = index // count
@@ -212,21 +253,9 @@ def train_rpn(
                 keep = max(int(negatives_per_positive * max(len(hit), 1)), 1)
                 negatives[a].append(features[rng.permutation(miss)[:keep]])
     dims = features.shape[1] if len(scenes) else 0
-    objectness = np.zeros((count, dims + 1, 2))
-    regression = np.zeros((count, dims + 1, 4))
-    scorer = build_architecture((dims,), ["dense 2"])
-    for a in range(count):
-        pos, neg = np.concatenate(positives[a]), np.concatenate(negatives[a])
-        if len(pos) == 0:
-            continue
-        x = np.concatenate([pos, neg])
-        y = np.concatenate([np.ones(len(pos), np.int64), np.zeros(len(neg), np.int64)])
-        trained, _ = fit_network(
-            scorer, x, y, epochs=epochs, batch_size=64, learning_rate=learning_rate,
-            momentum=0.9, weight_decay=1e-4, seed=seed + a, what="detection.train_rpn",
-        )  # fmt: skip
-        objectness[a] = np.vstack([trained[: 2 * dims].reshape(dims, 2), trained[2 * dims :]])
-        regression[a] = _ridge(pos, np.concatenate(deltas[a]), ridge)
+    objectness, regression = _train_scorers(
+        positives, negatives, deltas, dims, epochs, learning_rate, ridge, seed
+    )
     return RegionProposerModel(
         json.dumps(layers), weights, stride, json.dumps(shapes), objectness, regression
     )

@@ -128,6 +128,39 @@ def adaboost(
     )
 
 
+def _train_stage(
+    features: np.ndarray,
+    signs: np.ndarray,
+    positives: np.ndarray,
+    pool: np.ndarray,
+    detection_rate: float,
+    false_positive_rate: float,
+    max_stumps: int,
+) -> tuple[int, tuple[np.ndarray, ...], float, np.ndarray]:
+    """One stage of :func:`train_cascade` on the samples ``pool``: stumps boosted until the
+    stage, its threshold lowered to keep ``detection_rate`` of the positives, passes at
+    most ``false_positive_rate`` of the negatives (or holds ``max_stumps``). Returns its
+    stump count, its columns (feature, threshold, polarity, alpha), its threshold and
+    which samples of the pool pass it."""
+    # each stage starts from weights balanced between the classes (Viola–Jones)
+    weights = np.where(positives[pool], 0.5 / positives[pool].sum(), 0.5 / (~positives[pool]).sum())
+    stumps = boost_stumps(features[pool], signs[pool], weights)
+    chosen: list[Stump] = []
+    while len(chosen) < max_stumps:
+        chosen.append(next(stumps))
+        feature, threshold, polarity, alpha = (np.array(c) for c in zip(*chosen, strict=True))
+        sums = stump_votes(features[pool], feature.astype(int), threshold, polarity) @ alpha
+        # lower the stage threshold until it keeps the required share of positives
+        pos_sums = np.sort(sums[positives[pool]])
+        keep = int(np.floor((1 - detection_rate) * len(pos_sums)))
+        stage_threshold = float(pos_sums[keep]) if len(pos_sums) else 0.0
+        passed = sums >= stage_threshold
+        fp = passed[~positives[pool]].mean()
+        if fp <= false_positive_rate:
+            break
+    return len(chosen), (feature, threshold, polarity, alpha), stage_threshold, passed
+
+
 def train_cascade(
     features: np.ndarray,
     signs: np.ndarray,
@@ -149,31 +182,14 @@ def train_cascade(
         pool = np.flatnonzero(alive)
         if not (~positives[pool]).any():
             break
-        # each stage starts from weights balanced between the classes (Viola–Jones)
-        weights = np.where(
-            positives[pool], 0.5 / positives[pool].sum(), 0.5 / (~positives[pool]).sum()
+        count, stage_columns, stage_threshold, passed = _train_stage(
+            features, signs, positives, pool, detection_rate, false_positive_rate, max_stumps
         )
-        stumps = boost_stumps(features[pool], signs[pool], weights)
-        chosen: list[Stump] = []
-        while len(chosen) < max_stumps:
-            chosen.append(next(stumps))
-            feature, threshold, polarity, alpha = (np.array(c) for c in zip(*chosen, strict=True))
-            sums = stump_votes(features[pool], feature.astype(int), threshold, polarity) @ alpha
-            # lower the stage threshold until it keeps the required share of positives
-            pos_sums = np.sort(sums[positives[pool]])
-            keep = int(np.floor((1 - detection_rate) * len(pos_sums)))
-            stage_threshold = float(pos_sums[keep]) if len(pos_sums) else 0.0
-            passed = sums >= stage_threshold
-            fp = passed[~positives[pool]].mean()
-            if fp <= false_positive_rate:
-                break
         for name, value in zip(
-            ("feature", "threshold", "polarity", "alpha"),
-            (feature, threshold, polarity, alpha),
-            strict=True,
+            ("feature", "threshold", "polarity", "alpha"), stage_columns, strict=True
         ):
             columns[name].append(value)
-        stage_of += [stage] * len(chosen)
+        stage_of += [stage] * count
         thresholds.append(stage_threshold)
         rejected.append(int((~passed & ~positives[pool]).sum()))
         alive[pool[~passed]] = False

@@ -27,6 +27,34 @@ def corner_offsets(rects: np.ndarray, feature: np.ndarray, stride: int) -> np.nd
     return np.ascontiguousarray((rows * stride + cols).reshape(len(feature), 16), np.int64)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _window_statistics(integral, squared, top, left, window_h, window_w, area, sigma_floor):
+    """Mean and standard deviation (at least ``sigma_floor``) of the window at (top, left),
+    from the integral images of the level and of its square (:func:`scan_haar_cascade`)."""
+    b, r = top + window_h, left + window_w
+    pixel_sum = integral[b, r] - integral[top, r] - integral[b, left]
+    pixel_sum += integral[top, left]
+    total_sq = squared[b, r] - squared[top, r] - squared[b, left]
+    total_sq += squared[top, left]
+    mean = pixel_sum / area
+    sigma = max(np.sqrt(max(total_sq / area - mean * mean, 0.0)), sigma_floor)
+    return mean, sigma
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _haar_value(flat, base, corners, signs, t):
+    """Stump ``t``'s Haar-like feature on the window at flat offset ``base``: the signed sum
+    of its rectangles' sums (:func:`scan_haar_cascade`)."""
+    value = 0.0
+    for k in range(4):
+        if signs[t, k] == 0:
+            continue
+        c = corners[t, k]
+        part = flat[base + c[3]] - flat[base + c[1]] - flat[base + c[2]] + flat[base + c[0]]
+        value += part if signs[t, k] > 0 else -part
+    return value
+
+
 @numba.njit(cache=True, nogil=True)
 def scan_haar_cascade(
     integral,
@@ -78,30 +106,15 @@ def scan_haar_cascade(
             mean = 0.0
             sigma = 1.0
             if normalise:
-                b, r = top + window_h, left + window_w
-                pixel_sum = integral[b, r] - integral[top, r] - integral[b, left]
-                pixel_sum += integral[top, left]
-                total_sq = squared[b, r] - squared[top, r] - squared[b, left]
-                total_sq += squared[top, left]
-                mean = pixel_sum / area
-                sigma = max(np.sqrt(max(total_sq / area - mean * mean, 0.0)), sigma_floor)
+                mean, sigma = _window_statistics(
+                    integral, squared, top, left, window_h, window_w, area, sigma_floor
+                )
             first = 0
             margin = 0.0
             for s in range(stages):
                 total = 0.0
                 for t in range(first, stage_end[s]):
-                    value = 0.0
-                    for k in range(4):
-                        if signs[t, k] == 0:
-                            continue
-                        c = corners[t, k]
-                        part = (
-                            flat[base + c[3]]
-                            - flat[base + c[1]]
-                            - flat[base + c[2]]
-                            + flat[base + c[0]]
-                        )
-                        value += part if signs[t, k] > 0 else -part
+                    value = _haar_value(flat, base, corners, signs, t)
                     if normalise:
                         value = (value - mean * areas[t]) / sigma
                     vote = polarity[t] if value > threshold[t] else -polarity[t]
