@@ -49,7 +49,7 @@ from timing import best
 import graphvision as gv
 from graphvision_plugins import recognition as rec
 from graphvision_plugins import synthetic as syn
-from graphvision_plugins.recognition._faces import SceneBoxSet
+from graphvision_plugins.recognition._scenes import SceneBoxSet
 
 PIPELINES = Path(__file__).parent.parent / "pipelines"
 PHOTOS = ("astronaut", "astronaut_mirrored") + ("chelsea", "coffee", "rocket", "motorcycle",
