@@ -114,31 +114,37 @@ def saddle_peaks(response, radius):  # pragma: no cover
     square (``response == maximum_filter(response, 2 radius + 1)``, whose window lies
     inside the image there). A row's pixels are first compared with their 8 neighbours
     without branches, which rejects almost every pixel; only the rest scan the whole
-    square."""
+    square. The neighbours are read through views of the three rows that start where
+    the row's first pixel and its neighbours are, indexed from 0: no index can be
+    negative, so the compiled loop has no wrap-around test and is SIMD code."""
     height, width = response.shape
     border = radius + 1
+    inner = width - 2 * border
     rows = []
     cols = []
-    local = np.zeros(width, dtype=np.bool_)
+    local = np.zeros(max(inner, 0), dtype=np.bool_)
     for y in range(border, height - border):
         above, row, below = response[y - 1], response[y], response[y + 1]
-        for x in range(border, width - border):  # no branches: SIMD code
-            value = row[x]
-            local[x] = (
+        a_left, a_mid, a_right = above[border - 1 :], above[border:], above[border + 1 :]
+        left, mid, right = row[border - 1 :], row[border:], row[border + 1 :]
+        b_left, b_mid, b_right = below[border - 1 :], below[border:], below[border + 1 :]
+        for k in range(inner):  # pixel border + k; no branches: SIMD code
+            value = mid[k]
+            local[k] = (
                 (value > 0.0)
-                & (row[x - 1] <= value)
-                & (row[x + 1] <= value)
-                & (above[x - 1] <= value)
-                & (above[x] <= value)
-                & (above[x + 1] <= value)
-                & (below[x - 1] <= value)
-                & (below[x] <= value)
-                & (below[x + 1] <= value)
+                & (left[k] <= value)
+                & (right[k] <= value)
+                & (a_left[k] <= value)
+                & (a_mid[k] <= value)
+                & (a_right[k] <= value)
+                & (b_left[k] <= value)
+                & (b_mid[k] <= value)
+                & (b_right[k] <= value)
             )
-        for x in range(border, width - border):
-            if local[x] and _peak_of(response, y, x, radius, row[x]):
+        for k in range(inner):
+            if local[k] and _peak_of(response, y, border + k, radius, mid[k]):
                 rows.append(y)
-                cols.append(x)
+                cols.append(border + k)
     return np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64)
 
 
