@@ -11,6 +11,8 @@ by rounding (about 1e-12 px).
 
 from __future__ import annotations
 
+import functools
+
 import numba
 import numpy as np
 
@@ -22,6 +24,7 @@ __all__ = [
     "saddle_peaks",
     "saddle_response",
     "sample",
+    "smooth_reflect",
     "smooth_unit",
 ]
 
@@ -345,20 +348,48 @@ def forstner(smooth, corners, half, weight, which, iterations):  # pragma: no co
     return q
 
 
+@functools.lru_cache(maxsize=32)
+def _smoothing_plan(
+    height: int, width: int, sigma: float
+) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
+    """``smooth_gaussian``'s arguments of its compiled call for an image ``height × width``
+    (reflect): the taps, their symmetry, and the source row and column under each tap,
+    made once per shape and scale (they are read, never written)."""
+    from ..shared.separable import gaussian_taps
+
+    taps = gaussian_taps(sigma)
+    symmetry = 1 if np.array_equal(taps, taps[::-1]) else 0
+    half = taps.size // 2  # scipy's "reflect" is numpy's "symmetric" padding
+    rows = np.pad(np.arange(height, dtype=np.int64), half, mode="symmetric")
+    columns = np.pad(np.arange(width, dtype=np.int64), half, mode="symmetric")
+    for array in (taps, rows, columns):
+        array.flags.writeable = False
+    return taps, symmetry, rows, columns
+
+
+def smooth_reflect(image: np.ndarray, sigma: float) -> np.ndarray:
+    """``smooth_gaussian(image, sigma)`` of a 2-D ``float64`` image (reflect), the same
+    bits, without building the boundary's index arrays again at every call."""
+    from ..shared.separable_kernels import correlate_both
+
+    data = np.ascontiguousarray(image, dtype=np.float64)
+    taps, symmetry, rows, columns = _smoothing_plan(*data.shape, float(sigma))
+    out = np.empty(data.shape, np.float64)
+    correlate_both(data, taps, symmetry, rows, taps, symmetry, columns, out)
+    return out
+
+
 def smooth_unit(image: np.ndarray) -> np.ndarray:
     """``smooth_gaussian(image.astype(np.float64), 1.0)`` (reflect), the same bits: a
     ``float32`` image is widened where the filter's first pass reads it
     (``correlate_both_wide``), not copied to ``float64`` first."""
-    from ..shared.separable import gaussian_taps, smooth_gaussian
+    from ..shared.separable import smooth_gaussian
     from ..shared.separable_kernels import correlate_both_wide
 
     if image.dtype != np.float32 or image.ndim != 2:
         return np.ascontiguousarray(smooth_gaussian(np.asarray(image, np.float64), 1.0))
     data = np.ascontiguousarray(image)
-    taps = gaussian_taps(1.0)
-    half = taps.size // 2  # scipy's "reflect" is numpy's "symmetric" padding
-    rows = np.pad(np.arange(data.shape[0], dtype=np.int64), half, mode="symmetric")
-    columns = np.pad(np.arange(data.shape[1], dtype=np.int64), half, mode="symmetric")
+    taps, _, rows, columns = _smoothing_plan(*data.shape, 1.0)
     out = np.empty(data.shape, np.float64)
     correlate_both_wide(data, taps, 1, rows, taps, 1, columns, out)
     return out

@@ -100,11 +100,10 @@ def coarse_saddle_candidates(smooth: np.ndarray, count: int, sigma: float) -> np
     image smoothed by σ = 1 (``smooth``): its even pixels (σ = ½ of theirs) smoothed on to
     σ/2, the peaks of that response within ``sigma`` half pixels, each placed by a parabola
     through its 3 samples along each axis; in full-resolution pixels, strongest first."""
-    from ..shared.separable import smooth_gaussian
-    from ._corner_kernels import saddle_peaks, saddle_response
+    from ._corner_kernels import saddle_peaks, saddle_response, smooth_reflect
 
-    half = smooth_gaussian(smooth[::2, ::2], math.sqrt((sigma / 2) ** 2 - 0.25))
-    response = saddle_response(np.ascontiguousarray(half))
+    half = smooth_reflect(smooth[::2, ::2], math.sqrt((sigma / 2) ** 2 - 0.25))
+    response = saddle_response(half)
     rows, cols = saddle_peaks(response, max(1, int(round(sigma))))
     order = np.argsort(response[rows, cols])[::-1][:count]
     rows, cols = rows[order], cols[order]
