@@ -116,16 +116,18 @@ def saddle_peaks(response, radius):  # pragma: no cover
     border with a positive response equal to the maximum of their ``2 radius + 1``
     square (``response == maximum_filter(response, 2 radius + 1)``, whose window lies
     inside the image there). A row's pixels are first compared with their 8 neighbours
-    without branches, which rejects almost every pixel; only the rest scan the whole
-    square. The neighbours are read through views of the three rows that start where
-    the row's first pixel and its neighbours are, indexed from 0: no index can be
-    negative, so the compiled loop has no wrap-around test and is SIMD code."""
+    without branches, which rejects almost every pixel; the rest are gathered without
+    branches too, then each scans its whole square. Every row is read through views
+    indexed from 0 (no index can be negative: the compiled loops have no wrap-around
+    test and the first is SIMD code)."""
     height, width = response.shape
     border = radius + 1
-    inner = width - 2 * border
+    inner = max(width - 2 * border, 0)
+    span = 2 * radius + 1
     rows = []
     cols = []
-    local = np.zeros(max(inner, 0), dtype=np.bool_)
+    local = np.zeros(inner, dtype=np.bool_)
+    found = np.empty(inner, dtype=np.int64)
     for y in range(border, height - border):
         above, row, below = response[y - 1], response[y], response[y + 1]
         a_left, a_mid, a_right = above[border - 1 :], above[border:], above[border + 1 :]
@@ -144,20 +146,29 @@ def saddle_peaks(response, radius):  # pragma: no cover
                 & (b_mid[k] <= value)
                 & (b_right[k] <= value)
             )
-        for k in range(inner):
-            if local[k] and _peak_of(response, y, border + k, radius, mid[k]):
+        count = 0
+        for k in range(inner):  # the local maxima's places, gathered without branches
+            found[count] = k
+            count += local[k]
+        for i in range(count):
+            k = found[i]
+            if _peak_of(response, y - radius, k + border - radius, span, mid[k]):
                 rows.append(y)
                 cols.append(border + k)
     return np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _peak_of(response, y, x, radius, value):  # pragma: no cover
-    """No pixel of the square ``(y, x) ± radius`` exceeds ``value``."""
-    for v in range(y - radius, y + radius + 1):
-        for u in range(x - radius, x + radius + 1):
-            if response[v, u] > value:
-                return False
+def _peak_of(response, top, left, span, value):  # pragma: no cover
+    """No pixel of the ``span × span`` square at ``(top, left)`` exceeds ``value`` (each
+    row read whole, through a view indexed from 0)."""
+    for v in range(span):
+        window = response[top + v, left:]
+        above = False
+        for u in range(span):
+            above |= window[u] > value
+        if above:
+            return False
     return True
 
 
