@@ -273,35 +273,39 @@ def _forstner_sums(smooth, qx, qy, half, weight, columns, rows):  # pragma: no c
 
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
-def _forstner_sums_inside(smooth, qx, qy, half, weight):  # pragma: no cover
+def _forstner_sums_inside(smooth, qx, qy, half, weight, across, down):  # pragma: no cover
     """:func:`_forstner_sums` of a window whose samples, their right and lower pixels and
     those pixels' neighbours all lie inside the image: every sample has the same weights
-    (``q`` minus its floor) and every gradient is a central difference, so a row is one
-    vectorised loop over consecutive pixels (sums reassociated: the result differs from
-    the sample-by-sample sums by rounding)."""
+    (``q`` minus its floor) and every gradient is a central difference. The gradient is
+    first interpolated along x once per pixel row of the window (its ``2 half + 2`` rows
+    into ``across`` (d/dx) and ``down`` (d/dy)), then each sample interpolates those rows
+    along y; every loop is vectorised over consecutive pixels (sums reassociated: the
+    result differs from the sample-by-sample sums by rounding)."""
     fx, fy = np.floor(qx), np.floor(qy)
     wx, wy = qx - fx, qy - fy
     left, top = int(fx) - half, int(fy) - half
     side = 2 * half + 1
+    for r in range(side + 1):  # pixel row top + r, its pixels left + c and left + c + 1
+        row = smooth[top + r, left - 1 :]  # pixel left + c is element c + 1
+        above, below = smooth[top + r - 1, left:], smooth[top + r + 1, left:]
+        gx, gy = across[r], down[r]
+        for c in range(side):
+            x0 = (row[c + 2] - row[c]) / 2.0
+            x1 = (row[c + 3] - row[c + 1]) / 2.0
+            y0 = (below[c] - above[c]) / 2.0
+            y1 = (below[c + 1] - above[c + 1]) / 2.0
+            gx[c] = (1.0 - wx) * x0 + wx * x1
+            gy[c] = (1.0 - wx) * y0 + wx * y1
     axx = axy = ayy = bx = by = 0.0
     for r in range(side):
         py = qy + float(r - half)
-        above, upper = smooth[top + r - 1, left - 1 :], smooth[top + r, left - 1 :]
-        lower, below = smooth[top + r + 1, left - 1 :], smooth[top + r + 2, left - 1 :]
+        x_upper, x_lower, y_upper, y_lower = across[r], across[r + 1], down[r], down[r + 1]
         w_row = weight[r * side : (r + 1) * side]
-        for c in range(side):  # pixel left + c is element c + 1 of these rows
+        for c in range(side):
             w = w_row[c]
             px = qx + float(c - half)
-            x00 = (upper[c + 2] - upper[c]) / 2.0
-            x01 = (upper[c + 3] - upper[c + 1]) / 2.0
-            x10 = (lower[c + 2] - lower[c]) / 2.0
-            x11 = (lower[c + 3] - lower[c + 1]) / 2.0
-            y00 = (lower[c + 1] - above[c + 1]) / 2.0
-            y01 = (lower[c + 2] - above[c + 2]) / 2.0
-            y10 = (below[c + 1] - upper[c + 1]) / 2.0
-            y11 = (below[c + 2] - upper[c + 2]) / 2.0
-            sx = (1.0 - wy) * ((1.0 - wx) * x00 + wx * x01) + wy * ((1.0 - wx) * x10 + wx * x11)
-            sy = (1.0 - wy) * ((1.0 - wx) * y00 + wx * y01) + wy * ((1.0 - wx) * y10 + wx * y11)
+            sx = (1.0 - wy) * x_upper[c] + wy * x_lower[c]
+            sy = (1.0 - wy) * y_upper[c] + wy * y_lower[c]
             axx += w * sx * sx
             axy += w * sx * sy
             ayy += w * sy * sy
@@ -331,6 +335,8 @@ def forstner(smooth, corners, half, weight, which, iterations):  # pragma: no co
         np.empty(side),
         np.empty(side, np.bool_),
     )
+    across = np.empty((side + 1, side))
+    down = np.empty((side + 1, side))
     q = corners.copy()
     new = corners.copy()
     for _ in range(iterations):
@@ -339,7 +345,7 @@ def forstner(smooth, corners, half, weight, which, iterations):  # pragma: no co
             left, top = np.floor(q[i, 0]) - half, np.floor(q[i, 1]) - half
             if left >= 1 and top >= 1 and left + side + 1 < width and top + side + 1 < height:
                 axx, axy, ayy, bx, by = _forstner_sums_inside(
-                    smooth, q[i, 0], q[i, 1], half, weight[which[i]]
+                    smooth, q[i, 0], q[i, 1], half, weight[which[i]], across, down
                 )
             else:
                 _axis_samples(q[i, 0], half, width, *columns)
