@@ -399,14 +399,14 @@ def smooth_reflect(image: np.ndarray, sigma: float) -> np.ndarray:
 def smooth_unit(image: np.ndarray) -> np.ndarray:
     """``smooth_gaussian(image.astype(np.float64), 1.0)`` (reflect), the same bits: a
     ``float32`` image is widened where the filter's first pass reads it
-    (``correlate_both_wide``), not copied to ``float64`` first."""
+    (``correlate_both`` into a ``float64`` out), not copied to ``float64`` first."""
     from ..shared.separable import smooth_gaussian
-    from ..shared.separable_kernels import correlate_both_wide
+    from ..shared.separable_kernels import correlate_both
 
     if image.dtype != np.float32 or image.ndim != 2:
         return np.ascontiguousarray(smooth_gaussian(np.asarray(image, np.float64), 1.0))
     data = np.ascontiguousarray(image)
     taps, _, rows, columns = _smoothing_plan(*data.shape, 1.0)
     out = np.empty(data.shape, np.float64)
-    correlate_both_wide(data, taps, 1, rows, taps, 1, columns, out)
+    correlate_both(data, taps, 1, rows, taps, 1, columns, out)
     return out

@@ -8,30 +8,56 @@ scipy's ``correlate1d`` does,
 
 which halves the multiplications and makes a derivative of a constant
 exactly zero (:math:`f(i + u) - f(i - u) = 0` in any precision).
+
+The passes compute in the output's dtype: a ``float32`` image filtered into a ``float64``
+``out`` has every sample widened (exactly) where the column pass reads it, the same
+values to the bit as filtering ``image.astype(np.float64)``, without that copy.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 from numba import njit
+from numba.extending import overload
 
-__all__ = ["correlate_both", "correlate_both_halved", "correlate_both_wide"]
+__all__ = ["correlate_both", "correlate_both_halved"]
+
+
+def _in_dtype_of(value: Any, like: np.ndarray) -> Any:
+    """``value`` converted to the dtype of the array ``like`` (exactly, when it widens):
+    the compiled form is :func:`_in_dtype_of_compiled`'s, a no-op when the dtypes agree."""
+    return like.dtype.type(value)
+
+
+@overload(_in_dtype_of, inline="always")
+def _in_dtype_of_compiled(value: Any, like: Any) -> Callable[[Any, Any], Any]:
+    """numba's typing of :func:`_in_dtype_of`: a cast to ``like``'s element type."""
+    target = like.dtype
+
+    def convert(value: Any, like: Any) -> Any:  # pragma: no cover
+        return target(value)
+
+    return convert
 
 
 @njit(cache=True, fastmath=True, nogil=True)
 def _accumulate(
     out: np.ndarray, first: np.ndarray, last: np.ndarray, weight: float, symmetry: int
 ) -> None:  # pragma: no cover
-    """``out += weight · (first ± last)``, ``symmetry`` 1 (+) or −1 (−); 0: ``weight · first``."""
+    """``out += weight · (first ± last)``, ``symmetry`` 1 (+) or −1 (−); 0: ``weight · first``,
+    each sample of ``first`` and ``last`` in ``out``'s dtype first."""
     if symmetry == 1:
         for c in range(out.size):
-            out[c] += weight * (first[c] + last[c])
+            out[c] += weight * (_in_dtype_of(first[c], out) + _in_dtype_of(last[c], out))
     elif symmetry == -1:
         for c in range(out.size):
-            out[c] += weight * (first[c] - last[c])
+            out[c] += weight * (_in_dtype_of(first[c], out) - _in_dtype_of(last[c], out))
     else:
         for c in range(out.size):
-            out[c] += weight * first[c]
+            out[c] += weight * _in_dtype_of(first[c], out)
 
 
 @njit(cache=True, fastmath=True, nogil=True)
@@ -44,7 +70,8 @@ def _pass(
     symmetry: int,
     zero: np.ndarray,
 ) -> None:  # pragma: no cover
-    """``out = Σ_j taps[j] · lines[index[start + j]]`` (``index`` −1: the line ``zero``)."""
+    """``out = Σ_j taps[j] · lines[index[start + j]]`` (``index`` −1: the line ``zero``, of
+    the lines' dtype), in ``out``'s dtype."""
     size = taps.size
     half = size // 2
     centre = index[start + half]
@@ -57,7 +84,7 @@ def _pass(
     if centre >= 0:
         source = lines[centre]
         for c in range(out.size):
-            out[c] = taps[half] * source[c]
+            out[c] = taps[half] * _in_dtype_of(source[c], out)
     else:
         out[:] = 0.0
     for j in range(half):
@@ -90,7 +117,7 @@ def correlate_both(
     size = row_taps.size
     half = size // 2
     line = np.zeros(cols + 2 * half, out.dtype)
-    zero = np.zeros(cols, out.dtype)  # the rows outside the image under "constant"
+    zero = np.zeros(cols, image.dtype)  # the rows outside the image under "constant"
     for r in range(rows):
         centre = line[half : half + cols]
         _pass(centre, image, row_index, r, column_taps, column_symmetry, zero)
@@ -136,7 +163,7 @@ def correlate_both_halved(
     line = np.zeros(cols + 2 * half, out.dtype)
     even = np.empty((line.size + 1) // 2, out.dtype)
     odd = np.empty(line.size // 2, out.dtype)
-    zero = np.zeros(cols, out.dtype)
+    zero = np.zeros(cols, image.dtype)
     for r in range(out.shape[0]):
         centre = line[half : half + cols]
         _pass(centre, image, row_index, 2 * r, column_taps, column_symmetry, zero)
@@ -172,96 +199,3 @@ def correlate_both_halved(
             else:
                 for c in range(n):
                     row[c] += weight * (first[c] - last[c])
-
-
-@njit(cache=True, fastmath=True, nogil=True)
-def _accumulate_wide(
-    out: np.ndarray, first: np.ndarray, last: np.ndarray, weight: float, symmetry: int
-) -> None:  # pragma: no cover
-    """:func:`_accumulate` of ``float32`` lines into a ``float64`` ``out``: each sample is
-    widened to ``float64`` first (exactly, as ``astype`` widens it), then the same sums."""
-    if symmetry == 1:
-        for c in range(out.size):
-            out[c] += weight * (np.float64(first[c]) + np.float64(last[c]))
-    elif symmetry == -1:
-        for c in range(out.size):
-            out[c] += weight * (np.float64(first[c]) - np.float64(last[c]))
-    else:
-        for c in range(out.size):
-            out[c] += weight * np.float64(first[c])
-
-
-@njit(cache=True, fastmath=True, nogil=True)
-def _pass_wide(
-    out: np.ndarray,
-    lines: np.ndarray,
-    index: np.ndarray,
-    start: int,
-    taps: np.ndarray,
-    symmetry: int,
-    zero: np.ndarray,
-) -> None:  # pragma: no cover
-    """:func:`_pass` over the rows of a ``float32`` image into a ``float64`` line, each
-    sample widened as it is read (``zero``: a ``float32`` row of zeros)."""
-    size = taps.size
-    half = size // 2
-    centre = index[start + half]
-    if symmetry == 0:
-        out[:] = 0.0
-        for j in range(size):
-            line = lines[index[start + j]] if index[start + j] >= 0 else zero
-            _accumulate_wide(out, line, line, taps[j], 0)
-        return
-    if centre >= 0:
-        source = lines[centre]
-        for c in range(out.size):
-            out[c] = taps[half] * np.float64(source[c])
-    else:
-        out[:] = 0.0
-    for j in range(half):
-        far = size - 1 - j
-        first = lines[index[start + far]] if index[start + far] >= 0 else zero
-        last = lines[index[start + j]] if index[start + j] >= 0 else zero
-        _accumulate_wide(out, first, last, taps[far], symmetry)
-
-
-@njit(cache=True, fastmath=True, nogil=True)
-def correlate_both_wide(
-    image: np.ndarray,
-    column_taps: np.ndarray,
-    column_symmetry: int,
-    row_index: np.ndarray,
-    row_taps: np.ndarray,
-    row_symmetry: int,
-    column_index: np.ndarray,
-    out: np.ndarray,
-) -> None:  # pragma: no cover
-    """:func:`correlate_both` of a ``float32`` image into a ``float64`` ``out``, the same
-    values to the bit as :func:`correlate_both` of ``image.astype(np.float64)`` (every
-    sample widened exactly where the column pass reads it, the sums in the same order)
-    without the ``float64`` copy of the image."""
-    rows, cols = out.shape
-    size = row_taps.size
-    half = size // 2
-    line = np.zeros(cols + 2 * half, out.dtype)
-    zero = np.zeros(cols, image.dtype)  # the rows outside the image under "constant"
-    for r in range(rows):
-        centre = line[half : half + cols]
-        _pass_wide(centre, image, row_index, r, column_taps, column_symmetry, zero)
-        for k in range(half):
-            left, right = column_index[k], column_index[half + cols + k]
-            line[k] = centre[left] if left >= 0 else 0.0
-            line[half + cols + k] = centre[right] if right >= 0 else 0.0
-        row = out[r]
-        if row_symmetry == 0:
-            row[:] = 0.0
-            for j in range(size):
-                _accumulate(row, line[j : j + cols], line[j : j + cols], row_taps[j], 0)
-            continue
-        for c in range(cols):
-            row[c] = row_taps[half] * centre[c]
-        for j in range(half):
-            far = size - 1 - j
-            _accumulate(
-                row, line[far : far + cols], line[j : j + cols], row_taps[far], row_symmetry
-            )

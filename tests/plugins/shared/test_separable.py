@@ -79,3 +79,24 @@ def test_unsymmetric_symmetric_and_antisymmetric_taps_take_their_own_path():
         # reference: two scipy.ndimage.correlate1d calls, mode "reflect"
         expected = ndi.correlate1d(ndi.correlate1d(image, taps, axis=0), taps, axis=1)
         np.testing.assert_allclose(correlate_separable(image, taps, taps), expected, atol=1e-6)
+
+
+@pytest.mark.parametrize("mode", ["reflect", "constant"])
+def test_a_float32_image_into_a_float64_out_equals_its_float64_copy_to_the_bit(mode):
+    """One compiled core for both: the passes compute in the output's dtype, each float32
+    sample widened where it is read (was a copy of the core, ``correlate_both_wide``)."""
+    from graphvision_plugins.shared.separable import _boundary_index
+    from graphvision_plugins.shared.separable_kernels import correlate_both
+
+    image = RNG.random((19, 26), dtype=np.float32)
+    image.flat[0] = np.float32(1e-40)  # a subnormal widens exactly too
+    smooth = gaussian_taps(1.3)
+    for column, symmetry in [(smooth, 1), (gaussian_taps(1.3, order=1), -1), (RNG.random(9), 0)]:
+        rows = _boundary_index(19, column.size // 2, mode)
+        columns = _boundary_index(26, smooth.size // 2, mode)
+        wide, expected = np.empty((19, 26)), np.empty((19, 26))
+        arguments = (column, symmetry, rows, smooth, 1, columns)
+        correlate_both(image, *arguments, wide)
+        correlate_both(image.astype(np.float64), *arguments, expected)
+        np.testing.assert_array_equal(wide, expected)
+        assert not np.array_equal(wide.astype(np.float32), wide)  # float64 sums, not float32
