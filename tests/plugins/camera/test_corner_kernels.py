@@ -118,14 +118,8 @@ def test_forstner_equals_the_per_sample_iteration():
 
 def test_rot90_and_grown_grid_equal_the_numpy_loop():
     from graphvision_plugins import synthetic
-    from graphvision_plugins.camera._corners import (
-        _ANGLES,
-        MAX_ASYMMETRY,
-        TOLERANCE,
-        _Grower,
-        _Photo,
-        saddle_candidates,
-    )
+    from graphvision_plugins.camera._corners import saddle_candidates
+    from graphvision_plugins.camera._grid import _ANGLES, MAX_ASYMMETRY, TOLERANCE, _Grower, _Photo
     from graphvision_plugins.camera._grid_kernels import _rot90, next_row
 
     grid = np.arange(12).reshape(3, 4)
@@ -162,15 +156,14 @@ def test_coarse_candidates_lead_to_the_corners_the_full_resolution_ones_give():
 
     from graphvision_plugins import synthetic
     from graphvision_plugins.camera._corners import (
-        _Grower,
         _oriented,
-        _Photo,
         _refine,
         coarse_saddle_candidates,
         find_board,
         grid_spacing,
         saddle_candidates,
     )
+    from graphvision_plugins.camera._grid import _Grower, _Photo
 
     boards = synthetic.board_views(views=1, width=240, height=180, focal=300.0, seed=4)
     view, truth = np.asarray(boards.views[0], np.float64), boards.corners[0]
