@@ -47,6 +47,7 @@ References
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from typing import Annotated, NamedTuple
@@ -217,16 +218,27 @@ def _refine(
     from ._corner_kernels import forstner
 
     half = int(np.ceil(radius.max()))
+    radii, which = np.unique(radius, return_inverse=True)  # clipped: often one radius
+    weight = _window_weights(half, radii.tobytes())
+    q = np.ascontiguousarray(corners, dtype=np.float64)
+    return forstner(smooth, q, half, weight, which.ravel().astype(np.int64), iterations)
+
+
+@functools.lru_cache(maxsize=16)
+def _window_weights(half: int, radii: bytes) -> np.ndarray:
+    """The Gaussian weights (σ = the radius, 0 outside the square of that half size and at
+    the centre) of the ``(2 half + 1)²`` window offsets, row-major, one row per radius
+    (``radii``: the distinct radii's float64 bytes); made once per set of radii (the
+    windows are clipped to ``max_window``: every view's set is often the same)."""
     offsets = np.arange(-half, half + 1, dtype=np.float64)
     grid_y, grid_x = np.meshgrid(offsets, offsets, indexing="ij")
     ox, oy = grid_x.ravel(), grid_y.ravel()
-    radii, which = np.unique(radius, return_inverse=True)  # clipped: often one radius
-    r = radii[:, None]
+    r = np.frombuffer(radii, dtype=np.float64)[:, None]
     inside = (np.abs(ox) <= r) & (np.abs(oy) <= r)
     weight = np.exp(-(ox**2 + oy**2) / (2 * r**2)) * inside  # one row per radius
     weight[:, (ox == 0) & (oy == 0)] = 0.0  # the centre's gradient carries no position
-    q = np.ascontiguousarray(corners, dtype=np.float64)
-    return forstner(smooth, q, half, weight, which.ravel().astype(np.int64), iterations)
+    weight.flags.writeable = False
+    return weight
 
 
 class BoardCorners(NamedTuple):
