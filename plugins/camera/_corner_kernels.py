@@ -21,6 +21,7 @@ __all__ = [
     "forstner",
     "gradient",
     "gradient_samples",
+    "parabola_peaks",
     "saddle_peaks",
     "saddle_response",
     "sample",
@@ -170,6 +171,34 @@ def _peak_of(response, top, left, span, value):  # pragma: no cover
         if above:
             return False
     return True
+
+
+@numba.njit(cache=True, nogil=True)
+def parabola_peaks(response, rows, cols):  # pragma: no cover
+    """``(x, y)`` of each peak ``(rows[i], cols[i])`` of ``response`` placed by a parabola
+    through its 3 samples along each axis, the offset within ±0.5 (a flat or upward
+    curvature counts as −1e-300), ``N×2``: NumPy's arithmetic of
+    ``coarse_saddle_candidates`` (``np.minimum``, ``np.clip``: a NaN stays NaN), per peak."""
+    out = np.empty((rows.size, 2))
+    for i in range(rows.size):
+        r, c = rows[i], cols[i]
+        centre = response[r, c]
+        for axis in range(2):
+            before = response[r - 1, c] if axis == 0 else response[r, c - 1]
+            after = response[r + 1, c] if axis == 0 else response[r, c + 1]
+            curvature = before - 2 * centre + after
+            if not (curvature < -1e-300 or np.isnan(curvature)):
+                curvature = -1e-300
+            offset = (before - after) / (2 * curvature)
+            if offset < -0.5:
+                offset = -0.5
+            elif offset > 0.5:
+                offset = 0.5
+            if axis == 0:
+                out[i, 1] = 2.0 * (r + offset)
+            else:
+                out[i, 0] = 2.0 * (c + offset)
+    return out
 
 
 @numba.njit(cache=True, nogil=True, inline="always")

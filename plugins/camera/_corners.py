@@ -91,20 +91,13 @@ def coarse_saddle_candidates(smooth: np.ndarray, count: int, sigma: float) -> np
     image smoothed by σ = 1 (``smooth``): its even pixels (σ = ½ of theirs) smoothed on to
     σ/2, the peaks of that response within ``sigma`` half pixels, each placed by a parabola
     through its 3 samples along each axis; in full-resolution pixels, strongest first."""
-    from ._corner_kernels import saddle_peaks, saddle_response, smooth_reflect
+    from ._corner_kernels import parabola_peaks, saddle_peaks, saddle_response, smooth_reflect
 
     half = smooth_reflect(smooth[::2, ::2], math.sqrt((sigma / 2) ** 2 - 0.25))
     response = saddle_response(half)
     rows, cols = saddle_peaks(response, max(1, int(round(sigma))))
     order = np.argsort(response[rows, cols])[::-1][:count]
-    rows, cols = rows[order], cols[order]
-    offsets = []
-    for step in ((1, 0), (0, 1)):  # rows, then columns
-        before = response[rows - step[0], cols - step[1]]
-        centre, after = response[rows, cols], response[rows + step[0], cols + step[1]]
-        curvature = np.minimum(before - 2 * centre + after, -1e-300)
-        offsets.append(np.clip((before - after) / (2 * curvature), -0.5, 0.5))
-    return np.column_stack([2.0 * (cols + offsets[1]), 2.0 * (rows + offsets[0])])
+    return parabola_peaks(response, rows[order], cols[order])
 
 
 def sigma_ladder(shape: tuple[int, ...], columns: int, rows: int) -> list[float]:

@@ -226,3 +226,22 @@ def test_cell_means_equal_map_coordinates_at_the_cells_centres():
     centres = corners[:, idx].mean(axis=1)
     expected = ndimage.map_coordinates(image, [centres[:, 1], centres[:, 0]], order=1)
     np.testing.assert_allclose(_cell_means(image, corners, 4, 2, 1), expected, rtol=0, atol=1e-12)
+
+
+def test_parabola_peaks_equal_the_numpy_arithmetic_they_replace_to_the_bit():
+    """The coarse saddles' sub-pixel step, compiled: the same bits as the array form it
+    replaced, flat and upward curvatures (−1e-300) and offsets clipped at ±0.5 included."""
+    from graphvision_plugins.camera._corner_kernels import parabola_peaks
+
+    rng = np.random.default_rng(9)
+    response = np.round(rng.standard_normal((30, 40)) * 4) / 4  # flat triples too
+    rows, cols = rng.integers(1, 29, 300), rng.integers(1, 39, 300)
+    offsets = []
+    for step in ((1, 0), (0, 1)):  # the array form, as coarse_saddle_candidates had it
+        before = response[rows - step[0], cols - step[1]]
+        centre, after = response[rows, cols], response[rows + step[0], cols + step[1]]
+        curvature = np.minimum(before - 2 * centre + after, -1e-300)
+        offsets.append(np.clip((before - after) / (2 * curvature), -0.5, 0.5))
+    expected = np.column_stack([2.0 * (cols + offsets[1]), 2.0 * (rows + offsets[0])])
+    assert (np.abs(expected - 2 * np.column_stack([cols, rows])) == 1.0).any()  # clipped ones
+    np.testing.assert_array_equal(parabola_peaks(response, rows, cols), expected)
