@@ -208,7 +208,7 @@ def _refine(
 ) -> np.ndarray:
     """:func:`refine_corners` on the image smoothed by σ = 1 (its gradient by
     ``np.gradient``, computed where the windows read it)."""
-    from ._corner_kernels import forstner
+    from ._forstner_kernels import forstner
 
     half = int(np.ceil(radius.max()))
     radii, which = np.unique(radius, return_inverse=True)  # clipped: often one radius
