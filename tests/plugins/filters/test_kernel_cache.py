@@ -18,6 +18,7 @@ from graphvision_plugins import filters
 KERNEL_MODULES = [
     "graphvision_plugins.filters._median_kernels",
     "graphvision_plugins.filters._median_select5",
+    "graphvision_plugins.filters._median_histogram",
     "graphvision_plugins.filters._correlate_kernels",
     "graphvision_plugins.filters._padded_rows",
     "graphvision_plugins.colour._spaces_kernels",
@@ -41,13 +42,19 @@ def test_every_kernel_is_cached_on_disk(name):
     assert not uncached, f"{name}: compiled again in every process (no cache=True): {uncached}"
 
 
-@pytest.mark.parametrize("size", [3, 5, 7])
-def test_a_median_call_leaves_the_cache_index_the_next_process_reads(size):
+@pytest.mark.parametrize(
+    ("size", "level"), [(3, 0.3), (5, 0.3), (7, 0.3), (7, 0.0)], ids=["3", "5", "7", "7-levels"]
+)
+def test_a_median_call_leaves_the_cache_index_the_next_process_reads(size, level):
+    """0.3 is no 8-bit level (76.5/255): the 7×7 median takes the network; 0.0 is one,
+    and an image of 8-bit levels takes the sliding histogram from 7×7 up."""
+    from graphvision_plugins.filters._median_histogram import median_by_histogram
     from graphvision_plugins.filters._median_kernels import median_3x3, median_by_network
     from graphvision_plugins.filters._median_select5 import median_5x5
 
-    filters.median(np.zeros((9, 9), np.float32), size=size)
-    kernel = {3: median_3x3, 5: median_5x5, 7: median_by_network}[size]
+    filters.median(np.full((9, 9), level, np.float32), size=size)
+    kernels = {3: median_3x3, 5: median_5x5, 7: median_by_network}
+    kernel = median_by_histogram if level == 0.0 else kernels[size]
     index = Path(kernel._cache._cache_file._index_path)
     assert index.is_file(), f"no numba cache index at {index}"
     # the signature of the call is the one saved (a hit now or a miss written then)
