@@ -18,17 +18,24 @@ the OpenCV backend, and the engine's cost on top of OpenCV against a plain scrip
    the same load), best of each; the engine's overhead is ``engine / script - 1``
    (the issue's bar: at most 10 %). Where it goes is measured on 15 more runs of the
    engine, per run: the BLAS limit a run holds (threadpoolctl, set and lifted in a
-   helper thread: :mod:`graphvision.execution.blas`; the time the run waits for it, sent
-   when the run starts and after its last node), accepting the nodes' outputs
-   (validated, then frozen: an aligned array the node returned and holds no more
-   in place, read-only, :func:`graphvision.values.memory.frozen_in_place`; others copied
-   read-only, :func:`graphvision.execution.inputs.freeze_value`), the run's provenance
-   (:func:`graphvision.execution.provenance.describe_run`) and the peak-memory check
-   (:func:`graphvision.execution.peak_memory.check_peak_memory`).
+   helper thread: :mod:`graphvision.execution.blas`; the hand-offs to that thread and
+   the waits for it: the lowering sent when the run starts and waited for before its
+   first node, the restore sent after its last node and waited for before it returns),
+   accepting the nodes' outputs (validated, then frozen: an array aligned for its dtype
+   that the node returned and holds no more, or a view of one, in place, read-only,
+   wherever it lies, :func:`graphvision.values.memory.frozen_in_place`; others copied
+   read-only, :func:`graphvision.values.known.frozen_value`), the run's provenance
+   (:func:`graphvision.execution.provenance.describe_run`), the peak-memory check
+   (:func:`graphvision.execution.peak_memory.check_peak_memory`), and the rest of the
+   engine's time (the run's, less those parts and its nodes' own calls: keys,
+   scheduling, the record).
+3. ``--timeline PIPELINE.yaml``: node by node, the best of 15 warm runs of each: the
+   script's call, the same call in the engine and the engine's accepting of its outputs.
 
 Run: ``python bench/bench_backends.py [PIPELINE.yaml ...]`` (all pipelines by default);
 ``python bench/bench_backends.py --overhead [PIPELINE.yaml ...]`` gives part 2 alone (both
-pipelines by default), with the load average.
+pipelines by default), with the load average; ``--timeline [PIPELINE.yaml]`` part 3
+(``coins.yaml`` by default).
 """
 
 from __future__ import annotations
@@ -130,63 +137,128 @@ def _alternating(
     return min(times[0]), min(times[1])
 
 
+def _timed(owner: Any, name: str, spent: dict[str, float], label: str) -> Callable[[], None]:
+    """Wrap ``owner.name`` to add the seconds of each call to ``spent[label]``; the undo."""
+    original = getattr(owner, name)
+
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        began = time.perf_counter()
+        try:
+            return original(*args, **kwargs)
+        finally:
+            spent[label] += time.perf_counter() - began
+
+    setattr(owner, name, wrapper)
+    return lambda: setattr(owner, name, original)
+
+
+PARTS = ("blas", "accept", "provenance", "peak", "other")
+
+
 def _where_it_goes(run: Callable[[], Any], repeats: int = 15) -> dict[str, float]:
-    """Seconds per run in the BLAS limit, accepting (validating and freezing) outputs, the
-    provenance and the peak-memory check (wrapped, then restored)."""
+    """Seconds per run (the mean of ``repeats``) in the BLAS limit, accepting (validating and
+    freezing) outputs, the provenance, the peak-memory check (each wrapped, then restored),
+    and the rest of the engine's time: the run's time less those and its nodes' own."""
     from graphvision.execution import blas, state
     from graphvision.execution import run as run_module
 
-    spent = {"blas": 0.0, "accept": 0.0, "provenance": 0.0, "peak": 0.0}
-
-    def timed(owner: Any, name: str, label: str) -> Callable[[], None]:
-        original = getattr(owner, name)
-
-        def wrapper(*args: Any, **kwargs: Any) -> Any:
-            began = time.perf_counter()
-            try:
-                return original(*args, **kwargs)
-            finally:
-                spent[label] += time.perf_counter() - began
-
-        setattr(owner, name, wrapper)
-        return lambda: setattr(owner, name, original)
-
-    limit = blas.BlasLimit  # what a run waits for: the lowering before its first node, the
-    undo = [timed(limit, "hold", "blas"), timed(limit, "restored", "blas")]  # restore at its end
-    undo.append(timed(state.RunState, "accept", "accept"))
-    undo.append(timed(run_module, "describe_run", "provenance"))
-    undo.append(timed(run_module, "check_peak_memory", "peak"))
+    spent = dict.fromkeys(PARTS, 0.0)
+    limit = blas.BlasLimit  # the lowering sent when the run starts and waited for before its
+    undo = [  # first node, the restore sent after its last and waited for before it returns
+        _timed(limit, step, spent, "blas") for step in ("request", "hold", "release", "restored")
+    ]
+    undo.append(_timed(state.RunState, "accept", spent, "accept"))
+    undo.append(_timed(run_module, "describe_run", spent, "provenance"))
+    undo.append(_timed(run_module, "check_peak_memory", spent, "peak"))
     try:
         for _ in range(repeats):
-            run()
+            began = time.perf_counter()
+            result = run()
+            seconds = time.perf_counter() - began
+            spent["other"] += seconds - sum(node.seconds for node in result.record.nodes)
     finally:
         for restore in undo:
             restore()
+    spent["other"] -= sum(spent[k] for k in PARTS if k != "other")
     return {label: seconds / repeats for label, seconds in spent.items()}
+
+
+def _engine_and_script(name: str) -> tuple[Callable[[], Any], Callable[[], Any], Any]:
+    """``name`` with ``--backend opencv,numpy`` as a run (``sync``, no cache) and as the plain
+    script of the same calls, from the same inputs; the compiled graph."""
+    registry = gv.discover()
+    graph = gv.load_pipeline(PIPELINES / name).with_backends(["opencv", "numpy"])
+    compiled = gv.compile_graph(graph, registry)
+    inputs = {  # resolved once: both sides start from the same arrays
+        n: resolve_input(n, compiled.input_types[n], graph.inputs[n].default, registry)
+        for n in compiled.input_types
+    }
+    run = partial(gv.run, compiled, registry, inputs=inputs, executor="sync")
+    return run, _plain_script(compiled, inputs), compiled
 
 
 def overhead_rows(names: tuple[str, ...] = ("homography.yaml", "coins.yaml")) -> list[str]:
     rows = [
         "| pipeline | engine ms | plain script ms | overhead | of which BLAS limit ms "
-        "| accepting outputs ms | provenance ms | peak-memory check ms |",
-        "|---|---|---|---|---|---|---|---|",
+        "| accepting outputs ms | provenance ms | peak-memory check ms | rest of the engine ms |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
-    registry = gv.discover()
     for name in names:
-        graph = gv.load_pipeline(PIPELINES / name).with_backends(["opencv", "numpy"])
-        compiled = gv.compile_graph(graph, registry)
-        inputs = {  # resolved once: both sides start from the same arrays
-            n: resolve_input(n, compiled.input_types[n], graph.inputs[n].default, registry)
-            for n in compiled.input_types
-        }
-        run = partial(gv.run, compiled, registry, inputs=inputs, executor="sync")
-        script = _plain_script(compiled, inputs)
+        run, script, _ = _engine_and_script(name)
         engine, plain = _alternating(run, script, second_in=gv.one_blas_thread)
         parts = _where_it_goes(run)
         rows.append(
             f"| {name} | {engine * 1e3:.1f} | {plain * 1e3:.1f} | {engine / plain - 1:+.1%} | "
-            + " | ".join(f"{parts[k] * 1e3:.2f}" for k in ("blas", "accept", "provenance", "peak"))
+            + " | ".join(f"{parts[k] * 1e3:.2f}" for k in PARTS)
             + " |"
+        )
+    return rows
+
+
+def timeline_rows(name: str, repeats: int = 15) -> list[str]:
+    """Node by node, the best of ``repeats`` warm runs: the script's call, the same call in
+    the engine (its node's time) and the engine's accepting of its outputs."""
+    from graphvision.execution import state
+
+    run, _, compiled = _engine_and_script(name)
+    calls: dict[str, list[float]] = {n: [] for n in compiled.steps}
+    accepted: dict[str, float] = dict.fromkeys(compiled.steps, 0.0)
+    engine: dict[str, list[float]] = {n: [] for n in compiled.steps}
+    original = state.RunState.accept
+
+    def accept(self: Any, step: Any, result: Any, held: int = 0) -> Any:
+        began = time.perf_counter()
+        try:
+            return original(self, step, result, held)
+        finally:
+            accepted[step.name] = time.perf_counter() - began
+
+    run()
+    state.RunState.accept = accept  # type: ignore[method-assign]
+    try:
+        best_accept = dict.fromkeys(compiled.steps, float("inf"))
+        for _ in range(repeats):
+            with gv.one_blas_thread():
+                values = {(n, ""): v for n, v in run.keywords["inputs"].items()}
+                for step_name, step in compiled.steps.items():
+                    args = {port: values[source] for port, source in step.inputs.items()}
+                    began = time.perf_counter()
+                    out = step.spec.func(**args, **step.params)
+                    calls[step_name].append(time.perf_counter() - began)
+                    for port, value in step.spec.split_outputs(out).items():
+                        values[(step_name, port)] = value
+            for node in run().record.nodes:
+                engine[node.name].append(node.seconds)
+                best_accept[node.name] = min(best_accept[node.name], accepted[node.name])
+    finally:
+        state.RunState.accept = original  # type: ignore[method-assign]
+    rows = ["| node | op (backend) | script call ms | engine call ms | accepting ms |",
+            "|---|---|---|---|---|"]  # fmt: skip
+    for step_name, step in compiled.steps.items():
+        rows.append(
+            f"| {step_name} | {step.spec.id} ({step.spec.backend}) | "
+            f"{min(calls[step_name]) * 1e3:.3f} | {min(engine[step_name]) * 1e3:.3f} | "
+            f"{best_accept[step_name] * 1e3:.3f} |"
         )
     return rows
 
@@ -209,6 +281,8 @@ if __name__ == "__main__":
 
         print(f"load average {os.getloadavg()[0]:.1f} (1 min)")
         print("\n".join(overhead_rows(tuple(sys.argv[2:]) or ("homography.yaml", "coins.yaml"))))
+    elif sys.argv[1:2] == ["--timeline"]:  # node by node, one pipeline (coins.yaml by default)
+        print("\n".join(timeline_rows((sys.argv[2:] or ["coins.yaml"])[0])))
     elif sys.argv[1:2] == ["--table"]:  # the per-pipeline table alone, row by row
         print("\n".join(pipeline_rows(sys.argv[2:] or _all(), echo=True)[:2]))
     else:

@@ -21,14 +21,16 @@ The digest is xxh3-128 of everything after it (header, padding and payload),
 so every byte after the fixed prefix is verified before any of it is used.
 The header holds the port type, its JSON metadata, and each array's name,
 dtype, shape, offset and size; after the digest, the header's structure is
-checked too (a JSON object, the fields and their types, offsets at multiples
-of 64, sizes that add up to the payload), so an entry is used only if it is
-whole. The payload and every array in it start at a multiple of 64 bytes, and
-a file is read into an immutable buffer that starts at a 64-byte aligned
-address (:mod:`graphvision.values.memory`), so arrays read back with
-``numpy.frombuffer`` are aligned exactly as computed values are (a reduction
-over them takes the same path and gives the same bits), cannot be made
-writable, and hold no pickle (object dtypes are refused).
+checked too (a JSON object, the fields and their types, offsets under 64 bytes
+past multiples of 64 and aligned for the dtype, sizes that add up to the
+payload), so an entry is used only if it is whole. The payload starts at a
+multiple of 64 bytes, every array in it at a multiple of 64 plus the offset
+the value had past one when it was stored (its address modulo 64, a multiple
+of its dtype's alignment), and a file is read into an immutable buffer that
+starts at a 64-byte aligned address (:mod:`graphvision.values.memory`), so
+arrays read back with ``numpy.frombuffer`` lie exactly as the computed values
+did (a reduction over them takes the same path and gives the same bits),
+cannot be made writable, and hold no pickle (object dtypes are refused).
 
 Writes go to a temporary file in the same folder and are renamed into place,
 so a reader, another process, or an interrupted run never sees half an

@@ -5,8 +5,13 @@
     b"GVC3" | header length (8 bytes, little endian) | digest (16 bytes) | JSON header
             | zeros to a multiple of 64 bytes | payload
 
-Every array in the payload starts at a multiple of 64 bytes, so arrays read
-back over a 64-byte aligned buffer are aligned as computed values are.
+Every array in the payload starts at a multiple of 64 bytes plus the offset its value
+had past a multiple of 64 when it was stored (its address modulo 64, a multiple of its
+dtype's alignment: 0 for a copy the engine made, often 16 for an array NumPy or OpenCV
+allocated and the engine froze where it lay), so arrays read back over a 64-byte aligned
+buffer lie exactly as the computed values did, and a node reading one sees the same
+layout cold and warm. (Entries written before the offsets were kept have them all 0,
+and are read as they are.)
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ import numpy as np
 import xxhash
 
 from graphvision.cache.entries import Encoded
-from graphvision.values.memory import ALIGNMENT
+from graphvision.values.memory import ALIGNMENT, alignment_offset
 
 __all__ = ["MAGIC", "decode_blob", "encode_blob"]
 
@@ -33,6 +38,15 @@ def _padded(offset: int) -> int:
     return -(-offset // ALIGNMENT) * ALIGNMENT
 
 
+def _shift(given: np.ndarray, stored: np.ndarray) -> int:
+    """Where the stored array starts past a multiple of :data:`ALIGNMENT`: the offset the
+    value had (when it is the value's own memory, aligned for its dtype), else 0."""
+    if stored is not given or not stored.size:  # (a contiguous copy of a strided value)
+        return 0
+    shift = alignment_offset(stored)
+    return shift if shift % stored.dtype.alignment == 0 else 0
+
+
 def encode_blob(entry: Encoded) -> Iterator[bytes | memoryview]:
     """The bytes of a disk entry for ``entry``, in chunks (arrays are not copied)."""
     specs: list[dict[str, Any]] = []
@@ -42,7 +56,7 @@ def encode_blob(entry: Encoded) -> Iterator[bytes | memoryview]:
     for name, array in arrays.items():
         if array.dtype.hasobject:
             raise TypeError(f"cannot cache object array '{name}'")
-        start = _padded(offset)
+        start = _padded(offset) + _shift(entry.arrays[name], array)
         if array.size:
             chunks += [bytes(start - offset), array.data.cast("B")]
             offset = start + array.nbytes
@@ -97,6 +111,13 @@ def decode_blob(blob: bytes | memoryview) -> Encoded:
     return Encoded(header["type"], arrays, header["meta"])
 
 
+def _placeable(shift: int, nbytes: int, dtype: np.dtype) -> bool:
+    """Whether an array of ``nbytes`` may start ``shift`` bytes past its 64-byte boundary."""
+    if not nbytes:
+        return shift == 0
+    return 0 <= shift < ALIGNMENT and shift % dtype.alignment == 0
+
+
 def _check_header(
     header: Any, payload_bytes: int
 ) -> list[tuple[str, np.dtype, tuple[int, ...], int]]:
@@ -119,8 +140,10 @@ def _check_header(
         if dtype.hasobject:
             raise ValueError("object dtype refused")
         start = _padded(expected_offset) if nbytes else expected_offset
-        if any(n < 0 for n in shape) or offset != start:
+        shift = offset - start  # past the multiple of 64: a multiple of the dtype's alignment
+        if any(n < 0 for n in shape) or not _placeable(shift, nbytes, dtype):
             raise ValueError(f"array '{name}' has a bad shape or offset")
+        start = offset
         if nbytes != int(np.prod(shape, dtype=np.int64)) * dtype.itemsize:
             raise ValueError(f"array '{name}': shape {list(shape)} disagrees with {nbytes} bytes")
         specs.append((name, dtype, shape, offset))

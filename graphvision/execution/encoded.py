@@ -10,6 +10,7 @@ from typing import Any
 
 from graphvision.compiler.compiled import Step
 from graphvision.execution.executors import Executor, call_node_encoded
+from graphvision.values.ports import Placed
 
 __all__ = ["submit_encoded"]
 
@@ -36,9 +37,10 @@ def submit_encoded(
         return refused
     payload, upstream = {}, {}
     for port, source in step.inputs.items():
-        if source in values:
+        if source in values:  # with where each array lies (frozen there at the same offsets)
             kind = step.spec.inputs[port].type
-            payload[port] = (kind, *kind.encode(values[source]))
+            arrays, meta = kind.encode(values[source])
+            payload[port] = (kind, Placed.of(arrays), meta)
         else:  # submitted ahead: the producer's task stands for its result
             upstream[port] = (in_flight[source[0]].task, source[1])
     return executor.submit(

@@ -54,7 +54,7 @@ from graphvision.execution.folders import RunPage
 from graphvision.execution.record import RunRecord
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
-from graphvision.values.ports import freeze_all
+from graphvision.values.ports import Placed, freeze_all
 
 __all__ = [
     "FileJob",
@@ -136,8 +136,8 @@ def shared_seeds(
             port_type = step.outputs[port]
             hit, value = cache.get(key, port_type)
             if hit:
-                arrays, meta = port_type.encode(value)
-                seeds.append((key, port_type.type_name(), arrays, meta))
+                arrays, meta = port_type.encode(value)  # (frozen where they lay, on a worker)
+                seeds.append((key, port_type.type_name(), Placed.of(arrays), meta))
     return seeds
 
 

@@ -1,4 +1,4 @@
-"""Immutable buffers aligned to 64 bytes: the memory every value a node receives lies in.
+"""Immutable buffers, and values that lie in the same place cold and warm.
 
 Why both
 --------
@@ -7,21 +7,27 @@ A ``writeable`` flag is not enough (``flags.writeable = True`` succeeds again
 on an array that owns its memory); an array over a ``bytes`` object cannot be
 made writable at all.
 
-*Aligned*: NumPy picks its loops by alignment. A float32 array at an address
+*Placed*: NumPy picks its loops by alignment. A float32 array at an address
 that is not a multiple of 4 is "unaligned" and its reductions go through a
 buffered loop that adds in another order, so the same value summed cold (as
 computed) and warm (as read from the cache) gave 0.37982556 and 0.37982553;
-element-wise work on it was 2.5x slower. Every value is therefore placed at an
-address that is a multiple of :data:`ALIGNMENT` (64 bytes: a cache line, and
-the widest SIMD register), whether it was computed, read from the cache or
-received from another process, so a node sees the same memory layout either
-way and computes the same bits.
+element-wise work on it was 2.5x slower. Every value therefore lies at an
+address aligned for its dtype, and at the same address modulo :data:`ALIGNMENT`
+(64 bytes: a cache line, and the widest SIMD register) whether it was computed,
+read from the cache or received from another process, so a node sees the same
+memory layout either way and computes the same bits. A node's own array is kept
+where it lies (:func:`frozen_in_place`; NumPy's and OpenCV's large arrays start
+16 bytes past a multiple of 64, so requiring 64 had nearly every output copied:
+0.9 ms of a 14 ms run of ``coins.yaml``); a copy is placed at the offset its
+value had (:func:`alignment_offset`, kept in the disk cache's entries and sent
+with the arrays to another process), else at a multiple of 64.
 
 How
 ---
-A ``bytes`` object is allocated ``ALIGNMENT`` bytes larger than needed and
-filled exactly once, right after it is made and before anything else can see
-it, through a ``ctypes`` window at the first aligned address inside it. What
+A ``bytes`` object is allocated ``ALIGNMENT`` bytes (plus the offset asked for)
+larger than needed and filled exactly once, right after it is made and before
+anything else can see it, through a ``ctypes`` window at the first aligned
+address inside it (plus that offset). What
 callers keep is a read-only ``memoryview`` of that window. The object is made
 uninitialised (``PyBytes_FromStringAndSize(NULL, n)``, as CPython itself makes
 one it is about to fill): zeroing it first was a third of the cost of freezing
@@ -32,6 +38,7 @@ never read).
 from __future__ import annotations
 
 import ctypes
+import sys
 import weakref
 from collections.abc import Callable
 from typing import BinaryIO
@@ -41,6 +48,7 @@ import numpy as np
 __all__ = [
     "ALIGNMENT",
     "aligned_bytes",
+    "alignment_offset",
     "frozen_copies",
     "frozen_copy",
     "frozen_in_place",
@@ -90,27 +98,48 @@ def aligned_bytes(nbytes: int, fill: Callable[[memoryview], None]) -> memoryview
     return memoryview(owner)[offset : offset + nbytes]
 
 
-def _new_aligned(nbytes: int) -> tuple[bytes, int, int]:
+def _new_aligned(nbytes: int, shift: int = 0) -> tuple[bytes, int, int]:
     """A new uninitialised ``bytes`` object of ``nbytes`` and the padding, with the
-    address and the offset of its first aligned byte (to be written once, at once)."""
-    owner: bytes = _new_bytes(None, nbytes + ALIGNMENT)
+    address and the offset of its first aligned byte (to be written once, at once);
+    ``shift`` more bytes of padding after that byte, for a value placed there."""
+    owner: bytes = _new_bytes(None, nbytes + ALIGNMENT + shift)
     start = id(owner) + _DATA_OFFSET  # (the address ctypes.c_char_p(owner) gives)
     return owner, start, -start % ALIGNMENT
 
 
-def frozen_copy(array: np.ndarray) -> np.ndarray:
-    """A copy of ``array`` in an immutable, aligned buffer (C order, same dtype and shape)."""
+def alignment_offset(array: np.ndarray) -> int:
+    """Where ``array``'s data starts past a multiple of :data:`ALIGNMENT` (its address
+    modulo 64; 0 for an empty array): what a copy of it keeps to lie as it did."""
+    if not array.size:
+        return 0
+    return int(array.__array_interface__["data"][0] % ALIGNMENT)
+
+
+def _placement(array: np.ndarray, offset: int) -> int:
+    """``offset`` (bytes past a multiple of :data:`ALIGNMENT`) if the dtype can lie there,
+    else 0."""
+    if 0 < offset < ALIGNMENT and offset % array.dtype.alignment == 0:
+        return offset
+    return 0
+
+
+def frozen_copy(array: np.ndarray, offset: int = 0) -> np.ndarray:
+    """A copy of ``array`` in an immutable buffer (C order, same dtype and shape), at an
+    address ``offset`` bytes past a multiple of :data:`ALIGNMENT` (where the value lay when
+    it was computed; 0 unless given, and 0 for an offset the dtype cannot lie at)."""
     dtype, shape = array.dtype, array.shape
+    shift = _placement(array, offset)
+    owner, start, first = _new_aligned(array.nbytes, shift)
+    first += shift
     if not array.flags.c_contiguous:  # one pass from the strided array into the window
-
-        def fill(window: memoryview) -> None:
-            np.copyto(np.frombuffer(window, dtype).reshape(shape), array, casting="no")
-
-        return np.frombuffer(aligned_bytes(array.nbytes, fill), dtype).reshape(shape)
-    owner, start, offset = _new_aligned(array.nbytes)
-    if array.nbytes:
-        _fill(start + offset, array)
-    return np.frombuffer(owner, dtype, array.size, offset).reshape(shape)
+        if array.nbytes:
+            window = (ctypes.c_char * array.nbytes).from_address(start + first)
+            target = np.frombuffer(memoryview(window).cast("B"), dtype).reshape(shape)
+            np.copyto(target, array, casting="no")
+            del target, window
+    elif array.nbytes:
+        _fill(start + first, array)
+    return np.frombuffer(owner, dtype, array.size, first).reshape(shape)
 
 
 def _fill(address: int, array: np.ndarray) -> None:
@@ -137,7 +166,7 @@ def _padded(nbytes: int) -> int:
     return -(-nbytes // ALIGNMENT) * ALIGNMENT
 
 
-_ZEROS = bytes(ALIGNMENT)
+_ZEROS = bytes(2 * ALIGNMENT)
 
 
 IN_PLACE_BYTES = 16384
@@ -163,34 +192,56 @@ def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
     """``array``'s own memory, made immutable without a copy, when it can be (else None).
 
     For an array that a node has just returned and that nothing but the caller holds (the
-    caller checks that: ``sys.getrefcount``): a plain ``ndarray`` that owns C-ordered
-    memory at a multiple of :data:`ALIGNMENT`. Its ``writeable`` flag is cleared and what
+    caller checks that: ``sys.getrefcount``): a plain C-ordered ``ndarray`` aligned for its
+    dtype that owns its memory, or a view of one (``reshape`` of a result, a slice) that
+    nothing but the view holds. Its ``writeable`` flag (and its owner's) is cleared and what
     the caller keeps is a view through a read-only ``memoryview`` over that memory that
     refers to no object (``PyMemoryView_FromMemory``): the array is no base of the view
     and the window does not name it, so no flag set on the view or anything it refers to
     makes it writable, as with a copy in ``bytes``; the array is kept alive by the window
     (held by every view of it) and freed with it. The copy (0.8 ms of a 12 ms pipeline's
     run for 3.3 MB of images) is saved.
+
+    The value stays at its address, whatever it is modulo :data:`ALIGNMENT` (NumPy's and
+    OpenCV's large arrays start 16 bytes past a multiple of 64): where the value is
+    materialised again (read from the cache, received from another process), it is
+    placed at the same offset modulo 64 (:func:`alignment_offset`), so a node reading
+    it sees the same layout cold and warm.
     """
     flags = array.flags
     if (
         type(array) is not np.ndarray
-        or array.base is not None
-        or not (flags.writeable and flags.c_contiguous)
+        or not (flags.writeable and flags.c_contiguous and flags.aligned)
         or array.nbytes < IN_PLACE_BYTES
         or array.dtype.hasobject
-        or (address := array.__array_interface__["data"][0]) % ALIGNMENT
     ):
         return None
+    owner = array.base  # a view: of an array owning its memory that only the view holds
+    if owner is not None and not (
+        type(owner) is np.ndarray
+        and owner.base is None
+        and owner.flags.writeable
+        and sys.getrefcount(owner) <= _VIEW_ONLY_REFS
+    ):
+        return None
+    address = array.__array_interface__["data"][0]
     flags.writeable = False
     frozen = np.frombuffer(_from_memory(address, array.nbytes, _READ_ONLY), array.dtype)
     window = frozen.base  # the memoryview numpy holds (every view of ``frozen`` rests on it)
     if not isinstance(window, memoryview):  # (not how numpy holds a buffer: copy instead)
         flags.writeable = True
         return None
+    if owner is not None:
+        owner.flags.writeable = False
     key = id(window)
     _KEPT[key] = (array, weakref.ref(window, lambda ref: _release(key, ref)))
     return frozen.reshape(array.shape)
+
+
+_VIEW_ONLY_REFS = 3 if sys.version_info < (3, 14) else -(2**20)
+"""References to a view's owner in :func:`frozen_in_place` when only the view holds it (the
+view's ``base``, the name ``owner`` and ``getrefcount``'s argument; Python 3.14 counts the
+stack otherwise: there, no view is frozen in place)."""
 
 
 def is_frozen_window(window: memoryview) -> bool:
@@ -199,27 +250,31 @@ def is_frozen_window(window: memoryview) -> bool:
     return entry is not None and entry[1]() is window
 
 
-def frozen_copies(arrays: list[np.ndarray]) -> list[np.ndarray]:
-    """Copies of ``arrays`` in one immutable buffer, each at a multiple of :data:`ALIGNMENT`
-    (C order, same dtypes and shapes): a value of many arrays (a table's columns) is frozen
+def frozen_copies(arrays: list[np.ndarray], offsets: list[int] | None = None) -> list[np.ndarray]:
+    """Copies of ``arrays`` in one immutable buffer (C order, same dtypes and shapes), each
+    at a multiple of :data:`ALIGNMENT` plus its entry of ``offsets`` (where it lay when it
+    was computed; 0 when not given): a value of many arrays (a table's columns) is frozen
     with one buffer instead of one each."""
     sources = [np.ascontiguousarray(array) for array in arrays]
-    offsets, total = [], 0
-    for source in sources:
-        offsets.append(total)
-        total += _padded(source.nbytes)
+    given = offsets or [0] * len(sources)
+    shifts = [_placement(s, o) for s, o in zip(sources, given, strict=True)]
+    starts, total = [], 0
+    for source, shift in zip(sources, shifts, strict=True):
+        starts.append(total + shift)
+        total += _padded(shift + source.nbytes)
     owner, start, first = _new_aligned(total)
     window = memoryview((ctypes.c_char * (ALIGNMENT + total)).from_address(start)).cast("B")
     with window:  # every byte of the object written: the arrays, the padding zeroed
-        window[:first] = _ZEROS[:first]
-        for source, offset in zip(sources, offsets, strict=True):
-            begin, end = first + offset, first + offset + source.nbytes
-            _copy(window, begin, source, start)
-            window[end : begin + _padded(source.nbytes)] = _ZEROS[: -source.nbytes % ALIGNMENT]
-        window[first + total :] = _ZEROS[: ALIGNMENT - first]
+        done = 0  # (each gap is under 2 * ALIGNMENT bytes)
+        for source, begin in zip(sources, starts, strict=True):
+            at = first + begin
+            window[done:at] = _ZEROS[: at - done]
+            _copy(window, at, source, start)
+            done = at + source.nbytes
+        window[done:] = _ZEROS[: len(window) - done]
     return [
-        np.frombuffer(owner, source.dtype, source.size, first + offset).reshape(source.shape)
-        for source, offset in zip(sources, offsets, strict=True)
+        np.frombuffer(owner, source.dtype, source.size, first + begin).reshape(source.shape)
+        for source, begin in zip(sources, starts, strict=True)
     ]
 
 

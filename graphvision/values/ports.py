@@ -44,12 +44,18 @@ import numpy as np
 from graphvision.errors import PortValueError
 from graphvision.values.budget import check_array_file
 from graphvision.values.dtype_policy import to_dtype
-from graphvision.values.memory import frozen_copies, frozen_copy, is_aligned, is_frozen_window
+from graphvision.values.memory import (
+    alignment_offset,
+    frozen_copies,
+    frozen_copy,
+    is_frozen_window,
+)
 
 __all__ = [
     "ArrayPort",
     "Arrays",
     "Meta",
+    "Placed",
     "PortType",
     "RecordPort",
     "describe_value",
@@ -63,44 +69,63 @@ Arrays = dict[str, np.ndarray]
 Meta = dict[str, Any]
 
 
-def freeze(array: np.ndarray) -> np.ndarray:
-    """``array`` in immutable memory at a 64-byte aligned address (see :mod:`._memory`).
+def freeze(array: np.ndarray, offset: int = 0) -> np.ndarray:
+    """``array`` in immutable memory, aligned for its dtype (see :mod:`.memory`).
 
     A flag is not enough: ``flags.writeable = True`` succeeds again on an
     array that owns its memory (or on a view of a writable base). An array
     over a ``bytes`` object cannot be made writable at all, so the value is
-    copied once into one, unless it already lies, aligned, over immutable
+    copied once into one, ``offset`` bytes past a multiple of 64 (where it lay when
+    it was computed: :class:`Placed`), unless it already lies over immutable
     memory (a value read from the disk cache does).
     """
-    return array if is_frozen(array) else frozen_copy(array)
+    return array if is_frozen(array) else frozen_copy(array, offset)
+
+
+class Placed(dict[str, np.ndarray]):
+    """A value's arrays (as its port type encodes them) that remember where each lay,
+    its address modulo 64 (``offsets``), for the process that receives them to freeze
+    them at the same offsets (:func:`freeze_all`): a node there then sees the value laid
+    out as where it was computed or read from the cache. Pickled with its offsets."""
+
+    offsets: dict[str, int]
+
+    @classmethod
+    def of(cls, arrays: Arrays) -> Placed:
+        placed = cls(arrays)
+        placed.offsets = {name: alignment_offset(array) for name, array in arrays.items()}
+        return placed
 
 
 def freeze_all(arrays: Arrays) -> Arrays:
-    """:func:`freeze` of each array; those to copy share one buffer (one allocation for a
-    table's columns instead of one each)."""
+    """:func:`freeze` of each array, at the offsets :class:`Placed` arrays remember; those
+    to copy share one buffer (one allocation for a table's columns instead of one each)."""
+    offsets = getattr(arrays, "offsets", None) or {}
     thawed = [name for name, array in arrays.items() if not is_frozen(array)]
     if len(thawed) < 2:
-        return {name: freeze(array) for name, array in arrays.items()}
-    copies = dict(zip(thawed, frozen_copies([arrays[name] for name in thawed]), strict=True))
+        return {name: freeze(array, offsets.get(name, 0)) for name, array in arrays.items()}
+    made = frozen_copies([arrays[n] for n in thawed], [offsets.get(n, 0) for n in thawed])
+    copies = dict(zip(thawed, made, strict=True))
     return {name: copies.get(name, array) for name, array in arrays.items()}
 
 
 def is_frozen(array: np.ndarray) -> bool:
-    """Whether ``array`` lies, aligned and read-only, over immutable memory already."""
+    """Whether ``array`` lies, aligned for its dtype and read-only, over immutable memory
+    already."""
     if array.flags.writeable:  # (a node's fresh array: no walk to its root)
         return False
     root: object = array
     while isinstance(root, np.ndarray | memoryview):
         if isinstance(root, memoryview):
             if is_frozen_window(root):  # a node's own array, frozen where it lies
-                return is_aligned(array)
+                return bool(array.flags.aligned)
             root = root.obj
         elif root.base is None:
             break
         else:
             root = root.base
     # (an array unpickled over bytes can be writable: it is copied)
-    return isinstance(root, bytes) and is_aligned(array)
+    return isinstance(root, bytes) and bool(array.flags.aligned)
 
 
 class PortType:

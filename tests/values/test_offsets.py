@@ -1,0 +1,116 @@
+"""A value keeps its place modulo 64 bytes wherever it is materialised again.
+
+A node's own array is frozen where it lies, whatever its address modulo 64 (NumPy's and
+OpenCV's large arrays start 16 bytes past a multiple of 64), as long as it is aligned for
+its dtype; a copy of it (read from the cache, received from another process) is placed at
+the same offset, so a node reading it sees the same layout cold and warm.
+"""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+from graphvision.values.memory import (
+    alignment_offset,
+    frozen_copies,
+    frozen_copy,
+    frozen_in_place,
+)
+from graphvision.values.ports import Placed, freeze_all, is_frozen
+
+DTYPES = [np.bool_, np.uint8, np.int32, np.float32, np.float64, np.complex128]
+
+
+def at(values: np.ndarray, offset: int) -> np.ndarray:
+    """A writable copy of ``values`` whose data starts ``offset`` bytes past a multiple of 64."""
+    buffer = np.empty(values.nbytes + 128, np.uint8)
+    start = (offset - buffer.ctypes.data) % 64
+    placed = buffer[start : start + values.nbytes].view(values.dtype).reshape(values.shape)
+    placed[...] = values
+    return placed
+
+
+def offsets_of(dtype: type) -> range:
+    return range(0, 64, np.dtype(dtype).alignment)
+
+
+@pytest.mark.parametrize("dtype", DTYPES)
+def test_a_copy_lies_at_the_offset_asked_for_with_the_same_bits(dtype):
+    values = (np.random.default_rng(0).random((7, 9)) * 100).astype(dtype)
+    for offset in offsets_of(dtype):
+        copy = frozen_copy(at(values, 1 + offset % 7), offset)  # from anywhere
+        assert alignment_offset(copy) == offset and copy.tobytes() == values.tobytes()
+        assert is_frozen(copy) and not copy.flags.writeable
+        strided = frozen_copy(at(values, 0)[:, ::2], offset)  # one pass from a strided view
+        assert alignment_offset(strided) == offset and np.array_equal(strided, values[:, ::2])
+
+
+def test_an_offset_the_dtype_cannot_lie_at_gives_a_copy_at_a_multiple_of_64():
+    values = np.arange(10, dtype=np.float64)
+    for offset in (3, 12, 64, -8):
+        assert alignment_offset(frozen_copy(values, offset)) == 0
+
+
+def test_a_tables_columns_keep_each_their_offset_in_one_buffer():
+    rng = np.random.default_rng(1)
+    columns = [rng.random(n).astype(d) for n, d in ((5, np.float32), (0, np.float64), (9, bool))]
+    for shift in range(0, 64, 4):
+        offsets = [shift, 8 * (shift // 8), (shift + 1) % 64]
+        placed = [at(c, o) for c, o in zip(columns, offsets, strict=True)]
+        copies = frozen_copies(placed, offsets)
+        assert [alignment_offset(c) for c in copies] == [offsets[0], 0, offsets[2]]
+        assert all(c.tobytes() == s.tobytes() for c, s in zip(copies, columns, strict=True))
+        assert copies[0].base is not None and all(is_frozen(c) for c in copies)
+
+
+@pytest.mark.parametrize("dtype", [np.bool_, np.int32, np.float32, np.float64])
+def test_arrays_sent_to_another_process_are_frozen_there_at_their_offsets(dtype):
+    """The transport (the arrays pickled as a process pool sends them) keeps each offset."""
+    values = (np.random.default_rng(2).random((40, 30)) * 50).astype(dtype)
+    for offset in offsets_of(dtype):
+        sent = Placed.of({"a": frozen_copy(values, offset), "b": values[:3]})
+        received = pickle.loads(pickle.dumps(sent, protocol=4))  # writable, anywhere
+        frozen = freeze_all(received)
+        assert alignment_offset(frozen["a"]) == offset and frozen["a"].tobytes() == values.tobytes()
+        assert alignment_offset(frozen["b"]) == alignment_offset(values[:3])
+        alone = freeze_all(Placed.of({"a": frozen_copy(values, offset)}))  # (one array: no table)
+        assert alignment_offset(alone["a"]) == offset
+
+
+def test_plain_arrays_received_are_frozen_at_a_multiple_of_64_as_before():
+    received = pickle.loads(pickle.dumps({"a": np.arange(100.0), "b": np.arange(3)}))
+    assert [alignment_offset(a) for a in freeze_all(received).values()] == [0, 0]
+
+
+@pytest.mark.parametrize("offset", [0, 4, 16, 36, 60])
+def test_a_nodes_own_array_is_frozen_where_it_lies_at_any_aligned_offset(offset):
+    array = at(np.zeros((100, 100), np.float32), offset).copy()  # an owner, at malloc's place
+    address = array.__array_interface__["data"][0]
+    frozen = frozen_in_place(array)
+    assert frozen is not None and frozen.__array_interface__["data"][0] == address
+    view = at(np.ones((100, 100), np.float32), offset)  # a view whose owner only it holds
+    address = view.__array_interface__["data"][0]
+    frozen = frozen_in_place(view)
+    assert frozen is not None and frozen.__array_interface__["data"][0] == address
+    assert alignment_offset(frozen) == offset and is_frozen(frozen) and np.all(frozen == 1)
+    with pytest.raises(ValueError, match="WRITEABLE"):
+        frozen.flags.writeable = True
+
+
+def test_a_view_is_not_frozen_in_place_while_its_owner_is_held_elsewhere():
+    owner = np.zeros((100, 100), np.float32)
+    assert frozen_in_place(owner[1:]) is None  # ``owner`` is held here: a copy is made
+
+    def two_views() -> tuple[np.ndarray, np.ndarray]:
+        other = np.zeros((100, 101), np.float32)
+        return other[:, :3], other.reshape(-1)[: 100 * 100]
+
+    kept, view = two_views()  # another view of the same owner is held
+    assert frozen_in_place(view) is None
+    del kept
+    assert frozen_in_place(view) is not None  # (once it is not)
+    unaligned = np.zeros(100 * 100 * 4 + 1, np.uint8)[1:].view(np.float32)
+    assert frozen_in_place(unaligned) is None  # not aligned for its dtype: copied
