@@ -246,9 +246,9 @@ def timeline_rows(name: str, repeats: int = 15) -> list[str]:
     state.RunState.accept = accept  # type: ignore[method-assign]
     try:
         best_accept = dict.fromkeys(compiled.steps, float("inf"))
+        values = {(n, ""): v for n, v in run.keywords["inputs"].items()}
         for _ in range(repeats):
             with gv.one_blas_thread():
-                values = {(n, ""): v for n, v in run.keywords["inputs"].items()}
                 for step_name, step in compiled.steps.items():
                     args = {port: values[source] for port, source in step.inputs.items()}
                     began = time.perf_counter()
