@@ -18,9 +18,10 @@ read from the cache or received from another process, so a node sees the same
 memory layout either way and computes the same bits. A node's own array is kept
 where it lies (:func:`frozen_in_place`; NumPy's and OpenCV's large arrays start
 16 bytes past a multiple of 64, so requiring 64 had nearly every output copied:
-2.8 MB per run of ``coins.yaml``, 0.47 MB since, the outputs of its node with two); a copy is placed at the offset its
-value had (:func:`alignment_offset`, kept in the disk cache's entries and sent
-with the arrays to another process), else at a multiple of 64.
+2.8 MB per run of ``coins.yaml``, 0.47 MB since, the outputs of its node with
+two); a copy is placed at the offset its value had (:func:`alignment_offset`,
+kept in the disk cache's entries and sent with the arrays to another process),
+else at a multiple of 64.
 
 How
 ---
