@@ -112,5 +112,7 @@ def test_a_view_is_not_frozen_in_place_while_its_owner_is_held_elsewhere():
     assert frozen_in_place(view) is None
     del kept
     assert frozen_in_place(view) is not None  # (once it is not)
+    small = np.zeros((1000, 100), np.float32)[:100]  # a tenth of an array nothing else holds
+    assert frozen_in_place(small) is None  # copied: it would keep all of it alive
     unaligned = np.zeros(100 * 100 * 4 + 1, np.uint8)[1:].view(np.float32)
     assert frozen_in_place(unaligned) is None  # not aligned for its dtype: copied
