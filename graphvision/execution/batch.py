@@ -12,8 +12,10 @@ pattern matches that cannot be read (a folder named like a file, a dangling
 or looping symbolic link, a pipe) is listed as failed, saying why. On Dask a
 node whose worker died runs again on another worker. The pipeline is checked
 before anything else: an invalid one makes no folder. Stopped (Ctrl-C,
-SIGTERM), a batch summarises the files it finished, if any, and removes the
-folders it made that hold nothing.
+SIGTERM), a batch lists in ``batch.csv`` every file, done or not (even when
+none is done yet), each file's folder whole or absent as listed
+(:mod:`graphvision.execution.batch_stop`), and removes the folders it made
+that hold nothing.
 Each file gets its own folder, named after its path below the pattern's
 fixed part (``photos/a/img.png`` and ``photos/b/img.png`` give
 ``OUT/a/img`` and ``OUT/b/img``), so no two files ever share a folder
@@ -178,10 +180,12 @@ def run_batch(
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
     cache = Cache(MemoryStore()) if one_task_per_file and cache is None else cache  # for seeds
-    batch = BatchRun(graph, paths, folders, input, inputs or {}, pool, one_task_per_file, pages)
+    made = missing_folders(out_dir, *folders)
+    batch = BatchRun(
+        graph, paths, folders, input, inputs or {}, pool, one_task_per_file, pages, out_dir
+    )
     batch.options = dict(registry=registry, outputs=outputs, overrides=overrides, executor=pool)
     batch.options.update(cache=cache, keep_going=keep_going, hooks=hooks)
-    made = missing_folders(out_dir, *folders)
     own = isinstance(executor, str)
     grouped = getattr(pool, "files_at_once", 0) if one_task_per_file else 0  # Dask's
     width = files_at_once or grouped or executor_width(pool) * (2 if one_task_per_file else 1)
@@ -240,18 +244,20 @@ def _stop(
     where: tuple[Path, set[Path], list[Path]],
 ) -> None:
     """A stopped batch: no folder is started now, those being written are finished (those
-    whose writer died are cleared), the files done so far are summarised and the folders
-    made for unfinished files removed."""
+    whose writer died are cleared), every file is summarised, done or not (even when none
+    is), and the folders made for unfinished files removed."""
     out_dir, stale, made = where
     finished = batch.stop_writers()
     for index, item in finished.items():
         items[index] = items[index] or item
     if own:  # nodes still running are not waited for
         batch.pool.shutdown(wait=False, cancel_futures=True)
-    if any(item is not None for item in items):
+    try:
         not_run = _not_run(items, batch.paths, batch.folders, batch.started)
         _summarise(not_run, out_dir, batch.pages, stale)
-    remove_empty_folders(made)
+    finally:
+        batch.remove_stop_flag()  # a writer that looks now sees it gone: stopped
+        remove_empty_folders(made)
 
 
 def _checked_pipeline(

@@ -63,6 +63,7 @@ class BatchRun:
         pool: Executor,
         one_task_per_file: bool,
         pages: BatchPages,
+        out_dir: Path | None = None,
     ) -> None:
         self.graph, self.paths, self.folders = graph, paths, folders
         self.input, self.inputs, self.pool = input, inputs, pool
@@ -77,7 +78,8 @@ class BatchRun:
         self.started: set[int] = set()
         self.finished: dict[int, BatchItem] = {}  # as they complete, whoever runs them
         self.stopped = False
-        self.stop = None if hasattr(pool, "share") else StopFlag.make()  # not on Dask
+        # on Dask, whose workers may be on other machines, in the output folder they share
+        self.stop = StopFlag.make(out_dir if hasattr(pool, "share") else None)
         self.workers_ready = threading.Event()  # a worker has started (or could not)
 
     def run_one(self, index: int) -> BatchItem:
@@ -123,8 +125,7 @@ class BatchRun:
         written since the batch stopped is neither)."""
         if item.status != "interrupted":
             self.finished[index] = item
-        if self.stop is not None:
-            self.stop.dropped(self.folders[index])
+        self.stop.dropped(self.folders[index])
         return item
 
     def _on_worker(self, index: int) -> FileOutcome:
@@ -134,7 +135,7 @@ class BatchRun:
         could start, the file runs once more here, as the client's own files do."""
         path, folder = self.paths[index], self.folders[index]
         outcome, died = run_file(self.pool, self.job, path, folder)
-        if died is None or self.stop is None:
+        if died is None:
             return outcome
         name = StopFlag.name(folder)
         kept = self.stop.left().get(name, "no claim")
@@ -153,26 +154,24 @@ class BatchRun:
         return list(outputs) if outputs is not None else list(plain_graph(self.graph).outputs)
 
     def remove_stop_flag(self) -> None:
-        if self.stop is not None:
-            self.stop.remove()
+        self.stop.remove()
 
     def stop_writers(self) -> dict[int, BatchItem]:
         """The batch has stopped: no folder is started from now on; those being written are
         finished first. Every file finished so far, by its index (see
         :mod:`graphvision.execution.batch_stop`)."""
         self.stopped = True
-        if self.stop is not None:
-            self.stop.raise_()
-            self.stop.wait()
-            index = {StopFlag.name(folder): k for k, folder in enumerate(self.folders)}
-            for name, kept in self.stop.left().items():
-                k = index.get(name)
-                if k is None or k in self.finished:
-                    continue
-                if kept is not None:  # whole, its result not (yet) here: counted from the claim
-                    self.finished[k] = kept
-                else:  # its writer died half-way: what it wrote goes
-                    clear_unfinished(self.folders[k], self.wanted_outputs())
+        self.stop.raise_()
+        self.stop.wait()
+        index = {StopFlag.name(folder): k for k, folder in enumerate(self.folders)}
+        for name, kept in self.stop.left().items():
+            k = index.get(name)
+            if k is None or k in self.finished:
+                continue
+            if kept is not None:  # whole, its result not (yet) here: counted from the claim
+                self.finished[k] = kept
+            else:  # its writer died half-way (SIGTERM, kill -9): what it wrote goes
+                clear_unfinished(self.folders[k], self.wanted_outputs())
         return dict(self.finished)
 
     def run_in_client(

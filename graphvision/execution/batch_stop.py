@@ -27,8 +27,11 @@ lanes) share a :class:`StopFlag`, a folder of the client's on this machine:
 
 A writer that found the flag down after claiming had claimed before the flag
 was raised, so the client sees its claim. A flag folder that is gone counts as
-raised. On Dask, whose workers may be on other machines, there is no flag: a
-stopped batch leaves its workers' files to them.
+raised. On Dask, whose workers may be on other machines, the flag is a hidden
+folder in the batch's output folder (``.graphvision-stop-*``), on the storage
+the workers write the files' folders to (a claim's lock is then the shared
+file system's: ``flock`` on a local disk, NFS's locks over NFS); a task's
+files that start after the stop are not run at all.
 """
 
 from __future__ import annotations
@@ -53,10 +56,11 @@ try:
 except ImportError:  # pragma: no cover - Windows: a claim is a live writer's until it is written
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["INTERRUPTED", "Claim", "StopFlag", "signals_held", "writing"]
+__all__ = ["INTERRUPTED", "STOP_FOLDER", "Claim", "StopFlag", "signals_held", "writing"]
 
 INTERRUPTED = "the batch stopped while this file ran; re-run the batch to finish it"
 
+STOP_FOLDER = ".graphvision-stop-"  # a Dask batch's flag, in its output folder
 _STOPPED = "stopped"
 _CLAIM = "writing-"
 
@@ -112,8 +116,13 @@ class StopFlag:
         self.folder = folder
 
     @classmethod
-    def make(cls) -> StopFlag:
-        return cls(tempfile.mkdtemp(prefix="graphvision-batch-"))
+    def make(cls, inside: Path | None = None) -> StopFlag:
+        """A new flag: a folder in the system's temporary folder, or a hidden one ``inside``
+        a folder (made if missing: a Dask batch's output folder, which its workers share)."""
+        if inside is None:
+            return cls(tempfile.mkdtemp(prefix="graphvision-batch-"))
+        inside.mkdir(parents=True, exist_ok=True)
+        return cls(tempfile.mkdtemp(prefix=STOP_FOLDER, dir=inside))
 
     def raise_(self) -> None:
         """The batch has stopped: no writer starts a folder from now on."""
@@ -224,7 +233,8 @@ def writing(
     stop: StopFlag | None, folder: str | Path, stopped: Callable[[], bool] | None
 ) -> Iterator[Claim]:
     """Whether to write a file's ``folder`` now, claimed meanwhile when there is a flag
-    (:meth:`StopFlag.writing`); without one (Dask), whether ``stopped()`` is still false."""
+    (:meth:`StopFlag.writing`); without one (a file task run outside a batch), whether
+    ``stopped()`` is still false."""
     if stop is None:
         yield Claim(not (stopped is not None and stopped()))
         return

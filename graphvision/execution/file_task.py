@@ -82,7 +82,7 @@ class FileJob:
     the overrides applied; ``inputs`` are the graph inputs every file shares;
     ``store`` is the cache store the workers write values to (None: memory
     only); ``executor`` is what the records call the executor; ``stop`` the flag a
-    stopped batch raises (:mod:`graphvision.execution.batch_stop`; None on Dask).
+    stopped batch raises (:mod:`graphvision.execution.batch_stop`).
     """
 
     token: str
@@ -282,11 +282,14 @@ def run_file_task(
     (unless ``stopped()`` says by then that the batch has stopped: the client's own files)."""
     from graphvision.execution.run import run
 
+    item = BatchItem(Path(path), Path(folder))
+    if job.stop is not None and job.stop.is_raised():  # stopped before it started: not run
+        item.status, item.error = "interrupted", INTERRUPTED
+        return FileOutcome(item)
     prepared = _prepared(job)
     memory = MemoryStore(max_bytes=2**40)
     for key, value, nbytes in prepared.seeds:
         memory.put(key, value, nbytes)
-    item = BatchItem(Path(path), Path(folder))
     began = time.perf_counter()
     result = None
     try:
