@@ -56,6 +56,7 @@ from graphvision.execution.batch_files import (
     replace_text,
     write_summary,
 )
+from graphvision.execution.batch_guard import refuse_in_bootstrap
 from graphvision.execution.batch_lanes import FileLanes
 from graphvision.execution.batch_run import BatchRun
 from graphvision.execution.batch_stop import INTERRUPTED, signals_held
@@ -159,6 +160,7 @@ def run_batch(
         ``batch.csv`` is not a graphvision summary (checked before anything
         runs).
     """
+    refuse_in_bootstrap("a batch")  # a worker importing an unguarded script
     run_arguments(cache, executor, workers)
     graph = graph_argument(graph, backends)  # another order: compiled again with it
     inputs, outputs = mapping_argument(inputs, "inputs"), names_argument(outputs, "outputs")

@@ -1,43 +1,40 @@
 """Running nodes on a Dask cluster: :class:`DaskExecutor`.
 
-The executor hands each node to ``dask.distributed`` as one task. It keeps
-the transport of the ``processes`` executor: the node function travels as a
-:class:`~graphvision.nodes.node.FunctionRef` (the worker imports it by module and
-name, a local plugin file by its path), and values travel in their port
-type's array encoding (named arrays and a JSON header), never as pickled
-Python objects. Results come back to the client, which validates them and
-stores them in its own cache: the cache never has to be on storage the
-workers share, and a value is written once, by one process, with the cache's
-atomic rename.
+The executor hands each node to ``dask.distributed`` as one task. It keeps the transport
+of the ``processes`` executor: the node function travels as a
+:class:`~graphvision.nodes.node.FunctionRef` (the worker imports it by module and name, a
+local plugin file by its path), and values travel in their port type's array encoding
+(named arrays and a JSON header), never as pickled Python objects. Results come back to
+the client, which validates them and stores them in its own cache: the cache never has to
+be on storage the workers share, and a value is written once, by one process, with the
+cache's atomic rename.
 
-A node is submitted as soon as the nodes it reads are (``chains_tasks``: the
-run starts tasks ahead, see :func:`~graphvision.execution.scheduler.run_tasks`), with
-their Dask futures in its arguments in place of their values: Dask passes
-results from worker to worker, and a chain runs at the cluster's pace while
-the client takes each result as it lands (a round trip through the client
-per node made a chain cost 1.9 times raw Dask's).
+A node is submitted as soon as the nodes it reads are (``chains_tasks``: the run starts
+tasks ahead, see :func:`~graphvision.execution.scheduler.run_tasks`), with their Dask
+futures in its arguments in place of their values: Dask passes results from worker to
+worker, and a chain runs at the cluster's pace while the client takes each result as it
+lands (a round trip through the client per node made a chain cost 1.9 times raw Dask's).
 
-Results are fetched where it costs least. A task submitted while others are
-in flight has its result awaited on the client's event loop, so many results
-are fetched at once (a blocking fetch per task, one after another, made
-independent tasks cost twice what raw Dask's ``gather`` costs); a task submitted
-alone (a chain) is fetched by Dask's callback thread, one thread hop fewer.
+Results are fetched where it costs least. A task submitted while others are in flight
+has its result awaited on the client's event loop, so many results are fetched at once
+(a blocking fetch per task, one after another, made independent tasks cost twice what
+raw Dask's ``gather`` costs); a task submitted alone (a chain) is fetched by Dask's
+callback thread, one thread hop fewer.
 
-Without a client or an address, the executor starts a ``LocalCluster`` in a
-background thread when something first needs it: the files a batch's client
-runs while the workers are not ready
-(:mod:`graphvision.execution.batch_lanes`: ``client_files``, on for Dask) run
-meanwhile; what needs the cluster waits for it. A batch runs its first file
-before, then forks the cluster's workers from the client when that is safe
-(:mod:`graphvision.execution.dask_fork`), so they import nothing. A value shared
-before it has started (:meth:`DaskExecutor.share`) travels with the first task
-that reads it. A batch's files go several to a task
-(:mod:`graphvision.execution.dask_files`).
+Without a client or an address, the executor starts a ``LocalCluster`` in a background
+thread when something first needs it: the files a batch's client runs while the workers
+are not ready (:mod:`graphvision.execution.batch_lanes`: ``client_files``, on for Dask)
+run meanwhile; what needs the cluster waits for it. A batch runs its first file before,
+then forks the cluster's workers from the client when that is safe
+(:mod:`graphvision.execution.dask_fork`), so they import nothing. A value shared before
+it has started (:meth:`DaskExecutor.share`) travels with the first task that reads it. A
+batch's files go several to a task (:mod:`graphvision.execution.dask_files`). A worker
+importing a script that starts a cluster again is refused (``batch_guard``).
 
-A worker that dies while it runs a node is replaced by Dask and the node is
-run again on another worker (``retries``), so one lost worker costs one node,
-not the run. Dask is an optional dependency (``pip install
-graphvision[dask]``), imported only when this executor is made.
+A worker that dies while it runs a node is replaced by Dask and the node is run again on
+another worker (``retries``), so one lost worker costs one node, not the run. Dask is an
+optional dependency (``pip install graphvision[dask]``), imported only when this executor
+is made.
 """
 
 from __future__ import annotations
@@ -53,6 +50,7 @@ from concurrent.futures import Future
 from typing import Any
 
 from graphvision.errors import GraphvisionError
+from graphvision.execution.batch_guard import guard_hint, refuse_in_bootstrap
 from graphvision.execution.dask_files import FILES_PER_TASK, GROUPS_PER_THREAD, FileGroups
 from graphvision.execution.dask_fork import ForkedWorkers, start_forked_cluster
 from graphvision.execution.dask_worker import on_worker, shared
@@ -149,6 +147,7 @@ class DaskExecutor:
             if self._closing:  # shut down before it started: the client says so
                 self._started.set()
                 return
+            refuse_in_bootstrap("a local Dask cluster")  # in a worker importing the script
             _STARTING.add(self)
             _wait_for_starts_at_exit()
             self._starter = threading.Thread(
@@ -185,8 +184,9 @@ class DaskExecutor:
             error = self._start_error
             if error is None:
                 raise DaskUnavailableError("this Dask executor has been shut down")
+            hint = guard_hint() if self._forked is None else ""  # spawned workers
             raise DaskUnavailableError(
-                f"the local Dask cluster did not start ({type(error).__name__}: {error})"
+                f"the local Dask cluster did not start ({type(error).__name__}: {error}){hint}"
             ) from error
         return self._client
 

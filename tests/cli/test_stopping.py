@@ -4,7 +4,8 @@ An invalid pipeline, input, override or output makes no folder for ``run``, ``ru
 and ``sweep`` (exit 2); a batch whose pattern matches nothing neither. Stopped at any
 moment (SIGINT: exit 130, SIGTERM: exit 143, for every command), a command removes every
 folder it made, parents included, unless it holds what was finished (a batch's finished
-files, a sweep's finished combinations, with their summary).
+files, a sweep's finished combinations, with their summary); a batch always leaves its
+``batch.csv``, which lists every file, done or not, even when none is done yet.
 """
 
 from __future__ import annotations
@@ -144,7 +145,12 @@ def test_a_stopped_command_exits_with_its_signal_and_leaves_no_folder(
     _, err = process.communicate(timeout=60)
     assert process.returncode == status, err
     assert err.strip().splitlines()[-1].startswith(f"{word} after") and "Traceback" not in err
-    assert not (tmp_path / "a").exists()
+    if kind == "batch":  # its summary says no file is done; no file's folder is left
+        rows = list(csv.DictReader((out / "batch.csv").open()))
+        assert sorted(row["status"] for row in rows) == ["interrupted", "not run"]
+        assert {path.name for path in out.iterdir()} == {"batch.csv", "batch.html"}
+    else:
+        assert not (tmp_path / "a").exists()
 
 
 def test_a_run_stopped_while_writing_its_folder_removes_the_folders_it_made(
