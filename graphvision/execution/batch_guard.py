@@ -74,7 +74,7 @@ def guard_hint() -> str:
 def _main_script() -> str | None:
     """The file a spawned worker imports as the client's main module, if any (none for
     ``python -c``, a notebook or ``python -m package``)."""
-    main = sys.modules.get("__mp_main__") or sys.modules.get("__main__")  # a worker's, first
+    main = sys.modules.get("__mp_main__" if bootstrapping() else "__main__")  # as a worker
     spec = getattr(main, "__spec__", None)
     name = getattr(spec, "name", None)
     if name is not None and (name == "__main__" or name.endswith(".__main__")):

@@ -29,15 +29,24 @@ from .test_batch import _counting_graph, photo
 DEADLINE = 60.0
 
 
-def _one_file_batch(tmp_path: Path) -> BatchRun:
+def _one_file_batch(tmp_path: Path, pool: Any = None) -> BatchRun:
     """A batch of one file whose folder holds output ``score``, not started."""
     folder = tmp_path / "out" / "a"
-    pool = SyncExecutor()
+    pool = SyncExecutor() if pool is None else pool
     batch = BatchRun(
-        gv.Graph("g"), [tmp_path / "a.png"], [folder], "image", {}, pool, True, NO_PAGES
-    )
+        gv.Graph("g"), [tmp_path / "a.png"], [folder], "image", {}, pool, True, NO_PAGES,
+        tmp_path / "out",
+    )  # fmt: skip
     batch.options = {"outputs": ["score"]}
     return batch
+
+
+def _dask() -> Any:
+    """A Dask executor, not started (its workers may be on other machines)."""
+    pytest.importorskip("distributed", reason="Dask is an optional extra: graphvision[dask]")
+    from graphvision.execution.dask import DaskExecutor
+
+    return DaskExecutor()
 
 
 def _write_half_and_hang(flag: StopFlag, folder: Path, ready: Any) -> None:
@@ -51,9 +60,15 @@ def _write_half_and_hang(flag: StopFlag, folder: Path, ready: Any) -> None:
         threading.Event().wait(DEADLINE)
 
 
-def test_a_writer_killed_while_it_writes_is_not_waited_for_and_its_folder_is_cleared(tmp_path):
-    batch = _one_file_batch(tmp_path)
-    assert batch.stop is not None
+@pytest.mark.parametrize("executor", ["processes", "dask"])
+def test_a_writer_killed_while_it_writes_is_not_waited_for_and_its_folder_is_cleared(
+    tmp_path, executor
+):
+    """kill -9, or SIGTERM to the process group (a Dask worker forked from the client ends
+    on it at once): the staging folder and the outputs it placed are removed."""
+    batch = _one_file_batch(tmp_path, _dask() if executor == "dask" else None)
+    if executor == "dask":  # on the storage the workers write to, not this machine's /tmp
+        assert Path(batch.stop.folder).parent == tmp_path / "out"
     folder = batch.folders[0]
     fork = multiprocessing.get_context("fork")
     ready = fork.Event()
