@@ -142,7 +142,9 @@ class BatchRun:
         if isinstance(kept, BatchItem):  # written whole before its worker died
             return FileOutcome(kept)
         if kept is None:  # its worker died writing it
-            clear_unfinished(folder, self.wanted_outputs())
+            clear_unfinished(
+                folder, self.wanted_outputs(), placed=self.stop.placed_record(name, folder)
+            )
         self.stop.dropped(folder)
         if could_not_start(died) and self.job_sent is not None and not self.stopped:
             return FileOutcome(self.run_in_client(index, "in the client: no worker could start"))
@@ -171,7 +173,8 @@ class BatchRun:
             if kept is not None:  # whole, its result not (yet) here: counted from the claim
                 self.finished[k] = kept
             else:  # its writer died half-way (SIGTERM, kill -9): what it wrote goes
-                clear_unfinished(self.folders[k], self.wanted_outputs())
+                placed = self.stop.placed_record(name, self.folders[k])
+                clear_unfinished(self.folders[k], self.wanted_outputs(), placed=placed)
         return dict(self.finished)
 
     def run_in_client(

@@ -50,6 +50,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from graphvision.execution.batch_files import BatchItem
+from graphvision.execution.folders import RECORD
 
 try:
     import fcntl
@@ -63,28 +64,34 @@ INTERRUPTED = "the batch stopped while this file ran; re-run the batch to finish
 STOP_FOLDER = ".graphvision-stop-"  # a Dask batch's flag, in its output folder
 _STOPPED = "stopped"
 _CLAIM = "writing-"
+_RECORD_KEY = "record_before"  # in a claim: the folder's record.json digest when claimed
 
 
 @dataclass
 class Claim:
-    """A writer's claim on a folder (see the module docstring); true when it may write."""
+    """A writer's claim on a folder (see the module docstring); true when it may write.
+    ``record`` is the SHA-256 of the folder's ``record.json`` when it was claimed (None:
+    there was none), noted in the claim from the start."""
 
     allowed: bool
     path: Path | None = None
     fd: int = -1
     done: bool = False
+    record: str | None = None
 
     def __bool__(self) -> bool:
         return self.allowed
 
     def written(self, item: BatchItem) -> None:
         """The folder is written (whole, or cleared when the file failed): ``item`` is kept
-        in the claim, for a client whose result from this writer never comes."""
+        in the claim, for a client whose result from this writer never comes (written over
+        what the claim held, which is shorter: never an empty claim, even if killed now)."""
         self.done = True
         if self.fd < 0:
             return
-        os.ftruncate(self.fd, 0)
-        os.pwrite(self.fd, json.dumps(_item_json(item)).encode(), 0)
+        data = json.dumps({**_item_json(item), _RECORD_KEY: self.record}).encode()
+        os.pwrite(self.fd, data, 0)
+        os.ftruncate(self.fd, len(data))
 
 
 def _item_json(item: BatchItem) -> dict:
@@ -96,6 +103,14 @@ def _item_json(item: BatchItem) -> dict:
         "error": item.error,
         "scalars": item.scalars,
     }
+
+
+def _record_digest(folder: str | Path) -> str | None:
+    """The SHA-256 of ``folder``'s ``record.json``, or None when it has none."""
+    try:
+        return hashlib.sha256(Path(folder, RECORD).read_bytes()).hexdigest()
+    except OSError:
+        return None
 
 
 def _json_item(text: str) -> BatchItem | None:
@@ -138,14 +153,16 @@ class StopFlag:
         """What a claim on the output folder ``folder`` is called."""
         return _CLAIM + hashlib.blake2b(str(folder).encode(), digest_size=10).hexdigest()
 
-    def _locked_claim(self, folder: str | Path) -> tuple[Path, int] | None:
-        """A new claim on ``folder``, locked by this writer before it has its name (so no
-        reader ever sees it unlocked while its writer lives); None when the flag is gone."""
+    def _locked_claim(self, folder: str | Path, record: str | None) -> tuple[Path, int] | None:
+        """A new claim on ``folder`` noting its ``record`` digest, locked by this writer before
+        it has its name (so no reader ever sees it unlocked while its writer lives); None
+        when the flag is gone."""
         try:
             fd, temp = tempfile.mkstemp(prefix=".claim-", dir=self.folder)
         except OSError:  # the flag's folder is gone: the batch has ended
             return None
         try:
+            os.write(fd, json.dumps({_RECORD_KEY: record}).encode())
             if fcntl is not None:
                 fcntl.flock(fd, fcntl.LOCK_EX)
             claim = Path(self.folder, self.name(folder))
@@ -162,12 +179,14 @@ class StopFlag:
         """Whether to write ``folder`` now (false once the batch has stopped, by the flag or
         by ``stopped()``); claimed while the caller writes it. The caller calls
         :meth:`Claim.written` once the folder is written; else the claim is dropped."""
-        locked = self._locked_claim(folder)
+        record = _record_digest(folder)
+        locked = self._locked_claim(folder, record)
         if locked is None:
             yield Claim(False)
             return
         path, fd = locked
-        claim = Claim(not (self.is_raised() or (stopped is not None and stopped())), path, fd)
+        allowed = not (self.is_raised() or (stopped is not None and stopped()))
+        claim = Claim(allowed, path, fd, record=record)
         try:
             if not claim:
                 path.unlink(missing_ok=True)
@@ -223,6 +242,17 @@ class StopFlag:
             with contextlib.suppress(OSError):
                 found[name] = _json_item(Path(self.folder, name).read_text())
         return found
+
+    def placed_record(self, name: str, folder: str | Path) -> bool:
+        """Whether the writer of claim ``name``, which died half-way (:meth:`left` gives it
+        None), had replaced ``folder``'s ``record.json`` (the last file a run moves into
+        place): the run there is then that writer's, not the previous one."""
+        try:
+            before = json.loads(Path(self.folder, name).read_text())[_RECORD_KEY]
+        except (OSError, ValueError, KeyError, TypeError):
+            return False  # not known: the record there is taken for the previous run's
+        now = _record_digest(folder)
+        return now is not None and now != before
 
     def remove(self) -> None:
         shutil.rmtree(self.folder, ignore_errors=True)

@@ -155,12 +155,13 @@ def remove_empty_folders(folders: Iterable[Path]) -> None:
             folder.rmdir()
 
 
-def clear_unfinished(directory: Path, outputs: Iterable[str]) -> None:
+def clear_unfinished(directory: Path, outputs: Iterable[str], *, placed: bool = False) -> None:
     """Leave ``directory`` as it was before a writer that died half-way through it: its
     staging folders removed, the files it placed (output files of ``outputs`` and pages that
     the record there does not list, or all of them when the record's own files no longer
-    match their digests: the previous run stays in ``history/``), then the folder itself
-    when nothing is left in it."""
+    match their digests, or when the writer had ``placed`` the record itself, dying just
+    after: the previous run stays in ``history/``), then the folder itself when nothing is
+    left in it."""
     if not directory.is_dir() or directory.is_symlink():
         return
     for left in directory.glob(f"{STAGING}*"):
@@ -172,10 +173,14 @@ def clear_unfinished(directory: Path, outputs: Iterable[str]) -> None:
     record = _previous_record(directory)
     found = record.get("file_sha256")
     digests: dict[str, Any] = found if isinstance(found, dict) else {}
-    intact = bool(owned) and all(
-        (directory / name).is_file() and digests.get(name) == file_sha256(directory / name)
-        for name in owned - {RECORD, REPORT, REPORT_HTML}
-        if name in digests
+    intact = (
+        bool(owned)
+        and not placed
+        and all(
+            (directory / name).is_file() and digests.get(name) == file_sha256(directory / name)
+            for name in owned - {RECORD, REPORT, REPORT_HTML}
+            if name in digests
+        )
     )
     stems = set(outputs)
     for path in directory.iterdir():

@@ -23,6 +23,7 @@ from graphvision.execution.batch_files import NO_PAGES, BatchItem
 from graphvision.execution.batch_run import BatchRun
 from graphvision.execution.batch_stop import StopFlag
 from graphvision.execution.executors import SyncExecutor, WorkerDiedError
+from graphvision.execution.provenance import file_sha256
 
 from .test_batch import _counting_graph, photo
 
@@ -229,6 +230,27 @@ def test_a_write_cut_short_in_the_client_leaves_its_claim_for_the_stop_to_clear(
         raise KeyboardInterrupt
     try:
         assert batch.stop.left() == {StopFlag.name(folder): None}  # half-written, no writer
+        assert batch.stop_writers() == {}
+        assert not folder.exists()
+    finally:
+        batch.remove_stop_flag()
+
+
+def test_a_writer_killed_just_after_placing_its_record_leaves_no_folder(tmp_path):
+    """Its folder is whole, but its claim never got the file's item (SIGTERM to the process
+    group, between the record's move into place and the claim's update): the run there is
+    the writer's, not a previous one to keep, so it goes and the file is listed not done."""
+    batch = _one_file_batch(tmp_path)
+    folder = batch.folders[0]
+    with pytest.raises(KeyboardInterrupt), batch.stop.writing(folder, None) as claim:
+        assert claim
+        folder.mkdir(parents=True)
+        (folder / "score.json").write_text("1.0")
+        digest = file_sha256(folder / "score.json")
+        record = {"files": {"score": ["score.json"]}, "file_sha256": {"score.json": digest}}
+        (folder / "record.json").write_text(json.dumps(record))  # moved in last: whole
+        raise KeyboardInterrupt  # killed before claim.written
+    try:
         assert batch.stop_writers() == {}
         assert not folder.exists()
     finally:
