@@ -182,12 +182,12 @@ def run_batch(
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
     cache = Cache(MemoryStore()) if one_task_per_file and cache is None else cache  # for seeds
-    made = missing_folders(out_dir, *folders)
     batch = BatchRun(
         graph, paths, folders, input, inputs or {}, pool, one_task_per_file, pages, out_dir
     )
     batch.options = dict(registry=registry, outputs=outputs, overrides=overrides, executor=pool)
     batch.options.update(cache=cache, keep_going=keep_going, hooks=hooks)
+    made = missing_folders(out_dir, *folders)
     own = isinstance(executor, str)
     grouped = getattr(pool, "files_at_once", 0) if one_task_per_file else 0  # Dask's
     width = files_at_once or grouped or executor_width(pool) * (2 if one_task_per_file else 1)
@@ -227,6 +227,7 @@ def _run_files(
     so far are still summarised and the folders made for unfinished files removed."""
     items: list[BatchItem | None] = [None] * len(batch.paths)
     try:
+        batch.stop.create()  # from here on, a stop is summarised
         stream = _stream(batch, width)
         for done, (index, item) in enumerate(stream, start=1):
             items[index] = item

@@ -78,8 +78,9 @@ class BatchRun:
         self.started: set[int] = set()
         self.finished: dict[int, BatchItem] = {}  # as they complete, whoever runs them
         self.stopped = False
-        # on Dask, whose workers may be on other machines, in the output folder they share
-        self.stop = StopFlag.make(out_dir if hasattr(pool, "share") else None)
+        # made as the files start; on Dask, whose workers may be on other machines, in the
+        # output folder they share
+        self.stop = StopFlag.planned(out_dir if hasattr(pool, "share") else None)
         self.workers_ready = threading.Event()  # a worker has started (or could not)
 
     def run_one(self, index: int) -> BatchItem:

@@ -45,6 +45,7 @@ import signal
 import tempfile
 import threading
 import time
+import uuid
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -131,13 +132,26 @@ class StopFlag:
         self.folder = folder
 
     @classmethod
-    def make(cls, inside: Path | None = None) -> StopFlag:
-        """A new flag: a folder in the system's temporary folder, or a hidden one ``inside``
-        a folder (made if missing: a Dask batch's output folder, which its workers share)."""
+    def planned(cls, inside: Path | None = None) -> StopFlag:
+        """A new flag, made by :meth:`create`: a folder in the system's temporary folder,
+        or a hidden one ``inside`` a folder (a Dask batch's output folder, which its
+        workers share)."""
+        token = uuid.uuid4().hex[:12]
         if inside is None:
-            return cls(tempfile.mkdtemp(prefix="graphvision-batch-"))
-        inside.mkdir(parents=True, exist_ok=True)
-        return cls(tempfile.mkdtemp(prefix=STOP_FOLDER, dir=inside))
+            return cls(str(Path(tempfile.gettempdir(), f"graphvision-batch-{token}")))
+        return cls(str(inside / f"{STOP_FOLDER}{token}"))
+
+    @classmethod
+    def make(cls, inside: Path | None = None) -> StopFlag:
+        flag = cls.planned(inside)
+        flag.create()
+        return flag
+
+    def create(self) -> None:
+        """Make the flag's folder (and the folders it is in), down: no writer may write
+        before (a batch makes it as its files start, so a Ctrl-C before leaves nothing)."""
+        Path(self.folder).parent.mkdir(parents=True, exist_ok=True)
+        Path(self.folder).mkdir(mode=0o700)
 
     def raise_(self) -> None:
         """The batch has stopped: no writer starts a folder from now on."""

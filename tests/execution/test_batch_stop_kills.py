@@ -39,6 +39,7 @@ def _one_file_batch(tmp_path: Path, pool: Any = None) -> BatchRun:
         tmp_path / "out",
     )  # fmt: skip
     batch.options = {"outputs": ["score"]}
+    batch.stop.create()  # as its files start
     return batch
 
 
