@@ -106,6 +106,11 @@ def _item_json(item: BatchItem) -> dict:
     }
 
 
+def _unwritten(fd: int) -> bool:
+    """Whether the claim open as ``fd`` holds no file's item yet."""
+    return _json_item(os.pread(fd, 1 << 16, 0).decode(errors="replace")) is None
+
+
 def _record_digest(folder: str | Path) -> str | None:
     """The SHA-256 of ``folder``'s ``record.json``, or None when it has none."""
     try:
@@ -177,8 +182,9 @@ class StopFlag:
             return None
         try:
             os.write(fd, json.dumps({_RECORD_KEY: record}).encode())
-            if fcntl is not None:
-                fcntl.flock(fd, fcntl.LOCK_EX)
+            if fcntl is not None:  # a file system without locks: alive until written
+                with contextlib.suppress(OSError):
+                    fcntl.flock(fd, fcntl.LOCK_EX)
             claim = Path(self.folder, self.name(folder))
             os.replace(temp, claim)
         except OSError:
@@ -221,17 +227,22 @@ class StopFlag:
         return set()
 
     def writer_alive(self, name: str) -> bool:
-        """Whether the claim ``name`` is locked: its writer lives and is writing."""
+        """Whether the claim ``name`` is locked: its writer lives and is writing. Where there
+        are no locks (Windows, a file system without them), a claim is taken for a live
+        writer's until it holds its file's item (a dead writer is waited for, up to the
+        deadline of :meth:`wait`)."""
         try:
             fd = os.open(Path(self.folder, name), os.O_RDONLY)
         except OSError:
             return False  # dropped
         try:
-            if fcntl is None:  # pragma: no cover - Windows: alive until written
-                return os.fstat(fd).st_size == 0
+            if fcntl is None:  # pragma: no cover - Windows
+                return _unwritten(fd)
             fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
         except BlockingIOError:
             return True
+        except OSError:  # no locks on this file system
+            return _unwritten(fd)
         finally:
             os.close(fd)
         return False

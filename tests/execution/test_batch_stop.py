@@ -5,6 +5,7 @@ and one being written when the batch stops is finished and counted."""
 from __future__ import annotations
 
 import csv
+import errno
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
@@ -12,6 +13,7 @@ from typing import Any
 import pytest
 
 import graphvision as gv
+from graphvision.execution import batch_stop
 from graphvision.execution.batch_files import BatchItem
 from graphvision.execution.batch_stop import StopFlag
 
@@ -101,4 +103,27 @@ def test_a_folder_being_written_at_the_stop_is_finished_and_counted(tmp_path):
     finally:
         release.set()
         thread.join()
+        flag.remove()
+
+
+def test_without_locks_a_writer_still_writes_and_its_claim_is_live_until_written(
+    tmp_path, monkeypatch
+):
+    """A Dask batch's claims are on the storage its workers share: one without locks (flock
+    fails there) must not stop every folder from being written."""
+
+    def no_locks(fd: int, operation: int) -> None:
+        raise OSError(errno.ENOLCK, "No locks available")
+
+    monkeypatch.setattr(batch_stop.fcntl, "flock", no_locks)
+    flag = StopFlag.make(tmp_path / "out")
+    name = StopFlag.name(tmp_path / "out" / "a")
+    try:
+        with flag.writing(tmp_path / "out" / "a", None) as claim:
+            assert claim  # it writes, unlocked
+            assert flag.writer_alive(name)  # taken for a live writer's: waited for
+            claim.written(BatchItem(tmp_path / "a.png", tmp_path / "out" / "a"))
+        assert not flag.writer_alive(name)
+        assert flag.left()[name].status == "ok"
+    finally:
         flag.remove()
