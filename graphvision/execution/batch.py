@@ -187,17 +187,13 @@ def run_batch(
     )
     batch.options = dict(registry=registry, outputs=outputs, overrides=overrides, executor=pool)
     batch.options.update(cache=cache, keep_going=keep_going, hooks=hooks)
-    made = missing_folders(out_dir, *folders)
-    own = isinstance(executor, str)
+    made, own = missing_folders(out_dir, *folders), isinstance(executor, str)
     grouped = getattr(pool, "files_at_once", 0) if one_task_per_file else 0  # Dask's
     width = files_at_once or grouped or executor_width(pool) * (2 if one_task_per_file else 1)
     batch.file_threads = width > 1 and not one_task_per_file and not encodes_values(pool)
     default = getattr(pool, "client_files", hasattr(pool, "preload"))
     batch.client_files = one_task_per_file and (default if client_files is None else client_files)
-    try:
-        finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
-    finally:
-        batch.remove_stop_flag()
+    finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
     if own:
         pool.shutdown()
     return BatchResult(finished, _summarise(finished, out_dir, pages, stale), *batch.transferred())
@@ -237,6 +233,8 @@ def _run_files(
         with signals_held():  # a second Ctrl-C does not cut the stop short
             _stop(batch, items, own, where)
         raise
+    finally:
+        batch.remove_stop_flag()
     return [item for item in items if item is not None]
 
 
