@@ -32,6 +32,11 @@ folder in the batch's output folder (``.graphvision-stop-*``), on the storage
 the workers write the files' folders to (a claim's lock is then the shared
 file system's: ``flock`` on a local disk, NFS's locks over NFS); a task's
 files that start after the stop are not run at all.
+
+The flag's own folder holds an ``owner`` file that the client keeps locked
+while the batch runs. A client killed with ``kill -9`` cannot remove its
+flag; the next batch that makes a flag beside it removes every sibling flag
+whose owner lock it can take (its client is dead), and nothing else.
 """
 
 from __future__ import annotations
@@ -66,6 +71,9 @@ STOP_FOLDER = ".graphvision-stop-"  # a Dask batch's flag, in its output folder
 _STOPPED = "stopped"
 _CLAIM = "writing-"
 _RECORD_KEY = "record_before"  # in a claim: the folder's record.json digest when claimed
+_TOKEN = 12  # hexadecimal digits ending a flag's name
+_OWNER = "owner"  # in a flag's folder, locked by its client while the batch runs
+_OWNED: dict[str, int] = {}  # this process's flags: folder -> the owner file's descriptor
 
 
 @dataclass
@@ -141,7 +149,7 @@ class StopFlag:
         """A new flag, made by :meth:`create`: a folder in the system's temporary folder,
         or a hidden one ``inside`` a folder (a Dask batch's output folder, which its
         workers share)."""
-        token = uuid.uuid4().hex[:12]
+        token = uuid.uuid4().hex[:_TOKEN]
         if inside is None:
             return cls(str(Path(tempfile.gettempdir(), f"graphvision-batch-{token}")))
         return cls(str(inside / f"{STOP_FOLDER}{token}"))
@@ -157,6 +165,43 @@ class StopFlag:
         before (a batch makes it as its files start, so a Ctrl-C before leaves nothing)."""
         Path(self.folder).parent.mkdir(parents=True, exist_ok=True)
         Path(self.folder).mkdir(mode=0o700)
+        if fcntl is not None:
+            with contextlib.suppress(OSError):  # a file system without locks: nothing to sweep
+                self._own()
+                self._sweep()
+
+    def _own(self) -> None:
+        """The owner file, locked before it has its name (a sweep never sees it unlocked
+        while this client lives)."""
+        fd, temp = tempfile.mkstemp(prefix=".owner-", dir=self.folder)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            os.replace(temp, Path(self.folder, _OWNER))
+        except OSError:
+            os.close(fd)
+            raise
+        _OWNED[self.folder] = fd
+
+    def _sweep(self) -> None:
+        """Remove the flags beside this one (same name but for the token) whose owner lock
+        can be taken: their clients died before removing them. A flag without an owner file
+        (being made, or made by an older version) is left alone."""
+        here = Path(self.folder)
+        prefix = here.name[:-_TOKEN]
+        for other in here.parent.glob(f"{prefix}*"):
+            if other == here or other.is_symlink() or not other.is_dir():
+                continue
+            try:
+                fd = os.open(other / _OWNER, os.O_RDONLY)
+            except OSError:
+                continue
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                continue  # its client is alive
+            finally:
+                os.close(fd)
+            shutil.rmtree(other, ignore_errors=True)
 
     def raise_(self) -> None:
         """The batch has stopped: no writer starts a folder from now on."""
@@ -281,6 +326,9 @@ class StopFlag:
 
     def remove(self) -> None:
         shutil.rmtree(self.folder, ignore_errors=True)
+        fd = _OWNED.pop(self.folder, None)
+        if fd is not None:
+            os.close(fd)
 
 
 @contextlib.contextmanager

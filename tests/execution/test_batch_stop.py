@@ -127,3 +127,48 @@ def test_without_locks_a_writer_still_writes_and_its_claim_is_live_until_written
         assert flag.left()[name].status == "ok"
     finally:
         flag.remove()
+
+
+def test_a_flag_left_by_a_killed_client_is_removed_by_the_next_batch_and_nothing_else(
+    tmp_path,
+):
+    """A client killed with ``kill -9`` leaves its flag; the next flag made beside it removes
+    it (its owner lock is free), and keeps a live client's flag, a flag without an owner
+    file, and a folder that is no flag."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    made = tmp_path / "made"
+    child = subprocess.Popen(
+        [sys.executable, "-c",
+         "import sys, time; from pathlib import Path\n"
+         "from graphvision.execution.batch_stop import StopFlag\n"
+         "flag = StopFlag.make(Path(sys.argv[1]))\n"
+         "Path(sys.argv[2]).write_text(flag.folder)\n"
+         "time.sleep(60)", str(tmp_path), str(made)],
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 30  # for the child to make its flag
+        while not (made.exists() and made.read_text()):
+            assert child.poll() is None and time.monotonic() < deadline, "no flag made"
+            time.sleep(0.05)
+        dead = made.read_text()
+    finally:
+        os.kill(child.pid, signal.SIGKILL)
+        child.wait(timeout=30)
+    alive = StopFlag.make(tmp_path)
+    unowned = tmp_path / f"{batch_stop.STOP_FOLDER}0123456789ab"
+    unowned.mkdir()
+    other = tmp_path / "photo-1"
+    other.mkdir()
+    newest = StopFlag.make(tmp_path)
+    try:
+        assert not os.path.exists(dead)
+        for kept in (alive.folder, unowned, other, newest.folder):
+            assert os.path.isdir(kept), kept
+    finally:
+        alive.remove()
+        newest.remove()
