@@ -99,19 +99,28 @@ def run_tasks(
         What ``quick`` says, read without a call: a task is quick when its op is in
         the set (read as it changes). The tasks then run one by one in this thread,
         without the loop, as long as the next is quick; the loop takes over at the
-        first that is not.
+        first that is not, and hands back when none is running and the next is quick.
     """
     waiting, dependents = counted or count_dependencies(dependencies)
     loop = _Loop(dependencies, start, finish, keep_going, run_here, quick, limit, ahead)
     loop.waiting, loop.dependents = dict(waiting), dependents
     loop.ready.extend(compress(loop.waiting, map(not_, loop.waiting.values())))  # (in C)
     fast = None if quick is EVERY_TASK else quick_ops
-    if run_here and (fast or quick is EVERY_TASK) and _one_by_one(loop, run_here, fast):
-        return [n for n in dependencies if n not in loop.started or n in loop.blocked]
-    loop.unstarted = dict(loop.waiting)  # (only ``ahead`` reads it: never after one by one)
-    loop.launch()
-    while loop.running:
-        loop.step()
+    if run_here and (fast or quick is EVERY_TASK):
+        loop.rejoin = True  # the loop hands quick tasks back when nothing else is running
+        while not _one_by_one(loop, run_here, fast):
+            if ahead:  # none is running: every task started has finished
+                loop.unstarted = dict(loop.waiting)
+            loop.launch()
+            while loop.running:
+                loop.step()
+            if not loop.ready:
+                break
+    else:
+        loop.unstarted = dict(loop.waiting)  # (only ``ahead`` reads it)
+        loop.launch()
+        while loop.running:
+            loop.step()
     return [name for name in dependencies if name not in loop.started or name in loop.blocked]
 
 
@@ -198,6 +207,7 @@ class _Loop:
         self.blocked: set[str] = set()
         self.stopping = False
         self.running = 0
+        self.rejoin = False  # quick tasks go back to :func:`_one_by_one` when none runs
 
     def report_to_loop(self, name: str) -> Callable[[Future], None]:
         return lambda done: self.finished.put((name, done))
@@ -216,8 +226,9 @@ class _Loop:
         while self.ready:
             name = self.ready[0]
             if self.runs_here(name):
-                if self.here:  # one is waiting to run here: it may show the next is not quick
-                    return
+                if self.here or (self.rejoin and not self.running):
+                    return  # one is waiting to run here (it may show the next is not quick),
+                    # or none runs: run_tasks runs them one by one again, without the steps
                 self.ready.popleft()
                 self.started.add(name)
                 self.running += 1

@@ -197,3 +197,29 @@ def test_quick_tasks_run_here_one_by_one_until_the_next_is_not_quick():
         quick=lambda name: ops[name] in quick, quick_ops=(ops, quick), limit=4,
     )  # fmt: skip
     assert (here, handed, skipped) == (["a", "b", "d"], ["c", "e"], [])
+
+
+def test_quick_tasks_go_back_to_one_by_one_once_nothing_runs_on_the_executor():
+    """After a task the executor ran, the quick tasks that follow it run one by one again,
+    without the loop's steps (which ask ``quick`` about every task they place)."""
+    dependencies = {f"t{k}": {f"t{k - 1}"} if k else set() for k in range(40)}
+    ops = dict.fromkeys(dependencies, "fast") | {"t1": "slow", "t30": "slow"}
+    quick, asked, here, handed = {"fast"}, [], [], []
+
+    def ask(name: str) -> bool:
+        asked.append(name)
+        return ops[name] in quick
+
+    def start(name: str) -> Future:
+        handed.append(name)
+        done: Future = Future()
+        done.set_result(name)
+        return done
+
+    skipped = run_tasks(
+        dependencies, start, lambda name, future: True, run_here=lambda n: here.append(n) or True,
+        quick=ask, quick_ops=(ops, quick), limit=4,
+    )  # fmt: skip
+    assert skipped == [] and handed == ["t1", "t30"]
+    assert here == [name for name in dependencies if name not in handed]
+    assert asked == ["t1", "t2", "t30", "t31"]  # the loop placed these; the rest ran one by one
