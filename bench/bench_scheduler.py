@@ -14,7 +14,8 @@ the peak memory traced meanwhile (``tracemalloc``, a separate untimed pass).
 Phases (``--phases``): where a run's time goes, in CPU µs per node (``time.process_time``,
 which load disturbs less than wall time), best of 7 runs: the inputs' and outputs' keys,
 the nodes' records, the scheduler with the nodes themselves, ground-truth checks,
-provenance, and the rest (BLAS limit, executor, outputs).
+provenance, the outputs with their summaries, and the rest (arguments, BLAS limit,
+executor).
 
 Run: ``python bench/bench_scheduler.py [--phases | --graphvision]`` (``make bench`` runs every
 benchmark; ``--graphvision`` gives graphvision's columns alone, with the load average).
@@ -180,6 +181,7 @@ def phase_rows(registry: gv.Registry, repeats: int = 7) -> list[str]:
         (run_module, "run_tasks", "scheduler + nodes"),
         (run_module, "outputs_with_truth", "truth"),
         (run_module, "describe_run", "provenance"),
+        (RunState, "result", "outputs"),
     ]
     originals = [(owner, name, getattr(owner, name)) for owner, name, _ in wrapped]
 
@@ -193,7 +195,7 @@ def phase_rows(registry: gv.Registry, repeats: int = 7) -> list[str]:
 
         return call
 
-    labels = ["keys", "records", "scheduler + nodes", "truth", "provenance"]
+    labels = ["keys", "records", "scheduler + nodes", "truth", "provenance", "outputs"]
     rows = [
         f"| shape | executor | total | {' | '.join(labels)} | rest |",
         "| --- | --- |" + " ---: |" * (len(labels) + 2),

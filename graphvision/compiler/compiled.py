@@ -6,6 +6,7 @@ nothing in it changes once made, so runs, sweeps and batches share it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -67,6 +68,29 @@ class Step:
             exact = only[1].python_type  # type: ignore[attr-defined]
         func, inputs = self.spec.func, tuple(self.inputs.items())
         return func, inputs, self.params, label, op, only, exact
+
+    @cached_property
+    def scalar_plan(
+        self,
+    ) -> tuple[
+        str, str, tuple[str, str], str, type[PortType], bool, tuple[tuple[str, str], ...], str
+    ]:
+        """What a run reads to store the node's one scalar output, in one tuple made once:
+        the node's name, its op, the value it makes and its port, the port's type, whether
+        the node is cached, the values it read (:attr:`read`) and its backend."""
+        assert self.only_output is not None  # (a node with one output only)
+        port, kind = self.only_output[0], self.only_output[1]
+        spec = self.spec
+        return (
+            self.name,
+            spec.id,
+            (self.name, port),
+            port,
+            kind,
+            spec.cache,
+            self.read,
+            spec.backend,
+        )
 
     @cached_property
     def read(self) -> tuple[tuple[str, str], ...]:
@@ -181,6 +205,11 @@ class CompiledGraph:
     def output_types(self) -> dict[str, type[PortType]]:
         """Each output's port type (:meth:`output_type`), made once."""
         return {name: self.output_type(name) for name in self.outputs}
+
+    @cached_property
+    def output_summaries(self) -> dict[str, Callable[[Any], str]]:
+        """Each output's summary function (its port type's ``summary``), made once."""
+        return {name: kind.summary for name, kind in self.output_types.items()}
 
     def output_type(self, name: str) -> type[PortType]:
         producer, port = self.outputs[name]

@@ -121,7 +121,7 @@ def run_tasks(
         loop.launch()
         while loop.running:
             loop.step()
-    return [name for name in dependencies if name not in loop.started or name in loop.blocked]
+    return loop.skipped(dependencies)
 
 
 def EVERY_TASK(name: str) -> bool:  # a constant that is a function
@@ -163,8 +163,8 @@ def _one_by_one(
         started.add(name)
         if run_here(name):
             for child in dependents[name]:
-                waiting[child] -= 1
-                if not waiting[child] and not stopping and child not in blocked:
+                left = waiting[child] = waiting[child] - 1
+                if not left and not stopping and child not in blocked:
                     ready.append(child)
             continue
         stack = [name]
@@ -208,6 +208,13 @@ class _Loop:
         self.stopping = False
         self.running = 0
         self.rejoin = False  # quick tasks go back to :func:`_one_by_one` when none runs
+
+    def skipped(self, dependencies: Mapping[str, Set[str]]) -> list[str]:
+        """The tasks that did not start or were skipped, in order (none, without a step per
+        task, when every task started and none was blocked)."""
+        if not self.blocked and len(self.started) == len(dependencies):
+            return []
+        return [n for n in dependencies if n not in self.started or n in self.blocked]
 
     def report_to_loop(self, name: str) -> Callable[[Future], None]:
         return lambda done: self.finished.put((name, done))

@@ -16,18 +16,20 @@ not start are made pending at the end (:meth:`RunState.records`).
 
 from __future__ import annotations
 
-import sys
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from collections.abc import Set as AbstractSet
 from concurrent.futures import Future
 from dataclasses import dataclass, field
+from itertools import repeat
+from operator import call, is_
 from typing import Any
 
 from graphvision.cache.keys import known_content_key
 from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, Schedule, Step
 from graphvision.errors import GraphvisionError, PortValueError
+from graphvision.execution.accept import accepted, invalid_output
 from graphvision.execution.encoded import submit_encoded
 from graphvision.execution.executors import (
     NODE_ERRORS,
@@ -38,7 +40,7 @@ from graphvision.execution.executors import (
     chains_tasks,
     encodes_values,
 )
-from graphvision.execution.inputs import freeze_value, value_bytes
+from graphvision.execution.inputs import value_bytes
 from graphvision.execution.limits import current_limits, start_on_own_thread
 from graphvision.execution.plan import chain_keys, plan_steps
 from graphvision.execution.record import (
@@ -49,19 +51,13 @@ from graphvision.execution.record import (
     intermediates,
     wrapped_failure,
 )
-from graphvision.values.known import checked, frozen_value, note, recall
-from graphvision.values.memory import frozen_in_place
 
 __all__ = ["RunState"]
 
 # About what handing a node to a thread and taking its result back costs (measured on
 # a fan-out of trivial nodes): a node faster than this gains nothing from a thread.
 _QUICK_SECONDS = 25e-6
-
-getrefcount = sys.getrefcount
-# What ``accept`` holds of a node's result: its argument, the value and getrefcount's
-# (Python 3.14 counts the stack otherwise: there, nothing is frozen in place)
-_OWN_REFS = 3 if sys.version_info < (3, 14) else -(2**20)
+_NONE = object()  # (a value not produced)
 
 
 @dataclass(eq=False)
@@ -260,9 +256,10 @@ class RunState:
         False when it failed."""
         step = self.compiled.steps[name]
         func, inputs, params, label, op, only, exact = step.call_plan
-        for hook in self.hooks:
-            hook.node_started(name=name, op=op)
-        values, kwargs, seconds = self.values, {}, -1.0
+        if self.hooks:
+            for hook in self.hooks:
+                hook.node_started(name=name, op=op)
+        values, kwargs, seconds, outputs = self.values, {}, -1.0, None
         for port, source in inputs:  # (a loop: a comprehension is a call more)
             kwargs[port] = values[source]
         if params:
@@ -270,17 +267,19 @@ class RunState:
         try:  # as on a worker: warnings and a fault name the node, a forked child is ended
             result, seconds = call_labelled(func, kwargs, label, op)
             if type(result) is exact:  # a scalar its port takes as it is (no call)
-                outputs = {only[0]: result}
+                pass
             elif only is None or not only[2]:
-                outputs = self.accept(step, result, 1)
+                outputs = accepted(step, result, 1, False)
             else:  # one scalar: nothing to split or freeze
                 try:
-                    outputs = {only[0]: only[1].validate(result)}
+                    result = only[1].validate(result)
                 except PortValueError as error:
-                    raise _invalid(only[0], error) from None
+                    raise invalid_output(only[0], error) from None
         except NODE_ERRORS as error:  # (when it began: read once it failed, not per node)
             self.started[name] = began_before(seconds)
             return self.failed(step, error)
+        if outputs is None:
+            return self.computed_scalar(step, result, seconds)
         return self.computed(step, outputs, seconds)
 
     def _submit_encoded(self, name: str, step: Step) -> Future:
@@ -303,7 +302,7 @@ class RunState:
             self.in_flight.pop(name, None)
         try:
             result, seconds = future.result()  # (the future holds the result too)
-            outputs = self.accept(step, result, 2)
+            outputs = accepted(step, result, 2, self.encoded)
         except NODE_ERRORS as error:
             return self.failed(step, error)
         return self.computed(step, outputs, seconds)
@@ -350,51 +349,43 @@ class RunState:
             hook.node_finished(name=name, op=spec.id, status="computed", seconds=seconds)
         return True
 
-    def accept(self, step: Step, result: Any, held: int = 0) -> dict[str, Any]:
-        """Validated, frozen outputs; an array only the caller (``held`` references) holds
-        is frozen without a copy."""
-        if self.encoded:
-            return {
-                port: freeze_value(kind, kind.decode(arrays, meta))
-                for port, (kind, arrays, meta) in result.items()
-            }
-        only = step.only_output
-        if only is not None:  # one output: no tuple to split
-            port, kind, scalar, plain = only
-            if not scalar and recall(result, kind):  # frozen, accepted as ``kind`` before
-                return {port: result}
-            try:
-                value = kind.validate(result)
-            except PortValueError as error:
-                raise _invalid(port, error) from None
-            if scalar:
-                return {port: value}
-            if plain and value is result and getrefcount(value) <= held + _OWN_REFS:
-                frozen = frozen_in_place(value)  # nothing else holds it: no copy
-                if frozen is not None:
-                    note(frozen, kind, True, frozen=True)
-                    return {port: frozen}
-            return {port: frozen_value(kind, value)}
-        outputs = {}
-        for port, value in step.spec.split_outputs(result).items():
-            try:
-                outputs[port] = checked(step.outputs[port], value)
-            except PortValueError as error:
-                raise _invalid(port, error) from None
-        return outputs
+    def computed_scalar(self, step: Step, value: Any, seconds: float) -> bool:
+        """:meth:`computed` for a step whose one output is a scalar (``value``, accepted), in
+        fewer steps per node (what it reads is made once: :attr:`Step.scalar_plan`)."""
+        name, op, source, port, kind, caches, read, backend = step.scalar_plan
+        if seconds < _QUICK_SECONDS:
+            self.quick_ops.add(op)
+        else:
+            self.quick_ops.discard(op)
+        values, cache = self.values, self.cache
+        values[source] = value
+        key = self.keys[source]
+        size = cache.put(key, kind, value) if caches and cache is not None else 0
+        params = step.params
+        self.nodes[name] = NodeRecord(
+            name, op, "computed", seconds, size, "", dict(params) if params else {}, {port: key},
+            backend,
+        )  # fmt: skip
+        consumers, pinned = self.consumers, self.pinned  # release the inputs it read
+        for source in read:
+            left = consumers[source] = consumers[source] - 1
+            if not left and source not in pinned:
+                values.pop(source, None)
+        if self.hooks:
+            for hook in self.hooks:
+                hook.node_finished(name=name, op=op, status="computed", seconds=seconds)
+        return True
 
     def result(self, wanted: list[str]) -> RunResult:
         """The outputs produced (with their summaries in the record) as a :class:`RunResult`."""
-        values, summaries, produced = self.values, self.record.outputs, {}
-        sources, types = self.compiled.outputs, self.compiled.output_types
-        for name in wanted:
-            source = sources[name]
-            if source in values:
-                value = produced[name] = values[source]
-                summaries[name] = types[name].summary(value)
+        sources, summary = self.compiled.outputs, self.compiled.output_summaries
+        found = list(map(self.values.get, map(sources.__getitem__, wanted), repeat(_NONE)))
+        if any(map(is_, found, repeat(_NONE))):  # some were not produced
+            pairs = [(name, value) for name, value in zip(wanted, found, strict=True)]
+            wanted = [name for name, value in pairs if value is not _NONE]
+            found = [value for _, value in pairs if value is not _NONE]
+        produced = dict(zip(wanted, found, strict=True))  # (in C: no Python step per output)
+        summaries = map(call, map(summary.__getitem__, wanted), found)
+        self.record.outputs.update(zip(wanted, summaries, strict=True))
         kept = intermediates(self.compiled, self.values) if self.keep_intermediates else {}
         return RunResult(produced, self.record, self.compiled, self.failures, kept)
-
-
-def _invalid(port: str, error: PortValueError) -> PortValueError:
-    return PortValueError(f"node returned an invalid output '{port}': {error}")
