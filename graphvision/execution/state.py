@@ -353,10 +353,11 @@ class RunState:
         """:meth:`computed` for a step whose one output is a scalar (``value``, accepted), in
         fewer steps per node (what it reads is made once: :attr:`Step.scalar_plan`)."""
         name, op, source, port, kind, caches, read, backend = step.scalar_plan
-        if seconds < _QUICK_SECONDS:
-            self.quick_ops.add(op)
-        else:
-            self.quick_ops.discard(op)
+        quick = self.quick_ops
+        if seconds >= _QUICK_SECONDS:
+            quick.discard(op)
+        elif op not in quick:  # (a look-up, not a call, once it is known quick)
+            quick.add(op)
         values, cache = self.values, self.cache
         values[source] = value
         key = self.keys[source]
