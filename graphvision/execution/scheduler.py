@@ -273,8 +273,8 @@ class _Loop:
 
     def step(self) -> None:
         """Take one finished task (or run one here), release its dependents, launch more."""
-        if self.here:
-            name = self.here.pop()
+        if self.here and not self.finished_here and self.finished.empty():  # (a task the
+            name = self.here.pop()  # executor finished is taken first: none left, one by one)
             assert self.run_here is not None  # the only way into ``here``
             succeeded = self.run_here(name)
         else:

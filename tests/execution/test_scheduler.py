@@ -223,3 +223,28 @@ def test_quick_tasks_go_back_to_one_by_one_once_nothing_runs_on_the_executor():
     assert skipped == [] and handed == ["t1", "t30"]
     assert here == [name for name in dependencies if name not in handed]
     assert asked == ["t1", "t2", "t30", "t31"]  # the loop placed these; the rest ran one by one
+
+
+def test_a_fan_out_goes_back_to_one_by_one_once_its_handed_task_finished():
+    """The quick tasks ready beside a task handed to the executor run through the loop only
+    until that task has finished: then one by one again (the loop took every task of a
+    1,000-task fan-out after one hand-off)."""
+    dependencies: dict[str, set[str]] = {f"t{k}": set() for k in range(40)}
+    ops = dict.fromkeys(dependencies, "fast") | {"t1": "slow"}
+    quick, asked, here = {"fast"}, [], []
+
+    def ask(name: str) -> bool:
+        asked.append(name)
+        return ops[name] in quick
+
+    def start(name: str) -> Future:
+        done: Future = Future()
+        done.set_result(name)
+        return done
+
+    skipped = run_tasks(
+        dependencies, start, lambda name, future: True, run_here=lambda n: here.append(n) or True,
+        quick=ask, quick_ops=(ops, quick), limit=4,
+    )  # fmt: skip
+    assert skipped == [] and sorted(here) == sorted(set(dependencies) - {"t1"})
+    assert set(asked) == {"t1", "t2", "t3"}  # the loop placed these; the rest ran one by one
