@@ -278,9 +278,32 @@ class RunState:
         except NODE_ERRORS as error:  # (when it began: read once it failed, not per node)
             self.started[name] = began_before(seconds)
             return self.failed(step, error)
-        if outputs is None:
-            return self.computed_scalar(step, result, seconds)
-        return self.computed(step, outputs, seconds)
+        if outputs is not None:
+            return self.computed(step, outputs, seconds)
+        # one scalar output: what :meth:`computed` does, in fewer steps (no call more per node;
+        # what it reads is made once, :attr:`Step.scalar_plan`)
+        name, op, source, port, kind, caches, read, backend = step.scalar_plan
+        quick = self.quick_ops
+        if seconds >= _QUICK_SECONDS:
+            quick.discard(op)
+        elif op not in quick:  # (a look-up, not a call, once it is known quick)
+            quick.add(op)
+        values[source] = result
+        key, cache = self.keys[source], self.cache
+        size = cache.put(key, kind, result) if caches and cache is not None else 0
+        self.nodes[name] = NodeRecord(
+            name, op, "computed", seconds, size, "", dict(params) if params else {}, {port: key},
+            backend,
+        )  # fmt: skip
+        consumers, pinned = self.consumers, self.pinned  # release the inputs it read
+        for source in read:
+            left = consumers[source] = consumers[source] - 1
+            if not left and source not in pinned:
+                values.pop(source, None)
+        if self.hooks:
+            for hook in self.hooks:
+                hook.node_finished(name=name, op=op, status="computed", seconds=seconds)
+        return True
 
     def _submit_encoded(self, name: str, step: Step) -> Future:
         label = f"node '{name}' ({step.spec.id})"
@@ -347,34 +370,6 @@ class RunState:
                 values.pop(source, None)
         for hook in self.hooks:
             hook.node_finished(name=name, op=spec.id, status="computed", seconds=seconds)
-        return True
-
-    def computed_scalar(self, step: Step, value: Any, seconds: float) -> bool:
-        """:meth:`computed` for a step whose one output is a scalar (``value``, accepted), in
-        fewer steps per node (what it reads is made once: :attr:`Step.scalar_plan`)."""
-        name, op, source, port, kind, caches, read, backend = step.scalar_plan
-        quick = self.quick_ops
-        if seconds >= _QUICK_SECONDS:
-            quick.discard(op)
-        elif op not in quick:  # (a look-up, not a call, once it is known quick)
-            quick.add(op)
-        values, cache = self.values, self.cache
-        values[source] = value
-        key = self.keys[source]
-        size = cache.put(key, kind, value) if caches and cache is not None else 0
-        params = step.params
-        self.nodes[name] = NodeRecord(
-            name, op, "computed", seconds, size, "", dict(params) if params else {}, {port: key},
-            backend,
-        )  # fmt: skip
-        consumers, pinned = self.consumers, self.pinned  # release the inputs it read
-        for source in read:
-            left = consumers[source] = consumers[source] - 1
-            if not left and source not in pinned:
-                values.pop(source, None)
-        if self.hooks:
-            for hook in self.hooks:
-                hook.node_finished(name=name, op=op, status="computed", seconds=seconds)
         return True
 
     def result(self, wanted: list[str]) -> RunResult:
