@@ -49,12 +49,13 @@ from timing import best
 Row = tuple[str, str, Callable[[], object], Callable[[], object]]
 CONTRIB = "GRAPHVISION_OPENCV_CONTRIB"
 """Environment variable: a folder holding opencv-contrib-python-headless (``pip --target``)."""
+_CHILD = "GRAPHVISION_CONTRIB_CHILD"  # set in the child run with that folder first on its path
 
 
 def _in_child(folder: str) -> list[str]:
     """This bench's rows, run by a Python whose path starts with ``folder``."""
     paths = [folder, os.environ.get("PYTHONPATH", "")]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in paths if p)}
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in paths if p), _CHILD: "1"}
     done = subprocess.run(
         [sys.executable, __file__], env=env, capture_output=True, text=True, check=False
     )
@@ -156,8 +157,11 @@ def main() -> list[str]:
         "| --- | ---: | --- | ---: | ---: | ---: |",
     ]
     if not (hasattr(cv2, "CascadeClassifier") and hasattr(cv2, "ximgproc")):
-        if os.environ.get(CONTRIB) and os.environ.get(CONTRIB) not in sys.path:
-            return _in_child(os.environ[CONTRIB])
+        folder = os.environ.get(CONTRIB)
+        if folder and os.environ.get(_CHILD):  # the child's path did not give it either
+            return [f"{folder} holds no opencv-contrib `cv2` (`make bench` installs it there)"]
+        if folder:
+            return _in_child(folder)
         return [
             f"OpenCV {cv2.__version__} here has no CascadeClassifier or ximgproc (OpenCV 5 "
             "moved them to opencv-contrib): run with PYTHONPATH to opencv-contrib-python-"
