@@ -25,7 +25,7 @@ import numpy as np
 import xxhash
 
 from graphvision.cache.entries import Encoded
-from graphvision.values.memory import ALIGNMENT, alignment_offset
+from graphvision.values.memory import ALIGNMENT, alignment_offset, placed_offset
 
 __all__ = ["MAGIC", "decode_blob", "encode_blob"]
 
@@ -41,10 +41,9 @@ def _padded(offset: int) -> int:
 def _shift(given: np.ndarray, stored: np.ndarray) -> int:
     """Where the stored array starts past a multiple of :data:`ALIGNMENT`: the offset the
     value had (when it is the value's own memory, aligned for its dtype), else 0."""
-    if stored is not given or not stored.size:  # (a contiguous copy of a strided value)
+    if stored is not given:  # (a contiguous copy of a strided value)
         return 0
-    shift = alignment_offset(stored)
-    return shift if shift % stored.dtype.alignment == 0 else 0
+    return placed_offset(stored.dtype, alignment_offset(stored))
 
 
 def encode_blob(entry: Encoded) -> Iterator[bytes | memoryview]:
@@ -113,9 +112,7 @@ def decode_blob(blob: bytes | memoryview) -> Encoded:
 
 def _placeable(shift: int, nbytes: int, dtype: np.dtype) -> bool:
     """Whether an array of ``nbytes`` may start ``shift`` bytes past its 64-byte boundary."""
-    if not nbytes:
-        return shift == 0
-    return 0 <= shift < ALIGNMENT and shift % dtype.alignment == 0
+    return shift == (placed_offset(dtype, shift) if nbytes else 0)
 
 
 def _check_header(

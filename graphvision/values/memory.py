@@ -55,6 +55,7 @@ __all__ = [
     "frozen_in_place",
     "is_aligned",
     "is_frozen_window",
+    "placed_offset",
     "read_aligned",
 ]
 
@@ -116,10 +117,10 @@ def alignment_offset(array: np.ndarray) -> int:
     return int(array.__array_interface__["data"][0] % ALIGNMENT)
 
 
-def _placement(array: np.ndarray, offset: int) -> int:
-    """``offset`` (bytes past a multiple of :data:`ALIGNMENT`) if the dtype can lie there,
-    else 0."""
-    if 0 < offset < ALIGNMENT and offset % array.dtype.alignment == 0:
+def placed_offset(dtype: np.dtype, offset: int) -> int:
+    """``offset`` (bytes past a multiple of :data:`ALIGNMENT`) if an array of ``dtype`` can
+    lie there, else 0."""
+    if 0 < offset < ALIGNMENT and offset % dtype.alignment == 0:
         return offset
     return 0
 
@@ -129,7 +130,7 @@ def frozen_copy(array: np.ndarray, offset: int = 0) -> np.ndarray:
     address ``offset`` bytes past a multiple of :data:`ALIGNMENT` (where the value lay when
     it was computed; 0 unless given, and 0 for an offset the dtype cannot lie at)."""
     dtype, shape = array.dtype, array.shape
-    shift = _placement(array, offset)
+    shift = placed_offset(dtype, offset)
     owner, start, first = _new_aligned(array.nbytes, shift)
     first += shift
     if not array.flags.c_contiguous:  # one pass from the strided array into the window
@@ -260,7 +261,7 @@ def frozen_copies(arrays: list[np.ndarray], offsets: list[int] | None = None) ->
     with one buffer instead of one each."""
     sources = [np.ascontiguousarray(array) for array in arrays]
     given = offsets or [0] * len(sources)
-    shifts = [_placement(s, o) for s, o in zip(sources, given, strict=True)]
+    shifts = [placed_offset(s.dtype, o) for s, o in zip(sources, given, strict=True)]
     starts, total = [], 0
     for source, shift in zip(sources, shifts, strict=True):
         starts.append(total + shift)
