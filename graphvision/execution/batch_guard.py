@@ -54,8 +54,9 @@ def refuse_in_bootstrap(what: str) -> None:
 
 
 def guard_hint() -> str:
-    """For a local cluster whose workers did not start: a note naming the guard when the
-    main script, which each spawned worker imports first, has none (else nothing)."""
+    """For workers that did not start or died (a local Dask cluster's, a process pool's not
+    forked): a note naming the guard when the main script, which each spawned worker
+    imports first, has none (else nothing)."""
     script = _main_script()
     if script is None:
         return ""
@@ -66,8 +67,8 @@ def guard_hint() -> str:
     if _GUARD.search(text):
         return ""
     return (
-        f"; {script} has no `{GUARD}`: each worker imports it first and, running its "
-        "batch again there, stops (put the code that runs the batch under the guard)"
+        f"; {script} has no `{GUARD}`: each worker imports it first and, starting its "
+        "work again there, stops (put the code that runs the batch or the run under the guard)"
     )
 
 

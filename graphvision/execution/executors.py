@@ -28,6 +28,7 @@ from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
+from graphvision.execution.batch_guard import guard_hint
 from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.node_call import began_before, call_labelled, call_node
 from graphvision.execution.warnings import show_warning
@@ -150,6 +151,12 @@ class WorkerDiedError(RuntimeError):
     """The worker process running a node died (killed, out of memory), also on the retry."""
 
 
+def _died(how: str) -> WorkerDiedError:
+    """:class:`WorkerDiedError` saying ``how``, naming the main guard when the script lacks
+    it: the retry's worker comes from the fork server and imports the script first."""
+    return WorkerDiedError(f"{_DIED}, {how}{guard_hint()}")
+
+
 class _Processes:
     """A process pool that survives a dying worker.
 
@@ -240,17 +247,14 @@ class _Processes:
         except Exception as error:  # no worker starts (the fork server killed, say): say so
             alone.shutdown(wait=False)
             why = f"{type(error).__name__}: {error}"
-            outer.set_exception(
-                WorkerDiedError(f"{_DIED}, and no worker could start again ({why})")
-            )
+            outer.set_exception(_died(f"and no worker could start again ({why})"))
             return
 
         def settle(done: Future) -> None:
             alone.shutdown(wait=False)
             if isinstance(done.exception(), BrokenProcessPool):
                 outer.set_exception(
-                    ended_by_limit(fn, args)
-                    or WorkerDiedError(f"{_DIED}, and again when retried alone")
+                    ended_by_limit(fn, args) or _died("and again when retried alone")
                 )
             else:
                 _copy(done, outer)
