@@ -20,6 +20,8 @@ References
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -35,7 +37,8 @@ def level_codes(
     image: np.ndarray, levels: np.ndarray, codes: np.ndarray
 ) -> bool:  # pragma: no cover
     """``codes`` = the level index of each value of ``image``; False at the first value
-    that is not one of ``levels`` (``codes`` then partly written)."""
+    that is not one of ``levels`` (``codes`` then partly written). −0.0 is none: its
+    median would come back as the level +0.0, where the network keeps its sign bit."""
     top = levels.size - 1
     for r in range(image.shape[0]):
         row, code = image[r], codes[r]
@@ -43,7 +46,7 @@ def level_codes(
             value = row[c]
             near = 1.0 if value > 1 else (np.float64(value) if value >= 0 else 0.0)  # NaN: 0
             k = int(near * top + 0.5)
-            if levels[k] != value:
+            if levels[k] != value or (k == 0 and math.copysign(1.0, value) < 0):
                 return False
             code[c] = k
     return True

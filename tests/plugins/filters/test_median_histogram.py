@@ -76,3 +76,15 @@ def test_only_an_image_of_levels_takes_the_histogram():
     assert not _median._median_of_levels(image, rows, columns, out)
     assert np.all(out == -1.0)  # nothing written: the network fills it
     np.testing.assert_array_equal(filters.median(image, size=7), _network(image, 7, "mirror"))
+
+
+def test_negative_zero_keeps_its_sign_bit_as_the_network_does():
+    """−0.0 equals the level 0 but is not its bits: an image holding it keeps the network,
+    whose medians keep the sign bit (the histogram's would be +0.0)."""
+    image = np.full((20, 20), -0.0, np.float32)
+    image[0, 0] = 1.0
+    codes = np.empty(image.shape, np.uint8)
+    assert not level_codes(image, LEVELS, codes)
+    median = filters.median(image, size=7)
+    np.testing.assert_array_equal(np.signbit(median), np.signbit(_network(image, 7, "mirror")))
+    assert np.signbit(median).all()
