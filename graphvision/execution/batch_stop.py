@@ -47,6 +47,8 @@ import json
 import os
 import shutil
 import signal
+import stat
+import string
 import tempfile
 import threading
 import time
@@ -73,6 +75,8 @@ _CLAIM = "writing-"
 _RECORD_KEY = "record_before"  # in a claim: the folder's record.json digest when claimed
 _TOKEN = 12  # hexadecimal digits ending a flag's name
 _OWNER = "owner"  # in a flag's folder, locked by its client while the batch runs
+_FLAG_FILES = {_OWNER, _STOPPED}  # what a flag's folder holds: these, and claims
+_FLAG_PREFIXES = (_CLAIM, ".claim-", ".owner-")
 _OWNED: dict[str, int] = {}  # this process's flags: folder -> the owner file's descriptor
 
 
@@ -138,6 +142,21 @@ def _json_item(text: str) -> BatchItem | None:
         return None
 
 
+def _is_flag(folder: Path, prefix: str) -> bool:
+    """Whether ``folder`` is a stop flag: named ``prefix`` and a token, a real folder whose
+    ``owner`` is a plain file and which holds nothing but a flag's own files."""
+    token = folder.name[len(prefix) :]
+    if len(token) != _TOKEN or token.strip(string.hexdigits.lower()) or folder.is_symlink():
+        return False
+    try:
+        if not stat.S_ISREG(os.lstat(folder / _OWNER).st_mode):
+            return False
+        names = os.listdir(folder)
+    except OSError:
+        return False
+    return all(name in _FLAG_FILES or name.startswith(_FLAG_PREFIXES) for name in names)
+
+
 class StopFlag:
     """The flag of one batch, in ``folder`` (see the module docstring); picklable."""
 
@@ -189,10 +208,10 @@ class StopFlag:
         here = Path(self.folder)
         prefix = here.name[:-_TOKEN]
         for other in here.parent.glob(f"{prefix}*"):
-            if other == here or other.is_symlink() or not other.is_dir():
+            if other == here or not _is_flag(other, prefix):
                 continue
             try:
-                fd = os.open(other / _OWNER, os.O_RDONLY)
+                fd = os.open(other / _OWNER, os.O_RDONLY | os.O_NOFOLLOW)
             except OSError:
                 continue
             try:

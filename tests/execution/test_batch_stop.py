@@ -134,7 +134,8 @@ def test_a_flag_left_by_a_killed_client_is_removed_by_the_next_batch_and_nothing
 ):
     """A client killed with ``kill -9`` leaves its flag; the next flag made beside it removes
     it (its owner lock is free), and keeps a live client's flag, a flag without an owner
-    file, and a folder that is no flag."""
+    file, a folder that is no flag, and folders named like flags that hold more than a
+    flag does."""
     import os
     import signal
     import subprocess
@@ -164,10 +165,21 @@ def test_a_flag_left_by_a_killed_client_is_removed_by_the_next_batch_and_nothing
     unowned.mkdir()
     other = tmp_path / "photo-1"
     other.mkdir()
+    decoys = [  # named like flags, with an unlocked "owner": not flags all the same
+        tmp_path / f"{batch_stop.STOP_FOLDER}notes",  # no token
+        tmp_path / f"{batch_stop.STOP_FOLDER}0123456789cd",  # a file of the user's beside
+        tmp_path / f"{batch_stop.STOP_FOLDER}0123456789ef",  # "owner" a folder
+    ]
+    for decoy in decoys:
+        decoy.mkdir()
+    (decoys[0] / "owner").touch()
+    (decoys[1] / "owner").touch()
+    (decoys[1] / "precious.txt").write_text("keep")
+    (decoys[2] / "owner").mkdir()
     newest = StopFlag.make(tmp_path)
     try:
         assert not os.path.exists(dead)
-        for kept in (alive.folder, unowned, other, newest.folder):
+        for kept in (alive.folder, unowned, other, newest.folder, *decoys):
             assert os.path.isdir(kept), kept
     finally:
         alive.remove()
