@@ -10,10 +10,10 @@ it into a folder of its own and put that folder first on ``PYTHONPATH`` for this
 ``make bench`` runs it in a child process with that ``PYTHONPATH`` when
 ``GRAPHVISION_OPENCV_CONTRIB`` names the folder; without it, the section says so.
 
-Both sides single-threaded (``cv2.setNumThreads(1)``, numba and BLAS one thread), best of
-a few calls after a warm-up (``bench/timing.py``), the machine's 1-minute load beside each
-row. The calls compared, on the same pixels (float32 in [0, 1] for graphvision, uint8 for
-OpenCV):
+Both sides single-threaded (``cv2.setNumThreads(1)``, numba and BLAS one thread), the best
+of at least 3 calls of each, the two called in turn after a warm-up (``bench/timing.py``),
+the machine's 1-minute load beside each row. The calls compared, on the same pixels
+(float32 in [0, 1] for graphvision, uint8 for OpenCV):
 
 * LBP cascade on the astronaut (512², gray): ``recognition.lbp_detect`` with scikit-image's
   copy of ``lbpcascade_frontalface.xml`` against ``cv2.CascadeClassifier`` on the same file
@@ -44,7 +44,7 @@ import numpy as np
 import skimage.data
 import skimage.transform
 from bench_kernels_vs_opencv import _single_threaded
-from timing import best
+from timing import best_in_turn
 
 Row = tuple[str, str, Callable[[], object], Callable[[], object]]
 CONTRIB = "GRAPHVISION_OPENCV_CONTRIB"
@@ -138,7 +138,7 @@ def _selective_rows(cv2) -> list[Row]:
 
 
 def _row(kernel: str, call: str, ours: Callable[[], object], theirs) -> str:
-    t_ours, t_ref = best(ours, 3), best(theirs, 3)
+    t_ours, t_ref = best_in_turn(ours, theirs, 3)
     load = os.getloadavg()[0]
     return (
         f"| {kernel} | {t_ours * 1e3:.1f} | {call} | {t_ref * 1e3:.1f} "

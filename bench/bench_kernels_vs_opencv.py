@@ -1,7 +1,8 @@
 """Every own kernel beside its OpenCV counterpart, single-threaded on both sides (issue 26 item 3).
 
-Each row is graphvision's time over OpenCV's, measured in the same run one after the
-other (best of a few calls after a warm-up, ``bench/timing.py``), with the 1-minute load
+Each row is graphvision's time over OpenCV's, measured in the same run with the two
+calls in turn (the best of each over at least 7 pairs, 5 at 2048², and more until the pairs
+have taken half a second, after a warm-up: ``bench/timing.py``), with the 1-minute load
 average of the machine beside it: the target is at most 3 (aim 1.5; SGM at most 1.5 of
 SGBM). OpenCV runs with ``cv2.setNumThreads(1)``, numba with one thread and BLAS with one
 thread (``threadpoolctl``). Inputs are scikit-image's astronaut and camera resized to
@@ -48,7 +49,7 @@ from collections.abc import Callable
 import numpy as np
 import skimage.data
 import skimage.transform
-from timing import best
+from timing import best_in_turn
 
 SIZES = (512, 2048)
 # the node's function without the port checks (np.min/np.max of input and output): the
@@ -315,9 +316,8 @@ def _single_threaded(cv2) -> None:
 
 
 def _row(kernel: str, size: str, ours: Callable[[], object], call: str, theirs) -> str:
-    repeats = 5 if size != "2048²" else 3
-    t_ours = best(ours, repeats)
-    t_ref = best(theirs, repeats)
+    repeats = 7 if size != "2048²" else 5
+    t_ours, t_ref = best_in_turn(ours, theirs, repeats, min_seconds=0.5)
     load = os.getloadavg()[0]
     return (
         f"| {kernel} | {size} | {t_ours * 1e3:.2f} | {call} | {t_ref * 1e3:.2f} "
