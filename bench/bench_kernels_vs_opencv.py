@@ -1,16 +1,19 @@
 """Every own kernel beside its OpenCV counterpart, single-threaded on both sides (issue 26 item 3).
 
-Each row is graphvision's time over OpenCV's, measured in the same run with the two
-calls in turn (the best of each over at least 7 pairs, 5 at 2048², and more until the pairs
-have taken half a second, after a warm-up: ``bench/timing.py``), with the 1-minute load
-average of the machine beside it: the target is at most 3 (aim 1.5; SGM at most 1.5 of
-SGBM). OpenCV runs with ``cv2.setNumThreads(1)``, numba with one thread and BLAS with one
-thread (``threadpoolctl``). Inputs are scikit-image's astronaut and camera resized to
-512² and 2048² and rounded to 8-bit levels, as an image read from a file is (float32 in
-[0, 1] for graphvision; the dtype OpenCV's call takes, noted in the row, for OpenCV).
-graphvision is called as a user calls a node directly, its port checks included; the colour,
-median, correlation, pyramid, demosaicing and SGM rows are repeated with the node's own
-function (``__wrapped__``, no port checks), the kernel's time alone. The calls compared:
+Each row is graphvision's time over OpenCV's, measured in the same run with the two calls in
+turn (the best of each over at least 7 pairs, 5 at 2048², and more until the pairs have
+taken half a second, after a warm-up: ``bench/timing.py``). The times are the CPU time of
+the process (every thread of it): both sides run on one thread, so it is the wall time less
+the moments other processes held the core, and it moves less with the machine's load; the
+ratio by wall time is beside it, and the machine's 1-minute load average: the target is at
+most 3 (aim 1.5; SGM at most 1.5 of SGBM). OpenCV runs with ``cv2.setNumThreads(1)``, numba
+with one thread and BLAS with one thread (``threadpoolctl``). Inputs are scikit-image's
+astronaut and camera resized to 512² and 2048² and rounded to 8-bit levels, as an image read
+from a file is (float32 in [0, 1] for graphvision; the dtype OpenCV's call takes, noted in
+the row, for OpenCV). graphvision is called as a user calls a node directly, its port checks
+included; the colour, median, correlation, pyramid, demosaicing and SGM rows are repeated
+with the node's own function (``__wrapped__``, no port checks), the kernel's time alone. The
+calls compared:
 
 * colour: ``colour.from_rgb`` against ``cv2.cvtColor`` (RGB2HSV, RGB2Lab, RGB2YCrCb) on float32;
   the 8-bit levels take L*a*b*'s linear sRGB from a table, so a row gives the image moved
@@ -317,11 +320,12 @@ def _single_threaded(cv2) -> None:
 
 def _row(kernel: str, size: str, ours: Callable[[], object], call: str, theirs) -> str:
     repeats = 7 if size != "2048²" else 5
-    t_ours, t_ref = best_in_turn(ours, theirs, repeats, min_seconds=0.5)
+    timed = best_in_turn(ours, theirs, repeats, min_seconds=0.5)
     load = os.getloadavg()[0]
     return (
-        f"| {kernel} | {size} | {t_ours * 1e3:.2f} | {call} | {t_ref * 1e3:.2f} "
-        f"| {t_ours / t_ref:.2f} | {load:.1f} |"
+        f"| {kernel} | {size} | {timed.ours_cpu * 1e3:.2f} | {call} | {timed.theirs_cpu * 1e3:.2f} "
+        f"| {timed.ours_cpu / timed.theirs_cpu:.2f} | {timed.ours_wall / timed.theirs_wall:.2f} "
+        f"| {load:.1f} |"
     )
 
 
@@ -332,9 +336,9 @@ def main() -> list[str]:
         return ["OpenCV is not installed (`pip install -e .[bench]`): kernel ratios skipped"]
     _single_threaded(cv2)
     rows = [
-        "| kernel | size | graphvision ms | OpenCV call | OpenCV ms | graphvision / OpenCV "
-        "| load (1 min) |",
-        "| --- | --- | ---: | --- | ---: | ---: | ---: |",
+        "| kernel | size | graphvision ms (CPU) | OpenCV call | OpenCV ms (CPU) "
+        "| graphvision / OpenCV | by wall time | load (1 min) |",
+        "| --- | --- | ---: | --- | ---: | ---: | ---: | ---: |",
     ]
     for size in SIZES:
         for kernel, call, ours, theirs in _image_rows(cv2, size):
