@@ -6,7 +6,8 @@ on demand, for the pixels some keypoint's window reaches, and kept in the
 level's ``magnitude`` / ``angle`` arrays with a ``done`` flag: a level's
 keypoints cover a fraction of it, and ``atan2`` of every pixel of every level
 was the largest single cost of SIFT. The values are the whole-image ones
-(float32 ``hypot`` and ``atan2``, as numpy computes them).
+(float32 ``hypot`` and ``atan2`` of the C library; numpy's own AVX-512 ``arctan2``,
+where the machine has it, differs from the C library's in the last bit for some values).
 
 The descriptor is a scatter of every pixel of a rotated window into 8
 trilinearly interpolated histogram bins; in numpy that is a ``bincount``
