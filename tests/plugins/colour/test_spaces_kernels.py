@@ -3,6 +3,8 @@ they replaced (kept here as the reference, as they were in ``colour/_spaces.py``
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 import skimage.data
@@ -43,14 +45,26 @@ def _hsv(rgb: np.ndarray) -> np.ndarray:
     return np.stack([hue, saturation, value], axis=-1)
 
 
-def _lab(rgb: np.ndarray) -> np.ndarray:
+def _srgb_linear(channels: np.ndarray) -> np.ndarray:
+    """sRGB linearised in float64 with the C library's ``pow`` (``math.pow``), as the kernels
+    call it, but for the 8-bit levels, whose table is numpy's power (numpy's own SIMD power
+    where the CPU has AVX-512, which differs from ``pow`` in the last bit for a few %)."""
+    rgb = channels.astype(np.float64)
     linear = rgb / 12.92
     curved = rgb > 0.04045
-    linear[curved] = ((rgb[curved] + 0.055) / 1.055) ** 2.4
+    base = (rgb[curved] + 0.055) / 1.055
+    linear[curved] = [math.pow(value, 2.4) for value in base]
+    level = (np.round(channels * 255) / 255).astype(channels.dtype) == channels
+    linear[curved & level] = ((rgb[curved & level] + 0.055) / 1.055) ** 2.4
+    return linear
+
+
+def _lab(channels: np.ndarray) -> np.ndarray:
+    linear = _srgb_linear(channels)
     xyz = _linear(linear, XYZ_FROM_RGB / D65_WHITE[:, None], np.zeros(3))
     f = LAB_SLOPE * xyz + 16.0 / 116.0
     above = xyz > LAB_EPSILON
-    f[above] = np.cbrt(xyz[above])
+    f[above] = [math.cbrt(value) for value in xyz[above]]  # the C library's, as numba's
     lab = np.empty_like(f)
     lab[..., 0] = 116.0 * f[..., 1] - 16.0
     lab[..., 1] = 500.0 * (f[..., 0] - f[..., 1])
@@ -61,10 +75,12 @@ def _lab(rgb: np.ndarray) -> np.ndarray:
 def _reference(rgb: np.ndarray, space: str) -> np.ndarray:
     if space == "ycbcr" and rgb.dtype == np.float32:
         return _linear(rgb, YCBCR_FROM_RGB, YCBCR_OFFSET).astype(np.float32)
+    if space == "lab":
+        return _lab(rgb)  # the levels are those of the input's float
     rgb = np.asarray(rgb, dtype=np.float64)
     if space == "ycbcr":
         return _linear(rgb, YCBCR_FROM_RGB, YCBCR_OFFSET)
-    return _hsv(rgb) if space == "hsv" else _lab(rgb)
+    return _hsv(rgb)
 
 
 def _inputs() -> list[np.ndarray]:
