@@ -17,7 +17,8 @@ calls compared:
 
 * colour: ``colour.from_rgb`` against ``cv2.cvtColor`` (RGB2HSV, RGB2Lab, RGB2YCrCb) on float32;
   the 8-bit levels take L*a*b*'s linear sRGB from a table, so a row gives the image moved
-  off the levels (``0.999 x + 0.0005``), where each value goes through the C library's ``pow``;
+  off the levels (``0.999 x + 0.0005``), where each value takes the power computed in SIMD
+  lanes (the C library's ``pow`` for the 3 % near a rounding midpoint: same bits);
 * median 3/5/7: ``filters.median`` against ``cv2.medianBlur`` (float32 for 3 and 5; uint8
   for 7, the only type OpenCV filters with a window above 5). The 7×7 image holds 8-bit
   levels, so graphvision takes its sliding histogram, as OpenCV does on uint8; the row
@@ -85,7 +86,7 @@ def _image_rows(cv2, size: int) -> list[Row]:
                     lambda flag=flag: cv2.cvtColor(rgb, flag),
                 )
             )
-    rgb_off = rgb * np.float32(0.999) + np.float32(0.0005)  # no value k / 255: sRGB's pow
+    rgb_off = rgb * np.float32(0.999) + np.float32(0.0005)  # no value k / 255: the power
     rows.append(
         (
             "RGB → lab, off the 8-bit levels (kernel, no port checks)",

@@ -8,7 +8,6 @@ in [16, 240].
 
 from __future__ import annotations
 
-from functools import cache
 from typing import Literal
 
 import numpy as np
@@ -56,17 +55,6 @@ def _lab_to_rgb(lab: np.ndarray) -> np.ndarray:
     return np.where(linear > 0.0031308, 1.055 * linear ** (1 / 2.4) - 0.055, 12.92 * linear)
 
 
-@cache
-def _srgb_levels(dtype: np.dtype) -> tuple[np.ndarray, np.ndarray]:
-    """The 256 levels of an 8-bit channel in ``dtype`` and their linear sRGB values (float64)."""
-    levels = (np.arange(256) / 255.0).astype(dtype)
-    wide = levels.astype(np.float64)
-    linear = wide / 12.92
-    curved = wide > 0.04045
-    linear[curved] = ((wide[curved] + 0.055) / 1.055) ** 2.4
-    return levels, linear
-
-
 def _forward(rgb: np.ndarray, space: str, dtype: type) -> np.ndarray:
     """RGB to ``space`` by the compiled kernels, computed in float64 (YCbCr: in ``dtype``)
     and stored as ``dtype``."""
@@ -77,6 +65,7 @@ def _forward(rgb: np.ndarray, space: str, dtype: type) -> np.ndarray:
         rgb_to_lab_single,
         rgb_to_linear,
     )
+    from ._srgb_kernels import srgb_levels
 
     work = dtype if space == "ycbcr" else np.float64
     if space != "ycbcr" and np.asarray(rgb).dtype == np.float32:
@@ -87,11 +76,12 @@ def _forward(rgb: np.ndarray, space: str, dtype: type) -> np.ndarray:
         rgb_to_hsv_single(pixels, out)  # within 2⁻²³ of float64 rounded (its docstring)
     elif space == "hsv":
         rgb_to_hsv(pixels, out)
+    elif space == "lab" and dtype == np.float32:
+        rgb_to_lab_single(pixels, XYZ_FROM_RGB / D65_WHITE[:, None], LAB_EPSILON, LAB_SLOPE, out)
     elif space == "lab":
-        levels, linear = _srgb_levels(pixels.dtype)
+        levels, linear = srgb_levels(pixels.dtype)
         matrix = XYZ_FROM_RGB / D65_WHITE[:, None]
-        convert = rgb_to_lab_single if dtype == np.float32 else rgb_to_lab
-        convert(pixels, matrix, LAB_EPSILON, LAB_SLOPE, levels, linear, out)
+        rgb_to_lab(pixels, matrix, LAB_EPSILON, LAB_SLOPE, levels, linear, out)
     else:
         rgb_to_linear(pixels, YCBCR_FROM_RGB.astype(work), YCBCR_OFFSET.astype(work), out)
     return out.reshape(np.shape(rgb))
