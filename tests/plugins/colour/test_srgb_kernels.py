@@ -15,7 +15,7 @@ from graphvision_plugins.colour import _srgb_kernels
 from graphvision_plugins.colour._srgb_kernels import GAMMA_MARGIN, srgb_levels, srgb_linear
 
 
-@njit(cache=True)
+@njit
 def _before(
     values: np.ndarray, levels: np.ndarray, levels_linear: np.ndarray, out: np.ndarray
 ) -> None:  # pragma: no cover
