@@ -58,14 +58,13 @@ def _lab_to_rgb(lab: np.ndarray) -> np.ndarray:
 def _forward(rgb: np.ndarray, space: str, dtype: type) -> np.ndarray:
     """RGB to ``space`` by the compiled kernels, computed in float64 (YCbCr: in ``dtype``)
     and stored as ``dtype``."""
+    from ._lab_kernels import rgb_to_lab_single, srgb_levels
     from ._spaces_kernels import (
         rgb_to_hsv,
         rgb_to_hsv_single,
         rgb_to_lab,
-        rgb_to_lab_single,
         rgb_to_linear,
     )
-    from ._srgb_kernels import srgb_levels
 
     work = dtype if space == "ycbcr" else np.float64
     if space != "ycbcr" and np.asarray(rgb).dtype == np.float32:

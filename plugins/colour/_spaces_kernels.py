@@ -12,9 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._srgb_kernels import bits_of, double_of, srgb_linear
-
-__all__ = ["rgb_to_hsv", "rgb_to_hsv_single", "rgb_to_lab", "rgb_to_lab_single", "rgb_to_linear"]
+__all__ = ["rgb_to_hsv", "rgb_to_hsv_single", "rgb_to_lab", "rgb_to_linear"]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")  # no zero-divisor check: it vectorises
@@ -131,65 +129,3 @@ def rgb_to_linear(
         result[3 * i] = ((o0 + m00 * r) + m01 * g) + m02 * b
         result[3 * i + 1] = ((o1 + m10 * r) + m11 * g) + m12 * b
         result[3 * i + 2] = ((o2 + m20 * r) + m21 * g) + m22 * b
-
-
-_CHUNK = 512  # pixels per pass: a chunk's buffers stay in the L1 cache
-
-
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")  # in the caller's loop
-def _cube_root(x: float) -> float:  # pragma: no cover
-    """``∛x`` for a positive normal ``x``, within an ulp or two of float64: the exponent
-    divided by three on the bits (Kahan's seed, ~7 %), then three Halley steps
-    ``y ← y (y³ + 2x) / (2y³ + x)`` (error cubed each). Branch-free: SIMD lanes."""
-    y = double_of(np.int64(np.uint64(bits_of(x)) // np.uint64(3) + np.uint64(0x2A9F7893782DA1CE)))
-    for _ in range(3):
-        cube = y * y * y
-        y = y * (cube + 2.0 * x) / (2.0 * cube + x)
-    return y
-
-
-@njit(cache=True, nogil=True, error_model="numpy")  # no zero-divisor check: it vectorises
-def _linear_to_lab(
-    linear: np.ndarray, matrix: np.ndarray, epsilon: float, slope: float, out: np.ndarray
-) -> None:  # pragma: no cover
-    """L*a*b* of the flat linear RGB triples ``linear`` into the flat ``out``, one SIMD
-    loop: XYZ / white summed in column order, f(t) = ∛t by :func:`_cube_root` above
-    ``epsilon`` (computed at 1.0 below it, the seed needing a positive normal number, and
-    not taken), ``slope t + 16/116`` otherwise."""
-    m00, m01, m02 = matrix[0, 0], matrix[0, 1], matrix[0, 2]
-    m10, m11, m12 = matrix[1, 0], matrix[1, 1], matrix[1, 2]
-    m20, m21, m22 = matrix[2, 0], matrix[2, 1], matrix[2, 2]
-    for i in range(linear.size // 3):
-        r, g, b = linear[3 * i], linear[3 * i + 1], linear[3 * i + 2]
-        x = ((0.0 + m00 * r) + m01 * g) + m02 * b
-        y = ((0.0 + m10 * r) + m11 * g) + m12 * b
-        z = ((0.0 + m20 * r) + m21 * g) + m22 * b
-        fx = _cube_root(x if x > epsilon else 1.0)
-        fy = _cube_root(y if y > epsilon else 1.0)
-        fz = _cube_root(z if z > epsilon else 1.0)
-        fx = fx if x > epsilon else slope * x + 16.0 / 116.0
-        fy = fy if y > epsilon else slope * y + 16.0 / 116.0
-        fz = fz if z > epsilon else slope * z + 16.0 / 116.0
-        out[3 * i] = 116.0 * fy - 16.0
-        out[3 * i + 1] = 500.0 * (fx - fy)
-        out[3 * i + 2] = 200.0 * (fy - fz)
-
-
-@njit(cache=True, nogil=True)
-def rgb_to_lab_single(
-    rgb: np.ndarray, matrix: np.ndarray, epsilon: float, slope: float, out: np.ndarray
-) -> None:  # pragma: no cover
-    """:func:`rgb_to_lab` for a float32 ``out``, ``_CHUNK`` pixels at a time, each step a
-    loop that vectorises: the sRGB linearisation by :func:`srgb_linear` (the same bits as
-    the formula with ``pow``), then :func:`_linear_to_lab`, whose cube root is not the C
-    library's (a call per value, a quarter of a microsecond): it may differ from it in the
-    last bit of float64, which rounding to float32 hides but for one value in millions."""
-    pixels = rgb.reshape(-1)
-    result = out.reshape(-1)
-    linear = np.empty(3 * _CHUNK)
-    pending = np.empty(3 * _CHUNK, dtype=np.bool_)
-    for start in range(0, 3 * rgb.shape[0], 3 * _CHUNK):
-        stop = min(start + 3 * _CHUNK, 3 * rgb.shape[0])
-        chunk = linear[: stop - start]
-        srgb_linear(pixels[start:stop], chunk, pending[: stop - start])
-        _linear_to_lab(chunk, matrix, epsilon, slope, result[start:stop])

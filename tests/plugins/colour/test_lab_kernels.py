@@ -11,8 +11,8 @@ from numba import njit
 from numba.core.caching import FunctionCache
 from numba.core.registry import CPUDispatcher
 
-from graphvision_plugins.colour import _srgb_kernels
-from graphvision_plugins.colour._srgb_kernels import GAMMA_MARGIN, srgb_levels, srgb_linear
+from graphvision_plugins.colour import _lab_kernels
+from graphvision_plugins.colour._lab_kernels import GAMMA_MARGIN, srgb_levels, srgb_linear
 
 
 @njit
@@ -84,13 +84,13 @@ def test_the_power_table_is_the_reciprocal_centres_power():
     for j in (0, 1, 127, 128, 300, 639):
         exponent, step = divmod(j, 128)
         centre = 2.0 ** (exponent - 4) * (1 + (step + 0.5) / 128)
-        high, low = _srgb_kernels.GAMMA_HIGH[j], _srgb_kernels.GAMMA_LOW_PART[j]
+        high, low = _lab_kernels.GAMMA_HIGH[j], _lab_kernels.GAMMA_LOW_PART[j]
         assert abs(low) <= np.spacing(high) / 2
         assert abs(high - (1.0 / centre) ** -2.4) <= 2 * np.spacing(high)
 
 
 def test_every_kernel_is_cached_on_disk():
-    name = "graphvision_plugins.colour._srgb_kernels"
+    name = "graphvision_plugins.colour._lab_kernels"
     module = importlib.import_module(name)
     dispatchers = [
         value
