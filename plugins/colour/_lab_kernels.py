@@ -18,8 +18,8 @@ faster:
   below its exponent, :math:`r_j` the reciprocal of that interval's centre,
   :math:`C_j = r_j^{-2.4}` a table in double-double (decimal arithmetic, 40 digits) and
   :math:`(1 + z)^{2.4} = 1 + 2.4 z + \binom{2.4}{2} z^2 + \dots` (degree 7,
-  :math:`z = u r_j - 1`, :math:`|z| < 2^{-8}`), its first products exact by fused
-  multiply-adds (Dekker's two-product). Rounded, it is the correctly rounded power
+  :math:`z = u r_j - 1`, :math:`|z| < 2^{-8}`), by fused multiply-adds: Horner's rule,
+  and the first products exact (Dekker's two-product). Rounded, it is the correctly rounded power
   wherever the double-double value lies farther than ``GAMMA_MARGIN`` = 2⁻⁶ ulp from a
   midpoint between two doubles, and there glibc's ``pow`` (documented within 0.52 ulp;
   here it rounds otherwise only within 2⁻⁷ ulp of a midpoint) gives the same double. The
@@ -94,6 +94,8 @@ GAMMA_HIGH, GAMMA_LOW_PART = _gamma_table()
 C2, C3, C4, C5, C6, C7 = (_binomial(k) for k in range(2, 8))
 FIRST_INDEX = int(np.float64(2.0**GAMMA_LOW).view(np.int64)) >> (52 - GAMMA_BITS)
 EXPONENT_BITS = 0x7FF0000000000000
+# the largest |off| of a sure power, over 2^e for a y in [2^e, 2^(e+1)) (ulp 2^(e-52))
+_SURE = (0.5 - GAMMA_MARGIN) * 2.0**-52
 FRACTION_BITS = 0x000FFFFFFFFFFFFF
 
 
@@ -209,17 +211,19 @@ def _power(u: float) -> tuple[float, bool]:  # pragma: no cover
     z_high = p - 1.0  # exact (Sterbenz), p in [0.99, 1.01]
     z_low = fma(u, r, -p)  # exact: u r = p + z_low
     z = z_high + z_low
-    series = z * z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * (C6 + z * C7)))))
+    series = z * z * fma(z, fma(z, fma(z, fma(z, fma(z, C7, C6), C5), C4), C3), C2)
     s = EXPONENT * z_high
-    tail = fma(EXPONENT, z_high, -s) + EXPONENT * z_low + series  # (1 + z)^2.4 = 1 + s + tail
+    tail = fma(EXPONENT, z_low, fma(EXPONENT, z_high, -s) + series)  # (1 + z)^2.4 = 1 + s + tail
     p = high * s
     hi = high + p
     lo = (high - hi) + p  # exact (Fast2Sum: |high| > |p|)
-    lo += fma(high, s, -p) + high * tail + low * (1.0 + s + tail)
+    lo += fma(high, tail, fma(high, s, -p) + fma(low, s, low))
     y = hi + lo
     off = (hi - y) + lo  # exact: hi + lo = y + off
-    ulp = double_of(bits_of(y) & EXPONENT_BITS) * 2.0**-52
-    sure = abs(off) < (0.5 - GAMMA_MARGIN) * ulp and (bits_of(y) & FRACTION_BITS) != 0
+    sure = (
+        abs(off) < double_of(bits_of(y) & EXPONENT_BITS) * _SURE
+        and (bits_of(y) & FRACTION_BITS) != 0
+    )
     return y, inside and sure
 
 
