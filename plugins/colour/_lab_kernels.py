@@ -48,7 +48,7 @@ from numba.extending import intrinsic, overload
 __all__ = ["GAMMA_MARGIN", "rgb_to_lab_single", "srgb_levels", "srgb_linear"]
 
 GAMMA_BITS = 7  # bits of u below its exponent that choose the table entry
-GAMMA_LOW = -4  # the table covers u in [2⁻⁴, 2), 5 binades (u > 0.0905 above the knee)
+FIRST_BINADE = -4  # the table covers u in [2⁻⁴, 2), 5 binades (u > 0.0905 past the knee)
 GAMMA_MARGIN = 2.0**-6  # a power nearer a midpoint than this (in ulp) is left to pow
 EXPONENT = 2.4  # the double nearest 2.4 (below it by 8.9e-17): pow's exponent as written
 
@@ -75,13 +75,13 @@ def _binomial(k: int) -> float:
 def _gamma_table() -> tuple[np.ndarray, np.ndarray]:
     """``C_j = r_j^-EXPONENT`` as double-double (high, low), ``r_j = 1 / centre_j`` rounded
     as the kernel rounds it, by decimal arithmetic to 40 digits."""
-    size = (1 - GAMMA_LOW) << GAMMA_BITS
+    size = (1 - FIRST_BINADE) << GAMMA_BITS
     high, low = np.empty(size), np.empty(size)
     with localcontext() as context:
         context.prec = 40
         for j in range(size):
             exponent, step = divmod(j, 1 << GAMMA_BITS)
-            centre = 2.0 ** (GAMMA_LOW + exponent) * (1 + (step + 0.5) / (1 << GAMMA_BITS))
+            centre = 2.0 ** (FIRST_BINADE + exponent) * (1 + (step + 0.5) / (1 << GAMMA_BITS))
             power = (Decimal(1.0 / centre).ln() * -Decimal(EXPONENT)).exp()
             high[j] = float(power)
             low[j] = float(power - Decimal(high[j]))
@@ -90,9 +90,9 @@ def _gamma_table() -> tuple[np.ndarray, np.ndarray]:
 
 LINEAR32 = srgb_levels(np.dtype(np.float32))[1]
 LINEAR64 = srgb_levels(np.dtype(np.float64))[1]
-GAMMA_HIGH, GAMMA_LOW_PART = _gamma_table()
+POWER_HIGH, POWER_LOW = _gamma_table()
 C2, C3, C4, C5, C6, C7 = (_binomial(k) for k in range(2, 8))
-FIRST_INDEX = int(np.float64(2.0**GAMMA_LOW).view(np.int64)) >> (52 - GAMMA_BITS)
+FIRST_INDEX = int(np.float64(2.0**FIRST_BINADE).view(np.int64)) >> (52 - GAMMA_BITS)
 EXPONENT_BITS = 0x7FF0000000000000
 # the largest |off| of a sure power, over 2^e for a y in [2^e, 2^(e+1)) (ulp 2^(e-52))
 _SURE = (0.5 - GAMMA_MARGIN) * 2.0**-52
@@ -100,6 +100,7 @@ FRACTION_BITS = 0x000FFFFFFFFFFFFF
 
 
 def _fma_codegen(context, builder, signature, args):
+    """A call of LLVM's ``llvm.fma.f64``: a b + c rounded once."""
     double = ir.DoubleType()
     fma = builder.module.declare_intrinsic(
         "llvm.fma", [double], ir.FunctionType(double, [double] * 3)
@@ -200,13 +201,13 @@ def _power(u: float) -> tuple[float, bool]:  # pragma: no cover
     ``GAMMA_MARGIN`` ulp from a midpoint (and not at a power of two, where the ulp below
     is half the ulp above)."""
     j = (bits_of(u) >> (52 - GAMMA_BITS)) - FIRST_INDEX
-    inside = 0 <= j < GAMMA_HIGH.size
-    j = min(max(j, 0), GAMMA_HIGH.size - 1)
+    inside = 0 <= j < POWER_HIGH.size
+    j = min(max(j, 0), POWER_HIGH.size - 1)
     centre = double_of(
         (bits_of(u) >> (52 - GAMMA_BITS) << (52 - GAMMA_BITS)) | (1 << (51 - GAMMA_BITS))
     )
     r = 1.0 / centre
-    high, low = GAMMA_HIGH[j], GAMMA_LOW_PART[j]
+    high, low = POWER_HIGH[j], POWER_LOW[j]
     p = u * r
     z_high = p - 1.0  # exact (Sterbenz), p in [0.99, 1.01]
     z_low = fma(u, r, -p)  # exact: u r = p + z_low
