@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import functools
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = [
     "bilinear",
@@ -27,7 +28,7 @@ __all__ = [
 ]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _dy(f, y, x):  # pragma: no cover
     """``np.gradient(f, axis=0)`` at ``(y, x)``: central inside, one-sided at the border."""
     height = f.shape[0]
@@ -38,7 +39,7 @@ def _dy(f, y, x):  # pragma: no cover
     return f[y, x] - f[y - 1, x]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _dx(f, y, x):  # pragma: no cover
     """``np.gradient(f, axis=1)`` at ``(y, x)``."""
     width = f.shape[1]
@@ -49,7 +50,7 @@ def _dx(f, y, x):  # pragma: no cover
     return f[y, x] - f[y, x - 1]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _rows_apart(f, y):  # pragma: no cover
     """The rows ``np.gradient(f, axis=0)`` subtracts at row ``y`` and the factor of their
     difference: ``(f[y + 1], f[y - 1], 0.5)`` inside, ``(f[1], f[0], 1.0)`` at the top,
@@ -63,7 +64,7 @@ def _rows_apart(f, y):  # pragma: no cover
     return f[y], f[y - 1], 1.0
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _row_derivatives(f, y, dy, dx):  # pragma: no cover
     """Row ``y`` of ``np.gradient(f)`` into ``dy`` and ``dx``: the cases of the border
     chosen once per row and at the row's two ends, so the inside is one loop without
@@ -79,7 +80,7 @@ def _row_derivatives(f, y, dy, dx):  # pragma: no cover
     dx[width - 1] = row[width - 1] - row[width - 2]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def gradient(f):  # pragma: no cover
     """``np.gradient(f)`` of a 2-D array (both sides at least 2 long), ``(d/dy, d/dx)``."""
     height, width = f.shape
@@ -90,7 +91,7 @@ def gradient(f):  # pragma: no cover
     return gy, gx
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def saddle_response(smooth):  # pragma: no cover
     r""":math:`-(I_{xx} I_{yy} - I_{xy} I_{yx})` with every derivative by ``np.gradient``
     (one pass over the first derivatives; the second ones a row at a time)."""
@@ -108,7 +109,7 @@ def saddle_response(smooth):  # pragma: no cover
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def saddle_peaks(response, radius):  # pragma: no cover
     """Rows and columns (row-major order) of the pixels at least ``radius + 1`` from the
     border with a positive response equal to the maximum of their ``2 radius + 1``
@@ -156,7 +157,7 @@ def saddle_peaks(response, radius):  # pragma: no cover
     return np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _peak_of(response, top, left, span, value):  # pragma: no cover
     """No pixel of the ``span × span`` square at ``(top, left)`` exceeds ``value`` (each
     row read whole, through a view indexed from 0)."""
@@ -170,7 +171,7 @@ def _peak_of(response, top, left, span, value):  # pragma: no cover
     return True
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def parabola_peaks(response, rows, cols):  # pragma: no cover
     """``(x, y)`` of each peak ``(rows[i], cols[i])`` of ``response`` placed by a parabola
     through its 3 samples along each axis, the offset within ±0.5 (a flat or upward
@@ -198,7 +199,7 @@ def parabola_peaks(response, rows, cols):  # pragma: no cover
     return out
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def bilinear(values, x, y):  # pragma: no cover
     """``values`` at ``(x, y)`` interpolated linearly; 0 outside ``[0, W-1] × [0, H-1]``."""
     height, width = values.shape
@@ -215,7 +216,7 @@ def bilinear(values, x, y):  # pragma: no cover
     return (1.0 - wy) * top + wy * bottom
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def sample(values, xs, ys):  # pragma: no cover
     """``values`` at the points ``(xs[i], ys[i])`` (flat arrays), see :func:`bilinear`."""
     out = np.empty(xs.size)
@@ -224,7 +225,7 @@ def sample(values, xs, ys):  # pragma: no cover
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def gradient_samples(smooth, xs, ys):  # pragma: no cover
     """:func:`sample` of both images of :func:`gradient` of ``smooth`` at the points, the
     four pixels' gradients computed where read: ``(d/dx, d/dy)``."""

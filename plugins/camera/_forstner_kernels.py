@@ -9,15 +9,15 @@ bound is 1e-9 px), a window crossing the border sums sample by sample, in order.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from ..shared.jit import njit
 from ._corner_kernels import _dx, _dy
 
 __all__ = ["forstner"]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _axis_samples(q, half, length, first, second, weight, inside):  # pragma: no cover
     """For the ``2 half + 1`` positions ``q + o`` (o = −half … half) along one axis of
     ``length`` pixels, what :func:`bilinear` derives from each: the lower and upper pixel
@@ -32,7 +32,7 @@ def _axis_samples(q, half, length, first, second, weight, inside):  # pragma: no
         weight[c] = p - lower
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _forstner_sums(smooth, qx, qy, half, weight, columns, rows):  # pragma: no cover
     """Förstner's normal equations ``(axx, axy, ayy, bx, by)`` of one corner at
     ``(qx, qy)``: the window's samples in row-major order, each as :func:`bilinear` gives
@@ -67,7 +67,7 @@ def _forstner_sums(smooth, qx, qy, half, weight, columns, rows):  # pragma: no c
     return axx, axy, ayy, bx, by
 
 
-@numba.njit(cache=True, nogil=True, fastmath=True)
+@njit(cache=True, nogil=True, fastmath=True)
 def _forstner_sums_inside(smooth, qx, qy, half, weight, across, down):  # pragma: no cover
     """:func:`_forstner_sums` of a window whose samples, their right and lower pixels and
     those pixels' neighbours all lie inside the image: every sample has the same weights
@@ -109,7 +109,7 @@ def _forstner_sums_inside(smooth, qx, qy, half, weight, across, down):  # pragma
     return axx, axy, ayy, bx, by
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def forstner(smooth, corners, half, weight, which, iterations):  # pragma: no cover
     """Förstner's iteration for every corner at once (see ``refine_corners``): the window's
     offsets are the ``(2 half + 1)²`` integer ones, row-major (x fastest), corner ``i``'s

@@ -9,15 +9,15 @@ is grown in turn. The steps are ``_corners._Grower``'s, compiled as one call.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from ..shared.jit import njit
 from ._corner_kernels import bilinear
 
 __all__ = ["grid_homography", "grow", "next_row", "x_junctions"]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _normalising(points):  # pragma: no cover
     """Hartley's similarity (``geometry.normalising_transform``) as ``(scale, cx, cy)``."""
     n = points.shape[0]
@@ -34,7 +34,7 @@ def _normalising(points):  # pragma: no cover
     return (np.sqrt(2.0) / spread if spread > 0 else 1.0), cx, cy
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def grid_homography(src, dst):  # pragma: no cover
     """Normalised DLT by the 9×9 normal equations (see ``_corners._grid_homography``):
     ``(True, H)`` with :math:`H_{33} = 1`, or ``(False, zeros)`` when degenerate."""
@@ -69,7 +69,7 @@ def grid_homography(src, dst):  # pragma: no cover
     return True, h / h[2, 2]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _strongest_near(candidates, x, y, radius):  # pragma: no cover
     """The first (strongest) candidate within ``radius`` of ``(x, y)``, or -1."""
     for i in range(candidates.shape[0]):
@@ -80,7 +80,7 @@ def _strongest_near(candidates, x, y, radius):  # pragma: no cover
     return -1
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def x_junctions(smooth, points, radius, cos, sin, max_asymmetry):  # pragma: no cover
     """Every point is point-symmetric at its ``radius`` (``_corners._Photo.x_junctions``)."""
     for i in range(points.shape[0]):
@@ -100,7 +100,7 @@ def x_junctions(smooth, points, radius, cos, sin, max_asymmetry):  # pragma: no 
     return True
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def next_row(candidates, grid, smooth, tolerance, cos, sin, max_asymmetry):  # pragma: no cover
     """The row after the last of ``grid`` (``_corners._Grower._next_row``): ``(True, fit,
     indices)`` or ``(False, 0, empty)``. A homography fitted to the last 3 rows predicts it,
@@ -152,7 +152,7 @@ def next_row(candidates, grid, smooth, tolerance, cos, sin, max_asymmetry):  # p
     return True, fit / width, index
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _rot90(grid, turn):  # pragma: no cover
     """``np.rot90(grid, turn)`` for ``turn`` in 0 … 3, as a new array."""
     height, width = grid.shape
@@ -173,7 +173,7 @@ def _rot90(grid, turn):  # pragma: no cover
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def grow(
     candidates, grid, smooth, columns, rows, tolerance, cos, sin, max_asymmetry
 ):  # pragma: no cover

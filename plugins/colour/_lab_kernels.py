@@ -42,8 +42,10 @@ from typing import cast
 
 import numpy as np
 from llvmlite import ir  # type: ignore[import-untyped]  # numba's code generator, no stubs
-from numba import njit, types
+from numba import types
 from numba.extending import intrinsic, overload
+
+from ..shared.jit import njit
 
 __all__ = ["GAMMA_MARGIN", "rgb_to_lab_single", "srgb_levels", "srgb_linear"]
 

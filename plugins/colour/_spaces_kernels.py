@@ -10,7 +10,8 @@ branch); here nothing but the output is written.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..shared.jit import njit
 
 __all__ = ["rgb_to_hsv", "rgb_to_hsv_single", "rgb_to_lab", "rgb_to_linear"]
 

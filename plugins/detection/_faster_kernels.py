@@ -4,13 +4,14 @@ layer, trained end to end). Imported on first use: numba loads slowly."""
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = ["roi_max_pool_argmax"]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def roi_max_pool_argmax(features, rois, size):  # pragma: no cover (compiled)
     """Max pooling of ``features`` (C, H, W) over each ROI (R, 4) int64 (x0, y0, x1, y1),
     exclusive ends, inside the map, into ``size`` × ``size`` cells (the cells of
@@ -42,7 +43,7 @@ def roi_max_pool_argmax(features, rois, size):  # pragma: no cover (compiled)
     return out, where
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def greedy_nms(boxes, iou, most):  # pragma: no cover (compiled)
     """Greedy non-maximum suppression of ``boxes`` (N, 4) already sorted best first: the
     indices of the kept boxes (each overlapping no earlier kept box by IoU above ``iou``),

@@ -4,13 +4,14 @@ operation expresses without building a ragged index."""
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = ["roi_max_pool"]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def roi_max_pool(features, rois, size):  # pragma: no cover (compiled)
     """Max pooling of ``features`` (C, H, W) over each ROI (R, 4) int64 (x0, y0, x1, y1),
     exclusive ends, inside the map, into ``size`` × ``size`` cells: cell (i, j) spans rows

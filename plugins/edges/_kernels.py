@@ -12,13 +12,14 @@ besides the output mask.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = ["canny_mask", "gradient_magnitude", "suppress_non_maxima"]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _sample(magnitude, y, x, fy, fx):
     """Magnitude at ``(y + fy, x + fx)`` for |fx|, |fy| <= 1, one of them ±1, edge-replicated."""
     height, width = magnitude.shape
@@ -39,7 +40,7 @@ def _sample(magnitude, y, x, fy, fx):
     return total
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _is_maximum(dx, dy, magnitude, y, x):
     """Whether pixel ``(y, x)`` is a maximum along the gradient direction: above the
     neighbour behind, at least the one ahead, "ahead" pointing to increasing x (to
@@ -55,7 +56,7 @@ def _is_maximum(dx, dy, magnitude, y, x):
     return m >= _sample(magnitude, y, x, uy, ux) and m > _sample(magnitude, y, x, -uy, -ux)
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def suppress_non_maxima(dx, dy, magnitude, low):
     """Mask of the pixels with ``magnitude >= low`` (and > 0) that :func:`_is_maximum` keeps."""
     height, width = magnitude.shape
@@ -68,7 +69,7 @@ def suppress_non_maxima(dx, dy, magnitude, low):
     return keep
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def canny_mask(dx, dy, magnitude, low, high):
     """Canny's edges: the non-maxima suppressed (:func:`_is_maximum`), then hysteresis by a
     flood from every kept pixel of ``magnitude >= high`` through the kept pixels,
@@ -103,7 +104,7 @@ def canny_mask(dx, dy, magnitude, low, high):
     return edges
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def gradient_magnitude(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:  # pragma: no cover
     """``np.hypot(dx, dy)`` of float32 gradients, to the bit: each square and their sum
     in float64 (the squares are exact there), one square root, rounded to float32, as

@@ -17,15 +17,15 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from ..fitting._kernels import draw_sample, iterations_needed
+from ..shared.jit import njit
 
 __all__ = ["ransac_fundamental"]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _normalising(x, y):  # pragma: no cover - compiled
     """(scale, centre x, centre y) of Hartley's similarity (``_geometry._normalising``)."""
     n = x.shape[0]
@@ -37,7 +37,7 @@ def _normalising(x, y):  # pragma: no cover - compiled
     return math.sqrt(2.0) / max(spread / n, 1e-12), cx, cy
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _similarity(scale, cx, cy):  # pragma: no cover - compiled
     t = np.zeros((3, 3))
     t[0, 0] = scale
@@ -48,7 +48,7 @@ def _similarity(scale, cx, cy):  # pragma: no cover - compiled
     return t
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _product(x, y):  # pragma: no cover - compiled
     """3 × 3 matrix product in a loop (``@`` calls BLAS: a microsecond each at this size)."""
     out = np.zeros((3, 3))
@@ -59,7 +59,7 @@ def _product(x, y):  # pragma: no cover - compiled
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def eight_point_sample(a, b, sample):  # pragma: no cover - compiled
     """(F, True) from the correspondences ``sample`` of a, b; (zeros, False) if degenerate."""
     n = sample.shape[0]
@@ -99,7 +99,7 @@ def eight_point_sample(a, b, sample):  # pragma: no cover - compiled
     return F / norm, True
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def null_vector_8x9(design):  # pragma: no cover - compiled
     """(unit null vector of the 8 × 9 ``design``, whether its singular values have
     σ₈ < 10⁻⁹ σ₁): the 8-point algorithm's SVD and test, by Householder QR of designᵀ.
@@ -167,7 +167,7 @@ def null_vector_8x9(design):  # pragma: no cover - compiled
     return vt[8].copy(), singular[7] < 1e-9 * singular[0]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _sampson(F, xa, ya, xb, yb):  # pragma: no cover - compiled
     """The Sampson distance of one pair ``(xa, ya)`` ↔ ``(xb, yb)`` under ``F``."""
     fa0 = F[0, 0] * xa + F[0, 1] * ya + F[0, 2]
@@ -180,7 +180,7 @@ def _sampson(F, xa, ya, xb, yb):  # pragma: no cover - compiled
     return math.sqrt(algebraic * algebraic / denominator)
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def sampson_inliers(F, a, b, threshold, out):  # pragma: no cover - compiled
     """``out[i]`` = Sampson distance of pair i below ``threshold``; returns their count."""
     found = 0
@@ -191,7 +191,7 @@ def sampson_inliers(F, a, b, threshold, out):  # pragma: no cover - compiled
     return found
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def ransac_fundamental(a, b, threshold, confidence, max_iterations, rng):  # pragma: no cover
     """(best F, its inlier mask, samples drawn, whether any sample gave a model): the loop of
     :func:`~graphvision_plugins.fitting.ransac` with 8-point samples and Sampson scores."""
@@ -214,7 +214,7 @@ def ransac_fundamental(a, b, threshold, confidence, max_iterations, rng):  # pra
     return best, best_inliers, drawn, best_count >= 0
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def triangulate_dlt(Pa, Pb, a, b):  # pragma: no cover - compiled
     """:func:`._geometry.triangulate_linear` point by point: the right singular vector of the
     smallest singular value of the 4 × 4 DLT rows (each of unit norm), by one-sided Jacobi
@@ -248,7 +248,7 @@ def triangulate_dlt(Pa, Pb, a, b):  # pragma: no cover - compiled
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _jacobi_columns(A, V):  # pragma: no cover - compiled
     """Rotate the columns of ``A`` until they are orthogonal (A V = U Σ), V in ``V``."""
     m = A.shape[1]
@@ -281,7 +281,7 @@ def _jacobi_columns(A, V):  # pragma: no cover - compiled
             break
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def sampson_distances(F, a, b):  # pragma: no cover - compiled
     """:func:`._geometry.sampson_distance`, compiled (the residuals Levenberg-Marquardt
     evaluates some fifty times per refinement)."""
@@ -291,12 +291,12 @@ def sampson_distances(F, a, b):  # pragma: no cover - compiled
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _cross(x, y, z):  # pragma: no cover - compiled
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _rotation(x, y, z):  # pragma: no cover - compiled
     """``camera._projection.rotation_from_vector`` (Rodrigues' formula), compiled."""
     theta = math.sqrt(x * x + y * y + z * z)
@@ -306,7 +306,7 @@ def _rotation(x, y, z):  # pragma: no cover - compiled
     return np.eye(3) + math.sin(theta) * k + (1.0 - math.cos(theta)) * (k @ k)
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def fundamental_residuals(x, u0, vt0, a, b):  # pragma: no cover - compiled
     """Sampson distances under :math:`F = R(x_{0:3}) U_0 \\operatorname{diag}(1, x_6, 0)
     V_0^T R(x_{3:6})^T` (``_geometry.refine_fundamental``'s parametrisation)."""
@@ -318,7 +318,7 @@ def fundamental_residuals(x, u0, vt0, a, b):  # pragma: no cover - compiled
     return sampson_distances(u @ middle @ vt, a, b)
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def pose_residuals(x, R, t, e1, e2, ka_inv, kb_inv, a, b):  # pragma: no cover - compiled
     """Sampson distances under :math:`F = K_b^{-T} [t(x)]_\\times R(x_{0:3}) R K_a^{-1}`,
     :math:`t(x) \\propto t + x_3 e_1 + x_4 e_2` (``_geometry.refine_pose``'s parametrisation)."""
@@ -329,14 +329,14 @@ def pose_residuals(x, R, t, e1, e2, ka_inv, kb_inv, a, b):  # pragma: no cover -
     return sampson_distances(kb_inv.T @ cross @ rotation @ ka_inv, a, b)
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _step(value):  # pragma: no cover - compiled
     """SciPy's forward-difference step for ``value`` (``approx_derivative``, '2-point')."""
     sign = 1.0 if value >= 0 else -1.0
     return math.sqrt(np.finfo(np.float64).eps) * sign * max(1.0, abs(value))
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def fundamental_jacobian(x, u0, vt0, a, b):  # pragma: no cover - compiled
     """Forward differences of :func:`fundamental_residuals`, SciPy's ``'2-point'`` steps and
     arithmetic (the same Jacobian, without a Python call per column)."""
@@ -349,7 +349,7 @@ def fundamental_jacobian(x, u0, vt0, a, b):  # pragma: no cover - compiled
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def pose_jacobian(x, R, t, e1, e2, ka_inv, kb_inv, a, b):  # pragma: no cover - compiled
     """Forward differences of :func:`pose_residuals`, as :func:`fundamental_jacobian`."""
     f0 = pose_residuals(x, R, t, e1, e2, ka_inv, kb_inv, a, b)

@@ -19,7 +19,8 @@ References
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..shared.jit import njit
 
 __all__ = ["octave_keypoints", "upsample_twice"]
 

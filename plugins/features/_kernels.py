@@ -20,13 +20,14 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = ["descriptor_histograms", "orientation_histograms"]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _gradient(image, magnitude, angle, done, y, x):  # pragma: no cover
     """Fill the gradient of inner pixel (y, x) of ``image`` if not yet computed."""
     if not done[y, x]:
@@ -37,7 +38,7 @@ def _gradient(image, magnitude, angle, done, y, x):  # pragma: no cover
         done[y, x] = True
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def orientation_histograms(image, magnitude, angle, done, cx, cy, sigma, bins):  # pragma: no cover
     r"""Smoothed orientation histograms (Lowe 2004, section 5) of keypoints in one level.
 
@@ -74,7 +75,7 @@ def orientation_histograms(image, magnitude, angle, done, cx, cy, sigma, bins): 
     return out
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _vote(hist, rbin, cbin, obin, weight):  # pragma: no cover
     """Trilinear vote of ``weight`` at fractional (row, column, orientation) bin."""
     r0, c0, o0 = int(math.floor(rbin)), int(math.floor(cbin)), int(math.floor(obin))
@@ -87,7 +88,7 @@ def _vote(hist, rbin, cbin, obin, weight):  # pragma: no cover
             hist[r0 + 1 + dr, c0 + 1 + dc, o0 + 1] += wrc * fo
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _row_span(cos_t, sin_t, oy, reach, cx):  # pragma: no cover
     r"""Columns (a pixel wider each side) of one row that can fall in the rotated window.
 
@@ -108,7 +109,7 @@ def _row_span(cos_t, sin_t, oy, reach, cx):  # pragma: no cover
     return int(math.floor(low + cx)) - 1, int(math.ceil(high + cx)) + 1
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _describe(hist, image, magnitude, angle, done, cx, cy, w, theta, cells, bins):
     r"""Accumulate one keypoint's raw histogram into ``hist`` (cells + 2, cells + 2, bins + 2).
 
@@ -153,7 +154,7 @@ def _describe(hist, image, magnitude, angle, done, cx, cy, w, theta, cells, bins
             _vote(hist, rbin, cbin, relative * (bins / two_pi), weight)
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def descriptor_histograms(image, magnitude, angle, done, cx, cy, width, theta, cells, bins):
     """Raw (cells × cells × bins) histograms for keypoints at (cx, cy) in one pyramid level.
 

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..shared.jit import njit
 from ._padded_rows import fill_line
 
 __all__ = ["correlate_2d"]

@@ -27,8 +27,8 @@ _HEADER = '''"""The 5×5 median's pruned selection network as straight-line numb
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..shared.jit import njit
 from ._median_kernels import _advance, lower, upper
 
 __all__ = ["median_5x5"]

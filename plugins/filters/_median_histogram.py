@@ -23,7 +23,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from ..shared.jit import njit
 
 __all__ = ["LEVELS", "level_codes", "median_by_histogram"]
 

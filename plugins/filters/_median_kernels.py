@@ -6,9 +6,9 @@ from collections.abc import Callable
 from typing import cast
 
 import numpy as np
-from numba import njit
 from numba.extending import intrinsic
 
+from ..shared.jit import njit
 from ._padded_rows import fill_line
 
 __all__ = ["lower", "median_by_network", "upper"]

@@ -4,8 +4,8 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..shared.jit import njit
 from ._median_kernels import _advance, lower, upper
 
 __all__ = ["median_5x5"]

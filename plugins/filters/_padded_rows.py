@@ -7,7 +7,8 @@ padded position, −1 for zero), so no padded copy of the image is made.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..shared.jit import njit
 
 __all__ = ["fill_line"]
 

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import math
 
-import numba
+from ..shared.jit import njit
 
 __all__ = ["draw_sample", "iterations_needed"]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def draw_sample(rng, count, out):  # pragma: no cover - compiled
     """``out[:] = rng.choice(count, size=len(out), replace=False)`` (for len(out) ≤ 200:
     NumPy's Floyd branch, which every pool of 10,000 or fewer and every small sample takes)."""
@@ -33,7 +33,7 @@ def draw_sample(rng, count, out):  # pragma: no cover - compiled
         out[i], out[k] = out[k], out[i]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def iterations_needed(outlier_ratio, sample_size, confidence):  # pragma: no cover - compiled
     """:func:`~._ransac.ransac_iterations`, compiled (the same floating-point operations;
     counts beyond 10^18, which bound a loop to ``max_iterations`` anyway, are 10^18)."""

@@ -11,15 +11,15 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from ..fitting._kernels import draw_sample, iterations_needed
+from ..shared.jit import njit
 
 __all__ = ["ransac_homography"]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _normalised(points):  # pragma: no cover - compiled
     """(T points, T) with T of :func:`._homography.normalising_transform`."""
     n = points.shape[0]
@@ -37,7 +37,7 @@ def _normalised(points):  # pragma: no cover - compiled
     return out, scale, cx, cy
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _collinear_triple(p):  # pragma: no cover - compiled
     for i, j, k in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)):
         u0, u1 = p[j, 0] - p[i, 0], p[j, 1] - p[i, 1]
@@ -47,7 +47,7 @@ def _collinear_triple(p):  # pragma: no cover - compiled
     return False
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def dlt(src, dst):  # pragma: no cover - compiled
     """(H, True) through 4 or more correspondences, (zeros, False) where
     :func:`._homography.estimate_homography` returns None."""
@@ -78,7 +78,7 @@ def dlt(src, dst):  # pragma: no cover - compiled
     return h / h[2, 2], True
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def transfer_inliers(h, src, dst, threshold, out):  # pragma: no cover - compiled
     """``out[i]`` = forward transfer error of match i below ``threshold``; their count."""
     found = 0
@@ -93,7 +93,7 @@ def transfer_inliers(h, src, dst, threshold, out):  # pragma: no cover - compile
     return found
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def ransac_homography(src, dst, threshold, confidence, max_iterations, rng):  # pragma: no cover
     """(best H, its inlier mask, samples drawn, whether any sample gave a model)."""
     count = src.shape[0]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from ..shared.jit import njit
 
 __all__ = ["two_smallest"]
 

@@ -15,7 +15,8 @@ the bit as blurring the whole level and keeping every second row and column.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..shared.jit import njit
 
 __all__ = ["gaussian_chain"]
 

@@ -13,7 +13,8 @@ output (two image-sized float64 tables cost page faults and memory traffic at 20
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..shared.jit import njit
 
 __all__ = ["normalise_response"]
 

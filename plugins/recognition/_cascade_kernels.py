@@ -10,8 +10,9 @@ places an MB-LBP cascade's block corners for ``_lbp_kernels.scan_level``.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = ["corner_offsets", "scan_haar_cascade"]
 
@@ -27,7 +28,7 @@ def corner_offsets(rects: np.ndarray, feature: np.ndarray, stride: int) -> np.nd
     return np.ascontiguousarray((rows * stride + cols).reshape(len(feature), 16), np.int64)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _window_statistics(integral, squared, top, left, window_h, window_w, area, sigma_floor):
     """Mean and standard deviation (at least ``sigma_floor``) of the window at (top, left),
     from the integral images of the level and of its square (:func:`scan_haar_cascade`)."""
@@ -41,7 +42,7 @@ def _window_statistics(integral, squared, top, left, window_h, window_w, area, s
     return mean, sigma
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _haar_value(flat, base, corners, signs, t):
     """Stump ``t``'s Haar-like feature on the window at flat offset ``base``: the signed sum
     of its rectangles' sums (:func:`scan_haar_cascade`)."""
@@ -55,7 +56,7 @@ def _haar_value(flat, base, corners, signs, t):
     return value
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def scan_haar_cascade(
     integral,
     squared,

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = ["cell_histograms"]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def cell_histograms(
     images: np.ndarray, orientations: int, rows: int, cols: int, edges: np.ndarray
 ) -> np.ndarray:

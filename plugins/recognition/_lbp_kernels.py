@@ -8,8 +8,9 @@ stage it fails (early rejection), so most windows cost the first stage's few fea
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = ["TIE", "padded_integral", "resample_integral", "scan_level"]
 
@@ -20,7 +21,7 @@ same blocks differ by rounding (about 1e-10 at 512 × 512), far below one gray l
 over one pixel (1/255)."""
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def padded_integral(image):
     """The zero-padded integral image of a 2-D image, float64 (H + 1, W + 1): the
     sum of the pixels above and left of each corner, summed down the columns first and
@@ -37,7 +38,7 @@ def padded_integral(image):
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def resample_integral(padded, scale):
     r"""The zero-padded integral image of the image reduced by ``scale``:
     :math:`S_s(v, u) = F(v s, u s)`, F the padded integral ``padded`` interpolated
@@ -65,7 +66,7 @@ def resample_integral(padded, scale):
     return out
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _code(flat, base, off, k):
     """The 8-bit MB-LBP code of weak classifier k's 3 × 3 blocks, whose 16 corners
     (row-major) are ``flat[base + off[k]]``: bit 7 (top-left block) to bit 0
@@ -108,7 +109,7 @@ def _code(flat, base, off, k):
     )
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def scan_level(integral, window_h, window_w, step, offsets, subsets, leaves, stage_end, thresholds):
     """Windows of one level that pass every stage.
 
@@ -162,7 +163,7 @@ def scan_level(integral, window_h, window_w, step, offsets, subsets, leaves, sta
     return out[:found].copy(), score[:found].copy(), evaluated
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _grown(array, capacity):
     """``array`` copied into a new one of ``capacity`` rows."""
     bigger = np.empty((capacity, *array.shape[1:]), array.dtype)

@@ -9,13 +9,14 @@ neighbour meeting the up-left or left one records an equivalence.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = ["two_pass"]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _find(parent, i):
     while parent[i] != i:
         parent[i] = parent[parent[i]]  # path halving
@@ -23,7 +24,7 @@ def _find(parent, i):
     return i
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _union(parent, a, b):
     a = _find(parent, a)
     b = _find(parent, b)
@@ -34,7 +35,7 @@ def _union(parent, a, b):
     return b
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def two_pass(mask, eight):
     """Label ``mask``; return (int32 labels numbered in raster order, region count)."""
     rows, cols = mask.shape

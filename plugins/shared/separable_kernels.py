@@ -20,8 +20,9 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from numba import njit
 from numba.extending import overload
+
+from .jit import njit
 
 __all__ = ["correlate_both", "correlate_both_halved"]
 

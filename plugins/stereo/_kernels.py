@@ -11,7 +11,9 @@ as in float32 and with the same result.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from ..shared.jit import njit
 
 __all__ = [
     "aggregate_path",

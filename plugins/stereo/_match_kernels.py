@@ -17,9 +17,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.extending import intrinsic
 
+from ..shared.jit import njit
 from ._resolve_kernels import resolve_row
 
 __all__ = [

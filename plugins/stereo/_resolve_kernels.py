@@ -5,7 +5,8 @@ image's winners for the left-right check (see :mod:`._match_kernels`)."""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..shared.jit import njit
 
 __all__ = [
     "resolve_row",

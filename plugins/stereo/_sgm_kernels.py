@@ -19,8 +19,8 @@ that it fits), so the order of the paths does not change it: the result is
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..shared.jit import njit
 from ._match_kernels import _across, _block_rows, _next_columns
 from ._resolve_kernels import resolve_row
 

@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = ["integral_mean_std"]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def integral_mean_std(padded, window, rows, cols):
     """Mean and standard deviation of each ``window × window`` block of ``padded``.
 

@@ -1,0 +1,105 @@
+"""``njit``: numba's, with an on-disk cache that also knows the kernels a kernel calls.
+
+numba keys a cached kernel on the bytes of the file that defines it (and the
+kernel's own bytecode), not on the kernels it calls: when only a callee in
+another file changes (``fitting._kernels.draw_sample`` under
+``geometry._kernels.ransac_homography``), the caller keeps loading its old
+machine code, with the old callee compiled in. A checkout updated by ``git
+pull``, or a kernel edited by hand, then runs code that is no longer in the
+sources, and graphvision's cache (whose keys do cover the callee) would keep
+its wrong values under the new key.
+
+Every kernel here is compiled with :func:`njit`, which is ``numba.njit`` whose
+cache adds to each entry's key a digest of the files of every kernel reachable
+from it (its globals, and the attributes it reads of a module it holds,
+followed to the end): a changed callee is a cache miss, compiled anew.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import inspect
+import types
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numba
+from numba.core.caching import FunctionCache
+from numba.core.dispatcher import Dispatcher
+
+__all__ = ["njit"]
+
+
+def njit(**options: Any) -> Callable[[Callable[..., Any]], Any]:
+    """``numba.njit(**options)``; with ``cache=True`` the cache also covers the callees."""
+
+    def compile_later(func: Callable[..., Any]) -> Any:
+        kernel = numba.njit(**options)(func)
+        if options.get("cache"):
+            kernel._cache = _CalleeAwareCache(kernel.py_func)
+        return kernel
+
+    return compile_later
+
+
+class _CalleeAwareCache(FunctionCache):
+    """numba's function cache, its index key extended by :func:`callees_digest`."""
+
+    def _index_key(self, sig: Any, codegen: Any) -> tuple[Any, ...]:
+        return (*super()._index_key(sig, codegen), callees_digest(self._py_func))
+
+
+def callees_digest(func: Callable[..., Any]) -> str:
+    """sha256 over the source files of every kernel ``func`` reaches (itself excluded:
+    numba's own stamp covers its file), each file's path and bytes, in path order."""
+    files = {Path(inspect.getfile(kernel.py_func)) for kernel in _reachable(func)}
+    files.discard(Path(inspect.getfile(func)))
+    digest = hashlib.sha256()
+    for path in sorted(files):
+        state = path.stat()
+        digest.update(_file_digest(path, state.st_mtime_ns, state.st_size))
+    return digest.hexdigest()
+
+
+@functools.cache
+def _file_digest(path: Path, mtime_ns: int, size: int) -> bytes:
+    """sha256 of ``path``'s name and bytes (read again when its time or size changes)."""
+    return hashlib.sha256(str(path).encode() + b"\0" + path.read_bytes()).digest()
+
+
+def _reachable(func: Callable[..., Any]) -> Iterator[Dispatcher]:
+    """The compiled kernels ``func`` calls, and those they call, each once."""
+    seen: set[int] = set()
+    waiting = [func]
+    while waiting:
+        for kernel in _called(waiting.pop()):
+            if id(kernel) not in seen:
+                seen.add(id(kernel))
+                waiting.append(kernel.py_func)
+                yield kernel
+
+
+def _called(func: Callable[..., Any]) -> Iterator[Dispatcher]:
+    """The kernels among ``func``'s globals that its code names, directly or as an
+    attribute of a module it names."""
+    names = _names(func.__code__)
+    for name in names:
+        found = func.__globals__.get(name)
+        if isinstance(found, Dispatcher):
+            yield found
+        elif isinstance(found, types.ModuleType):
+            for attribute in names:
+                held = getattr(found, attribute, None)
+                if isinstance(held, Dispatcher):
+                    yield held
+
+
+def _names(code: types.CodeType) -> set[str]:
+    """The global and attribute names ``code`` and the code nested in it use."""
+    names = set(code.co_names)
+    for constant in code.co_consts:
+        if isinstance(constant, types.CodeType):
+            names |= _names(constant)
+    return names
