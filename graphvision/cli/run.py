@@ -28,11 +28,8 @@ if TYPE_CHECKING:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from graphvision.errors import RunError
+    from graphvision.execution.folder_lock import only_writer
     from graphvision.execution.folders import check_output_folder
-    from graphvision.execution.run import run
-    from graphvision.execution.sweep import scalar_outputs_of
-    from graphvision.views.progress import RunProgress
 
     graph, registry, overrides, inputs = load_run_arguments(args)
     out_dir = output_folder(args.output_dir)  # checked; made when its first file is written
@@ -40,8 +37,28 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.batch:
         with folders_kept_only_if_used(out_dir):
             return run_batch_command(graph, registry, inputs, overrides, args, progress)
-    if out_dir is not None:  # refuse before running, not after
-        check_output_folder(out_dir, args.output or graph.outputs)
+    if out_dir is None:
+        return _run_once(graph, registry, inputs, overrides, args, progress, None)
+    check_output_folder(out_dir, args.output or graph.outputs)  # refuse before running
+    with folders_kept_only_if_used(out_dir), only_writer(out_dir, f"run of {graph.name}"):
+        return _run_once(graph, registry, inputs, overrides, args, progress, out_dir)
+
+
+def _run_once(
+    graph: Graph,
+    registry: Registry,
+    inputs: dict[str, Any],
+    overrides: dict[str, Any],
+    args: argparse.Namespace,
+    progress: bool,
+    out_dir: Path | None,
+) -> int:
+    """One run of ``graph``, its figures printed and, with ``out_dir``, its folder written."""
+    from graphvision.errors import RunError
+    from graphvision.execution.run import run
+    from graphvision.execution.sweep import scalar_outputs_of
+    from graphvision.views.progress import RunProgress
+
     executor = executor_for(args)
     status = EXIT_OK
     try:

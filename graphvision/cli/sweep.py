@@ -32,6 +32,7 @@ if TYPE_CHECKING:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
+    from graphvision.execution.folder_lock import only_writer
     from graphvision.views.sweep_page import check_sweep_folder
 
     graph, registry, overrides, inputs = load_run_arguments(args)
@@ -48,7 +49,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     out_dir = output_folder(args.output_dir)  # checked; made when the results are written
     assert out_dir is not None  # the option is required
     check_sweep_folder(out_dir)  # before anything runs
-    with folders_kept_only_if_used(out_dir):
+    with folders_kept_only_if_used(out_dir), only_writer(out_dir, f"sweep of {graph.name}"):
         return _sweep(args, graph, registry, overrides, inputs, grid, out_dir)
 
 

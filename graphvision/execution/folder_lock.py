@@ -1,0 +1,102 @@
+"""One writer at a time per output folder.
+
+Two runs or batches writing into one folder at once would undo each other: each
+replaces the other's files, the last ``batch.csv`` wins, and a batch that clears
+what a killed run left in a file's folder could remove files the other is still
+writing. So whatever writes an output folder (``graphvision run -d``, a batch,
+a sweep) holds an exclusive lock on it while it writes: ``fcntl.flock`` on the
+file ``.graphvision-lock`` in the folder, which names the process holding it.
+A second writer is refused at once, with that name, before it runs anything.
+
+The lock belongs to the open file, so a writer killed by ``kill -9`` or a
+power cut holds nothing: the file it leaves behind is taken over by the next
+writer, and removed when that one ends. Where the file system has no
+``flock`` (Windows), nothing is locked.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Iterator
+from pathlib import Path
+
+from graphvision.errors import OutputFolderError
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None  # type: ignore[assignment]
+
+__all__ = ["LOCK_FILE", "only_writer"]
+
+LOCK_FILE = ".graphvision-lock"
+
+
+@contextlib.contextmanager
+def only_writer(directory: Path, doing: str = "run") -> Iterator[None]:
+    """Hold ``directory``'s writer lock for the ``with`` block (``doing``: what for, as the
+    refusal of a second writer names it); the folder is made if it does not exist.
+
+    Raises
+    ------
+    OutputFolderError
+        When another process holds the lock (naming it and what it is doing), or when
+        the lock's name in ``directory`` is taken by something that is not a plain file.
+    """
+    if fcntl is None:  # pragma: no cover - Windows
+        yield
+        return
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / LOCK_FILE
+    descriptor = _locked(path, directory)
+    try:
+        os.ftruncate(descriptor, 0)
+        os.pwrite(descriptor, f"{os.getpid()} {doing}\n".encode(), 0)
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            if _same_file(descriptor, path):
+                path.unlink()
+        os.close(descriptor)
+
+
+def _locked(path: Path, directory: Path) -> int:
+    """An open descriptor of ``path`` holding its exclusive lock."""
+    while True:
+        try:
+            descriptor = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+        except OSError as error:  # a link or a folder by that name: not ours to use
+            raise OutputFolderError(
+                f"output folder {directory} holds {LOCK_FILE}, which is not graphvision's "
+                f"lock file ({error.strerror}): remove it"
+            ) from None
+        try:
+            fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(descriptor, 200, 0).decode(errors="replace").split()
+            os.close(descriptor)
+            raise OutputFolderError(_busy(directory, holder)) from None
+        # its last holder may have removed the file between our open and our lock: then
+        # the lock is on a file nobody else will open, so take the one now at the path
+        if _same_file(descriptor, path):
+            return descriptor
+        os.close(descriptor)
+
+
+def _same_file(descriptor: int, path: Path) -> bool:
+    try:
+        found = path.stat(follow_symlinks=False)
+    except FileNotFoundError:
+        return False
+    held = os.fstat(descriptor)
+    return (found.st_dev, found.st_ino) == (held.st_dev, held.st_ino)
+
+
+def _busy(directory: Path, holder: list[str]) -> str:
+    who = f"process {holder[0]} ({' '.join(holder[1:])})" if holder else "another process"
+    return (
+        f"output folder {directory} is being written by {who}; two writers in one folder "
+        "would replace each other's files: wait for it to finish, or choose another "
+        "--output-dir"
+    )
