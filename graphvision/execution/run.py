@@ -63,6 +63,7 @@ from graphvision.execution.executors import (
     executor_width,
     make_executor,
 )
+from graphvision.execution.heap import keep_freed_memory
 from graphvision.execution.inputs import resolve_input
 from graphvision.execution.limits import current_limits, node_limits, refuse_declared_limits
 from graphvision.execution.peak_memory import check_peak_memory, running_at_once
@@ -158,7 +159,10 @@ def run(
         graph, inputs, outputs, overrides, cache, executor, workers
     )
     limit = BlasLimit()  # one BLAS thread while nodes run here (see graphvision.execution.blas)
-    if cache is None and _runs_here(executor):  # every node runs in this process: ask now
+    here = _runs_here(executor)
+    if here:  # the memory nodes free here is reused without page faults (execution.heap)
+        keep_freed_memory()
+    if cache is None and here:  # every node runs in this process: ask now
         limit.request()
     try:
         return _run(
