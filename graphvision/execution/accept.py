@@ -11,6 +11,7 @@ from graphvision.errors import PortValueError
 from graphvision.execution.inputs import freeze_value
 from graphvision.values.known import checked, frozen_value, note, recall
 from graphvision.values.memory import frozen_in_place
+from graphvision.values.ports import is_plain_array_port
 
 __all__ = ["accepted", "invalid_output"]
 
@@ -18,6 +19,10 @@ getrefcount = sys.getrefcount
 # What ``accepted`` holds of a node's result: its argument, the value and getrefcount's
 # (Python 3.14 counts the stack otherwise: there, nothing is frozen in place)
 _OWN_REFS = 3 if sys.version_info < (3, 14) else -(2**20)
+_TUPLE_REFS = 2  # of a tuple of outputs: its argument and getrefcount's
+# of an array in it that nothing else holds: the tuple, two names (as given, as validated)
+# and getrefcount's
+_IN_TUPLE_REFS = _OWN_REFS + 1
 
 
 def accepted(step: Step, result: Any, held: int, encoded: bool) -> dict[str, Any]:
@@ -46,10 +51,30 @@ def accepted(step: Step, result: Any, held: int, encoded: bool) -> dict[str, Any
                 note(frozen, kind, True, frozen=True)
                 return {port: frozen}
         return {port: frozen_value(kind, value)}
-    outputs = {}
-    for port, value in step.spec.split_outputs(result).items():
+    alone = getrefcount(result) <= held + _TUPLE_REFS  # (counted before the call holds it)
+    return _accepted_outputs(step, result, alone)
+
+
+def _accepted_outputs(step: Step, result: Any, alone: bool) -> dict[str, Any]:
+    """:func:`accepted` of a node with several outputs (a tuple); ``alone``: nothing but the
+    caller holds the tuple, so an array that nothing but the tuple (and this loop) holds is
+    frozen where it lies, as a node's one output is; the others are copied."""
+    outputs, kinds = {}, step.outputs
+    ports = list(step.spec.split_outputs(result))  # (which checks the tuple; an iterator over
+    for index, port in enumerate(ports):  # its pairs would hold the last value once more)
+        kind, value = kinds[port], result[index]
         try:
-            outputs[port] = checked(step.outputs[port], value)
+            if alone and is_plain_array_port(kind) and not recall(value, kind):
+                checked_value = kind.validate(value)
+                if checked_value is value and getrefcount(value) <= _IN_TUPLE_REFS:
+                    frozen = frozen_in_place(value)
+                    if frozen is not None:
+                        note(frozen, kind, True, frozen=True)
+                        outputs[port] = frozen
+                        continue
+                outputs[port] = frozen_value(kind, checked_value)
+                continue
+            outputs[port] = checked(kind, value)
         except PortValueError as error:
             raise invalid_output(port, error) from None
     return outputs

@@ -25,6 +25,8 @@ from itertools import repeat
 from operator import call, is_
 from typing import Any
 
+from numpy import ndarray
+
 from graphvision.cache.keys import known_content_key
 from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, Schedule, Step
@@ -51,6 +53,7 @@ from graphvision.execution.record import (
     intermediates,
     wrapped_failure,
 )
+from graphvision.values.ports import is_plain_array_port
 
 __all__ = ["RunState"]
 
@@ -356,8 +359,10 @@ class RunState:
             made[port] = keys[source]
             if cache is not None:
                 size += cache.put(made[port], step.outputs[port], value)
-            elif port not in step.scalar_outputs:
-                size += value_bytes(step.outputs[port], value)
+            elif port not in step.scalar_outputs:  # (an array's size is its nbytes)
+                kind = step.outputs[port]
+                plain = type(value) is ndarray and is_plain_array_port(kind)
+                size += value.nbytes if plain else value_bytes(kind, value)
         params = step.params
         self.nodes[name] = NodeRecord(
             name, spec.id, "computed", seconds, size, "", dict(params) if params else {}, made,

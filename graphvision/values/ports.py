@@ -62,6 +62,7 @@ __all__ = [
     "freeze",
     "freeze_all",
     "is_frozen",
+    "is_plain_array_port",
 ]
 
 
@@ -284,6 +285,23 @@ class ArrayPort(PortType):
     @classmethod
     def summary(cls, value: np.ndarray) -> str:
         return f"{cls.type_name()} {'×'.join(map(str, value.shape))} {value.dtype}"
+
+
+_PLAIN: dict[type[PortType], bool] = {}
+
+
+def is_plain_array_port(kind: type[PortType]) -> bool:
+    """Whether a value of ``kind`` is its one array as it is: an :class:`ArrayPort` that
+    encodes and decodes it as ``ArrayPort`` does (it may be frozen in place, its size is its
+    ``nbytes``). Worked out once per type."""
+    plain = _PLAIN.get(kind)
+    if plain is None:
+        plain = _PLAIN[kind] = (
+            issubclass(kind, ArrayPort)
+            and kind.encode.__func__ is ArrayPort.encode.__func__  # type: ignore[attr-defined]
+            and kind.decode.__func__ is ArrayPort.decode.__func__  # type: ignore[attr-defined]
+        )
+    return plain
 
 
 class RecordPort(PortType):
