@@ -98,12 +98,13 @@ def git_state(file: Path) -> tuple[str, bool]:
     return _git_state_of(file.resolve())
 
 
-def _git_state_of(file: Path) -> tuple[str, bool]:
-    """:func:`git_state` of a resolved path."""
-    watched = _git_files(str(file.parent))
+def _git_state_of(file: Path, info: os.stat_result | None = None) -> tuple[str, bool]:
+    """:func:`git_state` of a resolved path (``info``: its ``os.stat``, taken by the caller)."""
+    watched = _watched(str(file.parent))
     if watched is None:  # a worktree or a submodule: ask git every time
         return _ask_git(file)
-    stamp = (file, _stat(str(file)), *(_stat(p) for p in watched))
+    mine = (info.st_mtime_ns, info.st_size) if info is not None else _stat(str(file))
+    stamp = (file, mine, *watched)
     known = _GIT_STATES.get(stamp)
     if known is None:
         known = _ask_git(file)
@@ -122,6 +123,32 @@ def _stat(path: str) -> tuple[int, int]:
     except OSError:
         return (0, 0)
     return (info.st_mtime_ns, info.st_size)
+
+
+_WATCHED: dict[str, tuple[list[str], tuple[int, int]]] = {}
+"""The files :func:`_git_files` found for each folder inside a repository, with the stamp of
+its ``HEAD`` then."""
+
+
+def _watched(folder: str) -> list[tuple[int, int]] | None:
+    """The stamps of the files of :func:`_git_files` (None: ask git every time). The walk up
+    to the repository is made again only when ``HEAD``'s stamp changed (another branch,
+    another ref file; ``.git`` gone), so a run makes one system call per file watched (a
+    repository made since inside the one found, nearer the folder, is seen at the next
+    change of the found one's ``HEAD``)."""
+    known = _WATCHED.get(folder)
+    if known is not None:
+        stamps = [_stat(path) for path in known[0]]
+        if stamps[0] == known[1]:
+            return stamps
+    files = _git_files(folder)
+    if not files:  # outside a repository, or ``.git`` a file: walked every time
+        return None if files is None else []
+    stamps = [_stat(path) for path in files]
+    if len(_WATCHED) > 64:
+        _WATCHED.clear()
+    _WATCHED[folder] = (files, stamps[0])
+    return stamps
 
 
 def _git_files(folder: str) -> list[str] | None:
@@ -304,7 +331,7 @@ def describe_run(
         source = _resolved(compiled.graph.source, info)
         record.pipeline_file = str(source)
         record.pipeline_sha256 = _known_sha256(compiled.graph.source, info)
-        record.git_commit, record.git_dirty = _git_state_of(source)
+        record.git_commit, record.git_dirty = _git_state_of(source, info)
     record.inputs = {
         name: _describe_input(value, keys.get((name, ""), "")) for name, value in given.items()
     }

@@ -120,3 +120,32 @@ def test_the_pipeline_files_resolved_path_follows_a_retargeted_link(tmp_path):
     link.symlink_to(second / "p.yaml")
     after = gv.run(graph, registry, inputs={"image": image}).record.pipeline_file
     assert (before, after) == (str(first.resolve() / "p.yaml"), str(second.resolve() / "p.yaml"))
+
+
+def test_a_repository_is_found_once_and_its_files_stat_once_per_run(tmp_path, monkeypatch):
+    """The walk up to ``.git`` is made again only when ``HEAD`` changes: a run then makes one
+    ``os.stat`` per file it watches (the pipeline file, ``HEAD``, the index, the branch's ref),
+    and still sees the repository go."""
+    import os
+    import shutil
+    import subprocess
+
+    folder = tmp_path / "deep" / "er"
+    folder.mkdir(parents=True)
+    (folder / "p.yaml").write_text("version: 1\n")
+    git = ["git", "-C", str(tmp_path), "-c", "user.name=t", "-c", "user.email=t@t"]
+    subprocess.run([*git, "init", "-q"], check=True)
+    subprocess.run([*git, "add", "deep/er/p.yaml"], check=True)
+    subprocess.run([*git, "commit", "-q", "-m", "first"], check=True)
+    commit = subprocess.run(
+        [*git, "rev-parse", "HEAD"], capture_output=True, text=True, check=True
+    ).stdout.strip()
+    file = (folder / "p.yaml").resolve()
+    assert provenance._git_state_of(file) == (commit, False)
+    stats: list[str] = []
+    real_stat = os.stat
+    monkeypatch.setattr(os, "stat", lambda path, *a, **k: stats.append(path) or real_stat(path))
+    assert provenance._git_state_of(file) == (commit, False)
+    assert len(stats) == 4  # (the walk made 3 more: deep/er/.git, deep/.git, .git/HEAD)
+    shutil.rmtree(tmp_path / ".git")
+    assert provenance._git_state_of(file) == ("", False)
