@@ -263,7 +263,7 @@ def _plugin_version(origin: str) -> str:
     """A local plugin file's or folder's SHA-256, else the version of the distribution of the
     module ``origin`` names (an imported module's name is no path: not looked up as one)."""
     if origin in sys.modules:
-        return _distribution_of(origin) or "unknown"
+        return _imported_version(origin)
     try:
         info = os.stat(origin)
     except (OSError, ValueError):  # a module's name, not a path
@@ -273,6 +273,13 @@ def _plugin_version(origin: str) -> str:
     if info is not None and stat.S_ISDIR(info.st_mode):
         return f"sha256 {_folder_sha256(Path(origin))}"
     return _distribution_of(origin) or "unknown"
+
+
+@functools.cache
+def _imported_version(module: str) -> str:
+    """The distribution of an imported ``module``, looked up once per process: the code
+    running is the code imported, whatever is installed over it later."""
+    return _distribution_of(module) or "unknown"
 
 
 _RESOLVED: dict[tuple[Any, ...], Path] = {}
