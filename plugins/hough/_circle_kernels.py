@@ -62,8 +62,10 @@ def fold_plane(plane, k, last, spread, circumference, best, k_best, below, above
     and its first radius, ``below`` and ``above`` the scores of the radii either side of it
     (its own at the ends), ``previous`` the scores of radius ``k - 1``. Equals
     ``scores.max(0)``, ``argmax(0)`` and ``scores[k ± 1]`` of the whole stack of scores,
-    without holding it. Selections without branches, one row at a time, so that the
-    compiler makes SIMD code of them."""  # pragma: no cover
+    without holding it. Selections without branches, one row at a time, every value
+    loaded before any is stored, so that the compiler makes SIMD code of them (a
+    selection that reads an array it also writes, ``high[x] = score if ... else
+    high[x]``, kept the loop scalar, one division at a time: 3.6 of the coins' 11 ms)."""  # pragma: no cover
     height, width = plane.shape
     for y in range(height):
         votes, top, which = plane[y], best[y], k_best[y]
@@ -79,11 +81,12 @@ def fold_plane(plane, k, last, spread, circumference, best, k_best, below, above
             continue
         for x in range(width):
             score = votes[x] * spread / circumference
-            high[x] = score if which[x] == k - 1 else high[x]
-            better = score > top[x]
-            top[x] = score if better else top[x]
-            which[x] = k if better else which[x]
-            low[x] = before[x] if better else low[x]
+            w, t, h, lo, b = which[x], top[x], high[x], low[x], before[x]
+            better = score > t
+            high[x] = score if w == k - 1 else h
+            top[x] = score if better else t
+            which[x] = k if better else w
+            low[x] = b if better else lo
             before[x] = score
         if k == last:
             for x in range(width):
