@@ -177,31 +177,50 @@ def best_over_radii(voters, radii, signs, spread, shape, smoothing):  # pragma: 
 
 
 @numba.njit(cache=True, nogil=True)
+def _shifted_max(out, line, shift):  # pragma: no cover
+    """``out[x] = max(out[x], line[clip(x + shift, 0, size - 1)])``: one shift of a window,
+    the edge replicated; the clipped ends apart so the middle is one SIMD loop."""
+    size = line.size
+    if shift < 0:
+        for x in range(min(-shift, size)):
+            out[x] = max(out[x], line[0])
+        for x in range(-shift, size):
+            out[x] = max(out[x], line[x + shift])
+    else:
+        for x in range(size - shift):
+            out[x] = max(out[x], line[x + shift])
+        for x in range(max(size - shift, 0), size):
+            out[x] = max(out[x], line[size - 1])
+
+
+@numba.njit(cache=True, nogil=True)
 def window_maxima(values, size, floor):  # pragma: no cover
     """``(row, col)`` of the cells equal to the maximum of their ``size × size`` window
     (the image edge replicated, as ``maximum_filter(mode="nearest")``) and above
-    ``floor``, row-major."""
+    ``floor``, row-major. The maximum is taken along rows then down columns, each a
+    maximum of shifted whole rows (the order of a maximum does not change it; the values
+    hold no NaN, being scores)."""
     height, width = values.shape
     before = size // 2
     after = size - 1 - before
-    across = np.empty((height, width))
+    across = values.copy()
     for y in range(height):
-        for x in range(width):
-            best = values[y, max(x - before, 0)]
-            for u in range(max(x - before, 0), min(x + after, width - 1) + 1):
-                best = max(best, values[y, u])
-            across[y, x] = best
+        for shift in range(-before, after + 1):
+            if shift != 0:
+                _shifted_max(across[y], values[y], shift)
+    window = np.empty(width)
     rows = []
     cols = []
     for y in range(height):
+        low, high = max(y - before, 0), min(y + after, height - 1)
+        window[:] = across[low]
+        for v in range(low + 1, high + 1):
+            row = across[v]
+            for x in range(width):
+                window[x] = max(window[x], row[x])
         for x in range(width):
             value = values[y, x]
-            if not value > floor:
-                continue
-            best = across[max(y - before, 0), x]
-            for v in range(max(y - before, 0), min(y + after, height - 1) + 1):
-                best = max(best, across[v, x])
-            if value == best:
+            if value > floor and value == window[x]:
                 rows.append(y)
                 cols.append(x)
     out = np.empty((len(rows), 2), dtype=np.int64)

@@ -16,7 +16,7 @@ from graphvision_plugins.hough._peaks import suppress_close
 from graphvision_plugins.hough._support_kernels import line_support, pruned_support, support_bounds
 
 
-@pytest.mark.parametrize("size", [3, 5, 17])
+@pytest.mark.parametrize("size", [3, 5, 17, 70, 101])  # wider than the rows, or all
 def test_window_maxima_equal_scipy_maximum_filter(size):
     rng = np.random.default_rng(size)
     values = np.round(rng.random((60, 80)) * 20) / 4  # plateaus: ties count as maxima
