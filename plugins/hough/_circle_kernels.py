@@ -3,8 +3,9 @@
 Votes go straight into the accumulator (no ``radii × points`` index arrays), one radius
 at a time folded into the best score over radii (never the whole stack), window maxima are
 taken along rows then down columns, and the greedy suppression of close peaks is one
-loop. The arithmetic is the array form's, operation for operation, so results are the
-same to the bit.
+loop. The spreading of the votes by a Gaussian computes only the columns near a vote
+(votes are sparse), four pairs of taps a pass. The arithmetic is the array form's and
+``smooth_gaussian``'s, operation for operation, so results are the same to the bit.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..shared.separable_kernels import correlate_both
+from ..shared.separable_kernels import _accumulate
 
 __all__ = [
     "best_over_radii",
@@ -22,6 +23,8 @@ __all__ = [
     "vote_plane",
     "window_maxima",
 ]
+
+CHUNK = 64  # columns: the spreading skips the runs of CHUNK columns that hold no vote nearby
 
 
 @numba.njit(cache=True, nogil=True)
@@ -64,8 +67,8 @@ def fold_plane(plane, k, last, spread, circumference, best, k_best, below, above
     ``scores.max(0)``, ``argmax(0)`` and ``scores[k ± 1]`` of the whole stack of scores,
     without holding it. Selections without branches, one row at a time, every value
     loaded before any is stored, so that the compiler makes SIMD code of them (a
-    selection that reads an array it also writes, ``high[x] = score if ... else
-    high[x]``, kept the loop scalar, one division at a time: 3.6 of the coins' 11 ms)."""  # pragma: no cover
+    selection that reads an array it also writes, ``high[x] = score if … else
+    high[x]``, kept the loop scalar: 3.6 of the coins' 11 ms)."""  # pragma: no cover
     height, width = plane.shape
     for y in range(height):
         votes, top, which = plane[y], best[y], k_best[y]
@@ -124,55 +127,172 @@ def _votes_by_row(rows, cols, ux, uy, radii, signs, height, width):  # pragma: n
 
 
 @numba.njit(cache=True, nogil=True)
-def best_over_radii(voters, radii, signs, spread, shape, smoothing):  # pragma: no cover
+def _runs(occupied, runs):  # pragma: no cover
+    """``(start, stop)`` chunk indices of the runs of True in ``occupied`` into the rows of
+    ``runs`` (``(occupied.size + 1) // 2`` rows at least); returns their count."""
+    count = 0
+    c = 0
+    while c < occupied.size:
+        if occupied[c]:
+            stop = c
+            while stop < occupied.size and occupied[stop]:
+                stop += 1
+            runs[count, 0], runs[count, 1] = c, stop
+            count += 1
+            c = stop
+        c += 1
+    return count
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"contract"})
+def _four_pairs(out, lines, row, column, down, across, taps, j):  # pragma: no cover
+    """The pairs ``j … j + 3`` of :func:`_symmetric_pass`: ``out[x] += taps[far] (first[x]
+    + last[x])`` in order, the sum held in a register between them, each contracted to an
+    FMA as ``correlate_both``'s fastmath ``_accumulate`` has it; one pass instead of four.
+    (The centre's product stays a pass of its own: in this loop the compiler could fuse
+    it with the first pair's instead, another rounding.)"""
+    size = taps.size
+    n = out.size
+
+    def tap(i):  # the line under tap i
+        return lines[row + i * down, column + i * across : column + i * across + n]
+
+    a0, a1, a2, a3 = tap(size - 1 - j), tap(size - 2 - j), tap(size - 3 - j), tap(size - 4 - j)
+    b0, b1, b2, b3 = tap(j), tap(j + 1), tap(j + 2), tap(j + 3)
+    w0, w1, w2, w3 = taps[size - 1 - j], taps[size - 2 - j], taps[size - 3 - j], taps[size - 4 - j]
+    for x in range(n):
+        v = out[x]
+        v = v + w0 * (a0[x] + b0[x])
+        v = v + w1 * (a1[x] + b1[x])
+        v = v + w2 * (a2[x] + b2[x])
+        v = v + w3 * (a3[x] + b3[x])
+        out[x] = v
+
+
+@numba.njit(cache=True, nogil=True)
+def _symmetric_pass(out, lines, row, column, down, across, taps):  # pragma: no cover
+    """``out[x] = Σ_i taps[i] · lines[row + i·down, column + i·across + x]`` for symmetric
+    ``taps``, as ``correlate_both``'s passes compute it: the centre tap's product, then
+    ``+ taps[far] (first + last)`` for the pairs ``far = size − 1 − j``, ``j = 0, 1, …``
+    (four at a time by :func:`_four_pairs`, the rest by ``_accumulate``)."""
+    size = taps.size
+    half = size // 2
+    n = out.size
+    first = column + half * across
+    centre = lines[row + half * down, first : first + n]
+    for x in range(n):
+        out[x] = taps[half] * centre[x]
+    j = 0
+    while j + 4 <= half:
+        _four_pairs(out, lines, row, column, down, across, taps, j)
+        j += 4
+    for k in range(j, half):
+        far = size - 1 - k
+        one = lines[row + far * down, column + far * across : column + far * across + n]
+        other = lines[row + k * down, column + k * across : column + k * across + n]
+        _accumulate(out, one, other, taps[far], 1)
+
+
+@numba.njit(cache=True, nogil=True)
+def _spread_row(plane, r, near, taps, line, row, runs, spans):  # pragma: no cover
+    """Output row ``r`` of ``correlate_both(plane, taps, 1, …, "constant")`` into ``row``:
+    the column pass into the padded ``line`` (zero, and left zero), then the row pass,
+    each over the runs of :data:`CHUNK` columns that can be nonzero only. ``near[c]``:
+    chunk ``c`` of ``plane``'s rows ``r … r + taps.size − 1`` holds a vote. Elsewhere the
+    value is zero: every term there is a product of a tap by zero, and a term ``w (a +
+    b)`` of zero added to a sum leaves it as it is (an FMA too), so the skipped terms and
+    columns change no bit of the others. Each value computed takes the same operations,
+    in the same order, as ``correlate_both`` (:func:`_symmetric_pass`)."""
+    half = taps.size // 2
+    cols = row.size
+    centre = line[half : half + cols]
+    count = _runs(near, runs)
+    for run in range(count):
+        x0, x1 = runs[run, 0] * CHUNK, min(runs[run, 1] * CHUNK, cols)
+        _symmetric_pass(centre[x0:x1], plane, r, x0, 1, 0, taps)
+    reach = (half + CHUNK - 1) // CHUNK  # chunks a row-pass value reaches either side
+    wide = 0
+    for run in range(count):  # the runs widened by reach, merged where they meet
+        start, stop = max(runs[run, 0] - reach, 0), min(runs[run, 1] + reach, near.size)
+        if wide > 0 and start <= spans[wide - 1, 1]:
+            spans[wide - 1, 1] = stop
+        else:
+            spans[wide, 0], spans[wide, 1] = start, stop
+            wide += 1
+    row[:] = 0.0
+    padded = line.reshape(1, -1)
+    for run in range(wide):
+        x0, x1 = spans[run, 0] * CHUNK, min(spans[run, 1] * CHUNK, cols)
+        _symmetric_pass(row[x0:x1], padded, 0, x0, 0, 1, taps)
+    for run in range(count):
+        centre[runs[run, 0] * CHUNK : min(runs[run, 1] * CHUNK, cols)] = 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def _band_votes(first, xs, k, top, low_row, high_row, half, plane, occupied):  # pragma: no cover
+    """Radius ``k``'s votes in rows ``low_row … high_row − 1`` added into ``plane`` (zero;
+    row ``y`` at ``y − top + half``), and the chunks of :data:`CHUNK` columns they fall
+    in marked in ``occupied``."""
+    occupied[:] = False
+    for y in range(low_row, high_row):
+        for i in range(first[k, y], first[k, y + 1]):
+            plane[y - (top - half), xs[i]] += 1.0
+            occupied[y - (top - half), xs[i] // CHUNK] = True
+
+
+@numba.njit(cache=True, nogil=True)
+def best_over_radii(voters, radii, signs, spread, shape, taps):  # pragma: no cover
     """:func:`vote_plane`, the spreading of its votes and :func:`fold_plane` for every
-    radius in one call: ``voters`` the points' ``(rows, cols, ux, uy)``, ``smoothing``
-    the arguments of ``shared.separable_kernels.correlate_both`` after the image and the
-    output (no spreading when its taps are empty). Returns ``(best, k_best, below,
-    above)``.
+    radius in one call: ``voters`` the points' ``(rows, cols, ux, uy)``, ``taps`` the
+    symmetric taps of the spreading along both axes, zero outside the image
+    (``shared.separable_kernels.correlate_both``; none when empty). Returns ``(best,
+    k_best, below, above)``.
 
     A band of rows at a time, every radius folded into it before the next band, so that
     the band's votes, spread votes and running maxima stay in the processor's cache
     (radius by radius over the whole image streamed seven image-sized arrays per
     radius); each output row is computed by the same arithmetic, so the results are
-    those of whole planes to the bit."""
+    those of whole planes to the bit. Votes are sparse (2.7 % of the coins' cells hold
+    one): the spreading computes only the columns near one (:func:`_spread_row`), and
+    the plane is cleared where votes were added, not whole."""
     rows, cols, ux, uy = voters
     height, width = shape
-    taps, symmetry, row_index, column_index = smoothing
     half = taps.size // 2
     first, xs = _votes_by_row(rows, cols, ux, uy, radii, signs, height, width)
     band = 16
-    plane = np.empty((band + 2 * half, width))
+    plane = np.zeros((band + 2 * half, width))
+    occupied = np.zeros((band + 2 * half, (width + CHUNK - 1) // CHUNK), dtype=np.bool_)
+    near = np.empty(occupied.shape[1], dtype=np.bool_)
+    runs = np.empty(((near.size + 1) // 2, 2), dtype=np.int64)
+    spans = np.empty_like(runs)
+    line = np.zeros(width + 2 * half)
     spread_votes = np.empty((band, width))
     best = np.empty((height, width))
     below = np.empty((height, width))
     above = np.empty((height, width))
     previous = np.empty((height, width))
     k_best = np.zeros((height, width), dtype=np.int64)
-    last = radii.size - 1
-    local = np.empty(band + 2 * half, dtype=np.int64)
     for top in range(0, height, band):
         bottom = min(top + band, height)
         low_row, high_row = max(top - half, 0), min(bottom + half, height)
-        if taps.size > 0:  # band rows of the padded index, counted from row top - half
-            for t in range(bottom - top + 2 * half):
-                source = row_index[top + t]
-                local[t] = source - (top - half) if source >= 0 else -1
         for k in range(radii.size):
-            plane[:] = 0.0
-            for y in range(low_row, high_row):
-                for i in range(first[k, y], first[k, y + 1]):
-                    plane[y - (top - half), xs[i]] += 1.0
+            _band_votes(first, xs, k, top, low_row, high_row, half, plane, occupied)
             votes = plane[half : half + bottom - top]
             if taps.size > 0:
                 votes = spread_votes[: bottom - top]
-                correlate_both(plane, taps, symmetry, local, taps, symmetry, column_index, votes)
+                for r in range(bottom - top):
+                    for c in range(near.size):
+                        near[c] = occupied[r : r + taps.size, c].any()
+                    _spread_row(plane, r, near, taps, line, votes[r], runs, spans)
             circumference = 2.0 * np.pi * radii[k]
             fold_plane(
-                votes, k, last, spread, circumference, best[top:bottom],
+                votes, k, radii.size - 1, spread, circumference, best[top:bottom],
                 k_best[top:bottom], below[top:bottom], above[top:bottom],
                 previous[top:bottom],
             )  # fmt: skip
+            for y in range(low_row, high_row):  # clear the votes added
+                for i in range(first[k, y], first[k, y + 1]):
+                    plane[y - (top - half), xs[i]] = 0.0
     return best, k_best, below, above
 
 

@@ -62,28 +62,20 @@ def _best_over_radii(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Best score over radii at each pixel, its radius index and the scores of the radii
     either side: one radius at a time (votes, spread, score), never the whole stack, all
-    in one compiled call (``_circle_kernels.best_over_radii``). The spreading is
-    ``smooth_gaussian(votes, vote_sigma, "constant")``'s own compiled passes."""
-    from ..shared.separable import _boundary_index, _odd_length, _symmetry, gaussian_taps
+    in one compiled call (``_circle_kernels.best_over_radii``). The spreading equals
+    ``smooth_gaussian(votes, vote_sigma, "constant")`` to the bit, computed only near
+    the votes."""
+    from ..shared.separable import _odd_length, gaussian_taps
     from ._circle_kernels import best_over_radii
 
     rows, cols, ux, uy, signs = _voters(edges, image, sigma, polarity)
-    taps = np.zeros(0)
-    smoothing = (taps, 0, np.zeros(0, np.int64), np.zeros(0, np.int64))
-    if vote_sigma > 0:
-        taps = _odd_length(gaussian_taps(vote_sigma, 4.0))
-        half = taps.size // 2
-        smoothing = (
-            taps,
-            _symmetry(taps),
-            _boundary_index(edges.shape[0], half, "constant"),
-            _boundary_index(edges.shape[1], half, "constant"),
-        )
+    # symmetric: u and −u give the same exponent
+    taps = _odd_length(gaussian_taps(vote_sigma, 4.0)) if vote_sigma > 0 else np.zeros(0)
     # spread each vote as a Gaussian of height 1 (so one vote still counts one)
     spread = 2.0 * math.pi * vote_sigma**2 if vote_sigma > 0 else 1.0
     radii = np.ascontiguousarray(radii, dtype=np.float64)
     voters = (rows.astype(np.int64), cols.astype(np.int64), ux, uy)
-    return best_over_radii(voters, radii, signs, spread, edges.shape, smoothing)
+    return best_over_radii(voters, radii, signs, spread, edges.shape, taps)
 
 
 class HoughCircles(NamedTuple):

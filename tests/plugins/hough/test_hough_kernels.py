@@ -132,18 +132,22 @@ def test_folding_radii_equals_the_whole_stack_of_scores():
     np.testing.assert_array_equal(above, scores[np.minimum(k + 1, n - 1), y, x])
 
 
-@pytest.mark.parametrize("vote_sigma", [0.0, 1.0])
-def test_radii_in_one_call_equal_the_stack_smoothed_plane_by_plane(vote_sigma):
+@pytest.mark.parametrize("width", [64, 300])
+@pytest.mark.parametrize("vote_sigma", [0.0, 0.5, 1.0, 2.5])
+def test_radii_in_one_call_equal_the_stack_smoothed_plane_by_plane(vote_sigma, width):
     """``_best_over_radii`` (votes, spreading and folding of every radius compiled in one
     call) equals, to the bit, the whole stack of votes of ``vote_circles`` smoothed plane
-    by plane by ``smooth_gaussian(mode="constant")``, then its max and argmax over radii."""
+    by plane by ``smooth_gaussian(mode="constant")``, then its max and argmax over radii.
+    The spreading's taps reach 2, 4 and 10 pixels (pairs of taps four at a time and one
+    at a time); 300 columns leave runs of columns without a vote, which it skips."""
     from graphvision_plugins.hough._circle_kernels import vote_circles
     from graphvision_plugins.hough._circles import _best_over_radii, _voters
     from graphvision_plugins.shared.separable import smooth_gaussian
 
-    y, x = np.mgrid[0:48, 0:64]
+    y, x = np.mgrid[0:48, 0:width]
     image = (np.hypot(x - 30.3, y - 22.6) < 11.2).astype(np.float32)
     image[5:12, 40:60] = 0.6  # a bar: votes that meet no centre
+    image[(np.hypot(x - 270.5, y - 30.2) < 9.0)] = 0.8  # beyond 64 columns: a second disc
     edges = np.abs(np.gradient(image.astype(np.float64))[0]) + np.abs(np.gradient(image)[1]) > 0
     radii = np.arange(8.0, 14.5, 1.0)
     best, k_best, below, above = _best_over_radii(edges, image, radii, 1.0, "both", vote_sigma)
@@ -154,13 +158,16 @@ def test_radii_in_one_call_equal_the_stack_smoothed_plane_by_plane(vote_sigma):
     spread = 2.0 * math.pi * vote_sigma**2 if vote_sigma > 0 else 1.0
     scores = np.stack([p * spread / (2.0 * math.pi * r) for p, r in zip(stack, radii, strict=True)])
     k = scores.argmax(axis=0)
-    yy, xx = np.mgrid[0:48, 0:64]
+    yy, xx = np.mgrid[0:48, 0:width]
     np.testing.assert_array_equal(best, scores.max(axis=0))
     np.testing.assert_array_equal(k_best, k)
     np.testing.assert_array_equal(below, scores[np.maximum(k - 1, 0), yy, xx])
     np.testing.assert_array_equal(above, scores[np.minimum(k + 1, len(radii) - 1), yy, xx])
-    peak = np.unravel_index(best.argmax(), best.shape)  # the disc's centre, row 22.6 col 30.3
+    peak = np.unravel_index(best[:, :64].argmax(), (48, 64))  # the disc's centre, 22.6 30.3
     assert abs(peak[0] - 22.6) < 1.5 and abs(peak[1] - 30.3) < 1.5
+    if width == 300:
+        other = np.unravel_index(best[:, 200:].argmax(), (48, 100))  # row 30.2, column 270.5
+        assert abs(other[0] - 30.2) < 1.5 and abs(other[1] + 200 - 270.5) < 1.5
 
 
 @pytest.mark.parametrize("width", [7, 30])
