@@ -1,4 +1,4 @@
-"""numba kernel of demosaicking (imported on first use: compiling costs time).
+r"""numba kernel of demosaicking (imported on first use: compiling costs time).
 
 Every output value is a short list of taps ``(dy, dx, weight)`` chosen by the pixel's
 place in the 2×2 tile and the channel (``_bayer.py`` builds the lists), read from the
@@ -15,16 +15,49 @@ the same bits. The others (5/8, 3/16, 3/4) keep the float64 product. A product c
 lose bits in float32 below the normal range: an output row whose 5×5 windows read a value
 in (0, 2⁻¹⁰⁰) takes the float64 path for every tap (each value depends on its own window
 only, so the other rows keep the float32 path and their bits).
+
+The other taps, ``RN32(RN64(t + w·s))`` (``t`` the float32 sum so far), are one float32
+FMA, ``RN32(t + w·s)``, where the two roundings are one: where ``t + w·s`` is exact in
+float64. Let ``e_min`` and ``e_max`` be the binades of the least nonzero and the largest
+magnitude of the five rows read. Every sample is a multiple of
+:math:`2^{e_{min} - 23}`, every weight of 1/16, so every product and (by induction:
+rounding a multiple of a power of two to float32 keeps it one) every sum ``t`` is a
+multiple of :math:`g = 2^{e_{min} - 27}`; and :math:`|t + w s| < 2.5 \cdot 2^{e_{max} + 1}
+(1 + 2^{-20}) < 2^{e_{max} + 3}` (2.5 the largest sum of a kernel's weights' magnitudes).
+So ``t + w·s`` is an integer multiple of ``g`` below :math:`2^{e_{max} - e_{min} + 30}`,
+exact in float64's 53 bits when :math:`e_{max} - e_{min} \le 23`. Rows of at most
+``NARROW`` = 22 binades (an 8-bit image's levels span 8) take the FMA, eight times fewer
+conversions; the others keep float64 (a partial sum of 2⁻⁷⁰ beside a product of 0.4 on a
+float32 midpoint rounds otherwise: the tests hold such a row).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import intrinsic
 
 __all__ = ["demosaic_taps"]
 
-TINY = 2.0**-100  # below it, a product by a weight ≥ 1/16 could leave float32's normal range
+# bits of 2⁻¹⁰⁰: below it, a product by a weight ≥ 1/16 could leave float32's normal range
+TINY = np.uint32(27 << 23)
+# most binades from the least nonzero magnitude of the five rows to the largest under which
+# a tap whose weight is not a power of two may be one float32 FMA (module docstring)
+NARROW = 22
+FINITE = np.uint32(0x7F800000)  # bits of the infinity: a magnitude below it is finite
+NONE = np.uint32(0x7FFFFFFF)  # the magnitude's bits; the least nonzero one of a row without one
+
+
+@intrinsic
+def _fma(typingctx, a, b, c):  # pragma: no cover
+    """``a · b + c`` rounded once, in float32 (the processor's FMA, never two roundings)."""
+    if not (a == b == c == types.float32):
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.fma(*args)
+
+    return types.float32(a, b, c), codegen
 
 
 @njit(cache=True, nogil=True)
@@ -35,32 +68,34 @@ def _mirror(index: int, length: int) -> int:  # pragma: no cover
 
 @njit(cache=True, nogil=True)
 def _fill_padded(
-    raw: np.ndarray, p: int, even: np.ndarray, odd: np.ndarray, tiny: np.ndarray
+    raw: np.ndarray, p: int, even: np.ndarray, odd: np.ndarray, magnitudes: np.ndarray
 ) -> None:  # pragma: no cover
     """Row ``p`` of ``raw`` padded by 2 (``numpy.pad``'s ``reflect``), its even columns into
-    ``even[p % 5]`` and its odd ones into ``odd[p % 5]``; ``tiny[p % 5]``: whether it holds
-    a value in (0, TINY) in magnitude. One loop over the row's column pairs does the split
-    and the check at once (``even[k], odd[k] = row[2k − 2], row[2k − 1]``); the few ends
-    the reflection reaches are filled after it."""
+    ``even[p % 5]`` and its odd ones into ``odd[p % 5]``; ``magnitudes[p % 5]``: the bits
+    of its largest magnitude and of its least nonzero one (``0x7fffffff`` for none). A
+    float32's magnitude orders as the integer of its bits (NaN and infinities above every
+    number), so both are integer maxima and minima, which make SIMD code where a float's
+    do not. One loop over the row's column pairs does the split (``even[k], odd[k] =
+    row[2k − 2], row[2k − 1]``); the few ends the reflection reaches are filled after it."""
     source = raw[_mirror(p - 2, raw.shape[0])]
     cols = source.size
     low, high = even[p % 5], odd[p % 5]
     pairs = cols // 2 + 1  # k < pairs: both samples inside the row
-    found = 0
     for k in range(1, pairs):
-        first, second = source[2 * k - 2], source[2 * k - 1]
-        low[k], high[k] = first, second
-        size, other = abs(first), abs(second)
-        found += ((size > 0) & (size < TINY)) + ((other > 0) & (other < TINY))
-    if cols % 2:  # the last sample, not in a pair
-        size = abs(source[cols - 1])
-        found += (size > 0) & (size < TINY)
+        low[k], high[k] = source[2 * k - 2], source[2 * k - 1]
     low[0], high[0] = source[2], source[1]  # reflected columns −2 and −1
     for k in range(pairs, low.size):
         low[k] = source[_mirror(2 * k - 2, cols)]
     for k in range(pairs, high.size):
         high[k] = source[_mirror(2 * k - 1, cols)]
-    tiny[p % 5] = found > 0
+    bits = source.view(np.uint32)
+    largest, least = np.uint32(0), NONE
+    for i in range(cols):
+        size = bits[i] & NONE
+        largest = max(largest, size)
+        least = min(least, size if size > 0 else NONE)
+    magnitudes[p % 5, 0] = largest
+    magnitudes[p % 5, 1] = least
 
 
 @njit(cache=True, nogil=True)
@@ -114,7 +149,8 @@ def demosaic_taps(
     clipped to [0, 1]. An output row whose five padded rows hold a value below float32's
     normal range (see the module docstring) is summed in float64 throughout: the choice is
     made row by row, as the rows are read (each value depends on its own 5×5 only), not by a
-    pass over the whole mosaic first.
+    pass over the whole mosaic first; so is the choice of one FMA for Malvar's taps whose
+    weight is not a power of two (the five rows' magnitudes within ``NARROW`` binades).
 
     The five padded rows an output row reads are kept split into their even and their odd
     columns, in a ring (padded row ``p`` in slot ``p % 5``, one new row per output row), so
@@ -127,14 +163,17 @@ def demosaic_taps(
     width = cols + 4
     even = np.empty((5, (width + 1) // 2), dtype=np.float32)
     odd = np.empty((5, width // 2), dtype=np.float32)
-    tiny = np.zeros(5, dtype=np.bool_)
+    magnitudes = np.zeros((5, 2), dtype=np.uint32)
     for p in range(4):
-        _fill_padded(raw, p, even, odd, tiny)
+        _fill_padded(raw, p, even, odd, magnitudes)
     sums = np.empty((3, 2, (cols + 1) // 2), dtype=np.float32)
     low, high = np.float32(0.0), np.float32(1.0)
     for y in range(rows):
-        _fill_padded(raw, y + 4, even, odd, tiny)
-        single = not tiny.any()
+        _fill_padded(raw, y + 4, even, odd, magnitudes)
+        largest, least = magnitudes[:, 0].max(), magnitudes[:, 1].min()
+        single = least >= TINY
+        binades = np.int64(largest >> 23) - np.int64(least >> 23)  # exponents' difference
+        narrow = bool(largest < FINITE and binades <= NARROW)
         for c in range(3):
             for tx in range(2):
                 tile = 2 * (y % 2) + tx
@@ -146,7 +185,7 @@ def demosaic_taps(
                     total[:] = source[1 : 1 + n]
                 elif single and kinds[c, tile] > 0:
                     same, other = (even, odd) if tx == 0 else (odd, even)
-                    _malvar_run(kinds[c, tile], total, same, other, y + 2, tx)
+                    _malvar_run(kinds[c, tile], total, same, other, y + 2, tx, narrow)
                 else:
                     _add_taps(total, even, odd, y + 2, tx + 2, taps[c, tile], count, single)
         _interleave(sums, low, high, out[y].reshape(-1))
@@ -176,17 +215,31 @@ def _interleave(
 
 # Malvar's weights that are powers of two, as float32 (a product by them is exact)
 _N8, _S16, _Q, _H = np.float32(-0.125), np.float32(0.0625), np.float32(0.25), np.float32(0.5)
+_M316 = np.float32(-0.1875)  # exact in float32
 
 
-@njit(cache=True, nogil=True)
-def _wide(total: np.float32, weight: float, sample: np.float32) -> np.float32:  # pragma: no cover
-    """One tap whose weight is not a power of two: the product in float64, as ``_add_taps``."""
+@njit(cache=True, nogil=True, inline="always")
+def _wide(
+    total: np.float32, weight: float, sample: np.float32, narrow: bool
+) -> np.float32:  # pragma: no cover
+    """One tap whose weight is not a power of two: the product in float64, as ``_add_taps``;
+    where ``narrow`` (a constant where inlined: no branch is left in the loop) one float32
+    FMA, the same number where the five rows' magnitudes span at most ``NARROW`` binades
+    (module docstring)."""
+    if narrow:
+        return _fma(np.float32(weight), sample, total)  # type: ignore[call-arg]  # numba's call
     return np.float32(np.float64(total) + weight * np.float64(sample))
 
 
 @njit(cache=True, nogil=True)
 def _malvar_run(
-    kind: int, total: np.ndarray, same: np.ndarray, other: np.ndarray, row: int, tx: int
+    kind: int,
+    total: np.ndarray,
+    same: np.ndarray,
+    other: np.ndarray,
+    row: int,
+    tx: int,
+    narrow: bool,
 ) -> None:  # pragma: no cover
     """One run of ``demosaic_taps`` by one of Malvar's kernels (1: G at R/B, 2: R/B at G in
     their row, 3: in their column, 4: R at B / B at R), its taps written out in the order of
@@ -199,12 +252,30 @@ def _malvar_run(
     slots = ((row - 2) % 5, (row - 1) % 5, row % 5, (row + 1) % 5, (row + 2) % 5)
     if kind == 1:
         _green_at_rb(total, same, other, slots, tx)
-    elif kind == 2:
-        _rb_in_row(total, same, other, slots, tx)
-    elif kind == 3:
-        _rb_in_column(total, same, other, slots, tx)
+    elif narrow:  # each kernel inlined once per way of taking the other taps
+        _rb_kernel(kind, total, same, other, slots, tx, True)
     else:
-        _rb_at_br(total, same, other, slots, tx)
+        _rb_kernel(kind, total, same, other, slots, tx, False)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _rb_kernel(
+    kind: int,
+    total: np.ndarray,
+    same: np.ndarray,
+    other: np.ndarray,
+    slots: tuple[int, ...],
+    tx: int,
+    narrow: bool,
+) -> None:  # pragma: no cover
+    """Kernels 2–4 of :func:`_malvar_run`, their taps whose weight is not a power of two
+    taken by :func:`_wide` with ``narrow``."""
+    if kind == 2:
+        _rb_in_row(total, same, other, slots, tx, narrow)
+    elif kind == 3:
+        _rb_in_column(total, same, other, slots, tx, narrow)
+    else:
+        _rb_at_br(total, same, other, slots, tx, narrow)
 
 
 @njit(cache=True, nogil=True)
@@ -232,9 +303,14 @@ def _green_at_rb(
         total[j] = t
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _rb_in_row(
-    total: np.ndarray, a: np.ndarray, b: np.ndarray, slots: tuple[int, ...], tx: int
+    total: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    slots: tuple[int, ...],
+    tx: int,
+    narrow: bool,
 ) -> None:  # pragma: no cover
     """R (B) at a G whose row holds R (B) samples (kernel 2): see ``_malvar_run``."""
     m2, m1, c0, p1, p2 = slots
@@ -250,7 +326,7 @@ def _rb_in_row(
         t = t + _N8 * bm1[1 + j]
         t = t + _N8 * ac0[j]
         t = t + _H * bc0[j]
-        t = _wide(t, 0.625, ac0[1 + j])
+        t = _wide(t, 0.625, ac0[1 + j], narrow)
         t = t + _H * bc0[1 + j]
         t = t + _N8 * ac0[2 + j]
         t = t + _N8 * bp1[j]
@@ -259,9 +335,14 @@ def _rb_in_row(
         total[j] = t
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _rb_in_column(
-    total: np.ndarray, a: np.ndarray, b: np.ndarray, slots: tuple[int, ...], tx: int
+    total: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    slots: tuple[int, ...],
+    tx: int,
+    narrow: bool,
 ) -> None:  # pragma: no cover
     """R (B) at a G whose column holds them (kernel 3): see ``_malvar_run``."""
     m2, m1, c0, p1, p2 = slots
@@ -278,7 +359,7 @@ def _rb_in_column(
         t = t + _H * am1[1 + j]
         t = t + _N8 * bm1[1 + j]
         t = t + _S16 * ac0[j]
-        t = _wide(t, 0.625, ac0[1 + j])
+        t = _wide(t, 0.625, ac0[1 + j], narrow)
         t = t + _S16 * ac0[2 + j]
         t = t + _N8 * bp1[j]
         t = t + _H * ap1[1 + j]
@@ -287,9 +368,14 @@ def _rb_in_column(
         total[j] = t
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _rb_at_br(
-    total: np.ndarray, a: np.ndarray, b: np.ndarray, slots: tuple[int, ...], tx: int
+    total: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    slots: tuple[int, ...],
+    tx: int,
+    narrow: bool,
 ) -> None:  # pragma: no cover
     """R at B or B at R (kernel 4): see ``_malvar_run``."""
     m2, m1, c0, p1, p2 = slots
@@ -299,13 +385,13 @@ def _rb_at_br(
     bp1 = b[p1, tx:]
     ap2 = a[p2]
     for j in range(total.size):
-        t = np.float32(-0.1875 * np.float64(am2[1 + j]))
+        t = _M316 * am2[1 + j]  # one rounding of the exact product, as in float64
         t = t + _Q * bm1[j]
         t = t + _Q * bm1[1 + j]
-        t = _wide(t, -0.1875, ac0[j])
-        t = _wide(t, 0.75, ac0[1 + j])
-        t = _wide(t, -0.1875, ac0[2 + j])
+        t = _wide(t, -0.1875, ac0[j], narrow)
+        t = _wide(t, 0.75, ac0[1 + j], narrow)
+        t = _wide(t, -0.1875, ac0[2 + j], narrow)
         t = t + _Q * bp1[j]
         t = t + _Q * bp1[1 + j]
-        t = _wide(t, -0.1875, ap2[1 + j])
+        t = _wide(t, -0.1875, ap2[1 + j], narrow)
         total[j] = t

@@ -108,3 +108,19 @@ def test_a_value_below_the_normal_range_in_the_last_column_of_an_odd_width_is_se
     got = demosaic(raw, pattern="GRBG", method="malvar")
     np.testing.assert_array_equal(got, _reference(raw, "GRBG", "malvar"))
     assert got[4, 10, 0] == np.float32(2 * 2.0**-149)
+
+
+def test_taps_of_other_weights_are_one_fma_only_where_the_magnitudes_span_few_binades():
+    # R at the B pixel (5, 5) of RGGB: the sum so far is -3/16 · 2⁻⁷¹ (two rows up) and
+    # 3/4 of the centre, 0.375 + 1.5 · 2⁻²⁵, lies on a float32 midpoint. Exactly, the sum
+    # is just below it (rounds down); in float64 it rounds to the midpoint first, then
+    # to even (up): the array formulas' value, which one float32 FMA would miss by one
+    # step. Rows 0-2 and 8-11 read 2⁻⁷¹ or 0.5 alone (one binade), the FMA's, all equal.
+    raw = np.zeros((12, 12), np.float32)
+    raw[5, 5] = np.float32(0.5 + 2.0**-24)
+    raw[3, 5] = np.float32(2.0**-71)
+    raw[10, 1] = np.float32(0.5 + 2.0**-24)
+    raw[1, 9] = np.float32(2.0**-71)
+    found = demosaic(raw, pattern="RGGB", method="malvar")
+    np.testing.assert_array_equal(found, _reference(raw, "RGGB", "malvar"))
+    assert found[5, 5, 0] == np.float32(0.375 + 2.0**-24)  # rounded up, not 0.375 + 2⁻²⁵
