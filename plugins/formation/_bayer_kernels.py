@@ -170,7 +170,9 @@ def demosaic_taps(
     low, high = np.float32(0.0), np.float32(1.0)
     for y in range(rows):
         _fill_padded(raw, y + 4, even, odd, magnitudes)
-        largest, least = magnitudes[:, 0].max(), magnitudes[:, 1].min()
+        largest, least = magnitudes[0, 0], magnitudes[0, 1]
+        for slot in range(1, 5):  # scalars: a reduction over a view costs more per row
+            largest, least = max(largest, magnitudes[slot, 0]), min(least, magnitudes[slot, 1])
         single = least >= TINY
         binades = np.int64(largest >> 23) - np.int64(least >> 23)  # exponents' difference
         narrow = bool(largest < FINITE and binades <= NARROW)
