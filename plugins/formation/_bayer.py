@@ -124,7 +124,7 @@ def _tap_lists(pattern: str, method: str) -> tuple[np.ndarray, np.ndarray]:
 def _malvar_kinds(pattern: str, method: str) -> np.ndarray:
     """Which of Malvar's kernels gives each channel at each tile place (1: ``_G_AT_RB``,
     2: ``_RB_AT_G_ROW``, 3: ``_RB_AT_G_COLUMN``, 4: ``_RB_AT_BR``; 0: none, or bilinear),
-    for the kernel's written-out runs (``_bayer_kernels._malvar_run``)."""
+    for the kernel's written-out runs (``_malvar_kernels.malvar_run``)."""
     kinds = np.zeros((3, 4), dtype=np.int64)
     if method != "malvar":
         return kinds
