@@ -155,50 +155,31 @@ def demosaic_taps(
         single = least >= TINY
         binades = np.int64(largest >> 23) - np.int64(least >> 23)  # exponents' difference
         narrow = bool(largest < FINITE and binades <= NARROW)
-        ring = (even, odd, taps, counts, kinds, single, narrow)
-        _interleave(
-            _run(0, 0, y, ring, sums), _run(0, 1, y, ring, sums), _run(1, 0, y, ring, sums),
-            _run(1, 1, y, ring, sums), _run(2, 0, y, ring, sums), _run(2, 1, y, ring, sums),
-            low, high, out[y].reshape(-1),
-        )  # fmt: skip
-
-
-@njit(cache=True, nogil=True)
-def _run(c: int, tx: int, y: int, ring: tuple, sums: np.ndarray) -> np.ndarray:  # pragma: no cover
-    """Channel ``c`` of output row ``y`` at the columns of parity ``tx``: its samples in the
-    ring where the sensor has them (no copy), else summed into ``sums[c, tx]``; ``ring``:
-    ``(even, odd, taps, counts, kinds, single, narrow)`` of :func:`demosaic_taps`."""
-    even, odd, taps, counts, kinds, single, narrow = ring
-    tile = 2 * (y % 2) + tx
-    count = counts[c, tile]
-    n = (even.shape[1] + odd.shape[1] - 4 - tx + 1) // 2  # the row's columns of parity tx
-    if count < 0:
-        source = even[(y + 2) % 5] if tx == 0 else odd[(y + 2) % 5]
-        return source[1 : 1 + n]
-    total = sums[c, tx, :n]
-    if single and kinds[c, tile] > 0:
-        same, other = (even, odd) if tx == 0 else (odd, even)
-        malvar_run(kinds[c, tile], total, same, other, y + 2, tx, narrow)
-    else:
-        _add_taps(total, even, odd, y + 2, tx + 2, taps[c, tile], count, single)
-    return total
+        for c in range(3):
+            for tx in range(2):
+                tile = 2 * (y % 2) + tx
+                count = counts[c, tile]
+                n = (cols - tx + 1) // 2
+                total = sums[c, tx, :n]
+                if count < 0:
+                    source = even[(y + 2) % 5] if tx == 0 else odd[(y + 2) % 5]
+                    total[:] = source[1 : 1 + n]
+                elif single and kinds[c, tile] > 0:
+                    same, other = (even, odd) if tx == 0 else (odd, even)
+                    malvar_run(kinds[c, tile], total, same, other, y + 2, tx, narrow)
+                else:
+                    _add_taps(total, even, odd, y + 2, tx + 2, taps[c, tile], count, single)
+        _interleave(sums, low, high, out[y].reshape(-1))
 
 
 @njit(cache=True, nogil=True)
 def _interleave(
-    r0: np.ndarray,
-    r1: np.ndarray,
-    g0: np.ndarray,
-    g1: np.ndarray,
-    b0: np.ndarray,
-    b1: np.ndarray,
-    low: np.float32,
-    high: np.float32,
-    out: np.ndarray,
+    sums: np.ndarray, low: np.float32, high: np.float32, out: np.ndarray
 ) -> None:  # pragma: no cover
-    """One output row, RGB per pixel, from the six runs (channel, column parity), clipped
-    to [``low``, ``high``]: one loop over the pixel pairs, six loads and six stores each (a
-    SIMD shuffle), instead of a pass per run writing every sixth value."""
+    """One output row, RGB per pixel, from the six runs ``sums[channel, column parity]``,
+    clipped to [``low``, ``high``]: one loop over the pixel pairs, six loads and six stores
+    each (a SIMD shuffle), instead of a pass per run writing every sixth value."""
+    r0, r1, g0, g1, b0, b1 = sums[0, 0], sums[0, 1], sums[1, 0], sums[1, 1], sums[2, 0], sums[2, 1]
     pairs = out.size // 6
     for j in range(pairs):
         out[6 * j] = min(max(r0[j], low), high)
