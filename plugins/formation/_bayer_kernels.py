@@ -24,8 +24,8 @@ the same number, as shown there).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..shared.jit import njit
 from ._malvar_kernels import malvar_run
 
 __all__ = ["demosaic_taps"]

@@ -22,8 +22,10 @@ product of 0.4 on a float32 midpoint rounds otherwise: the tests hold such a row
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.extending import intrinsic
+
+from ..shared.jit import njit
 
 __all__ = ["malvar_run"]
 

@@ -10,9 +10,9 @@ loop. The spreading of the votes by a Gaussian computes only the columns near a 
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from ..shared.jit import njit
 from ..shared.separable_kernels import _accumulate
 
 __all__ = [
@@ -27,7 +27,7 @@ __all__ = [
 CHUNK = 64  # columns: the spreading skips the runs of CHUNK columns that hold no vote nearby
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def vote_circles(rows, cols, ux, uy, radii, signs, height, width):  # pragma: no cover
     """Accumulator ``(len(radii), height, width)``: point ``i`` votes 1 at
     ``rint((col, row) + sign · r · u_i)`` for every radius and sign, when inside."""
@@ -43,7 +43,7 @@ def vote_circles(rows, cols, ux, uy, radii, signs, height, width):  # pragma: no
     return votes
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def vote_plane(rows, cols, ux, uy, radius, signs, plane):  # pragma: no cover
     """:func:`vote_circles` for one radius, into ``plane`` (cleared first)."""
     height, width = plane.shape
@@ -58,7 +58,7 @@ def vote_plane(rows, cols, ux, uy, radius, signs, plane):  # pragma: no cover
     return plane
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def fold_plane(plane, k, last, spread, circumference, best, k_best, below, above, previous):
     """Fold the votes of radius ``k`` (of ``0..last``) into the running maximum over radii:
     the score ``plane · spread / circumference``; ``best`` and ``k_best`` the largest score
@@ -96,7 +96,7 @@ def fold_plane(plane, k, last, spread, circumference, best, k_best, below, above
                 high[x] = top[x] if which[x] == k else high[x]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _votes_by_row(rows, cols, ux, uy, radii, signs, height, width):  # pragma: no cover
     """Every vote of :func:`vote_plane` for every radius, sorted by radius and row:
     columns ``xs[first[k, y] : first[k, y + 1]]`` are the votes of radius ``k`` in row
@@ -126,7 +126,7 @@ def _votes_by_row(rows, cols, ux, uy, radii, signs, height, width):  # pragma: n
     return first, xs
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _runs(occupied, runs):  # pragma: no cover
     """``(start, stop)`` chunk indices of the runs of True in ``occupied`` into the rows of
     ``runs`` (``(occupied.size + 1) // 2`` rows at least); returns their count."""
@@ -144,7 +144,7 @@ def _runs(occupied, runs):  # pragma: no cover
     return count
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"contract"})
+@njit(cache=True, nogil=True, fastmath={"contract"})
 def _four_pairs(out, lines, row, column, down, across, taps, j):  # pragma: no cover
     """The pairs ``j … j + 3`` of :func:`_symmetric_pass`: ``out[x] += taps[far] (first[x]
     + last[x])`` in order, the sum held in a register between them, each contracted to an
@@ -169,7 +169,7 @@ def _four_pairs(out, lines, row, column, down, across, taps, j):  # pragma: no c
         out[x] = v
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _symmetric_pass(out, lines, row, column, down, across, taps):  # pragma: no cover
     """``out[x] = Σ_i taps[i] · lines[row + i·down, column + i·across + x]`` for symmetric
     ``taps``, as ``correlate_both``'s passes compute it: the centre tap's product, then
@@ -193,7 +193,7 @@ def _symmetric_pass(out, lines, row, column, down, across, taps):  # pragma: no 
         _accumulate(out, one, other, taps[far], 1)
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _spread_row(plane, r, near, taps, line, row, runs, spans):  # pragma: no cover
     """Output row ``r`` of ``correlate_both(plane, taps, 1, …, "constant")`` into ``row``:
     the column pass into the padded ``line`` (zero, and left zero), then the row pass,
@@ -228,7 +228,7 @@ def _spread_row(plane, r, near, taps, line, row, runs, spans):  # pragma: no cov
         centre[runs[run, 0] * CHUNK : min(runs[run, 1] * CHUNK, cols)] = 0.0
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _band_votes(first, xs, k, top, low_row, high_row, half, plane, occupied):  # pragma: no cover
     """Radius ``k``'s votes in rows ``low_row … high_row − 1`` added into ``plane`` (zero;
     row ``y`` at ``y − top + half``), and the chunks of :data:`CHUNK` columns they fall
@@ -240,7 +240,7 @@ def _band_votes(first, xs, k, top, low_row, high_row, half, plane, occupied):  #
             occupied[y - (top - half), xs[i] // CHUNK] = True
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def best_over_radii(voters, radii, signs, spread, shape, taps):  # pragma: no cover
     """:func:`vote_plane`, the spreading of its votes and :func:`fold_plane` for every
     radius in one call: ``voters`` the points' ``(rows, cols, ux, uy)``, ``taps`` the
@@ -296,7 +296,7 @@ def best_over_radii(voters, radii, signs, spread, shape, taps):  # pragma: no co
     return best, k_best, below, above
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _shifted_max(out, line, shift):  # pragma: no cover
     """``out[x] = max(out[x], line[clip(x + shift, 0, size - 1)])``: one shift of a window,
     the edge replicated; the clipped ends apart so the middle is one SIMD loop."""
@@ -313,7 +313,7 @@ def _shifted_max(out, line, shift):  # pragma: no cover
             out[x] = max(out[x], line[size - 1])
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def window_maxima(values, size, floor):  # pragma: no cover
     """``(row, col)`` of the cells equal to the maximum of their ``size × size`` window
     (the image edge replicated, as ``maximum_filter(mode="nearest")``) and above
@@ -350,7 +350,7 @@ def window_maxima(values, size, floor):  # pragma: no cover
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def greedy_suppression(positions, order, min_distance, limit):  # pragma: no cover
     """Indices from ``order`` (strongest first) kept when at least ``min_distance``
     (Euclidean) from every index kept before, at most ``limit``."""

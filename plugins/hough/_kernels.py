@@ -6,8 +6,9 @@ between the two nearest ρ bins: no ``points × θ`` temporaries.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = [
     "edge_points",
@@ -19,7 +20,7 @@ __all__ = [
 ]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho, pad):
     """Accumulator ``(len(cos), n_rho)``: point ``i`` votes for the ``width`` θ bins from
     ``first[i]`` (modulo the bin count) with weight ``weights[i]``; ``cos`` and ``sin`` are
@@ -31,7 +32,7 @@ def vote_lines(x, y, weights, first, width, cos, sin, rho0, n_rho, pad):
     return extended
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def vote_lines_into(extended, x, y, weights, first, width, cos, sin, rho0, pad):
     """:func:`vote_lines` written into ``extended`` (``len(cos) + 2 pad`` rows, zeroed
     here): a caller that reuses one array pays no page faults for a fresh one."""
@@ -70,7 +71,7 @@ def vote_lines_into(extended, x, y, weights, first, width, cos, sin, rho0, pad):
             extended[pad + n_theta + i, r] = extended[pad + i, n_rho - 1 - r]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def line_peaks(extended, pad, theta_bins):
     """``(θ row, ρ column)`` of the cells of ``extended`` (θ padded by ``pad`` rows each way)
     in rows ``[pad, pad + theta_bins)`` and columns ``(0, n_rho - 1)`` that are positive and
@@ -103,14 +104,14 @@ def line_peaks(extended, pad, theta_bins):
     return out
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _max3(row, out):
     """``out[r] = max(row[r - 1], row[r], row[r + 1])`` for ``0 < r < len(row) - 1``."""
     for r in range(1, row.size - 1):
         out[r] = max(max(row[r - 1], row[r]), row[r + 1])
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _counting_order(keys, size, within):
     """The order of ``within`` (a permutation) stably sorted by ``keys`` in [0, size), and
     where each key's run starts (``size + 1`` entries)."""
@@ -127,7 +128,7 @@ def _counting_order(keys, size, within):
     return order, starts
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def points_by_row_and_column(x, y, height, width):
     """The points (on the pixel grid) by row, each row's by column, and by column, each
     column's by row: ``(row starts, order, columns, column starts, order, rows)``, row or
@@ -143,7 +144,7 @@ def points_by_row_and_column(x, y, height, width):
     return row_starts, by_row, x[by_row], column_starts, by_column, y[by_column]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _parabola(left, centre, right):
     """``_peaks.parabolic_offset`` of one peak."""
     curvature = left - 2.0 * centre + right
@@ -152,7 +153,7 @@ def _parabola(left, centre, right):
     return 0.0
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def peak_offsets(array, rows, cols, solve):
     """``_peaks.quadratic_peak_2d`` peak by peak (``solve`` its 6×9 pseudo-inverse; each
     coefficient summed in the patch's order, so equal to it up to rounding)."""
@@ -182,7 +183,7 @@ def peak_offsets(array, rows, cols, solve):
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def edge_points(edges):
     """Columns ``x`` and rows ``y`` (float64) of the true pixels of ``edges``, row-major:
     ``np.nonzero`` in one pass, without its index arrays and their conversions."""

@@ -4,9 +4,9 @@ they still cover enough cells and it is far enough from every line kept."""
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from ..shared.jit import njit
 from ._support_kernels import _gather
 
 __all__ = [
@@ -14,7 +14,7 @@ __all__ = [
 ]
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _refit(x, y, on, t):
     """The total-least-squares line ``(ρ, θ, True)`` of the points ``on`` (θ on the branch
     of ``t``), or ``(0, t, False)`` for fewer than 2 points (:func:`select_lines`)."""
@@ -48,7 +48,7 @@ def _refit(x, y, on, t):
     return r, t, True
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _near_a_kept_line(out, count, r, t, theta_step, rho_step, min_distance):
     """Whether line ``(r, t)`` is within ``min_distance`` bins of one of the ``count``
     lines kept in ``out`` (:func:`select_lines`)."""
@@ -62,7 +62,7 @@ def _near_a_kept_line(out, count, r, t, theta_step, rho_step, min_distance):
     return False
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _refine(
     x, y, orientation, check, free, r, t, covered, tolerance, window, cells, stamp, on, index
 ):
@@ -80,7 +80,7 @@ def _refine(
     return r, t, covered, stamp
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _keep(out, count, r, t, covered, on, free, theta_step, rho_step, min_distance):
     """Line ``(r, t)``, θ put in [0, π), appended to ``out`` and its points ``on`` claimed,
     unless it lies within ``min_distance`` bins of a line kept; the new count of lines
@@ -100,7 +100,7 @@ def _keep(out, count, r, t, covered, on, free, theta_step, rho_step, min_distanc
     return count + 1
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def select_lines(
     x,
     y,

@@ -4,8 +4,9 @@ that prune candidates (the selection of lines is in ``_select_kernels``)."""
 
 from __future__ import annotations
 
-import numba
 import numpy as np
+
+from ..shared.jit import njit
 
 __all__ = [
     "line_support",
@@ -14,7 +15,7 @@ __all__ = [
 ]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _visit(
     i, x, y, orientation, check, free, c, s, t, rho, tolerance, window, cells, stamp, on, mark
 ):
@@ -35,7 +36,7 @@ def _visit(
     return 1
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _band(x, y, free, rho, theta, tolerance, cells, stamp, on, mark, index):
     """``_gather`` without the orientation check, visiting only the points within
     ``tolerance`` (plus a pixel for rounding) of the line: ``index`` (``_lines._point_index``)
@@ -88,7 +89,7 @@ def _band(x, y, free, rho, theta, tolerance, cells, stamp, on, mark, index):
     return covered
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _scan_ranges(orientation, check, theta, window):
     """Index ranges ``(a0, a1, b0, b1)`` of the points, sorted by ``orientation`` in [0, π),
     whose orientation can be within ``window`` of ``theta`` mod π (all of them unless
@@ -105,7 +106,7 @@ def _scan_ranges(orientation, check, theta, window):
     return np.searchsorted(orientation, low), np.searchsorted(orientation, high), 0, 0
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _gather(
     x, y, orientation, check, free, rho, theta, tolerance, window, cells, stamp, on, mark, index
 ):
@@ -147,7 +148,7 @@ def _gather(
     return covered
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def line_support(x, y, orientation, check, rho, theta, tolerance, window, extent, index):
     """Length in pixels of each line ``(rho[k], theta[k])`` covered by edge points: the number
     of 1-px cells along it holding the projection of a point within ``tolerance`` of it (and,
@@ -177,7 +178,7 @@ def line_support(x, y, orientation, check, rho, theta, tolerance, window, extent
     return counts
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def support_bounds(raw, pad, rho, theta, rho0, rho_step, tolerance, xmax, ymax):
     r"""An upper bound of each line's support from unit votes ``raw`` (:func:`vote_lines`,
     every point voting for every θ, unsmoothed; ``rho0`` is ρ of bin 0 in steps).
@@ -215,7 +216,7 @@ def support_bounds(raw, pad, rho, theta, rho0, rho_step, tolerance, xmax, ymax):
     return bounds
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def pruned_support(x, y, index, bounds, rho, theta, tolerance, extent, threshold):
     """:func:`line_support` without the orientation check, where only the lines that can
     reach ``threshold`` × the largest support matter: lines are taken by decreasing
@@ -244,7 +245,7 @@ def pruned_support(x, y, index, bounds, rho, theta, tolerance, extent, threshold
     return counts
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _scan(x, y, rho, theta, tolerance, cells, stamp, near):
     """:func:`_band` with every point free (as in :func:`pruned_support`), by a scan of
     every point: first which lie within ``tolerance`` of the line (one branch-free loop,
