@@ -22,6 +22,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from graphvision.errors import OutputFolderError
+from graphvision.execution.folders import missing_folders, remove_empty_folders
 
 try:
     import fcntl
@@ -36,7 +37,8 @@ LOCK_FILE = ".graphvision-lock"
 @contextlib.contextmanager
 def only_writer(directory: Path, doing: str = "run") -> Iterator[None]:
     """Hold ``directory``'s writer lock for the ``with`` block (``doing``: what for, as the
-    refusal of a second writer names it); the folder is made if it does not exist.
+    refusal of a second writer names it). The folder is made if it does not exist, and
+    removed at the end with the parents made for it if the block left them empty.
 
     Raises
     ------
@@ -47,9 +49,14 @@ def only_writer(directory: Path, doing: str = "run") -> Iterator[None]:
     if fcntl is None:  # pragma: no cover - Windows
         yield
         return
+    made = missing_folders(directory)
     directory.mkdir(parents=True, exist_ok=True)
     path = directory / LOCK_FILE
-    descriptor = _locked(path, directory)
+    try:
+        descriptor = _locked(path, directory)
+    except BaseException:
+        remove_empty_folders(made)
+        raise
     try:
         os.ftruncate(descriptor, 0)
         os.pwrite(descriptor, f"{os.getpid()} {doing}\n".encode(), 0)
@@ -59,6 +66,7 @@ def only_writer(directory: Path, doing: str = "run") -> Iterator[None]:
             if _same_file(descriptor, path):
                 path.unlink()
         os.close(descriptor)
+        remove_empty_folders(made)
 
 
 def _locked(path: Path, directory: Path) -> int:
