@@ -38,7 +38,7 @@ def finish_item(item: BatchItem, result: RunResult | None, pages: Sequence[RunPa
         remove_owned_files(folder, owned_files(folder))
         return item
     try:
-        write_run(result, folder, pages)
+        write_run(result, folder, pages, beside=True)  # its parent: in the batch's folder
     except Exception as error:  # a port type's writer, a report page, the disk: this file fails
         item.status, item.error = "failed", f"writing {folder}: {failure_reason(error)}"
         with contextlib.suppress(Exception):  # what an earlier run left must not look current
