@@ -126,3 +126,38 @@ def test_a_run_that_fails_to_compile_gives_the_blas_threads_back(blas_registry):
     with pytest.raises(gv.PipelineError):
         gv.run(g, blas_registry, executor="sync", cache=None)
     assert blas_threads() == before
+
+
+def test_a_batch_holds_one_blas_thread_from_file_to_file_and_gives_it_back(tmp_path):
+    """Between two files (where the batch calls ``on_item``) BLAS stays at one thread, so a
+    file's run only counts itself in; the threads come back when the batch ends, also
+    when it fails."""
+    import imageio.v3 as iio
+
+    from ..conftest import PIPELINES
+
+    for k in range(3):
+        iio.imwrite(tmp_path / f"p{k}.png", np.full((8, 8), 40 * k, np.uint8))
+    before, between = blas_threads(), []
+    batch = gv.run_batch(
+        gv.load_pipeline(PIPELINES / "denoise.yaml"),
+        str(tmp_path / "*.png"),
+        input="image",
+        output_dir=tmp_path / "out",
+        outputs=["psnr_noisy_gaussian"],
+        executor="sync",
+        on_item=lambda *_: between.append(blas_threads()),
+    )
+    assert [item.status for item in batch.items] == ["ok"] * 3
+    assert [set(threads) for threads in between] == [{1}] * 3
+    assert set(blas_threads()) == set(before)  # (the plugins may load scipy's BLAS too)
+
+    def stop(*_: object) -> None:
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        gv.run_batch(
+            gv.load_pipeline(PIPELINES / "denoise.yaml"), str(tmp_path / "*.png"),
+            input="image", output_dir=tmp_path / "stopped", executor="sync", on_item=stop,
+        )  # fmt: skip
+    assert set(blas_threads()) == set(before)
