@@ -67,6 +67,7 @@ from graphvision.execution.executors import (
     executor_width,
     make_executor,
 )
+from graphvision.execution.folder_lock import only_writer
 from graphvision.execution.folders import (
     check_output_folder,
     missing_folders,
@@ -166,13 +167,7 @@ def run_batch(
     graph = graph_argument(graph, backends)  # another order: compiled again with it
     inputs, outputs = mapping_argument(inputs, "inputs"), names_argument(outputs, "outputs")
     overrides = mapping_argument(overrides, "overrides")
-    if not isinstance(output_dir, (str, os.PathLike)):
-        raise TypeError(f"output_dir must be a folder's path, got {output_dir!r}")
-    if inputs and input in inputs:
-        raise InputError(
-            f"input '{input}' is given twice: once per file by the batch and once as"
-            f" {inputs[input]!r}; drop one of them"
-        )
+    _check_batch_arguments(output_dir, inputs, input)
     registry = _checked_pipeline(graph, registry, inputs, input, outputs, overrides)
     out_dir = Path(output_dir)
     paths, root = _batch_paths(files, out_dir, input)
@@ -180,24 +175,41 @@ def run_batch(
     for folder in folders:  # each refused before anything runs if it holds others' files
         check_output_folder(folder, outputs if outputs is not None else graph.outputs)
     stale = previous_folders(out_dir) - {folder.resolve() for folder in folders}
-    pool = make_executor(executor, workers) if isinstance(executor, str) else executor
-    one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
-    cache = Cache(MemoryStore()) if one_task_per_file and cache is None else cache  # for seeds
-    batch = BatchRun(
-        graph, paths, folders, input, inputs or {}, pool, one_task_per_file, pages, out_dir
-    )
-    batch.options = dict(registry=registry, outputs=outputs, overrides=overrides, executor=pool)
-    batch.options.update(cache=cache, keep_going=keep_going, hooks=hooks)
-    made, own = missing_folders(out_dir, *folders), isinstance(executor, str)
-    grouped = getattr(pool, "files_at_once", 0) if one_task_per_file else 0  # Dask's
-    width = files_at_once or grouped or executor_width(pool) * (2 if one_task_per_file else 1)
-    batch.file_threads = width > 1 and not one_task_per_file and not encodes_values(pool)
-    default = getattr(pool, "client_files", hasattr(pool, "preload"))
-    batch.client_files = one_task_per_file and (default if client_files is None else client_files)
-    finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
-    if own:
-        pool.shutdown()
-    return BatchResult(finished, _summarise(finished, out_dir, pages, stale), *batch.transferred())
+    name = graph.name if isinstance(graph, Graph) else graph.graph.name
+    with only_writer(out_dir, f"batch of {name}"):  # one writer per folder
+        pool = make_executor(executor, workers) if isinstance(executor, str) else executor
+        one_task_per_file = encodes_values(pool) if one_task_per_file is None else one_task_per_file
+        cache = Cache(MemoryStore()) if one_task_per_file and cache is None else cache  # for seeds
+        batch = BatchRun(
+            graph, paths, folders, input, inputs or {}, pool, one_task_per_file, pages, out_dir
+        )
+        batch.options = dict(registry=registry, outputs=outputs, overrides=overrides, executor=pool)
+        batch.options.update(cache=cache, keep_going=keep_going, hooks=hooks)
+        made, own = missing_folders(out_dir, *folders), isinstance(executor, str)
+        grouped = getattr(pool, "files_at_once", 0) if one_task_per_file else 0  # Dask's
+        width = files_at_once or grouped or executor_width(pool) * (2 if one_task_per_file else 1)
+        batch.file_threads = width > 1 and not one_task_per_file and not encodes_values(pool)
+        default = getattr(pool, "client_files", hasattr(pool, "preload"))
+        batch.client_files = one_task_per_file and (
+            default if client_files is None else client_files
+        )
+        finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
+        if own:
+            pool.shutdown()
+        return BatchResult(
+            finished, _summarise(finished, out_dir, pages, stale), *batch.transferred()
+        )
+
+
+def _check_batch_arguments(output_dir: object, inputs: dict[str, Any], input: str) -> None:
+    """Refuse an output folder that is no path, and the batch's input given as well."""
+    if not isinstance(output_dir, (str, os.PathLike)):
+        raise TypeError(f"output_dir must be a folder's path, got {output_dir!r}")
+    if inputs and input in inputs:
+        raise InputError(
+            f"input '{input}' is given twice: once per file by the batch and once as"
+            f" {inputs[input]!r}; drop one of them"
+        )
 
 
 def _batch_paths(
