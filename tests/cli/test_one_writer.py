@@ -60,9 +60,7 @@ def _listing(folder: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
 
 
-def test_every_writing_command_is_refused_while_another_process_writes(
-    capsys, tmp_path, pipeline
-):
+def test_every_writing_command_is_refused_while_another_process_writes(capsys, tmp_path, pipeline):
     out = tmp_path / "out"
     out.mkdir()
     (out / "notes.txt").write_text("mine")
@@ -103,10 +101,9 @@ def test_a_writer_killed_with_kill_9_holds_nothing(capsys, tmp_path, pipeline):
 
 
 def test_a_second_lock_in_the_same_process_is_refused(tmp_path):
-    with only_writer(tmp_path, "run of a"):
-        with pytest.raises(OutputFolderError, match=rf"process {os.getpid()} \(run of a\)"):
-            with only_writer(tmp_path, "run of b"):
-                pass  # pragma: no cover - never entered
+    refused = pytest.raises(OutputFolderError, match=rf"process {os.getpid()} \(run of a\)")
+    with only_writer(tmp_path, "run of a"), refused, only_writer(tmp_path, "run of b"):
+        pass  # pragma: no cover - never entered
     assert not (tmp_path / LOCK_FILE).exists()
     with only_writer(tmp_path):  # free again
         assert (tmp_path / LOCK_FILE).is_file()
