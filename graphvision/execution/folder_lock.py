@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -71,14 +72,21 @@ def only_writer(directory: Path, doing: str = "run") -> Iterator[None]:
 
 def _locked(path: Path, directory: Path) -> int:
     """An open descriptor of ``path`` holding its exclusive lock."""
+    flags = os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK  # (a pipe: no wait)
     while True:
         try:
-            descriptor = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
-        except OSError as error:  # a link or a folder by that name: not ours to use
+            descriptor = os.open(path, flags, 0o644)
+        except OSError as error:
+            if os.path.lexists(path):  # a link or a folder by that name: not ours to use
+                raise OutputFolderError(_not_ours(directory, str(error.strerror))) from None
             raise OutputFolderError(
-                f"output folder {directory} holds {LOCK_FILE}, which is not graphvision's "
-                f"lock file ({error.strerror}): remove it"
+                f"output folder {directory} cannot be written ({error.strerror})"
             ) from None
+        found = os.fstat(descriptor)
+        if not stat.S_ISREG(found.st_mode) or found.st_nlink != 1:  # a pipe, a hard link
+            os.close(descriptor)  # (to a file of the user's): nothing written nor removed
+            kind = "another name of a file" if stat.S_ISREG(found.st_mode) else "not a file"
+            raise OutputFolderError(_not_ours(directory, kind))
         try:
             fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -99,6 +107,13 @@ def _same_file(descriptor: int, path: Path) -> bool:
         return False
     held = os.fstat(descriptor)
     return (found.st_dev, found.st_ino) == (held.st_dev, held.st_ino)
+
+
+def _not_ours(directory: Path, why: str) -> str:
+    return (
+        f"output folder {directory} holds {LOCK_FILE}, which is not graphvision's lock file "
+        f"({why}): remove it"
+    )
 
 
 def _busy(directory: Path, holder: list[str]) -> str:

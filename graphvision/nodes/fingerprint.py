@@ -13,10 +13,12 @@ memory (never the file on disk, which may be newer than what was imported):
   Python function, a lookup table);
 * the source files of this project's modules that such a function imports
   inside its body (``from ._kernels import kernel``: a numba kernel module
-  imported on first use, so that start-up stays fast). Their code may not be
-  loaded yet, so the file's bytes are what identifies it, the same whether
-  or not the module has been imported (a module edited on disk after it was
-  imported in a long-running process is the one case this misreads);
+  imported on first use, so that start-up stays fast), and the files of the
+  project's modules those files import, followed to the end (a kernel
+  calling a kernel of another file). Their code may not be loaded yet, so
+  the file's bytes are what identifies it, the same whether or not the
+  module has been imported (a module edited on disk after it was imported in
+  a long-running process is the one case this misreads);
 * the version of the installed distribution that provides the node, so that
   an upgrade of a plugin invalidates its results even where the code that
   changed is out of reach (compiled extensions).
@@ -181,9 +183,20 @@ class _Walker:
         self.seen_modules.add(("module", module))
         origin = _module_file(module)
         self.feed("imported module", module)
-        if origin:
-            with contextlib.suppress(OSError), open(origin, "rb") as handle:
-                self.hasher.update(hashlib.blake2b(handle.read(), digest_size=16).digest())
+        if not origin:
+            return
+        try:
+            with open(origin, "rb") as handle:
+                source = handle.read()
+        except OSError:
+            return
+        self.hasher.update(hashlib.blake2b(source, digest_size=16).digest())
+        # and the project's modules that file imports (a kernel calling a kernel of another
+        # file: ``from ..fitting._kernels import draw_sample``), followed to the end
+        package = module if origin.endswith("__init__.py") else module.rpartition(".")[0]
+        for imported in _file_imports(origin, source, package):
+            if _project_of(imported) == self.project:
+                self.source_file(imported)
 
     def code(self, code: types.CodeType, doc: object) -> None:
         constants = list(code.co_consts)
@@ -272,6 +285,17 @@ def _imported_modules(code: types.CodeType, package: str) -> list[str]:
         if isinstance(constant, types.CodeType):
             found += _imported_modules(constant, package)
     return found
+
+
+@cache
+def _file_imports(origin: str, source: bytes, package: str) -> tuple[str, ...]:
+    """The modules a source file imports anywhere in it (:func:`_imported_modules` of its
+    compiled code; nothing when it does not compile)."""
+    try:
+        code = compile(source, origin, "exec", dont_inherit=True)
+    except (SyntaxError, ValueError):
+        return ()
+    return tuple(_imported_modules(code, package))
 
 
 def _module_file(module: str) -> str:

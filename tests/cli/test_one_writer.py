@@ -120,3 +120,42 @@ def test_a_link_named_as_the_lock_is_refused_and_its_target_untouched(capsys, tm
     assert f"output folder {out} holds {LOCK_FILE}, which is not graphvision's lock file" in err
     assert target.read_text() == "keep"
     assert (out / LOCK_FILE).is_symlink()
+
+
+@pytest.mark.parametrize("kind", ["hard link", "pipe"])
+def test_a_hard_link_or_a_pipe_named_as_the_lock_is_refused_and_left_alone(
+    capsys, tmp_path, pipeline, kind
+):
+    out = tmp_path / "out"
+    out.mkdir()
+    precious = tmp_path / "precious.txt"
+    precious.write_text("keep")
+    if kind == "hard link":  # another name of the user's file: writing to it would change it
+        os.link(precious, out / LOCK_FILE)
+        why = "another name of a file"
+    else:
+        os.mkfifo(out / LOCK_FILE)
+        why = "not a file"
+    assert main(["run", str(pipeline), "-d", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"holds {LOCK_FILE}, which is not graphvision's lock file ({why}): remove it" in err
+    assert precious.read_text() == "keep"
+    assert os.path.lexists(out / LOCK_FILE)  # not removed either
+    assert sorted(p.name for p in out.iterdir()) == [LOCK_FILE]  # and nothing written
+
+
+def test_a_folder_that_cannot_be_written_is_said_so(capsys, tmp_path, pipeline, monkeypatch):
+    out = tmp_path / "out"
+    out.mkdir()
+    real_open = os.open
+
+    def refused(path, flags, mode=0o777, **kwargs):  # as a read-only mount refuses
+        if str(path).endswith(LOCK_FILE):
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_open(path, flags, mode, **kwargs)
+
+    monkeypatch.setattr(os, "open", refused)
+    assert main(["run", str(pipeline), "-d", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"error: output folder {out} cannot be written (Permission denied)" in err
+    assert list(out.iterdir()) == []

@@ -495,6 +495,30 @@ def test_editing_a_module_imported_inside_a_node_invalidates_that_node_only(tmp_
     assert gv.run(graph, after, cache=None).outputs["o"] == 3.0
 
 
+def test_editing_a_module_that_the_kernel_module_imports_invalidates_the_node(tmp_path):
+    """The files the kernel module imports from the project are its code too, followed to
+    the end: a kernel calling a kernel of another file (a tryer's case: an edit of RANSAC's
+    sampling in fitting/_kernels.py kept the homography node's key, and its stale value)."""
+    package = tmp_path / "lazy"
+    package.mkdir()
+    (package / "__init__.py").write_text(LAZY_PACKAGE)
+    (package / "_kernel.py").write_text(
+        "from ._middle import factor\n\n\ndef scaled(x):\n    return factor() * x\n"
+    )
+    (package / "_middle.py").write_text(
+        "def factor():\n    from ._leaf import LEAF\n\n    return LEAF\n"
+    )
+    (package / "_leaf.py").write_text("LEAF = 2.0\n")
+    before = gv.discover([package], entry_points=False)
+    hashes = {op: before.node(op).source_hash for op in ("lazy.uses_kernel", "lazy.plain")}
+    (package / "_leaf.py").write_text("LEAF = 5.0\n")  # two files away from the node's body
+    after = gv.discover([package], entry_points=False)
+    assert after.node("lazy.uses_kernel").source_hash != hashes["lazy.uses_kernel"]
+    assert after.node("lazy.plain").source_hash == hashes["lazy.plain"]
+    again = gv.discover([package], entry_points=False)  # nothing edited: the same key
+    assert again.node("lazy.uses_kernel").source_hash == after.node("lazy.uses_kernel").source_hash
+
+
 THREAD_PLUGIN = '''
 import threading
 from graphvision import Float, node
