@@ -40,7 +40,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if out_dir is None:
         return _run_once(graph, registry, inputs, overrides, args, progress, None)
     check_output_folder(out_dir, args.output or graph.outputs)  # refuse before running
-    with folders_kept_only_if_used(out_dir), only_writer(out_dir, f"run of {graph.name}"):
+    with only_writer(out_dir, f"run of {graph.name}"):  # (removes the folders it made, if empty)
         return _run_once(graph, registry, inputs, overrides, args, progress, out_dir)
 
 

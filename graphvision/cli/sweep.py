@@ -15,7 +15,6 @@ from graphvision.cli.common import (
     check_overrides,
     disk_cache,
     executor_for,
-    folders_kept_only_if_used,
     load_run_arguments,
     named_pairs,
     output_folder,
@@ -49,7 +48,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     out_dir = output_folder(args.output_dir)  # checked; made when the results are written
     assert out_dir is not None  # the option is required
     check_sweep_folder(out_dir)  # before anything runs
-    with folders_kept_only_if_used(out_dir), only_writer(out_dir, f"sweep of {graph.name}"):
+    with only_writer(out_dir, f"sweep of {graph.name}"):  # (removes the folders it made, if empty)
         return _sweep(args, graph, registry, overrides, inputs, grid, out_dir)
 
 

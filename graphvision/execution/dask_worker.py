@@ -4,7 +4,6 @@ value's task, and several files of a batch as one task (:mod:`graphvision.execut
 
 from __future__ import annotations
 
-import functools
 import multiprocessing
 import os
 import pickle
@@ -17,10 +16,7 @@ from graphvision.nodes.spec import FunctionRef
 
 __all__ = ["FileTaskError", "keep_freed_memory", "on_worker", "run_files", "shared"]
 
-_MMAP_THRESHOLD, _TRIM_THRESHOLD = -3, -1  # glibc's mallopt parameters (malloc.h)
 
-
-@functools.cache  # once per process
 def keep_freed_memory() -> None:
     """In a worker started with ``MALLOC_TRIM_THRESHOLD_`` (Dask's nanny sets 64 KiB, to give
     freed memory back to the system): glibc's allocator keeps up to 64 MiB of freed memory
@@ -32,16 +28,10 @@ def keep_freed_memory() -> None:
     and a batch's file on a Dask worker about twice that of a ``processes`` worker. Memory
     over 64 MiB freed at the heap's top is still given back.
     """
-    if "MALLOC_TRIM_THRESHOLD_" not in os.environ:
-        return
-    import ctypes
+    if "MALLOC_TRIM_THRESHOLD_" in os.environ:
+        from graphvision.execution import heap
 
-    try:
-        libc = ctypes.CDLL("libc.so.6")
-        libc.mallopt(_MMAP_THRESHOLD, 32 * 2**20)
-        libc.mallopt(_TRIM_THRESHOLD, 64 * 2**20)
-    except (OSError, AttributeError):  # not glibc: nothing to undo
-        return
+        heap.keep_freed_memory()  # the thresholds a run sets where its nodes run
 
 
 def shared(value: Any) -> Any:

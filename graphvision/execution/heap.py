@@ -31,6 +31,7 @@ first task (:func:`graphvision.execution.dask_worker.keep_freed_memory`).
 from __future__ import annotations
 
 import ctypes
+import functools
 
 __all__ = ["MMAP_THRESHOLD", "TRIM_THRESHOLD", "keep_freed_memory"]
 
@@ -42,15 +43,12 @@ TRIM_THRESHOLD = 2 * MMAP_THRESHOLD
 rule: twice the mmap threshold)."""
 
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3  # glibc's <malloc.h>
-_SET = [False]  # whether this process has set them (once is enough: they are process-wide)
 
 
+@functools.cache  # once per process: the thresholds are process-wide
 def keep_freed_memory() -> None:
     """Set glibc's ``malloc`` thresholds once for this process (see the module docstring);
     nothing where there is no glibc."""
-    if _SET[0]:
-        return
-    _SET[0] = True
     try:
         libc = ctypes.CDLL("libc.so.6")
         libc.mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)
