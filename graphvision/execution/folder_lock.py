@@ -87,6 +87,10 @@ def _locked(path: Path, directory: Path) -> int:
             os.close(descriptor)  # (to a file of the user's): nothing written nor removed
             kind = "another name of a file" if stat.S_ISREG(found.st_mode) else "not a file"
             raise OutputFolderError(_not_ours(directory, kind))
+        held = os.pread(descriptor, 200, 0).split(maxsplit=1)
+        if held and not held[0].isdigit():  # a lock holds "<pid> <what>", or nothing yet
+            os.close(descriptor)
+            raise OutputFolderError(_not_ours(directory, "it holds something else"))
         try:
             fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

@@ -12,14 +12,19 @@ its wrong values under the new key.
 Every kernel here is compiled with :func:`njit`, which is ``numba.njit`` whose
 cache adds to each entry's key a digest of the files of every kernel reachable
 from it (its globals, and the attributes it reads of a module it holds,
-followed to the end): a changed callee is a cache miss, compiled anew.
+followed to the end) and of the project's modules those kernels' files import
+(a constant read from another file is compiled in too): a changed callee or
+constant is a cache miss, compiled anew.
 """
 
 from __future__ import annotations
 
+import ast
 import functools
 import hashlib
+import importlib.util
 import inspect
+import sys
 import types
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -52,9 +57,12 @@ class _CalleeAwareCache(FunctionCache):
 
 
 def callees_digest(func: Callable[..., Any]) -> str:
-    """sha256 over the source files of every kernel ``func`` reaches (itself excluded:
-    numba's own stamp covers its file), each file's path and bytes, in path order."""
-    files = {Path(inspect.getfile(kernel.py_func)) for kernel in _reachable(func)}
+    """sha256 over the source files of every kernel ``func`` reaches and of the project's
+    modules those kernels' modules import, to the end (a constant read from another file
+    is compiled in too), itself excluded (numba's own stamp covers its file): each file's
+    path and bytes, in path order."""
+    modules = {func.__module__, *(kernel.py_func.__module__ for kernel in _reachable(func))}
+    files = {Path(path) for path in _imported_files(modules)}
     files.discard(Path(inspect.getfile(func)))
     digest = hashlib.sha256()
     for path in sorted(files):
@@ -67,6 +75,46 @@ def callees_digest(func: Callable[..., Any]) -> str:
 def _file_digest(path: Path, mtime_ns: int, size: int) -> bytes:
     """sha256 of ``path``'s name and bytes (read again when its time or size changes)."""
     return hashlib.sha256(str(path).encode() + b"\0" + path.read_bytes()).digest()
+
+
+def _imported_files(modules: set[str]) -> set[str]:
+    """The files of ``modules`` and of the modules of their project that they import (at
+    the top of their file: what is loaded when a kernel is compiled), followed to the end."""
+    files: set[str] = set()
+    waiting, seen = list(modules), set(modules)
+    while waiting:
+        module = sys.modules.get(waiting.pop())
+        path = getattr(module, "__file__", None)
+        if module is None or not path or not path.endswith(".py"):
+            continue
+        files.add(path)
+        project = module.__name__.partition(".")[0]
+        package = module.__package__ or ""
+        for name in _top_level_imports(Path(path).read_bytes(), package):
+            if name.partition(".")[0] == project and name not in seen:
+                seen.add(name)
+                waiting.append(name)
+    return files
+
+
+@functools.cache
+def _top_level_imports(source: bytes, package: str) -> tuple[str, ...]:
+    """The absolute names a file's top-level imports may mean (``from .a import b``: ``a``
+    and ``a.b``, which may be a module)."""
+    found: list[str] = []
+    for statement in ast.parse(source).body:
+        if isinstance(statement, ast.Import):
+            found += [alias.name for alias in statement.names]
+        elif isinstance(statement, ast.ImportFrom):
+            relative = "." * statement.level + (statement.module or "")
+            try:
+                base = (
+                    importlib.util.resolve_name(relative, package) if statement.level else relative
+                )
+            except (ImportError, ValueError):
+                continue
+            found += [base, *(f"{base}.{alias.name}" for alias in statement.names)]
+    return tuple(found)
 
 
 def _reachable(func: Callable[..., Any]) -> Iterator[Dispatcher]:

@@ -159,3 +159,14 @@ def test_a_folder_that_cannot_be_written_is_said_so(capsys, tmp_path, pipeline, 
     err = capsys.readouterr().err
     assert f"error: output folder {out} cannot be written (Permission denied)" in err
     assert list(out.iterdir()) == []
+
+
+def test_a_file_of_the_users_named_as_the_lock_is_refused_and_kept(capsys, tmp_path, pipeline):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / LOCK_FILE).write_text("my notes\n")
+    assert main(["run", str(pipeline), "-d", str(out)]) == 2
+    err = capsys.readouterr().err
+    why = "(it holds something else)"
+    assert f"holds {LOCK_FILE}, which is not graphvision's lock file {why}" in err
+    assert (out / LOCK_FILE).read_text() == "my notes\n"

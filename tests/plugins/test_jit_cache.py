@@ -78,6 +78,31 @@ def test_a_changed_callee_two_files_away_is_compiled_in_again(tmp_path):
     assert _top_in_a_new_process(tmp_path) == (33.0, 1)
 
 
+CONSTANT_READER = """from graphvision_plugins.shared.jit import njit
+from kernels_under_test.constants import FACTOR
+
+
+@njit(cache=True, nogil=True)
+def top(x):
+    return FACTOR * x
+"""
+
+
+def test_a_changed_constant_imported_from_another_file_is_compiled_in_again(tmp_path):
+    """numba compiles a global's value into the kernel: an adversary's case, a constant
+    changed in its own file, gave the old value (and graphvision's cache, whose key did
+    follow the edit, kept it)."""
+    package = tmp_path / "kernels_under_test"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "constants.py").write_text("FACTOR = 2.0\n")
+    (package / "top.py").write_text(CONSTANT_READER)
+    assert _top_in_a_new_process(tmp_path) == (2.0, 0)
+    assert _top_in_a_new_process(tmp_path) == (2.0, 1)
+    (package / "constants.py").write_text("FACTOR = 7.0\n")
+    assert _top_in_a_new_process(tmp_path) == (7.0, 0)  # numba's own cache: 2.0, a hit
+
+
 def _plugin_kernels() -> list[tuple[str, str, Dispatcher]]:
     found = []
     for module_info in pkgutil.walk_packages(
