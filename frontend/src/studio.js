@@ -108,11 +108,26 @@ function whyFailed(event) {
   return nodes.length ? nodes.map((n) => n.error).join("; ") : event.error;
 }
 
+// What the page knows of the runs, from the server's list (api/runs, api/graph). A run's
+// status only moves forward: running, then how it ended. A list asked for while a run was
+// running can arrive after the run's end came by the event stream (another connection):
+// it is older than what the page knows and never puts an ended run back to running. A run
+// the list names that the page never heard start (the stream reconnected) becomes the latest.
+const ENDED = new Set(["done", "failed", "cancelled", "superseded"]);
+function learnRuns(runs) {
+  for (const r of runs) {
+    const known = S.runs[r.id];
+    if (known && ENDED.has(known.status) && !ENDED.has(r.status)) continue;
+    S.runs[r.id] = { ...known, ...r };
+    S.latest = Math.max(S.latest, r.id);
+  }
+}
+
 async function showRun(id) {
   if (!S.runs[id]?.nodes || S.runs[id].kept === undefined) {
     const found = await api("api/runs");
     if (!found.ok) return;
-    for (const r of found.data) S.runs[r.id] = r;
+    learnRuns(found.data);
   }
   const run = S.runs[id];
   if (!run || !run.kept) return;
@@ -580,7 +595,7 @@ async function refreshRuns(ask = true) {
   if (ask || !ids.every((id) => S.runs[id]?.diff && S.runs[id].metrics && S.runs[id].kept !== undefined)) {
     const found = await api("api/runs");
     if (!found.ok) return;
-    for (const r of found.data) S.runs[r.id] = { ...S.runs[r.id], ...r };
+    learnRuns(found.data);
   }
   const runs = Object.values(S.runs).filter((r) => r.id).sort((a, b) => b.id - a.id);
   const table = el("table", { class: "gv-runs" }, el("tr", {}, ...["A", "B", "run", "status", "ms", "changes", "metrics"].map((h) => el("th", {}, h))));
@@ -635,7 +650,7 @@ async function main() {
   S.view = new GraphView($("#graph"), S.graph, { onSelect: select });
   S.view.fit();
   for (const n of S.graph.nodes) if (n.kind === "node") setNodeState(n.id, "queued");
-  for (const r of S.graph.runs) S.runs[r.id] = r;
+  learnRuns(S.graph.runs);
   $("#fit").addEventListener("click", () => S.view.fit());
   $("#search").addEventListener("change", (e) => S.view.search(e.target.value));
   $("#cancel").addEventListener("click", () => api("api/cancel", {}));

@@ -100,6 +100,47 @@ def test_the_page_names_the_node_whose_worker_died_and_the_next_change_runs(
         server.stop()
 
 
+def test_a_runs_list_asked_for_before_the_run_ended_does_not_undo_its_end(
+    browser, registry, tmp_path: Path
+) -> None:
+    """The page asks for the runs list (``api/runs``) as it opens; the answer, made while run
+    1 was running, may arrive after the run's end came by the event stream (another
+    connection). Here every such answer is held until the page has shown the end: the
+    older answer must not put the header back to "running" (it did, and the CI run that
+    checked a killed worker's message timed out waiting for "failed")."""
+    server = _spinning(registry, tmp_path / "pid")
+    held: list[tuple[object, object]] = []
+    holding = [True]
+
+    def hold(route) -> None:
+        if holding[0]:
+            held.append((route, route.fetch()))  # the server's answer now, delivered later
+        else:
+            route.continue_()
+
+    try:
+        page = browser.new_page()
+        page.route("**/api/runs", hold)
+        page.goto(server.url)
+        pid = _pid(tmp_path / "pid")
+        while not held:  # the page has asked, and the server answered "running"
+            page.wait_for_timeout(20)
+        os.kill(pid, signal.SIGKILL)
+        assert _status(page, "failed").startswith("run 1 failed")
+        holding[0] = False
+        while held:
+            route, answer = held.pop(0)
+            page.evaluate("document.querySelector('#runs > table')?.setAttribute('data-old', '')")
+            route.fulfill(response=answer)
+            page.wait_for_selector("#runs > table:not([data-old])", timeout=60_000)
+            assert page.get_attribute("#run-status", "data-status") == "failed"
+    finally:
+        holding[0] = False
+        for route, answer in held:
+            route.fulfill(response=answer)
+        server.stop()
+
+
 def test_the_cancel_button_ends_the_running_node(browser, registry, tmp_path: Path) -> None:
     server = _spinning(registry, tmp_path / "pid")
     try:
