@@ -249,10 +249,13 @@ def _validate(command: Command) -> None:
 
 def _graph_and_report(command: Command) -> None:
     """``graph`` and ``report``: a pipeline drawn, a run folder's pages written again."""
-    p = command("graph", "draw a pipeline as SVG, DOT or Mermaid")
+    p = command("graph", "print a pipeline's drawing: Graphviz DOT, SVG or Mermaid")
     p.add_argument("pipeline", help="the pipeline file (YAML)")
     p.add_argument(
-        "--format", choices=("svg", "dot", "mermaid"), default="dot", help="the drawing's format"
+        "--format",
+        choices=("dot", "svg", "mermaid"),
+        default="dot",
+        help="the drawing's format (default: dot, for Graphviz: graphvision graph P | dot -Tpng)",
     )
     p.set_defaults(func=cmd_graph)
 

@@ -301,12 +301,24 @@ def _checked_combinations(
     outputs: Sequence[str] | None,
 ) -> tuple[CompiledGraph, list[str]]:
     """The first combination compiled, each other value checked once, and the outputs
-    to produce; PipelineError naming unknown outputs and inputs."""
+    to produce; PipelineError naming every refused value, unknown output and input."""
     first = {key: options[0] for key, options in zip(keys, values, strict=True)}
-    base = _compile(graph, registry, first, inputs)
+    refused: dict[tuple[str, str], Problem] = {}  # a bad first value fails every check
+
+    def compiled(combo: dict[str, Any]) -> CompiledGraph | None:
+        try:
+            return _compile(graph, registry, combo, inputs)
+        except PipelineError as error:
+            for p in error.problems:
+                refused.setdefault((p.where, p.message.rsplit(" (grid combination", 1)[0]), p)
+            return None
+
+    base = compiled(first)
     for key, options in zip(keys, values, strict=True):  # each value checked once
         for value in options[1:]:
-            _compile(graph, registry, {**first, key: value}, inputs)
+            compiled({**first, key: value})
+    if base is None or refused:
+        raise PipelineError(list(refused.values()), graph.source)
     wanted = list(outputs) if outputs is not None else list(base.outputs)
     listing, names = ", ".join(base.outputs), ", ".join(base.input_types) or "none"
     unknown = [

@@ -237,3 +237,18 @@ def test_a_bad_grid_value_is_named_as_the_grid_it_came_from() -> None:
         sweep(gv.load_pipeline(COINS), {"binary.window": [31, 52]}, executor="sync")
     (problem,) = caught.value.problems
     assert problem.where == "--grid binary.window=52" and "must be odd" in problem.message
+
+
+def test_every_bad_grid_value_is_named_at_once_each_once() -> None:
+    """A sweep names every refused value, as ``validate`` names every problem; a bad first
+    value (part of every combination checked) is named once, not once per check."""
+    grid = {"binary.window": [30, 31, 52, "wide"], "binary.k": [0.2, "low"]}
+    with pytest.raises(gv.PipelineError) as caught:
+        sweep(gv.load_pipeline(COINS), grid, executor="sync")
+    named = sorted(p.where for p in caught.value.problems)
+    assert named == [
+        "--grid binary.k='low'",
+        "--grid binary.window='wide'",
+        "--grid binary.window=30",
+        "--grid binary.window=52",
+    ]
