@@ -11,8 +11,9 @@ as the kernels had before (``pow`` of the C library for every value off the 8-bi
 faster:
 
 * a value that is one of the 256 levels of an 8-bit channel takes its linear value from a
-  table (numpy's power, as before: where numpy has its own AVX-512 power it may differ
-  from ``pow`` in the last bit);
+  table made with the same ``pow`` (numpy's power, which made it before, has its own
+  AVX-512 code that differs from ``pow`` in the last bit for a few levels: the table, and
+  every result read from it, would then depend on the CPU that made it);
 * off the levels, a float32 value's power is computed in SIMD lanes with an error far
   below 2⁻⁶ ulp: :math:`u^{2.4} = C_j (u r_j)^{2.4}`, :math:`j` the 7 bits of :math:`u`
   below its exponent, :math:`r_j` the reciprocal of that interval's centre,
@@ -35,6 +36,7 @@ Dekker (1971), "A floating-point technique for extending the available precision
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from decimal import Decimal, localcontext
 from functools import cache
@@ -62,7 +64,7 @@ def srgb_levels(dtype: np.dtype) -> tuple[np.ndarray, np.ndarray]:
     wide = levels.astype(np.float64)
     linear = wide / 12.92
     curved = wide > 0.04045
-    linear[curved] = ((wide[curved] + 0.055) / 1.055) ** 2.4
+    linear[curved] = [math.pow(u, 2.4) for u in (wide[curved] + 0.055) / 1.055]  # libm's
     return levels, linear
 
 

@@ -47,15 +47,12 @@ def _hsv(rgb: np.ndarray) -> np.ndarray:
 
 def _srgb_linear(channels: np.ndarray) -> np.ndarray:
     """sRGB linearised in float64 with the C library's ``pow`` (``math.pow``), as the kernels
-    call it, but for the 8-bit levels, whose table is numpy's power (numpy's own SIMD power
-    where the CPU has AVX-512, which differs from ``pow`` in the last bit for a few %)."""
+    call it and as their table of the 8-bit levels holds it."""
     rgb = channels.astype(np.float64)
     linear = rgb / 12.92
     curved = rgb > 0.04045
     base = (rgb[curved] + 0.055) / 1.055
     linear[curved] = [math.pow(value, 2.4) for value in base]
-    level = (np.round(channels * 255) / 255).astype(channels.dtype) == channels
-    linear[curved & level] = ((rgb[curved & level] + 0.055) / 1.055) ** 2.4
     return linear
 
 
