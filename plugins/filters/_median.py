@@ -114,13 +114,15 @@ def median(image: ImageT, *, size: MedianSize = 3, boundary: Boundary = "mirror"
     the median of a window's sorted columns is then selected by Batcher's
     odd-even merge pruned to the comparators the middle rank depends on
     (14 for 3×3, 82 for 5×5, 205 for 7×7), each run over a block of pixels
-    as min/max vector instructions. 3×3 fuses Paeth's network (max of the
-    column minima, median of the medians, min of the maxima) into one pass
-    per row. From 7×7 up, an image of 8-bit levels (every value :math:`k/255`,
-    as read from an 8-bit file) takes Huang's sliding histogram over the 256
-    levels instead: ``2 · size`` counter updates a pixel and a
-    short walk from the neighbour's median [4]_, the same median. Colour images
-    are filtered per channel.
+    as min/max vector instructions. 3×3 runs Paeth's network (max of the
+    column minima, median of the medians, min of the maxima) on 256 columns
+    at a time, reading the three rows where they lie in the image (no padded
+    copy; the border columns through the boundary rule). From 7×7 up, an
+    image of 8-bit levels (every value :math:`k/255`, as read from an 8-bit
+    file) takes Huang's sliding histogram over the 256 levels instead:
+    ``2 · size`` counter updates a pixel and a short walk from the
+    neighbour's median [4]_, the same median. Colour images are filtered per
+    channel.
 
     Parameters
     ----------

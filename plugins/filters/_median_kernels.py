@@ -122,35 +122,102 @@ def median_by_network(
             out[r, start : start + width] = wires[median_wire, :width]
 
 
+# columns of the 3×3 median per pass: its sorted triples (3 · 1 KB) stay in L1 beside the rows
+_SPAN = 256
+
+
 @njit(cache=True, nogil=True)
 def median_3x3(
     image: np.ndarray, row_index: np.ndarray, column_index: np.ndarray, out: np.ndarray
 ) -> None:  # pragma: no cover
-    """Exact 3×3 median from sorted column triples, fused into one pass per row.
+    """Exact 3×3 median from sorted column triples, a block of columns at a time.
 
     With each column sorted into (low, mid, high), the median of the nine is
     the median of (largest low, median of the mids, smallest high) [Paeth].
-    Padded rows come from a ring of three lines, as in :func:`median_by_network`.
+    The three rows are read where they lie in ``image`` (a zero row for
+    ``row_index`` −1) and only the border columns through ``column_index``;
+    the triples of ``_SPAN`` columns are sorted into arrays that stay in L1
+    and selected from at once. Padded row ``p`` comes as the ``p mod 3``-th of
+    the three, the order of the ring of lines the kernel once copied them into:
+    every comparator keeps its first operand on a tie, so between +0 and −0 the
+    median keeps the sign bit it had then.
     """
     rows, cols = out.shape
-    lines = np.empty((3, cols + 2), dtype=np.float32)
-    low = np.empty(cols + 2, dtype=np.float32)
-    mid = np.empty(cols + 2, dtype=np.float32)
-    high = np.empty(cols + 2, dtype=np.float32)
+    zeros = np.zeros(image.shape[1], dtype=np.float32)
+    triples = np.empty((3, _SPAN + 2), dtype=np.float32)
     for r in range(rows):
-        _advance(lines, image, row_index, column_index, r)
-        top, centre, bottom = lines[0], lines[1], lines[2]
-        for x in range(cols + 2):
-            a, b, c = top[x], centre[x], bottom[x]
-            small, large = min(a, b), max(a, b)
-            low[x] = min(small, c)
-            high[x] = max(large, c)
-            mid[x] = max(small, min(large, c))
+        top = _image_row(image, row_index[r + (0 - r) % 3], zeros)
+        centre = _image_row(image, row_index[r + (1 - r) % 3], zeros)
+        bottom = _image_row(image, row_index[r + (2 - r) % 3], zeros)
         row = out[r]
-        for x in range(cols):
-            lows = max(max(low[x], low[x + 1]), low[x + 2])
-            highs = min(min(high[x], high[x + 1]), high[x + 2])
-            a, b, c = mid[x], mid[x + 1], mid[x + 2]
-            mids = max(min(a, b), min(max(a, b), c))
-            small, large = min(lows, mids), max(lows, mids)
-            row[x] = max(small, min(large, highs))
+        for start in range(0, cols, _SPAN):
+            width = min(_SPAN, cols - start)
+            _sort_columns(top, centre, bottom, column_index, start, width + 2, triples)
+            _select_3x3(triples[0], triples[1], triples[2], row[start : start + width])
+
+
+@njit(cache=True, nogil=True)
+def _image_row(image: np.ndarray, source: int, zeros: np.ndarray) -> np.ndarray:  # pragma: no cover
+    """Row ``source`` of ``image``, or ``zeros`` for −1 (the zero boundary)."""
+    return image[source] if source >= 0 else zeros
+
+
+@njit(cache=True, nogil=True)
+def _sort3(a: float, b: float, c: float) -> tuple[float, float, float]:  # pragma: no cover
+    """(low, mid, high) of ``a, b, c``: on a tie, the first of them in that order."""
+    small, large = min(a, b), max(a, b)
+    return min(small, c), max(small, min(large, c)), max(large, c)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _sort_columns(
+    top: np.ndarray,
+    centre: np.ndarray,
+    bottom: np.ndarray,
+    column_index: np.ndarray,
+    start: int,
+    span: int,
+    triples: np.ndarray,
+) -> None:  # pragma: no cover
+    """``triples[:, i]`` = sorted (low, mid, high) of padded column ``start + i``, ``i <
+    span``: image column ``start + i − before`` inside, ``column_index``'s (−1: zeros) on
+    the border."""
+    width = top.size
+    before = (column_index.size - width) // 2  # 0 for crop
+    first = max(before - start, 0)  # the first i inside the image, and one past the last
+    last = min(before + width - start, span)
+    shift = start + first - before
+    a, b, c = top[shift:], centre[shift:], bottom[shift:]
+    low, mid, high = triples[0, first:], triples[1, first:], triples[2, first:]
+    for i in range(last - first):
+        low[i], mid[i], high[i] = _sort3(a[i], b[i], c[i])
+    for i in range(first):
+        _sort_border(top, centre, bottom, column_index[start + i], triples[:, i])
+    for i in range(last, span):
+        _sort_border(top, centre, bottom, column_index[start + i], triples[:, i])
+
+
+@njit(cache=True, nogil=True)
+def _sort_border(
+    top: np.ndarray, centre: np.ndarray, bottom: np.ndarray, k: int, triple: np.ndarray
+) -> None:  # pragma: no cover
+    """``triple`` = sorted column ``k`` of the three rows (−1: zeros)."""
+    if k >= 0:
+        triple[0], triple[1], triple[2] = _sort3(top[k], centre[k], bottom[k])
+    else:
+        triple[:] = 0.0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _select_3x3(
+    low: np.ndarray, mid: np.ndarray, high: np.ndarray, row: np.ndarray
+) -> None:  # pragma: no cover
+    """``row[x]`` = median of (largest low, median of the mids, smallest high) over the
+    sorted triples ``x, x + 1, x + 2``."""
+    for x in range(row.size):
+        lows = max(max(low[x], low[x + 1]), low[x + 2])
+        highs = min(min(high[x], high[x + 1]), high[x + 2])
+        a, b, c = mid[x], mid[x + 1], mid[x + 2]
+        mids = max(min(a, b), min(max(a, b), c))
+        small, large = min(lows, mids), max(lows, mids)
+        row[x] = max(small, min(large, highs))
