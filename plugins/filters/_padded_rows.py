@@ -26,7 +26,9 @@ def fill_line(
         return
     row = image[source]
     cols = row.size
-    line[before : before + cols] = row
+    inside = line[before : before + cols]
+    for k in range(cols):  # a loop, not ``inside[:] = row``: numba's slice copy took 3×
+        inside[k] = row[k]
     for k in range(before):
         index = column_index[k]
         line[k] = row[index] if index >= 0 else 0.0
