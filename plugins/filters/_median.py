@@ -115,9 +115,9 @@ def median(image: ImageT, *, size: MedianSize = 3, boundary: Boundary = "mirror"
     odd-even merge pruned to the comparators the middle rank depends on
     (14 for 3×3, 82 for 5×5, 205 for 7×7), each run over a block of pixels
     as min/max vector instructions. 3×3 runs Paeth's network (max of the
-    column minima, median of the medians, min of the maxima) on 256 columns
-    at a time, reading the three rows where they lie in the image (no padded
-    copy; the border columns through the boundary rule). From 7×7 up, an
+    column minima, median of the medians, min of the maxima) on a vector of
+    pixels at a time, reading the three rows where they lie in the image (no
+    padded copy; the border columns through the boundary rule). From 7×7 up, an
     image of 8-bit levels (every value :math:`k/255`, as read from an 8-bit
     file) takes Huang's sliding histogram over the 256 levels instead:
     ``2 · size`` counter updates a pixel and a short walk from the

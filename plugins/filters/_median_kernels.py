@@ -122,38 +122,39 @@ def median_by_network(
             out[r, start : start + width] = wires[median_wire, :width]
 
 
-# columns of the 3×3 median per pass: its sorted triples (3 · 1 KB) stay in L1 beside the rows
-_SPAN = 256
-
-
 @njit(cache=True, nogil=True)
 def median_3x3(
     image: np.ndarray, row_index: np.ndarray, column_index: np.ndarray, out: np.ndarray
 ) -> None:  # pragma: no cover
-    """Exact 3×3 median from sorted column triples, a block of columns at a time.
+    """Exact 3×3 median: Paeth's network over sorted column triples, one pass per row.
 
     With each column sorted into (low, mid, high), the median of the nine is
     the median of (largest low, median of the mids, smallest high) [Paeth].
     The three rows are read where they lie in ``image`` (a zero row for
-    ``row_index`` −1) and only the border columns through ``column_index``;
-    the triples of ``_SPAN`` columns are sorted into arrays that stay in L1
-    and selected from at once. Padded row ``p`` comes as the ``p mod 3``-th of
-    the three, the order of the ring of lines the kernel once copied them into:
-    every comparator keeps its first operand on a tie, so between +0 and −0 the
-    median keeps the sign bit it had then.
+    ``row_index`` −1), and each window's three columns are sorted in the loop
+    that selects its median (a vector of pixels at a time, as OpenCV does):
+    sorting each column once into arrays and reading them back three times cost
+    more than sorting it three times in registers. Only the windows over a
+    border read their columns through ``column_index``. Padded row ``p`` comes
+    as the ``p mod 3``-th of the three, the order of the ring of lines the
+    kernel once copied the rows into: every comparator keeps its first operand
+    on a tie, so between +0 and −0 the median keeps the sign bit it had then.
     """
     rows, cols = out.shape
-    zeros = np.zeros(image.shape[1], dtype=np.float32)
-    triples = np.empty((3, _SPAN + 2), dtype=np.float32)
+    width = image.shape[1]
+    before = (column_index.size - width) // 2  # 0 for crop
+    inside = max(width - 2, 0)  # the windows within the image's columns, from ``before``
+    zeros = np.zeros(width, dtype=np.float32)
     for r in range(rows):
         top = _image_row(image, row_index[r + (0 - r) % 3], zeros)
         centre = _image_row(image, row_index[r + (1 - r) % 3], zeros)
         bottom = _image_row(image, row_index[r + (2 - r) % 3], zeros)
         row = out[r]
-        for start in range(0, cols, _SPAN):
-            width = min(_SPAN, cols - start)
-            _sort_columns(top, centre, bottom, column_index, start, width + 2, triples)
-            _select_3x3(triples[0], triples[1], triples[2], row[start : start + width])
+        _medians_inside(top, centre, bottom, row[before : before + inside])
+        for c in range(before):
+            row[c] = _median_on_border(top, centre, bottom, column_index, c)
+        for c in range(before + inside, cols):
+            row[c] = _median_on_border(top, centre, bottom, column_index, c)
 
 
 @njit(cache=True, nogil=True)
@@ -162,62 +163,67 @@ def _image_row(image: np.ndarray, source: int, zeros: np.ndarray) -> np.ndarray:
     return image[source] if source >= 0 else zeros
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _sort3(a: float, b: float, c: float) -> tuple[float, float, float]:  # pragma: no cover
-    """(low, mid, high) of ``a, b, c``: on a tie, the first of them in that order."""
+    """(low, mid, high) of ``a, b, c``; ``min``/``max`` keep their first operand on a tie."""
     small, large = min(a, b), max(a, b)
     return min(small, c), max(small, min(large, c)), max(large, c)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _sort_columns(
-    top: np.ndarray,
-    centre: np.ndarray,
-    bottom: np.ndarray,
-    column_index: np.ndarray,
-    start: int,
-    span: int,
-    triples: np.ndarray,
-) -> None:  # pragma: no cover
-    """``triples[:, i]`` = sorted (low, mid, high) of padded column ``start + i``, ``i <
-    span``: image column ``start + i − before`` inside, ``column_index``'s (−1: zeros) on
-    the border."""
-    width = top.size
-    before = (column_index.size - width) // 2  # 0 for crop
-    first = max(before - start, 0)  # the first i inside the image, and one past the last
-    last = min(before + width - start, span)
-    shift = start + first - before
-    a, b, c = top[shift:], centre[shift:], bottom[shift:]
-    low, mid, high = triples[0, first:], triples[1, first:], triples[2, first:]
-    for i in range(last - first):
-        low[i], mid[i], high[i] = _sort3(a[i], b[i], c[i])
-    for i in range(first):
-        _sort_border(top, centre, bottom, column_index[start + i], triples[:, i])
-    for i in range(last, span):
-        _sort_border(top, centre, bottom, column_index[start + i], triples[:, i])
+def _median9(
+    t0: float,
+    c0: float,
+    b0: float,
+    t1: float,
+    c1: float,
+    b1: float,
+    t2: float,
+    c2: float,
+    b2: float,
+) -> float:  # pragma: no cover
+    """Median of three columns (top, centre, bottom each) by Paeth's network."""
+    low0, mid0, high0 = _sort3(t0, c0, b0)
+    low1, mid1, high1 = _sort3(t1, c1, b1)
+    low2, mid2, high2 = _sort3(t2, c2, b2)
+    lows = max(max(low0, low1), low2)
+    highs = min(min(high0, high1), high2)
+    mids = max(min(mid0, mid1), min(max(mid0, mid1), mid2))
+    small, large = min(lows, mids), max(lows, mids)
+    return max(small, min(large, highs))
 
 
 @njit(cache=True, nogil=True)
-def _sort_border(
-    top: np.ndarray, centre: np.ndarray, bottom: np.ndarray, k: int, triple: np.ndarray
+def _medians_inside(
+    top: np.ndarray, centre: np.ndarray, bottom: np.ndarray, row: np.ndarray
 ) -> None:  # pragma: no cover
-    """``triple`` = sorted column ``k`` of the three rows (−1: zeros)."""
-    if k >= 0:
-        triple[0], triple[1], triple[2] = _sort3(top[k], centre[k], bottom[k])
-    else:
-        triple[:] = 0.0
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _select_3x3(
-    low: np.ndarray, mid: np.ndarray, high: np.ndarray, row: np.ndarray
-) -> None:  # pragma: no cover
-    """``row[x]`` = median of (largest low, median of the mids, smallest high) over the
-    sorted triples ``x, x + 1, x + 2``."""
+    """``row[x]`` = median of columns ``x .. x + 2`` of the three rows (a SIMD loop)."""
+    t1, c1, b1, t2, c2, b2 = top[1:], centre[1:], bottom[1:], top[2:], centre[2:], bottom[2:]
     for x in range(row.size):
-        lows = max(max(low[x], low[x + 1]), low[x + 2])
-        highs = min(min(high[x], high[x + 1]), high[x + 2])
-        a, b, c = mid[x], mid[x + 1], mid[x + 2]
-        mids = max(min(a, b), min(max(a, b), c))
-        small, large = min(lows, mids), max(lows, mids)
-        row[x] = max(small, min(large, highs))
+        row[x] = _median9(top[x], centre[x], bottom[x], t1[x], c1[x], b1[x], t2[x], c2[x], b2[x])
+
+
+@njit(cache=True, nogil=True)
+def _median_on_border(
+    top: np.ndarray, centre: np.ndarray, bottom: np.ndarray, column_index: np.ndarray, c: int
+) -> float:  # pragma: no cover
+    """Median of the window at output column ``c``: padded columns ``c .. c + 2``, each
+    image column ``column_index[j]`` (−1: zeros)."""
+    j0, j1, j2 = column_index[c], column_index[c + 1], column_index[c + 2]
+    return _median9(
+        _at(top, j0),
+        _at(centre, j0),
+        _at(bottom, j0),
+        _at(top, j1),
+        _at(centre, j1),
+        _at(bottom, j1),
+        _at(top, j2),
+        _at(centre, j2),
+        _at(bottom, j2),
+    )
+
+
+@njit(cache=True, nogil=True)
+def _at(line: np.ndarray, k: int) -> np.float32:  # pragma: no cover
+    """``line[k]``, or a float32 zero for −1."""
+    return line[k] if k >= 0 else np.float32(0.0)

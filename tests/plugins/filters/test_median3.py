@@ -16,7 +16,8 @@ from graphvision_plugins import filters
 BOUNDARIES = ["mirror", "replicate", "wrap", "zero", "crop"]
 # the op's rules as numpy.pad modes (docs: plugins/filters/_boundary.py)
 _PAD = {"mirror": "symmetric", "replicate": "edge", "wrap": "wrap", "zero": "constant"}
-# 1..5 on each side, and rows wider than the kernel's 256-column pass (two and three passes)
+# 1..5 on each side (windows over both borders at once), and wide rows (the vector loop and
+# its remainder)
 SHAPES = [*itertools.product(range(1, 6), repeat=2), (7, 600), (4, 513), (9, 257)]
 
 
