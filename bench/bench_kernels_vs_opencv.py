@@ -56,8 +56,9 @@ import skimage.transform
 from timing import best_in_turn
 
 SIZES = (512, 2048)
-# the node's function without the port checks (np.min/np.max of input and output): the
-# kernel's own time, beside the direct node call a user makes
+# the node's function without the port checks (a direct call checks its inputs: one pass
+# over an image, its largest value read as an unsigned integer): the kernel's own time,
+# beside the direct node call a user makes
 _KERNEL_ONLY = " (kernel, no port checks)"
 Row = tuple[str, str, Callable[[], object], Callable[[], object]]
 
