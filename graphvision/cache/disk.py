@@ -113,12 +113,14 @@ class DiskStore:
     NotACacheError
         ``directory`` is a file, or a non-empty folder that is not a graphvision cache.
     ValueError
-        ``max_bytes`` is not positive.
+        ``max_bytes`` is not positive, or ``directory`` is an empty path.
     """
 
     def __init__(self, directory: str | Path, max_bytes: int = 4 * 2**30) -> None:
         if max_bytes <= 0:
             raise ValueError(f"the cache size bound must be positive, got {max_bytes} bytes")
+        if not str(directory).strip():  # Path('') would be this folder
+            raise ValueError("the cache folder is an empty path: give a folder (. for this one)")
         self.directory = Path(directory)
         self.max_bytes = max_bytes
         self.read_only = False

@@ -15,7 +15,8 @@ def cmd_cache(args: argparse.Namespace) -> int:
     from graphvision.cache.disk import DiskStore
     from graphvision.locations import default_cache_dir
 
-    store = DiskStore(args.cache_dir or default_cache_dir(), args.cache_max_bytes)
+    folder = default_cache_dir() if args.cache_dir is None else args.cache_dir
+    store = DiskStore(folder, args.cache_max_bytes)
     if args.action == "info":
         info = store.info()
         print(

@@ -95,6 +95,14 @@ def byte_size(text: str) -> int:
     return size
 
 
+def path_text(text: str) -> str:
+    """A file or folder named on the command line: an empty name (``--cache-dir ''``, a
+    variable that was not set) is refused, never read as this folder or as the default."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("is empty: give a path (use . for this folder)")
+    return text
+
+
 def positive_seconds(text: str) -> float:
     try:
         seconds = float(text)
@@ -138,8 +146,6 @@ def output_folder(text: str | None) -> Path | None:
 
     if text is None:
         return None
-    if not text.strip():
-        raise UsageError("--output-dir is empty: give a folder (use . for this one)")
     folder = Path(text)
     if folder.exists() and not folder.is_dir():
         raise UsageError(f"--output-dir {folder}: is a file, not a folder")
@@ -200,7 +206,8 @@ def disk_cache(args: argparse.Namespace) -> Cache | None:
 
     if args.no_cache:
         return None
-    return Cache.at(args.cache_dir or default_cache_dir(), args.cache_max_bytes)
+    folder = default_cache_dir() if args.cache_dir is None else args.cache_dir
+    return Cache.at(folder, args.cache_max_bytes)
 
 
 def executor_for(args: argparse.Namespace) -> Any:

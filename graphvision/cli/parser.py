@@ -12,6 +12,7 @@ from graphvision.cli.common import (
     EXECUTORS,
     Parser,
     byte_size,
+    path_text,
     pixel_count,
     positive_int,
     positive_seconds,
@@ -39,6 +40,7 @@ def global_options(parser: argparse.ArgumentParser, top: bool) -> None:
         "--plugins",
         action="append",
         default=[] if top else argparse.SUPPRESS,
+        type=path_text,
         metavar="PATH",
         help="load a local plugin file or folder (repeatable)",
     )
@@ -57,7 +59,9 @@ def global_options(parser: argparse.ArgumentParser, top: bool) -> None:
 
 
 def cache_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--cache-dir", metavar="DIR", help=f"disk cache folder ({CACHE_DIR_HELP})")
+    parser.add_argument(
+        "--cache-dir", type=path_text, metavar="DIR", help=f"disk cache folder ({CACHE_DIR_HELP})"
+    )
     parser.add_argument(
         "--cache-max-bytes",
         type=byte_size,
@@ -102,7 +106,7 @@ def backend_option(parser: argparse.ArgumentParser) -> None:
 
 def run_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``run`` and ``sweep``."""
-    parser.add_argument("pipeline", help="the pipeline file (YAML)")
+    parser.add_argument("pipeline", type=path_text, help="the pipeline file (YAML)")
     parser.add_argument(
         "--max-pixels",
         type=pixel_count,
@@ -193,7 +197,11 @@ def _run(command: Command) -> None:
         help="produce only this output (repeatable); only what it needs runs",
     )
     p.add_argument(
-        "--output-dir", "-d", metavar="DIR", help="write outputs, record, report.md, report.html"
+        "--output-dir",
+        "-d",
+        type=path_text,
+        metavar="DIR",
+        help="write outputs, record, report.md, report.html",
     )
     p.add_argument(
         "--batch",
@@ -228,7 +236,9 @@ def _sweep(command: Command) -> None:
         metavar="NAME",
         help="produce only this output in each run (repeatable); only what it needs runs",
     )
-    p.add_argument("--output-dir", "-d", metavar="DIR", required=True, help="where to write")
+    p.add_argument(
+        "--output-dir", "-d", type=path_text, metavar="DIR", required=True, help="where to write"
+    )
     p.add_argument("--plot", metavar="OUTPUT", help="plot this scalar output against each param")
     p.set_defaults(func=cmd_sweep)
 
@@ -243,14 +253,16 @@ def _studio(command: Command) -> None:
 
 def _validate(command: Command) -> None:
     p = command("validate", "check pipelines without running them")
-    p.add_argument("pipelines", nargs="+", metavar="PIPELINE", help="pipeline files")
+    p.add_argument(
+        "pipelines", nargs="+", type=path_text, metavar="PIPELINE", help="pipeline files"
+    )
     p.set_defaults(func=cmd_validate)
 
 
 def _graph_and_report(command: Command) -> None:
     """``graph`` and ``report``: a pipeline drawn, a run folder's pages written again."""
     p = command("graph", "print a pipeline's drawing: Graphviz DOT, SVG or Mermaid")
-    p.add_argument("pipeline", help="the pipeline file (YAML)")
+    p.add_argument("pipeline", type=path_text, help="the pipeline file (YAML)")
     p.add_argument(
         "--format",
         choices=("dot", "svg", "mermaid"),
@@ -260,7 +272,9 @@ def _graph_and_report(command: Command) -> None:
     p.set_defaults(func=cmd_graph)
 
     p = command("report", "write a run folder's report.md and report.html again from its files")
-    p.add_argument("directory", help="the run's output folder (-d of graphvision run)")
+    p.add_argument(
+        "directory", type=path_text, help="the run's output folder (-d of graphvision run)"
+    )
     p.set_defaults(func=cmd_report)
 
 

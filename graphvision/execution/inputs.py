@@ -38,6 +38,9 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
         Naming the input, the value and what is wrong.
     """
     origin = f"'{value}'" if isinstance(value, str) else f"the {type(value).__name__} given"
+    empty = isinstance(value, str) and not value  # Path('') would be this folder
+    if empty and not issubclass(port_type, (TextPort, _ScalarPort)):
+        raise InputError(f"input '{name}' is empty: give a file, or a source such as sample:NAME")
     if isinstance(value, str) and not issubclass(port_type, TextPort):
         scheme, sep, rest = value.partition(":")
         try:

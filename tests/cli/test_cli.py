@@ -374,7 +374,7 @@ def test_every_option_has_help_and_node_summaries_are_plain_text(capsys):
     ("extra", "message"),
     [
         (["--workers", "100000"], "at most 256, got 100000"),
-        (["-d", ""], "--output-dir is empty"),
+        (["-d", ""], "argument --output-dir/-d: is empty"),
         (["--executor", "dask", "--scheduler", "garbage"], "cannot reach the Dask scheduler at"),
     ],
 )
