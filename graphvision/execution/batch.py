@@ -217,10 +217,17 @@ def _batch_paths(
 ) -> tuple[list[Path], Path]:
     """The files of a batch and the folder their output folders are named below."""
     if isinstance(files, str):
-        paths, root = batch_files(files, exclude=out_dir), pattern_root(files)
+        paths, inside = batch_files(files, exclude=out_dir)
+        if not paths and inside:
+            raise InputError(
+                f"batch input '{input}': every file '{files}' matches ({len(inside)}, such as "
+                f"{inside[0]}) is inside the output folder {out_dir}, and a batch never reads "
+                "its output folder (its own outputs would become its inputs): move the files "
+                "out of it, or choose another --output-dir"
+            )
         if not paths:
             raise InputError(f"batch input '{input}': no file matches '{files}'")
-        return paths, root
+        return paths, pattern_root(files)
     paths = [Path(f) for f in files]
     return paths, Path(*common_parts([p.parent.parts for p in paths])) if paths else Path()
 

@@ -85,21 +85,24 @@ class BatchPages:
 NO_PAGES = BatchPages()
 
 
-def batch_files(pattern: str, exclude: Path | None = None) -> list[Path]:
-    """The paths a glob matches, sorted; ``**`` matches any depth of folders.
+def batch_files(pattern: str, exclude: Path | None = None) -> tuple[list[Path], list[Path]]:
+    """The paths a glob matches, sorted (``**`` matches any depth of folders), and those
+    of them left out because they are under ``exclude``.
 
-    Files under ``exclude`` (the batch's output folder, when it lies inside
-    the searched folders) are left out, so a batch never reads its own outputs.
-    A file reached by several paths (a folder symlink, a link back up the tree)
-    is taken once, by its shortest path. A match that cannot be read as a file
-    (a dangling or looping symbolic link, a pipe, and a folder when the
-    pattern's last part names a suffix, as ``*.png`` does) is kept, for the
-    batch to list it as failed with :func:`unreadable_reason`; folders matched by
-    a pattern that names no suffix (``photos/*``) are the folders searched.
+    ``exclude`` is the batch's output folder, when it lies inside the searched
+    folders: a batch never reads its own outputs, and the caller says so when
+    that leaves nothing. A file reached by several paths (a folder symlink, a
+    link back up the tree) is taken once, by its shortest path. A match that
+    cannot be read as a file (a dangling or looping symbolic link, a pipe, and a
+    folder when the pattern's last part names a suffix, as ``*.png`` does) is
+    kept, for the batch to list it as failed with :func:`unreadable_reason`;
+    folders matched by a pattern that names no suffix (``photos/*``) are the
+    folders searched.
     """
     skipped = exclude.resolve() if exclude is not None else None
     folders_are_matches = "." in Path(pattern).name
     found: dict[Path, Path] = {}
+    left_out: dict[Path, Path] = {}
     for path in sorted(map(Path, glob.glob(pattern, recursive=True)), key=lambda p: len(p.parts)):
         if path.is_dir() and not folders_are_matches:
             continue
@@ -107,9 +110,9 @@ def batch_files(pattern: str, exclude: Path | None = None) -> list[Path]:
             real = path.resolve(strict=path.is_file())
         except (OSError, RuntimeError):  # a symbolic link loop
             real = path.absolute()
-        if (skipped is None or skipped not in real.parents) and real not in found:
-            found[real] = path
-    return sorted(found.values())
+        chosen = left_out if skipped is not None and skipped in real.parents else found
+        chosen.setdefault(real, path)
+    return sorted(found.values()), sorted(left_out.values())
 
 
 def unreadable_reason(path: Path) -> str:

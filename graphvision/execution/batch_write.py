@@ -43,6 +43,7 @@ def finish_item(item: BatchItem, result: RunResult | None, pages: Sequence[RunPa
         item.status, item.error = "failed", f"writing {folder}: {failure_reason(error)}"
         with contextlib.suppress(Exception):  # what an earlier run left must not look current
             remove_owned_files(folder, owned_files(folder))
+        return item  # no values: batch.csv shows only what the folder holds
     item.scalars = {
         key: value
         for key, value in result.outputs.items()

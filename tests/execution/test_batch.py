@@ -125,6 +125,25 @@ def test_a_glob_matching_nothing_is_a_usage_error(capsys, tmp_path):
     assert status == 2 and "no file matches" in capsys.readouterr().err
 
 
+def test_a_pattern_whose_files_are_all_in_the_output_folder_says_so(capsys, tmp_path):
+    """Not 'no file matches': they do, and are left out because a batch never reads its
+    output folder (an adversary's case)."""
+    photos = tmp_path / "photos"
+    for name in ("a.png", "b.png"):
+        photo(photos / name, 100)
+    args = ["run", str(DEMO), "--no-cache", "-d", str(photos), "-o", PSNR]
+    assert main([*args, "--batch", f"image={photos}/*.png"]) == 2
+    assert (
+        f"error: --batch image={photos}/*.png: batch input 'image': every file "
+        f"'{photos}/*.png' matches (2, such as {photos}/a.png) is inside the output folder "
+        f"{photos}, and a batch never reads its output folder (its own outputs would become "
+        "its inputs): move the files out of it, or choose another --output-dir"
+    ) in capsys.readouterr().err
+    assert sorted(p.name for p in photos.iterdir()) == ["a.png", "b.png"]  # nothing written
+    assert main([*args, "--batch", f"image={photos}/*.jpg"]) == 2
+    assert f"no file matches '{photos}/*.jpg'" in capsys.readouterr().err  # none at all
+
+
 # -- image files that were misread -----------------------------------------------------------
 
 
@@ -429,5 +448,5 @@ def test_a_file_reached_through_folder_links_is_taken_once(tmp_path):
     photo(photos / "sub" / "b.png", 20)
     (photos / "sub" / "up").symlink_to(photos, target_is_directory=True)  # a loop
     (tmp_path / "alias").symlink_to(photos, target_is_directory=True)
-    found = batch_files(f"{photos}/**/*.png")
+    found = batch_files(f"{photos}/**/*.png")[0]
     assert found == [photos / "a.png", photos / "sub" / "b.png"]
