@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 
 def cmd_run(args: argparse.Namespace) -> int:
     from graphvision.execution.folder_lock import only_writer
-    from graphvision.execution.folders import check_output_folder
+    from graphvision.execution.owned import check_output_folder
 
     graph, registry, overrides, inputs = load_run_arguments(args)
     out_dir = output_folder(args.output_dir)  # checked; made when its first file is written

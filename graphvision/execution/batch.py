@@ -20,9 +20,14 @@ Each file gets its own folder, named after its path below the pattern's
 fixed part (``photos/a/img.png`` and ``photos/b/img.png`` give
 ``OUT/a/img`` and ``OUT/b/img``), so no two files ever share a folder
 (:func:`output_folders`). ``batch.csv`` lists every item: file, output
-folder, status, seconds, error message and the scalar outputs. A folder a
-previous batch into the same place listed, whose file is not in this batch,
-loses its graphvision files: nothing there is left looking current.
+folder, status, seconds, error message and the scalar outputs (none for a file
+whose folder could not be written). A folder a previous
+batch into the same place listed, whose file is not in this batch, and the
+folder of a file that failed, keep their last run in ``history/`` and lose their
+graphvision files: nothing there is left looking current. Item folders are
+written only inside the output folder, never through a link below it, and the
+files a pattern matches inside the output folder are not read (said so when no
+other file matches).
 """
 
 from __future__ import annotations
@@ -68,13 +73,8 @@ from graphvision.execution.executors import (
     make_executor,
 )
 from graphvision.execution.folder_lock import only_writer
-from graphvision.execution.folders import (
-    check_output_folder,
-    missing_folders,
-    owned_files,
-    remove_empty_folders,
-    remove_owned_files,
-)
+from graphvision.execution.folders import missing_folders, remove_empty_folders, retire_run
+from graphvision.execution.owned import check_output_folder
 from graphvision.execution.record import RunHooks
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
@@ -157,6 +157,8 @@ def run_batch(
     ------
     InputError
         When the glob matches no file, or ``inputs`` also gives ``input``.
+    ValueError
+        When ``output_dir`` is an empty string (it would be this folder).
     OutputFolderError
         When an item folder holds files graphvision did not write, or
         ``batch.csv`` is not a graphvision summary (checked before anything
@@ -172,9 +174,7 @@ def run_batch(
     out_dir = Path(output_dir)
     paths, root = _batch_paths(files, out_dir, input)
     folders = output_folders(paths, root, out_dir)
-    for folder in folders:  # each refused before anything runs if it holds others' files
-        check_output_folder(folder, outputs if outputs is not None else graph.outputs)
-    stale = previous_folders(out_dir) - {folder.resolve() for folder in folders}
+    stale = _checked_folders(out_dir, folders, outputs if outputs is not None else graph.outputs)
     name = graph.name if isinstance(graph, Graph) else graph.graph.name
     with only_writer(out_dir, f"batch of {name}"):  # one writer per folder
         pool = make_executor(executor, workers) if isinstance(executor, str) else executor
@@ -201,10 +201,25 @@ def run_batch(
         )
 
 
+def _checked_folders(out_dir: Path, folders: list[Path], outputs: Collection[str]) -> set[Path]:
+    """Refuse, before anything runs, a batch that would replace files graphvision did not
+    write in an item folder (or a ``batch.csv`` not a graphvision summary), write through a link,
+    or replace a run it cannot keep; return the folders of files that left the batch."""
+    for folder in folders:
+        check_output_folder(folder, outputs, out_dir)
+    current = {folder.resolve() for folder in folders}
+    stale = {folder for folder in previous_folders(out_dir) if folder.resolve() not in current}
+    for folder in stale:  # its run is kept in its history/ before its files go
+        check_output_folder(folder, (), out_dir)
+    return stale
+
+
 def _check_batch_arguments(output_dir: object, inputs: dict[str, Any], input: str) -> None:
     """Refuse an output folder that is no path, and the batch's input given as well."""
     if not isinstance(output_dir, (str, os.PathLike)):
         raise TypeError(f"output_dir must be a folder's path, got {output_dir!r}")
+    if not str(output_dir).strip():  # Path('') would be this folder
+        raise ValueError("output_dir is an empty path: give a folder ('.' for this one)")
     if inputs and input in inputs:
         raise InputError(
             f"input '{input}' is given twice: once per file by the batch and once as"
@@ -330,7 +345,7 @@ def _summarise(
     """``batch.csv`` for ``items``, and the summary page when there is one; the folders of
     files a previous batch listed and this one does not (``stale``) lose their files."""
     for folder in stale:  # its file is no longer in the batch
-        remove_owned_files(folder, owned_files(folder))
+        retire_run(folder, out_dir)
     summary = write_summary(items, out_dir)
     if pages.summary is not None:
         name, text = pages.summary(items, out_dir)

@@ -194,7 +194,8 @@ def common_parts(parts: list[tuple[str, ...]]) -> tuple[str, ...]:
 
 
 def previous_folders(out_dir: Path) -> set[Path]:
-    """The item folders (resolved) a previous ``batch.csv`` lists, only those inside ``out_dir``.
+    """The item folders a previous ``batch.csv`` lists, only those inside ``out_dir`` (where
+    they lead, as paths below ``out_dir``: ``out_dir`` itself may be reached by a link).
 
     Raises
     ------
@@ -222,7 +223,11 @@ def previous_folders(out_dir: Path) -> set[Path]:
         ) from None
     root = out_dir.resolve()
     folders = {Path(folder).resolve() for folder in listed if folder}
-    return {folder for folder in folders if root in folder.parents and folder.is_dir()}
+    return {
+        out_dir / folder.relative_to(root)
+        for folder in folders
+        if root in folder.parents and folder.is_dir()
+    }
 
 
 def write_summary(items: Sequence[BatchItem], out_dir: Path) -> Path:

@@ -63,11 +63,11 @@ class BatchRun:
         pool: Executor,
         one_task_per_file: bool,
         pages: BatchPages,
-        out_dir: Path | None = None,
+        out_dir: Path,
     ) -> None:
         self.graph, self.paths, self.folders = graph, paths, folders
         self.input, self.inputs, self.pool = input, inputs, pool
-        self.one_task_per_file, self.pages = one_task_per_file, pages
+        self.one_task_per_file, self.pages, self.out_dir = one_task_per_file, pages, out_dir
         self.options: dict[str, Any] = {}
         self.compiled: CompiledGraph | None = None
         self.file_threads = False  # files at once in this process: each one runs on ``sync``
@@ -115,7 +115,7 @@ class BatchRun:
             with writing(self.stop, folder, lambda: self.stopped) as claim:
                 if not claim:  # the batch was interrupted meanwhile: its folder is not written
                     return item
-                item = finish_item(item, result, self.pages.run)
+                item = finish_item(item, result, self.pages.run, self.out_dir)
                 claim.written(item)
             return self._received(index, item)
         except Exception as error:  # whatever it is, it fails this file alone
@@ -239,6 +239,7 @@ class BatchRun:
             pages=tuple(self.pages.run),
             store=cache.disk if cache is not None else None,
             executor=f"{executor_name(self.pool)}, {_tasks(self.pool)}",
+            out_dir=self.out_dir,
             stop=self.stop,
         )
         use_registry(job, options["registry"])  # for the client's own files

@@ -58,7 +58,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from graphvision.execution.batch_files import BatchItem
-from graphvision.execution.folders import RECORD
+from graphvision.execution.owned import RECORD
 
 try:
     import fcntl

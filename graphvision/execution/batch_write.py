@@ -5,15 +5,11 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Sequence
+from pathlib import Path
 
 from graphvision.errors import GraphvisionError
 from graphvision.execution.batch_files import BatchItem
-from graphvision.execution.folders import (
-    RunPage,
-    owned_files,
-    remove_owned_files,
-    write_run,
-)
+from graphvision.execution.folders import RunPage, retire_run, write_run
 from graphvision.execution.record import RunResult
 
 __all__ = ["failure_reason", "finish_item"]
@@ -31,18 +27,21 @@ def failure_reason(error: BaseException) -> str:
     return f"{type(error).__name__}: {text}" if text else type(error).__name__
 
 
-def finish_item(item: BatchItem, result: RunResult | None, pages: Sequence[RunPage]) -> BatchItem:
-    """Write the item's folder from its result (or clear it when there is none)."""
+def finish_item(
+    item: BatchItem, result: RunResult | None, pages: Sequence[RunPage], inside: Path
+) -> BatchItem:
+    """Write the item's folder from its result (or clear it when there is none); ``inside``
+    is the batch's folder, the only place it writes (no link below it is followed)."""
     folder = item.output_dir
     if result is None:  # nothing produced: what a previous run left there must not look current
-        remove_owned_files(folder, owned_files(folder))
+        retire_run(folder, inside)
         return item
     try:
-        write_run(result, folder, pages, beside=True)  # its parent: in the batch's folder
+        write_run(result, folder, pages, inside=inside)
     except Exception as error:  # a port type's writer, a report page, the disk: this file fails
         item.status, item.error = "failed", f"writing {folder}: {failure_reason(error)}"
         with contextlib.suppress(Exception):  # what an earlier run left must not look current
-            remove_owned_files(folder, owned_files(folder))
+            retire_run(folder, inside)
         return item  # no values: batch.csv shows only what the folder holds
     item.scalars = {
         key: value

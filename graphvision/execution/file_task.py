@@ -81,7 +81,8 @@ class FileJob:
     ``token`` names the batch (a worker prepares each job once); ``graph`` has
     the overrides applied; ``inputs`` are the graph inputs every file shares;
     ``store`` is the cache store the workers write values to (None: memory
-    only); ``executor`` is what the records call the executor; ``stop`` the flag a
+    only); ``executor`` is what the records call the executor; ``out_dir`` the
+    batch's folder, the only place its files are written; ``stop`` the flag a
     stopped batch raises (:mod:`graphvision.execution.batch_stop`).
     """
 
@@ -96,6 +97,7 @@ class FileJob:
     pages: tuple[RunPage, ...]
     store: Store | None
     executor: str
+    out_dir: Path
     stop: StopFlag | None = None
 
 
@@ -315,7 +317,7 @@ def run_file_task(
         if not claim:  # the batch stopped meanwhile: no folder written
             item.status, item.error = "interrupted", INTERRUPTED
             return FileOutcome(item)
-        outcome = FileOutcome(finish_item(item, result, job.pages))
+        outcome = FileOutcome(finish_item(item, result, job.pages, job.out_dir))
         claim.written(outcome.item)  # the client counts it, should this process die now
     if result is not None:
         outcome.keys, outcome.value_bytes = _output_keys(result.record, result.compiled)

@@ -1,9 +1,10 @@
-"""A run's output folder: which files there are graphvision's, and writing a run into it.
+"""A run's output folder: writing a run into it.
 
 A folder holds one run and keeps its predecessors in ``history/``
 (:mod:`graphvision.execution.history`). Its ``record.json`` lists the files the run wrote;
 that list is how the next run knows what is its to replace, and a file that
-no record lists is never replaced (the run is refused before it starts).
+no record lists is never replaced (the run is refused before it starts:
+:mod:`graphvision.execution.owned` says which files are graphvision's).
 Files are written to a hidden staging folder and moved into place, the
 record last, so an interrupted run leaves the previous run's folder whole. A
 batch's folder that does not exist yet is written whole as a hidden sibling (in
@@ -29,32 +30,36 @@ from typing import Any
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import OutputFolderError
 from graphvision.execution.history import keep_previous_run
+from graphvision.execution.owned import (
+    OUTPUT_SUFFIXES,
+    RECORD,
+    REPORT,
+    REPORT_HTML,
+    check_output_folder,
+    owned_files,
+    refuse_links,
+    refuse_replacing,
+)
 from graphvision.execution.provenance import file_sha256
 from graphvision.execution.record import RunResult
 from graphvision.graph.model import NAME, output_name_problem
 
 __all__ = [
-    "RECORD",
-    "REPORT",
-    "REPORT_HTML",
     "STAGING",
     "RunPage",
-    "check_output_folder",
     "clear_unfinished",
     "missing_folders",
     "new_folder",
-    "owned_files",
     "remove_empty_folders",
     "remove_owned_files",
+    "retire_run",
     "run_folder",
     "write_outputs",
     "write_run",
 ]
 
-RECORD, REPORT, REPORT_HTML = "record.json", "report.md", "report.html"
 STAGING = ".graphvision-writing-"  # prefix of the hidden folder a run's files are written to
 NEW = ".graphvision-new-"  # prefix of a new output folder written whole beside its place
-OUTPUT_SUFFIXES = (".png", ".npy", ".npz", ".json", ".csv", ".ply")  # the built-in writers'
 
 RunPage = Callable[[RunResult, Path], list[str]]
 """A report page writer: given a run and a folder, writes its files there and names them."""
@@ -75,81 +80,23 @@ def new_folder(directory: Path) -> Path:
     return directory.with_name(NEW + directory.name)
 
 
-def owned_files(directory: Path) -> set[str]:
-    """The file names in ``directory`` that a previous graphvision run wrote (its record's list).
-
-    Raises
-    ------
-    OutputFolderError
-        When ``directory`` has a ``record.json`` that is not a graphvision
-        record listing its files (so what is ours there cannot be known).
-    """
-    record = directory / RECORD
-    if not record.is_file():
-        return set()
-    try:
-        content = json.loads(record.read_text())
-        listed = content["files"]
-        names = {name for files in listed.values() for name in files}
-        if not all(
-            isinstance(n, str) and n == Path(n).name and n not in ("", ".", "..") for n in names
-        ):
-            raise ValueError("a listed file is not a plain file name")
-    except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
-        raise OutputFolderError(
-            f"{record} is not a graphvision record listing its files ({type(error).__name__}), "
-            "so which files there are a previous run's is unknown; choose another "
-            "--output-dir or empty this one"
-        ) from None
-    return names | {RECORD, REPORT, REPORT_HTML}
-
-
-def check_output_folder(directory: Path, outputs: Iterable[str]) -> set[str]:
-    """Refuse, before a run, a folder where the run's files would replace files not graphvision's.
-
-    A file counts as the run's when its name is ``record.json``, ``report.md``
-    or an output name with a suffix a port type writes. Returns the previous
-    run's files (:func:`owned_files`).
-
-    Raises
-    ------
-    OutputFolderError
-        Naming the folder and the first file in the way, or an output named
-        ``record`` (its file would be the record's).
-    """
-    if directory.exists() and not directory.is_dir():
-        raise OutputFolderError(f"output folder {directory} is a file")
-    stems = set(outputs)
-    if Path(RECORD).stem in stems:
-        raise OutputFolderError(
-            f"output '{Path(RECORD).stem}' cannot be written to an output folder: its file "
-            f"would be {RECORD}, the run record; rename the output"
-        )
-    owned = owned_files(directory)
-    if not directory.is_dir():
-        return owned
-    for path in sorted(directory.iterdir()):
-        ours = path.name in (RECORD, REPORT, REPORT_HTML) or (
-            path.stem in stems and path.suffix in OUTPUT_SUFFIXES
-        )
-        if ours and path.name not in owned:
-            _refuse(directory, path.name)
-    return owned
-
-
-def _refuse(directory: Path, name: str) -> None:
-    raise OutputFolderError(
-        f"output folder {directory} holds {name}, which no graphvision record there lists; "
-        "the run would replace it: move it, or choose another --output-dir"
-    )
-
-
 def remove_owned_files(directory: Path, names: Iterable[str]) -> None:
     """Delete the listed files of a previous run (plain files directly in ``directory`` only)."""
     for name in names:
         path = directory / name
         if path.is_file() or path.is_symlink():
             path.unlink()
+
+
+def retire_run(directory: Path, inside: Path) -> None:
+    """The run in ``directory``, an item folder of the batch in ``inside``, kept in its
+    ``history/``, then its files removed, so that nothing there looks current (a batch's
+    file that failed, or left the batch); never through a link below ``inside``."""
+    refuse_links(inside, directory)
+    owned = owned_files(directory)
+    if owned:
+        keep_previous_run(directory, owned)
+        remove_owned_files(directory, owned)
 
 
 def missing_folders(*folders: Path) -> list[Path]:
@@ -210,7 +157,11 @@ def clear_unfinished(directory: Path, outputs: Iterable[str], *, placed: bool = 
 
 
 def write_run(
-    result: RunResult, directory: Path, pages: Sequence[RunPage] = (), *, beside: bool = False
+    result: RunResult,
+    directory: Path,
+    pages: Sequence[RunPage] = (),
+    *,
+    inside: Path | None = None,
 ) -> dict[str, list[str]]:
     """Write outputs, ``record.json`` and ``pages``, replacing the last run's files.
 
@@ -230,34 +181,38 @@ def write_run(
         Writers of report pages (:data:`graphvision.views.report.RUN_PAGES`
         writes ``report.md`` and ``report.html``); each writes into the folder
         it is given and returns the names of the files it wrote there.
-    beside : bool
-        When ``directory`` does not exist yet, write it whole beside its place, then rename
-        it (:func:`new_folder`): for a batch's folders, in the batch's output folder.
+    inside : Path, optional
+        The batch's folder, when ``directory`` is one of its item folders: a new one is
+        written whole beside its place, then renamed (:func:`new_folder`), and a symbolic
+        link on the way from ``inside`` down to it is refused, not written through.
 
     Raises
     ------
     OutputFolderError
-        When a file would replace one no graphvision record there lists.
+        As :func:`~graphvision.execution.owned.check_output_folder`: a file would
+        replace one no graphvision record there lists, the previous run could not be
+        kept, or (with ``inside``) a link would take the writes outside the batch.
 
     A folder made for the run (``directory`` and its missing parents) is
     removed again when writing fails or is interrupted before a file is in it.
     """
     made = missing_folders(directory)
     try:
-        return _write_run(result, directory, pages, beside)
+        return _write_run(result, directory, pages, inside)
     except BaseException:
         remove_empty_folders(made)
         raise
 
 
 def _write_run(
-    result: RunResult, directory: Path, pages: Sequence[RunPage], beside: bool
+    result: RunResult, directory: Path, pages: Sequence[RunPage], inside: Path | None
 ) -> dict[str, list[str]]:
-    owned = check_output_folder(directory, result.compiled.outputs)
-    if beside and not os.path.lexists(directory):
+    owned = check_output_folder(directory, result.compiled.outputs, inside)
+    if inside is not None and not os.path.lexists(directory):
         written = _write_new(result, directory, pages)
         if written is not None:
             return written
+        refuse_links(inside, directory)  # what was made meanwhile is not written through
     directory.mkdir(parents=True, exist_ok=True)
     for left in directory.glob(f"{STAGING}*"):  # from a run killed while writing
         shutil.rmtree(left, ignore_errors=True)
@@ -268,8 +223,8 @@ def _write_run(
     try:
         files, new = _write_files(result, staging, pages, kept, _previous_record(directory))
         for name in new:
-            if (directory / name).exists() and name not in owned:
-                _refuse(directory, name)
+            if os.path.lexists(directory / name) and name not in owned:
+                refuse_replacing(directory, name)
         unchanged = {name for names in kept.values() for name in names}
         remove_owned_files(directory, owned - {RECORD} - unchanged)  # the record: replaced last
         for name in new:  # the record last, in one atomic replace

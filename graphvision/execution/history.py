@@ -10,10 +10,12 @@ copies otherwise. A warm
 re-run therefore no longer replaces the cold run's report: the folder shows
 the newest run and links its predecessors, newest first.
 
-``history/`` is graphvision's when it holds the marker file
-:data:`MARKER`; a ``history`` file or folder that someone else made is left
-alone (nothing is kept there). The newest :data:`KEPT_RUNS` runs are kept,
-older ones removed.
+``history/`` is graphvision's when it holds the marker file :data:`MARKER`
+(a file, not a link). A ``history`` that someone else made (a file, a link, a
+folder without the marker) is left alone, and a run that would replace a
+previous one is refused instead (:func:`history_problem`): a run is never
+replaced without being kept. The newest :data:`KEPT_RUNS` runs are kept, older
+ones removed.
 """
 
 from __future__ import annotations
@@ -28,7 +30,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-__all__ = ["HISTORY", "KEPT_RUNS", "MARKER", "Earlier", "earlier_runs", "keep_previous_run"]
+from graphvision.errors import OutputFolderError
+
+__all__ = [
+    "HISTORY",
+    "KEPT_RUNS",
+    "MARKER",
+    "Earlier",
+    "earlier_runs",
+    "history_problem",
+    "keep_previous_run",
+]
 
 HISTORY = "history"
 MARKER = ".graphvision-history"
@@ -46,22 +58,42 @@ class Earlier:
     record: dict[str, Any]
 
 
+def history_problem(directory: Path) -> str:
+    """Why ``directory/history`` is not graphvision's (and cannot become so), or ''."""
+    folder = directory / HISTORY
+    if folder.is_symlink():
+        return f"{folder} is a symbolic link to {os.readlink(folder)}"
+    if folder.exists() and not folder.is_dir():
+        return f"{folder} is a file, not graphvision's history folder"
+    marker = folder / MARKER
+    if folder.exists() and (marker.is_symlink() or not marker.is_file()):
+        return f"{folder} is a folder graphvision did not make (it has no file {MARKER})"
+    return ""
+
+
 def _history(directory: Path) -> Path | None:
     """``directory/history`` when it is graphvision's (or free to become so), else None."""
-    folder = directory / HISTORY
-    if folder.is_symlink() or (folder.exists() and not (folder / MARKER).is_file()):
-        return None
-    return folder
+    return None if history_problem(directory) else directory / HISTORY
 
 
 def keep_previous_run(directory: Path, owned: set[str]) -> Path | None:
     """Keep the files of the run now in ``directory`` (``owned``, its record's list) in
-    ``history/``; return the entry's folder, or None when there was no run to keep or
-    ``history`` is not graphvision's. Keeping the same run twice keeps it once."""
+    ``history/``; return the entry's folder, or None when there was no run to keep.
+    Keeping the same run twice keeps it once.
+
+    Raises
+    ------
+    OutputFolderError
+        When there is a run to keep and ``history`` is not graphvision's
+        (:func:`history_problem`): it is refused, not replaced unkept.
+    """
     record = directory / "record.json"
-    history = _history(directory)
-    if history is None or not record.is_file() or record.is_symlink():
+    if not record.is_file() or record.is_symlink():
         return None
+    problem = history_problem(directory)
+    if problem:
+        raise OutputFolderError(f"{problem}: the previous run in {directory} cannot be kept")
+    history = directory / HISTORY
     raw = record.read_bytes()
     try:
         date = str(json.loads(raw).get("date", ""))
@@ -73,7 +105,8 @@ def keep_previous_run(directory: Path, owned: set[str]) -> Path | None:
     same = [entry for entry in entries if entry.name.endswith(f"-{digest}")]
     if same:
         return same[0]
-    number = 1 + max((int(e.name[:6]) for e in entries), default=0)
+    names = [p.name for p in history.iterdir()] if history.is_dir() else []
+    number = 1 + max((int(n[:6]) for n in names if _ENTRY.match(n)), default=0)  # links too
     entry = history / f"{number:06d}-{stamp}-{digest}"
     history.mkdir(exist_ok=True)
     (history / MARKER).touch()
@@ -98,7 +131,9 @@ def _entries(history: Path) -> list[Path]:
     """The kept runs, newest first (their names start with the order they were kept in)."""
     if not history.is_dir():
         return []
-    found = [p for p in history.iterdir() if p.is_dir() and _ENTRY.match(p.name)]
+    found = [
+        p for p in history.iterdir() if _ENTRY.match(p.name) and p.is_dir() and not p.is_symlink()
+    ]
     return sorted(found, key=lambda p: p.name, reverse=True)
 
 

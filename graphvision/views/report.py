@@ -20,6 +20,9 @@ from __future__ import annotations
 
 import functools
 import json
+import os
+import shutil
+import tempfile
 import warnings
 from pathlib import Path
 from typing import Any
@@ -28,8 +31,9 @@ import numpy as np
 
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import OutputFolderError
-from graphvision.execution.folders import RECORD, REPORT, REPORT_HTML, RunPage, run_folder
+from graphvision.execution.folders import STAGING, RunPage, run_folder
 from graphvision.execution.history import earlier_runs
+from graphvision.execution.owned import RECORD, REPORT, REPORT_HTML
 from graphvision.execution.provenance import file_sha256
 from graphvision.execution.record import RunRecord, RunResult
 from graphvision.nodes.registry import Registry
@@ -172,6 +176,13 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
     record_path = directory / RECORD
     if not directory.is_dir():
         raise OutputFolderError(f"{directory}: no such folder (give a run's -d folder)")
+    for name in (RECORD, REPORT, REPORT_HTML):  # the run's own files, or refused
+        if (directory / name).is_symlink():
+            raise OutputFolderError(
+                f"{directory / name} is a symbolic link to {os.readlink(directory / name)}, "
+                "not a file a run wrote there: the report replaces only a run's own pages; "
+                "remove it"
+            )
     if not record_path.is_file():
         raise OutputFolderError(f"{directory} has no {RECORD}: it is not a graphvision run folder")
     record = read_record(record_path)
@@ -206,9 +217,24 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
         name: _read_output(name, names, compiled, record, (directory, source))
         for name, names in record.files.items()
     }
+    return _write_pages(compiled, outputs, record, directory)
+
+
+def _write_pages(
+    compiled: CompiledGraph, outputs: dict[str, Any], record: RunRecord, directory: Path
+) -> Path:
+    """``report.md`` and ``report.html`` written to a staging folder in ``directory``, then
+    moved into place, each whole (as a run places them); returns the page."""
     written = {name: list(names) for name, names in record.files.items()}
-    write_report(compiled, outputs, written, record, directory)
-    return write_html_report(compiled, outputs, record, directory, earlier=earlier_runs(directory))
+    staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=directory))
+    try:
+        write_report(compiled, outputs, written, record, staging)
+        write_html_report(compiled, outputs, record, staging, earlier=earlier_runs(directory))
+        for name in (REPORT, REPORT_HTML):
+            os.replace(staging / name, directory / name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return directory / REPORT_HTML
 
 
 def _read_output(

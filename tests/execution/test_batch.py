@@ -194,7 +194,9 @@ def test_a_file_dropped_from_the_batch_leaves_no_current_looking_folder(capsys, 
     (out / "b" / "mine.txt").write_text("kept")
     dropped.unlink()
     assert main([*args, "-o", PSNR]) == 0
-    assert {p.name for p in (out / "b").iterdir()} == {"mine.txt"}
+    assert {p.name for p in (out / "b").iterdir()} == {"mine.txt", "history"}
+    (kept,) = [p for p in (out / "b" / "history").iterdir() if not p.name.startswith(".")]
+    assert {p.name for p in kept.iterdir()} >= {"record.json", f"{PSNR}.json"}  # kept, not lost
     assert (out / "a" / "record.json").is_file()
     (out / "batch.csv").write_text("name,score\nx,1\n")  # the user's own table
     assert main([*args, "-o", PSNR]) == 2

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pickle
+from pathlib import Path
 
 import numpy as np
 
@@ -27,6 +28,7 @@ def test_a_shared_value_is_frozen_on_the_worker_as_in_the_client():
         pages=(),
         store=None,
         executor="processes, one task per file",
+        out_dir=Path("out"),
     )
     sent = pickle.loads(pickle.dumps(job))  # as a worker gets it: arrays writable again
     assert sent.seeds[0][2]["data"].flags.writeable

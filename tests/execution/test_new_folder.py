@@ -10,14 +10,8 @@ from pathlib import Path
 import pytest
 
 import graphvision as gv
-from graphvision.execution.folders import (
-    RECORD,
-    REPORT,
-    clear_unfinished,
-    new_folder,
-    run_folder,
-    write_run,
-)
+from graphvision.execution.folders import clear_unfinished, new_folder, run_folder, write_run
+from graphvision.execution.owned import RECORD, REPORT
 from graphvision.execution.provenance import file_sha256
 from graphvision.views.report import RUN_PAGES
 
@@ -34,8 +28,8 @@ def test_a_new_folder_holds_what_an_existing_empty_one_gets_and_nothing_is_left_
 ):
     new, empty = tmp_path / "deep" / "new", tmp_path / "empty"
     empty.mkdir()
-    assert write_run(_result(), new, RUN_PAGES, beside=True) == {"value": ["value.json"]}
-    assert write_run(_result(), empty, RUN_PAGES, beside=True) == {"value": ["value.json"]}
+    assert write_run(_result(), new, RUN_PAGES, inside=tmp_path) == {"value": ["value.json"]}
+    assert write_run(_result(), empty, RUN_PAGES, inside=tmp_path) == {"value": ["value.json"]}
     assert sorted(p.name for p in new.iterdir()) == sorted(p.name for p in empty.iterdir())
     assert sorted(p.name for p in new.iterdir()) == [
         "record.json",
@@ -55,7 +49,7 @@ def test_a_new_folder_left_half_written_by_a_killed_writer_is_replaced(tmp_path)
     left = new_folder(folder)
     left.mkdir()
     (left / "value.json").write_text("99")  # a writer killed before its record
-    write_run(_result(), folder, [], beside=True)
+    write_run(_result(), folder, [], inside=tmp_path)
     assert not left.exists()
     assert json.loads((folder / "value.json").read_text()) == 2.5
 
@@ -67,7 +61,7 @@ def test_a_page_that_fails_leaves_neither_the_new_folder_nor_its_hidden_sibling(
 
     folder = tmp_path / "made" / "out"
     with pytest.raises(RuntimeError, match="the page broke"):
-        write_run(_result(), folder, [broken], beside=True)
+        write_run(_result(), folder, [broken], inside=tmp_path)
     assert not (tmp_path / "made").exists()  # made for the run, removed with it
 
 
@@ -80,7 +74,7 @@ def test_a_folder_made_meanwhile_is_written_as_an_existing_one_keeping_its_files
             (folder / "notes.txt").write_text("mine")
         return []
 
-    write_run(_result(), folder, [intruder], beside=True)
+    write_run(_result(), folder, [intruder], inside=tmp_path)
     assert sorted(p.name for p in folder.iterdir()) == ["notes.txt", "record.json", "value.json"]
     assert (folder / "notes.txt").read_text() == "mine"
     assert not new_folder(folder).exists()
@@ -89,7 +83,7 @@ def test_a_folder_made_meanwhile_is_written_as_an_existing_one_keeping_its_files
 def test_a_page_writing_a_new_folder_knows_the_folder_it_becomes(tmp_path):
     folder = tmp_path / "out"
     seen = []
-    write_run(_result(), folder, [lambda r, d: seen.append(d) or []], beside=True)
+    write_run(_result(), folder, [lambda r, d: seen.append(d) or []], inside=tmp_path)
     assert seen == [new_folder(folder)] and run_folder(seen[0]) == folder
     assert run_folder(folder / ".graphvision-writing-x1") == folder  # an existing folder's
 

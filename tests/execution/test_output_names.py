@@ -80,18 +80,20 @@ def test_a_graph_whose_outputs_were_edited_directly_is_refused_when_compiled(reg
         gv.compile_graph(graph, registry)
 
 
-def test_a_symlink_in_the_output_folder_is_replaced_never_written_through(capsys, tmp_path):
+def test_a_file_the_last_run_wrote_now_a_symlink_is_refused_never_written_through(capsys, tmp_path):
+    """Replacing the link would lose it without a trace in history/ (it is not the file the
+    run wrote): the run is refused, naming it, and neither the link nor its target changes."""
     out, victim = tmp_path / "out", tmp_path / "victim.json"
     victim.write_text("precious")
     assert main(["run", str(DEMO), "-d", str(out), "-o", OUTPUT]) == 0
     own = out / f"{OUTPUT}.json"
     own.unlink()
     own.symlink_to(victim)  # a file the last run wrote, now a link to someone else's file
-    assert main(["run", str(DEMO), "-d", str(out), "-o", OUTPUT, "--no-cache"]) == 0
-    assert victim.read_text() == "precious"
-    assert own.is_file() and not own.is_symlink()
-    assert isinstance(json.loads(own.read_text()), float)
-    capsys.readouterr()
+    assert main(["run", str(DEMO), "-d", str(out), "-o", OUTPUT, "--no-cache"]) == 2
+    assert f"{own} is a symbolic link to {victim}, where the previous run wrote a file" in (
+        capsys.readouterr().err
+    )
+    assert victim.read_text() == "precious" and own.is_symlink()
 
 
 def test_a_symlink_not_written_by_graphvision_is_refused_and_left_alone(capsys, tmp_path):

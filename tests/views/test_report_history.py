@@ -53,16 +53,6 @@ def test_history_is_newest_first_and_bounded(tmp_path, monkeypatch):
     assert linked == [run.folder for run in runs]
 
 
-def test_a_history_folder_that_is_not_graphvisions_is_left_alone(tmp_path):
-    folder, cache = tmp_path / "out", tmp_path / "cache"
-    (folder / "history").mkdir(parents=True)
-    (folder / "history" / "notes.txt").write_text("mine")
-    _run(folder, cache)
-    _run(folder, cache)
-    assert sorted(p.name for p in (folder / "history").iterdir()) == ["notes.txt"]
-    assert "Earlier runs" not in (folder / "report.html").read_text()
-
-
 @pytest.mark.parametrize("warm", [False, True])
 def test_keep_intermediates_shows_cached_nodes_too(tmp_path, warm):
     folder, cache = tmp_path / "out", tmp_path / "cache"
