@@ -21,7 +21,8 @@ fixed part (``photos/a/img.png`` and ``photos/b/img.png`` give
 ``OUT/a/img`` and ``OUT/b/img``), so no two files ever share a folder
 (:func:`output_folders`). ``batch.csv`` lists every item: file, output
 folder, status, seconds, error message and the scalar outputs (none for a file
-whose folder could not be written). A folder a previous
+whose folder could not be written); ``batch.json`` lists it and ``batch.html``
+with their digests (:mod:`graphvision.execution.manifest`). A folder a previous
 batch into the same place listed, whose file is not in this batch, and the
 folder of a file that failed, keep their last run in ``history/`` and lose their
 graphvision files: nothing there is left looking current. Item folders are
@@ -49,7 +50,10 @@ from graphvision.execution.arguments import (
     run_arguments,
 )
 from graphvision.execution.batch_files import (
+    BATCH_FILES,
     NO_PAGES,
+    SUMMARY,
+    SUMMARY_PAGE,
     BatchItem,
     BatchPages,
     BatchResult,
@@ -58,8 +62,7 @@ from graphvision.execution.batch_files import (
     output_folders,
     pattern_root,
     previous_folders,
-    replace_text,
-    write_summary,
+    summary_text,
 )
 from graphvision.execution.batch_guard import refuse_in_bootstrap
 from graphvision.execution.batch_lanes import FileLanes
@@ -74,6 +77,7 @@ from graphvision.execution.executors import (
 )
 from graphvision.execution.folder_lock import only_writer
 from graphvision.execution.folders import missing_folders, remove_empty_folders, retire_run
+from graphvision.execution.manifest import check_folder_files, replace_folder_files
 from graphvision.execution.owned import check_output_folder
 from graphvision.execution.record import RunHooks
 from graphvision.graph.model import Graph
@@ -203,10 +207,11 @@ def run_batch(
 
 def _checked_folders(out_dir: Path, folders: list[Path], outputs: Collection[str]) -> set[Path]:
     """Refuse, before anything runs, a batch that would replace files graphvision did not
-    write in an item folder (or a ``batch.csv`` not a graphvision summary), write through a link,
+    write (in an item folder, or ``batch.csv`` and ``batch.html``), write through a link,
     or replace a run it cannot keep; return the folders of files that left the batch."""
     for folder in folders:
         check_output_folder(folder, outputs, out_dir)
+    check_folder_files(out_dir, BATCH_FILES)
     current = {folder.resolve() for folder in folders}
     stale = {folder for folder in previous_folders(out_dir) if folder.resolve() not in current}
     for folder in stale:  # its run is kept in its history/ before its files go
@@ -346,11 +351,11 @@ def _summarise(
     files a previous batch listed and this one does not (``stale``) lose their files."""
     for folder in stale:  # its file is no longer in the batch
         retire_run(folder, out_dir)
-    summary = write_summary(items, out_dir)
+    contents = {SUMMARY: summary_text(items)}
     if pages.summary is not None:
-        name, text = pages.summary(items, out_dir)
-        replace_text(out_dir / name, text)
-    return summary
+        contents[SUMMARY_PAGE] = pages.summary(items, out_dir)
+    replace_folder_files(out_dir, BATCH_FILES, contents)  # each whole, the manifest last
+    return out_dir / SUMMARY
 
 
 def _stream(batch: BatchRun, at_once: int) -> Iterator[tuple[int, BatchItem]]:

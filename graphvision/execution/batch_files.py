@@ -3,27 +3,26 @@ folder per file, the items and their summary (``batch.csv``)."""
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import errno
 import glob
 import io
 import os
 import stat
-import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from graphvision.errors import OutputFolderError
-from graphvision.execution.folders import (
-    RunPage,
-)
+from graphvision.execution.folders import RunPage
+from graphvision.execution.manifest import FolderFiles
 
 __all__ = [
+    "BATCH_FILES",
     "NO_PAGES",
     "SUMMARY",
+    "SUMMARY_PAGE",
     "BatchItem",
     "BatchPages",
     "BatchResult",
@@ -32,12 +31,13 @@ __all__ = [
     "output_folders",
     "pattern_root",
     "previous_folders",
-    "replace_text",
+    "summary_text",
     "unreadable_reason",
-    "write_summary",
 ]
 
 SUMMARY = "batch.csv"
+SUMMARY_PAGE = "batch.html"  # written by the summary page of :class:`BatchPages`, when given
+_COLUMNS = ("file", "output_dir", "status", "seconds", "error")  # batch.csv's first columns
 
 
 @dataclass
@@ -76,10 +76,10 @@ class BatchResult:
 @dataclass(frozen=True)
 class BatchPages:
     """The report pages a batch writes: ``run`` in each item folder, and ``summary`` (a
-    function of the items and the batch folder giving a file name and its text)."""
+    function of the items and the batch folder giving the text of :data:`SUMMARY_PAGE`)."""
 
     run: Sequence[RunPage] = ()
-    summary: Callable[[Sequence[BatchItem], Path], tuple[str, str]] | None = None
+    summary: Callable[[Sequence[BatchItem], Path], str] | None = None
 
 
 NO_PAGES = BatchPages()
@@ -193,6 +193,38 @@ def common_parts(parts: list[tuple[str, ...]]) -> tuple[str, ...]:
     return common
 
 
+def _summary_folders(summary: Path) -> list[str]:
+    """The ``output_dir`` column of a batch summary (ValueError when it is none)."""
+    with summary.open(newline="", encoding="utf-8") as handle:
+        reader = csv.DictReader(handle)
+        if (
+            not reader.fieldnames
+            or reader.fieldnames[0] != "file"
+            or "status" not in reader.fieldnames
+        ):
+            raise ValueError("not a batch summary")
+        return [row.get("output_dir") or "" for row in reader]
+
+
+def _is_summary(path: Path) -> bool:
+    """Whether ``path`` is ``batch.csv`` as a batch wrote it before it kept ``batch.json``:
+    its header starts with the columns :func:`summary_text` writes first."""
+    if path.name != SUMMARY:
+        return False
+    try:
+        with path.open(newline="", encoding="utf-8") as handle:
+            header = next(csv.reader(handle), [])
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return False
+    return header[: len(_COLUMNS)] == list(_COLUMNS)
+
+
+BATCH_FILES = FolderFiles(
+    "batch.json", "batch", lambda name: name in (SUMMARY, SUMMARY_PAGE), _is_summary
+)
+"""A batch's own files in its folder, listed with their digests in ``batch.json``."""
+
+
 def previous_folders(out_dir: Path) -> set[Path]:
     """The item folders a previous ``batch.csv`` lists, only those inside ``out_dir`` (where
     they lead, as paths below ``out_dir``: ``out_dir`` itself may be reached by a link).
@@ -207,15 +239,7 @@ def previous_folders(out_dir: Path) -> set[Path]:
     if not summary.is_file():
         return set()
     try:
-        with summary.open(newline="") as handle:
-            reader = csv.DictReader(handle)
-            if (
-                not reader.fieldnames
-                or reader.fieldnames[0] != "file"
-                or ("status" not in reader.fieldnames)
-            ):
-                raise ValueError("not a batch summary")
-            listed = [row.get("output_dir") or "" for row in reader]
+        listed = _summary_folders(summary)
     except (OSError, UnicodeDecodeError, ValueError, csv.Error):
         raise OutputFolderError(
             f"{summary} is not a graphvision batch summary; the batch would replace it: "
@@ -230,7 +254,7 @@ def previous_folders(out_dir: Path) -> set[Path]:
     }
 
 
-def write_summary(items: Sequence[BatchItem], out_dir: Path) -> Path:
+def summary_text(items: Sequence[BatchItem]) -> str:
     """``batch.csv``: file, output_dir, status, seconds, error, then every scalar output."""
     rows = [
         {
@@ -244,28 +268,8 @@ def write_summary(items: Sequence[BatchItem], out_dir: Path) -> Path:
         for item in items
     ]
     columns = list(dict.fromkeys(key for row in rows for key in row))
-    out_dir.mkdir(parents=True, exist_ok=True)
     text = io.StringIO(newline="")
     writer = csv.DictWriter(text, fieldnames=columns)
     writer.writeheader()
     writer.writerows(rows)
-    path = out_dir / SUMMARY
-    replace_text(path, text.getvalue())
-    return path
-
-
-def replace_text(path: Path, text: str) -> None:
-    """Write ``path`` whole or not at all (a temporary file beside it, then a rename).
-
-    A file replaced keeps its permissions; a new one gets the process's default (its
-    umask). The temporary file's name is this thread's own, so two threads writing the
-    same path at once each publish a whole file."""
-    temp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
-    try:
-        with temp.open("w", encoding="utf-8", newline="") as handle:
-            handle.write(text)
-        with contextlib.suppress(FileNotFoundError):
-            os.chmod(temp, stat.S_IMODE(path.stat().st_mode))
-        os.replace(temp, path)
-    finally:
-        temp.unlink(missing_ok=True)
+    return text.getvalue()

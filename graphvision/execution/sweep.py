@@ -14,6 +14,7 @@ key or a value of the wrong type stops the sweep at once, naming the key.
 from __future__ import annotations
 
 import csv
+import io
 import itertools
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -73,11 +74,16 @@ class SweepResult:
     def write_csv(self, path: str | Path) -> Path:
         """``sweep.csv``: one row per combination, columns in the order of :attr:`columns`."""
         path = Path(path)
-        with path.open("w", newline="", encoding="utf-8") as stream:
-            writer = csv.DictWriter(stream, fieldnames=self.columns)
-            writer.writeheader()
-            writer.writerows(self.rows)
+        path.write_text(self.csv_text(), encoding="utf-8", newline="")
         return path
+
+    def csv_text(self) -> str:
+        """The text of :meth:`write_csv`'s file."""
+        stream = io.StringIO(newline="")
+        writer = csv.DictWriter(stream, fieldnames=self.columns)
+        writer.writeheader()
+        writer.writerows(self.rows)
+        return stream.getvalue()
 
     @property
     def columns(self) -> list[str]:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from graphvision.execution.batch_files import replace_text
+from graphvision.execution.manifest import replace_bytes
 
 __all__ = ["command_line", "save_parameters"]
 
@@ -77,7 +77,7 @@ def save_parameters(source: Path, overrides: dict[str, Any], target: Path | None
     anchors = sorted({(anchor, kind) for anchor, kind in shared_through if anchor})
     _check_pipeline(original, text, overrides, destination, anchors)
     destination.parent.mkdir(parents=True, exist_ok=True)
-    replace_text(destination, text)
+    replace_bytes(destination, text.encode("utf-8"))
     return destination
 
 

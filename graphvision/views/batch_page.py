@@ -106,11 +106,7 @@ def _relative(path: Path, start: Path) -> str:
     return url if url.startswith("../") else f"./{url}"
 
 
-def _summary_page(items: Sequence[BatchItem], out_dir: Path) -> tuple[str, str]:
-    return "batch.html", batch_page(items, out_dir)
-
-
-BATCH_PAGES = BatchPages(run=RUN_PAGES, summary=_summary_page)
+BATCH_PAGES = BatchPages(run=RUN_PAGES, summary=batch_page)
 """Each item's ``report.md`` and ``report.html``, and the batch's ``batch.html``."""
 
 run_batch = update_wrapper(partial(batch.run_batch, pages=BATCH_PAGES), batch.run_batch)

@@ -1,21 +1,29 @@
 """A sweep's folder: ``sweep.csv``, ``sweep.html``, a page per run, an SVG chart per
-plotted output, listed in ``sweep.json`` so that the next sweep there replaces its own
-files and refuses anyone else's."""
+plotted output, listed with their digests in ``sweep.json`` so that the next sweep there
+replaces its own files and refuses anyone else's
+(:mod:`graphvision.execution.manifest`)."""
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Sequence
 from html import escape
 from pathlib import Path
 from typing import Any
 
-from graphvision.errors import OutputFolderError, PipelineError, Problem, did_you_mean
+from graphvision.errors import PipelineError, Problem, did_you_mean
+from graphvision.execution.manifest import FolderFiles, check_folder_files, replace_folder_files
 from graphvision.execution.sweep import SweepResult
 from graphvision.views.sweep_runs import run_page, run_page_name
 
-__all__ = ["check_sweep_folder", "nice_ticks", "sweep_html", "sweep_plot_svg", "write_sweep"]
+__all__ = [
+    "SWEEP_FILES",
+    "check_sweep_folder",
+    "nice_ticks",
+    "sweep_html",
+    "sweep_plot_svg",
+    "write_sweep",
+]
 
 MANIFEST = "sweep.json"
 
@@ -198,84 +206,48 @@ def sweep_html(result: SweepResult, title: str, plots: Sequence[str] = ()) -> st
 
 
 def _is_sweep_file(name: str) -> bool:
-    if name in ("sweep.csv", "sweep.html", MANIFEST):
+    if name in ("sweep.csv", "sweep.html"):
         return True
     return (name.startswith("sweep_") and name.endswith(".svg")) or (
         name.startswith("sweep_run_") and name.endswith(".html")
     )
 
 
-def check_sweep_folder(directory: Path) -> set[str]:
-    """Refuse a folder where a sweep's files would replace files graphvision did not write;
-    return the previous sweep's files there (its ``sweep.json``).
+SWEEP_FILES = FolderFiles(MANIFEST, "sweep", _is_sweep_file)
+"""A sweep's files, listed with their digests in ``sweep.json``."""
+
+
+def check_sweep_folder(directory: Path) -> None:
+    """Refuse a folder where a sweep's files would replace files graphvision did not write.
 
     Raises
     ------
     OutputFolderError
         The folder is a file, holds ``sweep.csv``, ``sweep.html``, ``sweep_*.svg`` or
-        ``sweep.json`` that no sweep manifest there lists, or its ``sweep.json`` is
-        not a graphvision manifest.
+        ``sweep_run_*.html`` that no sweep manifest there lists (or that changed since,
+        or is a link), or its ``sweep.json`` is not a graphvision manifest
+        (:func:`~graphvision.execution.manifest.check_folder_files`).
     """
-    if directory.exists() and not directory.is_dir():
-        raise OutputFolderError(f"output folder {directory} is a file")
-    if not directory.is_dir():
-        return set()
-    owned: set[str] = set()
-    manifest = directory / MANIFEST
-    if manifest.is_file():
-        try:
-            content = json.loads(manifest.read_text(encoding="utf-8"))
-            names = content["files"] if content.get("graphvision") == "sweep" else None
-            if not isinstance(names, list) or not all(
-                isinstance(n, str) and _is_sweep_file(n) and n == Path(n).name for n in names
-            ):
-                raise ValueError("not a sweep manifest")
-            owned = {*names, MANIFEST}
-        except (OSError, ValueError, KeyError, TypeError, AttributeError):
-            raise OutputFolderError(
-                f"{manifest} is not a graphvision sweep manifest, so which files there are a "
-                "previous sweep's is unknown; choose another --output-dir or empty this one"
-            ) from None
-    for path in sorted(directory.iterdir()):
-        if _is_sweep_file(path.name) and path.name not in owned:
-            raise OutputFolderError(
-                f"output folder {directory} holds {path.name}, which no graphvision sweep "
-                "there wrote; the sweep would replace it: move it, or choose another "
-                "--output-dir"
-            )
-    return owned
+    check_folder_files(directory, SWEEP_FILES)
 
 
 def write_sweep(
     result: SweepResult, directory: Path, name: str, plots: Sequence[str]
 ) -> list[Path]:
-    """Write ``sweep.csv``, a chart per output in ``plots``, ``sweep.html`` and the
-    manifest; remove what a previous sweep wrote there and this one did not.
+    """Write ``sweep.csv``, a chart per output in ``plots``, a page per run, ``sweep.html``
+    and the manifest; remove what a previous sweep wrote there and this one did not.
 
-    Returns the paths written (the manifest last, not listed).
+    Returns the paths written (not the manifest).
 
     Raises
     ------
     OutputFolderError
         As :func:`check_sweep_folder`.
     """
-    previous = check_sweep_folder(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    written = [result.write_csv(directory / "sweep.csv")]
+    contents = {"sweep.csv": result.csv_text()}
     for output in plots:
-        path = directory / f"sweep_{output}.svg"
-        path.write_text(sweep_plot_svg(result, output), encoding="utf-8")
-        written.append(path)
+        contents[f"sweep_{output}.svg"] = sweep_plot_svg(result, output)
     for number in range(1, len(result.records) + 1):
-        path = directory / run_page_name(number)
-        path.write_text(run_page(result, number, name), encoding="utf-8")
-        written.append(path)
-    page = directory / "sweep.html"
-    page.write_text(sweep_html(result, name, list(plots)), encoding="utf-8")
-    written.append(page)
-    names = {path.name for path in written}
-    for stale in sorted(previous - names - {MANIFEST}):
-        (directory / stale).unlink(missing_ok=True)
-    content = json.dumps({"graphvision": "sweep", "files": sorted(names)}, indent=1)
-    (directory / MANIFEST).write_text(content + "\n", encoding="utf-8")
-    return written
+        contents[run_page_name(number)] = run_page(result, number, name)
+    contents["sweep.html"] = sweep_html(result, name, list(plots))
+    return replace_folder_files(directory, SWEEP_FILES, contents)

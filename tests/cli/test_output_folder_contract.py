@@ -20,6 +20,8 @@ import pytest
 
 import graphvision as gv
 from graphvision.cli import main
+from graphvision.execution import manifest
+from graphvision.execution.batch_files import BATCH_FILES
 from graphvision.execution.folders import write_run
 
 from ..conftest import TOY
@@ -60,6 +62,97 @@ def _refused(capsys: pytest.CaptureFixture[str], status: int) -> str:
     err = capsys.readouterr().err
     assert status == 2 and "Traceback" not in err, err
     return err
+
+
+# -- 1. a batch's (and a sweep's) own files: only those it wrote are replaced ------------
+
+
+@pytest.mark.parametrize("name", ["batch.csv", "batch.html"])
+@pytest.mark.parametrize("planted", ["before", "over", "link"])
+def test_a_batch_replaces_only_the_files_at_its_folders_top_that_it_wrote(
+    capsys, tmp_path, setup, name, planted
+):
+    """``before``: the user's file before any batch; ``over``: saved over the batch's own
+    after it ran; ``link``: a symbolic link put in its place."""
+    pipeline, photos = setup
+    out, victim = tmp_path / "out", tmp_path / "victim.txt"
+    victim.write_text("the user's")
+    if planted != "before":
+        assert _batch(pipeline, f"{photos}/*.png", out) == 0
+        (out / name).unlink()
+    else:
+        out.mkdir()
+    if planted == "link":
+        (out / name).symlink_to(victim)
+    else:
+        (out / name).write_text("file,status\nmine,ok\n")
+    err = _refused(capsys, _batch(pipeline, f"{photos}/*.png", out))
+    reason = {
+        "before": "which no graphvision batch there wrote",
+        "over": "which changed since the batch wrote it",
+        "link": f"a symbolic link to {victim}, which no batch wrote",
+    }[planted]
+    assert f"error: output folder {out} holds {name}, {reason}; the batch would replace it" in err
+    assert victim.read_text() == "the user's"
+    if planted != "link":
+        assert (out / name).read_text() == "file,status\nmine,ok\n"
+
+
+def test_a_folder_of_a_batch_that_kept_no_manifest_is_taken_by_its_summary_only(
+    capsys, tmp_path, setup
+):
+    """A batch before batch.json: its batch.csv is recognised by its first columns, its
+    batch.html (the adversary's case: anyone's page) is not."""
+    pipeline, photos = setup
+    out = tmp_path / "out"
+    assert _batch(pipeline, f"{photos}/*.png", out) == 0
+    (out / "batch.json").unlink()
+    err = _refused(capsys, _batch(pipeline, f"{photos}/*.png", out))
+    assert "holds batch.html, which no graphvision batch there wrote" in err
+    (out / "batch.html").unlink()
+    assert _batch(pipeline, f"{photos}/*.png", out) == 0
+    listing = json.loads((out / "batch.json").read_text())["files"]
+    assert sorted(listing) == ["batch.csv", "batch.html"]
+    capsys.readouterr()
+
+
+def test_a_batch_killed_while_it_replaces_its_files_leaves_a_folder_the_next_accepts(tmp_path):
+    folder = tmp_path / "out"
+    manifest.replace_folder_files(folder, BATCH_FILES, {"batch.csv": "file,status\n"})
+    real = manifest.replace_bytes
+
+    def killed_after_one(path: Path, data: bytes) -> None:
+        real(path, data)
+        if path.name == "batch.csv":
+            raise KeyboardInterrupt  # killed: batch.html and the last manifest not written
+
+    contents = {"batch.csv": "file,status\nx,ok\n", "batch.html": "<p>x</p>"}
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(manifest, "replace_bytes", killed_after_one)
+        with pytest.raises(KeyboardInterrupt):
+            manifest.replace_folder_files(folder, BATCH_FILES, contents)
+    assert (folder / "batch.csv").read_text() == "file,status\nx,ok\n"
+    written = manifest.replace_folder_files(folder, BATCH_FILES, {"batch.csv": "file,status\n"})
+    assert written == [folder / "batch.csv"]
+    listing = json.loads((folder / "batch.json").read_text())
+    assert listing["graphvision"] == "batch" and list(listing["files"]) == ["batch.csv"]
+
+
+def test_a_sweep_replaces_only_the_pages_it_wrote(capsys, tmp_path, setup):
+    pipeline, photos = setup
+    out = tmp_path / "sweep"
+    args = ["--plugins", str(TOY), "sweep", str(pipeline), "-i", f"image={photos}/a.png"]
+    args += ["--grid", "gray.method=luminance", "-d", str(out), "--no-cache"]
+    assert main(args) == 0
+    assert main(args) == 0  # its own files: replaced
+    (out / "sweep_run_0001.html").write_text("my notes")
+    err = _refused(capsys, main(args))
+    assert "holds sweep_run_0001.html, which changed since the sweep wrote it" in err
+    assert (out / "sweep_run_0001.html").read_text() == "my notes"
+    (out / "sweep_run_0001.html").unlink()
+    (out / "sweep_run_2.html").write_text("my page")  # named like one a sweep writes
+    err = _refused(capsys, main(args))
+    assert "holds sweep_run_2.html, which no graphvision sweep there wrote" in err
 
 
 # -- 2. a batch writes only inside its folder, never through a link -----------------------

@@ -148,7 +148,7 @@ def test_a_stopped_command_exits_with_its_signal_and_leaves_no_folder(
     if kind == "batch":  # its summary says no file is done; no file's folder is left
         rows = list(csv.DictReader((out / "batch.csv").open()))
         assert sorted(row["status"] for row in rows) == ["interrupted", "not run"]
-        assert {path.name for path in out.iterdir()} == {"batch.csv", "batch.html"}
+        assert {path.name for path in out.iterdir()} == {"batch.csv", "batch.html", "batch.json"}
     else:
         assert not (tmp_path / "a").exists()
 

@@ -200,7 +200,7 @@ def test_a_file_dropped_from_the_batch_leaves_no_current_looking_folder(capsys, 
     assert (out / "a" / "record.json").is_file()
     (out / "batch.csv").write_text("name,score\nx,1\n")  # the user's own table
     assert main([*args, "-o", PSNR]) == 2
-    assert "is not a graphvision batch summary" in capsys.readouterr().err
+    assert "holds batch.csv, which changed since the batch wrote it" in capsys.readouterr().err
     assert (out / "batch.csv").read_text() == "name,score\nx,1\n"
 
 

@@ -1,0 +1,196 @@
+"""The files graphvision writes beside run folders (a batch's ``batch.csv`` and
+``batch.html``; a sweep's ``sweep.csv``, pages and charts), and how it knows, before
+replacing one, that it wrote it.
+
+A manifest in the folder (``batch.json``, ``sweep.json``) lists each file with the
+SHA-256 of what was written. A file of a writer's names is replaced only when the
+manifest lists it with the digest of what it holds now; one that no manifest lists,
+one that changed since (a user's page saved over it, a ``batch.csv`` edited in a
+spreadsheet), a symbolic link or a folder in its place is refused, naming it, before
+anything runs. Why digests and not a name list, a marker or a signature: a name says a
+writer once wrote a file so called, not that the file there now is that file; a marker
+has no place in every format (a CSV) and stays in a copy someone edits; a signature
+(``batch.csv``'s header) is matched by anyone's file of the same shape. A run folder's
+``record.json`` is the same kind of list (names and digests).
+
+Replacing is done in three steps, so that a writer killed at any point leaves a folder
+the next one accepts: the manifest first lists the old and the new digest of every file
+about to change, then each file is replaced whole (a temporary file beside it and a
+rename: a link in its place is replaced, never written through), the files no longer
+written are removed, and the manifest lists the new digests only.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import stat
+import threading
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from graphvision.errors import OutputFolderError
+
+__all__ = ["FolderFiles", "check_folder_files", "replace_bytes", "replace_folder_files"]
+
+Digests = frozenset[str] | None  # the digests a listed file may have; None: any (no digests)
+
+
+def _nothing(path: Path) -> bool:
+    return False
+
+
+@dataclass(frozen=True)
+class FolderFiles:
+    """The files one kind of writer puts in a folder.
+
+    ``manifest`` is the manifest's name; ``label`` the writer (``batch``,
+    ``sweep``), written in the manifest and named in messages; ``names`` says
+    whether a file name is one the writer writes; ``written_before`` recognises
+    a file such a writer wrote before it kept a manifest (the folder has none).
+    """
+
+    manifest: str
+    label: str
+    names: Callable[[str], bool]
+    written_before: Callable[[Path], bool] = field(default=_nothing)
+
+
+def check_folder_files(directory: Path, kind: FolderFiles) -> dict[str, Digests]:
+    """Refuse a folder where ``kind``'s writer would replace a file it did not write;
+    return what its manifest lists (name -> digests).
+
+    Raises
+    ------
+    OutputFolderError
+        Naming the folder and the file: the folder is a file; the manifest is a
+        link or not ``kind``'s manifest; a file of ``kind``'s names is not listed,
+        changed since it was written, or is a link or a folder.
+    """
+    if directory.exists() and not directory.is_dir():
+        raise OutputFolderError(f"output folder {directory} is a file")
+    if not directory.is_dir():
+        return {}
+    manifest = directory / kind.manifest
+    listed = _read_manifest(manifest, kind)
+    for path in sorted(directory.iterdir()):
+        if path.name == kind.manifest or not kind.names(path.name):
+            continue
+        problem = _not_written(path, listed, kind, os.path.lexists(manifest))
+        if problem:
+            raise OutputFolderError(
+                f"output folder {directory} holds {path.name}, {problem}; the {kind.label} "
+                "would replace it: move it, or choose another --output-dir"
+            )
+    return listed
+
+
+def _read_manifest(manifest: Path, kind: FolderFiles) -> dict[str, Digests]:
+    """The manifest's list, ``{}`` when there is none; a list of names without digests
+    (what a sweep wrote before digests) accepts any content."""
+    if not os.path.lexists(manifest):
+        return {}
+    try:
+        if manifest.is_symlink():
+            raise ValueError("a symbolic link")
+        content = json.loads(manifest.read_text(encoding="utf-8"))
+        files = content["files"] if content.get("graphvision") == kind.label else None
+        if isinstance(files, list) and all(isinstance(n, str) for n in files):
+            listed: dict[str, Digests] = dict.fromkeys(files)
+        elif isinstance(files, dict) and all(
+            isinstance(d, list) and all(isinstance(x, str) for x in d) for d in files.values()
+        ):
+            listed = {name: frozenset(digests) for name, digests in files.items()}
+        else:
+            raise ValueError(f"not a {kind.label} manifest")
+        if not all(kind.names(n) and n == Path(n).name for n in listed):
+            raise ValueError(f"it lists a file a {kind.label} does not write")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
+        raise OutputFolderError(
+            f"{manifest} is not a graphvision {kind.label} manifest ({error}), so which files "
+            f"there are a previous {kind.label}'s is unknown; choose another --output-dir or "
+            "empty this one"
+        ) from None
+    return listed
+
+
+def _not_written(
+    path: Path, listed: dict[str, Digests], kind: FolderFiles, has_manifest: bool
+) -> str:
+    """Why ``path`` is not a file ``kind``'s writer wrote, or ''."""
+    if path.is_symlink():
+        return f"a symbolic link to {os.readlink(path)}, which no {kind.label} wrote"
+    if not path.is_file():
+        return f"which is not a file a {kind.label} wrote"
+    if path.name not in listed:
+        if not has_manifest and kind.written_before(path):
+            return ""
+        return f"which no graphvision {kind.label} there wrote"
+    digests = listed[path.name]
+    if digests is not None and _sha256(path.read_bytes()) not in digests:
+        return f"which changed since the {kind.label} wrote it"
+    return ""
+
+
+def replace_folder_files(
+    directory: Path, kind: FolderFiles, contents: Mapping[str, str]
+) -> list[Path]:
+    """Write ``contents`` (file name -> text) into ``directory`` as ``kind``'s files,
+    replacing the previous ones and removing those no longer written, then the manifest
+    (in the three steps of the module docstring). Returns the paths written.
+
+    Raises
+    ------
+    OutputFolderError
+        As :func:`check_folder_files` (checked again here: a file may have come since).
+    """
+    listed = check_folder_files(directory, kind)
+    directory.mkdir(parents=True, exist_ok=True)
+    data = {name: text.encode("utf-8") for name, text in contents.items()}
+    new = {name: _sha256(content) for name, content in data.items()}
+    during = {name: {digest} for name, digest in new.items()}
+    for name in set(listed) | set(data):  # each is a file the kind wrote (checked): kept too
+        path = directory / name
+        if path.is_file() and not path.is_symlink():
+            during.setdefault(name, set()).add(_sha256(path.read_bytes()))
+    _write_manifest(directory, kind, during)  # a writer killed from here on: either is its
+    written = []
+    for name, content in data.items():
+        replace_bytes(directory / name, content)
+        written.append(directory / name)
+    for name in sorted(set(listed) - set(data)):
+        (directory / name).unlink(missing_ok=True)
+    _write_manifest(directory, kind, {name: {digest} for name, digest in new.items()})
+    return written
+
+
+def _write_manifest(directory: Path, kind: FolderFiles, files: Mapping[str, set[str]]) -> None:
+    listing = {name: sorted(digests) for name, digests in sorted(files.items())}
+    text = json.dumps({"graphvision": kind.label, "files": listing}, indent=1) + "\n"
+    replace_bytes(directory / kind.manifest, text.encode("utf-8"))
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def replace_bytes(path: Path, data: bytes) -> None:
+    """Write ``path`` whole or not at all (a temporary file beside it, then a rename: a
+    link in its place is replaced, not written through).
+
+    A file replaced keeps its permissions; a new one gets the process's default (its
+    umask). The temporary file's name is this thread's own, so two threads writing the
+    same path at once each publish a whole file."""
+    temp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
+    temp.unlink(missing_ok=True)  # a killed writer's, or a link put there: made anew
+    try:
+        with os.fdopen(os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), "wb") as out:
+            out.write(data)
+        with contextlib.suppress(FileNotFoundError):
+            os.chmod(temp, stat.S_IMODE(path.stat().st_mode))
+        os.replace(temp, path)
+    finally:
+        temp.unlink(missing_ok=True)
