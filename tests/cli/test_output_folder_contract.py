@@ -138,6 +138,20 @@ def test_a_batch_killed_while_it_replaces_its_files_leaves_a_folder_the_next_acc
     assert listing["graphvision"] == "batch" and list(listing["files"]) == ["batch.csv"]
 
 
+def test_a_sweep_manifest_without_digests_is_taken_as_a_list_of_names(tmp_path):
+    """What a sweep wrote before digests: its names are its files, whatever they hold."""
+    from graphvision.views.sweep_page import SWEEP_FILES
+
+    (tmp_path / "sweep.csv").write_text("a,status\n1,ok\n")
+    (tmp_path / "sweep.json").write_text('{"graphvision": "sweep", "files": ["sweep.csv"]}')
+    assert manifest.check_folder_files(tmp_path, SWEEP_FILES) == {"sweep.csv": None}
+    manifest.replace_folder_files(tmp_path, SWEEP_FILES, {"sweep.html": "<p>x</p>"})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sweep.html", "sweep.json"]
+    (tmp_path / "sweep.json").write_text('{"graphvision": "batch", "files": {}}')
+    with pytest.raises(gv.OutputFolderError, match=r"sweep.json is not a graphvision sweep"):
+        manifest.check_folder_files(tmp_path, SWEEP_FILES)
+
+
 def test_a_sweep_replaces_only_the_pages_it_wrote(capsys, tmp_path, setup):
     pipeline, photos = setup
     out = tmp_path / "sweep"
@@ -176,6 +190,19 @@ def test_a_link_on_the_way_to_an_item_folder_is_refused_and_nothing_is_written_o
     assert f"outside its output folder {out}" in err
     assert list(outside.iterdir()) == []
     assert sorted(p.name for p in out.iterdir()) == [link.name]  # nothing written
+
+
+def test_a_file_where_a_batch_makes_a_folder_is_refused_naming_it(capsys, tmp_path, setup):
+    pipeline, photos = setup
+    (photos / "sub").mkdir()
+    iio.imwrite(photos / "sub" / "d.png", np.zeros((6, 8), np.uint8))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "sub").write_text("mine")  # where sub/d.png's folder out/sub/d would be made
+    err = _refused(capsys, _batch(pipeline, f"{photos}/**/*.png", out))
+    assert f"error: {out / 'sub'} is a file, where the batch makes the folder {out}/sub/d" in err
+    assert sorted(p.name for p in out.iterdir()) == ["sub"]
+    assert (out / "sub").read_text() == "mine"
 
 
 @pytest.mark.parametrize("name", ["report.html", "report.md", "record.json"])
