@@ -5,7 +5,7 @@ of descriptors per region, filtering by descriptor ranges, and drawings.
 
 from ._draw import colorize, overlay
 from ._label import MAX_LABEL, check_label_count, label, label_components, relabel
-from ._measure import describe, filter_regions, perimeter_weights
+from ._measure import describe, filter_regions
 
 __all__ = [
     "MAX_LABEL",
@@ -16,6 +16,5 @@ __all__ = [
     "label",
     "label_components",
     "overlay",
-    "perimeter_weights",
     "relabel",
 ]
