@@ -24,7 +24,7 @@ def keep_freed_memory() -> None:
 
     That variable also pins glibc's mmap threshold at 128 KiB, so every array over 128 KiB
     a node makes is a fresh mapping, its pages faulted in and zeroed again: the coins
-    pipeline's ``regions.describe`` (a dozen 1 MB temporaries) took twice the CPU time,
+    pipeline's ``regions.describe`` (then a dozen 1 MB temporaries) took twice the CPU time,
     and a batch's file on a Dask worker about twice that of a ``processes`` worker. Memory
     over 64 MiB freed at the heap's top is still given back.
     """

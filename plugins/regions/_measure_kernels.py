@@ -5,8 +5,9 @@ gathered in eight passes and ``scipy.ndimage.find_objects`` in a ninth: the
 pixel count, the sums of x, y, x², y², xy, of the perimeter weights and of the
 intensities, and the bounding box. Each sum adds its float64 terms in pixel
 order, one term at a time, as ``bincount`` does, so the sums are the same to
-the bit (a pixel that adds nothing, background or a perimeter weight of 0,
-is skipped: adding +0.0 to a sum that started at +0.0 leaves it unchanged).
+the bit (a term that is 0 is skipped, a background pixel's, or the perimeter
+weight of a pixel off the boundary: adding +0.0 to a sum that started at +0.0
+leaves it unchanged).
 
 The perimeter weights follow Benkrid & Crookes: a boundary pixel (one with a
 4-neighbour outside its region or the image) has the code 1 + 2·(its
@@ -37,39 +38,55 @@ SUMS = ("x", "y", "xx", "yy", "xy", "perimeter", "intensity")
 
 
 @njit(cache=True, nogil=True)
+def _boundary_flag(labels, y, x, up, down, edge_row):  # pragma: no cover
+    """Whether pixel (y, x) is a boundary pixel, at any place in the image (rows ``up``,
+    ``down``: y - 1, y + 1 clamped to the image; ``edge_row``: y is the first or last)."""
+    cols = labels.shape[1]
+    lab = labels[y, x]
+    left, right = labels[y, max(x - 1, 0)], labels[y, min(x + 1, cols - 1)]
+    outside = edge_row | (x == 0) | (x == cols - 1)
+    differs = (left != lab) | (right != lab) | (labels[up, x] != lab) | (labels[down, x] != lab)
+    return (lab != 0) & (outside | differs)
+
+
+@njit(cache=True, nogil=True)
 def _boundary_row(labels, y, edge):  # pragma: no cover
-    """``edge[1 + x]`` ← 1 where pixel (y, x) is a boundary pixel, else 0."""
+    """``edge[1 + x]`` ← 1 where pixel (y, x) is a boundary pixel, else 0. Inside the
+    image, bitwise operators rather than ``or``: no branch for the flags of a noisy row."""
     rows, cols = labels.shape
-    for x in range(cols):
-        lab = labels[y, x]
-        edge[1 + x] = lab != 0 and (
-            x == 0
-            or labels[y, x - 1] != lab
-            or x == cols - 1
-            or labels[y, x + 1] != lab
-            or y == 0
-            or labels[y - 1, x] != lab
-            or y == rows - 1
-            or labels[y + 1, x] != lab
-        )
+    up, down = max(y - 1, 0), min(y + 1, rows - 1)
+    edge_row = y == 0 or y == rows - 1
+    edge[1] = _boundary_flag(labels, y, 0, up, down, edge_row)
+    if edge_row:
+        for x in range(1, cols):
+            edge[1 + x] = labels[y, x] != 0
+    else:
+        for x in range(1, cols - 1):
+            lab = labels[y, x]
+            differs = (labels[y, x - 1] != lab) | (labels[y, x + 1] != lab)
+            differs |= (labels[up, x] != lab) | (labels[down, x] != lab)
+            edge[1 + x] = (lab != 0) & differs
+        edge[cols] = _boundary_flag(labels, y, cols - 1, up, down, edge_row)
 
 
 @njit(cache=True, nogil=True)
 def _perimeter_weight(labels, y, x, above, here, below):  # pragma: no cover
     """The weight of boundary pixel (y, x); ``above``, ``here``, ``below``: the boundary
-    flags of rows y - 1, y, y + 1 (0 outside the image), column x at index x + 1."""
+    flags of rows y - 1, y, y + 1 (0 outside the image), column x at index x + 1. A
+    neighbour outside the image has the flag 0: the label read in its place (the
+    indices clamped to the image) adds nothing."""
+    rows, cols = labels.shape
     lab = labels[y, x]
-    code = 1
-    for dx in range(-1, 2):
-        step = 2 if dx == 0 else 10
-        if above[x + 1 + dx] and labels[y - 1, x + dx] == lab:
-            code += step
-        if below[x + 1 + dx] and labels[y + 1, x + dx] == lab:
-            code += step
-    if here[x] and labels[y, x - 1] == lab:
-        code += 2
-    if here[x + 2] and labels[y, x + 1] == lab:
-        code += 2
+    up, down = max(y - 1, 0), min(y + 1, rows - 1)
+    left, right = max(x - 1, 0), min(x + 1, cols - 1)
+    code = 1 + 2 * ((here[x] != 0) & (labels[y, left] == lab))
+    code += 2 * ((here[x + 2] != 0) & (labels[y, right] == lab))
+    code += 10 * ((above[x] != 0) & (labels[up, left] == lab))
+    code += 2 * ((above[x + 1] != 0) & (labels[up, x] == lab))
+    code += 10 * ((above[x + 2] != 0) & (labels[up, right] == lab))
+    code += 10 * ((below[x] != 0) & (labels[down, left] == lab))
+    code += 2 * ((below[x + 1] != 0) & (labels[down, x] == lab))
+    code += 10 * ((below[x + 2] != 0) & (labels[down, right] == lab))
     return WEIGHTS[code]
 
 
