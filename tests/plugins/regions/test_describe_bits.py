@@ -225,3 +225,10 @@ def test_values_by_hand():
         [3, 5],
         [3, 0],
     ]
+
+
+def test_views_to_the_bit():
+    """Labels and image that are not C-contiguous (transposed, strided) read in raster order."""
+    labels, gray = coins_labels()
+    assert_same_bits(labels.T, gray.T)
+    assert_same_bits(labels[::2, ::3], gray[::2, ::3])
