@@ -54,8 +54,6 @@ __all__ = [
 MAX_COMBINATIONS = 10_000
 """A larger grid is refused before anything runs (each combination is a whole run)."""
 
-"""The files a sweep wrote in its folder, so that the next one replaces those and no other."""
-
 
 @dataclass
 class SweepResult:
