@@ -31,6 +31,7 @@ from typing import Any, Protocol
 from graphvision.execution.batch_guard import guard_hint
 from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.node_call import began_before, call_labelled, call_node
+from graphvision.execution.node_imports import import_ahead
 from graphvision.execution.warnings import show_warning
 from graphvision.execution.worker_start import (
     ClientStdio,
@@ -382,6 +383,7 @@ def call_node_encoded(
     puts the result there.
     """
     func = ref.resolve()
+    import_ahead([func])  # its imports one thread at a time (a Dask worker's threads)
     if upstream:
         sent = {port: produced[source] for port, ((produced, _), source) in upstream.items()}
         inputs = {**inputs, **sent}

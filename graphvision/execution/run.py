@@ -10,9 +10,12 @@ r"""Running a graph: inputs, keys, cache plan, execution, record.
 5. plan from the outputs backwards: an output found in the cache is loaded
    and its producers are not visited, so a fully cached re-run reads only the
    requested outputs; everything else is computed;
-6. hand the computed steps to :func:`~graphvision.execution.scheduler.run_tasks` with
-   the chosen executor, validating, freezing and caching each result, and
-   releasing each intermediate value once its last consumer has run.
+6. import, in this thread, what the computed nodes import inside their bodies when
+   they run in this process (two threads importing one package at once can fail:
+   :mod:`~graphvision.execution.node_imports`); hand the computed steps to
+   :func:`~graphvision.execution.scheduler.run_tasks` with the chosen executor,
+   validating, freezing and caching each result, and releasing each intermediate
+   value once its last consumer has run.
 
 Hooks (:class:`RunHooks`) observe it; the run record is always produced.
 
@@ -66,6 +69,7 @@ from graphvision.execution.executors import (
 from graphvision.execution.heap import keep_freed_memory
 from graphvision.execution.inputs import resolve_input
 from graphvision.execution.limits import current_limits, node_limits, refuse_declared_limits
+from graphvision.execution.node_imports import import_ahead_of
 from graphvision.execution.peak_memory import check_peak_memory, running_at_once
 from graphvision.execution.plan import referenced_inputs as _referenced_inputs
 from graphvision.execution.provenance import describe_run
@@ -213,19 +217,9 @@ def _run(
         width = running_at_once(executor, workers)
         check_peak_memory(compiled, schedule, values, width, max_memory)
         state = _execute(
-            compiled,
-            values,
-            schedule,
-            wanted,
-            cache,
-            executor,
-            workers,
-            keep_going,
-            hooks,
-            keep_intermediates,
-            reference_keys,
-            limit,
-        )
+            compiled, values, schedule, wanted, cache, executor, workers, keep_going, hooks,
+            keep_intermediates, reference_keys, limit,
+        )  # fmt: skip
     describe_run(state.record, compiled, registry, given, state.keys, overrides)
     result = state.result(wanted)
     if state.failures:
@@ -330,6 +324,8 @@ def _execute(
         dependencies = state.prepare(compute, sources, schedule)
         for hook in hooks:
             hook.run_started(pipeline=compiled.graph.name, steps=compute)
+        if not state.encoded:  # nodes run in this process: what they import, first, here
+            import_ahead_of(compiled.steps, compute)
         skipped = _run_steps(state, schedule, dependencies, compute, keep_going, limit)
         _mark_skipped(state, skipped, hooks)
         failed = bool(state.failures)
