@@ -26,6 +26,7 @@ import dis
 import importlib
 import inspect
 import sys
+import threading
 import types
 from collections.abc import Callable, Iterable
 from importlib.util import resolve_name
@@ -34,6 +35,7 @@ from typing import Any
 __all__ = ["import_modules", "lazy_imports", "load_kernels"]
 
 _MOST_FUNCTIONS = 500  # a bound on the walk, whatever the plugins' code
+_IMPORTING = threading.RLock()  # two threads importing one package at once can fail
 
 
 def lazy_imports(functions: Iterable[Callable[..., Any]]) -> list[str]:
@@ -96,13 +98,15 @@ def _is_function_of(obj: Any, project: str) -> bool:
 
 
 def import_modules(names: list[str]) -> list[Any]:
-    """The modules of ``names`` that import (each on its own; whatever it raises)."""
+    """The modules of ``names`` that import (each on its own; whatever it raises), imported by
+    one thread at a time in the process (:mod:`graphvision.execution.node_imports`)."""
     found = []
-    for name in names:
-        try:
-            found.append(importlib.import_module(name))
-        except (Exception, SystemExit):  # it fails its nodes where they run, as it would anyway
-            continue
+    with _IMPORTING:
+        for name in names:
+            try:
+                found.append(importlib.import_module(name))
+            except (Exception, SystemExit):  # it fails its nodes where they run, as anyway
+                continue
     return found
 
 

@@ -11,10 +11,10 @@ on with the parent half made. When the parent's import then fails, the
 parent leaves ``sys.modules`` (only the failing modules do), and the other
 thread fails with ``KeyError`` naming the parent. The case met: a kernel
 module imports numba, numba imports scipy inside ``try ... except
-ImportError``; scipy's ``__init__`` meets the half-imported ``scipy._lib``
-that a second thread is importing for ``scipy.ndimage``, fails, and numba
-goes on without it; the second thread fails with ``KeyError: 'scipy'`` (four
-runs in five of two threads made to meet there; a run on threads now and then).
+ImportError``; scipy's ``__init__`` finds ``scipy._lib._testutils`` half made
+by a second thread importing ``scipy.ndimage`` ("cannot import name
+'PytestTester' from partially initialized module"), fails, and numba goes on
+without it; the second thread's node fails with ``KeyError: 'scipy'``.
 
 :func:`import_ahead` imports, in the calling thread and before any node of
 the run starts, the modules the nodes that will compute import inside their
@@ -23,9 +23,11 @@ lazy_imports`, which follows the helpers of the node's own top-level package)
 and the libraries an implementation declares it requires. Importing a module
 imports what it imports at its top, so a kernel module brings numba, and
 numba scipy, here. Runs started from several threads at once (a batch's file
-threads, a Dask worker's threads) import one after the other: a process-wide
-lock. Cached nodes import nothing (a warm run imports nothing it did not
-before); what each function imports is found once per process.
+threads, a Dask worker's threads) import one after the other (a process-wide
+lock in :func:`~graphvision.execution.batch_preload.import_modules`, which a
+batch's warm-up of its workers takes too). Cached nodes import nothing (a
+warm run imports nothing it did not before); what each function imports is
+found once per process.
 
 Not covered, because no code names it before it runs: a module named by a
 string at run time (``importlib.import_module(name)``), a submodule reached as
@@ -45,7 +47,6 @@ only it, is removed from ``sys.modules``.
 from __future__ import annotations
 
 import sys
-import threading
 import weakref
 from collections.abc import Callable, Iterable, Mapping
 from operator import attrgetter
@@ -56,7 +57,6 @@ from graphvision.execution.batch_preload import import_modules, lazy_imports
 
 __all__ = ["import_ahead", "import_ahead_of"]
 
-_LOCK = threading.RLock()  # one thread imports ahead at a time, in the whole process
 # What each node function imports in its body (weak: a registry loaded again is not kept)
 _FOUND: weakref.WeakKeyDictionary[Callable[..., Any], tuple[str, ...]] = weakref.WeakKeyDictionary()
 _SPEC = attrgetter("spec")
@@ -84,9 +84,8 @@ def import_ahead(functions: Iterable[Callable[..., Any]], libraries: Iterable[st
     missing = [name for name in wanted if name not in modules and name not in skipped]
     if not missing:
         return
-    with _LOCK:
-        import_modules([name for name in missing if name not in modules])
-        skipped.update(name for name in missing if name not in modules)
+    import_modules(missing)  # (one thread at a time in the process)
+    skipped.update(name for name in missing if name not in modules)
 
 
 def import_ahead_of(steps: Mapping[str, Step], names: Iterable[str]) -> None:
