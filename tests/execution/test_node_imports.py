@@ -177,3 +177,42 @@ def test_import_ahead_imports_what_the_bodies_name_and_skips_names_that_are_no_m
     assert lib in sys.modules and f"{lib}.part" in sys.modules  # the package imports it
     assert "colorsys" in sys.modules  # a library the implementation declares
     assert f"{lib}.VALUE" not in sys.modules  # ``from lib import VALUE``: a name, not a module
+
+
+TRACED_RUN = """
+import sys, threading
+
+first = {}
+
+
+class Tracer:
+    def find_spec(self, name, path=None, target=None):
+        first.setdefault(name, threading.current_thread().name)
+
+
+sys.meta_path.insert(0, Tracer())
+import numpy as np
+import graphvision as gv
+
+graph = gv.Graph("two")
+image = graph.input("image", "GrayImage")
+graph.output("local", graph.add("local", "threshold.local", image=image))
+graph.output("adaptive", graph.add("adaptive", "threshold.adaptive", image=image))
+gray = np.random.default_rng(0).random((64, 64), dtype=np.float32)
+gv.run(graph, inputs={"image": gray}, executor="threads", workers=2, cache=None)
+names = ["numba", "scipy", "scipy.ndimage", "graphvision_plugins.threshold._kernels"]
+print(" ".join(first.get(name, "-") for name in names))
+"""
+
+
+def test_the_threshold_nodes_modules_are_imported_by_the_calling_thread():
+    """The case met, on the built-in plugins: ``threshold.local`` imports its kernel module
+    (numba, which imports scipy) and ``threshold.adaptive`` scipy.ndimage; both start at
+    once on threads. In a fresh process, each of those modules is first imported by the
+    thread that called the run (15 runs in 100 failed with ``KeyError: 'scipy'`` before)."""
+    import subprocess
+
+    done = subprocess.run(
+        [sys.executable, "-c", TRACED_RUN], capture_output=True, text=True, timeout=600
+    )
+    assert done.stdout.split() == ["MainThread"] * 4, done.stderr
