@@ -33,9 +33,10 @@ Not covered, because no code names it before it runs: a module named by a
 string at run time (``importlib.import_module(name)``), a submodule reached as
 an attribute (``scipy.ndimage`` after ``import scipy``, a lazy-loader
 package's attributes), and what a library imports inside its own functions
-(numba's compiler on a kernel's first compile; numba's compiled linear
-algebra, which imports ``scipy.linalg.cython_blas`` from C on a kernel's first
-call).
+(numba's compiler, on a kernel's first compile or cache load, imports its
+implementations and ``scipy.linalg.cython_blas``; two threads made to meet
+there, one setting numba's compiler up while the other imported scipy.optimize,
+scipy.spatial or skimage.transform, did not fail in 20 tries).
 
 References
 ----------
