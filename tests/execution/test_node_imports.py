@@ -104,8 +104,8 @@ def _racing(tmp_path: Path) -> tuple[gv.Registry, str]:
 def racing(tmp_path):
     made = []
 
-    def make(folder: str = "") -> tuple[gv.Registry, str]:
-        where = tmp_path / (folder or f"trial{len(made)}")
+    def make() -> tuple[gv.Registry, str]:
+        where = tmp_path / f"trial{len(made)}"
         where.mkdir()
         found = _racing(where)
         made.append(str(where))
@@ -114,7 +114,7 @@ def racing(tmp_path):
     yield make
     for folder in made:
         sys.path.remove(folder)
-    for name in [m for m in sys.modules if m.startswith(("racing_lib_", "racing_gate_"))]:
+    for name in [m for m in sys.modules if m.startswith("racing_")]:
         del sys.modules[name]
 
 
@@ -155,7 +155,7 @@ def test_the_same_two_nodes_in_a_worker_s_threads_both_succeed(racing):
     assert values == [2.0, 3.0]
 
 
-def test_a_cached_node_imports_nothing(racing, tmp_path):
+def test_a_cached_node_imports_nothing(racing):
     """Only the nodes that will compute have their modules imported: a warm run does not."""
     registry, lib = racing()
     cache = gv.Cache(gv.MemoryStore())
