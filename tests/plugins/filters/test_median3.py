@@ -19,6 +19,8 @@ _PAD = {"mirror": "symmetric", "replicate": "edge", "wrap": "wrap", "zero": "con
 # 1..5 on each side (windows over both borders at once), and wide rows (the vector loop and
 # its remainder)
 SHAPES = [*itertools.product(range(1, 6), repeat=2), (7, 600), (4, 513), (9, 257)]
+# every rule on every shape but crop on an image smaller than the window (refused by the op)
+CASES = [(b, s) for b in BOUNDARIES for s in SHAPES if b != "crop" or min(s) >= 3]
 
 
 def _padded(image: np.ndarray, boundary: str) -> np.ndarray:
@@ -75,11 +77,8 @@ def _bits(values: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(values).view(np.uint32)
 
 
-@pytest.mark.parametrize("boundary", BOUNDARIES)
-@pytest.mark.parametrize("shape", SHAPES, ids=str)
+@pytest.mark.parametrize(("boundary", "shape"), CASES, ids=str)
 def test_3x3_median_is_the_median_of_the_nine_neighbours(boundary, shape):
-    if boundary == "crop" and min(shape) < 3:
-        pytest.skip("crop needs the window inside the image")
     for name, image in _images(shape).items():
         windows = sliding_window_view(_padded(image, boundary).astype(np.float64), (3, 3))
         expected = np.median(windows, axis=(-2, -1))  # +0 equals −0 here
@@ -87,13 +86,10 @@ def test_3x3_median_is_the_median_of_the_nine_neighbours(boundary, shape):
         np.testing.assert_array_equal(found, expected, err_msg=name)
 
 
-@pytest.mark.parametrize("boundary", BOUNDARIES)
-@pytest.mark.parametrize("shape", SHAPES, ids=str)
+@pytest.mark.parametrize(("boundary", "shape"), CASES, ids=str)
 def test_3x3_median_keeps_the_previous_kernels_bits(boundary, shape):
     """Which of +0 and −0 a zero median is depends on the order the comparators met
     them: the kernel keeps the order it had, so the bits are the same."""
-    if boundary == "crop" and min(shape) < 3:
-        pytest.skip("crop needs the window inside the image")
     for name, image in _images(shape).items():
         found = filters.median(image, size=3, boundary=boundary)
         expected = _previous_kernel(image, boundary)
