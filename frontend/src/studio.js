@@ -117,8 +117,8 @@ const ENDED = new Set(["done", "failed", "cancelled", "superseded"]);
 function learnRuns(runs) {
   for (const r of runs) {
     const known = S.runs[r.id];
-    if (known && ENDED.has(known.status) && !ENDED.has(r.status)) continue;
-    S.runs[r.id] = { ...known, ...r };
+    const older = known && ENDED.has(known.status) && !ENDED.has(r.status);
+    S.runs[r.id] = older ? { ...r, ...known } : { ...known, ...r };  // (older: its diff only)
     S.latest = Math.max(S.latest, r.id);
   }
 }
@@ -603,8 +603,8 @@ async function refreshRuns(ask = true) {
     const a = el("input", { type: "radio", name: "cmp-a", value: r.id });
     const b = el("input", { type: "radio", name: "cmp-b", value: r.id });
     if (!r.kept) { a.disabled = b.disabled = true; }
-    const diff = Object.entries(r.diff).map(([k, pair]) => changeText(k, pair, r.file)).join("; ");
-    const metrics = Object.entries(r.metrics).map(([k, v]) => `${k} ${typeof v === "number" ? Number(v.toPrecision(4)) : v}`).join(", ");
+    const diff = Object.entries(r.diff || {}).map(([k, pair]) => changeText(k, pair, r.file)).join("; ");
+    const metrics = Object.entries(r.metrics || {}).map(([k, v]) => `${k} ${typeof v === "number" ? Number(v.toPrecision(4)) : v}`).join(", ");
     if (r.kept && r.id === S.latest && r.status !== "running" && r.id > S.shown) showRun(r.id);
     if (r.id === S.latest) {  // a start or an end this tab missed (it opened meanwhile)
       if (r.status !== "running") showStatus(r);
@@ -624,8 +624,8 @@ async function compare() {
   if (!a || !b) { box.append("pick run A and run B in the table"); return; }
   const ra = S.runs[a], rb = S.runs[b];
   const metrics = el("table", { class: "gv-runs" }, el("tr", {}, el("th", {}, "metric"), el("th", {}, `run ${a}`), el("th", {}, `run ${b}`)));
-  for (const k of new Set([...Object.keys(ra.metrics), ...Object.keys(rb.metrics)])) {
-    metrics.append(el("tr", {}, el("td", {}, k), el("td", {}, String(ra.metrics[k] ?? "–")), el("td", {}, String(rb.metrics[k] ?? "–"))));
+  for (const k of new Set([...Object.keys(ra.metrics || {}), ...Object.keys(rb.metrics || {})])) {
+    metrics.append(el("tr", {}, el("td", {}, k), el("td", {}, String(ra.metrics?.[k] ?? "–")), el("td", {}, String(rb.metrics?.[k] ?? "–"))));
   }
   box.append(metrics);
   const node = S.graph.nodes.find((n) => n.id === S.selected && n.kind === "node") ||

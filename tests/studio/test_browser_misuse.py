@@ -120,6 +120,8 @@ def test_a_runs_list_asked_for_before_the_run_ended_does_not_undo_its_end(
 
     try:
         page = browser.new_page()
+        errors: list[object] = []
+        page.on("pageerror", lambda error: errors.append(error))  # (a run lacked its diff)
         page.route("**/api/runs", hold)
         page.goto(server.url)
         pid = _pid(tmp_path / "pid")
@@ -134,6 +136,8 @@ def test_a_runs_list_asked_for_before_the_run_ended_does_not_undo_its_end(
             route.fulfill(response=answer)
             page.wait_for_selector("#runs > table:not([data-old])", timeout=60_000)
             assert page.get_attribute("#run-status", "data-status") == "failed"
+        assert page.inner_text("#runs tr[data-run='1'] td:nth-child(4)") == "failed"
+        assert not errors, errors
     finally:
         holding[0] = False
         for route, answer in held:
