@@ -97,7 +97,9 @@ def _read_manifest(manifest: Path, kind: FolderFiles) -> dict[str, Digests]:
         if manifest.is_symlink():
             raise ValueError("a symbolic link")
         content = json.loads(manifest.read_text(encoding="utf-8"))
-        files = content["files"] if content.get("graphvision") == kind.label else None
+        if not isinstance(content, dict) or content.get("graphvision") != kind.label:
+            raise ValueError(f"not written by a {kind.label}")
+        files = content.get("files")
         if isinstance(files, list) and all(isinstance(n, str) for n in files):
             listed: dict[str, Digests] = dict.fromkeys(files)
         elif isinstance(files, dict) and all(
@@ -128,6 +130,12 @@ def _not_written(
     if path.name not in listed:
         if not has_manifest and kind.written_before(path):
             return ""
+        if not has_manifest:  # (graphvision kept no manifest before 2026-11-27)
+            return (
+                f"and no {kind.manifest} says a {kind.label} wrote it (an earlier graphvision "
+                f"kept none: if it is an earlier {kind.label}'s, delete it and the {kind.label} "
+                "writes it again)"
+            )
         return f"which no graphvision {kind.label} there wrote"
     digests = listed[path.name]
     if digests is not None and _sha256(path.read_bytes()) not in digests:

@@ -219,7 +219,16 @@ def load_pipeline(path: str | Path, *, allow_outside_plugins: bool = False) -> G
     problems = []
     for index, plugin in enumerate(graph.plugins):
         resolved = (folder / plugin).resolve()
-        if not allow_outside_plugins and not resolved.is_relative_to(folder):
+        if not plugin.strip():  # Path("") is the current folder: every file in it would run
+            problems.append(
+                Problem(
+                    graph.lines.get(f"plugins.{index}", graph.lines.get("plugins", 0)),
+                    f"plugins.{index}",
+                    "the plugin path is empty: name a plugin file or folder",
+                    str(path),
+                )
+            )
+        elif not allow_outside_plugins and not resolved.is_relative_to(folder):
             problems.append(
                 Problem(
                     graph.lines.get(f"plugins.{index}", graph.lines.get("plugins", 0)),

@@ -145,6 +145,9 @@ def _providers(
 
 def load_path(registry: Registry, path: str | Path) -> None:
     """Register a local plugin: a ``.py`` file, a package folder, or a folder of ``.py`` files."""
+    if not str(path).strip():  # (Path("") is the current folder: every file in it would run)
+        registry.record_failure("''", "''", "the plugin path is empty: name a file or folder")
+        return
     path = Path(path)
     if not path.exists():
         registry.record_failure(str(path), str(path), f"plugin path {path} does not exist")

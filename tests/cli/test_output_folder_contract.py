@@ -88,7 +88,8 @@ def test_a_batch_replaces_only_the_files_at_its_folders_top_that_it_wrote(
         (out / name).write_text("file,status\nmine,ok\n")
     err = _refused(capsys, _batch(pipeline, f"{photos}/*.png", out))
     reason = {
-        "before": "which no graphvision batch there wrote",
+        "before": "and no batch.json says a batch wrote it (an earlier graphvision kept none: "
+        "if it is an earlier batch's, delete it and the batch writes it again)",
         "over": "which changed since the batch wrote it",
         "link": f"a symbolic link to {victim}, which no batch wrote",
     }[planted]
@@ -108,7 +109,8 @@ def test_a_folder_of_a_batch_that_kept_no_manifest_is_taken_by_its_summary_only(
     assert _batch(pipeline, f"{photos}/*.png", out) == 0
     (out / "batch.json").unlink()
     err = _refused(capsys, _batch(pipeline, f"{photos}/*.png", out))
-    assert "holds batch.html, which no graphvision batch there wrote" in err
+    assert "holds batch.html, and no batch.json says a batch wrote it (an earlier " in err
+    assert "delete it and the batch writes it again" in err  # what the user does
     (out / "batch.html").unlink()
     assert _batch(pipeline, f"{photos}/*.png", out) == 0
     listing = json.loads((out / "batch.json").read_text())["files"]
@@ -136,6 +138,18 @@ def test_a_batch_killed_while_it_replaces_its_files_leaves_a_folder_the_next_acc
     assert written == [folder / "batch.csv"]
     listing = json.loads((folder / "batch.json").read_text())
     assert listing["graphvision"] == "batch" and list(listing["files"]) == ["batch.csv"]
+
+
+@pytest.mark.parametrize("content", ["[]", '{"graphvision": "sweep", "files": {}}', "7", "{"])
+def test_a_batch_manifest_that_is_not_one_is_refused_in_words(capsys, tmp_path, setup, content):
+    pipeline, photos = setup
+    out = tmp_path / "out"
+    assert _batch(pipeline, f"{photos}/*.png", out) == 0
+    (out / "batch.json").write_text(content)
+    err = _refused(capsys, _batch(pipeline, f"{photos}/*.png", out))
+    assert f"{out / 'batch.json'} is not a graphvision batch manifest (" in err
+    assert "object has no attribute" not in err and "'list'" not in err
+    assert (out / "batch.json").read_text() == content
 
 
 def test_a_sweep_manifest_without_digests_is_taken_as_a_list_of_names(tmp_path):

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+import graphvision as gv
 from graphvision.cli import main
 
 EVIL = """
@@ -107,3 +108,30 @@ def test_run_refuses_a_plugin_outside_its_pipelines_folder(capsys, tmp_path, whe
     assert not marker.exists()
     status, _, err = run_cli(capsys, "run", pipeline, "--allow-outside-plugins", "--no-cache")
     assert status == 0 and marker.exists() and "loading local plugins" in err
+
+
+@pytest.mark.parametrize("empty", ['""', "' '"])
+def test_an_empty_plugin_path_is_refused_not_read_as_the_pipelines_folder(
+    capsys, tmp_path, empty
+):
+    """``Path("")`` is the current folder: an empty ``plugins:`` entry would import every
+    file beside the pipeline (a tryer's own scripts ran)."""
+    pipeline, marker = setup(tmp_path, "evil.py")  # beside the pipeline: run if the folder is
+    pipeline.write_text(PIPELINE.format(plugin=empty, op="evil.one"))
+    for command in ("run", "validate", "graph"):
+        status, _, err = run_cli(capsys, command, pipeline, "--allow-outside-plugins")
+        assert status == 2, err
+        assert f"plugins.0 at {pipeline}:4: the plugin path is empty" in err
+    assert not marker.exists()
+
+
+def test_an_empty_plugin_path_given_to_discover_is_a_failed_plugin_not_this_folder(
+    tmp_path, monkeypatch
+):
+    (tmp_path / "evil.py").write_text(EVIL.format(marker=str(tmp_path / "marker")))
+    monkeypatch.chdir(tmp_path)
+    registry = gv.discover([""], entry_points=False)
+    assert [p.error for p in registry.failed_plugins()] == [
+        "the plugin path is empty: name a file or folder"
+    ]
+    assert not (tmp_path / "marker").exists()

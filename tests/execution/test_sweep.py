@@ -220,7 +220,7 @@ def test_a_sweep_never_replaces_a_users_files_and_removes_its_own_stale_ones(
     (out / "sweep.csv").write_text("my own table")
     args = ["sweep", str(LINE_FIT), "--no-cache", "-d", str(out), "--grid", "robust.threshold=1,3"]
     assert main(args) == 2
-    assert "holds sweep.csv, which no graphvision sweep there wrote" in capsys.readouterr().err
+    assert "holds sweep.csv, and no sweep.json says a sweep wrote it" in capsys.readouterr().err
     assert (out / "sweep.csv").read_text() == "my own table"
     (out / "sweep.csv").unlink()
     assert main([*args, "--plot", "error_ransac"]) == 0
