@@ -111,9 +111,7 @@ def test_run_refuses_a_plugin_outside_its_pipelines_folder(capsys, tmp_path, whe
 
 
 @pytest.mark.parametrize("empty", ['""', "' '"])
-def test_an_empty_plugin_path_is_refused_not_read_as_the_pipelines_folder(
-    capsys, tmp_path, empty
-):
+def test_an_empty_plugin_path_is_refused_not_read_as_the_pipelines_folder(capsys, tmp_path, empty):
     """``Path("")`` is the current folder: an empty ``plugins:`` entry would import every
     file beside the pipeline (a tryer's own scripts ran)."""
     pipeline, marker = setup(tmp_path, "evil.py")  # beside the pipeline: run if the folder is
