@@ -74,7 +74,8 @@ def describe(labels: LabelImage, image: GrayImage | None = None) -> Table:
     from ._measure_kernels import SUMS, region_sums  # numba loads on first use
 
     pixels = None if image is None else np.ascontiguousarray(image)
-    count, sums, box = region_sums(np.ascontiguousarray(labels), pixels, int(labels.max()) + 1)
+    values, names = _compact(np.ascontiguousarray(labels))
+    count, sums, box = region_sums(values, pixels, int(values.max()) + 1)
     present = np.flatnonzero(count)
     present = present[present > 0]
     area = count[present]
@@ -93,7 +94,7 @@ def describe(labels: LabelImage, image: GrayImage | None = None) -> Table:
         circularity = np.where(perimeter > 0, 4 * np.pi * area / perimeter**2, 0.0)
         compactness = np.where(area > 0, perimeter**2 / area, 0.0)
     table = {
-        "label": present.astype(np.int32),
+        "label": (present if names is None else names[present]).astype(np.int32),
         "area": area.astype(np.int64),
         "perimeter": perimeter,
         "compactness": compactness,
@@ -172,3 +173,17 @@ def filter_regions(
     rows = {name: column[keep] for name, column in table.items()}
     rows["label"] = np.arange(1, kept_labels.size + 1, dtype=np.int32)
     return Kept(lookup[labels], rows, int(kept_labels.size))
+
+
+def _compact(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """``labels`` as they are, or, when their largest value exceeds their pixel count (the
+    kernel's per-label sums would be longer than the image: a label of 2·10⁸ on 50×50 took
+    18 GB), their ranks among the values present with 0 kept for the background, and the
+    values (rank -> label). Ranks keep the order and the equality of labels, so every sum
+    is the same, added in the same pixel order."""
+    if labels.size == 0 or int(labels.max()) < labels.size:
+        return labels, None
+    names = np.unique(labels)
+    if names[0] != 0:
+        names = np.concatenate((np.zeros(1, names.dtype), names))
+    return np.searchsorted(names, labels).reshape(labels.shape), names

@@ -232,3 +232,29 @@ def test_views_to_the_bit():
     labels, gray = coins_labels()
     assert_same_bits(labels.T, gray.T)
     assert_same_bits(labels[::2, ::3], gray[::2, ::3])
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("with_zero", [True, False])
+def test_labels_larger_than_the_image_to_the_bit(seed, with_zero):
+    """Label values past the pixel count (the kernel then works on their ranks): the same
+    bits as the former code, background present or not, touching regions, one-pixel ones."""
+    rng = np.random.default_rng(seed)
+    shape = (int(rng.integers(20, 50)), int(rng.integers(20, 50)))
+    sparse = np.array([0, 5, 70_000, 70_001, 99_999], np.int64)[0 if with_zero else 1 :]
+    labels = blocks(rng, shape, sparse, int(rng.integers(1, 6)))
+    assert labels.max() >= labels.size  # the ranks' path
+    assert_same_bits(labels, rng.random(shape).astype(np.float32))
+
+
+def test_a_label_near_the_largest_int32_costs_memory_by_pixels_not_by_value():
+    """One pixel labelled 2³¹ − 1 on 50×50 (the former code's bincounts, and the kernel
+    before its ranks, needed tables of 2³¹ entries: tens of GB): the table of the same
+    image labelled 1, but for the label."""
+    labels = np.zeros((50, 50), np.int32)
+    labels[10:12, 20:23] = 2**31 - 1
+    table = unchecked(regions.describe)(labels)
+    small = unchecked(regions.describe)(np.minimum(labels, 1))
+    assert table["label"].tolist() == [2**31 - 1]
+    for name in set(small) - {"label"}:
+        assert table[name].tobytes() == small[name].tobytes(), name
