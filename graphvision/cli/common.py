@@ -292,9 +292,10 @@ def node_limit_options(args: argparse.Namespace) -> None:
             os.environ[variable] = str(value)
 
 
-def note_unread_plugins(graph: Graph, passed: Sequence[str | Path] = ()) -> None:
+def note_unread_plugins(graph: Graph, passed: Sequence[str | Path] = ()) -> list[str]:
     """Say which local plugins a pipeline names that reading it does not import: those
-    not also given with ``--plugins`` (``passed``; the same file, however it is spelled)."""
+    not also given with ``--plugins`` (``passed``; the same file, however it is spelled).
+    Returns them."""
     given = {Path(path).resolve() for path in passed}
     unread = [plugin for plugin in graph.plugins if Path(plugin).resolve() not in given]
     if unread:
@@ -304,3 +305,4 @@ def note_unread_plugins(graph: Graph, passed: Sequence[str | Path] = ()) -> None
             "pass --plugins PATH to load and check their ops",
             file=sys.stderr,
         )
+    return unread

@@ -4,12 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import TYPE_CHECKING
 
 from graphvision.cli.common import EXIT_OK, EXIT_USAGE, note_unread_plugins, registry_for
-
-if TYPE_CHECKING:
-    pass
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
@@ -21,8 +17,10 @@ def cmd_validate(args: argparse.Namespace) -> int:
     for path in args.pipelines:
         try:
             graph = load_pipeline(path, allow_outside_plugins=args.allow_outside_plugins)
-            note_unread_plugins(graph, args.plugins)
-            compile_graph(graph, registry_for(args, graph, run_its_plugins=False))
+            unread = note_unread_plugins(graph, args.plugins)
+            registry = registry_for(args, graph, run_its_plugins=False)
+            registry.unread_plugins = unread
+            compile_graph(graph, registry)
             print(f"{path}: ok")
         except PipelineError as error:
             print(error, file=sys.stderr)

@@ -70,6 +70,9 @@ class Registry:
         self.renamed: dict[str, str] = {}
         """Old op id -> new one, from the plugins' ``RENAMED_OPS`` (a pipeline using an old
         id is told the new one)."""
+        self.unread_plugins: list[str] = []
+        """A pipeline's own ``plugins:`` that were not imported (it was only checked or
+        drawn): an op of a family no loaded plugin provides may be theirs."""
 
     # -- registration -------------------------------------------------------------
 
@@ -266,6 +269,12 @@ class Registry:
             return f"op '{op}' was renamed '{self.renamed[op]}': use the new name"
         family = op.split(".", 1)[0]
         families = {name.split(".", 1)[0] for name in self.nodes}
+        if "." in op and family not in families and self.unread_plugins:
+            return (
+                f"unknown op '{op}': no loaded plugin provides the family '{family}'; the "
+                f"pipeline's plugins ({', '.join(self.unread_plugins)}) are not imported to "
+                "check it: pass --plugins PATH to load them and check their ops"
+            )
         if "." in op and family not in families:
             return (
                 f"unknown op '{op}': no loaded plugin provides the family '{family}'"

@@ -60,6 +60,8 @@ def test_checking_or_drawing_a_pipeline_imports_none_of_its_plugins(capsys, tmp_
     assert not marker.exists()
     assert "names local plugins" in err and "evil.py" in err and "not imported" in err
     assert status == 2 and "unknown op 'evil.one'" in err  # its ops cannot be checked
+    assert f"the pipeline's plugins ({pipeline.parent / 'evil.py'}) are not imported" in err
+    assert "`plugins: [PATH]` in the pipeline file" not in err  # (it has them already)
     status, _, err = run_cli(capsys, command, pipeline, "--plugins", pipeline.parent / "evil.py")
     assert status == 0 and marker.exists()  # asked for by name: loaded and checked
     assert "names local plugins" not in err and "pass --plugins" not in err
