@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 from collections.abc import Callable
@@ -35,10 +36,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from graphvision.views.sweep_page import check_sweep_folder
 
     graph, registry, overrides, inputs = load_run_arguments(args)
-    grid = {
-        key: yaml_value(f"[{values}]", f"--grid {key}={values}")
-        for key, values in named_pairs(args.grid, "--grid").items()
-    }
+    grid = {key: _listed(key, values) for key, values in named_pairs(args.grid, "--grid").items()}
     if not grid:
         raise UsageError("sweep needs at least one --grid NODE.PARAM=V1,V2,...")
     check_overrides(graph, registry, grid, "--grid")
@@ -141,3 +139,12 @@ def _progress(
         shown[0].finished(combination, row["status"] == "ok", row["seconds"])
 
     return report
+
+
+def _listed(key: str, values: str) -> Any:
+    """``--grid key=V1,V2,...``'s values read as YAML; an empty one (``3,,5``, a comma at
+    either end) is named, not left to the YAML reader's words."""
+    where = f"--grid {key}={values}"
+    if re.search(r"(^|,)\s*(,|$)", values):
+        raise UsageError(f"{where}: an empty value between commas (give V1,V2,...)")
+    return yaml_value(f"[{values}]", where)

@@ -154,7 +154,7 @@ def _cell(text: str) -> str:
     return " ".join(text.split()).replace("|", "\\|")
 
 
-def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
+def rewrite_report(directory: str | Path, registry: Registry | None = None) -> Path:
     """Make ``report.md`` and ``report.html`` of a run folder again from its files.
 
     The run's ``record.json`` names the pipeline file, the overrides and the
@@ -173,6 +173,7 @@ def rewrite_report(directory: Path, registry: Registry | None = None) -> Path:
     from graphvision.graph.pipeline_file import load_pipeline
     from graphvision.nodes.plugins import discover
 
+    directory = Path(directory)
     record_path = directory / RECORD
     if not directory.is_dir():
         raise OutputFolderError(f"{directory}: no such folder (give a run's -d folder)")

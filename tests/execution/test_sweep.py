@@ -196,6 +196,8 @@ def test_outputs_limit_each_run_and_the_table() -> None:
         (["-s", "robust.threshold=5"], "robust.threshold is both swept (--grid) and set (--set)"),
         (["--plot", "points"], "--plot points: not a scalar output of the sweep"),
         (["--plot", "error_ransak"], "did you mean 'error_ransac'"),
+        (["--grid", "robust.confidence=0.9,,0.99"], "=0.9,,0.99: an empty value between commas"),
+        (["--grid", "robust.confidence=0.9,"], "=0.9,: an empty value between commas"),
     ],
 )
 def test_sweep_command_mistakes_are_refused_before_anything_runs(

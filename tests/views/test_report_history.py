@@ -90,3 +90,15 @@ def test_a_planted_staging_name_neither_blocks_the_next_run_nor_is_written_throu
     _run(folder, cache)
     assert (folder / "history" / name / "record.json").read_bytes() == raw
     assert list(victim.iterdir()) == []
+
+
+def test_rewrite_report_takes_the_folder_as_a_string_too(tmp_path):
+    """``gv.rewrite_report("out/r")``, as a user types it (it raised TypeError on ``/``)."""
+    import graphvision as gv
+
+    folder = tmp_path / "out"
+    _run(folder, tmp_path / "cache")
+    before = (folder / "report.md").read_text()
+    (folder / "report.md").unlink()
+    assert gv.rewrite_report(str(folder)) == folder / "report.html"
+    assert (folder / "report.md").read_text() == before
