@@ -26,6 +26,7 @@ import contextlib
 import hashlib
 import json
 import os
+import re
 import stat
 import threading
 from collections.abc import Callable, Mapping
@@ -157,6 +158,7 @@ def replace_folder_files(
     """
     listed = check_folder_files(directory, kind)
     directory.mkdir(parents=True, exist_ok=True)
+    _remove_dead_writers_temporaries(directory, kind)
     data = {name: text.encode("utf-8") for name, text in contents.items()}
     new = {name: _sha256(content) for name, content in data.items()}
     during = {name: {digest} for name, digest in new.items()}
@@ -173,6 +175,31 @@ def replace_folder_files(
         (directory / name).unlink(missing_ok=True)
     _write_manifest(directory, kind, {name: {digest} for name, digest in new.items()})
     return written
+
+
+def _remove_dead_writers_temporaries(directory: Path, kind: FolderFiles) -> None:
+    """Remove the temporary files of :func:`replace_bytes` that a writer killed before its
+    rename left for ``kind``'s files (``.NAME.PID.THREAD.tmp``, its process gone): one
+    writer at a time holds the folder (:mod:`graphvision.execution.folder_lock`)."""
+    for path in directory.glob(".*.tmp"):
+        found = _TEMPORARY.fullmatch(path.name)
+        if found is None or not (kind.names(found[1]) or found[1] == kind.manifest):
+            continue
+        if int(found[2]) != os.getpid() and not _alive(int(found[2])) and not path.is_dir():
+            path.unlink(missing_ok=True)
+
+
+_TEMPORARY = re.compile(r"\.(.+)\.(\d+)\.(\d+)\.tmp")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)  # (signal 0: only asks whether the process exists)
+    except (ProcessLookupError, OverflowError):  # none has that number
+        return False
+    except PermissionError:  # another user's
+        return True
+    return True
 
 
 def _write_manifest(directory: Path, kind: FolderFiles, files: Mapping[str, set[str]]) -> None:

@@ -360,3 +360,24 @@ def test_a_batch_into_an_empty_output_dir_is_refused_from_python(setup):
     graph = gv.load_pipeline(pipeline)
     with pytest.raises(ValueError, match=r"output_dir is an empty path: give a folder"):
         gv.run_batch(graph, f"{photos}/*.png", input="image", output_dir="")
+
+
+def test_a_killed_writers_temporary_files_are_removed_by_the_next_batch(capsys, tmp_path, setup):
+    """A writer killed between a temporary file and its rename leaves ``.batch.json.PID.TID
+    .tmp``; the next batch (another process) removes those of dead processes, and nothing
+    else of the user's."""
+    import subprocess
+    import sys
+
+    pipeline, photos = setup
+    out = tmp_path / "out"
+    assert _batch(pipeline, f"{photos}/*.png", out) == 0
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
+    left = [out / f".batch.json.{gone}.140503779367808.tmp", out / f".batch.csv.{gone}.7.tmp"]
+    mine = [out / f".batch.csv.{os.getppid()}.7.tmp", out / ".notes.1.2.tmp", out / ".x.tmp"]
+    for path in left + mine:  # (the parent's: a live process; the others: not a batch's)
+        path.write_text("half")
+    assert _batch(pipeline, f"{photos}/*.png", out) == 0
+    assert not any(path.exists() for path in left)
+    assert all(path.read_text() == "half" for path in mine)
