@@ -24,13 +24,10 @@ from typing import Any
 
 from graphvision.cache.memory_store import MemoryStore
 from graphvision.cache.store import Cache
-from graphvision.compiler.compile import CompiledGraph, compile_graph
+from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import (
     GraphvisionError,
     InputError,
-    PipelineError,
-    Problem,
-    did_you_mean,
 )
 from graphvision.execution.arguments import (
     graph_argument,
@@ -41,6 +38,12 @@ from graphvision.execution.arguments import (
 from graphvision.execution.executors import Executor, make_executor
 from graphvision.execution.record import RunRecord
 from graphvision.execution.run import run
+from graphvision.execution.sweep_grid import (
+    MAX_COMBINATIONS,
+    checked_combinations,
+    compile_combination,
+    grid_values,
+)
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
 
@@ -50,9 +53,6 @@ __all__ = [
     "SweepResult",
     "sweep",
 ]
-
-MAX_COMBINATIONS = 10_000
-"""A larger grid is refused before anything runs (each combination is a whole run)."""
 
 
 @dataclass
@@ -167,8 +167,8 @@ def sweep(
 
         registry = discover_for(graph)
     keys = list(grid)
-    values = _grid_values(graph, grid, keys)
-    base, wanted = _checked_combinations(graph, registry, keys, values, inputs, outputs)
+    values = grid_values(graph, grid, keys)
+    base, wanted = checked_combinations(graph, registry, keys, values, inputs, outputs)
     total = math.prod(len(options) for options in values)
     scalar_outputs = scalar_outputs_of(base, wanted)
     result = SweepResult(keys, scalar_outputs)
@@ -217,7 +217,7 @@ def _run_combination(
     row: dict[str, Any] = dict(combo)
     try:
         outcome = run(
-            _compile(graph, registry, combo, inputs),
+            compile_combination(graph, registry, combo, inputs),
             registry,
             inputs=inputs,
             outputs=wanted,
@@ -254,88 +254,6 @@ def _not_run(
         result.rows.append({**rest, **blank, **marks})
 
 
-def _grid_values(
-    graph: Graph, grid: Mapping[str, Sequence[Any]], keys: list[str]
-) -> list[list[Any]]:
-    """Each key's values, or every problem of the grid's shape at once (PipelineError)."""
-    for key in keys:
-        if isinstance(grid[key], (str, bytes)) or not isinstance(grid[key], Sequence):
-            raise PipelineError(
-                [Problem(0, f"grid {key}", f"needs a list of values, got {grid[key]!r}")],
-                graph.source,
-            )
-    values = [list(grid[key]) for key in keys]
-    problems = [
-        Problem(0, f"grid {key}", "has no values")
-        for key, options in zip(keys, values, strict=True)
-        if not options
-    ]
-    for key in keys:
-        target, _, param = key.partition(".")
-        if not param:
-            problems.append(Problem(0, f"grid {key}", "must be node.param or params.name"))
-        elif target != "params" and target not in graph.nodes:
-            hint = did_you_mean(target, graph.nodes)
-            problems.append(Problem(0, f"grid {key}", f"no node '{target}'{hint}"))
-    if not keys:
-        problems.append(Problem(0, "grid", "the grid is empty: give at least one node.param"))
-    problems += _shadowed(graph, keys)
-    total = math.prod(len(options) for options in values)
-    if total > MAX_COMBINATIONS:
-        sizes = " × ".join(str(len(options)) for options in values)
-        problems.append(
-            Problem(
-                0,
-                "grid",
-                f"{total:,} combinations ({sizes}); at most {MAX_COMBINATIONS:,}: "
-                "sweep fewer values, or one parameter after another",
-            )
-        )
-    if problems:
-        raise PipelineError(problems, graph.source)
-    return values
-
-
-def _checked_combinations(
-    graph: Graph,
-    registry: Registry,
-    keys: list[str],
-    values: list[list[Any]],
-    inputs: dict[str, Any] | None,
-    outputs: Sequence[str] | None,
-) -> tuple[CompiledGraph, list[str]]:
-    """The first combination compiled, each other value checked once, and the outputs
-    to produce; PipelineError naming every refused value, unknown output and input."""
-    first = {key: options[0] for key, options in zip(keys, values, strict=True)}
-    refused: dict[tuple[str, str], Problem] = {}  # a bad first value fails every check
-
-    def compiled(combo: dict[str, Any]) -> CompiledGraph | None:
-        try:
-            return _compile(graph, registry, combo, inputs)
-        except PipelineError as error:
-            for p in error.problems:
-                refused.setdefault((p.where, p.message.rsplit(" (grid combination", 1)[0]), p)
-            return None
-
-    base = compiled(first)
-    for key, options in zip(keys, values, strict=True):  # each value checked once
-        for value in options[1:]:
-            compiled({**first, key: value})
-    if base is None or refused:
-        raise PipelineError(list(refused.values()), graph.source)
-    wanted = list(outputs) if outputs is not None else list(base.outputs)
-    listing, names = ", ".join(base.outputs), ", ".join(base.input_types) or "none"
-    unknown = [
-        *(Problem(0, "outputs", f"no output '{name}'; outputs: {listing}") for name in wanted
-          if name not in base.outputs),
-        *(Problem(0, "inputs", f"no input '{name}'; inputs: {names}") for name in inputs or {}
-          if name not in base.input_types),
-    ]  # fmt: skip
-    if unknown:
-        raise PipelineError(unknown, graph.source)
-    return base, wanted
-
-
 def scalar_outputs_of(compiled: CompiledGraph, names: Sequence[str]) -> list[str]:
     """The outputs among ``names`` a sweep tabulates and plots: numbers, booleans, text."""
     return [
@@ -343,57 +261,3 @@ def scalar_outputs_of(compiled: CompiledGraph, names: Sequence[str]) -> list[str
         for name in names
         if compiled.output_type(name).type_name() in ("Float", "Int", "Bool", "Text")
     ]
-
-
-def _shadowed(graph: Graph, keys: list[str]) -> list[Problem]:
-    """A swept ``params.name`` whose every use is itself swept would change nothing."""
-    problems = []
-    for key in keys:
-        target, _, name = key.partition(".")
-        if target != "params":
-            continue
-        reference = f"${{params.{name}}}"
-        uses = [
-            f"{node}.{param}"
-            for node, decl in graph.nodes.items()
-            for param, value in decl.params.items()
-            if isinstance(value, str) and reference in value
-        ]
-        if uses and all(use in keys for use in uses):
-            problems.append(
-                Problem(
-                    0,
-                    f"grid {key}",
-                    f"has no effect: every parameter that uses it ({', '.join(uses)}) is "
-                    "swept itself",
-                )
-            )
-    return problems
-
-
-def _grid_named(where: str, combo: dict[str, Any]) -> str:
-    """A problem's place as the user gave it: ``--grid key=value`` for a swept value."""
-    for key, value in combo.items():
-        where = where.replace(f"--set {key}={value!r}", f"--grid {key}={value!r}")
-    return where
-
-
-def _compile(
-    graph: Graph, registry: Registry, combo: dict[str, Any], inputs: dict[str, Any] | None
-) -> CompiledGraph:
-    """The graph with ``combo`` applied, validated; errors name the combination."""
-    try:
-        overridden = graph.with_overrides(combo)
-        return compile_graph(overridden, registry, provided=set(inputs or {}))
-    except PipelineError as error:
-        shown = ", ".join(f"{k}={v!r}" for k, v in combo.items())
-        problems = [
-            Problem(
-                p.line,
-                _grid_named(p.where, combo),
-                f"{p.message} (grid combination {shown})",
-                p.file,
-            )
-            for p in error.problems
-        ]
-        raise PipelineError(problems, error.source) from None

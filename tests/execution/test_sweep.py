@@ -85,6 +85,7 @@ def test_plot_has_a_chart_per_parameter_and_a_line_per_other_combination(line_sw
         ({"robust.treshold": [1.0]}, r"unknown parameter 'treshold'.*\(did you mean 'threshold'"),
         ({"robust.threshold": [1.0, "wide"]}, r"invalid value 'wide'.*threshold='wide'"),
         ({"robust.threshold": []}, r"grid robust.threshold: has no values"),
+        ({"robust.threshold": [1.0, 3.0, 1.0]}, r"grid robust.threshold: gives 1.0 twice"),
         ({}, r"the grid is empty"),
     ],
 )
