@@ -34,6 +34,7 @@ other file matches).
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Callable, Collection, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
@@ -247,6 +248,13 @@ def _batch_paths(
             )
         if not paths:
             raise InputError(f"batch input '{input}': no file matches '{files}'")
+        if inside:  # the others run; these are named, not dropped without a word
+            warnings.warn(
+                f"batch input '{input}': {len(inside)} file(s) '{files}' matches (such as "
+                f"{inside[0]}) lie inside the output folder {out_dir} and are left out: a "
+                "batch never reads its output folder",
+                stacklevel=3,
+            )
         return paths, pattern_root(files)
     paths = [Path(f) for f in files]
     return paths, Path(*common_parts([p.parent.parts for p in paths])) if paths else Path()

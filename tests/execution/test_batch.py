@@ -144,6 +144,23 @@ def test_a_pattern_whose_files_are_all_in_the_output_folder_says_so(capsys, tmp_
     assert f"no file matches '{photos}/*.jpg'" in capsys.readouterr().err  # none at all
 
 
+def test_files_a_pattern_matches_inside_the_output_folder_are_named_when_others_run(
+    capsys, tmp_path
+):
+    photos, out = tmp_path / "photos", tmp_path / "photos" / "out"
+    photo(photos / "a.png", 100)
+    photo(out / "b.png", 100)  # left there by hand, or by an earlier step
+    args = ["run", str(DEMO), "--no-cache", "-d", str(out), "-o", PSNR]
+    assert main([*args, "--batch", f"image={photos}/**/*.png"]) == 0
+    err = capsys.readouterr().err
+    assert (
+        f"warning: batch input 'image': 1 file(s) '{photos}/**/*.png' matches (such as "
+        f"{out}/b.png) lie inside the output folder {out} and are left out"
+    ) in err
+    with pytest.warns(UserWarning, match="lie inside the output folder"):
+        gv.run_batch(DEMO, f"{photos}/**/*.png", input="image", output_dir=out, outputs=[PSNR])
+
+
 # -- image files that were misread -----------------------------------------------------------
 
 
