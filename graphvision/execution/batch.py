@@ -77,7 +77,11 @@ from graphvision.execution.executors import (
     make_executor,
 )
 from graphvision.execution.folder_lock import only_writer
-from graphvision.execution.folders import missing_folders, remove_empty_folders, retire_run
+from graphvision.execution.folders import (
+    missing_folders,
+    remove_empty_folders,
+    retire_left_files,
+)
 from graphvision.execution.manifest import check_folder_files, replace_folder_files
 from graphvision.execution.owned import check_output_folder
 from graphvision.execution.record import RunHooks
@@ -357,8 +361,7 @@ def _summarise(
 ) -> Path:
     """``batch.csv`` for ``items``, and the summary page when there is one; the folders of
     files a previous batch listed and this one does not (``stale``) lose their files."""
-    for folder in stale:  # its file is no longer in the batch
-        retire_run(folder, out_dir)
+    retire_left_files(stale, out_dir)  # their files are no longer in the batch
     contents = {SUMMARY: summary_text(items)}
     if pages.summary is not None:
         contents[SUMMARY_PAGE] = pages.summary(items, out_dir)

@@ -23,6 +23,7 @@ import json
 import os
 import shutil
 import tempfile
+import warnings
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -52,6 +53,7 @@ __all__ = [
     "new_folder",
     "remove_empty_folders",
     "remove_owned_files",
+    "retire_left_files",
     "retire_run",
     "run_folder",
     "write_outputs",
@@ -97,6 +99,21 @@ def retire_run(directory: Path, inside: Path) -> None:
     if owned:
         keep_previous_run(directory, owned)
         remove_owned_files(directory, owned)
+
+
+def retire_left_files(folders: Iterable[Path], inside: Path) -> None:
+    """:func:`retire_run` for the item folders of files no longer in the batch in ``inside``
+    (batch.csv has no row for them), said in one warning: their folders were emptied
+    without a word."""
+    left = sorted(folders)
+    for folder in left:
+        retire_run(folder, inside)
+    if left:
+        warnings.warn(
+            f"{len(left)} folder(s) of files no longer in the batch (such as {left[0]}) are "
+            "emptied: each one's last run is kept in its history/",
+            stacklevel=3,
+        )
 
 
 def missing_folders(*folders: Path) -> list[Path]:

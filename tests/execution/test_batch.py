@@ -210,7 +210,12 @@ def test_a_file_dropped_from_the_batch_leaves_no_current_looking_folder(capsys, 
     assert main([*args, "-o", PSNR]) == 0
     (out / "b" / "mine.txt").write_text("kept")
     dropped.unlink()
+    capsys.readouterr()
     assert main([*args, "-o", PSNR]) == 0
+    assert (  # (said: batch.csv has no row for it)
+        f"warning: 1 folder(s) of files no longer in the batch (such as {out / 'b'}) are "
+        "emptied: each one's last run is kept in its history/"
+    ) in capsys.readouterr().err
     assert {p.name for p in (out / "b").iterdir()} == {"mine.txt", "history"}
     (kept,) = [p for p in (out / "b" / "history").iterdir() if not p.name.startswith(".")]
     assert {p.name for p in kept.iterdir()} >= {"record.json", f"{PSNR}.json"}  # kept, not lost
