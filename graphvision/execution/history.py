@@ -66,7 +66,9 @@ def history_problem(directory: Path) -> str:
     if folder.exists() and not folder.is_dir():
         return f"{folder} is a file, not graphvision's history folder"
     marker = folder / MARKER
-    if folder.exists() and (marker.is_symlink() or not marker.is_file()):
+    if folder.exists() and marker.is_symlink():
+        return f"{folder} is a folder graphvision did not make (its {MARKER} is a symbolic link)"
+    if folder.exists() and not marker.is_file():
         return f"{folder} is a folder graphvision did not make (it has no file {MARKER})"
     return ""
 

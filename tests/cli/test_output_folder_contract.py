@@ -292,7 +292,8 @@ UNKEPT = {  # what is planted -> what the refusal says
     "history is a link": "history is a symbolic link to {elsewhere}, so the previous run",
     "history is a file": "history is a file, not graphvision's history folder",
     "history is the user's folder": "history is a folder graphvision did not make",
-    "the marker is a link": "history is a folder graphvision did not make",
+    "the marker is a link": "history is a folder graphvision did not make (its "
+    ".graphvision-history is a symbolic link)",
     "the record is a link": "record.json is a symbolic link to {elsewhere}/record.json",
     "an output is a link": "gray.png is a symbolic link to {elsewhere}/record.json, where the",
     "an output is a folder": "gray.png is a folder, where the previous run wrote a file",
