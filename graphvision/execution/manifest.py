@@ -220,12 +220,15 @@ def replace_bytes(path: Path, data: bytes) -> None:
     umask). The temporary file's name is this thread's own, so two threads writing the
     same path at once each publish a whole file."""
     temp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
-    temp.unlink(missing_ok=True)  # a killed writer's, or a link put there: made anew
     try:
+        temp.unlink(missing_ok=True)  # a killed writer's, or a link put there: made anew
         with os.fdopen(os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), "wb") as out:
             out.write(data)
         with contextlib.suppress(FileNotFoundError):
             os.chmod(temp, stat.S_IMODE(path.stat().st_mode))
         os.replace(temp, path)
+    except OSError as error:  # named by the file meant, not the temporary one
+        raise OutputFolderError(f"cannot write {path}: {error.strerror or error}") from None
     finally:
-        temp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):
+            temp.unlink(missing_ok=True)

@@ -41,7 +41,7 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from graphvision.errors import PipelineError
+from graphvision.errors import OutputFolderError, PipelineError
 from graphvision.studio.describe import describe_graph
 from graphvision.studio.payload import MAX_STEP, png_of, raw_of
 from graphvision.studio.pictures import Descriptions, Pictures
@@ -264,8 +264,8 @@ class _Api:
             saved = await run_in_threadpool(
                 save_parameters, Path(source), self.session.overrides, target
             )
-        except (KeyError, PipelineError, OSError) as error:
-            return JSONResponse({"error": str(error)}, 400)
+        except (KeyError, PipelineError, OutputFolderError, OSError) as error:
+            return JSONResponse({"error": str(error)}, 400)  # (a file that cannot be written)
         return JSONResponse({"saved": str(saved)})
 
     async def command(self, request: Request) -> JSONResponse:

@@ -246,3 +246,16 @@ def test_a_cached_png_is_served_only_for_the_value_it_was_made_from(coins: Sessi
     api.pngs[(id(value), "gray", "out")] = (_reference(other), b"stale")
     assert asyncio.run(api.png(request)).body == fresh  # type: ignore[arg-type]
     assert fresh.startswith(b"\x89PNG")
+
+
+def test_saving_where_no_file_can_be_written_answers_in_words(coins: Session, tmp_path) -> None:
+    """``save as`` onto a folder: the page hears which file could not be written (not the
+    temporary file beside it, nor a server error), and nothing is left behind."""
+
+    async def body() -> dict[str, str]:
+        return {"path": str(tmp_path)}  # a folder: no file can take its place
+
+    answer = asyncio.run(_Api(coins).save(SimpleNamespace(json=body)))  # type: ignore[arg-type]
+    assert answer.status_code == 400
+    assert json.loads(answer.body) == {"error": f"cannot write {tmp_path}: Is a directory"}
+    assert list(tmp_path.iterdir()) == []
