@@ -197,11 +197,7 @@ def _summary_folders(summary: Path) -> list[str]:
     """The ``output_dir`` column of a batch summary (ValueError when it is none)."""
     with summary.open(newline="", encoding="utf-8") as handle:
         reader = csv.DictReader(handle)
-        if (
-            not reader.fieldnames
-            or reader.fieldnames[0] != "file"
-            or "status" not in reader.fieldnames
-        ):
+        if not _summary_header(reader.fieldnames or []):
             raise ValueError("not a batch summary")
         return [row.get("output_dir") or "" for row in reader]
 
@@ -213,10 +209,14 @@ def _is_summary(path: Path) -> bool:
         return False
     try:
         with path.open(newline="", encoding="utf-8") as handle:
-            header = next(csv.reader(handle), [])
+            return _summary_header(next(csv.reader(handle), []))
     except (OSError, UnicodeDecodeError, csv.Error):
         return False
-    return header[: len(_COLUMNS)] == list(_COLUMNS)
+
+
+def _summary_header(columns: Sequence[str]) -> bool:
+    """Whether ``columns`` start as :func:`summary_text` writes them."""
+    return list(columns[: len(_COLUMNS)]) == list(_COLUMNS)
 
 
 BATCH_FILES = FolderFiles(

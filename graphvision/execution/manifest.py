@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from graphvision.errors import OutputFolderError
+from graphvision.execution.provenance import file_sha256
 
 __all__ = ["FolderFiles", "check_folder_files", "replace_bytes", "replace_folder_files"]
 
@@ -71,22 +72,34 @@ def check_folder_files(directory: Path, kind: FolderFiles) -> dict[str, Digests]
         link or not ``kind``'s manifest; a file of ``kind``'s names is not listed,
         changed since it was written, or is a link or a folder.
     """
+    return _checked_files(directory, kind)[0]
+
+
+def _checked_files(directory: Path, kind: FolderFiles) -> tuple[dict[str, Digests], dict[str, str]]:
+    """:func:`check_folder_files`, and the digest of each of ``kind``'s files there now
+    (each file read once)."""
     if directory.exists() and not directory.is_dir():
         raise OutputFolderError(f"output folder {directory} is a file")
     if not directory.is_dir():
-        return {}
+        return {}, {}
     manifest = directory / kind.manifest
     listed = _read_manifest(manifest, kind)
+    held: dict[str, str] = {}
     for path in sorted(directory.iterdir()):
         if path.name == kind.manifest or not kind.names(path.name):
             continue
         problem = _not_written(path, listed, kind, os.path.lexists(manifest))
+        if not problem:
+            held[path.name] = digest = file_sha256(path)
+            allowed = listed.get(path.name)  # (None: any content)
+            if allowed is not None and digest not in allowed:
+                problem = f"which changed since the {kind.label} wrote it"
         if problem:
             raise OutputFolderError(
                 f"output folder {directory} holds {path.name}, {problem}; the {kind.label} "
                 "would replace it: move it, or choose another --output-dir"
             )
-    return listed
+    return listed, held
 
 
 def _read_manifest(manifest: Path, kind: FolderFiles) -> dict[str, Digests]:
@@ -123,7 +136,7 @@ def _read_manifest(manifest: Path, kind: FolderFiles) -> dict[str, Digests]:
 def _not_written(
     path: Path, listed: dict[str, Digests], kind: FolderFiles, has_manifest: bool
 ) -> str:
-    """Why ``path`` is not a file ``kind``'s writer wrote, or ''."""
+    """Why ``path`` is not a file ``kind``'s writer wrote, by its name and kind, or ''."""
     if path.is_symlink():
         return f"a symbolic link to {os.readlink(path)}, which no {kind.label} wrote"
     if not path.is_file():
@@ -138,10 +151,7 @@ def _not_written(
                 "writes it again)"
             )
         return f"which no graphvision {kind.label} there wrote"
-    digests = listed[path.name]
-    if digests is not None and _sha256(path.read_bytes()) not in digests:
-        return f"which changed since the {kind.label} wrote it"
-    return ""
+    return ""  # (whether it changed since: its digest, by the caller)
 
 
 def replace_folder_files(
@@ -156,16 +166,14 @@ def replace_folder_files(
     OutputFolderError
         As :func:`check_folder_files` (checked again here: a file may have come since).
     """
-    listed = check_folder_files(directory, kind)
+    listed, held = _checked_files(directory, kind)
     directory.mkdir(parents=True, exist_ok=True)
     _remove_dead_writers_temporaries(directory, kind)
     data = {name: text.encode("utf-8") for name, text in contents.items()}
     new = {name: _sha256(content) for name, content in data.items()}
     during = {name: {digest} for name, digest in new.items()}
-    for name in set(listed) | set(data):  # each is a file the kind wrote (checked): kept too
-        path = directory / name
-        if path.is_file() and not path.is_symlink():
-            during.setdefault(name, set()).add(_sha256(path.read_bytes()))
+    for name, digest in held.items():  # each is a file the kind wrote (checked): kept too
+        during.setdefault(name, set()).add(digest)
     _write_manifest(directory, kind, during)  # a writer killed from here on: either is its
     written = []
     for name, content in data.items():

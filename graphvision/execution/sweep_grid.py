@@ -82,10 +82,10 @@ def checked_combinations(
 
     def compiled(combo: dict[str, Any]) -> CompiledGraph | None:
         try:
-            return compile_combination(graph, registry, combo, inputs)
+            return compile_graph(graph.with_overrides(combo), registry, provided=set(inputs or {}))
         except PipelineError as error:
-            for p in error.problems:
-                refused.setdefault((p.where, p.message.rsplit(" (grid combination", 1)[0]), p)
+            for p in error.problems:  # (named once, with the first combination that shows it)
+                refused.setdefault((_grid_named(p.where, combo), p.message), _in(combo, p))
             return None
 
     base = compiled(first)
@@ -148,14 +148,13 @@ def compile_combination(
         overridden = graph.with_overrides(combo)
         return compile_graph(overridden, registry, provided=set(inputs or {}))
     except PipelineError as error:
-        shown = ", ".join(f"{k}={v!r}" for k, v in combo.items())
-        problems = [
-            Problem(
-                p.line,
-                _grid_named(p.where, combo),
-                f"{p.message} (grid combination {shown})",
-                p.file,
-            )
-            for p in error.problems
-        ]
-        raise PipelineError(problems, error.source) from None
+        raise PipelineError([_in(combo, p) for p in error.problems], error.source) from None
+
+
+def _in(combo: dict[str, Any], problem: Problem) -> Problem:
+    """``problem`` of the graph with ``combo`` applied, named as the user gave the values."""
+    shown = ", ".join(f"{k}={v!r}" for k, v in combo.items())
+    where = _grid_named(problem.where, combo)
+    return Problem(
+        problem.line, where, f"{problem.message} (grid combination {shown})", problem.file
+    )

@@ -62,35 +62,29 @@ def callees_digest(func: Callable[..., Any]) -> str:
     is compiled in too), itself excluded (numba's own stamp covers its file): each file's
     path and bytes, in path order."""
     modules = {func.__module__, *(kernel.py_func.__module__ for kernel in _reachable(func))}
-    files = {Path(path) for path in _imported_files(modules)}
-    files.discard(Path(inspect.getfile(func)))
+    files = _imported_files(modules)
+    files.pop(Path(inspect.getfile(func)), None)
     digest = hashlib.sha256()
     for path in sorted(files):
-        state = path.stat()
-        digest.update(_file_digest(path, state.st_mtime_ns, state.st_size))
+        digest.update(files[path])
     return digest.hexdigest()
 
 
-@functools.cache
-def _file_digest(path: Path, mtime_ns: int, size: int) -> bytes:
-    """sha256 of ``path``'s name and bytes (read again when its time or size changes)."""
-    return hashlib.sha256(str(path).encode() + b"\0" + path.read_bytes()).digest()
-
-
-def _imported_files(modules: set[str]) -> set[str]:
+def _imported_files(modules: set[str]) -> dict[Path, bytes]:
     """The files of ``modules`` and of the modules of their project that they import (at
-    the top of their file: what is loaded when a kernel is compiled), followed to the end."""
-    files: set[str] = set()
+    the top of their file: what is loaded when a kernel is compiled), followed to the end;
+    each with the digest of its name and bytes."""
+    files: dict[Path, bytes] = {}
     waiting, seen = list(modules), set(modules)
     while waiting:
         module = sys.modules.get(waiting.pop())
         path = getattr(module, "__file__", None)
         if module is None or not path or not path.endswith(".py"):
             continue
-        files.add(path)
+        state, package = Path(path).stat(), module.__package__ or ""
+        files[Path(path)], imports = _read(path, state.st_mtime_ns, state.st_size, package)
         project = module.__name__.partition(".")[0]
-        package = module.__package__ or ""
-        for name in _top_level_imports(Path(path).read_bytes(), package):
+        for name in imports:
             if name.partition(".")[0] == project and name not in seen:
                 seen.add(name)
                 waiting.append(name)
@@ -98,9 +92,11 @@ def _imported_files(modules: set[str]) -> set[str]:
 
 
 @functools.cache
-def _top_level_imports(source: bytes, package: str) -> tuple[str, ...]:
-    """The absolute names a file's top-level imports may mean (``from .a import b``: ``a``
-    and ``a.b``, which may be a module)."""
+def _read(path: str, mtime_ns: int, size: int, package: str) -> tuple[bytes, tuple[str, ...]]:
+    """sha256 of ``path``'s name and bytes, and the absolute names its top-level imports
+    may mean (``from .a import b``: ``a`` and ``a.b``, which may be a module); the file is
+    read once, and again only when its time or size changes."""
+    source = Path(path).read_bytes()
     found: list[str] = []
     for statement in ast.parse(source).body:
         if isinstance(statement, ast.Import):
@@ -114,7 +110,7 @@ def _top_level_imports(source: bytes, package: str) -> tuple[str, ...]:
             except (ImportError, ValueError):
                 continue
             found += [base, *(f"{base}.{alias.name}" for alias in statement.names)]
-    return tuple(found)
+    return hashlib.sha256(path.encode() + b"\0" + source).digest(), tuple(found)
 
 
 def _reachable(func: Callable[..., Any]) -> Iterator[Dispatcher]:
