@@ -32,6 +32,7 @@ def cmd_studio(args: argparse.Namespace) -> int:
     if not 0 <= args.port <= 65535:
         raise UsageError(f"--port {args.port}: must be between 0 and 65535")
     graph, registry, overrides, inputs = load_run_arguments(args)
+    session = None
     try:
         session = Session(graph, registry, inputs=inputs, overrides=overrides,
                           cache=disk_cache(args), executor=args.executor)  # fmt: skip
@@ -40,7 +41,9 @@ def cmd_studio(args: argparse.Namespace) -> int:
         raise UsageError(str(error)) from None
     except GraphvisionError:
         raise
-    except OSError as error:
+    except OSError as error:  # (a port in use: refused before its address is printed)
+        if session is not None:
+            session.close()  # its worker processes end
         raise UsageError(f"--host {args.host} --port {args.port}: {error.strerror}") from None
     print(f"graphvision studio on {graph.name}: {server.url}", file=sys.stderr, flush=True)
     print("Ctrl-C stops it", file=sys.stderr, flush=True)

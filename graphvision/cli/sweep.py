@@ -146,5 +146,5 @@ def _listed(key: str, values: str) -> Any:
     either end) is named, not left to the YAML reader's words."""
     where = f"--grid {key}={values}"
     if re.search(r"(^|,)\s*(,|$)", values):
-        raise UsageError(f"{where}: an empty value between commas (give V1,V2,...)")
+        raise UsageError(f"{where}: an empty value (give V1,V2,...)")
     return yaml_value(f"[{values}]", where)

@@ -28,6 +28,7 @@ __all__ = [
     "graph_argument",
     "mapping_argument",
     "names_argument",
+    "refuse_unknown_inputs",
     "run_arguments",
     "wanted_outputs",
 ]
@@ -111,13 +112,19 @@ def wanted_outputs(
                 f"unknown output '{name}'{did_you_mean(name, compiled.outputs)}"
                 f"; outputs: {', '.join(compiled.outputs)}"
             )
-    for name in inputs:
-        if name not in compiled.input_types:
-            raise UnknownNameError(
-                f"unknown input '{name}'{did_you_mean(name, compiled.input_types)}; "
-                f"inputs: {', '.join(compiled.input_types) or 'none'}"
-            )
+    refuse_unknown_inputs(inputs, compiled.input_types)
     return wanted
+
+
+def refuse_unknown_inputs(given: Iterable[str], declared: Iterable[str]) -> None:
+    """UnknownNameError for the first of ``given`` that the pipeline does not declare."""
+    names = list(declared)
+    for name in given:
+        if name not in names:
+            raise UnknownNameError(
+                f"unknown input '{name}'{did_you_mean(name, names)}; "
+                f"inputs: {', '.join(names) or 'none'}"
+            )
 
 
 def given_inputs(

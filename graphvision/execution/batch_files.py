@@ -37,6 +37,7 @@ __all__ = [
 
 SUMMARY = "batch.csv"
 SUMMARY_PAGE = "batch.html"  # written by the summary page of :class:`BatchPages`, when given
+MANIFEST = "batch.json"  # what the batch wrote beside its folders (execution.manifest)
 _COLUMNS = ("file", "output_dir", "status", "seconds", "error")  # batch.csv's first columns
 
 
@@ -154,15 +155,17 @@ def output_folders(files: Sequence[Path], root: Path, out_dir: Path) -> list[Pat
     """A distinct folder under ``out_dir`` for each file: its path below ``root`` without suffix.
 
     Two files whose paths differ only by suffix (``img.png``, ``img.jpg``) keep
-    it (``img_png``, ``img_jpg``); any name still taken, or the summary's
-    name, gets ``-2``, ``-3``... so the folders are always distinct.
+    it (``img_png``, ``img_jpg``); any name still taken, or the name of one of the
+    batch's own files (``batch.csv``, ``batch.html``, ``batch.json``), gets ``-2``,
+    ``-3``... so the folders are always distinct; a part named like graphvision's hidden
+    files (``.graphvision…``) gets ``_`` before it.
     """
     relative = [_below(f, root) for f in files]
-    plain = [r.with_suffix("") for r in relative]
+    plain = [_not_hidden_files(r.with_suffix("")) for r in relative]
     counts: dict[Path, int] = {}
     for name in plain:
         counts[name] = counts.get(name, 0) + 1
-    taken = {Path(SUMMARY)}
+    taken = {Path(SUMMARY), Path(SUMMARY_PAGE), Path(MANIFEST)}  # the batch's own files
     folders = []
     for rel, name in zip(relative, plain, strict=True):
         if counts[name] > 1 and rel.suffix:
@@ -174,6 +177,12 @@ def output_folders(files: Sequence[Path], root: Path, out_dir: Path) -> list[Pat
         taken.add(candidate)
         folders.append(out_dir / candidate)
     return folders
+
+
+def _not_hidden_files(name: Path) -> Path:
+    """``name`` with ``_`` before each part that graphvision's own hidden files could have
+    (``.graphvision-lock``, a new folder's ``.graphvision-new-…``)."""
+    return Path(*("_" + part if part.startswith(".graphvision") else part for part in name.parts))
 
 
 def _below(file: Path, root: Path) -> Path:
@@ -220,7 +229,7 @@ def _summary_header(columns: Sequence[str]) -> bool:
 
 
 BATCH_FILES = FolderFiles(
-    "batch.json", "batch", lambda name: name in (SUMMARY, SUMMARY_PAGE), _is_summary
+    MANIFEST, "batch", lambda name: name in (SUMMARY, SUMMARY_PAGE), _is_summary
 )
 """A batch's own files in its folder, listed with their digests in ``batch.json``."""
 

@@ -55,7 +55,7 @@ from graphvision.errors import (
     RunError,
     UnknownNameError,
 )
-from graphvision.execution.arguments import admitted
+from graphvision.execution.arguments import admitted, refuse_unknown_inputs
 from graphvision.execution.arguments import given_inputs as _given_inputs
 from graphvision.execution.arguments import wanted_outputs as _wanted_outputs
 from graphvision.execution.blas import BlasLimit
@@ -276,6 +276,7 @@ def _compiled(
             graph = graph.with_overrides(overrides)
         except KeyError as error:
             raise UnknownNameError(str(error.args[0])) from None
+    refuse_unknown_inputs(inputs, graph.inputs)  # (named before an input it lacks)
     return compile_graph(graph, registry, provided=set(inputs)), registry
 
 

@@ -34,12 +34,10 @@ def grid_values(
         for key, options in zip(keys, values, strict=True)
         if not options
     ]
-    for key, options in zip(keys, values, strict=True):  # (by repr: 1 and True differ)
-        shown = [repr(value) for value in options]
-        twice = sorted({text for text in shown if shown.count(text) > 1}, key=shown.index)
+    for key, options in zip(keys, values, strict=True):
         problems += [
-            Problem(0, f"grid {key}", f"gives {text} twice: its combinations would run twice")
-            for text in twice
+            Problem(0, f"grid {key}", f"gives {twice}: its combinations would run twice")
+            for twice in _repeated(options)
         ]
     for key in keys:
         target, _, param = key.partition(".")
@@ -158,3 +156,20 @@ def _in(combo: dict[str, Any], problem: Problem) -> Problem:
     return Problem(
         problem.line, where, f"{problem.message} (grid combination {shown})", problem.file
     )
+
+
+def _repeated(options: list[Any]) -> list[str]:
+    """Each value given again, in words, once: equal values are one (3 and 3.0, 1 and
+    true: a parameter reads them alike)."""
+    firsts: list[Any] = []
+    said: list[str] = []
+    for value in options:
+        earlier = [first for first in firsts if first == value]
+        if not earlier:
+            firsts.append(value)
+            continue
+        twice = f"{value!r} twice" if repr(value) == repr(earlier[0]) else (
+            f"{earlier[0]!r} and {value!r}, one value")  # fmt: skip
+        if twice not in said:
+            said.append(twice)
+    return said

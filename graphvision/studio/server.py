@@ -38,10 +38,10 @@ class StudioServer:
     token: str
     server: Any = field(repr=False, default=None)
     thread: threading.Thread | None = field(repr=False, default=None)
-    bound: socket.socket | None = field(repr=False, default=None)  # port 0's, held open
+    bound: socket.socket | None = field(repr=False, default=None)  # its port, held open
 
     def serve(self) -> None:
-        """Serve until stopped (in this thread), on the socket bound for a free port."""
+        """Serve until stopped (in this thread), on the socket bound for its port."""
         self.server.run(sockets=[self.bound] if self.bound is not None else None)
 
     @property
@@ -67,7 +67,8 @@ class StudioServer:
 
 
 def make_server(session: Session, host: str = "127.0.0.1", port: int = 0) -> StudioServer:
-    """A server for ``session`` (not started); port 0 picks a free one."""
+    """A server for ``session`` (not started), its port bound; port 0 picks a free one.
+    OSError when the port cannot be had (in use)."""
     try:
         import uvicorn
 
@@ -75,11 +76,16 @@ def make_server(session: Session, host: str = "127.0.0.1", port: int = 0) -> Stu
     except ImportError as error:
         raise ImportError(f"{MISSING_EXTRA} ({error})") from None
     token = secrets.token_urlsafe(24)
-    bound = None
-    if port == 0:  # bound here and kept: a port probed and let go can be taken before use
-        bound = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET)
-        bound.bind((host, 0))
-        port = bound.getsockname()[1]
+    # bound here and kept: a port probed and let go can be taken before use, and a port in
+    # use is refused now (OSError), before its address is printed or a browser opened
+    bound = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET)
+    try:
+        bound.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # (as uvicorn's own)
+        bound.bind((host, port))
+    except OSError:
+        bound.close()
+        raise
+    port = bound.getsockname()[1]
     config = uvicorn.Config(
         make_app(session, token), host=host, port=port, log_level="warning", lifespan="off",
         timeout_graceful_shutdown=1,

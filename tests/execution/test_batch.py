@@ -474,3 +474,31 @@ def test_a_file_reached_through_folder_links_is_taken_once(tmp_path):
     (tmp_path / "alias").symlink_to(photos, target_is_directory=True)
     found = batch_files(f"{photos}/**/*.png")[0]
     assert found == [photos / "a.png", photos / "sub" / "b.png"]
+
+
+def test_no_item_folder_takes_the_name_of_a_file_the_batch_writes_beside_them(tmp_path):
+    """Files named ``batch.json.png`` or ``.graphvision-lock.png`` (an adversary's): their
+    folders took the manifest's, the page's or the lock's name, and the batch could not
+    write its own files there, again and again."""
+    names = ["batch.csv.png", "batch.json.png", "batch.html.png", ".graphvision-lock.png",
+             ".graphvision-new-a.png", "a.png"]  # fmt: skip
+    out = tmp_path / "out"
+    folders = output_folders([tmp_path / n for n in names], tmp_path, out)
+    assert [f.name for f in folders] == [
+        "batch.csv-2", "batch.json-2", "batch.html-2", "_.graphvision-lock",
+        "_.graphvision-new-a", "a",
+    ]  # fmt: skip
+
+
+def test_an_unknown_input_is_named_before_a_missing_one(tmp_path):
+    """``--batch nope=…`` (or ``-i nope=…``) on a pipeline whose input has no default said
+    only that 'image' was missing."""
+    graph = gv.Graph("gray")
+    graph.input("image", "Image")
+    graph.add("gray", "colour.to_gray", image="image")
+    graph.output("gray", "gray")
+    with pytest.raises(gv.UnknownNameError, match=r"unknown input 'nope'; inputs: image"):
+        gv.run(graph, inputs={"nope": np.zeros((4, 4), np.float32)})
+    photo(tmp_path / "a.png", 100)
+    with pytest.raises(gv.UnknownNameError, match=r"unknown input 'nope'; inputs: image"):
+        gv.run_batch(graph, f"{tmp_path}/*.png", input="nope", output_dir=tmp_path / "out")

@@ -86,6 +86,7 @@ def test_plot_has_a_chart_per_parameter_and_a_line_per_other_combination(line_sw
         ({"robust.threshold": [1.0, "wide"]}, r"invalid value 'wide'.*threshold='wide'"),
         ({"robust.threshold": []}, r"grid robust.threshold: has no values"),
         ({"robust.threshold": [1.0, 3.0, 1.0]}, r"grid robust.threshold: gives 1.0 twice"),
+        ({"robust.threshold": [3, 3.0]}, r"grid robust.threshold: gives 3 and 3.0, one value"),
         ({}, r"the grid is empty"),
     ],
 )
@@ -197,8 +198,9 @@ def test_outputs_limit_each_run_and_the_table() -> None:
         (["-s", "robust.threshold=5"], "robust.threshold is both swept (--grid) and set (--set)"),
         (["--plot", "points"], "--plot points: not a scalar output of the sweep"),
         (["--plot", "error_ransak"], "did you mean 'error_ransac'"),
-        (["--grid", "robust.confidence=0.9,,0.99"], "=0.9,,0.99: an empty value between commas"),
-        (["--grid", "robust.confidence=0.9,"], "=0.9,: an empty value between commas"),
+        (["--grid", "robust.confidence=0.9,,0.99"], "=0.9,,0.99: an empty value (give V1,V2,...)"),
+        (["--grid", "robust.confidence=0.9,"], "=0.9,: an empty value (give V1,V2,...)"),
+        (["--grid", "robust.confidence="], "--grid robust.confidence=: an empty value"),
     ],
 )
 def test_sweep_command_mistakes_are_refused_before_anything_runs(

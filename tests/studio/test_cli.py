@@ -29,6 +29,22 @@ def test_a_bad_override_or_port_is_a_usage_error(capsys) -> None:
     assert "--port 70000: must be between 0 and 65535" in capsys.readouterr().err
 
 
+def test_a_port_in_use_is_refused_before_its_address_is_printed(capsys) -> None:
+    """With ``--port N`` taken, the studio printed N's address (another server's, whose
+    token it lacks), opened a browser there, then died with exit status 3."""
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        command = ["studio", str(PIPELINES / "coins.yaml"), "--port", str(port), "--no-browser"]
+        assert main(command) == 2
+    err = capsys.readouterr().err
+    assert f"--host 127.0.0.1 --port {port}: Address already in use" in err
+    assert "studio on" not in err
+
+
 def test_the_command_serves_until_interrupted() -> None:
     command = [sys.executable, "-m", "graphvision", "studio", str(PIPELINES / "coins.yaml"),
                "--no-browser", "--no-cache"]  # fmt: skip
