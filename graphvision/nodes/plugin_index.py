@@ -17,7 +17,8 @@ can change what discovery finds, computed on every use:
 
 * the bytes of every file of each entry point's top-level package and of
   graphvision itself (an edit anywhere in a plugin shows at once, whatever
-  the file's time stamp);
+  the file's time stamp; a process hashes a file again only when its status,
+  ``ctime`` included, changed: :func:`_file_digest`);
 * the entry points (name, target, and their distribution's metadata file,
   which holds its name and version);
 * the modification time of each ``sys.path`` folder but the first, each once (a package
@@ -43,6 +44,7 @@ import json
 import os
 import sys
 import tempfile
+import time
 from importlib.metadata import EntryPoint, entry_points
 from importlib.util import find_spec
 from pathlib import Path
@@ -69,8 +71,38 @@ FORMAT = 5  # bump when what an index holds changes
 
 
 def installed_entry_points() -> list[EntryPoint]:
-    """The ``graphvision.plugins`` entry points, in name order."""
-    return sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name)
+    """The ``graphvision.plugins`` entry points, in name order.
+
+    Listing them reads every installed distribution's metadata (4 ms here); a process
+    lists them again only when a ``sys.path`` folder changed (installing or removing a
+    distribution adds or removes its metadata folder there), or when one had changed in
+    the two seconds before the last listing (see :func:`_file_digest`).
+    """
+    stamp = _folders_stamp(sys.path)
+    if stamp is not None and _ENTRY_POINTS and _ENTRY_POINTS[0] == stamp:
+        return list(_ENTRY_POINTS[1])
+    found = sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name)
+    _ENTRY_POINTS[:] = [stamp, tuple(found)] if stamp is not None else []
+    return found
+
+
+_ENTRY_POINTS: list = []  # [the sys.path folders' stamp, the entry points listed under it]
+
+
+def _folders_stamp(folders: list[str]) -> tuple | None:
+    """Each folder's status, or None when one changed in the last two seconds."""
+    stamp: list[tuple[str, int | None, int, int]] = []
+    settled = time.time_ns() - _SETTLED_NS
+    for folder in folders:
+        try:
+            status = os.stat(folder or ".")
+        except OSError:
+            stamp.append((folder, None, 0, 0))
+            continue
+        if max(status.st_mtime_ns, status.st_ctime_ns) > settled:
+            return None
+        stamp.append((folder, status.st_ino, status.st_mtime_ns, status.st_ctime_ns))
+    return tuple(stamp)
 
 
 def environment_key(entries: list[EntryPoint]) -> str:
@@ -90,21 +122,59 @@ def environment_key(entries: list[EntryPoint]) -> str:
         with contextlib.suppress(OSError):
             hasher.update(f"{folder}|{os.stat(folder or '.').st_mtime_ns}\n".encode())
     packages = {"graphvision"}
-    releases: dict[int, str] = {}  # read once per distribution (parsing it is slow)
+    releases: dict[object, str] = {}  # read once per distribution (parsing it is slow)
     for entry in entries:
         dist = entry.dist
-        if dist is not None and id(dist) not in releases:
-            releases[id(dist)] = dist.read_text("METADATA") or dist.read_text("PKG-INFO") or ""
-        release = releases[id(dist)] if dist is not None else ""
+        # each entry point has its own distribution object: one per metadata folder
+        where = getattr(dist, "_path", id(dist))
+        if dist is not None and where not in releases:
+            releases[where] = dist.read_text("METADATA") or dist.read_text("PKG-INFO") or ""
+        release = releases[where] if dist is not None else ""
         hasher.update(f"{entry.name}|{entry.value}|{release}\n".encode())
         packages.add(entry.value.partition(":")[0].partition(".")[0])
     for package in sorted(packages):
         hasher.update(f"package {package}\n".encode())
         for file in _package_files(package):
             hasher.update(f"{file}\n".encode())
-            with contextlib.suppress(OSError):
-                hasher.update(file.read_bytes())
+            hasher.update(_file_digest(file))
     return hasher.hexdigest()
+
+
+# A file's digest, kept with the status that stamped it: (inode, size, mtime, ctime).
+_DIGESTS: dict[str, tuple[tuple[int, int, int, int], bytes]] = {}
+_SETTLED_NS = 2_000_000_000  # a status older than this is kept (see _file_digest)
+
+
+def _file_digest(name: str) -> bytes:
+    """The xxh3-128 digest of file ``name``'s bytes (empty when it cannot be read), hashed again
+    only when its status changed.
+
+    Every write sets a file's ``ctime`` (no tool can set it back, unlike ``mtime``), so a
+    file whose inode, size, ``mtime`` and ``ctime`` are those of its last hashing holds the
+    same bytes. The clock that stamps them is coarse (milliseconds), so two writes close
+    together can leave the same status: a digest is kept only for a file last changed
+    over two seconds before it was hashed (git's "racy clean" rule), and a recent file is
+    read every time. The first discovery of a process reads every file; those after it
+    (a batch, a sweep, each ``gv.run`` of a graph) stat them: 10 ms a discovery became 1.
+    """
+    import xxhash
+
+    try:
+        status = os.stat(name)
+    except OSError:
+        return b""
+    stamp = (status.st_ino, status.st_size, status.st_mtime_ns, status.st_ctime_ns)
+    kept = _DIGESTS.get(name)
+    if kept is not None and kept[0] == stamp:
+        return kept[1]
+    try:
+        with open(name, "rb") as stream:
+            digest = xxhash.xxh3_128_digest(stream.read())
+    except OSError:
+        return b""
+    if time.time_ns() - max(status.st_mtime_ns, status.st_ctime_ns) > _SETTLED_NS:
+        _DIGESTS[name] = (stamp, digest)
+    return digest
 
 
 def _path_folders() -> list[str]:
@@ -115,7 +185,7 @@ def _path_folders() -> list[str]:
     return list(dict.fromkeys(folder for folder in sys.path[1:] if folder != first))
 
 
-def _package_files(name: str) -> list[Path]:
+def _package_files(name: str) -> list[str]:
     """Every file of a top-level package or module, found without importing it."""
     try:
         spec = find_spec(name)
@@ -124,12 +194,12 @@ def _package_files(name: str) -> list[Path]:
     if spec is None:
         return []
     if not spec.submodule_search_locations:
-        return [Path(spec.origin)] if spec.origin else []
+        return [str(Path(spec.origin))] if spec.origin else []
     files = []
     for location in spec.submodule_search_locations:
-        for folder, subfolders, names in os.walk(location):
+        for folder, subfolders, names in os.walk(str(Path(location))):
             subfolders[:] = sorted(d for d in subfolders if d != "__pycache__")
-            files += [Path(folder, n) for n in sorted(names) if not n.endswith(".pyc")]
+            files += [os.path.join(folder, n) for n in sorted(names) if not n.endswith(".pyc")]
     return files
 
 
@@ -153,8 +223,14 @@ def has_index(key: str) -> bool:
     return index_path(key).is_file()
 
 
+_READ: dict[str, dict[str, Any]] = {}  # the index last read, by its file (named by its key)
+
+
 def _read(key: str) -> dict[str, Any] | None:
     """The index written under ``key``, its every byte checked; None without one.
+
+    An index read once is kept while its file is there: the key in its name fixes what
+    it holds (8 ms to read and check again at every discovery).
 
     The file is a header line (the key and a BLAKE2b digest of the rest) and
     the index as JSON. One that does not match its digest, does not parse or
@@ -162,6 +238,8 @@ def _read(key: str) -> dict[str, Any] | None:
     the discovery that replaces it writes it again.
     """
     path = index_path(key)
+    if str(path) in _READ and path.is_file():
+        return _READ[str(path)]
     try:
         data = path.read_bytes()
     except OSError:
@@ -172,10 +250,12 @@ def _read(key: str) -> dict[str, Any] | None:
         index = json.loads(body) if head == _header(key, body) else None
     except (ValueError, RecursionError):
         index = None
-    if not _well_formed(index):
+    if not isinstance(index, dict) or not _well_formed(index):
         with contextlib.suppress(OSError):
             path.unlink()
         return None
+    _READ.clear()
+    _READ[str(path)] = index
     return index
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Annotated
 
 import pytest
+import xxhash
 from pydantic import Field
 
 import graphvision as gv
@@ -167,6 +168,41 @@ def test_the_key_changes_with_a_files_bytes_alone(tmp_path, monkeypatch):
     assert edited != key
     (module.parent / "_more.py").write_text("")
     assert _plugin_index.environment_key(entries) not in (key, edited)
+
+
+def test_a_file_hashed_once_is_hashed_again_when_its_status_changes(tmp_path, monkeypatch):
+    """A process keeps a settled file's digest by its status; ctime moves with every write,
+    even one that puts back the size and modification time."""
+    module = _package(tmp_path, "First summary of the node.")
+    name = str(module)
+    first = _plugin_index._file_digest(name)
+    assert name not in _plugin_index._DIGESTS  # written just now: read every time
+    later = _plugin_index.time.time_ns() + 10 * _plugin_index._SETTLED_NS
+    monkeypatch.setattr(_plugin_index.time, "time_ns", lambda: later)
+    assert _plugin_index._file_digest(name) == first
+    assert _plugin_index._DIGESTS[name][1] == first  # settled: kept
+    _plugin_index.time.sleep(0.05)  # past the clock's coarse tick, so the ctime differs
+    _edit_keeping_size_and_time(module, "First summary", "Other summary")
+    edited = _plugin_index._file_digest(name)
+    assert edited != first
+    assert edited == xxhash.xxh3_128_digest(module.read_bytes())
+
+
+def test_entry_points_are_listed_again_when_a_path_folder_changes(tmp_path, monkeypatch):
+    """A distribution installed into a folder of ``sys.path`` shows in the next listing."""
+    site = tmp_path / "site"
+    site.mkdir()
+    monkeypatch.syspath_prepend(str(site))
+    later = _plugin_index.time.time_ns() + 10 * _plugin_index._SETTLED_NS
+    monkeypatch.setattr(_plugin_index.time, "time_ns", lambda: later)
+    before = {e.name for e in _plugin_index.installed_entry_points()}
+    assert _plugin_index._ENTRY_POINTS  # settled folders: the listing is kept
+    _plugin_index.time.sleep(0.05)
+    dist = site / "fakeplug-1.0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: fakeplug\nVersion: 1.0\n")
+    (dist / "entry_points.txt").write_text("[graphvision.plugins]\nfakeplug = fakeplug_nodes\n")
+    assert {e.name for e in _plugin_index.installed_entry_points()} == before | {"fakeplug"}
 
 
 def test_one_interpreter_spelled_two_ways_has_one_key(monkeypatch):
