@@ -200,7 +200,8 @@ def sweep_html(result: SweepResult, title: str, plots: Sequence[str] = ()) -> st
         "body{font-family:sans-serif;margin:2em} table{border-collapse:collapse}"
         "td,th{border:1px solid #ddd;padding:.2em .6em;text-align:right}"
         "tr.failed td{color:#b71c1c} svg{max-width:100%;height:auto}</style></head>"
-        f"<body><h1>{escape(title)}: {len(result.rows)} combinations</h1>"
+        f"<body><h1>{escape(title)}: {len(result.rows)} "
+        f"combination{'' if len(result.rows) == 1 else 's'}</h1>"
         f"<table><tr>{head}</tr>{''.join(rows)}</table>{charts}</body></html>\n"
     )
 

@@ -13,7 +13,7 @@ import pytest
 
 import graphvision as gv
 from graphvision.execution.sweep import sweep
-from graphvision.views.sweep_page import nice_ticks, sweep_plot_svg, write_sweep
+from graphvision.views.sweep_page import nice_ticks, sweep_html, sweep_plot_svg, write_sweep
 
 PIPELINES = Path(__file__).parents[2] / "pipelines"
 SVG = "{http://www.w3.org/2000/svg}"
@@ -91,3 +91,13 @@ def test_the_batch_page_names_its_pipeline_and_shows_each_files_metrics(tmp_path
         shown = dict(re.findall(r"<tr><th>([^<]+)</th><td>([^<]+)</td></tr>", card))
         assert shown == {name: f"{value:.4g}" for name, value in item.scalars.items()}
         assert len(shown) >= 5  # the PSNRs
+
+
+@pytest.mark.parametrize(("count", "heading"), [(1, "1 combination<"), (2, "2 combinations<")])
+def test_the_heading_counts_its_combinations_in_words(count, heading):
+    result = gv.SweepResult(
+        keys=["smooth.sigma"],
+        outputs=["count"],
+        rows=[{"smooth.sigma": float(s), "count": 20} for s in range(count)],
+    )
+    assert f"<h1>p: {heading}/h1>" in sweep_html(result, "p")
