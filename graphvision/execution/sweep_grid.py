@@ -34,11 +34,6 @@ def grid_values(
         for key, options in zip(keys, values, strict=True)
         if not options
     ]
-    for key, options in zip(keys, values, strict=True):
-        problems += [
-            Problem(0, f"grid {key}", f"gives {twice}: its combinations would run twice")
-            for twice in _repeated(options)
-        ]
     for key in keys:
         target, _, param = key.partition(".")
         if not param:
@@ -60,9 +55,18 @@ def grid_values(
                 "sweep fewer values, or one parameter after another",
             )
         )
-    if problems:
-        raise PipelineError(problems, graph.source)
+    if problems:  # (values given twice are named with the values' own problems, later)
+        raise PipelineError([*repeated_values(keys, values), *problems], graph.source)
     return values
+
+
+def repeated_values(keys: list[str], values: list[list[Any]]) -> list[Problem]:
+    """A problem for each value a key gives twice."""
+    return [
+        Problem(0, f"grid {key}", f"gives {twice}: its combinations would run twice")
+        for key, options in zip(keys, values, strict=True)
+        for twice in _repeated(options)
+    ]
 
 
 def checked_combinations(
@@ -74,7 +78,8 @@ def checked_combinations(
     outputs: Sequence[str] | None,
 ) -> tuple[CompiledGraph, list[str]]:
     """The first combination compiled, each other value checked once, and the outputs
-    to produce; PipelineError naming every refused value, unknown output and input."""
+    to produce; PipelineError naming every value given twice or refused, unknown output
+    and input."""
     first = {key: options[0] for key, options in zip(keys, values, strict=True)}
     refused: dict[tuple[str, str], Problem] = {}  # a bad first value fails every check
 
@@ -90,8 +95,9 @@ def checked_combinations(
     for key, options in zip(keys, values, strict=True):  # each value checked once
         for value in options[1:]:
             compiled({**first, key: value})
-    if base is None or refused:
-        raise PipelineError(list(refused.values()), graph.source)
+    twice = repeated_values(keys, values)
+    if base is None or refused or twice:
+        raise PipelineError([*twice, *refused.values()], graph.source)
     wanted = list(outputs) if outputs is not None else list(base.outputs)
     listing, names = ", ".join(base.outputs), ", ".join(base.input_types) or "none"
     unknown = [

@@ -97,6 +97,16 @@ def test_a_bad_grid_is_refused_before_anything_runs(grid, message) -> None:
     assert executor.submitted == 0
 
 
+def test_values_given_twice_and_refused_values_are_named_in_one_error() -> None:
+    grid = {"robust.threshold": [1.0, 1.0, "wide"], "robust.confidence": [0.9, 7.0, 0.9]}
+    with pytest.raises(gv.PipelineError) as refused:
+        sweep(gv.load_pipeline(LINE_FIT), grid, executor=CountingExecutor())
+    message = str(refused.value)
+    assert "grid robust.threshold: gives 1.0 twice" in message
+    assert "grid robust.confidence: gives 0.9 twice" in message
+    assert "threshold='wide'" in message and "confidence=7.0" in message
+
+
 def test_on_row_hears_every_combination_in_order() -> None:
     heard: list[tuple[int, int, float]] = []
     grid = {"robust.threshold": [1.0, 3.0]}
