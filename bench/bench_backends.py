@@ -19,19 +19,17 @@ the OpenCV backend, and the engine's cost on top of OpenCV against a plain scrip
    (the issue's bar: at most 10 %), in wall time, and in CPU time (15 more of each,
    ``time.process_time``: on a machine other processes load, the wall time of a
    15 ms run moves by tens of percent from one run of the benchmark to the next).
-   Where it goes is measured on 15 more runs of the
-   engine, per run: the BLAS limit a run holds (threadpoolctl, set and lifted in a
-   helper thread: :mod:`graphvision.execution.blas`; the hand-offs to that thread and
-   the waits for it: the lowering sent when the run starts and waited for before its
-   first node, the restore sent after its last node and waited for before it returns),
-   accepting the nodes' outputs (validated, then frozen: an array aligned for its dtype
-   that the node returned and holds no more, or a view of one, in place, read-only,
-   wherever it lies, :func:`graphvision.values.memory.frozen_in_place`; others copied
-   read-only, :func:`graphvision.values.known.frozen_value`), the run's provenance
+   Where it goes is measured on 15 more runs of the engine, per run: the BLAS limit a run
+   holds (each BLAS library's thread count set to one before its first node and given back
+   after its last: :mod:`graphvision.execution.blas`), accepting the nodes' outputs
+   (validated, then frozen: an array aligned for its dtype that the node returned and holds
+   no more, or a view of one, in place, read-only, wherever it lies,
+   :func:`graphvision.values.memory.frozen_in_place`; others copied read-only,
+   :func:`graphvision.values.known.frozen_value`), the run's provenance
    (:func:`graphvision.execution.provenance.describe_run`), the peak-memory check
    (:func:`graphvision.execution.peak_memory.check_peak_memory`), and the rest of the
-   engine's time (the run's, less those parts and its nodes' own calls: keys,
-   scheduling, the record).
+   engine's time (the run's, less those parts and its nodes' own calls: keys, scheduling,
+   the record).
 3. ``--timeline PIPELINE.yaml``: node by node, the best of 15 warm runs of each: the
    script's call, the same call in the engine and the engine's accepting of its outputs.
 
@@ -186,10 +184,7 @@ def _where_it_goes(run: Callable[[], Any], repeats: int = 15) -> dict[str, float
     from graphvision.execution import run as run_module
 
     spent = dict.fromkeys(PARTS, 0.0)
-    limit = blas.BlasLimit  # the lowering sent when the run starts and waited for before its
-    undo = [  # first node, the restore sent after its last and waited for before it returns
-        _timed(limit, step, spent, "blas") for step in ("request", "hold", "release", "restored")
-    ]
+    undo = [_timed(blas.BlasLimit, step, spent, "blas") for step in ("hold", "release")]
     undo.append(_timed_accept(state, spent))  # as the run state calls it
     undo.append(_timed(run_module, "describe_run", spent, "provenance"))
     undo.append(_timed(run_module, "check_peak_memory", spent, "peak"))

@@ -163,11 +163,8 @@ def run(
         graph, inputs, outputs, overrides, cache, executor, workers
     )
     limit = BlasLimit()  # one BLAS thread while nodes run here (see graphvision.execution.blas)
-    here = _runs_here(executor)
-    if here:  # the memory nodes free here is reused without page faults (execution.heap)
-        keep_freed_memory()
-    if cache is None and here:  # every node runs in this process: ask now
-        limit.request()
+    if _runs_here(executor):  # the memory nodes free here is reused without page faults
+        keep_freed_memory()  # (execution.heap)
     try:
         return _run(
             graph, registry, inputs, outputs, overrides, executor, workers, cache, keep_going,
@@ -175,7 +172,7 @@ def run(
             backends, limit,
         )  # fmt: skip
     finally:
-        limit.restored()  # BLAS has its threads back when the run returns
+        limit.release()  # BLAS has its threads back when the run returns
 
 
 def _run(
@@ -197,7 +194,7 @@ def _run(
     backends: Sequence[str] | str | None,
     limit: BlasLimit,
 ) -> RunResult:
-    """:func:`run` after its arguments are checked, its BLAS limit asked for."""
+    """:func:`run` after its arguments are checked; ``limit`` released by the caller."""
     compiled, registry = _compiled(graph, registry, inputs, overrides, backends)
     wanted = _wanted_outputs(compiled, outputs, inputs)
     wanted = outputs_with_truth(compiled, wanted, set(inputs), asked=outputs is not None)
@@ -304,8 +301,8 @@ def _execute(
 
     An executor made here is shut down here: after the run, or at once
     (without waiting for running nodes) when the run is interrupted. BLAS runs on one
-    thread from the first node to the last (``limit``; lifted after them, restored for
-    sure by the caller).
+    thread from the first node to the last (``limit``; lifted after them, and for sure by
+    the caller).
     """
     limit = limit or BlasLimit()
     own = isinstance(executor, str)

@@ -86,8 +86,8 @@ def test_overlapping_limits_restore_the_original_threads():
 
 
 def test_a_limit_entered_in_the_main_thread_and_left_in_another_restores():
-    """OpenBLAS ignores a raise of its thread count from a worker once the main thread
-    lowered it; the limit is therefore set and lifted from a helper thread."""
+    """threadpoolctl ignores a raise of OpenBLAS's thread count from any thread but the first
+    that set it; the limit sets the count itself, from whichever thread enters or leaves."""
     before = blas_threads()
     here, there = gv.one_blas_thread(), gv.one_blas_thread()
     here.__enter__()
@@ -102,20 +102,46 @@ def test_a_limit_entered_in_the_main_thread_and_left_in_another_restores():
     assert blas_threads() == before
 
 
-def test_a_user_entering_while_a_restore_is_on_its_way_still_gets_one_thread():
-    """A run sends the restore after its last node and waits for it only before it returns
-    (execution.blas.BlasLimit): a user who enters in between, seeing one thread still set,
-    must not take the limit for held; the helper restores, then lowers again, in order."""
+def test_a_limit_entered_in_a_thread_lowers_after_another_thread_took_threadpoolctl():
+    """A user's thread that set BLAS threads through threadpoolctl first becomes its
+    "controlling thread"; a run in another thread still gets one BLAS thread (the same
+    bits) and gives the count back."""
+    from threadpoolctl import ThreadpoolController
+
+    libraries = ThreadpoolController().select(user_api="blas").lib_controllers
+    before = blas_threads()
+    for library in libraries:
+        library.set_num_threads(library.num_threads)  # this thread controls threadpoolctl now
+    inside: list[list[int]] = []
+
+    def limited() -> None:
+        with gv.one_blas_thread():
+            inside.append(blas_threads())
+
+    try:
+        worker = threading.Thread(target=limited)
+        worker.start()
+        worker.join()
+    finally:
+        type(libraries[0]).clear_controlling_thread(force=True)
+    assert [set(threads) for threads in inside] == [{1}]
+    assert blas_threads() == before
+
+
+def test_a_run_and_a_user_in_another_thread_share_one_limit():
+    """A run holds the limit from its first node to its last; a user entering meanwhile only
+    counts, and the threads come back when the last leaves."""
     from graphvision.execution.blas import BlasLimit
 
     before = blas_threads()
     run = BlasLimit()
     run.hold()
     assert set(blas_threads()) == {1}
-    run.release()  # the restore is sent, not waited for
     with gv.one_blas_thread():
-        assert set(blas_threads()) == {1}
-    run.restored()
+        run.release()
+        assert set(blas_threads()) == {1}  # the user still holds it
+    assert blas_threads() == before
+    run.release()  # (again, in the run's finally: nothing more)
     assert blas_threads() == before
 
 
