@@ -17,15 +17,20 @@ import platform
 import stat
 import subprocess
 import sys
+import weakref
 from collections.abc import Collection, Mapping
 from datetime import UTC, datetime
 from importlib import metadata
+from operator import is_
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.nodes.fingerprint import distributions_of
-from graphvision.nodes.registry import Registry
+from graphvision.nodes.registry import PluginStatus, Registry
+from graphvision.values.dtype_policy import dtype_name
 
 if TYPE_CHECKING:
     from graphvision.execution.record import RunRecord
@@ -248,12 +253,38 @@ def package_versions(registry: Registry, ops: Collection[str] | None = None) -> 
         "python": _PYTHON,
         **{name: _version(name) for name in ("graphvision", "numpy", "scipy")},
     }
-    used = set(ops) if ops is not None else None
-    for name, plugin in sorted(registry.plugins.items()):
-        if used is not None and not (plugin.sources or used.intersection(plugin.nodes)):
-            continue
-        versions[f"plugin {name}"] = _plugin_version(plugin.origin)
+    for label, origin in _plugins_listed(registry, ops):
+        versions[label] = _plugin_version(origin)
     return versions
+
+
+_LISTED: weakref.WeakKeyDictionary[
+    Registry,
+    dict[frozenset[str] | None, tuple[list[str], list[PluginStatus], list[tuple[str, str]]]],
+] = weakref.WeakKeyDictionary()
+
+
+def _plugins_listed(registry: Registry, ops: Collection[str] | None) -> list[tuple[str, str]]:
+    """``("plugin NAME", origin)`` of each plugin :func:`package_versions` lists, in name
+    order; worked out again for ``ops`` only when the registry's plugins changed (a run of
+    a compiled graph asks with the same ``ops`` each time: a sort and a set intersection
+    per loaded plugin were most of its provenance)."""
+    names, statuses = list(registry.plugins), list(registry.plugins.values())
+    known = _LISTED.setdefault(registry, {})
+    found = known.get(ops) if ops is None or isinstance(ops, frozenset) else None
+    if found is not None and found[0] == names and all(map(is_, found[1], statuses)):
+        return found[2]
+    used = set(ops) if ops is not None else None
+    listed = [
+        (f"plugin {name}", plugin.origin)
+        for name, plugin in sorted(registry.plugins.items())
+        if used is None or plugin.sources or used.intersection(plugin.nodes)
+    ]
+    if ops is None or isinstance(ops, frozenset):  # (a compiled graph's ops)
+        if len(known) > 16:
+            known.clear()
+        known[ops] = (names, statuses, listed)
+    return listed
 
 
 _PYTHON = platform.python_version()
@@ -318,6 +349,7 @@ def _describe_input(given: Any, key: str) -> dict[str, str]:
         return entry
     shape = getattr(given, "shape", None)
     dtype = getattr(given, "dtype", None)
+    dtype = dtype_name(dtype) if isinstance(dtype, np.dtype) else dtype
     described = f"{type(given).__name__} {shape} {dtype}" if shape is not None else repr(given)
     return {"given": described[:200], "key": key}
 

@@ -43,7 +43,7 @@ import numpy as np
 
 from graphvision.errors import PortValueError
 from graphvision.values.budget import check_array_file
-from graphvision.values.dtype_policy import to_dtype
+from graphvision.values.dtype_policy import dtype_name, to_dtype
 from graphvision.values.memory import (
     alignment_offset,
     frozen_copies,
@@ -284,7 +284,7 @@ class ArrayPort(PortType):
 
     @classmethod
     def summary(cls, value: np.ndarray) -> str:
-        return f"{cls.type_name()} {'×'.join(map(str, value.shape))} {value.dtype}"
+        return f"{cls.type_name()} {'×'.join(map(str, value.shape))} {dtype_name(value.dtype)}"
 
 
 _PLAIN: dict[type[PortType], bool] = {}

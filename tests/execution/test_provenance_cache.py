@@ -149,3 +149,41 @@ def test_a_repository_is_found_once_and_its_files_stat_once_per_run(tmp_path, mo
     assert len(stats) == 4  # (the walk made 3 more: deep/er/.git, deep/.git, .git/HEAD)
     shutil.rmtree(tmp_path / ".git")
     assert provenance._git_state_of(file) == ("", False)
+
+
+OTHER = '''
+from graphvision import Image, node
+
+@node("otherprov.darker")
+def darker(image: Image) -> Image:
+    """The image less 0.1, clipped to [0, 1]."""
+    return (image - 0.1).clip(0, 1)
+'''
+
+
+def test_the_plugins_listed_follow_the_registry_between_two_runs(tmp_path):
+    """The plugins a run lists are worked out once per registry and ops, and again when the
+    registry's plugins change (one loaded since, one loaded again from another file)."""
+    from graphvision.nodes.plugins import load_path
+    from graphvision.nodes.registry import PluginStatus
+
+    plugin, other = tmp_path / "cachedprov.py", tmp_path / "otherprov.py"
+    plugin.write_text(PLUGIN)
+    other.write_text(OTHER)
+    registry = gv.discover([plugin], entry_points=False)
+    ops = frozenset({"cachedprov.brighter"})
+    first = provenance.package_versions(registry, ops)
+    assert [k for k in first if k.startswith("plugin ")] == [f"plugin {plugin}"]
+    assert provenance.package_versions(registry, ops) == first
+    load_path(registry, other)
+    assert [k for k in provenance.package_versions(registry, None) if k.startswith("plugin ")] == (
+        sorted([f"plugin {plugin}", f"plugin {other}"])
+    )
+    with_other = provenance.package_versions(registry, ops | {"otherprov.darker"})
+    assert f"plugin {other}" in with_other
+    assert provenance.package_versions(registry, ops) == first  # the other provides none
+    name = next(n for n in registry.plugins if "cachedprov" in n)  # the same name, another file
+    registry.plugins[name] = PluginStatus(name, str(other), ["cachedprov.brighter"])
+    assert provenance.package_versions(registry, ops)[f"plugin {name}"] == (
+        f"sha256 {hashlib.sha256(OTHER.encode()).hexdigest()}"
+    )

@@ -302,3 +302,22 @@ def test_a_finite_float64_beyond_float32_is_refused_as_out_of_range_not_as_infin
             r"the largest, -1e\+300, is at row 2, column 3, channel 1",
         ):
             port.admit(wide, "input 'x'")
+
+
+@pytest.mark.parametrize(
+    ("dtype", "name"),
+    [
+        ("f4", "float32"),
+        ("<i4", "int32"),
+        ("?", "bool"),
+        (">f4", ">f4"),  # swapped: not the native float32's name
+        ("M8[s]", "datetime64[s]"),
+        ([("a", "<i4")], "[('a', '<i4')]"),
+    ],
+)
+def test_dtype_names_are_numpys_and_stay_apart_for_look_alike_dtypes(dtype, name):
+    from graphvision.values.dtype_policy import dtype_name
+
+    for _ in range(2):  # (the second time from what the first kept)
+        assert dtype_name(np.dtype(dtype)) == name
+    assert gv.ArrayPort.summary(np.zeros((2, 3), np.dtype(dtype))) == f"Array 2×3 {name}"
