@@ -141,7 +141,8 @@ def frozen_copy(array: np.ndarray, offset: int = 0) -> np.ndarray:
             del target, window
     elif array.nbytes:
         _fill(start + first, array)
-    return np.frombuffer(owner, dtype, array.size, first).reshape(shape)
+    frozen = np.frombuffer(owner, dtype, array.size, first)
+    return frozen if array.ndim == 1 else frozen.reshape(shape)
 
 
 def _fill(address: int, array: np.ndarray) -> None:
@@ -162,10 +163,6 @@ def _copy(window: memoryview, begin: int, array: np.ndarray, address: int) -> No
     except (TypeError, ValueError, NotImplementedError):  # a dtype with no buffer format
         source = array.__array_interface__["data"][0]
         ctypes.memmove(address + begin, source, array.nbytes)
-
-
-def _padded(nbytes: int) -> int:
-    return -(-nbytes // ALIGNMENT) * ALIGNMENT
 
 
 _ZEROS = bytes(2 * ALIGNMENT)
@@ -260,26 +257,34 @@ def frozen_copies(arrays: list[np.ndarray], offsets: list[int] | None = None) ->
     was computed; 0 when not given): a value of many arrays (a table's columns) is frozen
     with one buffer instead of one each."""
     sources = [np.ascontiguousarray(array) for array in arrays]
-    given = offsets or [0] * len(sources)
-    shifts = [placed_offset(s.dtype, o) for s, o in zip(sources, given, strict=True)]
+    if offsets and any(offsets):
+        shifts = [placed_offset(s.dtype, o) for s, o in zip(sources, offsets, strict=True)]
+    else:  # (a node's fresh table: no offset to keep, no call per column)
+        shifts = [0] * len(sources)
     starts, total = [], 0
     for source, shift in zip(sources, shifts, strict=True):
         starts.append(total + shift)
-        total += _padded(shift + source.nbytes)
+        total -= -(shift + source.nbytes) // ALIGNMENT * ALIGNMENT  # (rounded up)
     owner, start, first = _new_aligned(total)
     window = memoryview((ctypes.c_char * (ALIGNMENT + total)).from_address(start)).cast("B")
     with window:  # every byte of the object written: the arrays, the padding zeroed
-        done = 0  # (each gap is under 2 * ALIGNMENT bytes)
+        done, zeros = 0, _ZERO_WINDOW  # (each gap is under 2 * ALIGNMENT bytes)
         for source, begin in zip(sources, starts, strict=True):
             at = first + begin
-            window[done:at] = _ZEROS[: at - done]
+            window[done:at] = zeros[: at - done]
             _copy(window, at, source, start)
             done = at + source.nbytes
-        window[done:] = _ZEROS[: len(window) - done]
-    return [
-        np.frombuffer(owner, source.dtype, source.size, first + begin).reshape(source.shape)
+        window[done:] = zeros[: len(window) - done]
+    return [  # (a column is 1-D: no reshape, a view less per column)
+        _frombuffer(owner, source.dtype, source.size, first + begin)
+        if source.ndim == 1
+        else _frombuffer(owner, source.dtype, source.size, first + begin).reshape(source.shape)
         for source, begin in zip(sources, starts, strict=True)
     ]
+
+
+_frombuffer = np.frombuffer
+_ZERO_WINDOW = memoryview(_ZEROS)  # (a slice of it is no new bytes object)
 
 
 def is_aligned(array: np.ndarray) -> bool:

@@ -66,6 +66,34 @@ def test_a_tables_columns_keep_each_their_offset_in_one_buffer():
         assert copies[0].base is not None and all(is_frozen(c) for c in copies)
 
 
+def test_a_fresh_tables_columns_lie_at_multiples_of_64_over_zeroed_padding():
+    """A node's own table (no offsets kept): each column at a multiple of 64 in one buffer of
+    bytes, its shape kept (1-D and 2-D), read-only, and every other byte of the buffer 0."""
+    columns = [
+        np.arange(1, 6, dtype=np.int32),
+        np.full((2, 3), 7.5),
+        np.array([True, False, True]),
+        np.ones(0, np.float32),
+    ]
+    for offsets in (None, [0, 0, 0, 0]):
+        copies = frozen_copies(columns, offsets)
+        assert [c.shape for c in copies] == [(5,), (2, 3), (3,), (0,)]
+        for copy, column in zip(copies, columns, strict=True):
+            assert copy.tobytes() == column.tobytes() and copy.dtype == column.dtype
+        assert [alignment_offset(c) for c in copies[:3]] == [0, 0, 0]
+        assert all(is_frozen(c) and not c.flags.writeable for c in copies)
+        owner = copies[0].base
+        assert isinstance(owner, bytes)
+        first = copies[0].__array_interface__["data"][0]
+        buffer = np.frombuffer(owner, np.uint8)
+        start = first - buffer.__array_interface__["data"][0]
+        laid = buffer[start : start + 64 * 3]  # 20 bytes, 48 and 3, each in 64: the rest is 0
+        expected = np.zeros(64 * 3, np.uint8)
+        for k, column in enumerate(columns[:3]):
+            expected[64 * k : 64 * k + column.nbytes] = np.frombuffer(column.tobytes(), np.uint8)
+        assert laid.tobytes() == expected.tobytes()
+
+
 @pytest.mark.parametrize("dtype", [np.bool_, np.int32, np.float32, np.float64])
 def test_arrays_sent_to_another_process_are_frozen_there_at_their_offsets(dtype):
     """The transport (the arrays pickled as a process pool sends them) keeps each offset."""
