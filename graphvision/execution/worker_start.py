@@ -19,10 +19,9 @@ runs: a lock it holds at the fork (a logging handler's, a BLAS or numba thread
 pool's, the pool's own queues') stays held in the child for good. So a batch
 forks its workers (:func:`fork_context`) only from its main thread, right
 after the first file, before it starts any thread of its own, and only when no
-other thread runs but graphvision's BLAS helper (idle between runs, made again
-in a child: :mod:`graphvision.execution.blas`) and tqdm's progress-bar monitor
-(asleep but for microseconds every 10 s, holding a lock no worker takes), and
-numba's parallel threading layer has not started; on Linux only (macOS's system libraries are not
+other thread runs but tqdm's progress-bar monitor (asleep but for microseconds
+every 10 s, holding a lock no worker takes), and numba's parallel threading
+layer has not started; on Linux only (macOS's system libraries are not
 fork-safe). A client with other threads (a studio's server, Dask's client, a
 notebook's), ``GRAPHVISION_WORKER_START=forkserver``, ``gv.run`` and a pool
 made again after a worker died use the fork server. Python 3.12 warns at any
@@ -87,7 +86,6 @@ PRELOAD_VARIABLE = "GRAPHVISION_WORKER_PRELOAD"  # the server's start only: see 
 _NUMBA = "graphvision.execution._numba_setup"
 _LAST = "graphvision.execution._preload"
 START_VARIABLE = "GRAPHVISION_WORKER_START"  # "forkserver": never fork from the client
-_FORK_SAFE_THREADS = ("graphvision-blas-limit",)  # idle between runs, made again in a child
 _MOST_BYTES = 100_000  # Linux refuses one environment string over 128 KiB
 _WARM: tuple[Any, ...] = ()  # see warm_server
 
@@ -101,9 +99,8 @@ def context() -> BaseContext:
 
 def fork_context() -> BaseContext | None:
     """The ``fork`` start method, when forking this process now is safe (else None): on
-    Linux, from a thread with no other thread beside it but graphvision's BLAS helper
-    (idle between runs and made again in a child), numba's parallel threads not started,
-    and ``GRAPHVISION_WORKER_START`` not ``forkserver``. A batch forks its workers from the
+    Linux, from a thread with no other thread beside it (but tqdm's idle monitor), numba's
+    parallel threads not started, and ``GRAPHVISION_WORKER_START`` not ``forkserver``. A batch forks its workers from the
     client this way after its first file, from the main thread (see the module docstring)."""
     if sys.platform != "linux" or os.environ.get(START_VARIABLE) == "forkserver":
         return None
@@ -111,7 +108,7 @@ def fork_context() -> BaseContext | None:
         return None
     here = threading.current_thread()
     others = [t for t in threading.enumerate() if t is not here]
-    if not all(t.name in _FORK_SAFE_THREADS or _is_bar_monitor(t) for t in others):
+    if not all(_is_bar_monitor(t) for t in others):
         return None
     parallel = sys.modules.get("numba.np.ufunc.parallel")
     if parallel is not None and getattr(parallel, "_is_initialized", False):

@@ -55,12 +55,11 @@ def test_a_forked_worker_ends_on_sigterm_without_the_clients_handler(alone):
 
 def test_the_client_is_not_forked_beside_another_thread_or_when_told_not_to(monkeypatch):
     here = threading.current_thread()
-    blas = SimpleNamespace(name="graphvision-blas-limit")  # idle, made again in the child
     user = SimpleNamespace(name="user-thread")  # may hold a lock the child keeps for good
     _no_parallel_layer(monkeypatch)
-    monkeypatch.setattr(threading, "enumerate", lambda: [here, blas])
+    monkeypatch.setattr(threading, "enumerate", lambda: [here])
     assert fork_context() is not None
-    monkeypatch.setattr(threading, "enumerate", lambda: [here, blas, user])
+    monkeypatch.setattr(threading, "enumerate", lambda: [here, user])
     assert fork_context() is None
     monkeypatch.setattr(threading, "enumerate", lambda: [here])
     started = SimpleNamespace(_is_initialized=True)  # numba's threading layer has threads
