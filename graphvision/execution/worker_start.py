@@ -100,8 +100,9 @@ def context() -> BaseContext:
 def fork_context() -> BaseContext | None:
     """The ``fork`` start method, when forking this process now is safe (else None): on
     Linux, from a thread with no other thread beside it (but tqdm's idle monitor), numba's
-    parallel threads not started, and ``GRAPHVISION_WORKER_START`` not ``forkserver``. A batch forks its workers from the
-    client this way after its first file, from the main thread (see the module docstring)."""
+    parallel threads not started, and ``GRAPHVISION_WORKER_START`` not ``forkserver``. A
+    batch forks its workers from the client this way after its first file, from the main
+    thread (see the module docstring)."""
     if sys.platform != "linux" or os.environ.get(START_VARIABLE) == "forkserver":
         return None
     if "fork" not in multiprocessing.get_all_start_methods():  # pragma: no cover - Linux has it
