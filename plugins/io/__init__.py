@@ -3,7 +3,8 @@
 Sources (values of graph inputs):
 
 * ``sample:NAME`` — an image shipped with scikit-image (no download);
-* a path — PNG, JPEG, TIFF, BMP, ... read with imageio, or ``.npy``.
+* a path — PNG, JPEG, TIFF, BMP, ... as imageio reads them (PNG, JPEG, BMP
+  and WebP opened once, with Pillow: :mod:`._image_file`), or ``.npy``.
 
 The sources return arrays as stored; the graph input's port type applies the
 one dtype policy (:mod:`graphvision.values.dtype_policy`): an ``Image`` input gets

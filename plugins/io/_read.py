@@ -2,18 +2,16 @@
 
 from __future__ import annotations
 
-import contextlib
 import functools
-import io
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Literal, get_args
 
 import numpy as np
 
-from graphvision import Image, InputError, check_array_file, check_pixels, node, source
+from graphvision import Image, check_array_file, node, source
 
 from ..shared.checks import to_float_image
+from ._image_file import read_image_file
 
 __all__ = ["SAMPLES", "read_array", "read_file", "read_sample", "sample", "sample_array"]
 
@@ -104,7 +102,10 @@ def read_array(path: str) -> np.ndarray:
     (JPEG or TIFF from print workflows) is converted to RGB (through its
     embedded colour profile when it has one), not read as four RGBA
     channels. An animated or multi-page file is refused with what to do,
-    since a graph input is one still image.
+    since a graph input is one still image. A PNG, JPEG, BMP or WebP file is
+    opened once, with Pillow: its header is checked against the pixel budget,
+    then the same handle decodes it (:mod:`._image_file`); other formats are
+    read with imageio.
 
     Raises
     ------
@@ -128,30 +129,7 @@ def read_array(path: str) -> np.ndarray:
         except ValueError as error:
             raise ValueError(f"{file} is not a plain numpy array file: {error}") from None
         return array
-    import imageio.v3 as iio
-
-    try:
-        with _pillow_checks_left_to_the_budget():
-            properties = iio.improps(file)  # the header only: nothing is decoded yet
-        check_pixels(properties.shape, str(file))
-        frames = properties.n_images
-        if frames is not None and frames > 1:
-            raise _FramesError(
-                f"{file} holds {frames} frames (an animation or a multi-page file); "
-                "graphvision reads one still image: save the frame you want as PNG "
-                "(e.g. imageio.v3.imwrite('frame.png', imageio.v3.imread(path, index=0))) "
-                "or run --batch over the frames saved as files"
-            )
-        with _pillow_checks_left_to_the_budget():
-            cmyk = _cmyk_as_rgb(file)
-            data: np.ndarray = iio.imread(file) if cmyk is None else cmyk
-    except (PermissionError, _FramesError, _ColourError, InputError):
-        raise
-    except Exception as error:  # imageio raises many types for undecodable files
-        raise ValueError(f"{file} is not a readable image ({type(error).__name__})") from None
-    if data.ndim == 3 and data.shape[0] in (1,) and data.shape[2] not in (2, 3, 4):
-        data = data[0]
-    return data
+    return read_image_file(file)
 
 
 def read_file(path: str) -> np.ndarray:
@@ -166,69 +144,6 @@ def read_file(path: str) -> np.ndarray:
         unsupported shape or dtype.
     """
     return to_float_image(read_array(path), source=str(path))
-
-
-@contextlib.contextmanager
-def _pillow_checks_left_to_the_budget() -> Iterator[None]:
-    """Pillow's own decompression-bomb limit (89 megapixels, a warning, then an error at
-    twice that) lifted while a file the budget admitted is read: one limit, the run's."""
-    from PIL import Image as PILImage
-
-    before = PILImage.MAX_IMAGE_PIXELS
-    PILImage.MAX_IMAGE_PIXELS = None
-    try:
-        yield
-    finally:
-        PILImage.MAX_IMAGE_PIXELS = before
-
-
-class _FramesError(ValueError):
-    """A file with several frames where one image is expected."""
-
-
-class _ColourError(ValueError):
-    """A colour space that cannot be converted to RGB correctly."""
-
-
-def _cmyk_as_rgb(file: Path) -> np.ndarray | None:
-    """The RGB pixels of a CMYK image, or None for any other mode.
-
-    With an embedded ICC profile the pixels go through it to sRGB
-    (LittleCMS, via Pillow's ``ImageCms``); a profile that cannot build that
-    transform is refused by name. Without one, Pillow's device conversion
-    R = 255 - min(255, C + K) (likewise G, B) is the definition; Pillow
-    undoes the inverted CMYK of Adobe JPEGs when it reads them.
-
-    Raises
-    ------
-    ValueError
-        For a CMYK image whose embedded colour profile cannot be applied.
-    """
-    from PIL import Image as PILImage
-    from PIL import ImageCms
-
-    try:
-        with PILImage.open(file) as image:
-            if image.mode != "CMYK":
-                return None
-            profile = image.info.get("icc_profile")
-            if not profile:
-                return np.asarray(image.convert("RGB"))
-            try:
-                converted = ImageCms.profileToProfile(
-                    image,
-                    ImageCms.ImageCmsProfile(io.BytesIO(profile)),
-                    ImageCms.createProfile("sRGB"),
-                    outputMode="RGB",
-                )
-            except (ImageCms.PyCMSError, OSError) as error:
-                raise _ColourError(
-                    f"{file} is a CMYK image whose embedded colour profile cannot be applied "
-                    f"({error}); convert it to RGB with a colour-managed tool first"
-                ) from None
-            return np.asarray(converted)
-    except PILImage.UnidentifiedImageError:
-        return None
 
 
 @node("io.sample", version=1)

@@ -1,0 +1,189 @@
+"""Decoding an image file: one Pillow handle where imageio would read it with Pillow.
+
+``imageio.v3.imread`` picks its plugin by the file's suffix: Pillow first for
+PNG, JPEG, BMP and WebP, tifffile for TIFF. Its Pillow plugin then returns
+``np.asarray(image)``, after expanding a palette (``image.convert(image.palette.mode)``).
+Reading a file through imageio opened it three times (``improps`` for the
+header, Pillow again for the CMYK check, ``imread`` to decode) and paid the
+plugin's start each time (a failed ``import pillow_heif``, a search of
+``sys.path``). For those suffixes, formats and modes graphvision opens the
+file once with Pillow: the header gives the size, checked against the pixel
+budget before a byte is decoded, the mode tells a CMYK image, and the same
+handle decodes, with the pixels, dtype and shape ``imread`` gives.
+
+Everything else goes through imageio as before, with the same handle for
+the CMYK check: TIFF (read by tifffile), GIF and APNG (read as a stack of
+frames, refused when there are several), the modes imageio's plugin
+converts otherwise (a 32-bit ``I`` PNG) or that it keeps as they are but
+graphvision never saw through this path (``F``, ``YCbCr``, ...), MPO, and
+any file Pillow cannot identify.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from graphvision import InputError, check_pixels
+
+if TYPE_CHECKING:
+    from PIL.Image import Image as PILImageType
+
+__all__ = ["PILLOW_SUFFIXES", "read_image_file"]
+
+PILLOW_SUFFIXES = frozenset({".bmp", ".jfif", ".jpe", ".jpeg", ".jpg", ".png", ".webp"})
+"""The suffixes for which imageio tries its Pillow plugin first (``imageio.config``)."""
+
+_PILLOW_FORMATS = frozenset({"BMP", "JPEG", "PNG", "WEBP"})
+_PILLOW_MODES = frozenset({"1", "CMYK", "I;16", "L", "LA", "P", "RGB", "RGBA"})
+
+
+def read_image_file(file: Path) -> np.ndarray:
+    """The pixels of an image file, dtype as stored, as ``imageio.v3.imread`` gives them.
+
+    A CMYK image is converted to RGB (see :func:`_cmyk_as_rgb`); a stack of
+    one frame is that frame. The shape the header declares is checked
+    against the pixel budget before anything is decoded, with Pillow's own
+    decompression-bomb limit lifted meanwhile (one limit: the run's).
+
+    Raises
+    ------
+    PermissionError
+        When the file cannot be read.
+    InputError
+        When the header declares more pixels than the budget.
+    ValueError
+        When the file is not an image, holds several frames, or is CMYK
+        with a colour profile that cannot be applied.
+    """
+    from PIL import Image as PILImage
+
+    try:
+        with _pillow_checks_left_to_the_budget():
+            try:
+                image = PILImage.open(file)
+            except PILImage.UnidentifiedImageError:
+                data = _read_with_imageio(file, None)
+            else:
+                with image:
+                    if _imageio_reads_as_pillow_does(file, image):
+                        data = _read_with_pillow(file, image)
+                    else:
+                        data = _read_with_imageio(file, image)
+    except (PermissionError, _FramesError, _ColourError, InputError):
+        raise
+    except Exception as error:  # Pillow and imageio raise many types for undecodable files
+        raise ValueError(f"{file} is not a readable image ({type(error).__name__})") from None
+    if data.ndim == 3 and data.shape[0] in (1,) and data.shape[2] not in (2, 3, 4):
+        data = data[0]
+    return data
+
+
+def _imageio_reads_as_pillow_does(file: Path, image: PILImageType) -> bool:
+    """Whether ``iio.imread(file)`` would be ``np.asarray`` of ``image`` (its palette
+    expanded): imageio picks Pillow for the suffix, reads one frame of the format
+    (not GIF, not APNG) and converts nothing else in that mode."""
+    return (
+        file.suffix.lower() in PILLOW_SUFFIXES
+        and image.format in _PILLOW_FORMATS
+        and image.mode in _PILLOW_MODES
+        and getattr(image, "custom_mimetype", None) != "image/apng"
+    )
+
+
+def _read_with_pillow(file: Path, image: PILImageType) -> np.ndarray:
+    """The pixels of an open ``image``, after its header's shape passed the budget."""
+    from PIL.Image import getmodebands
+
+    palette = image.palette if image.mode == "P" else None
+    mode = palette.mode if palette is not None else image.mode  # what it decodes to
+    bands = getmodebands(mode)  # the shape iio.improps declares: (H, W), or (H, W, bands)
+    check_pixels((image.height, image.width, *((bands,) if bands > 1 else ())), str(file))
+    if image.mode == "CMYK":
+        return _cmyk_as_rgb(file, image)
+    if palette is not None:  # as imageio's Pillow plugin does (Pillow 9 changed palettes)
+        image = image.convert(mode)
+    data = np.asarray(image)
+    return data if data.flags.writeable else data.copy()  # writeable, as imageio's is
+
+
+def _read_with_imageio(file: Path, image: PILImageType | None) -> np.ndarray:
+    """The pixels ``iio.imread`` gives, after imageio's header passed the budget and
+    showed one frame; a CMYK ``image`` (Pillow's handle on the file) converted to RGB."""
+    import imageio.v3 as iio
+
+    properties = iio.improps(file)  # the header only: nothing is decoded yet
+    check_pixels(properties.shape, str(file))
+    frames = properties.n_images
+    if frames is not None and frames > 1:
+        raise _FramesError(
+            f"{file} holds {frames} frames (an animation or a multi-page file); "
+            "graphvision reads one still image: save the frame you want as PNG "
+            "(e.g. imageio.v3.imwrite('frame.png', imageio.v3.imread(path, index=0))) "
+            "or run --batch over the frames saved as files"
+        )
+    if image is not None and image.mode == "CMYK":
+        return _cmyk_as_rgb(file, image)
+    data: np.ndarray = iio.imread(file)
+    return data
+
+
+@contextlib.contextmanager
+def _pillow_checks_left_to_the_budget() -> Iterator[None]:
+    """Pillow's own decompression-bomb limit (89 megapixels, a warning, then an error at
+    twice that) lifted while a file the budget admitted is read: one limit, the run's."""
+    from PIL import Image as PILImage
+
+    before = PILImage.MAX_IMAGE_PIXELS
+    PILImage.MAX_IMAGE_PIXELS = None
+    try:
+        yield
+    finally:
+        PILImage.MAX_IMAGE_PIXELS = before
+
+
+class _FramesError(ValueError):
+    """A file with several frames where one image is expected."""
+
+
+class _ColourError(ValueError):
+    """A colour space that cannot be converted to RGB correctly."""
+
+
+def _cmyk_as_rgb(file: Path, image: PILImageType) -> np.ndarray:
+    """The RGB pixels of a CMYK ``image`` (Pillow's open handle on ``file``).
+
+    With an embedded ICC profile the pixels go through it to sRGB
+    (LittleCMS, via Pillow's ``ImageCms``); a profile that cannot build that
+    transform is refused by name. Without one, Pillow's device conversion
+    R = 255 - min(255, C + K) (likewise G, B) is the definition; Pillow
+    undoes the inverted CMYK of Adobe JPEGs when it reads them.
+
+    Raises
+    ------
+    ValueError
+        For a CMYK image whose embedded colour profile cannot be applied.
+    """
+    from PIL import ImageCms
+
+    profile = image.info.get("icc_profile")
+    if not profile:
+        return np.asarray(image.convert("RGB"))
+    try:
+        converted = ImageCms.profileToProfile(
+            image,
+            ImageCms.ImageCmsProfile(io.BytesIO(profile)),
+            ImageCms.createProfile("sRGB"),
+            outputMode="RGB",
+        )
+    except (ImageCms.PyCMSError, OSError) as error:
+        raise _ColourError(
+            f"{file} is a CMYK image whose embedded colour profile cannot be applied "
+            f"({error}); convert it to RGB with a colour-managed tool first"
+        ) from None
+    return np.asarray(converted)

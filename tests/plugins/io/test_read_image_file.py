@@ -1,0 +1,201 @@
+"""Reading an image file once (issue 26, item 1): a PNG, JPEG, BMP or WebP is opened once
+with Pillow, and gives what ``imageio.v3.imread`` gives, to the bit, in dtype and shape, for
+every mode and format graphvision reads; other files still go through imageio."""
+
+from __future__ import annotations
+
+import contextlib
+import struct
+import zlib
+from collections.abc import Callable
+from pathlib import Path
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+from imageio.config import known_extensions
+from PIL import Image, ImageCms, features
+
+import graphvision as gv
+from graphvision_plugins.io import read_array
+from graphvision_plugins.io._image_file import PILLOW_SUFFIXES
+
+RNG = np.random.default_rng(26)
+GRAY = (RNG.random((9, 13)) * 255).astype(np.uint8)
+RGB = (RNG.random((9, 13, 3)) * 255).astype(np.uint8)
+RGBA = (RNG.random((9, 13, 4)) * 255).astype(np.uint8)
+DEEP = (RNG.random((9, 13)) * 65535).astype(np.uint16)
+SRGB = ImageCms.ImageCmsProfile(ImageCms.createProfile("sRGB")).tobytes()
+
+
+def png(color_type: int, depth: int, width: int, rows: np.ndarray) -> bytes:
+    """A PNG written chunk by chunk (Pillow writes no 16-bit RGB, 16-bit LA or 2-bit gray):
+    ``rows`` holds each row's bytes (filter 0, big-endian samples)."""
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        crc = struct.pack(">I", zlib.crc32(kind + data))
+        return struct.pack(">I", len(data)) + kind + data + crc
+
+    header = struct.pack(">IIBBBBB", width, len(rows), depth, color_type, 0, 0, 0)
+    data = zlib.compress(b"".join(b"\0" + row.tobytes() for row in rows))
+    signature = b"\x89PNG\r\n\x1a\n"
+    return signature + chunk(b"IHDR", header) + chunk(b"IDAT", data) + chunk(b"IEND", b"")
+
+
+def frames(mode: str) -> list[Image.Image]:
+    return [Image.fromarray(RGB).convert(mode), Image.fromarray(RGB[::-1].copy()).convert(mode)]
+
+
+def rotated() -> Image.Exif:
+    exif = Image.Exif()
+    exif[0x0112] = 6  # orientation: rotate 90° to show; imread does not apply it
+    return exif
+
+
+def saved(image: Image.Image, **options: object) -> Callable[[Path], None]:
+    return lambda path: image.save(path, **options)
+
+
+def raw(data: bytes) -> Callable[[Path], None]:
+    def write(path: Path) -> None:
+        path.write_bytes(data)
+
+    return write
+
+
+gray, rgb, rgba = Image.fromarray(GRAY), Image.fromarray(RGB), Image.fromarray(RGBA)
+FILES: dict[str, Callable[[Path], None]] = {
+    "l.png": saved(gray),
+    "rgb.png": saved(rgb),
+    "rgba.png": saved(rgba),
+    "la.png": saved(gray.convert("LA")),
+    "p.png": saved(rgb.quantize(7)),
+    "p_alpha.png": saved(rgba.quantize(5)),  # a palette with alpha: RGB, as imageio gives it
+    "p_transparent.png": saved(rgb.quantize(7), transparency=2),
+    "l_transparent.png": saved(gray, transparency=7),
+    "i16.png": saved(Image.fromarray(DEEP)),
+    "1.png": saved(gray.convert("1")),
+    "rgb16.png": raw(png(2, 16, 13, np.dstack([DEEP] * 3).astype(">u2").reshape(9, -1))),
+    "la16.png": raw(png(4, 16, 13, np.dstack([DEEP] * 2).astype(">u2").reshape(9, -1))),
+    "l2.png": raw(png(0, 2, 12, np.packbits((GRAY[:, :12] >> 7).repeat(2, axis=1), axis=1))),
+    "exif.png": saved(rgb, exif=rotated()),
+    "named.jpg.png": saved(rgb),
+    "png_named.jpg": saved(rgb, format="PNG"),
+    "png_named.pbm": saved(gray, format="PNG"),  # imageio tries OpenCV first: RGB
+    "png_named.tif": saved(gray, format="PNG"),
+    "gif_named.png": saved(rgb.quantize(7), format="GIF"),  # imageio: a stack of one frame
+    "l.jpg": saved(gray, quality=90),
+    "rgb.jpg": saved(rgb, quality=90),
+    "rgb_icc.jpg": saved(rgb, icc_profile=SRGB),
+    "exif.jpeg": saved(rgb, exif=rotated()),
+    "progressive.JPG": saved(rgb, progressive=True),
+    "cmyk.jpg": saved(rgb.convert("CMYK"), quality=95),
+    "mpo.jpg": saved(rgb, format="MPO", save_all=True, append_images=[rgb]),
+    "l.bmp": saved(gray),
+    "rgb.bmp": saved(rgb),
+    "p.bmp": saved(rgb.quantize(7)),
+    "1.bmp": saved(gray.convert("1")),
+    "l.tif": saved(gray),
+    "rgb.tif": saved(rgb),
+    "p.tif": saved(rgb.quantize(7)),
+    "i16.tif": saved(Image.fromarray(DEEP)),
+    "cmyk.tif": saved(rgb.convert("CMYK")),
+    "pages.tif": saved(rgb, save_all=True, append_images=[rgb]),
+    "one.gif": saved(rgb.quantize(7)),
+    "rgb.ppm": saved(rgb),
+    "1.pbm": saved(gray.convert("1")),  # imageio reads .pbm with OpenCV, as RGB
+}
+if features.check("webp"):
+    FILES |= {
+        "rgb.webp": saved(rgb, lossless=True),
+        "rgba.webp": saved(rgba, lossless=True),
+        "lossy.webp": saved(rgb, quality=80),
+        "animated.webp": saved(frames("RGB")[0], save_all=True, append_images=frames("RGB")[1:]),
+    }
+ONCE = {  # opened once with Pillow: imageio would read them with Pillow as they are
+    *(name for name in FILES if Path(name).suffix.lower() in PILLOW_SUFFIXES),
+} - {"mpo.jpg", "gif_named.png"}  # (imageio's plugin: MPO's first frame, GIF's stack)
+
+
+def warned(name: str) -> contextlib.AbstractContextManager[object]:
+    """Pillow's warning on expanding a palette whose alpha is bytes (imageio's too)."""
+    if name != "p_alpha.png":
+        return contextlib.nullcontext()
+    return pytest.warns(UserWarning, match="Palette images with Transparency expressed in bytes")
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    made = tmp_path_factory.mktemp("modes")
+    for name, write in FILES.items():
+        write(made / name)
+    return made
+
+
+@pytest.mark.parametrize("name", sorted(FILES))
+def test_a_file_reads_as_imageio_reads_it_to_the_bit(folder, name):
+    path = folder / name
+    if "cmyk" in name:  # reference: Pillow's device conversion, R = 255 - min(255, C + K)
+        with Image.open(path) as image:
+            expected = np.asarray(image.convert("RGB"))
+    else:
+        with warned(name):
+            expected = iio.imread(path)
+    with warned(name):
+        data = read_array(str(path))
+    assert (data.dtype, data.shape) == (expected.dtype, expected.shape)
+    assert data.tobytes() == expected.tobytes()
+    assert data.flags.writeable or "cmyk" in name  # imageio's pixels are writeable
+
+
+@pytest.mark.parametrize("name", sorted(ONCE))
+def test_a_pillow_file_is_opened_once_and_imageio_not_used(folder, name, monkeypatch):
+    opened = []
+    open_image = Image.open
+    monkeypatch.setattr(Image, "open", lambda *a, **k: opened.append(a) or open_image(*a, **k))
+    for function in ("improps", "imread", "imopen"):
+        monkeypatch.setattr(iio, function, lambda *a, **k: pytest.fail("imageio was used"))
+    with warned(name):
+        read_array(str(folder / name))
+    assert len(opened) == 1
+
+
+@pytest.mark.parametrize("name", sorted(ONCE))
+def test_the_header_is_checked_against_the_budget_as_imageio_declares_it(folder, name, monkeypatch):
+    declared = iio.improps(folder / name).shape  # the shape the imageio path checked
+    pixels = declared[0] * declared[1]
+    monkeypatch.setenv("GRAPHVISION_MAX_PIXELS", str(pixels - 1))
+    monkeypatch.setattr(Image.Image, "load", lambda self: pytest.fail("decoded"))
+    size = " × ".join(map(str, declared))
+    with pytest.raises(gv.InputError, match=f"{name} declares {size} .* nothing was decoded"):
+        read_array(str(folder / name))
+
+
+def test_pillows_bomb_limit_is_lifted_only_while_reading(folder, monkeypatch):
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 10)  # 9 × 13 is over twice that: an error
+    assert read_array(str(folder / "rgb.png")).shape == (9, 13, 3)
+    assert Image.MAX_IMAGE_PIXELS == 10
+    with pytest.raises(Image.DecompressionBombError), Image.open(folder / "rgb.png"):
+        pass
+
+
+def test_imageio_tries_pillow_first_for_the_suffixes_read_once():
+    for suffix in PILLOW_SUFFIXES:  # the first plugin imageio.v3.imread tries for the suffix
+        assert known_extensions[suffix][0].priority[0] == "pillow", suffix
+
+
+@pytest.mark.parametrize("suffix", [".gif", ".png"])
+def test_an_animation_is_refused_before_it_is_decoded(tmp_path, suffix):
+    path = tmp_path / f"anim{suffix}"
+    first, *rest = frames("P" if suffix == ".gif" else "RGB")
+    first.save(path, save_all=True, append_images=rest)
+    with pytest.raises(ValueError, match=f"anim{suffix} holds 2 frames .* save the frame you"):
+        read_array(str(path))
+
+
+@pytest.mark.parametrize("suffix", [".jpg", ".tif"])
+def test_a_cmyk_profile_that_cannot_apply_is_refused_by_name(tmp_path, suffix):
+    path = tmp_path / f"print{suffix}"
+    rgb.convert("CMYK").save(path, icc_profile=SRGB)  # an RGB profile on CMYK data
+    with pytest.raises(ValueError, match=f"print{suffix} is a CMYK image whose embedded colour"):
+        read_array(str(path))
