@@ -41,6 +41,7 @@ PILLOW_SUFFIXES = frozenset({".bmp", ".jfif", ".jpe", ".jpeg", ".jpg", ".png", "
 
 _PILLOW_FORMATS = frozenset({"BMP", "JPEG", "PNG", "WEBP"})
 _PILLOW_MODES = frozenset({"1", "CMYK", "I;16", "L", "LA", "P", "RGB", "RGBA"})
+_PILLOW_TRUNCATED = ("image file is truncated", "Truncated File Read")  # Pillow's OSErrors
 
 
 def read_image_file(file: Path) -> np.ndarray:
@@ -58,8 +59,9 @@ def read_image_file(file: Path) -> np.ndarray:
     InputError
         When the header declares more pixels than the budget.
     ValueError
-        When the file is not an image, holds several frames, or is CMYK
-        with a colour profile that cannot be applied.
+        When the file is not an image (saying when it is empty or
+        truncated), holds several frames, or is CMYK with a colour profile
+        that cannot be applied.
     """
     from PIL import Image as PILImage
 
@@ -78,7 +80,8 @@ def read_image_file(file: Path) -> np.ndarray:
     except (PermissionError, _FramesError, _ColourError, InputError):
         raise
     except Exception as error:  # Pillow and imageio raise many types for undecodable files
-        raise ValueError(f"{file} is not a readable image ({type(error).__name__})") from None
+        reason = _what_is_wrong(file, error)
+        raise ValueError(f"{file} is not a readable image ({reason})") from None
     if data.ndim == 3 and data.shape[0] in (1,) and data.shape[2] not in (2, 3, 4):
         data = data[0]
     return data
@@ -131,6 +134,18 @@ def _read_with_imageio(file: Path, image: PILImageType | None) -> np.ndarray:
         return _cmyk_as_rgb(file, image)
     data: np.ndarray = iio.imread(file)
     return data
+
+
+def _what_is_wrong(file: Path, error: Exception) -> str:
+    """Why a file is not a readable image, in words where they are known (empty,
+    truncated), or else the error's type."""
+    with contextlib.suppress(OSError):
+        size = file.stat().st_size
+        if size == 0:
+            return "the file is empty"
+        if str(error).startswith(_PILLOW_TRUNCATED):
+            return f"the file is truncated: its {size:,} bytes end before the image does"
+    return type(error).__name__
 
 
 @contextlib.contextmanager

@@ -112,8 +112,9 @@ def read_array(path: str) -> np.ndarray:
     FileNotFoundError, PermissionError, IsADirectoryError
         With the path.
     ValueError
-        When the file is not an image, holds several frames, or is CMYK
-        with a colour profile that cannot be applied.
+        When the file is not an image (saying when it is empty or truncated),
+        holds several frames, or is CMYK with a colour profile that cannot be
+        applied.
     """
     file = Path(path)
     if file.is_dir():
