@@ -8,6 +8,8 @@ kernels). Each part's wall time, divided by the files, gives milliseconds per fi
 
 - compute: the node functions themselves;
 - planning: compiling the graph, keying the steps, the cache plan;
+- read: decoding the input image file (its header checked against the pixel
+  budget, then its pixels: one Pillow handle for a PNG);
 - hashing: content keys of the inputs, SHA-256 of the input file and of the
   files written (provenance, ``record.json``'s ``file_sha256``);
 - transport: port types' encode/decode (cache entries, values to and from
@@ -62,6 +64,7 @@ PARTS: dict[str, list[tuple[str, str]]] = {
         ("graphvision.execution.state", "RunState.plan"),
         ("graphvision.execution.state", "RunState.prepare"),
     ],
+    "read": [("graphvision_plugins.io._image_file", "read_image_file")],
     "hashing": [
         ("graphvision.cache.keys", "content_key"),
         ("graphvision.execution.provenance", "file_sha256"),
