@@ -48,7 +48,8 @@ def read_image_file(file: Path) -> np.ndarray:
     """The pixels of an image file, dtype as stored, as ``imageio.v3.imread`` gives them.
 
     A CMYK image is converted to RGB (see :func:`_cmyk_as_rgb`); a stack of
-    one frame is that frame. The shape the header declares is checked
+    one frame (a still GIF) is that frame; an animation or a multi-page file
+    (GIF, APNG, TIFF, WebP) is refused. The shape the header declares is checked
     against the pixel budget before anything is decoded, with Pillow's own
     decompression-bomb limit lifted meanwhile (one limit: the run's).
 
@@ -73,6 +74,7 @@ def read_image_file(file: Path) -> np.ndarray:
                 data = _read_with_imageio(file, None)
             else:
                 with image:
+                    _refuse_several_frames(file, image)
                     if _imageio_reads_as_pillow_does(file, image):
                         data = _read_with_pillow(file, image)
                     else:
@@ -82,9 +84,33 @@ def read_image_file(file: Path) -> np.ndarray:
     except Exception as error:  # Pillow and imageio raise many types for undecodable files
         reason = _what_is_wrong(file, error)
         raise ValueError(f"{file} is not a readable image ({reason})") from None
-    if data.ndim == 3 and data.shape[0] in (1,) and data.shape[2] not in (2, 3, 4):
+    one_frame_stack = data.ndim == 4 or data.shape[-1] not in (2, 3, 4)  # (1, H, W[, C])
+    if data.ndim >= 3 and data.shape[0] == 1 and one_frame_stack:
         data = data[0]
     return data
+
+
+_PAGED_FORMATS = frozenset({"GIF", "PNG", "TIFF", "WEBP"})
+"""Formats whose frames are an animation's or a document's pages (MPO's second frame is a
+camera's other view or preview: its first is the photograph, as imageio reads it)."""
+
+
+def _refuse_several_frames(file: Path, image: PILImageType) -> None:
+    """Refuse an animation or a multi-page file from its Pillow handle (a multi-page TIFF
+    read as a stack, an animated WebP read as its first frame, went unnoticed)."""
+    if image.format in _PAGED_FORMATS:
+        frames = getattr(image, "n_frames", 1)
+        if frames > 1:
+            raise _several_frames(file, frames)
+
+
+def _several_frames(file: Path, frames: int) -> _FramesError:
+    return _FramesError(
+        f"{file} holds {frames} frames (an animation or a multi-page file); "
+        "graphvision reads one still image: save the frame you want as PNG "
+        "(e.g. imageio.v3.imwrite('frame.png', imageio.v3.imread(path, index=0))) "
+        "or run --batch over the frames saved as files"
+    )
 
 
 def _imageio_reads_as_pillow_does(file: Path, image: PILImageType) -> bool:
@@ -124,12 +150,7 @@ def _read_with_imageio(file: Path, image: PILImageType | None) -> np.ndarray:
     check_pixels(properties.shape, str(file))
     frames = properties.n_images
     if frames is not None and frames > 1:
-        raise _FramesError(
-            f"{file} holds {frames} frames (an animation or a multi-page file); "
-            "graphvision reads one still image: save the frame you want as PNG "
-            "(e.g. imageio.v3.imwrite('frame.png', imageio.v3.imread(path, index=0))) "
-            "or run --batch over the frames saved as files"
-        )
+        raise _several_frames(file, frames)
     if image is not None and image.mode == "CMYK":
         return _cmyk_as_rgb(file, image)
     data: np.ndarray = iio.imread(file)
