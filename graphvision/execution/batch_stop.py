@@ -8,7 +8,8 @@ ended half-way (it ends with the client), leaving outputs without their
 record or an empty folder.
 
 Here the client and the processes writing folders (its workers, its own file
-lanes) share a :class:`StopFlag`, a folder of the client's on this machine:
+lanes) share a :class:`StopFlag`, a folder of the client's on this machine (in
+memory, ``/dev/shm``, where there is one: a claim is a file made per batch file):
 
 - a writer claims the folder it is about to write: a ``writing-`` file named
   after it, which appears already locked by the writer (``fcntl.flock``; the
@@ -70,6 +71,7 @@ __all__ = ["INTERRUPTED", "STOP_FOLDER", "Claim", "StopFlag", "signals_held", "w
 INTERRUPTED = "the batch stopped while this file ran; re-run the batch to finish it"
 
 STOP_FOLDER = ".graphvision-stop-"  # a Dask batch's flag, in its output folder
+MEMORY = "/dev/shm"  # a file system in memory (Linux): where a local batch's flag is made
 _STOPPED = "stopped"
 _CLAIM = "writing-"
 _RECORD_KEY = "record_before"  # in a claim: the folder's record.json digest when claimed
@@ -157,6 +159,16 @@ def _is_flag(folder: Path, prefix: str) -> bool:
     return all(name in _FLAG_FILES or name.startswith(_FLAG_PREFIXES) for name in names)
 
 
+def _local_folder() -> str:
+    """Where a batch whose writers are all on this machine keeps its flag: the file system
+    in memory (:data:`MEMORY`) when there is one this user may write to, else the system's
+    temporary folder. Each file's claim is a file made in the flag: 0.3-1 ms of CPU on the
+    disk of the project's cloud VM (ext4), 0.01 ms in memory, for the same locks."""
+    if os.path.isdir(MEMORY) and os.access(MEMORY, os.W_OK | os.X_OK):
+        return MEMORY
+    return tempfile.gettempdir()
+
+
 class StopFlag:
     """The flag of one batch, in ``folder`` (see the module docstring); picklable."""
 
@@ -165,12 +177,12 @@ class StopFlag:
 
     @classmethod
     def planned(cls, inside: Path | None = None) -> StopFlag:
-        """A new flag, made by :meth:`create`: a folder in the system's temporary folder,
+        """A new flag, made by :meth:`create`: a folder on this machine (:func:`_local_folder`),
         or a hidden one ``inside`` a folder (a Dask batch's output folder, which its
         workers share)."""
         token = uuid.uuid4().hex[:_TOKEN]
         if inside is None:
-            return cls(str(Path(tempfile.gettempdir(), f"graphvision-batch-{token}")))
+            return cls(str(Path(_local_folder(), f"graphvision-batch-{token}")))
         return cls(str(inside / f"{STOP_FOLDER}{token}"))
 
     @classmethod

@@ -184,3 +184,28 @@ def test_a_flag_left_by_a_killed_client_is_removed_by_the_next_batch_and_nothing
     finally:
         alive.remove()
         newest.remove()
+
+
+def test_a_local_batchs_flag_and_claims_are_made_in_memory_where_the_machine_has_it(
+    tmp_path, monkeypatch
+):
+    """A claim is a file made per batch file: in memory (``/dev/shm``) it costs no disk; a
+    machine without one keeps the flag in the system's temporary folder."""
+    import tempfile
+    from pathlib import Path
+
+    memory, folder = tmp_path / "shm", tmp_path / "out" / "photo-1"
+    memory.mkdir()
+    monkeypatch.setattr(batch_stop, "MEMORY", str(memory))
+    flag = StopFlag.make()
+    try:
+        assert Path(flag.folder).parent == memory
+        with flag.writing(folder, None) as claim:
+            assert claim and flag.claims() == {StopFlag.name(folder)}
+            assert flag.writer_alive(StopFlag.name(folder))  # locked while it writes
+    finally:
+        flag.remove()
+    assert list(memory.iterdir()) == []
+    monkeypatch.setattr(batch_stop, "MEMORY", str(tmp_path / "no-shm"))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    assert Path(StopFlag.planned().folder).parent == tmp_path / "tmp"
