@@ -26,6 +26,7 @@ import json
 import os
 import re
 import shutil
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -59,18 +60,30 @@ class Earlier:
 
 
 def history_problem(directory: Path) -> str:
-    """Why ``directory/history`` is not graphvision's (and cannot become so), or ''."""
+    """Why ``directory/history`` is not graphvision's (and cannot become so), or ''. One
+    ``lstat`` when there is none (as in every new folder: each report page asks)."""
     folder = directory / HISTORY
-    if folder.is_symlink():
+    mode = _mode(folder)
+    if mode is None:
+        return ""
+    if stat.S_ISLNK(mode):
         return f"{folder} is a symbolic link to {os.readlink(folder)}"
-    if folder.exists() and not folder.is_dir():
+    if not stat.S_ISDIR(mode):
         return f"{folder} is a file, not graphvision's history folder"
-    marker = folder / MARKER
-    if folder.exists() and marker.is_symlink():
+    marker = _mode(folder / MARKER)
+    if marker is not None and stat.S_ISLNK(marker):
         return f"{folder} is a folder graphvision did not make (its {MARKER} is a symbolic link)"
-    if folder.exists() and not marker.is_file():
+    if marker is None or not stat.S_ISREG(marker):
         return f"{folder} is a folder graphvision did not make (it has no file {MARKER})"
     return ""
+
+
+def _mode(path: Path) -> int | None:
+    """``path``'s own mode (a link's, not its target's), or None when there is nothing."""
+    try:
+        return os.lstat(path).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return None
 
 
 def _history(directory: Path) -> Path | None:

@@ -112,6 +112,8 @@ def check_output_folder(
             f"output '{Path(RECORD).stem}' cannot be written to an output folder: its file "
             f"would be {RECORD}, the run record; rename the output"
         )
+    if not os.path.lexists(directory):  # a new folder (a batch's, mostly): nothing in the way
+        return set()
     owned = owned_files(directory)
     if not directory.is_dir():
         return owned

@@ -232,6 +232,11 @@ def _nodes_html(record: RunRecord) -> str:
     return f"<table><tr>{head}</tr>{rows}</table>"
 
 
+_JSON_TEXT = json.JSONEncoder(default=str).encode
+"""``json.dumps(value, default=str)``, its encoder made once (``dumps`` makes one per call
+when given ``default``)."""
+
+
 def _provenance_html(record: RunRecord) -> str:
     """Every field of the record but its nodes and outputs, as a two-column table."""
     fields = {
@@ -241,7 +246,7 @@ def _provenance_html(record: RunRecord) -> str:
     }
     rows = "".join(
         f'<tr><th>{escape(key)}</th><td class="text"><code>'
-        f"{escape(value if isinstance(value, str) else json.dumps(value, default=str))}"
+        f"{escape(value if isinstance(value, str) else _JSON_TEXT(value))}"
         "</code></td></tr>"
         for key, value in fields.items()
     )
