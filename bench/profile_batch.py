@@ -27,7 +27,15 @@ cloud VM creating a file or a folder cost 0.3-1 ms of CPU (and removing a
 folder 0.2-3 ms of wall time: the disk discards freed blocks), so a coins
 file's folder (the folder, ``count.json``, ``record.json``, ``report.md``,
 ``report.html``) cost 4-5 ms of the engine's 6-7 ms CPU, where in memory the
-whole engine cost about 1 ms.
+whole engine cost about 1 ms. Where that CPU goes (``perf record -g`` of a loop
+making files): ext4 without a journal (this VM's) does not reuse an inode freed in
+the last 1-6 minutes, and its allocator (``find_inode_bit``) passes over each such
+inode of the block group (``recently_deleted``, a buffer looked up for each), so a
+file made where many were just removed (a batch's temporary
+folders, other benchmarks on the same disk, a claim file made and removed per
+batch file) costs more the more were removed: one more reason to make and remove
+nothing per file on the disk that the folder does not keep (the stop flag's claims
+are made in memory, ``graphvision.execution.batch_stop``).
 
 A part is timed from its outermost call only (a part that calls itself is not
 counted twice); parts overlap where one calls another (thumbnails are inside the
