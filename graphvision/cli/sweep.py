@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 import time
@@ -45,7 +46,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise UsageError(f"{both[0]} is both swept (--grid) and set (--set); give one of them")
     out_dir = output_folder(args.output_dir)  # checked; made when the results are written
     assert out_dir is not None  # the option is required
-    check_sweep_folder(out_dir)  # before anything runs
+    combinations = math.prod(len(values) for values in grid.values())
+    check_sweep_folder(out_dir, [args.plot] if args.plot else [], combinations)  # first
     with only_writer(out_dir, f"sweep of {graph.name}"):  # (removes the folders it made, if empty)
         return _sweep(args, graph, registry, overrides, inputs, grid, out_dir)
 

@@ -29,7 +29,7 @@ import os
 import re
 import stat
 import threading
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -61,9 +61,13 @@ class FolderFiles:
     written_before: Callable[[Path], bool] = field(default=_nothing)
 
 
-def check_folder_files(directory: Path, kind: FolderFiles) -> dict[str, Digests]:
+def check_folder_files(
+    directory: Path, kind: FolderFiles, writing: Collection[str] | None = None
+) -> dict[str, Digests]:
     """Refuse a folder where ``kind``'s writer would replace a file it did not write;
-    return what its manifest lists (name -> digests).
+    return what its manifest lists (name -> digests). Given the names the writer is about
+    to write (``writing``), a file of ``kind``'s names that is neither among them nor
+    listed is left alone: nothing would touch it (a user's ``sweep_mine.svg``).
 
     Raises
     ------
@@ -72,10 +76,12 @@ def check_folder_files(directory: Path, kind: FolderFiles) -> dict[str, Digests]
         link or not ``kind``'s manifest; a file of ``kind``'s names is not listed,
         changed since it was written, or is a link or a folder.
     """
-    return _checked_files(directory, kind)[0]
+    return _checked_files(directory, kind, writing)[0]
 
 
-def _checked_files(directory: Path, kind: FolderFiles) -> tuple[dict[str, Digests], dict[str, str]]:
+def _checked_files(
+    directory: Path, kind: FolderFiles, writing: Collection[str] | None = None
+) -> tuple[dict[str, Digests], dict[str, str]]:
     """:func:`check_folder_files`, and the digest of each of ``kind``'s files there now
     (each file read once)."""
     if directory.exists() and not directory.is_dir():
@@ -88,6 +94,8 @@ def _checked_files(directory: Path, kind: FolderFiles) -> tuple[dict[str, Digest
     for path in sorted(directory.iterdir()):
         if path.name == kind.manifest or not kind.names(path.name):
             continue
+        if writing is not None and path.name not in writing and path.name not in listed:
+            continue  # neither replaced nor removed
         problem = _not_written(path, listed, kind, os.path.lexists(manifest))
         if not problem:
             held[path.name] = digest = file_sha256(path)
@@ -166,7 +174,7 @@ def replace_folder_files(
     OutputFolderError
         As :func:`check_folder_files` (checked again here: a file may have come since).
     """
-    listed, held = _checked_files(directory, kind)
+    listed, held = _checked_files(directory, kind, contents)
     directory.mkdir(parents=True, exist_ok=True)
     _remove_dead_writers_temporaries(directory, kind)
     data = {name: text.encode("utf-8") for name, text in contents.items()}

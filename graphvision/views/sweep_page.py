@@ -218,18 +218,27 @@ SWEEP_FILES = FolderFiles(MANIFEST, "sweep", _is_sweep_file)
 """A sweep's files, listed with their digests in ``sweep.json``."""
 
 
-def check_sweep_folder(directory: Path) -> None:
+def check_sweep_folder(
+    directory: Path, plots: Sequence[str] = (), combinations: int | None = None
+) -> None:
     """Refuse a folder where a sweep's files would replace files graphvision did not write.
+
+    Given the sweep's ``combinations`` (how many) and ``plots``, only the files it
+    would write or remove count: a user's ``sweep_mine.svg`` beside them is left alone.
 
     Raises
     ------
     OutputFolderError
         The folder is a file, holds ``sweep.csv``, ``sweep.html``, ``sweep_*.svg`` or
-        ``sweep_run_*.html`` that no sweep manifest there lists (or that changed since,
-        or is a link), or its ``sweep.json`` is not a graphvision manifest
-        (:func:`~graphvision.execution.manifest.check_folder_files`).
+        ``sweep_run_*.html`` that the sweep would write and no sweep manifest there lists
+        (or that changed since, or is a link), or its ``sweep.json`` is not a graphvision
+        manifest (:func:`~graphvision.execution.manifest.check_folder_files`).
     """
-    check_folder_files(directory, SWEEP_FILES)
+    writing = None
+    if combinations is not None:
+        pages = (run_page_name(number) for number in range(1, combinations + 1))
+        writing = {"sweep.csv", "sweep.html", *(f"sweep_{o}.svg" for o in plots), *pages}
+    check_folder_files(directory, SWEEP_FILES, writing)
 
 
 def write_sweep(

@@ -178,9 +178,16 @@ def test_a_sweep_replaces_only_the_pages_it_wrote(capsys, tmp_path, setup):
     assert "holds sweep_run_0001.html, which changed since the sweep wrote it" in err
     assert (out / "sweep_run_0001.html").read_text() == "my notes"
     (out / "sweep_run_0001.html").unlink()
-    (out / "sweep_run_2.html").write_text("my page")  # named like one a sweep writes
-    err = _refused(capsys, main(args))
-    assert "holds sweep_run_2.html, which no graphvision sweep there wrote" in err
+    (out / "sweep_run_2.html").write_text("my page")  # named like a sweep's page, and
+    (out / "sweep_mine.svg").write_text("<svg/>")  # like a plot, but this sweep writes neither
+    assert main(args) == 0
+    assert (out / "sweep_run_2.html").read_text() == "my page"
+    assert (out / "sweep_mine.svg").read_text() == "<svg/>"
+    (out / "sweep_run_0002.html").write_text("my page")  # the second combination's page
+    wider = [*args[:-5], "--grid", "gray.method=luminance,mean", *args[-3:]]
+    err = _refused(capsys, main(wider))
+    assert "holds sweep_run_0002.html, which no graphvision sweep there wrote" in err
+    assert (out / "sweep_run_0002.html").read_text() == "my page"
 
 
 # -- 2. a batch writes only inside its folder, never through a link -----------------------
