@@ -70,6 +70,7 @@ from graphvision.execution.batch_lanes import FileLanes
 from graphvision.execution.batch_run import BatchRun
 from graphvision.execution.batch_stop import INTERRUPTED, signals_held
 from graphvision.execution.blas import one_blas_thread
+from graphvision.execution.closing import Closing
 from graphvision.execution.executors import (
     Executor,
     encodes_values,
@@ -203,11 +204,13 @@ def run_batch(
             default if client_files is None else client_files
         )
         finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
-        if own:
-            pool.shutdown()
-        return BatchResult(
-            finished, _summarise(finished, out_dir, pages, stale), *batch.transferred()
-        )
+        closing = Closing(pool) if own else None  # its workers end while the summary is made
+        try:
+            summary = _summarise(finished, out_dir, pages, stale)
+        finally:
+            if closing is not None:
+                closing.wait()
+        return BatchResult(finished, summary, *batch.transferred())
 
 
 def _checked_folders(out_dir: Path, folders: list[Path], outputs: Collection[str]) -> set[Path]:
