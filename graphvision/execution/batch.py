@@ -68,7 +68,8 @@ from graphvision.execution.batch_files import (
 from graphvision.execution.batch_guard import refuse_in_bootstrap
 from graphvision.execution.batch_lanes import FileLanes
 from graphvision.execution.batch_run import BatchRun
-from graphvision.execution.batch_stop import INTERRUPTED, signals_held
+from graphvision.execution.batch_signals import signals_held
+from graphvision.execution.batch_stop import INTERRUPTED
 from graphvision.execution.blas import one_blas_thread
 from graphvision.execution.closing import Closing
 from graphvision.execution.executors import (
@@ -78,11 +79,7 @@ from graphvision.execution.executors import (
     make_executor,
 )
 from graphvision.execution.folder_lock import only_writer
-from graphvision.execution.folders import (
-    missing_folders,
-    remove_empty_folders,
-    retire_left_files,
-)
+from graphvision.execution.folders import missing_folders, remove_empty_folders, retire_left_files
 from graphvision.execution.manifest import check_folder_files, replace_folder_files
 from graphvision.execution.owned import check_output_folder
 from graphvision.execution.record import RunHooks

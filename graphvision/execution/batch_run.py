@@ -17,7 +17,7 @@ from typing import Any
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.execution.batch_files import BatchItem, BatchPages, unreadable_reason
 from graphvision.execution.batch_items import could_not_start, plain_graph, run_file, run_item
-from graphvision.execution.batch_stop import StopFlag, writing
+from graphvision.execution.batch_stop import INTERRUPTED, StopFlag, writing
 from graphvision.execution.batch_write import failure_reason, finish_item
 from graphvision.execution.executors import (
     Executor,
@@ -114,6 +114,7 @@ class BatchRun:
             item, result = self._run(index)
             with writing(self.stop, folder, lambda: self.stopped) as claim:
                 if not claim:  # the batch was interrupted meanwhile: its folder is not written
+                    item.status, item.error = "interrupted", INTERRUPTED
                     return item
                 item = finish_item(item, result, self.pages.run, self.out_dir)
                 claim.written(item)

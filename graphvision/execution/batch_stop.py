@@ -47,11 +47,9 @@ import hashlib
 import json
 import os
 import shutil
-import signal
 import stat
 import string
 import tempfile
-import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator
@@ -66,7 +64,7 @@ try:
 except ImportError:  # pragma: no cover - Windows: a claim is a live writer's until it is written
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["INTERRUPTED", "STOP_FOLDER", "Claim", "StopFlag", "signals_held", "writing"]
+__all__ = ["INTERRUPTED", "STOP_FOLDER", "Claim", "StopFlag", "writing"]
 
 INTERRUPTED = "the batch stopped while this file ran; re-run the batch to finish it"
 
@@ -164,9 +162,22 @@ def _local_folder() -> str:
     in memory (:data:`MEMORY`) when there is one this user may write to, else the system's
     temporary folder. Each file's claim is a file made in the flag: 0.3-1 ms of CPU on the
     disk of the project's cloud VM (ext4), 0.01 ms in memory, for the same locks."""
-    if os.path.isdir(MEMORY) and os.access(MEMORY, os.W_OK | os.X_OK):
+    if os.path.isdir(MEMORY) and os.access(MEMORY, os.W_OK | os.X_OK) and _writable(MEMORY):
         return MEMORY
     return tempfile.gettempdir()
+
+
+def _writable(folder: str) -> bool:
+    """Whether a file can be made in ``folder`` now (a full ``/dev/shm``, Docker's 64 MB
+    one, refuses it although its mode allows it), as ``tempfile.gettempdir`` checks."""
+    try:
+        fd, name = tempfile.mkstemp(prefix=".graphvision-probe-", dir=folder)
+    except OSError:
+        return False
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(name)
+    return True
 
 
 class StopFlag:
@@ -251,11 +262,24 @@ class StopFlag:
     def _locked_claim(self, folder: str | Path, record: str | None) -> tuple[Path, int] | None:
         """A new claim on ``folder`` noting its ``record`` digest, locked by this writer before
         it has its name (so no reader ever sees it unlocked while its writer lives); None
-        when the flag is gone."""
+        when the flag is gone (the batch has ended, or someone removed it).
+
+        Raises
+        ------
+        OSError
+            When the flag is there but no claim can be made in it (its file system is
+            full), naming the folder: the file fails with it, rather than being left
+            unwritten under the name of a batch that stopped.
+        """
         try:
             fd, temp = tempfile.mkstemp(prefix=".claim-", dir=self.folder)
-        except OSError:  # the flag's folder is gone: the batch has ended
-            return None
+        except OSError as error:
+            if not os.path.isdir(self.folder):  # the flag's folder is gone
+                return None
+            raise OSError(
+                error.errno,
+                f"cannot mark {folder} as being written in {self.folder}: {error.strerror}",
+            ) from None
         try:
             os.write(fd, json.dumps({_RECORD_KEY: record}).encode())
             if fcntl is not None:  # a file system without locks: alive until written
@@ -374,27 +398,3 @@ def writing(
         return
     with stop.writing(folder, stopped) as claim:
         yield claim
-
-
-@contextlib.contextmanager
-def signals_held() -> Iterator[None]:
-    """Ctrl-C and SIGTERM do nothing meanwhile (from the main thread; elsewhere signals do
-    not reach Python code anyway): a stopped batch's second Ctrl-C, pressed while it
-    waits for its writers and writes ``batch.csv``, no longer ends it before the summary
-    and leaves folders half-written. The first stop's exception goes on once it is done."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    held = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    held = {s: handler for s, handler in held.items() if handler is not None}
-    for number in held:
-        signal.signal(number, _ignored)
-    try:
-        yield
-    finally:
-        for number, handler in held.items():
-            signal.signal(number, handler)
-
-
-def _ignored(signum: int, frame: object) -> None:
-    """A signal during a batch's stop: the stop already under way is the answer to it."""

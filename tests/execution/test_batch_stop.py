@@ -209,3 +209,84 @@ def test_a_local_batchs_flag_and_claims_are_made_in_memory_where_the_machine_has
     monkeypatch.setattr(batch_stop, "MEMORY", str(tmp_path / "no-shm"))
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
     assert Path(StopFlag.planned().folder).parent == tmp_path / "tmp"
+
+
+def test_a_full_memory_folder_leaves_the_flag_in_the_temporary_folder(tmp_path, monkeypatch):
+    """``/dev/shm`` whose mode allows a file but whose space does not (Docker's 64 MB one,
+    full): the flag goes where a file can be made."""
+    import tempfile
+    from pathlib import Path
+
+    memory = tmp_path / "shm"
+    memory.mkdir()
+    monkeypatch.setattr(batch_stop, "MEMORY", str(memory))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    made = tempfile.mkstemp
+
+    def full(*args: Any, dir: Any = None, **kwargs: Any) -> Any:
+        if dir is not None and Path(dir).is_relative_to(memory):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return made(*args, dir=dir, **kwargs)
+
+    monkeypatch.setattr(tempfile, "mkstemp", full)
+    assert Path(StopFlag.planned().folder).parent == tmp_path
+
+
+def _batch_of_three(tmp_path):
+    graph, registry, _ = _counting_graph(tmp_path)
+    files = [str(photo(tmp_path / "in" / f"p{k}.png", 40 * k)) for k in range(3)]
+    return graph, registry, files
+
+
+def test_a_file_whose_claim_cannot_be_made_fails_naming_why(tmp_path, monkeypatch):
+    """The flag is there but full: each file fails with the reason, none is 'ok' without
+    its folder (they were, and the batch exited 0)."""
+    import tempfile
+
+    graph, registry, files = _batch_of_three(tmp_path)
+    made = tempfile.mkstemp
+
+    def full(*args: Any, prefix: Any = None, **kwargs: Any) -> Any:
+        if prefix == ".claim-":
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return made(*args, prefix=prefix, **kwargs)
+
+    monkeypatch.setattr(tempfile, "mkstemp", full)
+    result = gv.run_batch(
+        graph, files, input="image", output_dir=tmp_path / "out", registry=registry,
+        executor="sync", cache=None,
+    )  # fmt: skip
+    for item in result.items:
+        assert item.status == "failed" and not item.output_dir.exists()
+        assert f"cannot mark {item.output_dir} as being written in" in item.error
+        assert "No space left on device" in item.error
+
+
+def test_files_after_their_flag_was_removed_are_interrupted_not_ok(tmp_path, monkeypatch):
+    """Someone empties the flag's folder mid-batch (systemd removes a user's /dev/shm files
+    at logout): the files after it are 'interrupted' and unwritten, not 'ok'."""
+    import shutil
+
+    memory = tmp_path / "shm"  # this batch's alone
+    memory.mkdir()
+    monkeypatch.setattr(batch_stop, "MEMORY", str(memory))
+    graph, registry, files = _batch_of_three(tmp_path)
+
+    def remove_flags(number: int, total: int, item: BatchItem) -> None:
+        if number == 1:
+            for flag in memory.glob("graphvision-batch-*"):
+                shutil.rmtree(flag)
+
+    result = gv.run_batch(
+        graph,
+        files,
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        executor="sync",
+        cache=None,
+        on_item=remove_flags,
+    )
+    statuses = [item.status for item in result.items]
+    assert statuses[0] == "ok" and statuses[1:] == ["interrupted", "interrupted"]
+    assert [item.output_dir.exists() for item in result.items] == [True, False, False]

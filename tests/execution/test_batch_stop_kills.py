@@ -18,7 +18,7 @@ from typing import Any
 import pytest
 
 import graphvision as gv
-from graphvision.execution import batch_stop, file_task
+from graphvision.execution import batch_signals, batch_stop, file_task
 from graphvision.execution.batch_files import NO_PAGES, BatchItem
 from graphvision.execution.batch_run import BatchRun
 from graphvision.execution.batch_stop import StopFlag
@@ -197,7 +197,7 @@ def test_a_second_ctrl_c_during_the_stop_still_leaves_batch_csv(tmp_path, monkey
     raise_ = StopFlag.raise_
     monkeypatch.setattr(file_task, "finish_item", slow_finish)
     monkeypatch.setattr(StopFlag, "raise_", lambda flag: (raise_(flag), raised.set()))
-    monkeypatch.setattr(batch_stop, "_ignored", lambda *_: handled.set(), raising=False)
+    monkeypatch.setattr(batch_signals, "_ignored", lambda *_: handled.set())
     before = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal
     try:
         with pytest.raises(KeyboardInterrupt):
