@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -147,7 +148,10 @@ def _read_with_imageio(file: Path, image: PILImageType | None) -> np.ndarray:
     import imageio.v3 as iio
 
     properties = iio.improps(file)  # the header only: nothing is decoded yet
-    check_pixels(properties.shape, str(file))
+    shape = tuple(properties.shape)
+    if len(shape) == 4 and shape[0] == 1:  # a stack of one frame (a still GIF): that frame's
+        shape = shape[1:]
+    check_pixels(shape, str(file))
     frames = properties.n_images
     if frames is not None and frames > 1:
         raise _several_frames(file, frames)
@@ -169,18 +173,34 @@ def _what_is_wrong(file: Path, error: Exception) -> str:
     return type(error).__name__
 
 
+class _LiftedLimit:
+    """Pillow's limit is one global for the process: the first reader lifts it, the last
+    puts back what the first found (each reader saving and restoring it alone, readers on
+    two threads left it lifted for good, the user's own ``Image.open`` unprotected)."""
+
+    lock = threading.Lock()
+    readers = 0
+    before: int | None = None
+
+
 @contextlib.contextmanager
 def _pillow_checks_left_to_the_budget() -> Iterator[None]:
     """Pillow's own decompression-bomb limit (89 megapixels, a warning, then an error at
     twice that) lifted while a file the budget admitted is read: one limit, the run's."""
     from PIL import Image as PILImage
 
-    before = PILImage.MAX_IMAGE_PIXELS
-    PILImage.MAX_IMAGE_PIXELS = None
+    with _LiftedLimit.lock:
+        if _LiftedLimit.readers == 0:
+            _LiftedLimit.before = PILImage.MAX_IMAGE_PIXELS
+            PILImage.MAX_IMAGE_PIXELS = None
+        _LiftedLimit.readers += 1
     try:
         yield
     finally:
-        PILImage.MAX_IMAGE_PIXELS = before
+        with _LiftedLimit.lock:
+            _LiftedLimit.readers -= 1
+            if _LiftedLimit.readers == 0:
+                PILImage.MAX_IMAGE_PIXELS = _LiftedLimit.before
 
 
 class _FramesError(ValueError):

@@ -233,3 +233,47 @@ def test_a_cmyk_profile_that_cannot_apply_is_refused_by_name(tmp_path, suffix):
     rgb.convert("CMYK").save(path, icc_profile=SRGB)  # an RGB profile on CMYK data
     with pytest.raises(ValueError, match=f"print{suffix} is a CMYK image whose embedded colour"):
         read_array(str(path))
+
+
+def test_readers_on_several_threads_put_pillows_limit_back(folder, monkeypatch):
+    """Each reader saved and restored the one global alone: two threads interleaving left
+    it lifted (None) for good. Every reader here starts before any ends."""
+    import threading
+
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 1234)
+    inside, release = threading.Barrier(5), threading.Event()  # four readers and this thread
+    decode = Image.Image.load
+
+    waited: set[int] = set()
+
+    def load(self: Image.Image) -> object:
+        if threading.get_ident() not in waited:  # (Pillow may load more than once)
+            waited.add(threading.get_ident())
+            inside.wait(30)  # all four are reading now
+            assert release.wait(30)
+        return decode(self)
+
+    monkeypatch.setattr(Image.Image, "load", load)
+    readers = [
+        threading.Thread(target=read_array, args=(str(folder / "rgb.png"),)) for _ in range(4)
+    ]
+    for reader in readers:
+        reader.start()
+    inside.wait(30)
+    assert Image.MAX_IMAGE_PIXELS is None  # lifted while they read
+    release.set()
+    for reader in readers:
+        reader.join(30)
+    assert Image.MAX_IMAGE_PIXELS == 1234
+
+
+def test_a_still_gif_counts_its_pixels_not_its_channels_against_the_budget(tmp_path, monkeypatch):
+    """imageio declares a GIF as a stack (1, H, W, 3): its frame's H × W pixels count."""
+    path = tmp_path / "still.gif"
+    frames("P")[0].save(path)
+    height, width = iio.imread(path).shape[1:3]
+    monkeypatch.setenv("GRAPHVISION_MAX_PIXELS", str(height * width))
+    assert read_array(str(path)).shape[:2] == (height, width)
+    monkeypatch.setenv("GRAPHVISION_MAX_PIXELS", str(height * width - 1))
+    with pytest.raises(gv.InputError, match=f"declares {height} × {width} "):
+        read_array(str(path))
