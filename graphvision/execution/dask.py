@@ -41,9 +41,9 @@ from __future__ import annotations
 
 import atexit
 import functools
-import logging
 import os
 import threading
+import time
 import weakref
 from collections.abc import Callable
 from concurrent.futures import Future
@@ -52,13 +52,24 @@ from typing import Any
 from graphvision.errors import GraphvisionError
 from graphvision.execution.batch_guard import guard_hint, refuse_in_bootstrap
 from graphvision.execution.dask_files import FILES_PER_TASK, GROUPS_PER_THREAD, FileGroups
-from graphvision.execution.dask_fork import ForkedWorkers, start_forked_cluster
+from graphvision.execution.dask_fork import (
+    ForkedWorkers,
+    start_forked_cluster,
+    start_local_cluster,
+)
 from graphvision.execution.dask_worker import on_worker, shared
 from graphvision.execution.worker_start import fork_context
 
-__all__ = ["SCHEDULER_VARIABLE", "DaskExecutor", "DaskUnavailableError", "TaskFuture"]
+__all__ = [
+    "SCHEDULER_VARIABLE",
+    "WIDTH_SECONDS",
+    "DaskExecutor",
+    "DaskUnavailableError",
+    "TaskFuture",
+]
 
 SCHEDULER_VARIABLE = "GRAPHVISION_DASK_SCHEDULER"
+WIDTH_SECONDS = 1.0  # a given cluster's width is asked of its scheduler at most this often
 
 
 class DaskUnavailableError(GraphvisionError):
@@ -116,6 +127,7 @@ class DaskExecutor:
         self._client: Any = client
         self._owns_client = client is None
         self._width = 0  # a local cluster's, known before it has started
+        self._asked = (0, -WIDTH_SECONDS)  # a given cluster's width, and when it was asked
         self._started = threading.Event()
         self._start_error: BaseException | None = None
         self._closing = False
@@ -160,9 +172,7 @@ class DaskExecutor:
         meanwhile); a cluster that started after :meth:`shutdown` is closed at once."""
         try:
             if self._forked is not None:
-                self._cluster, self._client = start_forked_cluster(
-                    self._forked, self._ready, start_local_cluster
-                )
+                self._cluster, self._client = start_forked_cluster(self._forked, self._ready)
             else:
                 self._cluster, self._client = start_local_cluster(*self._shape)
         except BaseException as error:  # reported where the client is first needed
@@ -192,8 +202,20 @@ class DaskExecutor:
 
     @property
     def width(self) -> int:
-        """Tasks the cluster runs at once: the threads of all its workers."""
-        return self._width or max(1, sum(self.client.nthreads().values()))
+        """Tasks the cluster runs at once: the threads of all its workers.
+
+        A given cluster's is asked of its scheduler at most once every
+        :data:`WIDTH_SECONDS` (a batch reads it each time it sends a task: a
+        round trip through the scheduler each time took 0.7 s of a 200-file
+        coins batch's client, while it held the batch's files back).
+        """
+        if self._width:
+            return self._width
+        width, asked = self._asked
+        if time.monotonic() - asked >= WIDTH_SECONDS:
+            width = max(1, sum(self.client.nthreads().values()))
+            self._asked = (width, time.monotonic())
+        return width
 
     @property
     def files_at_once(self) -> int:
@@ -350,31 +372,6 @@ class _Later:
 
     def __reduce__(self) -> tuple[Any, ...]:  # never sent as such: see DaskExecutor._sent
         raise TypeError("a shared value travels as its task, not as the placeholder")
-
-
-def start_local_cluster(workers: int, threads_per_worker: int) -> tuple[Any, Any]:
-    """A ``LocalCluster`` of ``workers`` processes and its client. Its workers do not run
-    Dask's statistical profiler (``distributed.worker.profile``: a thread that took the GIL
-    every 10 ms to walk the stack, 7 % of a batch's worker time on coins files)."""
-    import dask
-    import distributed
-
-    with dask.config.set({"distributed.worker.profile.enabled": False}):
-        cluster = distributed.LocalCluster(
-            n_workers=workers,
-            threads_per_worker=threads_per_worker,
-            processes=True,
-            scheduler_port=0,
-            dashboard_address=":0",
-            # a failing node is reported once, by the run, naming it: not also as
-            # each worker's "Compute Failed" traceback
-            silence_logs=logging.CRITICAL,
-        )
-    try:
-        return cluster, distributed.Client(cluster)
-    except BaseException:
-        cluster.close()
-        raise
 
 
 def _is(fn: Any, name: str) -> bool:
