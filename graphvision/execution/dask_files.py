@@ -4,23 +4,31 @@ A batch sends each file after the first as one task
 (:mod:`graphvision.execution.file_task`). On Dask a task costs the client's
 process (where a ``LocalCluster``'s scheduler runs too) milliseconds of CPU:
 the task's submission, the scheduler's transitions, the worker's report, the
-result's fetch through the scheduler, the key's release. On 2 cores, with
-both workers computing, that was 10 to 16 ms of CPU per file (coins files:
-40 ms each), taken from the workers' cores.
+result's fetch through the scheduler, the key's release; and the worker's
+event loop a few more. On 2 cores, with both workers computing, that was 10
+to 16 ms of CPU per file (coins files: 40 ms each), taken from the workers'
+cores.
 
 Here the files the batch's lanes submit at the same time travel together:
 at most :data:`GROUPS_PER_THREAD` tasks per worker thread are in flight (one
 running, one queued behind it, so that no worker waits for the client), and
-the files submitted meanwhile wait in the client and leave, up to
-:data:`FILES_PER_TASK` of them, in the next task, as soon as one of those
-tasks comes back. A batch runs ``width × GROUPS_PER_THREAD × FILES_PER_TASK``
-files at once on Dask (:attr:`DaskExecutor.files_at_once
-<graphvision.execution.dask.DaskExecutor.files_at_once>`), so tasks fill
-up once the first ones are in flight: the first tasks leave with one file each
-(the workers start at once), the next ones with several. Each file keeps its
-own outcome: one that raises fails alone, named (:class:`FileTaskError`); a task
-whose worker died runs again whole (``retries``) and each of its files is
-written again, whole, as before.
+the files submitted meanwhile wait in the client and leave together in the
+next task. A task's size follows the files' own time: as many files as take
+about :data:`TASK_SECONDS` by the files measured so far (their run's
+seconds), at least one and at most :data:`FILES_PER_TASK`; one file a task
+until a first file has come back. A task of fewer files leaves only for a
+worker thread that would wait otherwise (fewer tasks in flight than threads:
+the batch's start and its last files); one to queue behind a running task
+waits until it is full. Without that rule, each task that came back let the
+first file resubmitted leave alone: a quarter of a coins batch's tasks held
+one file.
+
+A batch runs ``width × GROUPS_PER_THREAD × FILES_PER_TASK`` files at once on
+Dask (:attr:`DaskExecutor.files_at_once
+<graphvision.execution.dask.DaskExecutor.files_at_once>`), so that the tasks
+in flight can be full. Each file keeps its own outcome: one that raises fails
+alone, named (:class:`FileTaskError`); a task whose worker died runs again
+whole (``retries``) and each of its files is written again, whole, as before.
 """
 
 from __future__ import annotations
@@ -32,20 +40,24 @@ from typing import Any
 
 from graphvision.execution.dask_worker import FileTaskError, on_worker, run_files
 
-__all__ = ["FILES_PER_TASK", "GROUPS_PER_THREAD", "FileGroups"]
+__all__ = ["FILES_PER_TASK", "GROUPS_PER_THREAD", "TASK_SECONDS", "FileGroups"]
 
-FILES_PER_TASK = 4
+FILES_PER_TASK = 8
 GROUPS_PER_THREAD = 2
+TASK_SECONDS = 0.1  # a task's files take about this long (Dask's advice: tasks of 100 ms or more)
 
 
 class FileGroups:
-    """Files of a batch submitted one at a time, sent to ``executor``'s cluster a few per task."""
+    """Files of a batch submitted one at a time, sent to ``executor``'s cluster several to a task
+    (as many as take about :data:`TASK_SECONDS`)."""
 
     def __init__(self, executor: Any) -> None:
         self.executor = executor
         self._waiting: deque[tuple[Any, str, str, Future]] = deque()
         self._task: Any = None  # the function that runs one file (file_task.run_file_task)
+        self._job: Any = None  # the batch's job whose files are measured
         self._flying = 0
+        self._measured = (0.0, 0)  # the job's files come back so far: their seconds, how many
         self._lock = threading.Lock()
         self._closed = False
 
@@ -56,22 +68,35 @@ class FileGroups:
         future: Future = Future()
         future.set_running_or_notify_cancel()
         with self._lock:
+            if self._job is not job:  # another batch's files: measured afresh
+                self._job, self._measured = job, (0.0, 0)
             self._waiting.append((job, path, folder, future))
         self._pump()
         return future
 
     def _take(self) -> list[tuple[Any, str, str, Future]]:
-        """The next task's files (the same job's, in order), or none while enough fly."""
+        """The next task's files (the same job's, in order), or none while enough fly or
+        while a task that would queue behind a running one is not full (see the module's
+        docstring)."""
         with self._lock:
-            most = max(1, self.executor.width) * GROUPS_PER_THREAD
-            if self._closed or not self._waiting or self._flying >= most:
+            width = max(1, self.executor.width)
+            if self._closed or not self._waiting or self._flying >= width * GROUPS_PER_THREAD:
                 return []
-            job = self._waiting[0][0]
-            taken = [call for call in self._waiting if call[0] is job][:FILES_PER_TASK]
+            job, size = self._waiting[0][0], self._size()
+            taken = [call for call in self._waiting if call[0] is job][:size]
+            if len(taken) < size and self._flying >= width:
+                return []  # more files come as the lanes get their results
             for call in taken:
                 self._waiting.remove(call)
             self._flying += 1
             return taken
+
+    def _size(self) -> int:
+        """Files a task: about :data:`TASK_SECONDS` of them, by the files measured so far."""
+        seconds, count = self._measured
+        if count == 0 or seconds <= 0:
+            return 1
+        return max(1, min(FILES_PER_TASK, round(TASK_SECONDS * count / seconds)))
 
     def _pump(self) -> None:
         """Send tasks while fewer than enough are in flight and files wait."""
@@ -103,6 +128,11 @@ class FileGroups:
                 outcomes = task.result()
             except BaseException as failed:  # the whole task failed (a worker died twice...)
                 error = failed
+        seconds = [o.item.seconds for o in outcomes if not isinstance(o, BaseException)]
+        with self._lock:
+            if seconds and taken[0][0] is self._job:
+                total, count = self._measured
+                self._measured = (total + sum(seconds), count + len(seconds))
         for k, (*_, future) in enumerate(taken):
             found = error if error is not None else outcomes[k]
             if isinstance(found, BaseException):
