@@ -14,9 +14,11 @@ at most :data:`GROUPS_PER_THREAD` tasks per worker thread are in flight (one
 running, one queued behind it, so that no worker waits for the client), and
 the files submitted meanwhile wait in the client and leave together in the
 next task. A task's size follows the files' own time: as many files as take
-about :data:`TASK_SECONDS` by the files measured so far (their run's
-seconds), at least one and at most :data:`FILES_PER_TASK`; one file a task
-until a first file has come back. A task of fewer files leaves only for a
+about :data:`TASK_SECONDS` by the files measured so far (the CPU time of the
+worker's thread, which a loaded machine does not stretch as it does the
+clock: sized by wall time, coins tasks under a load of 8 held 3 files, not
+8), at least one and at most :data:`FILES_PER_TASK`; one file a task until a
+first task has come back. A task of fewer files leaves only for a
 worker thread that would wait otherwise (fewer tasks in flight than threads:
 the batch's start and its last files); one to queue behind a running task
 waits until it is full. Without that rule, each task that came back let the
@@ -57,7 +59,7 @@ class FileGroups:
         self._task: Any = None  # the function that runs one file (file_task.run_file_task)
         self._job: Any = None  # the batch's job whose files are measured
         self._flying = 0
-        self._measured = (0.0, 0)  # the job's files come back so far: their seconds, how many
+        self._measured = (0.0, 0)  # the job's files back so far: their CPU seconds, how many
         self._lock = threading.Lock()
         self._closed = False
 
@@ -125,14 +127,11 @@ class FileGroups:
         outcomes: list[Any] = []
         if task is not None:
             try:
-                outcomes = task.result()
+                outcomes, seconds = task.result()
             except BaseException as failed:  # the whole task failed (a worker died twice...)
                 error = failed
-        seconds = [o.item.seconds for o in outcomes if not isinstance(o, BaseException)]
-        with self._lock:
-            if seconds and taken[0][0] is self._job:
-                total, count = self._measured
-                self._measured = (total + sum(seconds), count + len(seconds))
+            else:
+                self._measure(taken[0][0], seconds, len(outcomes))
         for k, (*_, future) in enumerate(taken):
             found = error if error is not None else outcomes[k]
             if isinstance(found, BaseException):
@@ -142,6 +141,13 @@ class FileGroups:
         with self._lock:
             self._flying -= 1
         self._pump()
+
+    def _measure(self, job: Any, seconds: float, files: int) -> None:
+        """``files`` of ``job`` took ``seconds`` of a worker thread's CPU time."""
+        with self._lock:
+            if job is self._job:
+                total, count = self._measured
+                self._measured = (total + seconds, count + files)
 
     def close(self) -> None:
         """No task is sent from now on; files still waiting fail (the batch has stopped)."""

@@ -7,6 +7,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import pickle
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -69,11 +70,13 @@ class FileTaskError(Exception):
 
 def run_files(
     task: Callable[[Any, str, str], Any], job: Any, files: list[tuple[str, str]]
-) -> list[Any]:
+) -> tuple[list[Any], float]:
     """Several files of a batch in one task, each run by ``task(job, path, folder)``
     (:func:`~graphvision.execution.file_task.run_file_task`): each one's outcome, or what it
-    raised (that file fails alone, named, and the others run)."""
+    raised (that file fails alone, named, and the others run); and the CPU seconds they took
+    in this thread (what sizes the next tasks: :mod:`graphvision.execution.dask_files`)."""
     found: list[Any] = []
+    began = time.thread_time()
     for path, folder in files:
         try:
             found.append(task(job, path, folder))
@@ -81,7 +84,7 @@ def run_files(
             found.append(
                 error if _pickles(error) else FileTaskError(f"{type(error).__name__}: {error}")
             )
-    return found
+    return found, time.thread_time() - began
 
 
 def _pickles(error: Exception) -> bool:

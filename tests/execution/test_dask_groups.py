@@ -10,12 +10,13 @@ from typing import Any
 
 from graphvision.execution.batch_files import BatchItem
 from graphvision.execution.dask_files import FileGroups
+from graphvision.execution.dask_worker import run_files
 from graphvision.execution.file_task import FileOutcome
 
 
 class _Cluster:
-    """A client whose tasks wait until the test lands them (``land``), with a file taking
-    ``seconds`` each."""
+    """A client whose tasks wait until the test lands them (``land``), a file taking ``seconds``
+    of CPU time each."""
 
     def __init__(self, seconds: float) -> None:
         self.seconds = seconds
@@ -30,9 +31,8 @@ class _Cluster:
 
     def land(self, k: int) -> None:
         files, future = self.tasks[k]
-        future.set_result(
-            [FileOutcome(BatchItem(Path(p), Path(f), seconds=self.seconds)) for p, f in files]
-        )
+        outcomes = [FileOutcome(BatchItem(Path(p), Path(f))) for p, f in files]
+        future.set_result((outcomes, self.seconds * len(files)))  # as run_files returns
 
 
 class _Executor:
@@ -84,3 +84,19 @@ def test_another_batchs_files_are_measured_afresh():
     groups.submit(object(), second, "b.png", "out/b")
     groups.submit(object(), second, "c.png", "out/c")
     assert _sizes(cluster) == [1, 1, 2, 1, 1, 1]  # another job: one a task until measured
+
+
+def _busy(job: Any, path: str, folder: str) -> str:
+    if path == "bad.png":
+        raise ValueError(f"{path} is unreadable")
+    total = 0
+    for k in range(200_000):  # some CPU time in this thread
+        total += k
+    return f"{job}:{path}->{folder}:{total}"
+
+
+def test_a_task_of_files_reports_each_outcome_and_the_cpu_time_they_took():
+    found, seconds = run_files(_busy, "job", [("a.png", "out/a"), ("bad.png", "out/bad")])
+    assert found[0] == "job:a.png->out/a:19999900000"
+    assert isinstance(found[1], ValueError) and str(found[1]) == "bad.png is unreadable"
+    assert 0.0 < seconds < 60.0
