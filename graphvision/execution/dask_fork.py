@@ -1,5 +1,5 @@
-"""The workers of the Dask executor's own ``LocalCluster`` forked from a batch's client
-(:class:`ForkedWorkers`), as the ``processes`` executor's are
+"""The Dask executor's own ``LocalCluster`` (:func:`start_local_cluster`) and its workers
+forked from a batch's client (:class:`ForkedWorkers`), as the ``processes`` executor's are
 (:mod:`graphvision.execution.worker_start`).
 
 A ``LocalCluster`` spawns each worker: a new interpreter that imports numpy,

@@ -327,6 +327,7 @@ def test_a_batch_runs_files_in_the_client_while_the_workers_are_not_ready(dask_e
     from .test_batch import _counting_graph, photo
 
     client, name = dask_executor.client, f"hold-{tmp_path.name}"
+    client.wait_for_workers(2, timeout=60)  # a worker an earlier test killed is back: held too
 
     def hold(event_name: str) -> bool:
         return distributed.Event(event_name).wait(timeout=30)
