@@ -61,6 +61,7 @@ __all__ = [
     "has_index",
     "index_path",
     "installed_entry_points",
+    "package_digest",
     "read_index",
     "read_providers",
     "write_index",
@@ -75,33 +76,41 @@ def installed_entry_points() -> list[EntryPoint]:
 
     Listing them reads every installed distribution's metadata (4 ms here); a process
     lists them again only when a ``sys.path`` folder changed (installing or removing a
-    distribution adds or removes its metadata folder there), or when one had changed in
-    the two seconds before the last listing (see :func:`_file_digest`).
+    distribution adds or removes its metadata folder there) or the ``entry_points.txt`` of
+    a distribution listed (edited in place), or when one had changed in the two seconds
+    before the last listing (see :func:`_file_digest`).
     """
-    stamp = _folders_stamp(sys.path)
+    stamp = _stamp(sys.path)
     if stamp is not None and _ENTRY_POINTS and _ENTRY_POINTS[0] == stamp:
-        return list(_ENTRY_POINTS[1])
+        files = _ENTRY_POINTS[1]
+        if _stamp(files) == _ENTRY_POINTS[2]:
+            return list(_ENTRY_POINTS[3])
     found = sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name)
-    _ENTRY_POINTS[:] = [stamp, tuple(found)] if stamp is not None else []
+    folders = {getattr(e.dist, "_path", None) for e in found}  # (PathDistribution's)
+    files = sorted(os.path.join(folder, "entry_points.txt") for folder in folders if folder)
+    listed = _stamp(files)
+    settled = stamp is not None and listed is not None
+    _ENTRY_POINTS[:] = [stamp, files, listed, tuple(found)] if settled else []
     return found
 
 
-_ENTRY_POINTS: list = []  # [the sys.path folders' stamp, the entry points listed under it]
+# [the sys.path folders' stamp, the entry_points.txt files read, their stamp, what they list]
+_ENTRY_POINTS: list = []
 
 
-def _folders_stamp(folders: list[str]) -> tuple | None:
-    """Each folder's status, or None when one changed in the last two seconds."""
+def _stamp(paths: list[str]) -> tuple | None:
+    """Each path's status, or None when one changed in the last two seconds."""
     stamp: list[tuple[str, int | None, int, int]] = []
     settled = time.time_ns() - _SETTLED_NS
-    for folder in folders:
+    for path in paths:
         try:
-            status = os.stat(folder or ".")
+            status = os.stat(path or ".")
         except OSError:
-            stamp.append((folder, None, 0, 0))
+            stamp.append((path, None, 0, 0))
             continue
         if max(status.st_mtime_ns, status.st_ctime_ns) > settled:
             return None
-        stamp.append((folder, status.st_ino, status.st_mtime_ns, status.st_ctime_ns))
+        stamp.append((path, status.st_ino, status.st_mtime_ns, status.st_ctime_ns))
     return tuple(stamp)
 
 
@@ -175,6 +184,17 @@ def _file_digest(name: str) -> bytes:
     if time.time_ns() - max(status.st_mtime_ns, status.st_ctime_ns) > _SETTLED_NS:
         _DIGESTS[name] = (stamp, digest)
     return digest
+
+
+def package_digest(name: str) -> bytes:
+    """A digest of the files of the top-level package or module ``name`` (names and bytes)."""
+    import xxhash
+
+    hasher = xxhash.xxh3_128()
+    for file in _package_files(name):
+        hasher.update(f"{file}\n".encode())
+        hasher.update(_file_digest(file))
+    return hasher.digest()
 
 
 def _path_folders() -> list[str]:

@@ -31,6 +31,7 @@ from graphvision.nodes.plugin_index import (
     environment_key,
     has_index,
     installed_entry_points,
+    package_digest,
     read_providers,
     write_index,
 )
@@ -86,9 +87,25 @@ def load_entry_points(registry: Registry, needs: Needs | None = None) -> None:
                 note_distribution(module.__name__.partition(".")[0], _distribution_name(entry))
         except Exception as error:
             registry.record_failure(entry.name, entry.value, _summarise(error))
+    tops = {entry.value.partition(":")[0].partition(".")[0] for entry in entries}
+    for top in tops - _LOADED_AS.keys():  # (once per package and process)
+        _LOADED_AS[top] = package_digest(top)
     recordable = fresh and not indexed and not registry.failed_plugins()
-    if recordable and environment_key(entries) == key:  # no file changed while they loaded
-        write_index(key, registry)
+    if recordable and environment_key(entries) == key and _unchanged_since_loaded(tops):
+        write_index(key, registry)  # (no file changed while, or since, they loaded)
+
+
+_LOADED_AS: dict[str, bytes] = {}  # a plugin package -> its files' digest when first loaded
+
+
+def _unchanged_since_loaded(packages: set[str]) -> bool:
+    """Whether every package's files are those this process loaded (see :data:`_LOADED_AS`).
+
+    A package imported before its files were edited keeps the old code: a registry of it,
+    recorded under the new key, would be an index served stale to every later command (a
+    notebook or the studio open while the user edits a plugin).
+    """
+    return all(_LOADED_AS[package] == package_digest(package) for package in packages)
 
 
 _DISTRIBUTION_NAMES: dict[object, str] = {}  # by metadata folder (its name holds the name)

@@ -368,3 +368,54 @@ def test_a_worker_process_finds_its_clients_index(tmp_path, method):
         [sys.executable, str(script), method], capture_output=True, text=True, timeout=120
     )
     assert done.stdout.strip() == "True", done.stderr[-2000:]
+
+
+def test_a_process_that_loaded_a_plugin_before_its_edit_never_records_it(tmp_path):
+    """One process discovers, the plugin is edited, the same process discovers again (a
+    notebook or the studio open while the user edits): its registry holds the old code, so
+    no index is written under the new key, and a fresh `nodes` shows the edit."""
+    site = tmp_path / "site"
+    dist = site / "fakeplug-1.0.dist-info"
+    dist.mkdir(parents=True)
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: fakeplug\nVersion: 1.0\n")
+    (dist / "entry_points.txt").write_text("[graphvision.plugins]\nfakeplug = fakeplug_nodes\n")
+    module = _package(site, "First summary of the node.")
+    env = {**os.environ, "PYTHONPATH": str(site), "GRAPHVISION_CACHE_DIR": str(tmp_path / "c")}
+    script = textwrap.dedent(
+        f"""
+        import pathlib, graphvision as gv
+        gv.discover()
+        module = pathlib.Path({str(module)!r})
+        module.write_text(module.read_text().replace("First summary", "Other summary"))
+        gv.discover()
+        """
+    )
+    ran = subprocess.run(
+        [sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=120
+    )
+    assert ran.returncode == 0, ran.stderr
+    command = [sys.executable, "-m", "graphvision", "nodes"]
+    listed = subprocess.run(command, env=env, capture_output=True, text=True, timeout=120)
+    assert "Other summary of the node." in listed.stdout
+
+
+def test_entry_points_are_listed_again_when_a_distributions_file_is_edited_in_place(
+    tmp_path, monkeypatch
+):
+    """A distribution's entry_points.txt rewritten where it is (its folder unchanged):
+    the next listing in the same process reads it."""
+    site = tmp_path / "site"
+    dist = site / "fakeplug-1.0.dist-info"
+    dist.mkdir(parents=True)
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: fakeplug\nVersion: 1.0\n")
+    listing = dist / "entry_points.txt"
+    listing.write_text("[graphvision.plugins]\nfakeplug = fakeplug_nodes\n")
+    monkeypatch.syspath_prepend(str(site))
+    later = _plugin_index.time.time_ns() + 10 * _plugin_index._SETTLED_NS
+    monkeypatch.setattr(_plugin_index.time, "time_ns", lambda: later)
+    values = {e.name: e.value for e in _plugin_index.installed_entry_points()}
+    assert values["fakeplug"] == "fakeplug_nodes" and _plugin_index._ENTRY_POINTS
+    _plugin_index.time.sleep(0.05)
+    listing.write_text("[graphvision.plugins]\nfakeplug = fakeplug_other\n")
+    values = {e.name: e.value for e in _plugin_index.installed_entry_points()}
+    assert values["fakeplug"] == "fakeplug_other"
