@@ -56,12 +56,17 @@ def max_pixels() -> int:
     if given is not None:
         return given
     text = os.environ.get(ENVIRONMENT_VARIABLE, "")
+    if not text:
+        return DEFAULT_MAX_PIXELS
     try:
-        return int(text) if text else DEFAULT_MAX_PIXELS
+        budget = int(text)
     except ValueError:
+        budget = 0
+    if budget < 1:  # (-1 made every image "over a budget of -1 pixels")
         raise InputError(
-            f"{ENVIRONMENT_VARIABLE}={text!r} is not a whole number of pixels"
-        ) from None
+            f"{ENVIRONMENT_VARIABLE}={text!r} is not a whole number of pixels above 0"
+        )
+    return budget
 
 
 @contextlib.contextmanager

@@ -127,7 +127,10 @@ def test_the_command_line_budget_reaches_the_readers(capsys, tmp_path, monkeypat
     assert status == 2 and "not a whole number of pixels: 'many'" in capsys.readouterr().err
 
 
-def test_a_malformed_budget_in_the_environment_is_named(monkeypatch):
-    monkeypatch.setenv("GRAPHVISION_MAX_PIXELS", "lots")
-    with pytest.raises(gv.InputError, match="GRAPHVISION_MAX_PIXELS='lots' is not a whole number"):
+@pytest.mark.parametrize("text", ["lots", "-1", "0", "2.5"])
+def test_a_malformed_budget_in_the_environment_is_named(monkeypatch, text):
+    monkeypatch.setenv("GRAPHVISION_MAX_PIXELS", text)
+    with pytest.raises(
+        gv.InputError, match=f"GRAPHVISION_MAX_PIXELS='{text}' is not a whole number .* above 0"
+    ):
         gv.max_pixels()
