@@ -63,9 +63,7 @@ def max_pixels() -> int:
     except ValueError:
         budget = 0
     if budget < 1:  # (-1 made every image "over a budget of -1 pixels")
-        raise InputError(
-            f"{ENVIRONMENT_VARIABLE}={text!r} is not a whole number of pixels above 0"
-        )
+        raise InputError(f"{ENVIRONMENT_VARIABLE}={text!r} is not a whole number of pixels above 0")
     return budget
 
 
