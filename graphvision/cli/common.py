@@ -114,28 +114,37 @@ def positive_seconds(text: str) -> float:
 
 
 def check_overrides(graph: Graph, registry: Registry, overrides: dict[str, Any], flag: str) -> None:
-    """Refuse, naming the command line, an override of a node or parameter that does not exist."""
-    for key, value in overrides.items():
-        target, _, param = key.partition(".")
-        shown = f"{flag} {key}={value!r}"
-        if not param:
-            raise UsageError(f"{shown}: expected NODE.PARAM or params.NAME")
-        if target == "params":
-            if param not in graph.params:
-                hint = did_you_mean(param, graph.params)
-                raise UsageError(f"{shown}: the pipeline has no param '{param}'{hint}")
-            continue
-        if target not in graph.nodes:
-            hint = did_you_mean(target, graph.nodes)
-            raise UsageError(f"{shown}: the pipeline has no node '{target}'{hint}")
-        spec = registry.nodes.get(graph.nodes[target].op)
-        if spec is not None and param not in spec.param_fields:
-            names = list(spec.param_fields)
-            hint = did_you_mean(param, names)
-            listing = ", ".join(names) or "none"
-            raise UsageError(
-                f"{shown}: {spec.id} has no parameter '{param}'{hint}; parameters: {listing}"
-            )
+    """Refuse, naming the command line, every override of a node or parameter that does not
+    exist (all of them at once, one line each)."""
+    problems = [
+        f"{flag} {key}={value!r}: {problem}"
+        for key, value in overrides.items()
+        if (problem := _unknown_target(graph, registry, key))
+    ]
+    if len(problems) == 1:
+        raise UsageError(problems[0])
+    if problems:
+        listed = "".join(f"\n  - {problem}" for problem in problems)
+        raise UsageError(f"{len(problems)} overrides name nothing in the pipeline:{listed}")
+
+
+def _unknown_target(graph: Graph, registry: Registry, key: str) -> str:
+    """What is wrong with the override ``key`` (NODE.PARAM or params.NAME), or ''."""
+    target, _, param = key.partition(".")
+    if not param:
+        return "expected NODE.PARAM or params.NAME"
+    if target == "params":
+        if param not in graph.params:
+            return f"the pipeline has no param '{param}'{did_you_mean(param, graph.params)}"
+        return ""
+    if target not in graph.nodes:
+        return f"the pipeline has no node '{target}'{did_you_mean(target, graph.nodes)}"
+    spec = registry.nodes.get(graph.nodes[target].op)
+    if spec is not None and param not in spec.param_fields:
+        names = list(spec.param_fields)
+        hint, listing = did_you_mean(param, names), ", ".join(names) or "none"
+        return f"{spec.id} has no parameter '{param}'{hint}; parameters: {listing}"
+    return ""
 
 
 def output_folder(text: str | None) -> Path | None:

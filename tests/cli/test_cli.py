@@ -295,6 +295,15 @@ def test_malformed_command_line_values_are_refused_before_running(capsys, tmp_pa
     assert not (tmp_path / "out" / "record.json").exists()
 
 
+def test_every_override_that_names_nothing_is_refused_at_once(capsys, tmp_path):
+    args = ["-s", "gauss_on_gaus.sigma=2", "-s", "gauss_on_gauss.sgma=2", "-s", "params.sed=2"]
+    status, _, err = cli(capsys, "run", DEMO, "-d", tmp_path / "out", "--no-cache", *args)
+    assert status == 2 and "3 overrides name nothing in the pipeline:" in err, err
+    assert "  - --set gauss_on_gaus.sigma=2: the pipeline has no node 'gauss_on_gaus'" in err
+    assert "  - --set gauss_on_gauss.sgma=2: filters.gaussian has no parameter 'sgma'" in err
+    assert "  - --set params.sed=2: the pipeline has no param 'sed'" in err
+
+
 def test_output_dir_that_is_a_file_or_cannot_be_made(capsys, tmp_path):
     blocker = write(tmp_path, "blocker", "x")
     status, _, err = cli(capsys, "run", DEMO, "-d", blocker, "--no-cache")
