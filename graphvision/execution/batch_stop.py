@@ -162,14 +162,13 @@ def _local_folder() -> str:
     in memory (:data:`MEMORY`) when there is one this user may write to, else the system's
     temporary folder. Each file's claim is a file made in the flag: 0.3-1 ms of CPU on the
     disk of the project's cloud VM (ext4), 0.01 ms in memory, for the same locks."""
-    if os.path.isdir(MEMORY) and os.access(MEMORY, os.W_OK | os.X_OK) and _writable(MEMORY):
-        return MEMORY
-    return tempfile.gettempdir()
+    return MEMORY if _writable(MEMORY) else tempfile.gettempdir()
 
 
 def _writable(folder: str) -> bool:
-    """Whether a file can be made in ``folder`` now (a full ``/dev/shm``, Docker's 64 MB
-    one, refuses it although its mode allows it), as ``tempfile.gettempdir`` checks."""
+    """Whether a file can be made in ``folder`` now: it is there, this user may write to it,
+    and it has room (a full ``/dev/shm``, Docker's 64 MB one, refuses a file although its
+    mode allows it), as ``tempfile.gettempdir`` checks."""
     try:
         fd, name = tempfile.mkstemp(prefix=".graphvision-probe-", dir=folder)
     except OSError:

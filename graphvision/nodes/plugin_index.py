@@ -61,6 +61,7 @@ __all__ = [
     "has_index",
     "index_path",
     "installed_entry_points",
+    "metadata_folder",
     "package_digest",
     "read_index",
     "read_providers",
@@ -86,7 +87,7 @@ def installed_entry_points() -> list[EntryPoint]:
         if _stamp(files) == _ENTRY_POINTS[2]:
             return list(_ENTRY_POINTS[3])
     found = sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name)
-    folders = {getattr(e.dist, "_path", None) for e in found}  # (PathDistribution's)
+    folders = {metadata_folder(e.dist) for e in found}
     files = sorted(os.path.join(folder, "entry_points.txt") for folder in folders if folder)
     listed = _stamp(files)
     settled = stamp is not None and listed is not None
@@ -98,17 +99,31 @@ def installed_entry_points() -> list[EntryPoint]:
 _ENTRY_POINTS: list = []
 
 
+def metadata_folder(dist: Any) -> Any:
+    """The folder of a distribution's metadata (``*.dist-info``), or None: it names one
+    distribution where each entry point brings its own distribution object."""
+    return getattr(dist, "_path", None)  # (PathDistribution's; others have none)
+
+
+_SETTLED_NS = 2_000_000_000  # a status older than this is kept (see _file_digest)
+
+
+def _settled(status: os.stat_result) -> bool:
+    """Whether a file last changed over two seconds ago: the clock that stamps files is
+    coarse, so a status kept from a more recent change may not tell the next one."""
+    return time.time_ns() - max(status.st_mtime_ns, status.st_ctime_ns) > _SETTLED_NS
+
+
 def _stamp(paths: list[str]) -> tuple | None:
     """Each path's status, or None when one changed in the last two seconds."""
     stamp: list[tuple[str, int | None, int, int]] = []
-    settled = time.time_ns() - _SETTLED_NS
     for path in paths:
         try:
             status = os.stat(path or ".")
         except OSError:
             stamp.append((path, None, 0, 0))
             continue
-        if max(status.st_mtime_ns, status.st_ctime_ns) > settled:
+        if not _settled(status):
             return None
         stamp.append((path, status.st_ino, status.st_mtime_ns, status.st_ctime_ns))
     return tuple(stamp)
@@ -134,8 +149,7 @@ def environment_key(entries: list[EntryPoint]) -> str:
     releases: dict[object, str] = {}  # read once per distribution (parsing it is slow)
     for entry in entries:
         dist = entry.dist
-        # each entry point has its own distribution object: one per metadata folder
-        where = getattr(dist, "_path", id(dist))
+        where = metadata_folder(dist) or id(dist)
         if dist is not None and where not in releases:
             releases[where] = dist.read_text("METADATA") or dist.read_text("PKG-INFO") or ""
         release = releases[where] if dist is not None else ""
@@ -143,15 +157,12 @@ def environment_key(entries: list[EntryPoint]) -> str:
         packages.add(entry.value.partition(":")[0].partition(".")[0])
     for package in sorted(packages):
         hasher.update(f"package {package}\n".encode())
-        for file in _package_files(package):
-            hasher.update(f"{file}\n".encode())
-            hasher.update(_file_digest(file))
+        hasher.update(package_digest(package))
     return hasher.hexdigest()
 
 
 # A file's digest, kept with the status that stamped it: (inode, size, mtime, ctime).
 _DIGESTS: dict[str, tuple[tuple[int, int, int, int], bytes]] = {}
-_SETTLED_NS = 2_000_000_000  # a status older than this is kept (see _file_digest)
 
 
 def _file_digest(name: str) -> bytes:
@@ -181,7 +192,7 @@ def _file_digest(name: str) -> bytes:
             digest = xxhash.xxh3_128_digest(stream.read())
     except OSError:
         return b""
-    if time.time_ns() - max(status.st_mtime_ns, status.st_ctime_ns) > _SETTLED_NS:
+    if _settled(status):
         _DIGESTS[name] = (stamp, digest)
     return digest
 

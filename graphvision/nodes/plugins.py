@@ -31,6 +31,7 @@ from graphvision.nodes.plugin_index import (
     environment_key,
     has_index,
     installed_entry_points,
+    metadata_folder,
     package_digest,
     read_providers,
     write_index,
@@ -115,7 +116,7 @@ def _distribution_name(entry: EntryPoint) -> str:
     """The name of ``entry``'s distribution, its metadata parsed once per process (11 ms)."""
     dist = entry.dist
     assert dist is not None
-    where = getattr(dist, "_path", None)
+    where = metadata_folder(dist)
     if where is None:
         return str(dist.name)
     if where not in _DISTRIBUTION_NAMES:

@@ -141,8 +141,14 @@ def frozen_copy(array: np.ndarray, offset: int = 0) -> np.ndarray:
             del target, window
     elif array.nbytes:
         _fill(start + first, array)
-    frozen = np.frombuffer(owner, dtype, array.size, first)
-    return frozen if array.ndim == 1 else frozen.reshape(shape)
+    return _view(owner, dtype, array.size, first, shape)
+
+
+def _view(owner: bytes, dtype: np.dtype, size: int, at: int, shape: tuple[int, ...]) -> np.ndarray:
+    """The array of ``shape`` at byte ``at`` of ``owner`` (a 1-D one without a reshape: a
+    view less per table column)."""
+    flat = np.frombuffer(owner, dtype, size, at)
+    return flat if len(shape) == 1 else flat.reshape(shape)
 
 
 def _fill(address: int, array: np.ndarray) -> None:
@@ -275,15 +281,12 @@ def frozen_copies(arrays: list[np.ndarray], offsets: list[int] | None = None) ->
             _copy(window, at, source, start)
             done = at + source.nbytes
         window[done:] = zeros[: len(window) - done]
-    return [  # (a column is 1-D: no reshape, a view less per column)
-        _frombuffer(owner, source.dtype, source.size, first + begin)
-        if source.ndim == 1
-        else _frombuffer(owner, source.dtype, source.size, first + begin).reshape(source.shape)
+    return [
+        _view(owner, source.dtype, source.size, first + begin, source.shape)
         for source, begin in zip(sources, starts, strict=True)
     ]
 
 
-_frombuffer = np.frombuffer
 _ZERO_WINDOW = memoryview(_ZEROS)  # (a slice of it is no new bytes object)
 
 

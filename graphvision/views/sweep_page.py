@@ -234,11 +234,18 @@ def check_sweep_folder(
         (or that changed since, or is a link), or its ``sweep.json`` is not a graphvision
         manifest (:func:`~graphvision.execution.manifest.check_folder_files`).
     """
-    writing = None
-    if combinations is not None:
-        pages = (run_page_name(number) for number in range(1, combinations + 1))
-        writing = {"sweep.csv", "sweep.html", *(f"sweep_{o}.svg" for o in plots), *pages}
+    writing = None if combinations is None else _sweep_names(plots, combinations)
     check_folder_files(directory, SWEEP_FILES, writing)
+
+
+def _sweep_names(plots: Sequence[str], runs: int) -> set[str]:
+    """The files a sweep of ``runs`` combinations plotting ``plots`` writes."""
+    pages = (run_page_name(number) for number in range(1, runs + 1))
+    return {"sweep.csv", "sweep.html", *(_plot_name(output) for output in plots), *pages}
+
+
+def _plot_name(output: str) -> str:
+    return f"sweep_{output}.svg"
 
 
 def write_sweep(
@@ -256,7 +263,7 @@ def write_sweep(
     """
     contents = {"sweep.csv": result.csv_text()}
     for output in plots:
-        contents[f"sweep_{output}.svg"] = sweep_plot_svg(result, output)
+        contents[_plot_name(output)] = sweep_plot_svg(result, output)
     for number in range(1, len(result.records) + 1):
         contents[run_page_name(number)] = run_page(result, number, name)
     contents["sweep.html"] = sweep_html(result, name, list(plots))

@@ -85,10 +85,13 @@ def read_image_file(file: Path) -> np.ndarray:
     except Exception as error:  # Pillow and imageio raise many types for undecodable files
         reason = _what_is_wrong(file, error)
         raise ValueError(f"{file} is not a readable image ({reason})") from None
-    one_frame_stack = data.ndim == 4 or data.shape[-1] not in (2, 3, 4)  # (1, H, W[, C])
-    if data.ndim >= 3 and data.shape[0] == 1 and one_frame_stack:
-        data = data[0]
-    return data
+    return data[0] if _one_frame_stack(data.shape) else data
+
+
+def _one_frame_stack(shape: tuple[int, ...]) -> bool:
+    """Whether ``shape`` is a stack of one frame, (1, H, W[, C]), as imageio reads a still
+    GIF: the frame is the image."""
+    return len(shape) >= 3 and shape[0] == 1 and (len(shape) == 4 or shape[-1] not in (2, 3, 4))
 
 
 _PAGED_FORMATS = frozenset({"GIF", "PNG", "TIFF", "WEBP"})
@@ -149,9 +152,7 @@ def _read_with_imageio(file: Path, image: PILImageType | None) -> np.ndarray:
 
     properties = iio.improps(file)  # the header only: nothing is decoded yet
     shape = tuple(properties.shape)
-    if len(shape) == 4 and shape[0] == 1:  # a stack of one frame (a still GIF): that frame's
-        shape = shape[1:]
-    check_pixels(shape, str(file))
+    check_pixels(shape[1:] if _one_frame_stack(shape) else shape, str(file))
     frames = properties.n_images
     if frames is not None and frames > 1:
         raise _several_frames(file, frames)

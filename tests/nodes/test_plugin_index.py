@@ -127,13 +127,21 @@ def _edit_keeping_size_and_time(path: Path, old: str, new: str) -> None:
     assert path.stat().st_size == before.st_size
 
 
-def test_a_plugin_edit_shows_at_once(tmp_path):
-    """An installed plugin (an entry point of a distribution) edited between two commands."""
-    site = tmp_path / "site"
+def _distribution(site: Path) -> Path:
+    """A distribution ``fakeplug`` installed in ``site`` whose entry point is the package
+    ``fakeplug_nodes``; its ``entry_points.txt``."""
     dist = site / "fakeplug-1.0.dist-info"
     dist.mkdir(parents=True)
     (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: fakeplug\nVersion: 1.0\n")
-    (dist / "entry_points.txt").write_text("[graphvision.plugins]\nfakeplug = fakeplug_nodes\n")
+    listing = dist / "entry_points.txt"
+    listing.write_text("[graphvision.plugins]\nfakeplug = fakeplug_nodes\n")
+    return listing
+
+
+def test_a_plugin_edit_shows_at_once(tmp_path):
+    """An installed plugin (an entry point of a distribution) edited between two commands."""
+    site = tmp_path / "site"
+    _distribution(site)
     module = _package(site, "First summary of the node.")
     env = {**os.environ, "PYTHONPATH": str(site), "GRAPHVISION_CACHE_DIR": str(tmp_path / "c")}
 
@@ -198,10 +206,7 @@ def test_entry_points_are_listed_again_when_a_path_folder_changes(tmp_path, monk
     before = {e.name for e in _plugin_index.installed_entry_points()}
     assert _plugin_index._ENTRY_POINTS  # settled folders: the listing is kept
     _plugin_index.time.sleep(0.05)
-    dist = site / "fakeplug-1.0.dist-info"
-    dist.mkdir()
-    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: fakeplug\nVersion: 1.0\n")
-    (dist / "entry_points.txt").write_text("[graphvision.plugins]\nfakeplug = fakeplug_nodes\n")
+    _distribution(site)
     assert {e.name for e in _plugin_index.installed_entry_points()} == before | {"fakeplug"}
 
 
@@ -375,10 +380,7 @@ def test_a_process_that_loaded_a_plugin_before_its_edit_never_records_it(tmp_pat
     notebook or the studio open while the user edits): its registry holds the old code, so
     no index is written under the new key, and a fresh `nodes` shows the edit."""
     site = tmp_path / "site"
-    dist = site / "fakeplug-1.0.dist-info"
-    dist.mkdir(parents=True)
-    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: fakeplug\nVersion: 1.0\n")
-    (dist / "entry_points.txt").write_text("[graphvision.plugins]\nfakeplug = fakeplug_nodes\n")
+    _distribution(site)
     module = _package(site, "First summary of the node.")
     env = {**os.environ, "PYTHONPATH": str(site), "GRAPHVISION_CACHE_DIR": str(tmp_path / "c")}
     script = textwrap.dedent(
@@ -405,11 +407,7 @@ def test_entry_points_are_listed_again_when_a_distributions_file_is_edited_in_pl
     """A distribution's entry_points.txt rewritten where it is (its folder unchanged):
     the next listing in the same process reads it."""
     site = tmp_path / "site"
-    dist = site / "fakeplug-1.0.dist-info"
-    dist.mkdir(parents=True)
-    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: fakeplug\nVersion: 1.0\n")
-    listing = dist / "entry_points.txt"
-    listing.write_text("[graphvision.plugins]\nfakeplug = fakeplug_nodes\n")
+    listing = _distribution(site)
     monkeypatch.syspath_prepend(str(site))
     later = _plugin_index.time.time_ns() + 10 * _plugin_index._SETTLED_NS
     monkeypatch.setattr(_plugin_index.time, "time_ns", lambda: later)
