@@ -105,14 +105,16 @@ def _refuse_several_frames(file: Path, image: PILImageType) -> None:
     if image.format in _PAGED_FORMATS:
         frames = getattr(image, "n_frames", 1)
         if frames > 1:
-            raise _several_frames(file, frames)
+            raise _several_frames(file, frames, "page" if image.format == "TIFF" else "index")
 
 
-def _several_frames(file: Path, frames: int) -> _FramesError:
+def _several_frames(file: Path, frames: int, pick: str = "index") -> _FramesError:
+    """What to do with a file of several frames; ``pick``: imageio's argument that reads
+    one of them (a TIFF's ``index`` is a whole series, its ``page`` one page)."""
     return _FramesError(
         f"{file} holds {frames} frames (an animation or a multi-page file); "
         "graphvision reads one still image: save the frame you want as PNG "
-        "(e.g. imageio.v3.imwrite('frame.png', imageio.v3.imread(path, index=0))) "
+        f"(e.g. imageio.v3.imwrite('frame.png', imageio.v3.imread(path, {pick}=0))) "
         "or run --batch over the frames saved as files"
     )
 

@@ -5,6 +5,7 @@ every mode and format graphvision reads; other files still go through imageio.""
 from __future__ import annotations
 
 import contextlib
+import re
 import struct
 import zlib
 from collections.abc import Callable
@@ -214,8 +215,17 @@ def test_an_animation_or_a_multi_page_file_is_refused_before_it_is_decoded(tmp_p
     path = tmp_path / f"anim{suffix}"
     first, *rest = frames("P" if suffix == ".gif" else "RGB")
     first.save(path, save_all=True, append_images=rest)
-    with pytest.raises(ValueError, match=f"anim{suffix} holds 2 frames .* save the frame you"):
+    with pytest.raises(
+        ValueError, match=f"anim{suffix} holds 2 frames .* save the frame you"
+    ) as refused:
         read_array(str(path))
+    # the call the message suggests gives a still image graphvision reads (a TIFF's
+    # index=0 was its whole series: a file of two frames again)
+    suggested = re.search(r"imageio\.v3\.imread\(path, (\w+)=0\)", str(refused.value))
+    assert suggested is not None
+    frame = tmp_path / "frame.png"
+    iio.imwrite(frame, iio.imread(path, **{suggested[1]: 0}))
+    assert read_array(str(frame)).shape == iio.imread(path, **{suggested[1]: 0}).shape[-3:]
 
 
 def test_a_still_gif_runs_as_its_one_frame(tmp_path):
