@@ -43,6 +43,7 @@ PILLOW_SUFFIXES = frozenset({".bmp", ".jfif", ".jpe", ".jpeg", ".jpg", ".png", "
 _PILLOW_FORMATS = frozenset({"BMP", "JPEG", "PNG", "WEBP"})
 _PILLOW_MODES = frozenset({"1", "CMYK", "I;16", "L", "LA", "P", "RGB", "RGBA"})
 _PILLOW_TRUNCATED = ("image file is truncated", "Truncated File Read")  # Pillow's OSErrors
+_NO_READER = "Could not find a backend to open"  # imageio's OSError: no plugin reads the file
 
 
 def read_image_file(file: Path) -> np.ndarray:
@@ -166,13 +167,15 @@ def _read_with_imageio(file: Path, image: PILImageType | None) -> np.ndarray:
 
 def _what_is_wrong(file: Path, error: Exception) -> str:
     """Why a file is not a readable image, in words where they are known (empty,
-    truncated), or else the error's type."""
+    truncated, a format nothing installed reads), or else the error's type."""
     with contextlib.suppress(OSError):
         size = file.stat().st_size
         if size == 0:
             return "the file is empty"
         if str(error).startswith(_PILLOW_TRUNCATED):
             return f"the file is truncated: its {size:,} bytes end before the image does"
+    if str(error).startswith(_NO_READER):
+        return "neither Pillow nor imageio knows its format: save it as PNG, JPEG or TIFF"
     return type(error).__name__
 
 

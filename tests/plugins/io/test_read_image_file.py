@@ -186,19 +186,21 @@ def test_imageio_tries_pillow_first_for_the_suffixes_read_once():
         assert known_extensions[suffix][0].priority[0] == "pillow", suffix
 
 
-def test_an_empty_or_truncated_file_says_so(folder, tmp_path):
+def test_an_empty_truncated_or_unknown_file_says_so(folder, tmp_path):
     whole = (folder / "rgb.png").read_bytes()
     (tmp_path / "empty.png").write_bytes(b"")
     (tmp_path / "cut.png").write_bytes(whole[:60])
     (tmp_path / "cut.jpg").write_bytes((folder / "rgb.jpg").read_bytes()[:300])
     (tmp_path / "cut.tif").write_bytes(b"")
     (tmp_path / "text.png").write_text("not a png")
+    (tmp_path / "notes.txt").write_text("not an image at all")
     for name, reason in (
         ("empty.png", r"\(the file is empty\)"),
         ("cut.tif", r"\(the file is empty\)"),
         ("cut.png", r"\(the file is truncated: its 60 bytes end before the image does\)"),
         ("cut.jpg", r"\(the file is truncated: its 300 bytes end before the image does\)"),
-        ("text.png", r"\(OSError\)"),
+        ("text.png", r"\(neither Pillow nor imageio knows its format: save it as PNG, .*\)"),
+        ("notes.txt", r"\(neither Pillow nor imageio knows its format: save it as PNG, .*\)"),
     ):
         with pytest.raises(ValueError, match=f"{name} is not a readable image {reason}$"):
             read_array(str(tmp_path / name))
