@@ -57,6 +57,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from graphvision.execution.batch_files import BatchItem
+from graphvision.execution.flag_folder import local_folder
 from graphvision.execution.owned import RECORD
 
 try:
@@ -69,7 +70,6 @@ __all__ = ["INTERRUPTED", "STOP_FOLDER", "Claim", "StopFlag", "writing"]
 INTERRUPTED = "the batch stopped while this file ran; re-run the batch to finish it"
 
 STOP_FOLDER = ".graphvision-stop-"  # a Dask batch's flag, in its output folder
-MEMORY = "/dev/shm"  # a file system in memory (Linux): where a local batch's flag is made
 _STOPPED = "stopped"
 _CLAIM = "writing-"
 _RECORD_KEY = "record_before"  # in a claim: the folder's record.json digest when claimed
@@ -157,28 +157,6 @@ def _is_flag(folder: Path, prefix: str) -> bool:
     return all(name in _FLAG_FILES or name.startswith(_FLAG_PREFIXES) for name in names)
 
 
-def _local_folder() -> str:
-    """Where a batch whose writers are all on this machine keeps its flag: the file system
-    in memory (:data:`MEMORY`) when there is one this user may write to, else the system's
-    temporary folder. Each file's claim is a file made in the flag: 0.3-1 ms of CPU on the
-    disk of the project's cloud VM (ext4), 0.01 ms in memory, for the same locks."""
-    return MEMORY if _writable(MEMORY) else tempfile.gettempdir()
-
-
-def _writable(folder: str) -> bool:
-    """Whether a file can be made in ``folder`` now: it is there, this user may write to it,
-    and it has room (a full ``/dev/shm``, Docker's 64 MB one, refuses a file although its
-    mode allows it), as ``tempfile.gettempdir`` checks."""
-    try:
-        fd, name = tempfile.mkstemp(prefix=".graphvision-probe-", dir=folder)
-    except OSError:
-        return False
-    os.close(fd)
-    with contextlib.suppress(OSError):
-        os.unlink(name)
-    return True
-
-
 class StopFlag:
     """The flag of one batch, in ``folder`` (see the module docstring); picklable."""
 
@@ -187,12 +165,12 @@ class StopFlag:
 
     @classmethod
     def planned(cls, inside: Path | None = None) -> StopFlag:
-        """A new flag, made by :meth:`create`: a folder on this machine (:func:`_local_folder`),
-        or a hidden one ``inside`` a folder (a Dask batch's output folder, which its
-        workers share)."""
+        """A new flag, made by :meth:`create`: a folder on this machine
+        (:func:`~graphvision.execution.flag_folder.local_folder`), or a hidden one ``inside``
+        a folder (a Dask batch's output folder, which its workers share)."""
         token = uuid.uuid4().hex[:_TOKEN]
         if inside is None:
-            return cls(str(Path(_local_folder(), f"graphvision-batch-{token}")))
+            return cls(str(Path(local_folder(), f"graphvision-batch-{token}")))
         return cls(str(inside / f"{STOP_FOLDER}{token}"))
 
     @classmethod
@@ -273,12 +251,8 @@ class StopFlag:
         try:
             fd, temp = tempfile.mkstemp(prefix=".claim-", dir=self.folder)
         except OSError as error:
-            if not os.path.isdir(self.folder):  # the flag's folder is gone
-                return None
-            raise OSError(
-                error.errno,
-                f"cannot mark {folder} as being written in {self.folder}: {error.strerror}",
-            ) from None
+            self._raise_unless_gone(folder, error)
+            return None
         try:
             os.write(fd, json.dumps({_RECORD_KEY: record}).encode())
             if fcntl is not None:  # a file system without locks: alive until written
@@ -286,12 +260,21 @@ class StopFlag:
                     fcntl.flock(fd, fcntl.LOCK_EX)
             claim = Path(self.folder, self.name(folder))
             os.replace(temp, claim)
-        except OSError:
+        except OSError as error:  # (a full file system makes the file, then refuses its bytes)
             os.close(fd)
             with contextlib.suppress(OSError):
                 os.unlink(temp)
+            self._raise_unless_gone(folder, error)
             return None
         return claim, fd
+
+    def _raise_unless_gone(self, folder: str | Path, error: OSError) -> None:
+        """The claim's ``error``, naming the folder, unless the flag is gone (no claim)."""
+        if os.path.isdir(self.folder):
+            raise OSError(
+                error.errno,
+                f"cannot mark {folder} as being written in {self.folder}: {error.strerror}",
+            ) from None
 
     @contextlib.contextmanager
     def writing(self, folder: str | Path, stopped: Callable[[], bool] | None) -> Iterator[Claim]:

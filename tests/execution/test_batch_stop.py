@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 import graphvision as gv
-from graphvision.execution import batch_stop
+from graphvision.execution import batch_stop, flag_folder
 from graphvision.execution.batch_files import BatchItem
 from graphvision.execution.batch_stop import StopFlag
 
@@ -196,7 +196,7 @@ def test_a_local_batchs_flag_and_claims_are_made_in_memory_where_the_machine_has
 
     memory, folder = tmp_path / "shm", tmp_path / "out" / "photo-1"
     memory.mkdir()
-    monkeypatch.setattr(batch_stop, "MEMORY", str(memory))
+    monkeypatch.setattr(flag_folder, "MEMORY", str(memory))
     flag = StopFlag.make()
     try:
         assert Path(flag.folder).parent == memory
@@ -206,7 +206,7 @@ def test_a_local_batchs_flag_and_claims_are_made_in_memory_where_the_machine_has
     finally:
         flag.remove()
     assert list(memory.iterdir()) == []
-    monkeypatch.setattr(batch_stop, "MEMORY", str(tmp_path / "no-shm"))
+    monkeypatch.setattr(flag_folder, "MEMORY", str(tmp_path / "no-shm"))
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
     assert Path(StopFlag.planned().folder).parent == tmp_path / "tmp"
 
@@ -219,7 +219,7 @@ def test_a_full_memory_folder_leaves_the_flag_in_the_temporary_folder(tmp_path, 
 
     memory = tmp_path / "shm"
     memory.mkdir()
-    monkeypatch.setattr(batch_stop, "MEMORY", str(memory))
+    monkeypatch.setattr(flag_folder, "MEMORY", str(memory))
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     made = tempfile.mkstemp
 
@@ -269,7 +269,7 @@ def test_files_after_their_flag_was_removed_are_interrupted_not_ok(tmp_path, mon
 
     memory = tmp_path / "shm"  # this batch's alone
     memory.mkdir()
-    monkeypatch.setattr(batch_stop, "MEMORY", str(memory))
+    monkeypatch.setattr(flag_folder, "MEMORY", str(memory))
     graph, registry, files = _batch_of_three(tmp_path)
 
     def remove_flags(number: int, total: int, item: BatchItem) -> None:
@@ -290,3 +290,55 @@ def test_files_after_their_flag_was_removed_are_interrupted_not_ok(tmp_path, mon
     statuses = [item.status for item in result.items]
     assert statuses[0] == "ok" and statuses[1:] == ["interrupted", "interrupted"]
     assert [item.output_dir.exists() for item in result.items] == [True, False, False]
+
+
+def _bytes_refused_in(folder: Any, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A full tmpfs: a file is made in ``folder``, then its first byte refused."""
+    import os
+
+    made, names = os.write, {}
+    opened = batch_stop.tempfile.mkstemp
+
+    def mkstemp(*args: Any, **kwargs: Any) -> Any:
+        fd, name = opened(*args, **kwargs)
+        names[fd] = name
+        return fd, name
+
+    def write(fd: int, data: bytes) -> int:
+        if str(names.get(fd, "")).startswith(str(folder)):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return made(fd, data)
+
+    monkeypatch.setattr(batch_stop.tempfile, "mkstemp", mkstemp)
+    monkeypatch.setattr(os, "write", write)
+
+
+def test_a_memory_folder_that_makes_files_but_refuses_bytes_is_not_used(tmp_path, monkeypatch):
+    import tempfile
+    from pathlib import Path
+
+    memory = tmp_path / "shm"
+    memory.mkdir()
+    monkeypatch.setattr(flag_folder, "MEMORY", str(memory))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    _bytes_refused_in(memory, monkeypatch)
+    assert Path(StopFlag.planned().folder).parent == tmp_path
+    assert list(memory.iterdir()) == []  # its probe removed
+
+
+def test_a_claim_whose_bytes_are_refused_fails_its_file_naming_why(tmp_path, monkeypatch):
+    """/dev/shm filled while the batch runs: the claim's file is made, its bytes refused;
+    the file fails with the reason (it was 'interrupted', re-running never helped)."""
+    memory = tmp_path / "shm"
+    memory.mkdir()
+    monkeypatch.setattr(flag_folder, "MEMORY", str(memory))
+    graph, registry, files = _batch_of_three(tmp_path)
+    _bytes_refused_in(memory / "graphvision-batch-", monkeypatch)  # the flag's, not the probe's
+    result = gv.run_batch(
+        graph, files, input="image", output_dir=tmp_path / "out", registry=registry,
+        executor="sync", cache=None,
+    )  # fmt: skip
+    for item in result.items:
+        assert item.status == "failed" and not item.output_dir.exists()
+        assert f"cannot mark {item.output_dir} as being written in" in item.error
+        assert "No space left on device" in item.error
