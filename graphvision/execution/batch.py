@@ -379,8 +379,9 @@ def _stream(batch: BatchRun, at_once: int) -> Iterator[tuple[int, BatchItem]]:
         return
     yield 0, run_one(0)
     if batch.one_task_per_file and at_once > 1:
-        lanes = FileLanes(count, at_once, batch.workers_ready, lambda: batch.stopped)
-        yield from lanes.stream(run_one, batch.run_in_client if batch.client_files else None)
+        ready, stopped = batch.workers_ready, lambda: batch.stopped
+        lanes = FileLanes(count, at_once, ready, stopped, batch.lane_files)
+        yield from lanes.stream(batch.run_files, batch.client_lane())
         return
     if at_once <= 1:
         for index in range(1, count):

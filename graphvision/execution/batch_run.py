@@ -10,6 +10,7 @@ import pickle
 import threading
 import uuid
 import warnings
+from collections.abc import Callable
 from concurrent.futures import Future
 from pathlib import Path
 from typing import Any
@@ -19,6 +20,7 @@ from graphvision.execution.batch_files import BatchItem, BatchPages, unreadable_
 from graphvision.execution.batch_items import could_not_start, plain_graph, run_file, run_item
 from graphvision.execution.batch_stop import INTERRUPTED, StopFlag, writing
 from graphvision.execution.batch_write import failure_reason, finish_item
+from graphvision.execution.dask_worker import run_files
 from graphvision.execution.executors import (
     Executor,
     SyncExecutor,
@@ -130,15 +132,64 @@ class BatchRun:
         self.stop.dropped(self.folders[index])
         return item
 
+    def run_files(self, indices: list[int]) -> list[tuple[int, BatchItem]]:
+        """Files after the first, as one task of the executor when there are several (see
+        :mod:`graphvision.execution.batch_lanes`): each file's ``(index, item)``. A file that
+        failed in a task that failed whole (its worker died) is settled as :meth:`_on_worker`
+        settles it, then, unless written whole, runs again as a task of its own: only the
+        file at fault fails."""
+        if len(indices) == 1 or not self.one_task_per_file:
+            return [(index, self.run_one(index)) for index in indices]
+        found, sent = {}, []
+        for index in indices:
+            self.started.add(index)
+            path = self.paths[index]
+            reason = unreadable_reason(path)
+            if reason:
+                error = f"{path} {reason}"
+                found[index] = BatchItem(path, self.folders[index], "failed", error=error)
+            else:
+                sent.append(index)
+        files = [(str(self.paths[k]), str(self.folders[k])) for k in sent]
+        outcomes: list[Any] = [None] * len(sent)
+        with contextlib.suppress(Exception):  # the task failed whole: each file on its own
+            outcomes = self.pool.submit(run_files, run_file_task, self.job, files).result()[0]
+        for index, outcome in zip(sent, outcomes, strict=True):
+            if not isinstance(outcome, FileOutcome):  # it raised, or its worker died
+                outcome = self._settled(index) or self._alone(index)
+            self.outcomes.append(outcome)
+            found[index] = self._received(index, outcome.item)
+        return [(index, found[index]) for index in indices]
+
+    def _alone(self, index: int) -> FileOutcome:
+        """A file of a task that failed, run again as a task of its own (not once the batch
+        has stopped: then it is interrupted)."""
+        if self.stopped:
+            return FileOutcome(
+                BatchItem(self.paths[index], self.folders[index], "interrupted", error=INTERRUPTED)
+            )
+        return self._on_worker(index)
+
     def _on_worker(self, index: int) -> FileOutcome:
         """One file as one task of the executor. A task whose worker died (and died again,
-        or could not start again: the executor retries once) counts as its claim says: a
-        folder written whole is the file's, one left half-way is cleared; when no worker
-        could start, the file runs once more here, as the client's own files do."""
+        or could not start again: the executor retries once) counts as its claim says
+        (:meth:`_settled`); when no worker could start, the file runs once more here, as the
+        client's own files do."""
         path, folder = self.paths[index], self.folders[index]
         outcome, died = run_file(self.pool, self.job, path, folder)
         if died is None:
             return outcome
+        kept = self._settled(index)
+        if kept is not None:
+            return kept
+        if could_not_start(died) and self.job_sent is not None and not self.stopped:
+            return FileOutcome(self.run_in_client(index, "in the client: no worker could start"))
+        return outcome
+
+    def _settled(self, index: int) -> FileOutcome | None:
+        """A file whose task failed, as its claim says: its folder written whole is the
+        file's (its outcome); one left half-way is cleared, its claim dropped (None)."""
+        folder = self.folders[index]
         name = StopFlag.name(folder)
         kept = self.stop.left().get(name, "no claim")
         if isinstance(kept, BatchItem):  # written whole before its worker died
@@ -148,9 +199,21 @@ class BatchRun:
                 folder, self.wanted_outputs(), placed=self.stop.placed_record(name, folder)
             )
         self.stop.dropped(folder)
-        if could_not_start(died) and self.job_sent is not None and not self.stopped:
-            return FileOutcome(self.run_in_client(index, "in the client: no worker could start"))
-        return outcome
+        return None
+
+    def client_lane(self) -> Callable[[list[int]], list[tuple[int, BatchItem]]] | None:
+        """The client's lane of files while the workers start, when it has one."""
+        if not self.client_files:
+            return None
+        return lambda indices: [(index, self.run_in_client(index)) for index in indices]
+
+    @property
+    def lane_files(self) -> int:
+        """Files a lane sends to the executor as one task: its ``files_per_task``, unless it
+        groups the files itself (Dask's ``files_at_once``)."""
+        if hasattr(self.pool, "files_at_once"):
+            return 1
+        return int(getattr(self.pool, "files_per_task", 1))
 
     def wanted_outputs(self) -> list[str]:
         """The outputs each file's folder holds."""
@@ -315,6 +378,6 @@ class BatchRun:
 
 def _tasks(pool: Any) -> str:
     """How a batch's files go to ``pool``'s workers, as its records say: several a task on
-    an executor that groups them (``files_per_task``, Dask), else one each."""
+    an executor that groups them (``files_per_task``: processes, Dask), else one each."""
     per_task = getattr(pool, "files_per_task", 1)
     return f"up to {per_task} files a task" if per_task > 1 else "one task per file"

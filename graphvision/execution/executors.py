@@ -12,9 +12,8 @@ by name with :func:`make_executor`:
     A process pool, its workers forked from a server that has imported
     graphvision and the plugins (:mod:`~graphvision.execution.worker_start`).
     The node function travels as a :class:`~graphvision.nodes.node.FunctionRef`
-    (imported by name in the worker, local plugin files by path) and values travel
-    in their port type's encoding (named arrays and a JSON header), never as
-    pickled objects.
+    (imported by name in the worker, local plugin files by path); values travel in
+    their port type's encoding (named arrays and a JSON header), never pickled.
 """
 
 from __future__ import annotations
@@ -171,6 +170,7 @@ class _Processes:
 
     encodes_values = True
     name = "processes"
+    files_per_task = 8  # files a batch's lane sends as one task (execution.batch_lanes)
 
     def __init__(self, workers: int) -> None:
         self._workers = workers

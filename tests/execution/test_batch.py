@@ -343,7 +343,7 @@ def test_files_at_once_1_runs_files_one_after_another(tmp_path):
     assert lines == ["start", "end"] * 3
 
 
-def test_on_processes_each_further_file_is_one_task_with_the_shared_values_sent(tmp_path):
+def test_on_processes_further_files_go_in_tasks_with_the_shared_values_sent(tmp_path):
     from graphvision.execution.file_task import shared_steps
 
     graph, registry, log = _counting_graph(tmp_path)
@@ -368,7 +368,7 @@ def test_on_processes_each_further_file_is_one_task_with_the_shared_values_sent(
         assert record["outputs"]["score"].startswith("Float")
     assert log.read_text().splitlines().count("model") == 1  # seeded, never recomputed
     later = json.loads((batch.items[-1].output_dir / "record.json").read_text())
-    assert "one task per file" in later["executor"]
+    assert later["executor"] == "processes, up to 8 files a task"
     statuses = {node["name"]: node["status"] for node in later["nodes"]}
     assert statuses == {"model": "cached", "score": "computed"}
 
@@ -407,7 +407,7 @@ def test_a_batch_run_again_on_processes_loads_every_file_from_the_cache(tmp_path
     runs = log.read_text().count("start")
     assert runs == len(files)
     later = json.loads((first.items[-1].output_dir / "record.json").read_text())
-    assert later["executor"] == "processes, one task per file"
+    assert later["executor"] == "processes, up to 8 files a task"
     again = gv.run_batch(graph, [str(f) for f in files], **options)
     assert log.read_text().count("start") == runs  # nothing computed the second time
     assert [i.scalars for i in again.items] == [i.scalars for i in first.items]

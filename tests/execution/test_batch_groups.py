@@ -1,0 +1,91 @@
+"""On the process pool a batch's lanes send several files as one task
+(graphvision.execution.batch_lanes): tasks shrink to one file as the batch ends, every
+file runs once, and a node that kills its worker fails its own file alone."""
+
+from __future__ import annotations
+
+import json
+import threading
+
+import pytest
+
+import graphvision as gv
+from graphvision.execution.batch_files import BatchItem
+from graphvision.execution.batch_lanes import FileLanes
+
+from .test_batch import photo
+
+CRASHING_PLUGIN = '''
+import os
+
+import numpy as np
+
+from graphvision import Float, Image, node
+
+
+@node("crashy.score")
+def score(image: Image) -> Float:
+    """The image's mean; a worker process given the image of level 77 dies."""
+    mean = float(np.mean(image))
+    if round(mean * 255) == 77 and os.getpid() != int(os.environ["CLIENT_PID"]):
+        os._exit(3)
+    return mean
+'''
+
+
+def test_lanes_take_up_to_per_task_files_and_one_at_a_time_at_the_end():
+    ready = threading.Event()
+    ready.set()
+    taken: list[list[int]] = []
+    lock = threading.Lock()
+
+    def lane(indices: list[int]) -> list[tuple[int, BatchItem]]:
+        with lock:
+            taken.append(indices)
+        return [(k, BatchItem(f"{k}.png", f"out/{k}")) for k in indices]  # type: ignore[arg-type]
+
+    lanes = FileLanes(201, 4, ready, lambda: False, per_task=8)
+    done = sorted(index for index, _ in lanes.stream(lane, None))
+    assert done == list(range(1, 201))  # every file once
+    assert sorted(k for indices in taken for k in indices) == done
+    sizes = sorted((len(indices) for indices in taken), reverse=True)
+    assert sizes[0] == 8 and sizes[-4:] == [1, 1, 1, 1]  # the last files alone
+    assert len(taken) < 60  # against 200 tasks of one file
+    for indices in taken:  # consecutive files in a task
+        assert indices == list(range(indices[0], indices[0] + len(indices)))
+
+
+def test_a_node_that_kills_its_worker_in_a_task_of_several_files_fails_that_file_alone(
+    tmp_path, monkeypatch
+):
+    monkeypatch.setenv("CLIENT_PID", str(__import__("os").getpid()))
+    plugin = tmp_path / "crashy.py"
+    plugin.write_text(CRASHING_PLUGIN)
+    registry = gv.discover([plugin])
+    graph = gv.Graph("crashy")
+    graph.output("score", graph.add("score", "crashy.score", image=graph.input("image", "Image")))
+    levels = [10 + 3 * k for k in range(30)]
+    levels[3] = 77  # in the batch's first task of several files
+    files = [photo(tmp_path / "in" / f"{k:02d}.png", level) for k, level in enumerate(levels)]
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        cache=None,
+        executor="processes",
+        workers=2,
+        client_files=False,
+    )
+    status = [item.status for item in batch.items]
+    assert status == ["ok"] * 3 + ["failed"] + ["ok"] * 26, batch.items
+    assert "again when retried alone" in batch.items[3].error
+    assert not (tmp_path / "out" / "03").exists()  # no half of a folder
+    for item, level in zip(batch.items, levels, strict=True):
+        if item.status == "ok":
+            assert item.scalars["score"] == pytest.approx(level / 255.0, abs=1e-6)
+            record = json.loads((item.output_dir / "record.json").read_text())
+            assert record["outputs"]["score"].startswith("Float")
+    later = json.loads((batch.items[-1].output_dir / "record.json").read_text())
+    assert later["executor"] == "processes, up to 8 files a task"
