@@ -57,13 +57,14 @@ def _metrics(item: BatchItem) -> str:
     return f'<table class="metrics">{rows}</table>' if rows else ""
 
 
-def _card(item: BatchItem, out_dir: Path) -> str:
-    folder = Path(item.output_dir)
-    pictures = sorted(folder.glob("*.png")) if folder.is_dir() else []
-    page = folder / "report.html"
+def _card(item: BatchItem, out_dir: str) -> str:
+    """One file's card; ``out_dir`` is the batch's folder as an absolute path."""
+    folder = os.path.abspath(item.output_dir)
+    names = _file_names(folder)
+    pictures = sorted(name for name in names if name.endswith(".png"))
     image = (
-        f'<img loading="lazy" alt="{escape(pictures[0].name)}" '
-        f'src="{escape(_relative(pictures[0], out_dir))}">'
+        f'<img loading="lazy" alt="{escape(pictures[0])}" '
+        f'src="{escape(_relative(os.path.join(folder, pictures[0]), out_dir))}">'
         if pictures
         else '<div class="none">no picture</div>'
     )
@@ -73,9 +74,20 @@ def _card(item: BatchItem, out_dir: Path) -> str:
         f"<small>{escape(item.status)}, {item.seconds:.2f} s</small>{_metrics(item)}{error}"
     )
     kind = "ok" if item.status == "ok" else "bad"
-    if page.is_file():  # a failed or interrupted file has no page to link to
-        return f'<a class="card {kind}" href="{escape(_relative(page, out_dir))}">{body}</a>'
+    if "report.html" in names:  # a failed or interrupted file has no page to link to
+        page = _relative(os.path.join(folder, "report.html"), out_dir)
+        return f'<a class="card {kind}" href="{escape(page)}">{body}</a>'
     return f'<div class="card {kind}">{body}</div>'
+
+
+def _file_names(folder: str) -> set[str]:
+    """The names of the files in ``folder`` (links followed; none when it is not a folder),
+    read in one listing: a card used to ask of each folder four times."""
+    try:
+        with os.scandir(folder) as entries:
+            return {entry.name for entry in entries if entry.is_file()}
+    except OSError:
+        return set()
 
 
 def batch_page(items: Sequence[BatchItem], out_dir: Path) -> str:
@@ -85,7 +97,8 @@ def batch_page(items: Sequence[BatchItem], out_dir: Path) -> str:
     Pictures are linked from the item folders (a batch of thousands stays a
     small page).
     """
-    cards = [_card(item, out_dir) for item in items]
+    start = os.path.abspath(out_dir)
+    cards = [_card(item, start) for item in items]
     failed = sum(item.status != "ok" for item in items)
     name, source = _pipeline(items)
     title = f"{name}: " if name else ""
@@ -98,10 +111,11 @@ def batch_page(items: Sequence[BatchItem], out_dir: Path) -> str:
     )
 
 
-def _relative(path: Path, start: Path) -> str:
-    """``path`` as a relative URL from ``start``: percent-encoded, starting ``./`` or
-    ``../``, so no file name can become a scheme (``javascript:``), a query or a fragment."""
-    relative = Path(os.path.relpath(path, start)).as_posix()
+def _relative(path: str, start: str) -> str:
+    """``path`` as a relative URL from ``start`` (both absolute): percent-encoded, starting
+    ``./`` or ``../``, so no file name can become a scheme (``javascript:``), a query or a
+    fragment."""
+    relative = os.path.relpath(path, start).replace(os.sep, "/")
     url = quote(relative, safe="/")
     return url if url.startswith("../") else f"./{url}"
 
