@@ -36,6 +36,7 @@ from graphvision.execution.worker_start import (
     ClientStdio,
     context,
     fork_context,
+    process_pool,
     start_server,
 )
 from graphvision.nodes.spec import FunctionRef
@@ -180,12 +181,8 @@ class _Processes:
         self._pool = self._new_pool()
 
     def _new_pool(self, workers: int = 0) -> ProcessPoolExecutor:
-        return ProcessPoolExecutor(
-            max_workers=workers or self._workers,
-            mp_context=context(),
-            initializer=_worker_setup,
-            initargs=(dict(os.environ), ClientStdio()),
-        )
+        setup = (dict(os.environ), ClientStdio())
+        return process_pool(workers or self._workers, context(), _worker_setup, setup)
 
     def preload(self, modules: list[str]) -> None:
         """Start the workers' server in the background, importing ``modules`` too (the
@@ -203,7 +200,7 @@ class _Processes:
         with self._lock:
             old, self._pool = (
                 self._pool,
-                ProcessPoolExecutor(self._workers, forked, _worker_setup, setup),
+                process_pool(self._workers, forked, _worker_setup, setup),
             )
         old.shutdown(wait=False)
         return True

@@ -67,6 +67,7 @@ import signal
 import sys
 import threading
 from collections.abc import Iterable
+from concurrent.futures import ProcessPoolExecutor
 from multiprocessing.context import BaseContext
 from typing import Any
 
@@ -77,6 +78,7 @@ __all__ = [
     "ClientStdio",
     "context",
     "fork_context",
+    "process_pool",
     "start_server",
     "warm_server",
 ]
@@ -115,6 +117,28 @@ def fork_context() -> BaseContext | None:
     if parallel is not None and getattr(parallel, "_is_initialized", False):
         return None  # a threading layer (OpenMP, TBB) whose threads a fork does not carry
     return multiprocessing.get_context("fork")
+
+
+def process_pool(workers: int, start: BaseContext, *setup: Any) -> ProcessPoolExecutor:
+    """A process pool of ``workers`` started by ``start``, each running ``setup`` (the
+    initializer and its arguments) first.
+
+    Raises
+    ------
+    OSError
+        When the pool cannot make its semaphores, saying so and where they live (on Linux,
+        POSIX semaphores are files in ``/dev/shm``: a full one, Docker's 64 MB, refused
+        them with a bare "No space left on device").
+    """
+    try:
+        return ProcessPoolExecutor(workers, start, *setup)
+    except OSError as error:
+        where = "in /dev/shm" if os.path.isdir("/dev/shm") else "in the system's shared memory"
+        raise OSError(
+            error.errno,
+            f"the process pool cannot make its semaphores {where} ({error.strerror}): free "
+            "space there, or use the threads executor",
+        ) from None
 
 
 def _is_bar_monitor(thread: Any) -> bool:
