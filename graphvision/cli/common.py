@@ -113,19 +113,44 @@ def positive_seconds(text: str) -> float:
     return seconds
 
 
-def check_overrides(graph: Graph, registry: Registry, overrides: dict[str, Any], flag: str) -> None:
+def check_overrides(
+    graph: Graph, registry: Registry, overrides: dict[str, Any], flag: str, swept: bool = False
+) -> None:
     """Refuse, naming the command line, every override of a node or parameter that does not
-    exist (all of them at once, one line each)."""
-    problems = [
-        f"{flag} {key}={value!r}: {problem}"
-        for key, value in overrides.items()
-        if (problem := _unknown_target(graph, registry, key))
-    ]
+    exist and every value its parameter refuses (all of them at once, one line each);
+    ``swept``: each override holds a list of values (``--grid``)."""
+    problems, unknown = [], 0
+    for key, value in overrides.items():
+        if problem := _unknown_target(graph, registry, key):
+            problems.append(f"{flag} {key}={value!r}: {problem}")
+            unknown += 1
+            continue
+        for each in value if swept else [value]:
+            problems += [
+                f"{flag} {key}={each!r}: {said}" for said in _refused(graph, registry, key, each)
+            ]
     if len(problems) == 1:
         raise UsageError(problems[0])
     if problems:
         listed = "".join(f"\n  - {problem}" for problem in problems)
-        raise UsageError(f"{len(problems)} overrides name nothing in the pipeline:{listed}")
+        what = "name nothing in the pipeline" if unknown == len(problems) else "are refused"
+        raise UsageError(f"{len(problems)} overrides {what}:{listed}")
+
+
+def _refused(graph: Graph, registry: Registry, key: str, value: Any) -> list[str]:
+    """Why the parameter ``key`` (NODE.PARAM, which exists) refuses ``value`` on its own;
+    nothing for a pipeline param, whose values the nodes using it check."""
+    import pydantic
+
+    target, _, param = key.partition(".")
+    spec = registry.nodes.get(graph.nodes[target].op) if target in graph.nodes else None
+    if spec is None:
+        return []
+    try:
+        spec.validate_params({param: value})
+    except pydantic.ValidationError as error:
+        return [said for name, said in spec.param_problems(error) if name == param]
+    return []
 
 
 def _unknown_target(graph: Graph, registry: Registry, key: str) -> str:

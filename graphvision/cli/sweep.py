@@ -40,7 +40,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     grid = {key: _listed(key, values) for key, values in named_pairs(args.grid, "--grid").items()}
     if not grid:
         raise UsageError("sweep needs at least one --grid NODE.PARAM=V1,V2,...")
-    check_overrides(graph, registry, grid, "--grid")
+    check_overrides(graph, registry, grid, "--grid", swept=True)
     both = sorted(set(grid) & set(overrides))
     if both:
         raise UsageError(f"{both[0]} is both swept (--grid) and set (--set); give one of them")

@@ -427,3 +427,17 @@ def test_a_warning_inside_a_node_names_the_node(capsys, tmp_path, executor):
     )
     assert "warning: noisy.divide: divide by zero encountered" in done.stderr, done.stderr
     assert "RuntimeWarning" not in done.stderr and ".py:" not in done.stderr
+
+
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_overrides_naming_nothing_and_values_refused_are_named_at_once(capsys, tmp_path, command):
+    flag = "-s" if command == "run" else "--grid"
+    given = ["gauss_on_gaus.sigma=2", "gauss_on_gauss.sigma=-1", "params.sed=2"]
+    args = [part for value in given for part in (flag, value)]
+    status, _, err = cli(capsys, command, DEMO, "-d", tmp_path / "out", "--no-cache", *args)
+    shown = "--set" if command == "run" else "--grid"
+    assert status == 2 and "3 overrides are refused:" in err, err
+    assert f"  - {shown} gauss_on_gaus.sigma=" in err and "no node 'gauss_on_gaus'" in err
+    assert f"  - {shown} gauss_on_gauss.sigma=-1: invalid value -1 for parameter 'sigma'" in err
+    assert f"  - {shown} params.sed=" in err and "the pipeline has no param 'sed'" in err
+    assert not (tmp_path / "out").exists()
