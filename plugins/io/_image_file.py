@@ -49,7 +49,9 @@ _NO_READER = "Could not find a backend to open"  # imageio's OSError: no plugin 
 def read_image_file(file: Path) -> np.ndarray:
     """The pixels of an image file, dtype as stored, as ``imageio.v3.imread`` gives them.
 
-    A CMYK image is converted to RGB (see :func:`_cmyk_as_rgb`); a stack of
+    A photograph whose EXIF Orientation says it was taken turned (a phone held
+    sideways) is turned upright, as viewers and OpenCV's ``imread`` show it. A
+    CMYK image is converted to RGB (see :func:`_cmyk_as_rgb`); a stack of
     one frame (a still GIF) is that frame; an animation or a multi-page file
     (GIF, APNG, TIFF, WebP) is refused. The shape the header declares is checked
     against the pixel budget before anything is decoded, with Pillow's own
@@ -81,12 +83,46 @@ def read_image_file(file: Path) -> np.ndarray:
                         data = _read_with_pillow(file, image)
                     else:
                         data = _read_with_imageio(file, image)
+                    turn = _orientation(image)
     except (PermissionError, _FramesError, _ColourError, InputError):
         raise
     except Exception as error:  # Pillow and imageio raise many types for undecodable files
         reason = _what_is_wrong(file, error)
         raise ValueError(f"{file} is not a readable image ({reason})") from None
-    return data[0] if _one_frame_stack(data.shape) else data
+    data = data[0] if _one_frame_stack(data.shape) else data
+    return _upright(data, turn) if turn in _UPRIGHT else data
+
+
+_ORIENTATION_TAG = 0x0112
+"""EXIF's Orientation: how the stored pixels are turned from the scene upright (1: as
+stored; 2 to 8: mirrored and/or rotated, as a phone held sideways or upside down saves)."""
+
+_UPRIGHT = {
+    2: lambda data: data[:, ::-1],
+    3: lambda data: data[::-1, ::-1],
+    4: lambda data: data[::-1],
+    5: lambda data: data.swapaxes(0, 1),
+    6: lambda data: np.rot90(data, -1),
+    7: lambda data: data[::-1, ::-1].swapaxes(0, 1),
+    8: lambda data: np.rot90(data, 1),
+}
+"""The pixels of an image whose Orientation is the key, turned upright (as a camera app,
+a browser, Pillow's ``ImageOps.exif_transpose`` and OpenCV's ``imread`` show them)."""
+
+
+def _orientation(image: PILImageType) -> int:
+    """The EXIF Orientation of an image read through ``image`` (1 without one); the EXIF
+    of a PNG whose eXIf chunk follows its pixels is known once they are decoded."""
+    if "exif" not in image.info:
+        return 1
+    value = image.getexif().get(_ORIENTATION_TAG, 1)
+    return value if isinstance(value, int) else 1
+
+
+def _upright(data: np.ndarray, turn: int) -> np.ndarray:
+    """``data`` turned upright from EXIF Orientation ``turn`` (2 to 8): a new C-ordered,
+    writeable array."""
+    return np.ascontiguousarray(_UPRIGHT[turn](data))
 
 
 def _one_frame_stack(shape: tuple[int, ...]) -> bool:

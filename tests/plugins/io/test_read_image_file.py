@@ -49,7 +49,7 @@ def frames(mode: str) -> list[Image.Image]:
 
 def rotated() -> Image.Exif:
     exif = Image.Exif()
-    exif[0x0112] = 6  # orientation: rotate 90° to show; imread does not apply it
+    exif[0x0112] = 6  # orientation: rotate 90° to show (imread applies it with rotate=True)
     return exif
 
 
@@ -138,8 +138,8 @@ def test_a_file_reads_as_imageio_reads_it_to_the_bit(folder, name):
         with Image.open(path) as image:
             expected = np.asarray(image.convert("RGB"))
     else:
-        with warned(name):
-            expected = iio.imread(path)
+        with warned(name):  # a photograph taken turned is read upright, as viewers show it
+            expected = iio.imread(path, **({"rotate": True} if "exif" in name else {}))
     if "gif" in name:  # imageio reads a GIF as a stack of frames: a still one is its frame
         assert expected.shape[0] == 1 and expected.ndim == 4
         expected = expected[0]
@@ -289,3 +289,36 @@ def test_a_still_gif_counts_its_pixels_not_its_channels_against_the_budget(tmp_p
     monkeypatch.setenv("GRAPHVISION_MAX_PIXELS", str(height * width - 1))
     with pytest.raises(gv.InputError, match=f"declares {height} × {width} "):
         read_array(str(path))
+
+
+@pytest.mark.parametrize("suffix", [".png", ".webp", ".jpg"])
+@pytest.mark.parametrize("orientation", range(1, 9))
+def test_a_photograph_taken_turned_is_read_upright(tmp_path, suffix, orientation):
+    # reference: Pillow's ImageOps.exif_transpose of the same file (what viewers show)
+    from PIL import ImageOps
+
+    exif = Image.Exif()
+    exif[0x0112] = orientation  # EXIF Orientation
+    path = tmp_path / f"turned{suffix}"
+    Image.fromarray(RGB).save(path, exif=exif, **({"lossless": True} if suffix == ".webp" else {}))
+    with Image.open(path) as image:
+        upright = np.asarray(ImageOps.exif_transpose(image))
+    read = read_array(str(path))
+    assert read.shape == upright.shape == ((13, 9, 3) if orientation >= 5 else (9, 13, 3))
+    np.testing.assert_array_equal(read, upright)
+    assert read.flags.c_contiguous and read.flags.writeable
+
+
+def test_a_png_whose_exif_follows_its_pixels_is_read_upright(tmp_path):
+    # an eXIf chunk after IDAT: Pillow knows it only once the pixels are decoded
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    chunk_data = exif.tobytes()
+    path = tmp_path / "late.png"
+    Image.fromarray(GRAY).save(path)
+    data = path.read_bytes()
+    end = data.rindex(b"IEND") - 4
+    chunk = struct.pack(">I", len(chunk_data)) + b"eXIf" + chunk_data
+    chunk += struct.pack(">I", zlib.crc32(b"eXIf" + chunk_data))
+    path.write_bytes(data[:end] + chunk + data[end:])
+    np.testing.assert_array_equal(read_array(str(path)), np.rot90(GRAY, -1))
