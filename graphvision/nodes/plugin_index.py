@@ -51,6 +51,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from graphvision.locations import default_cache_dir
+from graphvision.nodes.index_shape import INDEX, fits
 
 if TYPE_CHECKING:
     from graphvision.nodes.registry import Registry
@@ -265,8 +266,9 @@ def _read(key: str) -> dict[str, Any] | None:
 
     The file is a header line (the key and a BLAKE2b digest of the rest) and
     the index as JSON. One that does not match its digest, does not parse or
-    holds the wrong shapes (truncated, hand-edited, hostile) is removed, so that
-    the discovery that replaces it writes it again.
+    holds the wrong shapes (truncated, hand-edited, hostile: a node's entry missing
+    a field or of another type, :data:`~graphvision.nodes.index_shape.INDEX`) is
+    removed, so that the discovery that replaces it writes it again.
     """
     path = index_path(key)
     if str(path) in _READ and path.is_file():
@@ -281,7 +283,7 @@ def _read(key: str) -> dict[str, Any] | None:
         index = json.loads(body) if head == _header(key, body) else None
     except (ValueError, RecursionError):
         index = None
-    if not isinstance(index, dict) or not _well_formed(index):
+    if not isinstance(index, dict) or not fits(index, INDEX):
         with contextlib.suppress(OSError):
             path.unlink()
         return None
@@ -292,17 +294,6 @@ def _read(key: str) -> dict[str, Any] | None:
 
 def _header(key: str, body: bytes) -> dict[str, str]:
     return {"key": key, "blake2b": hashlib.blake2b(body, digest_size=20).hexdigest()}
-
-
-def _well_formed(index: Any) -> bool:
-    if not isinstance(index, dict) or not isinstance(index.get("nodes"), dict):
-        return False
-    plugins = index.get("plugins")
-    return isinstance(plugins, dict) and all(
-        isinstance(entry, dict)
-        and all(isinstance(entry.get(kind), list) for kind in ("nodes", "port_types", "sources"))
-        for entry in plugins.values()
-    )
 
 
 def read_index(key: str) -> dict[str, Any] | None:
