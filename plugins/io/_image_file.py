@@ -208,11 +208,82 @@ def _what_is_wrong(file: Path, error: Exception) -> str:
         size = file.stat().st_size
         if size == 0:
             return "the file is empty"
+        cut = _truncated_header(file)
+        if cut:
+            return f"the file is truncated: {cut}"
         if str(error).startswith(_PILLOW_TRUNCATED):
             return f"the file is truncated: its {size:,} bytes end before the image does"
     if str(error).startswith(_NO_READER):
         return "neither Pillow nor imageio knows its format: save it as PNG, JPEG or TIFF"
     return type(error).__name__
+
+
+_SIGNATURES = (
+    (b"\x89PNG\r\n\x1a\n", "PNG"),
+    (b"\xff\xd8\xff", "JPEG"),
+    (b"GIF87a", "GIF"),
+    (b"GIF89a", "GIF"),
+    (b"BM", "BMP"),
+    (b"II*\x00", "TIFF"),
+    (b"MM\x00*", "TIFF"),
+    (b"RIFF", "WEBP"),  # (then the size, then "WEBP")
+)
+"""The first bytes of each format graphvision reads, and Pillow's name of the format."""
+
+
+def _truncated_header(file: Path) -> str:
+    """What is missing when ``file`` begins a format's header but does not complete it,
+    or ''.
+
+    A file that begins a format's signature (or is a part of one) and on which
+    Pillow's parser of that format asked for bytes beyond the end (a PNG cut in
+    its ``IHDR`` chunk, a JPEG before its frame marker) is a truncated file: the
+    parsers say ``SyntaxError``, ``IndexError`` or ``struct.error`` there, which
+    name no cause. A header that is whole but damaged (a wrong checksum) is not.
+    A WebP file (a RIFF container) is cut when it is shorter than the size its
+    first 8 bytes declare.
+    """
+    with contextlib.suppress(OSError):
+        data = file.read_bytes()
+        count = f"{len(data):,} byte{'s' if len(data) > 1 else ''}"
+        for signature, kind in _SIGNATURES:
+            if not signature.startswith(data[: len(signature)]):
+                continue
+            if kind == "WEBP" and b"WEBP".startswith(data[8:12]):
+                declared = 8 + int.from_bytes(data[4:8], "little")
+                if len(data) < 12:
+                    return f"not a complete WebP header ({count})"
+                if len(data) < declared:
+                    return f"its WebP header declares {declared:,} bytes, it holds {count}"
+            elif kind != "WEBP" and (len(data) <= len(signature) or _header_runs_out(data, kind)):
+                return f"not a complete {kind} header ({count})"
+    return ""
+
+
+class _EndWatch(io.BytesIO):
+    """A file's bytes that note when a read asked for more than was left, the first read
+    aside (``Image.open`` reads 16 bytes to pick the parsers to try)."""
+
+    reads = 0
+    ran_out = False
+
+    def read(self, size: int | None = -1, /) -> bytes:
+        data = super().read(size)
+        self.reads += 1
+        if self.reads > 1 and size is not None and size > len(data):
+            self.ran_out = True
+        return data
+
+
+def _header_runs_out(data: bytes, kind: str) -> bool:
+    """Whether Pillow's parser of format ``kind`` read to the end of ``data`` and wanted
+    more, parsing its header (nothing is decoded)."""
+    from PIL import Image as PILImage
+
+    stream = _EndWatch(data)
+    with contextlib.suppress(Exception), PILImage.open(stream, formats=[kind]):
+        pass
+    return stream.ran_out
 
 
 class _LiftedLimit:

@@ -190,7 +190,9 @@ def test_an_empty_truncated_or_unknown_file_says_so(folder, tmp_path):
     whole = (folder / "rgb.png").read_bytes()
     (tmp_path / "empty.png").write_bytes(b"")
     (tmp_path / "cut.png").write_bytes(whole[:60])
-    (tmp_path / "cut.jpg").write_bytes((folder / "rgb.jpg").read_bytes()[:300])
+    jpeg = (folder / "rgb.jpg").read_bytes()
+    assert len(jpeg) > 640  # its tables end before 600: the cut is in the pixel data
+    (tmp_path / "cut.jpg").write_bytes(jpeg[:640])
     (tmp_path / "cut.tif").write_bytes(b"")
     (tmp_path / "text.png").write_text("not a png")
     (tmp_path / "notes.txt").write_text("not an image at all")
@@ -198,12 +200,59 @@ def test_an_empty_truncated_or_unknown_file_says_so(folder, tmp_path):
         ("empty.png", r"\(the file is empty\)"),
         ("cut.tif", r"\(the file is empty\)"),
         ("cut.png", r"\(the file is truncated: its 60 bytes end before the image does\)"),
-        ("cut.jpg", r"\(the file is truncated: its 300 bytes end before the image does\)"),
+        ("cut.jpg", r"\(the file is truncated: its 640 bytes end before the image does\)"),
         ("text.png", r"\(neither Pillow nor imageio knows its format: save it as PNG, .*\)"),
         ("notes.txt", r"\(neither Pillow nor imageio knows its format: save it as PNG, .*\)"),
     ):
         with pytest.raises(ValueError, match=f"{name} is not a readable image {reason}$"):
             read_array(str(tmp_path / name))
+
+
+HEADERS = [".png", ".jpg", ".bmp", ".gif", ".tif", *([".webp"] if features.check("webp") else [])]
+
+
+@pytest.mark.parametrize("suffix", HEADERS)
+@pytest.mark.parametrize("kept", [1, 4, 8, 12, 20, 30])
+def test_a_file_cut_inside_its_header_says_it_is_truncated(tmp_path, suffix, kept):
+    """The first bytes of an image file said '(SyntaxError)', '(IndexError)', '(error)'
+    (the parsers' own errors, which name no cause); found by an earlier adversary."""
+    whole = tmp_path / f"whole{suffix}"
+    Image.fromarray(RGB).convert("P" if suffix == ".gif" else "RGB").save(whole)
+    cut = tmp_path / f"cut{suffix}"
+    cut.write_bytes(whole.read_bytes()[:kept])
+    with pytest.raises(
+        ValueError, match=rf"cut\{suffix} is not a readable image \(the file is trun"
+    ):
+        read_array(str(cut))
+
+
+@pytest.mark.parametrize(
+    ("suffix", "kept", "reason"),
+    [
+        (".png", 1, "not a complete PNG header (1 byte)"),
+        (".png", 12, "not a complete PNG header (12 bytes)"),
+        (".jpg", 4, "not a complete JPEG header (4 bytes)"),
+        (".tif", 8, "not a complete TIFF header (8 bytes)"),
+        (".gif", 30, "not a complete GIF header (30 bytes)"),
+    ],
+)
+def test_a_header_cut_short_is_named_with_its_format(tmp_path, suffix, kept, reason):
+    whole = tmp_path / f"whole{suffix}"
+    Image.fromarray(RGB).convert("P" if suffix == ".gif" else "RGB").save(whole)
+    cut = tmp_path / f"cut{suffix}"
+    cut.write_bytes(whole.read_bytes()[:kept])
+    with pytest.raises(ValueError, match=rf"\(the file is truncated: {re.escape(reason)}\)$"):
+        read_array(str(cut))
+
+
+def test_a_damaged_header_that_is_whole_is_not_called_truncated(tmp_path):
+    """A PNG whose header chunk's checksum is wrong: the file is not short, it is damaged."""
+    data = bytearray(png(2, 8, 13, RGB.reshape(9, -1)))
+    data[29] ^= 0xFF  # in IHDR's CRC (8 bytes of signature, 8 of length and type, 13 of data)
+    (tmp_path / "damaged.png").write_bytes(bytes(data))
+    with pytest.raises(ValueError, match=r"damaged\.png is not a readable image") as refused:
+        read_array(str(tmp_path / "damaged.png"))
+    assert "truncated" not in str(refused.value)
 
 
 ANIMATIONS = [".gif", ".png", ".tif", *([".webp"] if features.check("webp") else [])]
