@@ -19,10 +19,10 @@
 ``--plugins PATH`` and ``--debug`` go anywhere on the line. Exit status: 0
 success, 1 a run failed (or the environment: a full disk, a closed pipe), 2
 an invalid pipeline or usage, 130 interrupted (Ctrl-C), 143 terminated
-(SIGTERM). Every mistake is one message, never a traceback (``--debug`` adds
-it). Every sub-command calls the Python
-API; heavy modules are imported by the command that needs them, so ``--help``
-is quick.
+(SIGTERM), 129 hung up (SIGHUP: the terminal closed, an ssh connection
+dropped). Every mistake is one message, never a traceback (``--debug`` adds
+it). Every sub-command calls the Python API; heavy modules are imported by
+the command that needs them, so ``--help`` is quick.
 """
 
 from __future__ import annotations
@@ -36,11 +36,12 @@ import sys
 import time
 import traceback
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 from graphvision.cli.common import (
     EXIT_FAILED,
+    EXIT_HUNG_UP,
     EXIT_INTERRUPTED,
     EXIT_OK,
     EXIT_TERMINATED,
@@ -60,7 +61,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     The one place errors become messages: a graphvision error is a usage
     problem (2), a failed run or a problem of the environment (a full disk,
-    no permission, a closed pipe) a failure (1), Ctrl-C 130, SIGTERM 143.
+    no permission, a closed pipe) a failure (1), Ctrl-C 130, SIGTERM 143, SIGHUP 129.
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
@@ -82,9 +83,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise UsageError("give a command: " + ", ".join(_commands(parser)))
         return int(args.func(args))
     except KeyboardInterrupt as stop:
-        what = "terminated" if isinstance(stop, Terminated) else "interrupted"
-        print(f"{what} after {time.perf_counter() - began:.1f} s", file=sys.stderr)
-        return EXIT_TERMINATED if isinstance(stop, Terminated) else EXIT_INTERRUPTED
+        what, status = _stopped_by(stop)
+        with contextlib.suppress(OSError):  # (a hung-up terminal refuses the line: EIO)
+            print(f"{what} after {time.perf_counter() - began:.1f} s", file=sys.stderr)
+        return status
     except BrokenPipeError:  # `graphvision nodes | head -1`: the reader has what it wanted
         _silence_stdout()
         return EXIT_OK
@@ -92,6 +94,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         if debug:
             traceback.print_exc()
         return _report_error(error)
+
+
+def _stopped_by(stop: KeyboardInterrupt) -> tuple[str, int]:
+    """What stopped the command, in a word, and its exit status."""
+    if not isinstance(stop, Terminated):
+        return "interrupted", EXIT_INTERRUPTED
+    if stop.signum == HANG_UP:
+        return "hung up", EXIT_HUNG_UP
+    return "terminated", EXIT_TERMINATED
 
 
 def _report_error(error: Exception) -> int:
@@ -135,25 +146,73 @@ def entry() -> None:
     the node they run (cache entries and outputs are written atomically, so
     nothing is left half-written; worker processes see their parent go and exit).
     """
-    signal.signal(signal.SIGTERM, _terminate)
+    terminate = _terminator(os.getpid(), _terminals())
+    signal.signal(signal.SIGTERM, terminate)
+    if HANG_UP is not None and signal.getsignal(HANG_UP) is not signal.SIG_IGN:
+        signal.signal(HANG_UP, terminate)  # (under nohup, the command outlives its terminal)
     faulthandler.enable(all_threads=True)  # a node that crashes the process: where it was
     quiet_resource_tracker()
     status = main()
     sys.stdout.flush()
     sys.stderr.flush()
-    if status in (EXIT_INTERRUPTED, EXIT_TERMINATED):
+    if status in (EXIT_INTERRUPTED, EXIT_TERMINATED, EXIT_HUNG_UP):
         _release_process_resources()
         os._exit(status)
     sys.exit(status)
 
 
+HANG_UP = getattr(signal, "SIGHUP", None)  # (not on Windows)
+
+
 class Terminated(KeyboardInterrupt):
-    """SIGTERM (``kill``, ``timeout``, ``docker stop``, a batch scheduler): stopped as Ctrl-C
-    stops a run, so a batch or sweep still writes what it has done."""
+    """SIGTERM (``kill``, ``timeout``, ``docker stop``, a batch scheduler) or SIGHUP (the
+    terminal closed, an ssh connection dropped): stopped as Ctrl-C stops a run, so a batch
+    or sweep still writes what it has done. ``signum``: the signal."""
+
+    def __init__(self, signum: int = signal.SIGTERM) -> None:
+        super().__init__()
+        self.signum = signum
 
 
-def _terminate(signum: int, frame: Any) -> None:
-    raise Terminated
+def _terminator(pid: int, terminals: tuple[int, ...]) -> Callable[[int, Any], None]:
+    """The handler that stops the command in process ``pid``, whose ``terminals`` (standard
+    output, error) are left once hung up; a process forked from it (a worker) that still
+    has the handler ends as the signal's default action does, as though the handler were
+    not there (SIGHUP reaches the command's whole process group)."""
+
+    def terminate(signum: int, frame: Any) -> None:
+        if os.getpid() != pid:
+            signal.signal(signum, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+            return
+        if signum == HANG_UP:
+            _leave_hung_up(terminals)
+        raise Terminated(signum)
+
+    return terminate
+
+
+def _terminals() -> tuple[int, ...]:
+    """The descriptors of standard output and error that are a terminal."""
+    found = []
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            if os.isatty(stream.fileno()):
+                found.append(stream.fileno())
+    return tuple(found)
+
+
+def _leave_hung_up(terminals: tuple[int, ...]) -> None:
+    """Point each of ``terminals`` that is a terminal no more (hung up: it refuses every
+    write, EIO) at /dev/null: the batch being stopped would fail on its first message
+    instead of writing its ``batch.csv`` and exiting 129. (A terminal still there, sent
+    SIGHUP by ``kill -HUP``, still shows the last lines.)"""
+    hung_up = [fd for fd in terminals if not os.isatty(fd)]
+    if hung_up:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        for fd in hung_up:
+            os.dup2(devnull, fd)
+        os.close(devnull)
 
 
 def quiet_resource_tracker() -> None:

@@ -2,15 +2,17 @@
 
 An invalid pipeline, input, override or output makes no folder for ``run``, ``run --batch``
 and ``sweep`` (exit 2); a batch whose pattern matches nothing neither. Stopped at any
-moment (SIGINT: exit 130, SIGTERM: exit 143, for every command), a command removes every
-folder it made, parents included, unless it holds what was finished (a batch's finished
-files, a sweep's finished combinations, with their summary); a batch always leaves its
-``batch.csv``, which lists every file, done or not, even when none is done yet.
+moment (SIGINT: exit 130, SIGTERM: exit 143, SIGHUP: exit 129, for every command), a
+command removes every folder it made, parents included, unless it holds what was finished
+(a batch's finished files, a sweep's finished combinations, with their summary); a batch
+always leaves its ``batch.csv``, which lists every file, done or not, even when none is
+done yet.
 """
 
 from __future__ import annotations
 
 import csv
+import os
 import signal
 import subprocess
 import sys
@@ -122,7 +124,13 @@ def test_a_batch_whose_pattern_matches_nothing_exits_2_and_makes_nothing(capsys,
 
 @pytest.mark.parametrize("kind", ["run", "batch", "sweep"])
 @pytest.mark.parametrize(
-    ("sent", "status", "word"), [("SIGINT", 130, "interrupted"), ("SIGTERM", 143, "terminated")]
+    ("sent", "status", "word"),
+    [
+        ("SIGINT", 130, "interrupted"),
+        ("SIGTERM", 143, "terminated"),
+        # the terminal closed, an ssh connection dropped: a batch still wrote no batch.csv
+        ("SIGHUP", 129, "hung up"),
+    ],
 )
 def test_a_stopped_command_exits_with_its_signal_and_leaves_no_folder(
     tmp_path, kind, sent, status, word
@@ -192,3 +200,73 @@ def test_a_stopped_batch_keeps_the_files_it_finished_and_no_empty_folder(
     assert (out / "f0" / "p0" / "record.json").is_file()
     assert not (out / "f2").exists()  # made for nothing: gone
     assert all(any(folder.iterdir()) for folder in out.rglob("*") if folder.is_dir())
+
+
+def _in_a_terminal(args: list[str], nohup: Path | None = None) -> tuple[subprocess.Popen, int]:
+    """``graphvision ARGS`` started in a terminal of its own (a pseudo-terminal it controls,
+    its output and progress written there, or as ``nohup`` starts it: SIGHUP ignored, the
+    output in the file ``nohup``), and the terminal's other end."""
+    import fcntl
+    import pty
+    import termios
+
+    master, slave = pty.openpty()
+
+    def session() -> None:
+        os.setsid()
+        fcntl.ioctl(0, termios.TIOCSCTTY, 0)
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        if nohup is not None:
+            signal.signal(signal.SIGHUP, signal.SIG_IGN)
+
+    output = slave if nohup is None else os.open(nohup, os.O_WRONLY | os.O_CREAT, 0o600)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "graphvision", *args],
+        stdin=slave,
+        stdout=output,
+        stderr=output,
+        preexec_fn=session,
+    )
+    os.close(slave)
+    if output != slave:
+        os.close(output)
+    return process, master
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="no SIGHUP (Windows)")
+@pytest.mark.parametrize("executor", ["threads", "processes"])
+def test_a_batch_whose_terminal_closes_writes_batch_csv_and_exits_129(tmp_path, executor):
+    """The terminal closed (an ssh connection dropped): SIGHUP, and every write to the
+    terminal refused (EIO); the batch stopped as on SIGTERM, with its batch.csv, where it
+    used to die at once (no batch.csv) and then, handled, fail on its message (exit 1)."""
+    photos(tmp_path)
+    out = tmp_path / "out"
+    args = command("batch", tmp_path, pipeline(tmp_path, seconds="30"), out)
+    args = [a for a in args if a != "--no-progress"] + ["--progress", "--executor", executor]
+    process, terminal = _in_a_terminal(args)
+    for _ in range(600):
+        if (tmp_path / "started").exists() or process.poll() is not None:
+            break
+        time.sleep(0.1)
+    assert (tmp_path / "started").exists()
+    os.close(terminal)  # the terminal closes: the kernel sends SIGHUP
+    assert process.wait(timeout=60) == 129
+    rows = list(csv.DictReader((out / "batch.csv").open()))
+    assert sorted(row["status"] for row in rows) == ["interrupted", "not run"]
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="no SIGHUP (Windows)")
+def test_a_batch_under_nohup_outlives_its_terminal(tmp_path):
+    photos(tmp_path)
+    out = tmp_path / "out"
+    args = command("batch", tmp_path, pipeline(tmp_path, seconds="1"), out)
+    process, terminal = _in_a_terminal(args, nohup=tmp_path / "nohup.out")
+    for _ in range(600):
+        if (tmp_path / "started").exists() or process.poll() is not None:
+            break
+        time.sleep(0.1)
+    process.send_signal(signal.SIGHUP)
+    os.close(terminal)
+    assert process.wait(timeout=120) == 0, (tmp_path / "nohup.out").read_text()
+    rows = list(csv.DictReader((out / "batch.csv").open()))
+    assert [row["status"] for row in rows] == ["ok", "ok"]
