@@ -42,7 +42,7 @@ import ctypes
 import sys
 import weakref
 from collections.abc import Callable
-from typing import BinaryIO
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -261,30 +261,38 @@ def frozen_copies(arrays: list[np.ndarray], offsets: list[int] | None = None) ->
     """Copies of ``arrays`` in one immutable buffer (C order, same dtypes and shapes), each
     at a multiple of :data:`ALIGNMENT` plus its entry of ``offsets`` (where it lay when it
     was computed; 0 when not given): a value of many arrays (a table's columns) is frozen
-    with one buffer instead of one each."""
+    with one buffer instead of one each.
+
+    The buffer's bytes (the arrays, the zeroed padding between them, before the first and
+    after the last) are joined in C (``bytes.join``) and copied into it with one
+    ``memmove``: per array, a few list steps and one view (a table of 17 small columns
+    froze in 8 µs instead of 30, where a window slice per array and its padding was most).
+    """
     sources = [np.ascontiguousarray(array) for array in arrays]
     if offsets and any(offsets):
         shifts = [placed_offset(s.dtype, o) for s, o in zip(sources, offsets, strict=True)]
     else:  # (a node's fresh table: no offset to keep, no call per column)
         shifts = [0] * len(sources)
-    starts, total = [], 0
+    parts: list[Any] = [_ZERO_WINDOW]  # (the padding before the first: cut below)
+    starts, total, zeros = [], 0, _ZERO_WINDOW
     for source, shift in zip(sources, shifts, strict=True):
+        if shift:
+            parts.append(zeros[:shift])
         starts.append(total + shift)
-        total -= -(shift + source.nbytes) // ALIGNMENT * ALIGNMENT  # (rounded up)
+        end = total + shift + source.nbytes
+        total = -(-end // ALIGNMENT) * ALIGNMENT  # (rounded up)
+        parts += (source, zeros[: total - end])
     owner, start, first = _new_aligned(total)
-    window = memoryview((ctypes.c_char * (ALIGNMENT + total)).from_address(start)).cast("B")
-    with window:  # every byte of the object written: the arrays, the padding zeroed
-        done, zeros = 0, _ZERO_WINDOW  # (each gap is under 2 * ALIGNMENT bytes)
-        for source, begin in zip(sources, starts, strict=True):
-            at = first + begin
-            window[done:at] = zeros[: at - done]
-            _copy(window, at, source, start)
-            done = at + source.nbytes
-        window[done:] = zeros[: len(window) - done]
-    return [
-        _view(owner, source.dtype, source.size, first + begin, source.shape)
-        for source, begin in zip(sources, starts, strict=True)
-    ]
+    parts[0] = zeros[:first]
+    parts.append(zeros[: ALIGNMENT - first])  # every byte of the object written
+    joined = b"".join(parts)  # (a C-contiguous array of any dtype gives its bytes as they are)
+    ctypes.memmove(start, joined, len(joined))
+    del joined
+    views = []
+    for array, begin in zip(arrays, starts, strict=True):  # (a loop: no call per column)
+        flat = np.frombuffer(owner, array.dtype, array.size, first + begin)
+        views.append(flat if array.ndim == 1 else flat.reshape(array.shape))  # (0-d: 0-d)
+    return views
 
 
 _ZERO_WINDOW = memoryview(_ZEROS)  # (a slice of it is no new bytes object)

@@ -92,6 +92,29 @@ def test_a_fresh_tables_columns_lie_at_multiples_of_64_over_zeroed_padding():
         for k, column in enumerate(columns[:3]):
             expected[64 * k : 64 * k + column.nbytes] = np.frombuffer(column.tobytes(), np.uint8)
         assert laid.tobytes() == expected.tobytes()
+        outside = np.concatenate([buffer[:start], buffer[start + 64 * 3 :]])
+        assert len(outside) == len(owner) - 64 * 3 and not outside.any()  # before and after
+
+
+def test_columns_of_any_dtype_are_copied_bit_for_bit():
+    """Each column's bytes as they are, whatever its dtype (no buffer format needed), for
+    columns a node made as views (strided or reversed) too."""
+    made = np.arange(12, dtype=np.int64).reshape(3, 4)
+    columns = [
+        np.array(["2020-01-01", "2021-02-03"], dtype="datetime64[D]"),
+        np.array([(1, 2.5)], dtype=[("a", "<i2"), ("b", "<f8")]),
+        np.array([1.5, -2.0], dtype=">f4"),
+        np.array([1 + 2j], np.complex64),
+        made[:, 1],
+        made[0, ::-1],
+        np.array(3.25),
+    ]
+    copies = frozen_copies(columns)
+    for copy, column in zip(copies, columns, strict=True):
+        assert copy.dtype == column.dtype and copy.shape == column.shape
+        assert copy.tobytes() == column.tobytes() and copy.flags.c_contiguous
+        assert is_frozen(copy) and alignment_offset(copy) == 0
+    assert copies[4].tolist() == [1, 5, 9] and copies[5].tolist() == [3, 2, 1, 0]
 
 
 @pytest.mark.parametrize("dtype", [np.bool_, np.int32, np.float32, np.float64])
