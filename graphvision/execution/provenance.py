@@ -15,8 +15,8 @@ import hashlib
 import os
 import platform
 import stat
-import subprocess
 import sys
+import time
 import weakref
 from collections.abc import Collection, Mapping
 from datetime import UTC, datetime
@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from graphvision.compiler.compile import CompiledGraph
+from graphvision.execution.git_state import file_stamp, git_state, git_state_stamped, stat_stamp
 from graphvision.nodes.fingerprint import distributions_of
 from graphvision.nodes.registry import PluginStatus, Registry
 from graphvision.values.dtype_policy import dtype_name
@@ -55,14 +56,10 @@ inode, size, modification time in ns) of each file: a run hashes again only what
 since (the pipeline file and each local plugin were read whole on every run)."""
 
 
-def _stamp(path: str, info: os.stat_result) -> tuple[Any, ...]:
-    return (path, info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns)
-
-
 def _known_sha256(path: str, info: os.stat_result) -> str:
     """:func:`file_sha256` of ``path`` (whose ``os.stat`` is ``info``), kept while its stamp
     is unchanged."""
-    stamp = _stamp(path, info)
+    stamp = file_stamp(path, info)
     known = _HASHED.get(stamp)
     if known is None:
         known = file_sha256(Path(path))
@@ -80,7 +77,7 @@ def _folder_sha256(folder: Path) -> str:
     """SHA-256 over the names and bytes of the ``.py`` files under ``folder`` (a plugin package),
     kept while every file's stamp is unchanged (a file added or removed changes the list)."""
     files = sorted(folder.rglob("*.py"))
-    stamp = tuple(_stamp(str(path), path.stat()) for path in files)
+    stamp = tuple(file_stamp(str(path), path.stat()) for path in files)
     known = _HASHED.get(stamp)
     if known is None:
         digest = hashlib.sha256()
@@ -90,136 +87,6 @@ def _folder_sha256(folder: Path) -> str:
         known = digest.hexdigest()
         _remember(stamp, known)
     return known
-
-
-def git_state(file: Path) -> tuple[str, bool]:
-    """(commit of the repository holding ``file``, whether ``file`` differs from it).
-
-    Any failure (no git, not a repository) gives ``("", False)``. Asking git
-    takes two subprocesses; the answer is kept for as long as the file and
-    the repository's ``HEAD`` and index are unchanged (their sizes and
-    modification times), so a batch of many runs of one pipeline asks once.
-    """
-    return _git_state_of(file.resolve())
-
-
-def _git_state_of(file: Path, info: os.stat_result | None = None) -> tuple[str, bool]:
-    """:func:`git_state` of a resolved path (``info``: its ``os.stat``, taken by the caller)."""
-    watched = _watched(str(file.parent))
-    if watched is None:  # a worktree or a submodule: ask git every time
-        return _ask_git(file)
-    mine = (info.st_mtime_ns, info.st_size) if info is not None else _stat(str(file))
-    stamp = (file, mine, *watched)
-    known = _GIT_STATES.get(stamp)
-    if known is None:
-        known = _ask_git(file)
-        if len(_GIT_STATES) > 64:
-            _GIT_STATES.clear()
-        _GIT_STATES[stamp] = known
-    return known
-
-
-_GIT_STATES: dict[tuple[Any, ...], tuple[str, bool]] = {}
-
-
-def _stat(path: str) -> tuple[int, int]:
-    try:
-        info = os.stat(path)
-    except OSError:
-        return (0, 0)
-    return (info.st_mtime_ns, info.st_size)
-
-
-_WATCHED: dict[str, tuple[list[str], tuple[int, int]]] = {}
-"""The files :func:`_git_files` found for each folder inside a repository, with the stamp of
-its ``HEAD`` then."""
-
-
-def _watched(folder: str) -> list[tuple[int, int]] | None:
-    """The stamps of the files of :func:`_git_files` (None: ask git every time). The walk up
-    to the repository is made again only when ``HEAD``'s stamp changed (another branch,
-    another ref file; ``.git`` gone), so a run makes one system call per file watched (a
-    repository made since inside the one found, nearer the folder, is seen at the next
-    change of the found one's ``HEAD``)."""
-    known = _WATCHED.get(folder)
-    if known is not None:
-        stamps = [_stat(path) for path in known[0]]
-        if stamps[0] == known[1]:
-            return stamps
-    files = _git_files(folder)
-    if not files:  # outside a repository, or ``.git`` a file: walked every time
-        return None if files is None else []
-    stamps = [_stat(path) for path in files]
-    if len(_WATCHED) > 64:
-        _WATCHED.clear()
-    _WATCHED[folder] = (files, stamps[0])
-    return stamps
-
-
-def _git_files(folder: str) -> list[str] | None:
-    """``HEAD``, the checked-out branch's ref and the index of the repository above
-    ``folder`` (absolute; [] outside a repository; None when ``.git`` is a file, which
-    points elsewhere). One system call per folder looked at; ``HEAD`` is read again only
-    when its stamp changed."""
-    parent = folder
-    while True:
-        git_dir = os.path.join(parent, ".git")
-        try:
-            mode = os.stat(git_dir).st_mode
-        except OSError:
-            mode = 0
-        if stat.S_ISDIR(mode):
-            files = [os.path.join(git_dir, "HEAD"), os.path.join(git_dir, "index")]
-            head = _head_of(files[0])
-            if head.startswith("ref: "):
-                files.append(os.path.join(git_dir, head[5:]))
-            return files
-        if stat.S_ISREG(mode):
-            return None
-        parent, child = os.path.dirname(parent), parent
-        if parent == child:
-            return []
-
-
-_HEADS: dict[tuple[Any, ...], str] = {}
-
-
-def _head_of(path: str) -> str:
-    """The text of a repository's ``HEAD`` ("" when unreadable), kept while its stamp holds."""
-    try:
-        info = os.stat(path)
-    except OSError:
-        return ""
-    stamp = _stamp(path, info)
-    known = _HEADS.get(stamp)
-    if known is None:
-        try:
-            with open(path, encoding="utf-8") as handle:
-                known = handle.read().strip()
-        except (OSError, UnicodeDecodeError):
-            return ""
-        if len(_HEADS) > 64:
-            _HEADS.clear()
-        _HEADS[stamp] = known
-    return known
-
-
-def _ask_git(file: Path) -> tuple[str, bool]:
-    folder = file.parent
-
-    def git(*args: str) -> subprocess.CompletedProcess[str]:
-        return subprocess.run(
-            ["git", "-C", str(folder), *args], capture_output=True, text=True, timeout=10
-        )
-
-    try:
-        head = git("rev-parse", "HEAD")
-        if head.returncode != 0:
-            return "", False
-        changed = git("status", "--porcelain", "--", file.name)
-    except (OSError, subprocess.SubprocessError):
-        return "", False
-    return head.stdout.strip(), bool(changed.stdout.strip())
 
 
 @functools.cache
@@ -249,13 +116,28 @@ def package_versions(registry: Registry, ops: Collection[str] | None = None) -> 
     With ``ops`` the list depends on the pipeline alone, not on which plugins
     happened to be imported (all of them when the plugin index was missing).
     """
+    listed = _plugins_listed(registry, ops)
+    known = _IMPORTED_VERSIONS.get(id(listed))
+    if known is not None and known[0] is listed:
+        return dict(known[1])
     versions = {
         "python": _PYTHON,
         **{name: _version(name) for name in ("graphvision", "numpy", "scipy")},
     }
-    for label, origin in _plugins_listed(registry, ops):
+    for label, origin in listed:
         versions[label] = _plugin_version(origin)
+    if all(origin in sys.modules for _, origin in listed):  # each read once per process
+        if len(_IMPORTED_VERSIONS) > 16:
+            _IMPORTED_VERSIONS.clear()
+        _IMPORTED_VERSIONS[id(listed)] = (listed, versions.copy())
     return versions
+
+
+_IMPORTED_VERSIONS: dict[int, tuple[list[tuple[str, str]], dict[str, str]]] = {}
+""":func:`package_versions` of each list of plugins (:func:`_plugins_listed`, by identity)
+whose plugins are all imported modules: each version then is read once per process
+(:func:`_imported_version`, as Python's, graphvision's, NumPy's and SciPy's are), so the
+answer is too. A local plugin file or folder is hashed by its stamp at every run."""
 
 
 _LISTED: weakref.WeakKeyDictionary[
@@ -339,6 +221,57 @@ def _file_stat(path: str) -> os.stat_result | None:
     return info if stat.S_ISREG(info.st_mode) else None
 
 
+_PipelineFile = tuple[str, str, str, bool]
+_PIPELINE_FILES: dict[
+    str, tuple[tuple[Any, ...], list[str], list[tuple[int, int]], _PipelineFile]
+] = {}
+"""What :func:`_pipeline_file` worked out for each path, with the stamps it was worked out on."""
+
+
+def _pipeline_file(path: str) -> _PipelineFile | None:
+    """The pipeline file ``path`` resolved, its SHA-256 and its git state (None: no such file).
+
+    Kept with the stamps it was decided on: the file's (device, inode, size, modification
+    time; the working folder if ``path`` is relative) and its repository's ``HEAD``, index
+    and branch ref's (:func:`~graphvision.execution.git_state.git_state_stamped`). A run
+    compares them, one ``os.stat`` per file as before, and on any difference works each
+    part out again (each checks its own stamps). Safe: each stamp is taken before the
+    answer it keeps (a change meanwhile leaves it older: the next run looks again), and a
+    file written or replaced between two runs has another stamp. Outside a repository or
+    in a worktree (git asked every time) nothing is kept here.
+    """
+    info = _file_stat(path)
+    if info is None:
+        return None
+    where = "" if os.path.isabs(path) else os.getcwd()
+    stamp = (where, info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns)
+    known = _PIPELINE_FILES.get(path)
+    if known is not None and known[0] == stamp and list(map(stat_stamp, known[1])) == known[2]:
+        return known[3]
+    source = _resolved(path, info)
+    (commit, dirty), files, watched = git_state_stamped(source, info)
+    found = (str(source), _known_sha256(path, info), commit, dirty)
+    if files:
+        if len(_PIPELINE_FILES) > 64:
+            _PIPELINE_FILES.clear()
+        _PIPELINE_FILES[path] = (stamp, files, watched, found)
+    return found
+
+
+_DATES: dict[int, str] = {}  # the text of the last second a date was made in
+
+
+def _date_now() -> str:
+    """``datetime.now(UTC).isoformat(timespec="seconds")``, made once per second."""
+    second = time.time_ns() // 1_000_000_000  # (the clock datetime.now reads, floored)
+    text = _DATES.get(second)
+    if text is None:
+        text = datetime.fromtimestamp(second, UTC).isoformat(timespec="seconds")
+        _DATES.clear()
+        _DATES[second] = text
+    return text
+
+
 def _describe_input(given: Any, key: str) -> dict[str, str]:
     """What was given for an input, a file's path and SHA-256 if it is one, its content key."""
     if isinstance(given, str):
@@ -364,13 +297,10 @@ def describe_run(
 ) -> None:
     """Fill ``record``'s provenance fields (each node's record holds its parameters and
     cache keys from the start)."""
-    record.date = datetime.now(UTC).isoformat(timespec="seconds")
-    info = _file_stat(compiled.graph.source) if compiled.graph.source else None
-    if info is not None:
-        source = _resolved(compiled.graph.source, info)
-        record.pipeline_file = str(source)
-        record.pipeline_sha256 = _known_sha256(compiled.graph.source, info)
-        record.git_commit, record.git_dirty = _git_state_of(source, info)
+    record.date = _date_now()
+    found = _pipeline_file(compiled.graph.source) if compiled.graph.source else None
+    if found is not None:
+        record.pipeline_file, record.pipeline_sha256, record.git_commit, record.git_dirty = found
     record.inputs = {
         name: _describe_input(value, keys.get((name, ""), "")) for name, value in given.items()
     }

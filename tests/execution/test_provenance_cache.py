@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 import graphvision as gv
-from graphvision.execution import provenance
+from graphvision.execution import git_state, provenance
 
 PLUGIN = '''
 from graphvision import Image, node
@@ -141,14 +141,14 @@ def test_a_repository_is_found_once_and_its_files_stat_once_per_run(tmp_path, mo
         [*git, "rev-parse", "HEAD"], capture_output=True, text=True, check=True
     ).stdout.strip()
     file = (folder / "p.yaml").resolve()
-    assert provenance._git_state_of(file) == (commit, False)
+    assert git_state._git_state_of(file) == (commit, False)
     stats: list[str] = []
     real_stat = os.stat
     monkeypatch.setattr(os, "stat", lambda path, *a, **k: stats.append(path) or real_stat(path))
-    assert provenance._git_state_of(file) == (commit, False)
+    assert git_state._git_state_of(file) == (commit, False)
     assert len(stats) == 4  # (the walk made 3 more: deep/er/.git, deep/.git, .git/HEAD)
     shutil.rmtree(tmp_path / ".git")
-    assert provenance._git_state_of(file) == ("", False)
+    assert git_state._git_state_of(file) == ("", False)
 
 
 OTHER = '''
@@ -187,3 +187,47 @@ def test_the_plugins_listed_follow_the_registry_between_two_runs(tmp_path):
     assert provenance.package_versions(registry, ops)[f"plugin {name}"] == (
         f"sha256 {hashlib.sha256(OTHER.encode()).hexdigest()}"
     )
+
+
+def test_a_run_sees_the_pipeline_file_and_its_repository_change_between_two_runs(tmp_path):
+    """What a run records of its pipeline file (path, SHA-256, commit, dirty) is kept with the
+    stamps of the file and of the repository's files, and worked out again when one of them
+    changed: an edit, a commit, a file put in its place, another branch."""
+    import subprocess
+
+    plugin = tmp_path / "cachedprov.py"
+    plugin.write_text(PLUGIN)
+    registry = gv.discover([plugin], entry_points=False)
+    pipeline = _pipeline(tmp_path)
+    git = ["git", "-C", str(tmp_path), "-c", "user.name=t", "-c", "user.email=t@t"]
+
+    def commit(message: str) -> str:
+        subprocess.run([*git, "add", "p.yaml"], check=True)
+        subprocess.run([*git, "commit", "-q", "--allow-empty", "-m", message], check=True)
+        return subprocess.run(
+            [*git, "rev-parse", "HEAD"], capture_output=True, text=True, check=True
+        ).stdout.strip()
+
+    def recorded() -> tuple[str, str, str, bool]:
+        image = np.zeros((4, 4), np.float32)
+        record = gv.run(gv.load_pipeline(pipeline), registry, inputs={"image": image}).record
+        return record.pipeline_file, record.pipeline_sha256, record.git_commit, record.git_dirty
+
+    def sha() -> str:
+        return hashlib.sha256(pipeline.read_bytes()).hexdigest()
+
+    subprocess.run([*git, "init", "-q"], check=True)
+    first = commit("first")
+    path = str(pipeline.resolve())
+    assert recorded() == recorded() == (path, sha(), first, False)
+    pipeline.write_text(pipeline.read_text().replace("p\n", "q\n", 1))  # the same size
+    assert recorded() == (path, sha(), first, True)
+    second = commit("second")
+    assert recorded() == (path, sha(), second, False)
+    replaced = tmp_path / "new.yaml"
+    replaced.write_text(pipeline.read_text() + "# more\n")
+    replaced.replace(pipeline)  # another inode at the same path, not committed
+    assert recorded() == (path, sha(), second, True)
+    subprocess.run([*git, "checkout", "-q", "-b", "other"], check=True)
+    third = commit("third")
+    assert recorded() == (path, sha(), third, False)
