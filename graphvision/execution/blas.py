@@ -65,13 +65,14 @@ class _SharedLimit:
 
     def _libraries(self) -> list[Any]:
         """threadpoolctl's controllers of the loaded BLAS libraries, found again after an
-        import."""
-        from threadpoolctl import ThreadpoolController  # type: ignore[import-untyped]  # no types
-
+        import (the list is not changed by its readers)."""
         if self.controller is None or len(sys.modules) != self.modules_seen:
+            from threadpoolctl import ThreadpoolController  # type: ignore[import-untyped]
+
             self.modules_seen = len(sys.modules)
-            self.controller = ThreadpoolController().select(user_api="blas").lib_controllers
-        return list(self.controller)
+            found = ThreadpoolController().select(user_api="blas").lib_controllers
+            self.controller = list(found)
+        return self.controller
 
     def enter(self) -> None:
         """Count a user; the first sets every BLAS library running more than one thread

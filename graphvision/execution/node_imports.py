@@ -78,9 +78,17 @@ def import_ahead(functions: Iterable[Callable[..., Any]], libraries: Iterable[st
     Each module is imported on its own; one that fails is left to fail its
     nodes where they run, as it would anyway.
     """
+    _import_missing(_modules_of(functions, libraries))
+
+
+def _modules_of(functions: Iterable[Callable[..., Any]], libraries: Iterable[str]) -> list[str]:
     wanted = dict.fromkeys(libraries)
     for func in functions:
         wanted.update(dict.fromkeys(_imports_of(func)))
+    return list(wanted)
+
+
+def _import_missing(wanted: list[str]) -> None:
     modules, skipped = sys.modules, _NOT_MODULES
     missing = [name for name in wanted if name not in modules and name not in skipped]
     if not missing:
@@ -90,9 +98,26 @@ def import_ahead(functions: Iterable[Callable[..., Any]], libraries: Iterable[st
 
 
 def import_ahead_of(steps: Mapping[str, Step], names: Iterable[str]) -> None:
-    """:func:`import_ahead` for the steps ``names`` of a compiled graph (each op once)."""
-    specs = set(map(_SPEC, map(steps.__getitem__, names)))  # (in C: a run of many nodes)
-    import_ahead([spec.func for spec in specs], [m for spec in specs for m in spec.requires])
+    """:func:`import_ahead` for the steps ``names`` of a compiled graph (each op once); the
+    modules of the same steps of the same graph are listed once (a graph run again with
+    nothing cached asks for the same steps each time)."""
+    listed = list(names)
+    known = _LISTED.get(id(steps))
+    if known is not None and known[0] is steps and known[1] == listed:
+        _import_missing(known[2])
+        return
+    specs = set(map(_SPEC, map(steps.__getitem__, listed)))  # (in C: a run of many nodes)
+    wanted = _modules_of([s.func for s in specs], [m for s in specs for m in s.requires])
+    if len(_LISTED) > 8:
+        _LISTED.clear()
+    _LISTED[id(steps)] = (steps, listed, wanted)
+    _import_missing(wanted)
+
+
+_LISTED: dict[int, tuple[Mapping[str, Step], list[str], list[str]]] = {}
+"""The modules :func:`import_ahead_of` listed for the last graphs' steps (held: an ``id``
+is not reused while its steps are), with the step names they were listed for. What a node
+function imports never changes (:func:`_imports_of`), nor do a compiled graph's steps."""
 
 
 def _imports_of(func: Callable[..., Any]) -> tuple[str, ...]:

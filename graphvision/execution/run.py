@@ -30,14 +30,13 @@ Each node of the run moves through these states (``NodeRecord.status``)::
                 +--an upstream node failed--> skipped
                 +--the run was interrupted--> pending (stays)
 
-(``running`` is known to the scheduler and the hooks, not written in the
-record.) The state lives in one dataclass, ``RunState``; :func:`plan_steps` (a function
-of the graph, the keys and the cache, changing nothing) decides cached or pending,
-``RunState.plan`` records its decision, ``start`` hands a pending node to the executor
-(encoded values for other processes, the values themselves in this one; to an
-executor that chains tasks, such as Dask's, as soon as the nodes it reads are
-submitted, their tasks standing for their values),
-``finish`` validates, freezes, stores and releases, and the scheduler
+(``running`` is known to the scheduler and the hooks, not written in the record.) The
+state lives in one dataclass, ``RunState``; :func:`plan_steps` (a function of the graph,
+the keys and the cache, changing nothing) decides cached or pending, ``RunState.plan``
+records its decision, ``start`` hands a pending node to the executor (encoded values for
+other processes, the values themselves in this one; to an executor that chains tasks,
+such as Dask's, as soon as the nodes it reads are submitted, their tasks standing for
+their values), ``finish`` validates, freezes, stores and releases, and the scheduler
 (:func:`~graphvision.execution.scheduler.run_tasks`) only orders them.
 """
 
@@ -51,11 +50,15 @@ from typing import Any
 
 from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, Schedule, compile_graph
-from graphvision.errors import (
-    RunError,
-    UnknownNameError,
+from graphvision.errors import RunError, UnknownNameError
+from graphvision.execution.arguments import (
+    admitted,
+    graph_argument,
+    mapping_argument,
+    names_argument,
+    refuse_unknown_inputs,
+    run_arguments,
 )
-from graphvision.execution.arguments import admitted, refuse_unknown_inputs
 from graphvision.execution.arguments import given_inputs as _given_inputs
 from graphvision.execution.arguments import wanted_outputs as _wanted_outputs
 from graphvision.execution.blas import BlasLimit
@@ -68,7 +71,12 @@ from graphvision.execution.executors import (
 )
 from graphvision.execution.heap import keep_freed_memory
 from graphvision.execution.inputs import resolve_input
-from graphvision.execution.limits import current_limits, node_limits, refuse_declared_limits
+from graphvision.execution.limits import (
+    NodeLimits,
+    current_limits,
+    node_limits,
+    refuse_declared_limits,
+)
 from graphvision.execution.node_imports import import_ahead_of
 from graphvision.execution.peak_memory import check_peak_memory, running_at_once
 from graphvision.execution.plan import referenced_inputs as _referenced_inputs
@@ -204,7 +212,7 @@ def _run(
     with pixel_budget(max_pixels), node_limits(node_timeout, node_memory):
         where = executor_name(executor)
         refuse_declared_limits(compiled, where)
-        current_limits().check_executor(where)
+        (limits := current_limits()).check_executor(where)  # (read once: the state takes them)
         values = {
             name: partial(resolve_input, name, compiled.input_types[name], value, registry)
             if name in reference_keys
@@ -215,7 +223,7 @@ def _run(
         check_peak_memory(compiled, schedule, values, width, max_memory)
         state = _execute(
             compiled, values, schedule, wanted, cache, executor, workers, keep_going, hooks,
-            keep_intermediates, reference_keys, limit,
+            keep_intermediates, reference_keys, limit, limits,
         )  # fmt: skip
     describe_run(state.record, compiled, registry, given, state.keys, overrides)
     result = state.result(wanted)
@@ -237,13 +245,6 @@ def _checked_arguments(
     graph: Any, inputs: Any, outputs: Any, overrides: Any, cache: Any, executor: Any, workers: Any
 ) -> tuple[Graph | CompiledGraph, dict[str, Any], list[str] | None, dict[str, Any]]:
     """The arguments of :func:`run` as it uses them, or a TypeError naming the wrong one."""
-    from graphvision.execution.arguments import (
-        graph_argument,
-        mapping_argument,
-        names_argument,
-        run_arguments,
-    )
-
     run_arguments(cache, executor, workers)
     return (
         graph_argument(graph),
@@ -296,6 +297,7 @@ def _execute(
     keep_intermediates: bool = False,
     reference_keys: dict[str, str] | None = None,
     limit: BlasLimit | None = None,
+    limits: NodeLimits | None = None,
 ) -> RunState:
     """Steps 4 to 6: key, plan, schedule; the run's state, with its record, whatever happens.
 
@@ -308,7 +310,12 @@ def _execute(
     own = isinstance(executor, str)
     pool = make_executor(executor, workers) if isinstance(executor, str) else executor
     state = RunState(
-        compiled, cache, pool, hooks, RunRecord(compiled.graph.name, executor_name(pool))
+        compiled,
+        cache,
+        pool,
+        hooks,
+        RunRecord(compiled.graph.name, executor_name(pool)),
+        limits=limits or current_limits(),
     )
     began, failed = time.perf_counter(), True
     try:

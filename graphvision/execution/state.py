@@ -43,7 +43,7 @@ from graphvision.execution.executors import (
     encodes_values,
 )
 from graphvision.execution.inputs import value_bytes
-from graphvision.execution.limits import current_limits, start_on_own_thread
+from graphvision.execution.limits import NodeLimits, current_limits, start_on_own_thread
 from graphvision.execution.plan import chain_keys, plan_steps
 from graphvision.execution.record import (
     NodeRecord,
@@ -89,13 +89,13 @@ class RunState:
     deferred: dict[str, Any] = field(default_factory=dict)
     keep_intermediates: bool = False
     pending: set[str] = field(default_factory=set)
+    limits: NodeLimits = field(default_factory=current_limits)  # time and memory per node
 
     def __post_init__(self) -> None:
         self.encoded = encodes_values(self.executor)  # the transport, read once
         self.chained = self.encoded and chains_tasks(self.executor)
         self.in_flight: dict[str, Any] = {}  # a chaining executor's futures not finished
         self.quick_ops: set[str] = self.compiled.quick_ops  # last ran under _QUICK_SECONDS
-        self.limits = current_limits()  # time and memory per node (execution.limits)
         self.timed = self.limits.timeout is not None or self.compiled.has_timeouts
         # sync runs tasks in this thread anyway: each node without a time limit runs here
         self.inline = bool(getattr(self.executor, "in_calling_thread", False))

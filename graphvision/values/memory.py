@@ -231,7 +231,9 @@ def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
         and 8 * array.nbytes >= 7 * owner.nbytes
     ):
         return None
-    address = array.__array_interface__["data"][0]
+    # its address: through a one-byte ctypes window on its (writable, C-ordered) buffer,
+    # released at once (a microsecond less than the dict ``__array_interface__`` builds)
+    address = ctypes.addressof(ctypes.c_char.from_buffer(array))  # type: ignore[arg-type]
     flags.writeable = False
     frozen = np.frombuffer(_from_memory(address, array.nbytes, _READ_ONLY), array.dtype)
     window = frozen.base  # the memoryview numpy holds (every view of ``frozen`` rests on it)

@@ -284,7 +284,19 @@ class ArrayPort(PortType):
 
     @classmethod
     def summary(cls, value: np.ndarray) -> str:
-        return f"{cls.type_name()} {'×'.join(map(str, value.shape))} {dtype_name(value.dtype)}"
+        shape, dtype = value.shape, value.dtype
+        known = _SUMMARIES.get((cls, shape, dtype))
+        if known is None:
+            known = f"{cls._type_name} {'×'.join(map(str, shape))} {dtype_name(dtype)}"
+            if len(_SUMMARIES) > 256:
+                _SUMMARIES.clear()
+            _SUMMARIES[(cls, shape, dtype)] = known
+        return known
+
+
+_SUMMARIES: dict[tuple[type[PortType], tuple[int, ...], np.dtype], str] = {}
+""":meth:`ArrayPort.summary` by port type, shape and dtype, all it depends on (a run of one
+graph summarises arrays of the same shapes each time)."""
 
 
 _PLAIN: dict[type[PortType], bool] = {}

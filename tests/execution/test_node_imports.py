@@ -216,3 +216,22 @@ def test_the_threshold_nodes_modules_are_imported_by_the_calling_thread():
         [sys.executable, "-c", TRACED_RUN], capture_output=True, text=True, timeout=600
     )
     assert done.stdout.split() == ["MainThread"] * 4, done.stderr
+
+
+def test_a_graph_run_again_imports_again_what_left_sys_modules_and_only_for_its_steps(racing):
+    """The modules of a compiled graph's steps are listed once (``import_ahead_of`` keeps
+    the list), and still imported at each run that lacks them; another list of steps of the
+    same graph lists its own."""
+    from graphvision.execution.node_imports import import_ahead_of
+
+    registry, lib = racing()
+    compiled = gv.compile_graph(_both(), registry)
+    for _ in range(2):  # the second time from the list made the first
+        import_ahead_of(compiled.steps, ["whole", "part"])
+        assert lib in sys.modules and f"{lib}.part" in sys.modules
+        for name in (lib, f"{lib}.part"):
+            del sys.modules[name]
+    import_ahead_of(compiled.steps, [])  # no step: nothing (not the list of two)
+    assert lib not in sys.modules
+    import_ahead_of(compiled.steps, ["whole"])  # ``from lib import VALUE``: the package
+    assert lib in sys.modules

@@ -321,3 +321,16 @@ def test_dtype_names_are_numpys_and_stay_apart_for_look_alike_dtypes(dtype, name
     for _ in range(2):  # (the second time from what the first kept)
         assert dtype_name(np.dtype(dtype)) == name
     assert gv.ArrayPort.summary(np.zeros((2, 3), np.dtype(dtype))) == f"Array 2×3 {name}"
+
+
+def test_an_array_summary_follows_its_port_type_shape_and_dtype_each_time():
+    """Summaries are kept by port type, shape and dtype: an array of another shape, dtype or
+    type, or one reshaped in place, is summarised anew."""
+    mask = np.zeros((4, 5), bool)
+    for _ in range(2):  # (the second time from what the first kept)
+        assert gv.BinaryImagePort.summary(mask) == "BinaryImage 4×5 bool"
+        assert gv.ArrayPort.summary(mask) == "Array 4×5 bool"
+        assert gv.ArrayPort.summary(mask.astype(">i2")) == "Array 4×5 >i2"
+    mask.shape = (5, 4)
+    assert gv.BinaryImagePort.summary(mask) == "BinaryImage 5×4 bool"
+    assert gv.ArrayPort.summary(np.zeros(0)) == "Array 0 float64"
