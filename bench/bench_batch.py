@@ -9,9 +9,21 @@ in this thread), the thread executor, the process pool and a Dask
 the same folders; the
 ratio is sync's time over the executor's (issue 26: processes at least 1.7×,
 threads 1.3×, Dask 1.6× on 2 cores). A Python loop calling the same node
-functions on each file, writing nothing, shows what the engine adds. No
+functions on each file, writing nothing (the plain loop), shows what the engine adds. No
 cache, so every file is computed. The machine's load (1-minute average)
 is printed beside each row.
+
+Two rows give the ceiling two cores allow on this work, each against the plain loop
+in one process timed just before it (alternated, several runs: min–max), not
+against sync: "plain loop, split over 2 processes (the machine's ceiling)" runs
+each half of the files through the plain loop in one of two processes forked
+before the clock (nothing to import, compile or send but the paths and the
+counts); two cores gave about 1.75× on it, not 2×. "plain loop on the same
+cluster, raw Dask" runs the plain loop on the running ``LocalCluster(2)`` of the
+Dask rows through ``dask.distributed`` alone (:func:`raw_dask`: ``client.map`` of
+a few files a task, read on the workers, counts gathered), the scheduler in the
+client's process as a ``LocalCluster``'s is: the most a graphvision batch on
+Dask could reach here.
 
 :func:`scaling` runs the batch on processes over 50, 200 and 1,000 files:
 time per file and the client's peak traced memory (``tracemalloc``) should
@@ -34,7 +46,9 @@ from __future__ import annotations
 import os
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import imageio.v3 as iio
 import numpy as np
@@ -128,6 +142,7 @@ def main() -> list[str]:
             f"{FILES / floor:.1f} | {sync / floor:.2f}× | {sum(c == 24 for c in counts)} | "
             f"{_load()} |"
         )
+        rows.append(_split_row(paths))
         rows.append(
             f"| graphvision batch, sync | {sync:.1f} | {FILES / sync:.1f} | 1.00× | {good} | "
             f"{_load()} |"
@@ -138,6 +153,48 @@ def main() -> list[str]:
         fewer = _fewer(graph, paths[:50], folder)
         rows += _dask_rows(graph, paths, folder, sync)  # last: its client's threads stay
     return [*rows, *fewer, "", *engine]
+
+
+CEILING_RUNS = 3
+
+
+def _split_row(paths: list[Path]) -> str:
+    """The machine's ceiling: the plain loop over each half of the files in two processes
+    forked before the clock (from this warmed process: nothing to import or compile), against
+    the same loop over all the files in this process, alternated :data:`CEILING_RUNS` times."""
+    import multiprocessing
+
+    halves = [paths[: len(paths) // 2], paths[len(paths) // 2 :]]
+    runs = []
+    with multiprocessing.get_context("fork").Pool(2) as pool:
+        pool.map(_loop, [paths[:1]] * 2, chunksize=1)  # the pool's first round trip
+        for _ in range(CEILING_RUNS):
+            one = _timed(_loop, paths)
+            split = _timed(lambda: [c for half in pool.map(_loop, halves, 1) for c in half])
+            runs.append((one, split, _load()))
+    return _ceiling_row("plain loop, split over 2 processes (the machine's ceiling)", runs)
+
+
+def _timed(run: Callable[..., list[int]], *args: object) -> tuple[float, int]:
+    """Seconds of ``run(*args)`` and how many of the counts it returns are 24."""
+    began = time.perf_counter()
+    counts = run(*args)
+    return time.perf_counter() - began, sum(c == 24 for c in counts)
+
+
+def _ceiling_row(name: str, runs: list[tuple[tuple[float, int], tuple[float, int], str]]) -> str:
+    """A ceiling row: seconds of each run of ``name`` (the second of each pair) as min–max,
+    and its ratio to the plain loop in one process timed just before it (the first), as
+    min–max over the pairs; the load at each."""
+    times = sorted(split for _, (split, _), _ in runs)
+    ratios = sorted(one / split for (one, _), (split, _), _ in runs)
+    good = min(g for _, (_, g), _ in runs)
+    loads = ", ".join(load for *_, load in runs)
+    return (
+        f"| {name} ({len(runs)} runs) | {times[0]:.2f}–{times[-1]:.2f} | "
+        f"{FILES / times[-1]:.1f}–{FILES / times[0]:.1f} | "
+        f"{ratios[0]:.2f}–{ratios[-1]:.2f}× the loop in one process | {good} | {loads} |"
+    )
 
 
 def _engine_rows(floor: float, sync: float) -> list[str]:
@@ -162,13 +219,18 @@ def _row(name: str, measured: tuple[float, int], sync: float) -> str:
 
 
 def _dask_rows(graph: gv.Graph, paths: list[Path], folder: Path, sync: float) -> list[str]:
-    """The batch on Dask three ways (see :func:`dask_runs`), :data:`DASK_RUNS` times each,
-    against ``sync``: seconds and ratios as min–max, with the load at each run. Run after
-    the others: the threads of a Dask client stay in the process after it closes."""
+    """The batch on Dask three ways and raw Dask's ceiling (see :func:`dask_runs`),
+    :data:`DASK_RUNS` times each, against ``sync`` (the ceiling against the plain loop in one
+    process): seconds and ratios as min–max, with the load at each run. Run after the
+    others: the threads of a Dask client stay in the process after it closes."""
     found: dict[str, list[tuple[float, int, str]]] = {}
+    ceiling: list[tuple[tuple[float, int], tuple[float, int], str]] = []
     for run in range(DASK_RUNS):
-        for name, seconds, good in dask_runs(graph, paths, folder / f"run{run}"):
-            found.setdefault(name, []).append((seconds, good, _load()))
+        for name, seconds, good, loop in dask_runs(graph, paths, folder / f"run{run}"):
+            if loop is None:
+                found.setdefault(name, []).append((seconds, good, _load()))
+            else:
+                ceiling.append((loop, (seconds, good), _load()))
     rows = []
     for name, runs in found.items():
         times = sorted(seconds for seconds, _, _ in runs)
@@ -180,26 +242,39 @@ def _dask_rows(graph: gv.Graph, paths: list[Path], folder: Path, sync: float) ->
             f"{FILES / times[-1]:.1f}–{FILES / times[0]:.1f} | "
             f"{sync / times[-1]:.2f}–{sync / times[0]:.2f}× | {good} | {loads} |"
         )
+    if ceiling:
+        rows.append(
+            _ceiling_row(f"plain loop on the same cluster, raw Dask ({RAW_TASKS})", ceiling)
+        )
     return rows or ["(Dask not installed: pip install 'graphvision[dask]')"]
 
 
 DASK_RUNS = 3
+RAW_FILES_PER_TASK = 8  # as many as a graphvision task's most (dask_files.FILES_PER_TASK)
+RAW_TASKS = f"client.map, {RAW_FILES_PER_TASK} files a task"
 
 
-def dask_runs(graph: gv.Graph, paths: list[Path], folder: Path) -> list[tuple[str, float, int]]:
-    """Seconds of the batch on a Dask ``LocalCluster`` of 2 single-threaded worker processes:
-    ``executor="dask"`` in a fresh process, as the command line runs it (the executor
-    starts the cluster, forking its workers from the client after the first file, and
-    closes it: timed with it; :func:`own_cluster`); a running cluster given to
-    ``DaskExecutor``, started before the clock, on its workers' first batch (each worker
-    imports graphvision, the plugins, scipy and numba's compiler while the client runs
-    files); and the same cluster's next batch (a long-lived cluster: nothing left to
-    start)."""
+def dask_runs(
+    graph: gv.Graph, paths: list[Path], folder: Path
+) -> list[tuple[str, float, int, tuple[float, int] | None]]:
+    """Seconds of the batch on a Dask ``LocalCluster`` of 2 single-threaded worker processes,
+    and the files that counted 24 coins: ``executor="dask"`` in a fresh process, as the
+    command line runs it (the executor starts the cluster, forking its workers from the
+    client after the first file, and closes it: timed with it; :func:`own_cluster`); a
+    running cluster given to ``DaskExecutor``, started before the clock, on its workers'
+    first batch (each worker imports graphvision, the plugins, scipy and numba's compiler
+    while the client runs files); and the same cluster's next batch (a long-lived cluster:
+    nothing left to start). Last, the Dask ceiling on the same cluster (:func:`raw_dask`),
+    with the plain loop in this process timed just before it (the fourth item; None for
+    the batches)."""
     try:
         import distributed
     except ImportError:
         return []
-    found = [("(executor starts LocalCluster(2) itself, timed)", *_own_cluster_run(paths, folder))]
+    own = _own_cluster_run(paths, folder)
+    found: list[tuple[str, float, int, tuple[float, int] | None]] = [
+        ("(executor starts LocalCluster(2) itself, timed)", *own, None)
+    ]
     with (
         distributed.LocalCluster(
             n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
@@ -209,8 +284,37 @@ def dask_runs(graph: gv.Graph, paths: list[Path], folder: Path) -> list[tuple[st
         for name in ("running LocalCluster(2) given, workers' first batch", "same, next batch"):
             executor = gv.DaskExecutor(client)
             seconds, good = _batch(graph, paths, folder / f"dask-{len(found)}", executor)
-            found.append((name, seconds, good))
+            found.append((name, seconds, good, None))
+        loop = _timed(_loop, paths)
+        found.append(("raw", *raw_dask(client, paths), loop))
     return found
+
+
+def raw_dask(client: Any, paths: list[Path]) -> tuple[float, int]:
+    """The plain loop through raw ``dask.distributed`` on ``client``'s running cluster (the
+    scheduler in this process, as a ``LocalCluster``'s): ``client.map`` of
+    :data:`RAW_FILES_PER_TASK` files a task, read on the workers, and a ``gather`` of their
+    counts; its seconds (each worker having run one file before the clock) and the counts
+    of 24. The ceiling Dask itself gives a graphvision batch on this machine."""
+    for address in client.scheduler_info()["workers"]:
+        client.submit(_loop_on_worker, paths[:1], workers=[address], pure=False).result()
+    chunks = [paths[k : k + RAW_FILES_PER_TASK] for k in range(0, len(paths), RAW_FILES_PER_TASK)]
+
+    def run() -> list[int]:
+        tasks = client.map(_loop_on_worker, chunks, pure=False)
+        return [count for counts in client.gather(tasks) for count in counts]
+
+    return _timed(run)
+
+
+def _loop_on_worker(paths: list[Path]) -> list[int]:
+    """:func:`_loop` on a Dask worker, its heap set as graphvision's tasks set it there
+    (:func:`~graphvision.execution.dask_worker.keep_freed_memory`: the nanny's
+    ``MALLOC_TRIM_THRESHOLD_`` makes each large array a fresh mapping)."""
+    from graphvision.execution.dask_worker import keep_freed_memory
+
+    keep_freed_memory()
+    return _loop(paths)
 
 
 def _own_cluster_run(paths: list[Path], folder: Path) -> tuple[float, int]:
