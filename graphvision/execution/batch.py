@@ -59,10 +59,10 @@ from graphvision.execution.batch_files import (
     BatchPages,
     BatchResult,
     batch_files,
+    checked_folders,
     common_parts,
     output_folders,
     pattern_root,
-    previous_folders,
     summary_text,
 )
 from graphvision.execution.batch_guard import refuse_in_bootstrap
@@ -80,8 +80,7 @@ from graphvision.execution.executors import (
 )
 from graphvision.execution.folder_lock import only_writer
 from graphvision.execution.folders import missing_folders, remove_empty_folders, retire_left_files
-from graphvision.execution.manifest import check_folder_files, replace_folder_files
-from graphvision.execution.owned import check_output_folder
+from graphvision.execution.manifest import replace_folder_files
 from graphvision.execution.record import RunHooks
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
@@ -181,7 +180,7 @@ def run_batch(
     out_dir = Path(output_dir)
     paths, root = _batch_paths(files, out_dir, input)
     folders = output_folders(paths, root, out_dir)
-    stale = _checked_folders(out_dir, folders, outputs if outputs is not None else graph.outputs)
+    stale = checked_folders(out_dir, folders, outputs if outputs is not None else graph.outputs)
     name = graph.name if isinstance(graph, Graph) else graph.graph.name
     with only_writer(out_dir, f"batch of {name}"):  # one writer per folder
         pool = make_executor(executor, workers) if isinstance(executor, str) else executor
@@ -208,20 +207,6 @@ def run_batch(
             if closing is not None:
                 closing.wait()
         return BatchResult(finished, summary, *batch.transferred())
-
-
-def _checked_folders(out_dir: Path, folders: list[Path], outputs: Collection[str]) -> set[Path]:
-    """Refuse, before anything runs, a batch that would replace files graphvision did not
-    write (in an item folder, or ``batch.csv`` and ``batch.html``), write through a link,
-    or replace a run it cannot keep; return the folders of files that left the batch."""
-    for folder in folders:
-        check_output_folder(folder, outputs, out_dir)
-    check_folder_files(out_dir, BATCH_FILES)
-    current = {folder.resolve() for folder in folders}
-    stale = {folder for folder in previous_folders(out_dir) if folder.resolve() not in current}
-    for folder in stale:  # its run is kept in its history/ before its files go
-        check_output_folder(folder, (), out_dir)
-    return stale
 
 
 def _check_batch_arguments(output_dir: object, inputs: dict[str, Any], input: str) -> None:

@@ -9,14 +9,16 @@ import glob
 import io
 import os
 import stat
-from collections.abc import Callable, Sequence
+import unicodedata
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from graphvision.errors import OutputFolderError
 from graphvision.execution.folders import RunPage
-from graphvision.execution.manifest import FolderFiles
+from graphvision.execution.manifest import FolderFiles, check_folder_files
+from graphvision.execution.owned import check_output_folder
 
 __all__ = [
     "BATCH_FILES",
@@ -27,6 +29,7 @@ __all__ = [
     "BatchPages",
     "BatchResult",
     "batch_files",
+    "checked_folders",
     "common_parts",
     "output_folders",
     "pattern_root",
@@ -282,3 +285,36 @@ def summary_text(items: Sequence[BatchItem]) -> str:
     writer.writeheader()
     writer.writerows(rows)
     return text.getvalue()
+
+
+def checked_folders(out_dir: Path, folders: list[Path], outputs: Collection[str]) -> set[Path]:
+    """Refuse, before anything runs, a batch that would replace files graphvision did not
+    write (in an item folder, or ``batch.csv`` and ``batch.html``), write through a link,
+    or replace a run it cannot keep; return the folders of files that left the batch."""
+    present = _names_in(out_dir)  # a folder whose first part is not there is new: no check
+    depth = len(out_dir.parts)
+    for k, folder in enumerate(folders):  # (the first always: it checks the output names)
+        if k == 0 or _folded(folder.parts[depth]) in present:
+            check_output_folder(folder, outputs, out_dir)
+    check_folder_files(out_dir, BATCH_FILES)
+    previous = previous_folders(out_dir)
+    current = {folder.resolve() for folder in folders} if previous else set()
+    stale = {folder for folder in previous if folder.resolve() not in current}
+    for folder in stale:  # its run is kept in its history/ before its files go
+        check_output_folder(folder, (), out_dir)
+    return stale
+
+
+def _names_in(folder: Path) -> set[str]:
+    """The names in ``folder`` (none when it is not a folder), in one listing, as
+    :func:`_folded` gives them."""
+    try:
+        return {_folded(name) for name in os.listdir(folder)}
+    except OSError:
+        return set()
+
+
+def _folded(name: str) -> str:
+    """``name`` as a case-insensitive file system (macOS's, Windows') compares names: a
+    folder made there under another case or Unicode form would be the same folder."""
+    return unicodedata.normalize("NFC", name).casefold()
