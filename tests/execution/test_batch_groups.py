@@ -4,8 +4,11 @@ file runs once, and a node that kills its worker fails its own file alone."""
 
 from __future__ import annotations
 
+import csv
 import json
 import threading
+from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -13,7 +16,7 @@ import graphvision as gv
 from graphvision.execution.batch_files import BatchItem
 from graphvision.execution.batch_lanes import FileLanes
 
-from .test_batch import photo
+from .test_batch import _counting_graph, photo
 
 CRASHING_PLUGIN = '''
 import os
@@ -89,3 +92,40 @@ def test_a_node_that_kills_its_worker_in_a_task_of_several_files_fails_that_file
             assert record["outputs"]["score"].startswith("Float")
     later = json.loads((batch.items[-1].output_dir / "record.json").read_text())
     assert later["executor"] == "processes, up to 8 files a task"
+
+
+def test_ctrl_c_in_a_batch_of_tasks_of_several_files_leaves_each_folder_whole_or_absent(
+    tmp_path,
+):
+    graph, registry, _ = _counting_graph(tmp_path)
+    files = [photo(tmp_path / "in" / f"{k:02d}.png", 5 * k) for k in range(40)]
+
+    def stop_at_tenth(number: int, total: int, item: Any) -> None:
+        if number == 10:  # tasks of several files on both workers: Ctrl-C
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        gv.run_batch(
+            graph,
+            [str(f) for f in files],
+            input="image",
+            output_dir=tmp_path / "out",
+            registry=registry,
+            cache=None,
+            executor="processes",
+            workers=2,
+            client_files=False,
+            on_item=stop_at_tenth,
+        )
+    with (tmp_path / "out" / "batch.csv").open() as summary:
+        rows = {Path(r["output_dir"]).name: r["status"] for r in csv.DictReader(summary)}
+    assert sorted(rows) == [f"{k:02d}" for k in range(40)]  # every file, done or not
+    assert sum(status == "ok" for status in rows.values()) >= 10
+    for name, status in rows.items():
+        folder = tmp_path / "out" / name
+        if status == "ok":
+            record = json.loads((folder / "record.json").read_text())
+            first = name == "00"  # run in the client
+            assert record["executor"].endswith("first file in this process" if first else "a task")
+        else:
+            assert status in ("interrupted", "not run") and not folder.exists()
