@@ -74,14 +74,13 @@ def positive_int(text: str) -> int:
 
 
 def pixel_count(text: str) -> int:
-    """A pixel budget: a whole number of at least 1 (``1e9`` and ``1_000_000`` accepted)."""
+    """``--max-pixels``: a whole number of at least 1 (``1e9`` and ``1_000_000`` accepted)."""
+    from graphvision.values.budget import pixel_count as parsed
+
     try:
-        value = int(float(text)) if "e" in text.lower() else int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number of pixels: '{text}'") from None
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
+        return parsed(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def byte_size(text: str) -> int:
@@ -260,12 +259,14 @@ def load_run_arguments(
     args: argparse.Namespace,
 ) -> tuple[Graph, Registry, dict[str, Any], dict[str, Any]]:
     """The pipeline, its registry, the checked overrides (``--set``) and inputs (``--input``)."""
+    from graphvision.execution.arguments import environment_limits
     from graphvision.graph.pipeline_file import load_pipeline
     from graphvision.values.budget import ENVIRONMENT_VARIABLE
 
     if args.max_pixels is not None:  # in the environment: worker processes read it too
         os.environ[ENVIRONMENT_VARIABLE] = str(args.max_pixels)
     node_limit_options(args)
+    environment_limits()  # a malformed variable refused once, before the pipeline is read
     order = backend_order(args)  # an empty entry is refused before the file is read
     graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
     graph = graph.with_backends(order)  # --backend: the run's order

@@ -24,6 +24,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "admitted",
+    "environment_limits",
     "given_inputs",
     "graph_argument",
     "mapping_argument",
@@ -79,8 +80,32 @@ def mapping_argument(value: Any, what: str) -> dict[str, Any]:
     return {key: os.fspath(v) if isinstance(v, os.PathLike) else v for key, v in value.items()}
 
 
-def run_arguments(cache: Any, executor: Any, workers: Any) -> None:
-    """Refuse a cache, executor or worker count of the wrong kind, saying what is taken."""
+def environment_limits(*, max_pixels: int | None = None, max_memory: int | None = None) -> None:
+    """Refuse a limit the environment sets that is malformed (``GRAPHVISION_MAX_PIXELS``,
+    ``GRAPHVISION_NODE_TIMEOUT``, ``GRAPHVISION_NODE_MEMORY``, ``GRAPHVISION_MAX_MEMORY``),
+    naming the variable and its value, before any work: each was read only where it is
+    used (the pixel budget when a file is read, deep in a run or per file of a batch). A
+    limit given as an argument (``max_pixels``, ``max_memory``) supersedes its variable.
+
+    Raises
+    ------
+    InputError
+        Naming the variable, its value and what it takes.
+    """
+    from graphvision.execution.limits import current_limits
+    from graphvision.execution.peak_memory import environment_memory
+    from graphvision.values.budget import max_pixels as budget_in_force
+
+    if max_pixels is None:
+        budget_in_force()
+    current_limits()
+    if max_memory is None:
+        environment_memory()
+
+
+def run_arguments(cache: Any, executor: Any, workers: Any, **limits: int | None) -> None:
+    """Refuse a cache, executor or worker count of the wrong kind, saying what is taken, and
+    a malformed limit in the environment (:func:`environment_limits`, given ``limits``)."""
     from graphvision.cache.store import Cache
     from graphvision.execution.executors import EXECUTORS
 
@@ -99,6 +124,7 @@ def run_arguments(cache: Any, executor: Any, workers: Any) -> None:
         raise TypeError(f"workers must be a whole number, got {workers!r}")
     if isinstance(workers, int) and workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
+    environment_limits(**limits)
 
 
 def wanted_outputs(

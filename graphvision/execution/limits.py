@@ -44,7 +44,7 @@ from pathlib import Path
 from typing import Any
 
 from graphvision.compiler.compiled import CompiledGraph
-from graphvision.errors import PipelineError, Problem
+from graphvision.errors import InputError, PipelineError, Problem
 from graphvision.execution.crash_note import real_exit
 
 __all__ = [
@@ -112,11 +112,13 @@ def _positive(value: Any, what: str, kind: type) -> Any:
 
 
 def _from_environment(variable: str, kind: type) -> Any:
+    """The limit ``variable`` sets (None unset); an InputError, a user's mistake, naming it
+    and its value when it is not a positive number."""
     text = os.environ.get(variable, "")
     try:
         return _positive(kind(float(text)), variable, kind) if text else None
-    except ValueError:
-        raise ValueError(f"{variable}={text!r} is not a positive number") from None
+    except (ValueError, OverflowError):
+        raise InputError(f"{variable}={text!r} is not a positive number") from None
 
 
 def current_limits() -> NodeLimits:

@@ -44,6 +44,7 @@ __all__ = [
     "MEMORY_VARIABLE",
     "Estimate",
     "check_peak_memory",
+    "environment_memory",
     "estimate_peak",
     "memory_allowed",
     "running_at_once",
@@ -124,12 +125,9 @@ def memory_allowed(max_memory: int | None = None) -> tuple[int | None, str]:
     None when unknown) and where that figure comes from."""
     if max_memory is not None:
         return max_memory, "allowed (max_memory)"
-    text = os.environ.get(MEMORY_VARIABLE, "")
-    if text:
-        try:
-            return int(float(text)), "allowed (--max-memory)"
-        except ValueError:
-            raise InputError(f"{MEMORY_VARIABLE}={text!r} is not a number of bytes") from None
+    given = environment_memory()
+    if given is not None:
+        return given, "allowed (--max-memory)"
     try:
         for line in Path("/proc/meminfo").read_text().splitlines():
             if line.startswith("MemAvailable:"):
@@ -137,6 +135,26 @@ def memory_allowed(max_memory: int | None = None) -> tuple[int | None, str]:
     except OSError:
         pass
     return None, ""
+
+
+def environment_memory() -> int | None:
+    """The bytes :data:`MEMORY_VARIABLE` allows a run (None when it is unset).
+
+    Raises
+    ------
+    InputError
+        When it is not a number of bytes above 0, naming it and its value.
+    """
+    text = os.environ.get(MEMORY_VARIABLE, "")
+    if not text:
+        return None
+    try:
+        value = int(float(text))
+    except (ValueError, OverflowError):
+        value = 0
+    if value <= 0:  # (-1 refused every run as over its memory)
+        raise InputError(f"{MEMORY_VARIABLE}={text!r} is not a number of bytes above 0")
+    return value
 
 
 def _surely_available(peak: int) -> bool:

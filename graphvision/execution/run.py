@@ -168,7 +168,7 @@ def run(
         the outputs that were produced and the record.
     """
     graph, inputs, outputs, overrides = _checked_arguments(
-        graph, inputs, outputs, overrides, cache, executor, workers
+        graph, inputs, outputs, overrides, (cache, executor, workers), max_pixels, max_memory
     )
     limit = BlasLimit()  # one BLAS thread while nodes run here (see graphvision.execution.blas)
     if _runs_here(executor):  # the memory nodes free here is reused without page faults
@@ -242,10 +242,18 @@ def _runs_here(executor: str | Executor) -> bool:
 
 
 def _checked_arguments(
-    graph: Any, inputs: Any, outputs: Any, overrides: Any, cache: Any, executor: Any, workers: Any
+    graph: Any,
+    inputs: Any,
+    outputs: Any,
+    overrides: Any,
+    running: tuple[Any, Any, Any],
+    max_pixels: Any,
+    max_memory: Any,
 ) -> tuple[Graph | CompiledGraph, dict[str, Any], list[str] | None, dict[str, Any]]:
-    """The arguments of :func:`run` as it uses them, or a TypeError naming the wrong one."""
-    run_arguments(cache, executor, workers)
+    """The arguments of :func:`run` as it uses them, or a TypeError naming the wrong one;
+    ``running``: its cache, executor and workers. A malformed limit in the environment is
+    refused (an InputError) unless the argument of that limit supersedes it."""
+    run_arguments(*running, max_pixels=max_pixels, max_memory=max_memory)
     return (
         graph_argument(graph),
         mapping_argument(inputs, "inputs"),

@@ -38,6 +38,7 @@ __all__ = [
     "npy_declared",
     "npz_declared",
     "pixel_budget",
+    "pixel_count",
     "pixels_of",
 ]
 
@@ -51,7 +52,15 @@ _BUDGET: ContextVar[int | None] = ContextVar("graphvision_max_pixels", default=N
 
 
 def max_pixels() -> int:
-    """The pixel budget in force (see the module docstring for where it comes from)."""
+    """The pixel budget in force (see the module docstring for where it comes from).
+
+    Raises
+    ------
+    InputError
+        When the budget comes from :data:`ENVIRONMENT_VARIABLE` and it is not a whole
+        number above 0 (``gv.run``, ``gv.run_batch``, ``gv.sweep`` and the commands that
+        run ask before any work: :func:`graphvision.execution.arguments.run_arguments`).
+    """
     given = _BUDGET.get()
     if given is not None:
         return given
@@ -59,12 +68,33 @@ def max_pixels() -> int:
     if not text:
         return DEFAULT_MAX_PIXELS
     try:
-        budget = int(text)
-    except ValueError:
-        budget = 0
-    if budget < 1:  # (-1 made every image "over a budget of -1 pixels")
-        raise InputError(f"{ENVIRONMENT_VARIABLE}={text!r} is not a whole number of pixels above 0")
-    return budget
+        return pixel_count(text)
+    except ValueError:  # (-1 made every image "over a budget of -1 pixels")
+        raise InputError(
+            f"{ENVIRONMENT_VARIABLE}={text!r} is not a whole number of pixels above 0 "
+            f"(e.g. 2e8; unset, the budget is {DEFAULT_MAX_PIXELS:,})"
+        ) from None
+
+
+def pixel_count(text: str) -> int:
+    """A pixel budget written as ``--max-pixels`` and :data:`ENVIRONMENT_VARIABLE` take it:
+    a whole number of at least 1 (``1e9`` and ``1_000_000`` accepted).
+
+    >>> pixel_count("1e9"), pixel_count("1_000_000")
+    (1000000000, 1000000)
+
+    Raises
+    ------
+    ValueError
+        Saying what is wrong with ``text``.
+    """
+    try:
+        value = int(float(text)) if "e" in text.lower() else int(text)
+    except (ValueError, OverflowError):  # (float("1e999") is inf)
+        raise ValueError(f"not a whole number of pixels: '{text}'") from None
+    if value <= 0:
+        raise ValueError(f"must be at least 1, got {value}")
+    return value
 
 
 @contextlib.contextmanager
