@@ -93,4 +93,5 @@ _PLUGIN = {  # what each entry-point plugin provides (the choice of plugins a ru
 INDEX = {
     "nodes": Each({"summary": str, "description": _DESCRIPTION}),
     "plugins": Each(_PLUGIN),
+    "modules?": Each(str),  # other modules of the plugins' distributions: name -> digest
 }

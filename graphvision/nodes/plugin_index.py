@@ -28,12 +28,20 @@ can change what discovery finds, computed on every use:
   hashed as above);
 * the Python version and executable.
 
+The other top-level modules a plugin's import brought in from its distribution
+(its nodes defined in a second package of the distribution) are not known
+before the import: the index records their digests, and is not served when one
+changed.
+
 An index is written only after a discovery in which every entry-point plugin
 loaded (a failing plugin is imported, and its error reported, every time),
-and only if the key is the same after the plugins were imported as before (a
-file edited meanwhile). It is one JSON file per Python environment, next to
-the default cache folder, named by its key and written atomically; an index
-that cannot be read or written is simply not used.
+only if the key is the same after the plugins were imported as before (a
+file edited meanwhile), and only if no file of the plugins' modules changed
+after they could have been imported (:mod:`graphvision.nodes.plugin_modules`:
+a module imported before its file was edited holds the old nodes). It is one
+JSON file per Python environment, next to the default cache folder, named by
+its key and written atomically; an index that cannot be read or written is
+simply not used.
 """
 
 from __future__ import annotations
@@ -64,13 +72,14 @@ __all__ = [
     "installed_entry_points",
     "metadata_folder",
     "package_digest",
+    "package_files",
     "read_index",
     "read_providers",
     "write_index",
 ]
 
 ENTRY_POINT_GROUP = "graphvision.plugins"
-FORMAT = 5  # bump when what an index holds changes
+FORMAT = 6  # bump when what an index holds changes
 
 
 def installed_entry_points() -> list[EntryPoint]:
@@ -203,7 +212,7 @@ def package_digest(name: str) -> bytes:
     import xxhash
 
     hasher = xxhash.xxh3_128()
-    for file in _package_files(name):
+    for file in package_files(name):
         hasher.update(f"{file}\n".encode())
         hasher.update(_file_digest(file))
     return hasher.digest()
@@ -217,8 +226,9 @@ def _path_folders() -> list[str]:
     return list(dict.fromkeys(folder for folder in sys.path[1:] if folder != first))
 
 
-def _package_files(name: str) -> list[str]:
-    """Every file of a top-level package or module, found without importing it."""
+def package_files(name: str) -> list[str]:
+    """Every file of a top-level package or module, found without importing it (but for
+    ``__pycache__``)."""
     try:
         spec = find_spec(name)
     except (ImportError, ValueError):
@@ -271,7 +281,7 @@ def _read(key: str) -> dict[str, Any] | None:
     removed, so that the discovery that replaces it writes it again.
     """
     path = index_path(key)
-    if str(path) in _READ and path.is_file():
+    if str(path) in _READ and path.is_file() and _modules_unchanged(_READ[str(path)]):
         return _READ[str(path)]
     try:
         data = path.read_bytes()
@@ -283,13 +293,21 @@ def _read(key: str) -> dict[str, Any] | None:
         index = json.loads(body) if head == _header(key, body) else None
     except (ValueError, RecursionError):
         index = None
-    if not isinstance(index, dict) or not fits(index, INDEX):
+    if not isinstance(index, dict) or not fits(index, INDEX) or not _modules_unchanged(index):
         with contextlib.suppress(OSError):
             path.unlink()
         return None
     _READ.clear()
     _READ[str(path)] = index
     return index
+
+
+def _modules_unchanged(index: dict[str, Any]) -> bool:
+    """Whether the other top-level modules the plugins' import brought in (recorded by
+    :func:`write_index`; not in the key, which is computed before any import) hold the
+    bytes they held when the index was written."""
+    recorded = index.get("modules", {})
+    return all(package_digest(name).hex() == digest for name, digest in recorded.items())
 
 
 def _header(key: str, body: bytes) -> dict[str, str]:
@@ -329,9 +347,11 @@ def _exclusive(registry: Registry, plugin: str) -> dict[str, Any]:
     }
 
 
-def write_index(key: str, registry: Registry) -> None:
-    """Record ``registry``'s nodes under ``key`` and remove this environment's older indexes
-    (quietly nothing if the files cannot be written)."""
+def write_index(key: str, registry: Registry, modules: dict[str, bytes] | None = None) -> None:
+    """Record ``registry``'s nodes under ``key``, with the digests of ``modules`` (the other
+    top-level modules of the plugins' distributions, which the key does not cover), and
+    remove this environment's older indexes (quietly nothing if the files cannot be
+    written)."""
     nodes = {
         op: {"summary": spec.summary, "description": registry.describe(op)}
         for op, spec in sorted(registry.nodes.items())
@@ -351,7 +371,8 @@ def write_index(key: str, registry: Registry) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
         try:
-            body = json.dumps({"nodes": nodes, "plugins": plugins}).encode()
+            recorded = {name: digest.hex() for name, digest in sorted((modules or {}).items())}
+            body = json.dumps({"nodes": nodes, "plugins": plugins, "modules": recorded}).encode()
             with os.fdopen(handle, "wb") as stream:
                 stream.write(json.dumps(_header(key, body)).encode() + b"\n" + body)
             os.replace(temporary, path)

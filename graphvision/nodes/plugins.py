@@ -14,6 +14,8 @@ plugins, their nodes' parameter models are built on first use.
 
 from __future__ import annotations
 
+import sys
+import time
 import traceback
 import types
 from collections.abc import Iterable
@@ -36,6 +38,7 @@ from graphvision.nodes.plugin_index import (
     read_providers,
     write_index,
 )
+from graphvision.nodes.plugin_modules import distribution_modules, loaded_as_now
 from graphvision.nodes.registry import Registry
 
 __all__ = [
@@ -76,37 +79,60 @@ def load_entry_points(registry: Registry, needs: Needs | None = None) -> None:
         if wanted is not None:
             entries = [entry for entry in entries if entry.name in wanted]
             fresh = False  # a part of the plugins: never recorded as the whole
-    for entry in entries:
-        if entry.name in registry.plugins:
-            continue
-        try:
-            module = entry.load()
-            if not isinstance(module, types.ModuleType):
-                raise PluginLoadError(f"entry point must name a module, got {module!r}")
-            registry.add_plugin(module, entry.name, entry.value, params_checked=indexed)
-            if entry.dist is not None:
-                note_distribution(module.__name__.partition(".")[0], _distribution_name(entry))
-        except Exception as error:
-            registry.record_failure(entry.name, entry.value, _summarise(error))
     tops = {entry.value.partition(":")[0].partition(".")[0] for entry in entries}
-    for top in tops - _LOADED_AS.keys():  # (once per package and process)
-        _LOADED_AS[top] = package_digest(top)
+    imported_before, began = {top for top in tops if top in sys.modules}, time.time_ns()
+    for entry in entries:
+        if entry.name not in registry.plugins:
+            count = len(sys.modules)
+            _load_entry_point(registry, entry, indexed)
+            if len(sys.modules) > count:  # (modules are added at the end: a dict keeps order)
+                brought = distribution_modules(entry, list(sys.modules)[count:])
+                _BROUGHT.setdefault(entry.value, set()).update(brought)
+    others = {name for entry in entries for name in _BROUGHT.get(entry.value, ())}
+    for top in (tops | others) - _LOADED_AS.keys():  # (once per module and process)
+        trusted = loaded_as_now(top, top in imported_before, began)
+        _LOADED_AS[top] = package_digest(top) if trusted else None
     recordable = fresh and not indexed and not registry.failed_plugins()
-    if recordable and environment_key(entries) == key and _unchanged_since_loaded(tops):
-        write_index(key, registry)  # (no file changed while, or since, they loaded)
+    if recordable and environment_key(entries) == key and _unchanged_since_loaded(tops | others):
+        recorded = {name: _LOADED_AS[name] or b"" for name in others}
+        write_index(key, registry, recorded)  # (no file changed while, or since, they loaded)
 
 
-_LOADED_AS: dict[str, bytes] = {}  # a plugin package -> its files' digest when first loaded
+def _load_entry_point(registry: Registry, entry: EntryPoint, indexed: bool) -> None:
+    """Import ``entry``'s module and register it, or record why it failed."""
+    try:
+        module = entry.load()
+        if not isinstance(module, types.ModuleType):
+            raise PluginLoadError(f"entry point must name a module, got {module!r}")
+        registry.add_plugin(module, entry.name, entry.value, params_checked=indexed)
+        if entry.dist is not None:
+            note_distribution(module.__name__.partition(".")[0], _distribution_name(entry))
+    except Exception as error:
+        registry.record_failure(entry.name, entry.value, _summarise(error))
 
 
-def _unchanged_since_loaded(packages: set[str]) -> bool:
-    """Whether every package's files are those this process loaded (see :data:`_LOADED_AS`).
+_LOADED_AS: dict[str, bytes | None] = {}
+"""A plugin's top-level module -> its files' digest when first loaded, None when they may
+have changed since it was imported (:func:`~.plugin_modules.loaded_as_now`)."""
 
-    A package imported before its files were edited keeps the old code: a registry of it,
+_BROUGHT: dict[str, set[str]] = {}
+"""An entry point's target -> the other top-level modules of its distribution its import
+brought in (:func:`~.plugin_modules.distribution_modules`), kept for the discoveries after
+the first, whose import of it imports nothing."""
+
+
+def _unchanged_since_loaded(modules: set[str]) -> bool:
+    """Whether every module's files are those this process loaded (see :data:`_LOADED_AS`).
+
+    A module imported before its files were edited keeps the old code: a registry of it,
     recorded under the new key, would be an index served stale to every later command (a
-    notebook or the studio open while the user edits a plugin).
+    notebook or the studio open while the user edits a plugin, a plugin package imported
+    before the first discovery).
     """
-    return all(_LOADED_AS[package] == package_digest(package) for package in packages)
+    return all(
+        _LOADED_AS[name] is not None and _LOADED_AS[name] == package_digest(name)
+        for name in modules
+    )
 
 
 _DISTRIBUTION_NAMES: dict[object, str] = {}  # by metadata folder (its name holds the name)
