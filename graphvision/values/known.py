@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from graphvision.values.ports import PortType, freeze_all, is_frozen
-from graphvision.values.scalars import _ScalarPort
+from graphvision.values.ports import PortType, freeze, freeze_all, is_frozen, is_plain_array_port
+from graphvision.values.scalars import _ScalarPort, is_plain_table_port
 
 __all__ = ["checked", "frozen_value", "note", "recall"]
 
@@ -81,7 +81,12 @@ def frozen_value(kind: type[PortType], value: Any) -> Any:
     memory already), noted as accepted by ``kind``; a scalar as it is."""
     if issubclass(kind, _ScalarPort):
         return value
-    arrays, meta = kind.encode(value)
-    frozen = kind.decode(freeze_all(arrays), meta)
-    note(frozen, kind, True, frozen=True)  # (what freeze_all returns is frozen)
+    if type(value) is np.ndarray and is_plain_array_port(kind):  # its one array as it is
+        frozen: Any = freeze(value)
+    elif type(value) is dict and is_plain_table_port(kind):  # its columns as they are
+        frozen = freeze_all(value)
+    else:
+        arrays, meta = kind.encode(value)
+        frozen = kind.decode(freeze_all(arrays), meta)
+    note(frozen, kind, True, frozen=True)  # (what freeze and freeze_all return is frozen)
     return frozen

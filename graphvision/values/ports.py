@@ -105,6 +105,8 @@ def freeze_all(arrays: Arrays) -> Arrays:
     thawed = [name for name, array in arrays.items() if not is_frozen(array)]
     if len(thawed) < 2:
         return {name: freeze(array, offsets.get(name, 0)) for name, array in arrays.items()}
+    if not offsets and len(thawed) == len(arrays):  # a node's fresh value: all, as they lie
+        return dict(zip(thawed, frozen_copies(list(arrays.values())), strict=True))
     made = frozen_copies([arrays[n] for n in thawed], [offsets.get(n, 0) for n in thawed])
     copies = dict(zip(thawed, made, strict=True))
     return {name: copies.get(name, array) for name, array in arrays.items()}

@@ -19,6 +19,7 @@ __all__ = [
     "TablePort",
     "TextPort",
     "_ScalarPort",
+    "is_plain_table_port",
 ]
 
 
@@ -142,3 +143,20 @@ class TablePort(PortType):
     def read(cls, files: list[Path]) -> dict[str, np.ndarray]:
         (table,) = [path for path in files if path.suffix == ".json"]
         return {name: np.asarray(column) for name, column in json.loads(table.read_text()).items()}
+
+
+_PLAIN_TABLES: dict[type[PortType], bool] = {}
+
+
+def is_plain_table_port(kind: type[PortType]) -> bool:
+    """Whether a value of ``kind`` is its arrays as they are: a :class:`TablePort` that encodes
+    and decodes a table as ``TablePort`` does (its columns are frozen in the dict's order,
+    without the encoding's copy of the dict and the decoding's). Worked out once per type."""
+    plain = _PLAIN_TABLES.get(kind)
+    if plain is None:
+        plain = _PLAIN_TABLES[kind] = (
+            issubclass(kind, TablePort)
+            and kind.encode.__func__ is TablePort.encode.__func__  # type: ignore[attr-defined]
+            and kind.decode.__func__ is TablePort.decode.__func__  # type: ignore[attr-defined]
+        )
+    return plain

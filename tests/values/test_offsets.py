@@ -167,3 +167,25 @@ def test_a_view_is_not_frozen_in_place_while_its_owner_is_held_elsewhere():
     assert frozen_in_place(small) is None  # copied: it would keep all of it alive
     unaligned = np.zeros(100 * 100 * 4 + 1, np.uint8)[1:].view(np.float32)
     assert frozen_in_place(unaligned) is None  # not aligned for its dtype: copied
+
+
+@pytest.mark.parametrize("rows", [3, 40_000])  # under and over JOINED_BYTES in all
+def test_large_and_small_values_are_copied_the_same_way(rows):
+    """Joined in C (small) or part by part (large), the copies hold the same bytes at the same
+    offsets, and every other byte of the buffer is 0."""
+    from graphvision.values.memory import JOINED_BYTES
+
+    rng = np.random.default_rng(3)
+    columns = [rng.random(rows), rng.integers(0, 9, rows).astype(np.int16), np.ones(5, bool)]
+    assert (sum(c.nbytes for c in columns) > JOINED_BYTES) == (rows > 3)
+    for offsets in (None, [8, 2, 5]):
+        copies = frozen_copies(columns, offsets)
+        expected = offsets or [0, 0, 0]
+        assert [alignment_offset(c) for c in copies] == expected
+        assert all(c.tobytes() == s.tobytes() for c, s in zip(copies, columns, strict=True))
+        buffer = np.frombuffer(copies[0].base, np.uint8).copy()
+        base = np.frombuffer(copies[0].base, np.uint8).__array_interface__["data"][0]
+        for copy in copies:
+            at = copy.__array_interface__["data"][0] - base
+            buffer[at : at + copy.nbytes] = 0
+        assert not buffer.any()
