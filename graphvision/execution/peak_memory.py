@@ -161,16 +161,27 @@ def _surely_available(peak: int) -> bool:
     """Whether ``peak`` bytes are below the memory available for sure, without reading
     ``/proc/meminfo`` (0.1-0.2 ms a run, a tenth of the engine's cost on a 12 ms pipeline):
     the kernel's ``MemAvailable`` is at least its free memory less its reserves, far under a
-    sixteenth of the memory (``sysinfo``, through ``os.sysconf``). Never without a limit
-    from the environment, which is checked as given."""
+    sixteenth of the memory (``sysinfo``, through ``os.sysconf``; the memory's size read
+    once per process, a system call less per run: the reserves are set from it at boot, so
+    memory added since only widens the margin). Never without a limit from the
+    environment, which is checked as given."""
     if os.environ.get(MEMORY_VARIABLE):
         return False
     try:
         page = _PAGE_SIZE or 0
-        free, total = os.sysconf("SC_AVPHYS_PAGES") * page, os.sysconf("SC_PHYS_PAGES") * page
+        free = os.sysconf("SC_AVPHYS_PAGES") * page
+        total = _PHYSICAL[0] if _PHYSICAL else _physical(os.sysconf("SC_PHYS_PAGES") * page)
     except (ValueError, OSError):  # a system without these names
         return False
     return peak <= free - total // 16
+
+
+_PHYSICAL: list[int] = []  # the memory's size, read at the first run
+
+
+def _physical(total: int) -> int:
+    _PHYSICAL.append(total)
+    return total
 
 
 def _page_size() -> int | None:

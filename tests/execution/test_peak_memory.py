@@ -126,11 +126,14 @@ def test_the_memory_available_is_read_only_when_the_free_memory_does_not_settle_
     from graphvision.execution import peak_memory
 
     pages = {"SC_AVPHYS_PAGES": 1000, "SC_PHYS_PAGES": 1600, "SC_PAGE_SIZE": 4096}
-    monkeypatch.setattr(peak_memory.os, "sysconf", lambda name: pages[name])
+    asked: list[str] = []
+    monkeypatch.setattr(peak_memory.os, "sysconf", lambda name: asked.append(name) or pages[name])
     monkeypatch.setattr(peak_memory, "_PAGE_SIZE", 4096)
+    monkeypatch.setattr(peak_memory, "_PHYSICAL", [])  # (as in a process that ran nothing)
     monkeypatch.delenv("GRAPHVISION_MAX_MEMORY", raising=False)
     sure = (1000 - 1600 // 16) * 4096
     assert peak_memory._surely_available(sure)
     assert not peak_memory._surely_available(sure + 1)
+    assert asked.count("SC_PHYS_PAGES") == 1 and asked.count("SC_AVPHYS_PAGES") == 2
     monkeypatch.setenv("GRAPHVISION_MAX_MEMORY", "1e12")
     assert not peak_memory._surely_available(0)

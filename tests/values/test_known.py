@@ -70,3 +70,19 @@ def test_a_frozen_input_given_again_is_keyed_and_checked_once(monkeypatch):
     assert calls == []
     assert second.outputs["out"] is image
     assert second.record.inputs["image"]["key"] == first.record.inputs["image"]["key"]
+
+
+def test_the_notes_of_dead_arrays_are_dropped_and_those_of_live_ones_kept():
+    """Notes are dropped in sweeps (no callback per array): many arrays noted and let go
+    leave a bounded number of notes, and an array still alive keeps its own throughout."""
+    from graphvision.values import known
+
+    kept = frozen_copy(np.arange(6, dtype=np.float32))
+    note(kept, "fact", "kept")
+    for k in range(5000):
+        note(frozen_copy(np.full(3, k, dtype=np.int16)), "fact", k)  # dead at once
+    assert len(known._NOTES) <= known._SWEEP_AT[0] < 5000
+    assert recall(kept, "fact") == "kept"
+    known._sweep()
+    assert all(entry[0]() is not None for entry in known._NOTES.values())
+    assert recall(kept, "fact") == "kept"
