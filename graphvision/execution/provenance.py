@@ -280,11 +280,25 @@ def _describe_input(given: Any, key: str) -> dict[str, str]:
         if info is not None:
             entry |= {"path": str(Path(given).resolve()), "sha256": _known_sha256(given, info)}
         return entry
+    if type(given) is np.ndarray:  # (described by its shape and dtype: made once for them)
+        described = _ARRAYS.get((given.shape, given.dtype))
+        if described is None:
+            described = _ARRAYS[(given.shape, given.dtype)] = _described(given)
+            if len(_ARRAYS) > 256:
+                _ARRAYS.clear()
+        return {"given": described, "key": key}
+    return {"given": _described(given), "key": key}
+
+
+def _described(given: Any) -> str:
     shape = getattr(given, "shape", None)
     dtype = getattr(given, "dtype", None)
     dtype = dtype_name(dtype) if isinstance(dtype, np.dtype) else dtype
     described = f"{type(given).__name__} {shape} {dtype}" if shape is not None else repr(given)
-    return {"given": described[:200], "key": key}
+    return described[:200]
+
+
+_ARRAYS: dict[tuple[tuple[int, ...], np.dtype], str] = {}
 
 
 def describe_run(

@@ -231,3 +231,15 @@ def test_a_run_sees_the_pipeline_file_and_its_repository_change_between_two_runs
     subprocess.run([*git, "checkout", "-q", "-b", "other"], check=True)
     third = commit("third")
     assert recorded() == (path, sha(), third, False)
+
+
+def test_an_array_input_is_described_by_its_shape_and_dtype_each_run():
+    """An array given is described by its type, shape and dtype (the text kept for each shape
+    and dtype): arrays of another shape or dtype get their own, anything else its repr."""
+    for _ in range(2):  # (the second time from what the first kept)
+        assert provenance._describe_input(np.zeros((3, 4), np.float32), "k") == {
+            "given": "ndarray (3, 4) float32",
+            "key": "k",
+        }
+        assert provenance._describe_input(np.zeros(2, ">i2"), "k")["given"] == "ndarray (2,) >i2"
+        assert provenance._describe_input(3.5, "k")["given"] == "3.5"
