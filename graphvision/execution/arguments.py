@@ -24,6 +24,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "admitted",
+    "checked_run_arguments",
     "environment_limits",
     "given_inputs",
     "graph_argument",
@@ -174,3 +175,25 @@ def admitted(name: str, kind: type[PortType], value: Any, registry: Registry) ->
     if resolved is value:
         note(value, (resolve_input, kind), True)
     return resolved
+
+
+def checked_run_arguments(
+    graph: Any,
+    inputs: Any,
+    outputs: Any,
+    overrides: Any,
+    running: tuple[Any, Any, Any],
+    max_pixels: Any,
+    max_memory: Any,
+) -> tuple[Graph | CompiledGraph, dict[str, Any], list[str] | None, dict[str, Any]]:
+    """The arguments of :func:`~graphvision.execution.run.run` as it uses them, or a
+    TypeError naming the wrong one; ``running``: its cache, executor and workers. A
+    malformed limit in the environment is refused (an InputError) unless the argument of
+    that limit supersedes it."""
+    run_arguments(*running, max_pixels=max_pixels, max_memory=max_memory)
+    return (
+        graph_argument(graph),
+        mapping_argument(inputs, "inputs"),
+        names_argument(outputs, "outputs"),
+        mapping_argument(overrides, "overrides"),
+    )

@@ -53,11 +53,8 @@ from graphvision.compiler.compile import CompiledGraph, Schedule, compile_graph
 from graphvision.errors import RunError, UnknownNameError
 from graphvision.execution.arguments import (
     admitted,
-    graph_argument,
-    mapping_argument,
-    names_argument,
+    checked_run_arguments,
     refuse_unknown_inputs,
-    run_arguments,
 )
 from graphvision.execution.arguments import given_inputs as _given_inputs
 from graphvision.execution.arguments import wanted_outputs as _wanted_outputs
@@ -167,7 +164,7 @@ def run(
         Nodes failed; ``error.failures`` names them, ``error.result`` holds
         the outputs that were produced and the record.
     """
-    graph, inputs, outputs, overrides = _checked_arguments(
+    graph, inputs, outputs, overrides = checked_run_arguments(
         graph, inputs, outputs, overrides, (cache, executor, workers), max_pixels, max_memory
     )
     limit = BlasLimit()  # one BLAS thread while nodes run here (see graphvision.execution.blas)
@@ -239,27 +236,6 @@ def _runs_here(executor: str | Executor) -> bool:
     if isinstance(executor, str):
         return executor in ("sync", "threads")
     return not encodes_values(executor)
-
-
-def _checked_arguments(
-    graph: Any,
-    inputs: Any,
-    outputs: Any,
-    overrides: Any,
-    running: tuple[Any, Any, Any],
-    max_pixels: Any,
-    max_memory: Any,
-) -> tuple[Graph | CompiledGraph, dict[str, Any], list[str] | None, dict[str, Any]]:
-    """The arguments of :func:`run` as it uses them, or a TypeError naming the wrong one;
-    ``running``: its cache, executor and workers. A malformed limit in the environment is
-    refused (an InputError) unless the argument of that limit supersedes it."""
-    run_arguments(*running, max_pixels=max_pixels, max_memory=max_memory)
-    return (
-        graph_argument(graph),
-        mapping_argument(inputs, "inputs"),
-        names_argument(outputs, "outputs"),
-        mapping_argument(overrides, "overrides"),
-    )
 
 
 def _compiled(
