@@ -20,6 +20,7 @@ False
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,25 +43,43 @@ class ListOf:
 
 def fits(value: Any, shape: Any) -> bool:
     """Whether ``value`` (parsed JSON) has ``shape`` (see the module docstring)."""
+    return _checker(shape)(value)
+
+
+_Check = Callable[[Any], bool]
+
+
+def _checker(shape: Any) -> _Check:
+    """A function telling whether a value has ``shape``: the shape is read once, not at
+    every value (the 400 nodes of the built-in plugins' index checked in 0.75 ms of CPU
+    instead of 1.55, best of 30 interleaved; parsing its JSON takes 2.3)."""
     if isinstance(shape, type):
-        return isinstance(value, shape)
+        return lambda value: isinstance(value, shape)
     if isinstance(shape, tuple):
-        return any(fits(value, one) for one in shape)
+        ones = [_checker(one) for one in shape]
+        return lambda value: any(one(value) for one in ones)
     if isinstance(shape, Each):
-        return isinstance(value, dict) and all(fits(v, shape.shape) for v in value.values())
+        each = _checker(shape.shape)
+        return lambda value: isinstance(value, dict) and all(map(each, value.values()))
     if isinstance(shape, ListOf):
-        return isinstance(value, list) and all(fits(v, shape.shape) for v in value)
-    if not isinstance(value, dict):
-        return False
-    for key, inner in shape.items():
-        name = key.removesuffix("?")
-        if name not in value:
-            if name == key:
-                return False
-            continue
-        if not fits(value[name], inner):
+        item = _checker(shape.shape)
+        return lambda value: isinstance(value, list) and all(map(item, value))
+    fields = [
+        (key.removesuffix("?"), key.endswith("?"), _checker(one)) for key, one in shape.items()
+    ]
+
+    def check(value: Any) -> bool:
+        if not isinstance(value, dict):
             return False
-    return True
+        for name, optional, inner in fields:
+            if name in value:
+                if not inner(value[name]):
+                    return False
+            elif not optional:
+                return False
+        return True
+
+    return check
 
 
 _NUMBER = (int, float)
