@@ -58,6 +58,7 @@ __all__ = [
     "Placed",
     "PortType",
     "RecordPort",
+    "codes_as",
     "describe_value",
     "freeze",
     "freeze_all",
@@ -301,21 +302,27 @@ _SUMMARIES: dict[tuple[type[PortType], tuple[int, ...], np.dtype], str] = {}
 graph summarises arrays of the same shapes each time)."""
 
 
-_PLAIN: dict[type[PortType], bool] = {}
+_PLAIN: dict[tuple[type[PortType], type[PortType]], bool] = {}
+
+
+def codes_as(kind: type[PortType], base: type[PortType]) -> bool:
+    """Whether ``kind`` is a ``base`` that encodes and decodes its values as ``base`` does
+    (its values are then what ``base`` takes them for). Worked out once per pair."""
+    plain = _PLAIN.get((kind, base))
+    if plain is None:
+        plain = _PLAIN[(kind, base)] = (
+            issubclass(kind, base)
+            and kind.encode.__func__ is base.encode.__func__  # type: ignore[attr-defined]
+            and kind.decode.__func__ is base.decode.__func__  # type: ignore[attr-defined]
+        )
+    return plain
 
 
 def is_plain_array_port(kind: type[PortType]) -> bool:
     """Whether a value of ``kind`` is its one array as it is: an :class:`ArrayPort` that
     encodes and decodes it as ``ArrayPort`` does (it may be frozen in place, its size is its
-    ``nbytes``). Worked out once per type."""
-    plain = _PLAIN.get(kind)
-    if plain is None:
-        plain = _PLAIN[kind] = (
-            issubclass(kind, ArrayPort)
-            and kind.encode.__func__ is ArrayPort.encode.__func__  # type: ignore[attr-defined]
-            and kind.decode.__func__ is ArrayPort.decode.__func__  # type: ignore[attr-defined]
-        )
-    return plain
+    ``nbytes``)."""
+    return codes_as(kind, ArrayPort)
 
 
 class RecordPort(PortType):

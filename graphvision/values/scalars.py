@@ -10,7 +10,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from graphvision.errors import PortValueError
-from graphvision.values.ports import Arrays, Meta, PortType, _fail, describe_value
+from graphvision.values.ports import Arrays, Meta, PortType, _fail, codes_as, describe_value
 
 __all__ = [
     "BoolPort",
@@ -145,18 +145,8 @@ class TablePort(PortType):
         return {name: np.asarray(column) for name, column in json.loads(table.read_text()).items()}
 
 
-_PLAIN_TABLES: dict[type[PortType], bool] = {}
-
-
 def is_plain_table_port(kind: type[PortType]) -> bool:
     """Whether a value of ``kind`` is its arrays as they are: a :class:`TablePort` that encodes
     and decodes a table as ``TablePort`` does (its columns are frozen in the dict's order,
-    without the encoding's copy of the dict and the decoding's). Worked out once per type."""
-    plain = _PLAIN_TABLES.get(kind)
-    if plain is None:
-        plain = _PLAIN_TABLES[kind] = (
-            issubclass(kind, TablePort)
-            and kind.encode.__func__ is TablePort.encode.__func__  # type: ignore[attr-defined]
-            and kind.decode.__func__ is TablePort.decode.__func__  # type: ignore[attr-defined]
-        )
-    return plain
+    without the encoding's copy of the dict and the decoding's)."""
+    return codes_as(kind, TablePort)
