@@ -112,10 +112,14 @@ a browser, Pillow's ``ImageOps.exif_transpose`` and OpenCV's ``imread`` show the
 
 def _orientation(image: PILImageType) -> int:
     """The EXIF Orientation of an image read through ``image`` (1 without one); the EXIF
-    of a PNG whose eXIf chunk follows its pixels is known once they are decoded."""
+    of a PNG whose eXIf chunk follows its pixels is known once they are decoded; a damaged
+    EXIF block (Pillow's parser raises struct.error, SyntaxError...) says nothing: 1."""
     if "exif" not in image.info:
         return 1
-    value = image.getexif().get(_ORIENTATION_TAG, 1)
+    try:
+        value = image.getexif().get(_ORIENTATION_TAG, 1)
+    except Exception:  # the pixels are whole: read them as stored, as before EXIF was read
+        return 1
     return value if isinstance(value, int) else 1
 
 

@@ -371,3 +371,18 @@ def test_a_png_whose_exif_follows_its_pixels_is_read_upright(tmp_path):
     chunk += struct.pack(">I", zlib.crc32(b"eXIf" + chunk_data))
     path.write_bytes(data[:end] + chunk + data[end:])
     np.testing.assert_array_equal(read_array(str(path)), np.rot90(GRAY, -1))
+
+
+DAMAGED_EXIF = {"cut": b"Exif\x00\x00MM\x00*\x00\x00", "garbled": b"Exif\x00\x00" + b"\xff" * 30}
+
+
+@pytest.mark.parametrize("suffix", [".png", ".webp", ".jpg"])
+@pytest.mark.parametrize("block", DAMAGED_EXIF.values(), ids=DAMAGED_EXIF.keys())
+def test_a_photograph_whose_exif_is_damaged_is_read_as_stored(tmp_path, suffix, block):
+    # a cut or garbled EXIF block (Pillow's getexif raises on it): the pixels are whole
+    path = tmp_path / f"damaged{suffix}"
+    Image.fromarray(RGB).save(path, exif=block, **({"lossless": True} if suffix == ".webp" else {}))
+    with Image.open(path) as image:
+        stored = np.asarray(image)  # Pillow's pixels, not turned
+    assert stored.shape == (9, 13, 3)
+    np.testing.assert_array_equal(read_array(str(path)), stored)
