@@ -161,10 +161,11 @@ def output_folders(files: Sequence[Path], root: Path, out_dir: Path) -> list[Pat
     it (``img_png``, ``img_jpg``); any name still taken, or the name of one of the
     batch's own files (``batch.csv``, ``batch.html``, ``batch.json``), gets ``-2``,
     ``-3``... so the folders are always distinct; a part named like graphvision's hidden
-    files (``.graphvision…``) gets ``_`` before it.
+    files (``.graphvision…``), or ``.`` or ``..`` (the folder of ``..png`` or ``...png``,
+    which would be the batch's folder or the one above it), gets ``_`` before it.
     """
     relative = [_below(f, root) for f in files]
-    plain = [_not_hidden_files(r.with_suffix("")) for r in relative]
+    plain = [_folder_path(r) for r in relative]
     counts: dict[Path, int] = {}
     for name in plain:
         counts[name] = counts.get(name, 0) + 1
@@ -182,10 +183,21 @@ def output_folders(files: Sequence[Path], root: Path, out_dir: Path) -> list[Pat
     return folders
 
 
-def _not_hidden_files(name: Path) -> Path:
-    """``name`` with ``_`` before each part that graphvision's own hidden files could have
-    (``.graphvision-lock``, a new folder's ``.graphvision-new-…``)."""
-    return Path(*("_" + part if part.startswith(".graphvision") else part for part in name.parts))
+def _folder_path(relative: Path) -> Path:
+    """The item folder of the file at ``relative`` (below the batch's root): its path without
+    its suffix, each part that would not be a folder of its own below the batch's folder
+    given ``_`` before it (:func:`_own_part`)."""
+    stem = relative.name[: len(relative.name) - len(relative.suffix)]
+    return Path(*(_own_part(part) for part in (*relative.parts[:-1], stem)))
+
+
+def _own_part(part: str) -> str:
+    """``part`` of an item folder's path, with ``_`` before it when it is ``.``, ``..`` or
+    empty (the folder would be the one above, or the batch's own) or a name graphvision's
+    hidden files could have (``.graphvision-lock``, a new folder's ``.graphvision-new-…``)."""
+    if part in ("", ".", "..") or part.startswith(".graphvision"):
+        return "_" + part
+    return part
 
 
 def _below(file: Path, root: Path) -> Path:
@@ -294,7 +306,10 @@ def checked_folders(out_dir: Path, folders: list[Path], outputs: Collection[str]
     present = _names_in(out_dir)  # a folder whose first part is not there is new: no check
     depth = len(out_dir.parts)
     for k, folder in enumerate(folders):  # (the first always: it checks the output names)
-        if k == 0 or _folded(folder.parts[depth]) in present:
+        below = folder.parts[depth:]
+        if folder.parts[:depth] != out_dir.parts or not below or ".." in below:
+            raise OutputFolderError(f"{folder} is not a folder below {out_dir}")
+        if k == 0 or _folded(below[0]) in present:
             check_output_folder(folder, outputs, out_dir)
     check_folder_files(out_dir, BATCH_FILES)
     previous = previous_folders(out_dir)

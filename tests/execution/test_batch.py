@@ -13,7 +13,8 @@ import pytest
 
 import graphvision as gv
 from graphvision.cli import main
-from graphvision.execution.batch_files import output_folders, pattern_root
+from graphvision.errors import OutputFolderError
+from graphvision.execution.batch_files import checked_folders, output_folders, pattern_root
 
 from ..conftest import PIPELINES
 
@@ -53,7 +54,7 @@ def test_same_file_names_in_different_folders_get_their_own_folders(capsys, tmp_
 def test_output_folders_are_distinct_for_any_set_of_paths(seed):
     rng = np.random.default_rng(seed)
     folders = ["", "a", "b", "a/b", "img", "batch.csv"]
-    stems = ["img", "img_png", "img-2", "batch", "x.y"]
+    stems = ["img", "img_png", "img-2", "batch", "x.y", ".", "..", "_.", ".graphvision-new-a"]
     suffixes = [".png", ".jpg", ".PNG", ""]
     chosen = {
         Path("root", rng.choice(folders), f"{rng.choice(stems)}{rng.choice(suffixes)}")
@@ -63,7 +64,40 @@ def test_output_folders_are_distinct_for_any_set_of_paths(seed):
     named = output_folders(files, Path("root"), Path("out"))
     assert len(set(named)) == len(files)
     assert Path("out/batch.csv") not in named
-    assert all(".." not in p.parts and p.parts[0] == "out" for p in named)
+    assert all(".." not in p.parts and p.parts[0] == "out" and len(p.parts) > 1 for p in named)
+    assert not any(part.startswith(".graphvision") for p in named for part in p.parts)
+
+
+def test_files_named_dot_dot_png_get_folders_of_their_own_below_the_output_folder(capsys, tmp_path):
+    photos = tmp_path / "photos"
+    levels = {"..png": 200, "...png": 60, "a/..png": 120}
+    for name, level in levels.items():
+        photo(photos / name, level)
+    out = tmp_path / "batches" / "out"
+    pattern = f"image={photos}/**/.*.png"  # (each a hidden file: a plain * skips them)
+    status = main(
+        ["run", str(DEMO), "--no-cache", "--batch", pattern, "-d", str(out), "-o", "noisy_gaussian"]
+    )
+    assert status == 0, capsys.readouterr().err
+    rows = list(csv.DictReader((out / "batch.csv").open()))
+    folders = {Path(r["file"]).relative_to(photos).as_posix(): r["output_dir"] for r in rows}
+    assert folders == {
+        "..png": str(out / "_."),
+        "...png": str(out / "_.."),
+        "a/..png": str(out / "a" / "_."),
+    }
+    assert sorted(p.name for p in (tmp_path / "batches").iterdir()) == ["out"]  # nothing above
+    assert not (out / "record.json").exists()  # nothing in the batch's own folder
+    for name, folder in folders.items():
+        noisy = iio.imread(Path(folder) / "noisy_gaussian.png")
+        assert abs(float(np.median(noisy)) - levels[name]) < 8
+
+
+def test_a_folder_outside_the_output_folder_is_refused(tmp_path):
+    out = tmp_path / "out"
+    for folder in (out / ".." / "x", out, tmp_path / "elsewhere"):
+        with pytest.raises(OutputFolderError, match="is not a folder below"):
+            checked_folders(out, [folder], ["count"])
 
 
 def test_pattern_root_is_the_part_before_the_first_wildcard():
