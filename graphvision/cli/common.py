@@ -149,7 +149,8 @@ def _refused(graph: Graph, registry: Registry, key: str, value: Any) -> list[str
     try:
         spec.validate_params({param: value})
     except pydantic.ValidationError as error:
-        return [said for name, said in spec.param_problems(error) if name == param]
+        found = spec.param_problems(error)
+        return [said for name, said in found if name == param or name.startswith(f"{param}.")]
     return []
 
 

@@ -61,6 +61,7 @@ workers are spawned.
 from __future__ import annotations
 
 import contextlib
+import errno
 import multiprocessing
 import os
 import signal
@@ -134,10 +135,11 @@ def process_pool(workers: int, start: BaseContext, *setup: Any) -> ProcessPoolEx
         return ProcessPoolExecutor(workers, start, *setup)
     except OSError as error:
         where = "in /dev/shm" if os.path.isdir("/dev/shm") else "in the system's shared memory"
+        fix = "free space there" if error.errno == errno.ENOSPC else "make it writable"
         raise OSError(
             error.errno,
-            f"the process pool cannot make its semaphores {where} ({error.strerror}): free "
-            "space there, or use the threads executor",
+            f"the process pool cannot make its semaphores {where} ({error.strerror}): {fix}, "
+            "or use the threads executor",
         ) from None
 
 

@@ -70,6 +70,7 @@ def read_image_file(file: Path) -> np.ndarray:
     """
     from PIL import Image as PILImage
 
+    turn = 1  # as stored, unless Pillow read the file (or imageio did with Pillow) and EXIF says
     try:
         with _pillow_checks_left_to_the_budget():
             try:
@@ -83,7 +84,8 @@ def read_image_file(file: Path) -> np.ndarray:
                         data = _read_with_pillow(file, image)
                     else:
                         data = _read_with_imageio(file, image)
-                    turn = _orientation(image)
+                    if file.suffix.lower() in PILLOW_SUFFIXES:  # (another reader may turn it)
+                        turn = _orientation(image)
     except (PermissionError, _FramesError, _ColourError, InputError):
         raise
     except Exception as error:  # Pillow and imageio raise many types for undecodable files

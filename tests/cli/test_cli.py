@@ -441,3 +441,12 @@ def test_overrides_naming_nothing_and_values_refused_are_named_at_once(capsys, t
     assert f"  - {shown} gauss_on_gauss.sigma=-1: invalid value -1 for parameter 'sigma'" in err
     assert f"  - {shown} params.sed=" in err and "the pipeline has no param 'sed'" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_refused_value_inside_a_parameter_is_named_with_the_others(capsys, tmp_path):
+    coins = PIPELINES / "coins.yaml"
+    args = ["-s", "coins.ranges={area: [400]}", "-s", "disk.size=4x"]
+    status, _, err = cli(capsys, "run", coins, "-d", tmp_path / "out", "--no-cache", *args)
+    assert status == 2 and "2 overrides are refused:" in err, err
+    assert "parameter 'ranges.area' of regions.filter: List should have at least 2 items" in err
+    assert "invalid value '4x' for parameter 'size' of morphology.footprint" in err

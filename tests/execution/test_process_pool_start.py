@@ -43,3 +43,15 @@ def test_the_command_line_says_so_and_writes_nothing(full_shared_memory, tmp_pat
     assert error.startswith("error: the process pool cannot make its semaphores in /dev/shm")
     assert "Traceback" not in error
     assert not out.exists()
+
+
+def test_a_read_only_shared_memory_is_not_told_to_free_space(monkeypatch):
+    def refused(*args, **kwargs):
+        raise OSError(errno.EROFS, "Read-only file system")
+
+    monkeypatch.setattr(multiprocessing.synchronize.SemLock, "__init__", refused)
+    with pytest.raises(OSError) as caught:
+        make_executor("processes", workers=2)
+    assert "(Read-only file system): make it writable, or use the threads executor" in str(
+        caught.value
+    )

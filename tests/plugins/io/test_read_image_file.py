@@ -386,3 +386,15 @@ def test_a_photograph_whose_exif_is_damaged_is_read_as_stored(tmp_path, suffix, 
         stored = np.asarray(image)  # Pillow's pixels, not turned
     assert stored.shape == (9, 13, 3)
     np.testing.assert_array_equal(read_array(str(path)), stored)
+
+
+def test_a_file_pillow_cannot_identify_is_read_by_imageio_as_stored(tmp_path, monkeypatch):
+    # a format only imageio's other plugins read: Pillow's identification refused here
+    path = tmp_path / "other.png"
+    iio.imwrite(path, GRAY)
+
+    def unidentified(*args, **kwargs):
+        raise Image.UnidentifiedImageError("not identified")
+
+    monkeypatch.setattr(Image, "open", unidentified)
+    np.testing.assert_array_equal(read_array(str(path)), GRAY)
