@@ -58,7 +58,8 @@ def yaml_value(text: str, where: str) -> Any:
         return parse_value(text)
     except PipelineError as error:
         reasons = "; ".join(problem.message for problem in error.problems)
-        raise UsageError(f"{where}: {reasons}") from None
+        shown = where if len(where) <= 80 else f"{where[:60]}..."
+        raise UsageError(f"{shown}: {reasons}") from None
 
 
 def positive_int(text: str) -> int:

@@ -103,7 +103,13 @@ class _Reader:
         line = event.start_mark.line + 1
         if kind is yaml.ScalarEvent:
             self.written += 1
-            value = _scalar(loader, event)
+            try:
+                value = _scalar(loader, event)
+            except ValueError as error:  # a number of more digits than Python reads, a date
+                text = event.value  # of month 13: what it is, not Python's advice on its limit
+                shown = text if len(text) <= 40 else f"{text[:20]}... ({len(text)} characters)"
+                reason = str(error).split(";")[0]
+                raise _RefusedError(line, f"{shown} cannot be read: {reason}") from None
             if event.anchor:
                 self.anchors[event.anchor] = (value, 1)
             self.attach(value, 1, line, True)

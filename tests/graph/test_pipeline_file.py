@@ -187,6 +187,19 @@ def test_deep_nesting_is_refused_without_a_recursion_error(depth):
         gv.parse_pipeline(text)
 
 
+@pytest.mark.parametrize(
+    ("value", "said"),
+    [
+        ("9" * 5000, r"9{20}\.\.\. \(5000 characters\) cannot be read: Exceeds the limit"),
+        ("2024-13-45", r"2024-13-45 cannot be read: month must be in 1\.\.12"),
+    ],
+)
+def test_a_scalar_python_cannot_convert_is_a_problem_at_its_line(value, said):
+    text = f"name: n\nparams:\n  big: {value}\nnodes: {{}}\noutputs: {{}}\n"
+    with pytest.raises(gv.PipelineError, match=rf"yaml at <string>:3: {said}"):
+        gv.parse_pipeline(text)
+
+
 def test_merge_keys_and_aliases_within_the_budget_work():
     text = (
         "name: m\nparams:\n  base: &base {value: 2, unused: 0}\n"
