@@ -58,6 +58,7 @@ from typing import Any
 
 from graphvision.cache.entries import CacheWarning, Encoded, NotACacheError
 from graphvision.cache.format import decode_blob, encode_blob
+from graphvision.locations import open_regular
 from graphvision.values.memory import read_aligned
 
 __all__ = [
@@ -193,7 +194,7 @@ class DiskStore:
     def get(self, key: str) -> Encoded | None:
         path = self.path(key)
         try:
-            with path.open("rb") as stream:
+            with open_regular(path) as stream:  # (a pipe there would block the read)
                 blob = read_aligned(stream, os.fstat(stream.fileno()).st_size)
         except FileNotFoundError:
             return None

@@ -58,7 +58,7 @@ from importlib.util import find_spec
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from graphvision.locations import default_cache_dir
+from graphvision.locations import default_cache_dir, open_regular
 from graphvision.nodes.index_shape import INDEX, fits
 
 if TYPE_CHECKING:
@@ -284,7 +284,8 @@ def _read(key: str) -> dict[str, Any] | None:
     if str(path) in _READ and path.is_file() and _modules_unchanged(_READ[str(path)]):
         return _READ[str(path)]
     try:
-        data = path.read_bytes()
+        with open_regular(path) as stream:  # (a pipe there would block the read)
+            data = stream.read()
     except OSError:
         return None
     header, _, body = data.partition(b"\n")

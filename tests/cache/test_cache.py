@@ -404,3 +404,17 @@ def test_a_folder_given_where_a_store_goes_says_how_to_cache_in_a_folder(tmp_pat
     cache = gv.Cache.at(tmp_path / "cache")
     assert cache.memory is not None and cache.disk is not None
     assert (tmp_path / "cache" / "CACHEDIR.TAG").is_file()
+
+
+def test_a_pipe_where_an_entry_was_is_a_miss_not_a_wait(registry, tmp_path):
+    store = gv.DiskStore(tmp_path)
+    graph = gv.Graph("p")
+    graph.output("o", graph.add("o", "toy.add", a=graph.input("x", "Float", default=1.0), b="x"))
+    gv.run(graph, registry, cache=gv.Cache(None, store))
+    (path,) = [p for p in tmp_path.rglob("*.gvc")]
+    path.unlink()
+    os.mkfifo(path)  # opened plainly, a read waits for a writer for ever
+    with pytest.warns(gv.CacheWarning, match="not a regular file"):
+        result = gv.run(graph, registry, cache=gv.Cache(None, store))
+    assert result.outputs == {"o": 2.0}
+    assert result.record.nodes[0].status == "computed"

@@ -417,3 +417,17 @@ def test_entry_points_are_listed_again_when_a_distributions_file_is_edited_in_pl
     listing.write_text("[graphvision.plugins]\nfakeplug = fakeplug_other\n")
     values = {e.name: e.value for e in _plugin_index.installed_entry_points()}
     assert values["fakeplug"] == "fakeplug_other"
+
+
+def test_a_pipe_at_the_index_path_is_no_index_not_a_wait(tmp_path):
+    site = tmp_path / "site"
+    _distribution(site)
+    _package(site, "First summary of the node.")
+    env = {**os.environ, "PYTHONPATH": str(site), "GRAPHVISION_CACHE_DIR": str(tmp_path / "c")}
+    command = [sys.executable, "-m", "graphvision", "nodes"]
+    subprocess.run(command, env=env, capture_output=True, text=True, timeout=120, check=True)
+    (index,) = [p for p in (tmp_path / "c").parent.rglob("*.json") if "index" in p.name]
+    index.unlink()
+    os.mkfifo(index)  # opened plainly, the read waits for a writer for ever
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and "First summary of the node." in done.stdout, done.stderr
