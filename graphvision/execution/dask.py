@@ -26,8 +26,10 @@ thread when something first needs it: the files a batch's client runs while the 
 are not ready (:mod:`graphvision.execution.batch_lanes`: ``client_files``, on for Dask)
 run meanwhile; what needs the cluster waits for it. A batch runs its first file before,
 then forks the cluster's workers from the client when that is safe
-(:mod:`graphvision.execution.dask_fork`), so they import nothing. A value shared before
-it has started (:meth:`DaskExecutor.share`) travels with the first task that reads it. A
+(:mod:`graphvision.execution.dask_fork`), so they import nothing. A value shared
+(:meth:`DaskExecutor.share`) is copied to every worker, so that Dask spreads the tasks
+that read it (:mod:`graphvision.execution.dask_shared`); shared before the cluster has
+started, it travels with the first task that reads it. A
 batch's files go several to a task (:mod:`graphvision.execution.dask_files`). A worker
 importing a script that starts a cluster again is refused (``batch_guard``).
 
@@ -57,7 +59,8 @@ from graphvision.execution.dask_fork import (
     start_forked_cluster,
     start_local_cluster,
 )
-from graphvision.execution.dask_worker import on_worker, shared
+from graphvision.execution.dask_shared import SharedValue
+from graphvision.execution.dask_worker import on_worker
 from graphvision.execution.worker_start import fork_context
 
 __all__ = [
@@ -236,26 +239,18 @@ class DaskExecutor:
         return True
 
     def share(self, value: Any) -> Any:
-        """``value`` sent to the cluster once; the handle stands for it in :meth:`submit`'s
-        arguments (a batch's job, sent once rather than with every file).
-
-        It is the result of a task that returns it, not scattered data: a worker
-        that dies holding it loses nothing, the scheduler runs the task again
-        (scattered data lost with its worker failed every file still to run). A
-        local cluster still starting gets it with the first task that reads it.
-        """
+        """``value`` sent to the cluster once and held by every worker; the handle stands for
+        it in :meth:`submit`'s arguments (a batch's job, sent once rather than with every
+        file: :mod:`graphvision.execution.dask_shared`). A local cluster still starting
+        gets it with the first task that reads it."""
+        handle = SharedValue(self, value)
         if self._started.is_set():
-            return self.client.submit(shared, value, pure=False, retries=self.retries)
-        return _Later(value)
+            handle.sent()
+        return handle
 
     def _sent(self, arg: Any) -> Any:
-        """``arg``, or the task that holds it on the cluster when it is a :class:`_Later`."""
-        if not isinstance(arg, _Later):
-            return arg
-        with self._in_flight_lock:
-            if arg.task is None:
-                arg.task = self.client.submit(shared, arg.value, pure=False, retries=self.retries)
-            return arg.task
+        """``arg``, or the task that holds it on the cluster when it is a shared value."""
+        return arg.sent() if isinstance(arg, SharedValue) else arg
 
     def warm(self, fn: Callable[..., Any], /, *args: Any) -> list[Future]:
         """Have every worker run ``fn(*args)`` now, as a task of its own (a batch's imports
@@ -361,17 +356,6 @@ def _let_clusters_start() -> None:
     for executor in list(_STARTING):
         if executor._starter is not None:
             executor._starter.join(timeout=60)
-
-
-class _Later:
-    """A value :meth:`DaskExecutor.share` got before its local cluster had started: sent
-    with the first task that reads it, its task then standing for it."""
-
-    def __init__(self, value: Any) -> None:
-        self.value, self.task = value, None
-
-    def __reduce__(self) -> tuple[Any, ...]:  # never sent as such: see DaskExecutor._sent
-        raise TypeError("a shared value travels as its task, not as the placeholder")
 
 
 def _is(fn: Any, name: str) -> bool:

@@ -1,6 +1,7 @@
 """What the Dask executor's tasks run on a worker (:mod:`graphvision.execution.dask`): a node
 with the worker's set-up (one BLAS thread, glibc's allocator keeping freed memory), a shared
-value's task, and several files of a batch as one task (:mod:`graphvision.execution.dask_files`)."""
+value's task and its copies (:mod:`graphvision.execution.dask_shared`), and several files of
+a batch as one task (:mod:`graphvision.execution.dask_files`)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from graphvision.errors import GraphvisionError
 from graphvision.execution.blas import one_blas_thread, one_blas_thread_for_good
 from graphvision.nodes.spec import FunctionRef
 
-__all__ = ["FileTaskError", "keep_freed_memory", "on_worker", "run_files", "shared"]
+__all__ = ["FileTaskError", "hold", "keep_freed_memory", "on_worker", "run_files", "shared"]
 
 
 def keep_freed_memory() -> None:
@@ -38,6 +39,11 @@ def keep_freed_memory() -> None:
 def shared(value: Any) -> Any:
     """The value a task was given (see :meth:`DaskExecutor.share`)."""
     return value
+
+
+def hold(value: Any) -> None:
+    """Nothing: run on a worker so that it holds a copy of ``value``, a shared value's task
+    (:mod:`graphvision.execution.dask_shared`)."""
 
 
 def on_worker(fn: Callable[..., Any], *args: Any) -> Any:
