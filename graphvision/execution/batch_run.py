@@ -20,13 +20,13 @@ from graphvision.execution.batch_files import BatchItem, BatchPages, unreadable_
 from graphvision.execution.batch_items import could_not_start, plain_graph, run_file, run_item
 from graphvision.execution.batch_stop import INTERRUPTED, StopFlag, writing
 from graphvision.execution.batch_write import failure_reason, finish_item
-from graphvision.execution.dask_worker import run_files
 from graphvision.execution.executors import (
     Executor,
     SyncExecutor,
     executor_name,
     executor_width,
 )
+from graphvision.execution.file_group import run_files
 from graphvision.execution.file_task import (
     FileJob,
     FileOutcome,

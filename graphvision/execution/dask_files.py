@@ -40,7 +40,8 @@ from collections import deque
 from concurrent.futures import Future
 from typing import Any
 
-from graphvision.execution.dask_worker import FileTaskError, on_worker, run_files
+from graphvision.execution.dask_worker import on_worker
+from graphvision.execution.file_group import FileTaskError, run_files
 
 __all__ = ["FILES_PER_TASK", "GROUPS_PER_THREAD", "TASK_SECONDS", "FileGroups"]
 

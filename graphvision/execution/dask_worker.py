@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-import pickle
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -16,7 +14,7 @@ from graphvision.errors import GraphvisionError
 from graphvision.execution.blas import one_blas_thread, one_blas_thread_for_good
 from graphvision.nodes.spec import FunctionRef
 
-__all__ = ["FileTaskError", "hold", "keep_freed_memory", "on_worker", "run_files", "shared"]
+__all__ = ["hold", "keep_freed_memory", "on_worker", "shared"]
 
 
 def keep_freed_memory() -> None:
@@ -67,36 +65,3 @@ def on_worker(fn: Callable[..., Any], *args: Any) -> Any:
         return fn(*args)
     with one_blas_thread():  # a worker thread in the client's process (processes=False)
         return fn(*args)
-
-
-class FileTaskError(Exception):
-    """What a file of a task of several files raised, as its type's name and message (when the
-    exception itself does not pickle: it would have failed the task's other files)."""
-
-
-def run_files(
-    task: Callable[[Any, str, str], Any], job: Any, files: list[tuple[str, str]]
-) -> tuple[list[Any], float]:
-    """Several files of a batch in one task, each run by ``task(job, path, folder)``
-    (:func:`~graphvision.execution.file_task.run_file_task`): each one's outcome, or what it
-    raised (that file fails alone, named, and the others run); and the CPU seconds they took
-    in this thread (what sizes the next tasks: :mod:`graphvision.execution.dask_files`)."""
-    found: list[Any] = []
-    began = time.thread_time()
-    for path, folder in files:
-        try:
-            found.append(task(job, path, folder))
-        except Exception as error:  # this file fails alone, with its reason
-            found.append(
-                error if _pickles(error) else FileTaskError(f"{type(error).__name__}: {error}")
-            )
-    return found, time.thread_time() - began
-
-
-def _pickles(error: Exception) -> bool:
-    """Whether ``error`` goes back to the client as it is (else as a :class:`FileTaskError`)."""
-    try:
-        pickle.loads(pickle.dumps(error))
-    except Exception:
-        return False
-    return True

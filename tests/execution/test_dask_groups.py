@@ -10,7 +10,7 @@ from typing import Any
 
 from graphvision.execution.batch_files import BatchItem
 from graphvision.execution.dask_files import FileGroups
-from graphvision.execution.dask_worker import run_files
+from graphvision.execution.file_group import run_files
 from graphvision.execution.file_task import FileOutcome
 
 

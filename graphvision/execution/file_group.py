@@ -1,0 +1,46 @@
+"""Several files of a batch as one task (on Dask: :mod:`graphvision.execution.dask_files`; on
+the process pool: :mod:`graphvision.execution.batch_lanes`), each with its own outcome."""
+
+from __future__ import annotations
+
+import pickle
+import time
+from collections.abc import Callable
+from typing import Any
+
+__all__ = ["FileTaskError", "run_files"]
+
+
+class FileTaskError(Exception):
+    """What a file of a task of several files raised, as its type's name and message (when the
+    exception itself does not pickle: it would have failed the task's other files)."""
+
+
+def run_files(
+    task: Callable[[Any, str, str], Any], job: Any, files: list[tuple[str, str]]
+) -> tuple[list[Any], float]:
+    """Several files of a batch in one task, each run by ``task(job, path, folder)``
+    (:func:`~graphvision.execution.file_task.run_file_task`): each one's outcome, or what it
+    raised (that file fails alone, named, and the others run); and the CPU seconds they took
+    in this thread (what sizes the next Dask tasks: :mod:`graphvision.execution.dask_files`).
+    On the process pool a batch's lanes send several files this way too
+    (:mod:`graphvision.execution.batch_lanes`)."""
+    found: list[Any] = []
+    began = time.thread_time()
+    for path, folder in files:
+        try:
+            found.append(task(job, path, folder))
+        except Exception as error:  # this file fails alone, with its reason
+            found.append(
+                error if _pickles(error) else FileTaskError(f"{type(error).__name__}: {error}")
+            )
+    return found, time.thread_time() - began
+
+
+def _pickles(error: Exception) -> bool:
+    """Whether ``error`` goes back to the client as it is (else as a :class:`FileTaskError`)."""
+    try:
+        pickle.loads(pickle.dumps(error))
+    except Exception:
+        return False
+    return True
