@@ -8,7 +8,10 @@ in this thread), the thread executor, the process pool and a Dask
 ``LocalCluster`` of 2 worker processes (three ways: :func:`dask_runs`), each writing
 the same folders; the
 ratio is sync's time over the executor's (issue 26: processes at least 1.7×,
-threads 1.3×, Dask 1.6× on 2 cores). A Python loop calling the same node
+threads 1.3×, Dask 1.6× on 2 cores). Each executor's run is paired with a sync
+batch timed just before it (:func:`_paired_row`): this VM's file system makes files
+more slowly for minutes after many were deleted, which moved a ratio taken against
+one sync batch by a third. A Python loop calling the same node
 functions on each file, writing nothing (the plain loop), shows what the engine adds. No
 cache, so every file is computed. The machine's load (1-minute average)
 is printed beside each row.
@@ -148,10 +151,11 @@ def main() -> list[str]:
             f"{_load()} |"
         )
         for name, executor in (("threads (2)", "threads"), ("processes (2)", "processes")):
-            rows.append(_row(name, _batch(graph, paths, folder / name[:5], executor), sync))
+            rows.append(_paired_row(graph, paths, folder / name[:5], name, executor))
+        rows += _in_memory_rows(graph, paths)
         engine = _engine_rows(floor, sync)
         fewer = _fewer(graph, paths[:50], folder)
-        rows += _dask_rows(graph, paths, folder, sync)  # last: its client's threads stay
+        rows += _dask_rows(graph, paths, folder)  # last: its client's threads stay
     return [*rows, *fewer, "", *engine]
 
 
@@ -210,38 +214,66 @@ def _engine_rows(floor: float, sync: float) -> list[str]:
     ]
 
 
-def _row(name: str, measured: tuple[float, int], sync: float) -> str:
-    seconds, good = measured
+PAIRED_RUNS = 3
+
+
+def _paired_row(graph: gv.Graph, paths: list[Path], folder: Path, name: str, executor: str) -> str:
+    """The batch on ``executor``, each of :data:`PAIRED_RUNS` runs right after a sync batch
+    of the same files, its ratio to that one: on this VM, making files slows down for
+    minutes after many were deleted (ext4's inode allocator), so a sync batch timed once at
+    the start stood for a file system in another state (ratios from 1.25 to 1.74× for one
+    build); seconds and ratios as min–max, with the load at each run."""
+    runs = []
+    for run in range(PAIRED_RUNS):
+        sync, _ = _batch(graph, paths, folder / f"sync{run}", "sync")
+        seconds, good = _batch(graph, paths, folder / f"run{run}", executor)
+        runs.append((seconds, good, sync / seconds, _load()))
+    return _range_row(f"graphvision batch, {name}, each after a sync batch", runs)
+
+
+def _in_memory_rows(graph: gv.Graph, paths: list[Path]) -> list[str]:
+    """:func:`_paired_row` on threads and processes with every folder written in memory
+    (``/dev/shm``, where the machine has it): the engine's scaling without the disk's state,
+    which moved the rows above from run to run."""
+    if not os.path.isdir("/dev/shm"):
+        return []
+    rows = []
+    with tempfile.TemporaryDirectory(dir="/dev/shm") as memory:
+        for name, executor in (("threads (2)", "threads"), ("processes (2)", "processes")):
+            where = Path(memory) / executor
+            rows.append(_paired_row(graph, paths, where, f"{name}, folders in /dev/shm", executor))
+    return rows
+
+
+def _range_row(name: str, runs: list[tuple[float, int, float, str]]) -> str:
+    """A row of several runs, each ``(seconds, counts of 24, sync / this, load)``."""
+    times = sorted(seconds for seconds, *_ in runs)
+    ratios = sorted(ratio for _, _, ratio, _ in runs)
+    good = min(g for _, g, _, _ in runs)
+    loads = ", ".join(load for *_, load in runs)
     return (
-        f"| graphvision batch, {name} | {seconds:.1f} | {FILES / seconds:.1f} | "
-        f"{sync / seconds:.2f}× | {good} | {_load()} |"
+        f"| {name} ({len(runs)} runs) | {times[0]:.1f}–{times[-1]:.1f} | "
+        f"{FILES / times[-1]:.1f}–{FILES / times[0]:.1f} | "
+        f"{ratios[0]:.2f}–{ratios[-1]:.2f}× | {good} | {loads} |"
     )
 
 
-def _dask_rows(graph: gv.Graph, paths: list[Path], folder: Path, sync: float) -> list[str]:
+def _dask_rows(graph: gv.Graph, paths: list[Path], folder: Path) -> list[str]:
     """The batch on Dask three ways and raw Dask's ceiling (see :func:`dask_runs`),
-    :data:`DASK_RUNS` times each, against ``sync`` (the ceiling against the plain loop in one
-    process): seconds and ratios as min–max, with the load at each run. Run after the
-    others: the threads of a Dask client stay in the process after it closes."""
-    found: dict[str, list[tuple[float, int, str]]] = {}
+    :data:`DASK_RUNS` times each, against a sync batch timed before each run (the ceiling
+    against the plain loop in one process): seconds and ratios as min–max, with the load
+    at each run. Run after the others: the threads of a Dask client stay in the process
+    after it closes."""
+    found: dict[str, list[tuple[float, int, float, str]]] = {}
     ceiling: list[tuple[tuple[float, int], tuple[float, int], str]] = []
-    for run in range(DASK_RUNS):
+    for run in range(DASK_RUNS):  # each run's ratios against a sync batch just before it
+        sync, _ = _batch(graph, paths, folder / f"sync{run}", "sync")
         for name, seconds, good, loop in dask_runs(graph, paths, folder / f"run{run}"):
             if loop is None:
-                found.setdefault(name, []).append((seconds, good, _load()))
+                found.setdefault(name, []).append((seconds, good, sync / seconds, _load()))
             else:
                 ceiling.append((loop, (seconds, good), _load()))
-    rows = []
-    for name, runs in found.items():
-        times = sorted(seconds for seconds, _, _ in runs)
-        good = min(g for _, g, _ in runs)
-        loads = ", ".join(load for *_, load in runs)
-        rows.append(
-            f"| graphvision batch, Dask {name} ({len(runs)} runs) | "
-            f"{times[0]:.1f}–{times[-1]:.1f} | "
-            f"{FILES / times[-1]:.1f}–{FILES / times[0]:.1f} | "
-            f"{sync / times[-1]:.2f}–{sync / times[0]:.2f}× | {good} | {loads} |"
-        )
+    rows = [_range_row(f"graphvision batch, Dask {name}", runs) for name, runs in found.items()]
     if ceiling:
         rows.append(
             _ceiling_row(f"plain loop on the same cluster, raw Dask ({RAW_TASKS})", ceiling)
@@ -442,7 +474,7 @@ def _startup_run(graph: gv.Graph, files: int, start: str) -> list[tuple[str, str
         FILES = saved
         os.environ.pop("GRAPHVISION_WORKER_START")
     client = [t for (t, _), w in zip(done, where, strict=True) if "in the client while" in w]
-    workers = [t for (t, _), w in zip(done, where, strict=True) if "one task per file" in w]
+    workers = [t for (t, _), w in zip(done, where, strict=True) if w.endswith(" a task")]
     rest = (workers[-1] - workers[0]) / max(len(workers) - 1, 1)
     return [
         ("first file done (in the client), s", f"{done[0][0]:.2f}"),
