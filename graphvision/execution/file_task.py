@@ -34,6 +34,7 @@ machine, or storage the workers share) and import the plugins (see
 
 from __future__ import annotations
 
+import multiprocessing
 import threading
 import time
 from collections import OrderedDict
@@ -310,6 +311,11 @@ def run_file_task(
         result = getattr(error, "result", None)
     except InputError as error:  # this file cannot be read; the others may
         item.status, item.error = "failed", str(error)
+    except (KeyboardInterrupt, SystemExit) as error:
+        if multiprocessing.parent_process() is None:  # Ctrl-C in the client: the batch stops
+            raise
+        item.status = "failed"  # a worker ignores Ctrl-C: a node raised it, for this file
+        item.error = f"a node raised {type(error).__name__} on the worker"
     item.seconds = time.perf_counter() - began
     if result is not None:
         result.record.executor = job.executor

@@ -129,3 +129,45 @@ def test_ctrl_c_in_a_batch_of_tasks_of_several_files_leaves_each_folder_whole_or
             assert record["executor"].endswith("first file in this process" if first else "a task")
         else:
             assert status in ("interrupted", "not run") and not folder.exists()
+
+
+INTERRUPTING_PLUGIN = '''
+import numpy as np
+
+from graphvision import Float, Image, node
+
+
+@node("interrupting.score")
+def score(image: Image) -> Float:
+    """The image's mean; the image of level 77 raises KeyboardInterrupt, as a node may."""
+    mean = float(np.mean(image))
+    if round(mean * 255) == 77:
+        raise KeyboardInterrupt
+    return mean
+'''
+
+
+def test_a_node_raising_keyboard_interrupt_on_a_worker_fails_its_file_alone(tmp_path):
+    plugin = tmp_path / "interrupting.py"
+    plugin.write_text(INTERRUPTING_PLUGIN)
+    registry = gv.discover([plugin])
+    graph = gv.Graph("interrupting")
+    image = graph.input("image", "Image")
+    graph.output("score", graph.add("score", "interrupting.score", image=image))
+    levels = [10 + 3 * k for k in range(20)]
+    levels[5] = 77  # not the first file: the client runs that one (its Ctrl-C stops the batch)
+    files = [photo(tmp_path / "in" / f"{k:02d}.png", level) for k, level in enumerate(levels)]
+    batch = gv.run_batch(
+        graph,
+        [str(f) for f in files],
+        input="image",
+        output_dir=tmp_path / "out",
+        registry=registry,
+        cache=None,
+        executor="processes",
+        workers=2,
+        client_files=False,
+    )
+    status = [item.status for item in batch.items]
+    assert status == ["ok"] * 5 + ["failed"] + ["ok"] * 14, batch.items
+    assert batch.items[5].error == "a node raised KeyboardInterrupt on the worker"
