@@ -10,7 +10,6 @@ import pickle
 import threading
 import uuid
 import warnings
-from collections.abc import Callable
 from concurrent.futures import Future
 from pathlib import Path
 from typing import Any
@@ -18,6 +17,7 @@ from typing import Any
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.execution.batch_files import BatchItem, BatchPages, unreadable_reason
 from graphvision.execution.batch_items import could_not_start, plain_graph, run_file, run_item
+from graphvision.execution.batch_lanes import Lane
 from graphvision.execution.batch_stop import INTERRUPTED, StopFlag, writing
 from graphvision.execution.batch_write import failure_reason, finish_item
 from graphvision.execution.executors import (
@@ -103,11 +103,10 @@ class BatchRun:
         return item
 
     def _run_one(self, index: int) -> BatchItem:
-        self.started.add(index)
         path, folder = self.paths[index], self.folders[index]
-        reason = unreadable_reason(path)
-        if reason:  # matched by the pattern, but not a file that can be read
-            return BatchItem(path, folder, "failed", error=f"{path} {reason}")
+        unreadable = self._started(index)
+        if unreadable is not None:
+            return unreadable
         try:
             if index > 0 and self.one_task_per_file:  # the worker writes the folder
                 outcome = self._on_worker(index)
@@ -123,6 +122,16 @@ class BatchRun:
             return self._received(index, item)
         except Exception as error:  # whatever it is, it fails this file alone
             return BatchItem(path, folder, "failed", error=failure_reason(error))
+
+    def _started(self, index: int) -> BatchItem | None:
+        """Note file ``index`` as started; its failed item when it is matched by the pattern
+        but is not a file that can be read (else None)."""
+        self.started.add(index)
+        path = self.paths[index]
+        reason = unreadable_reason(path)
+        if reason:
+            return BatchItem(path, self.folders[index], "failed", error=f"{path} {reason}")
+        return None
 
     def _received(self, index: int, item: BatchItem) -> BatchItem:
         """The file's item has reached the client: counted, its claim dropped (a file not
@@ -142,12 +151,9 @@ class BatchRun:
             return [(index, self.run_one(index)) for index in indices]
         found, sent = {}, []
         for index in indices:
-            self.started.add(index)
-            path = self.paths[index]
-            reason = unreadable_reason(path)
-            if reason:
-                error = f"{path} {reason}"
-                found[index] = BatchItem(path, self.folders[index], "failed", error=error)
+            unreadable = self._started(index)
+            if unreadable is not None:
+                found[index] = unreadable
             else:
                 sent.append(index)
         files = [(str(self.paths[k]), str(self.folders[k])) for k in sent]
@@ -201,7 +207,7 @@ class BatchRun:
         self.stop.dropped(folder)
         return None
 
-    def client_lane(self) -> Callable[[list[int]], list[tuple[int, BatchItem]]] | None:
+    def client_lane(self) -> Lane | None:
         """The client's lane of files while the workers start, when it has one."""
         if not self.client_files:
             return None
@@ -247,11 +253,10 @@ class BatchRun:
     ) -> BatchItem:
         """A further file run here as a worker would run it (while the workers start: see
         :mod:`graphvision.execution.batch_lanes`); its folder is not written once stopped."""
-        self.started.add(index)
         path, folder = self.paths[index], self.folders[index]
-        reason = unreadable_reason(path)
-        if reason:
-            return BatchItem(path, folder, "failed", error=f"{path} {reason}")
+        unreadable = self._started(index)
+        if unreadable is not None:
+            return unreadable
         try:
             if self.job_sent is None:
                 raise RuntimeError("the batch's first file did not prepare the other files' job")
