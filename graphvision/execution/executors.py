@@ -224,6 +224,8 @@ class _Processes:
                 ended = ended_by_limit(fn, args)  # a node past its limit is not retried
                 if ended is not None:
                     outer.set_exception(ended)
+                elif getattr(fn, "settles_its_files", False):  # the caller retries each file
+                    outer.set_exception(_died("running a task of several files"))
                 else:
                     self._retry_alone(outer, fn, args)
             else:

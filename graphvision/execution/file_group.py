@@ -44,3 +44,9 @@ def _pickles(error: Exception) -> bool:
     except Exception:
         return False
     return True
+
+
+run_files.settles_its_files = True  # type: ignore[attr-defined]
+"""A task of several files whose worker died is not run again whole (the files it had
+written whole would be written again): the batch settles each file by its claim and runs
+the others one to a task (:meth:`~graphvision.execution.batch_run.BatchRun.run_files`)."""

@@ -85,6 +85,8 @@ def test_a_node_that_kills_its_worker_in_a_task_of_several_files_fails_that_file
     assert status == ["ok"] * 3 + ["failed"] + ["ok"] * 26, batch.items
     assert "again when retried alone" in batch.items[3].error
     assert not (tmp_path / "out" / "03").exists()  # no half of a folder
+    for written in ("01", "02"):  # whole before the worker died in their task: not run again
+        assert not (tmp_path / "out" / written / "history").exists()
     for item, level in zip(batch.items, levels, strict=True):
         if item.status == "ok":
             assert item.scalars["score"] == pytest.approx(level / 255.0, abs=1e-6)
