@@ -172,15 +172,15 @@ def test_a_spawned_worker_importing_an_unguarded_script_stops_there_naming_the_g
 def test_a_process_worker_that_died_twice_names_a_missing_guard(tmp_path, monkeypatch):
     """A process pool's retry comes from the fork server, which imports the client's script
     first: an unguarded script dies there, and the node's error says why."""
-    from graphvision.execution.executors import _died
+    from graphvision.execution.worker_died import died
 
     script = tmp_path / "run.py"
     script.write_text("import graphvision as gv\ngv.run(...)\n")
     main = types.ModuleType("__main__")
     main.__file__ = str(script)
     monkeypatch.setitem(sys.modules, "__main__", main)
-    error = _died("and again when retried alone")
+    error = died("and again when retried alone")
     assert str(error).startswith("the worker process running this node died")
     assert f"{script} has no `if __name__ ==" in str(error)
     script.write_text('if __name__ == "__main__":\n    gv.run(...)\n')
-    assert str(_died("and again when retried alone")).endswith("and again when retried alone")
+    assert str(died("and again when retried alone")).endswith("and again when retried alone")
