@@ -17,9 +17,9 @@ On the process pool, an executor lane sends several files as one task
 task cost the client about a millisecond of CPU (the pool's threads handing
 the call and its result on, the lane's and the batch's threads woken), taken
 from the cores the workers need; a 200-file coins batch spent 0.25 s of it.
-The lane takes as many files as leave ``2 × at_once`` of the files left to
-every lane, so tasks shrink to one file as the batch ends and the workers
-finish together.
+A lane takes a ``2 × at_once``-th of the files left (rounded up), so tasks
+shrink to one file as the batch ends and the workers finish together (38 tasks
+for 199 files on two workers).
 
 The client leaves the last ``at_once`` files to the workers (its lane takes a
 file only while more remain): the end of the batch is the workers' pace, and
@@ -73,7 +73,7 @@ class FileLanes:
                 return []
             if in_client and (self.ready.is_set() or left <= self.at_once):
                 return []
-            size = 1 if in_client else max(1, min(self.per_task, left // (2 * self.at_once)))
+            size = 1 if in_client else min(self.per_task, -(-left // (2 * self.at_once)))
             self._next += size
             return list(range(self._next - size, self._next))
 

@@ -376,8 +376,9 @@ class BatchRun:
             self.workers_ready.set()
 
     def _share(self, job: FileJob) -> Any:
-        """The job, or the executor's handle on it once sent to every worker (Dask)."""
-        share = getattr(self.pool, "share", None)
+        """The job, or the executor's handle on it: sent once to every worker (Dask's
+        ``share``), or pickled once for all the tasks (the process pool's ``sent_once``)."""
+        share = getattr(self.pool, "share", None) or getattr(self.pool, "sent_once", None)
         return share(job) if share is not None else job
 
 

@@ -21,6 +21,7 @@ from multiprocessing.connection import wait
 from typing import Any
 
 from graphvision.execution.limits import ended_by_limit
+from graphvision.execution.pickled_once import PickledOnce
 from graphvision.execution.warnings import show_warning
 from graphvision.execution.worker_died import WorkerDiedError, died
 from graphvision.execution.worker_start import (
@@ -123,6 +124,11 @@ class ProcessExecutor:
             )
         old.shutdown(wait=False)
         return True
+
+    def sent_once(self, value: Any) -> PickledOnce:
+        """``value`` for the arguments of many tasks (a batch's job): pickled once here and
+        unpickled once per worker (:mod:`graphvision.execution.pickled_once`)."""
+        return PickledOnce(value)
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
         outer: Future = Future()
