@@ -181,12 +181,13 @@ class ProcessExecutor:
             outer.set_exception(died(f"and no worker could start again ({why})"))
             return
 
+        workers = _workers(alone)
+
         def settle(done: Future) -> None:
             alone.shutdown(wait=False)
             if isinstance(done.exception(), BrokenProcessPool):
-                outer.set_exception(
-                    ended_by_limit(fn, args) or died("and again when retried alone")
-                )
+                ended = list(workers.values())
+                _after_exit(ended, lambda: outer.set_exception(_died_again(fn, args, ended)))
             else:
                 _copy(done, outer)
 
@@ -201,6 +202,16 @@ class ProcessExecutor:
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         self._pool.shutdown(wait=wait, cancel_futures=cancel_futures)
+
+
+def _died_again(fn: Callable[..., Any], args: tuple, ended: list[Any]) -> BaseException:
+    """The error of a task whose worker died again when retried alone: the limit it went
+    past, or how its worker ended (the retry's pool has that one worker)."""
+    codes = []
+    for worker in ended:
+        with contextlib.suppress(ValueError):  # a process object already closed
+            codes.append(worker.exitcode)
+    return ended_by_limit(fn, args) or died("and again when retried alone", *codes[:1])
 
 
 def _copy(source: Future, target: Future) -> None:

@@ -49,6 +49,35 @@ def test_a_segfault_in_a_node_names_the_node_function(tmp_path, executor):
     assert "segfault_in_a_node" in done.stderr and "crashing.py" in done.stderr
 
 
+def test_a_segfault_on_processes_fails_the_node_saying_it_crashed(tmp_path):
+    """The client lives on; the node's error says how its worker ended, each time."""
+    (tmp_path / "crashing.py").write_text(CRASHING)
+    (tmp_path / "p.yaml").write_text(PIPELINE)
+    command = [sys.executable, "-m", "graphvision", "run", str(tmp_path / "p.yaml")]
+    done = subprocess.run(
+        [*command, "--no-cache", "--executor", "processes"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 1, done.stderr
+    assert (
+        "died (crashed in native code: SIGSEGV, a segmentation fault), and again when "
+        "retried alone" in done.stderr
+    )
+    assert "Traceback" not in done.stderr.split("Fatal Python error")[0]
+
+
+def test_a_worker_end_is_worded_by_its_exit_code():
+    from graphvision.execution.worker_died import how_it_ended
+
+    assert how_it_ended(-9).startswith("killed by SIGKILL")
+    assert how_it_ended(-11) == "crashed in native code: SIGSEGV, a segmentation fault"
+    assert how_it_ended(3).startswith("it exited with status 3")
+    assert how_it_ended(None) == "killed, or out of memory"  # not known
+    assert how_it_ended(-64) in ("ended by signal 64", "ended by SIGRTMAX")
+
+
 def test_cache_folders_are_the_owners_only_whatever_the_umask(tmp_path):
     before = os.umask(0)
     try:
