@@ -7,7 +7,7 @@ import argparse
 import contextlib
 import os
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -128,7 +128,8 @@ def check_overrides(
             continue
         for each in value if swept else [value]:
             problems += [
-                f"{flag} {key}={each!r}: {said}" for said in _refused(graph, registry, key, each)
+                f"{flag} {key}={each!r}: {said}"
+                for said in _refused(graph, registry, key, each, overrides)
             ]
     if len(problems) == 1:
         raise UsageError(problems[0])
@@ -138,12 +139,29 @@ def check_overrides(
         raise UsageError(f"{len(problems)} overrides {what}:{listed}")
 
 
-def _refused(graph: Graph, registry: Registry, key: str, value: Any) -> list[str]:
-    """Why the parameter ``key`` (NODE.PARAM, which exists) refuses ``value`` on its own;
-    nothing for a pipeline param, whose values the nodes using it check."""
+def _refused(
+    graph: Graph, registry: Registry, key: str, value: Any, overridden: Iterable[str] = ()
+) -> list[str]:
+    """Why the parameter ``key`` (NODE.PARAM or params.NAME, which exists) refuses ``value``
+    on its own; for a pipeline param, why each node parameter that is that param whole
+    (``"${params.NAME}"``) and is not ``overridden`` itself refuses it (one inside a longer
+    text is checked when compiled)."""
     import pydantic
 
     target, _, param = key.partition(".")
+    if target == "params":
+        reference = f"${{params.{param}}}"
+        uses = [
+            f"{node}.{name}"
+            for node, decl in graph.nodes.items()
+            for name, given in decl.params.items()
+            if isinstance(given, str)
+            and given.strip() == reference
+            and f"{node}.{name}" not in overridden
+        ]
+        return [
+            f"{said} (as {use})" for use in uses for said in _refused(graph, registry, use, value)
+        ]
     spec = registry.nodes.get(graph.nodes[target].op) if target in graph.nodes else None
     if spec is None:
         return []

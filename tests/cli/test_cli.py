@@ -450,3 +450,19 @@ def test_a_refused_value_inside_a_parameter_is_named_with_the_others(capsys, tmp
     assert status == 2 and "2 overrides are refused:" in err, err
     assert "parameter 'ranges.area' of regions.filter: List should have at least 2 items" in err
     assert "invalid value '4x' for parameter 'size' of morphology.footprint" in err
+
+
+def test_a_pipeline_param_value_its_node_refuses_is_named_with_the_others(capsys, tmp_path):
+    """coins.yaml's binary.window is "${params.window}": a value threshold.local refuses is
+    named at once, beside another refused override, with the node parameter it stands for."""
+    coins = PIPELINES / "coins.yaml"
+    args = ["-s", "params.window=abc", "-s", "binary.k=xyz"]
+    status, _, err = cli(capsys, "run", coins, "-d", tmp_path / "out", "--no-cache", *args)
+    assert status == 2 and "2 overrides are refused:" in err, err
+    assert (
+        "--set params.window='abc': invalid value 'abc' for parameter 'window' of "
+        "threshold.local" in err
+    )
+    assert "(as binary.window)" in err
+    assert "--set binary.k='xyz': invalid value 'xyz'" in err
+    assert not (tmp_path / "out").exists()
