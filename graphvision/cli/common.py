@@ -7,7 +7,7 @@ import argparse
 import contextlib
 import os
 import sys
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -114,13 +114,33 @@ def positive_seconds(text: str) -> float:
     return seconds
 
 
+def read_each(
+    pairs: dict[str, str], read: Callable[[str, str], Any]
+) -> tuple[dict[str, Any], list[str]]:
+    """Each value of ``pairs`` read by ``read(key, text)``: the values read, and the message
+    of each that could not be (a :class:`UsageError`'s), to be named with the others."""
+    values, problems = {}, []
+    for key, text in pairs.items():
+        try:
+            values[key] = read(key, text)
+        except UsageError as error:
+            problems.append(str(error))
+    return values, problems
+
+
 def check_overrides(
-    graph: Graph, registry: Registry, overrides: dict[str, Any], flag: str, swept: bool = False
+    graph: Graph,
+    registry: Registry,
+    overrides: dict[str, Any],
+    flag: str,
+    swept: bool = False,
+    malformed: Sequence[str] = (),
 ) -> None:
     """Refuse, naming the command line, every override of a node or parameter that does not
-    exist and every value its parameter refuses (all of them at once, one line each);
-    ``swept``: each override holds a list of values (``--grid``)."""
-    problems, unknown = [], 0
+    exist and every value its parameter refuses (all of them at once, one line each, after
+    the ``malformed`` ones: values that could not be read); ``swept``: each override holds a
+    list of values (``--grid``)."""
+    problems, unknown = list(malformed), 0
     for key, value in overrides.items():
         if problem := _unknown_target(graph, registry, key):
             problems.append(f"{flag} {key}={value!r}: {problem}")
@@ -292,11 +312,10 @@ def load_run_arguments(
     graph = graph.with_backends(order)  # --backend: the run's order
     registry = registry_for(args, graph)
     check_backend_option(order, registry)
-    overrides = {
-        key: yaml_value(value, f"--set {key}={value}")
-        for key, value in named_pairs(args.set, "--set").items()
-    }
-    check_overrides(graph, registry, overrides, "--set")
+    overrides, malformed = read_each(
+        named_pairs(args.set, "--set"), lambda key, text: yaml_value(text, f"--set {key}={text}")
+    )
+    check_overrides(graph, registry, overrides, "--set", malformed=malformed)
     return graph, registry, overrides, dict(named_pairs(args.input, "--input"))
 
 

@@ -20,6 +20,7 @@ from graphvision.cli.common import (
     load_run_arguments,
     named_pairs,
     output_folder,
+    read_each,
     yaml_value,
 )
 from graphvision.errors import did_you_mean
@@ -37,10 +38,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from graphvision.views.sweep_page import check_sweep_folder
 
     graph, registry, overrides, inputs = load_run_arguments(args)
-    grid = {key: _listed(key, values) for key, values in named_pairs(args.grid, "--grid").items()}
-    if not grid:
+    grid, malformed = read_each(named_pairs(args.grid, "--grid"), _listed)
+    if not grid and not malformed:
         raise UsageError("sweep needs at least one --grid NODE.PARAM=V1,V2,...")
-    check_overrides(graph, registry, grid, "--grid", swept=True)
+    check_overrides(graph, registry, grid, "--grid", swept=True, malformed=malformed)
     both = sorted(set(grid) & set(overrides))
     if both:
         raise UsageError(f"{both[0]} is both swept (--grid) and set (--set); give one of them")

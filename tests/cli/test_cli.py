@@ -466,3 +466,17 @@ def test_a_pipeline_param_value_its_node_refuses_is_named_with_the_others(capsys
     assert "(as binary.window)" in err
     assert "--set binary.k='xyz': invalid value 'xyz'" in err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_a_value_that_is_no_yaml_is_named_with_the_other_refused_overrides(
+    capsys, tmp_path, command
+):
+    coins = PIPELINES / "coins.yaml"
+    flag, shown = ("-s", "--set") if command == "run" else ("--grid", "--grid")
+    args = [flag, "disk.size=[1", flag, "binary.k=xyz"]
+    status, _, err = cli(capsys, command, coins, "-d", tmp_path / "out", "--no-cache", *args)
+    assert status == 2 and "2 overrides are refused:" in err, err
+    assert f"  - {shown} disk.size=" in err and "malformed YAML" in err
+    assert f"  - {shown} binary.k='xyz': invalid value 'xyz'" in err
+    assert not (tmp_path / "out").exists()
