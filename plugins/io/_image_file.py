@@ -42,7 +42,11 @@ PILLOW_SUFFIXES = frozenset({".bmp", ".jfif", ".jpe", ".jpeg", ".jpg", ".png", "
 
 _PILLOW_FORMATS = frozenset({"BMP", "JPEG", "PNG", "WEBP"})
 _PILLOW_MODES = frozenset({"1", "CMYK", "I;16", "L", "LA", "P", "RGB", "RGBA"})
-_PILLOW_TRUNCATED = ("image file is truncated", "Truncated File Read")  # Pillow's OSErrors
+_TRUNCATED = (
+    "image file is truncated",  # Pillow's OSErrors
+    "Truncated File Read",
+    "failed to read ",  # tifffile's ValueError: "failed to read 4096 bytes, got 1920"
+)
 _NO_READER = "Could not find a backend to open"  # imageio's OSError: no plugin reads the file
 
 
@@ -217,7 +221,7 @@ def _what_is_wrong(file: Path, error: Exception) -> str:
         cut = _truncated_header(file)
         if cut:
             return f"the file is truncated: {cut}"
-        if str(error).startswith(_PILLOW_TRUNCATED):
+        if str(error).startswith(_TRUNCATED):
             return f"the file is truncated: its {size:,} bytes end before the image does"
     if str(error).startswith(_NO_READER):
         return "neither Pillow nor imageio knows its format: save it as PNG, JPEG or TIFF"
