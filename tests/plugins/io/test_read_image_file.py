@@ -211,7 +211,6 @@ def test_an_empty_truncated_or_unknown_file_says_so(folder, tmp_path):
 def test_a_tiff_cut_in_its_pixels_says_it_is_truncated(tmp_path):
     """tifffile, which reads what Pillow does not, says "failed to read 4096 bytes, got
     ..." there: the reason in words, not the error's type."""
-
     pixels = np.random.default_rng(3).integers(0, 256, (64, 64), dtype=np.uint8)
     iio.imwrite(tmp_path / "whole.tif", pixels)
     whole = (tmp_path / "whole.tif").read_bytes()
