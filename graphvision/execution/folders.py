@@ -22,6 +22,7 @@ import contextlib
 import json
 import os
 import shutil
+import stat
 import tempfile
 import warnings
 from collections.abc import Callable, Iterable, Sequence
@@ -40,6 +41,7 @@ from graphvision.execution.owned import (
     owned_files,
     refuse_links,
     refuse_replacing,
+    write_file,
 )
 from graphvision.execution.provenance import file_sha256
 from graphvision.execution.record import RunResult
@@ -121,10 +123,10 @@ def missing_folders(*folders: Path) -> list[Path]:
     what making them creates, so that a command that stops can remove them again."""
     missing: set[Path] = set()
     for folder in folders:
-        for path in (folder, *folder.parents):
-            if path in missing or path.exists() or path.is_symlink():
-                break
+        path = folder
+        while path not in missing and not os.path.lexists(path):  # (a link's, even broken)
             missing.add(path)
+            path = path.parent
     return sorted(missing, key=lambda path: len(path.absolute().parts), reverse=True)
 
 
@@ -258,24 +260,40 @@ def _write_new(
     a killed writer's removed first) and renamed into it; None, nothing written, when it
     cannot be (made meanwhile, a name too long): the caller writes it as an existing one."""
     staging = new_folder(directory)
-    try:
-        directory.parent.mkdir(parents=True, exist_ok=True)
-        shutil.rmtree(staging, ignore_errors=True)
-        staging.mkdir()
-    except OSError:
+    if not _made_anew(staging):
         return None
+    placed = False
     try:
         files = _write_files(result, staging, pages, {}, {})[0]
         try:
             os.rename(staging, directory)  # onto nothing, or onto a folder made meanwhile, empty
+            placed = True
         except OSError:
             if not os.path.lexists(directory):
                 raise
             return None  # made meanwhile, not empty: written as an existing one
     finally:
-        if os.path.lexists(staging):  # the write failed, was cut short, or is done again
+        if not placed:  # the write failed, was cut short, or is done again
             shutil.rmtree(staging, ignore_errors=True)
     return files
+
+
+def _made_anew(staging: Path) -> bool:
+    """Make the empty folder ``staging`` (a killed writer's removed first, its parent made when
+    missing), False when it cannot be: one ``mkdir`` in a batch, where four calls each released
+    the GIL and took it again."""
+    for _ in range(2):
+        try:
+            staging.mkdir()
+            return True
+        except FileExistsError:
+            shutil.rmtree(staging, ignore_errors=True)
+        except FileNotFoundError:
+            with contextlib.suppress(OSError):
+                staging.parent.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            return False
+    return False
 
 
 def _write_files(
@@ -296,7 +314,7 @@ def _write_files(
     files = {name: kept.get(name) or written[name] for name in result.outputs}
     result.record.files = files
     result.record.file_sha256 = digests
-    (staging / RECORD).write_text(result.record.to_json() + "\n")
+    write_file(staging / RECORD, f"{result.record.to_json()}\n".encode())  # (ASCII)
     shown = [name for page in pages for name in page(result, staging)]
     return files, [name for names in written.values() for name in names] + shown + [RECORD]
 
@@ -355,7 +373,8 @@ def write_outputs(
     compiled: CompiledGraph, outputs: dict[str, Any], directory: Path
 ) -> dict[str, list[str]]:
     """Write every produced output to ``directory``; return output name -> file names."""
-    directory.mkdir(parents=True, exist_ok=True)
+    if not directory.is_dir():  # (a run's staging folder is: one stat, not mkdir and stat)
+        directory.mkdir(parents=True, exist_ok=True)
     written = {}
     for name, value in outputs.items():
         if not NAME.match(name):  # compile_graph refuses these; a port type may not add any
@@ -363,10 +382,18 @@ def write_outputs(
         kind = compiled.output_type(name)
         files = kind.write(value, directory / name)
         for file in files:
-            if file.parent != directory or file.is_symlink() or not file.is_file():
+            if file.parent != directory or not _plain_file(file):
                 raise OutputFolderError(
                     f"port type {kind.type_name()} wrote output '{name}' as {file}, which is "
                     f"not a plain file directly in {directory}"
                 )
         written[name] = [f.name for f in files]
     return written
+
+
+def _plain_file(path: Path) -> bool:
+    """Whether ``path`` is a regular file, not a link to one (one ``lstat``)."""
+    try:
+        return stat.S_ISREG(os.lstat(path).st_mode)
+    except OSError:
+        return False

@@ -158,7 +158,10 @@ def _prune(history: Path) -> None:
 
 
 def earlier_runs(directory: Path) -> list[Earlier]:
-    """The runs kept in ``directory``'s history, newest first."""
+    """The runs kept in ``directory``'s history, newest first; one ``lstat`` when there is
+    none, as in every new folder (each report page asks)."""
+    if _mode(directory / HISTORY) is None:
+        return []
     history = _history(directory)
     if history is None:
         return []

@@ -33,7 +33,7 @@ from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import OutputFolderError
 from graphvision.execution.folders import STAGING, RunPage, run_folder
 from graphvision.execution.history import earlier_runs
-from graphvision.execution.owned import RECORD, REPORT, REPORT_HTML
+from graphvision.execution.owned import RECORD, REPORT, REPORT_HTML, write_file
 from graphvision.execution.provenance import file_sha256
 from graphvision.execution.record import RunRecord, RunResult
 from graphvision.nodes.registry import Registry
@@ -89,7 +89,7 @@ def write_report(
         ]
         lines.append("")
     path = directory / "report.md"
-    path.write_text("\n".join(lines))
+    write_file(path, "\n".join(lines).encode())  # UTF-8, as report.html
     return path
 
 

@@ -218,3 +218,22 @@ def test_keep_intermediates_adds_their_pictures_to_the_report(tmp_path):
     for name in ("gray", "binary", "closed", "filled", "opened"):
         assert name in page.headings
     assert len(page.images) > 2
+
+
+def test_the_written_page_is_the_page_text_in_utf8(tmp_path: Path) -> None:
+    """write_html_report writes the constant style and scripts encoded once: the file is
+    still html_report's text in UTF-8, byte for byte, failures and earlier runs included."""
+    from graphvision.execution.history import Earlier
+    from graphvision.views.html import html_report
+
+    result = gv.run(gv.load_pipeline(PIPELINES / "coins.yaml"), cache=None)
+    earlier = [Earlier("history/000001-x-0123abcd", "2026-11-27", {"seconds": 1.5})]
+    options = {"failures": {"binary": "Ünicode <error> ½"}, "earlier": earlier}
+    run = (result.compiled, result.outputs, result.record)
+    written = write_html_report(*run, tmp_path, **options).read_bytes()
+    assert written == html_report(*run, **options).encode()
+    assert written.startswith(b'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">')
+    assert written.endswith(b"</body></html>\n")
+    assert "Ünicode &lt;error&gt; ½".encode() in written  # the page's own text, in UTF-8
+    assert b'<button type="button">\xe2\x88\x92</button>' in written  # the zoom's minus sign
+    assert written.count(b"<style>") == 1 and b"</style></head><body>" in written
