@@ -411,3 +411,22 @@ def test_a_file_pillow_cannot_identify_is_read_by_imageio_as_stored(tmp_path, mo
 
     monkeypatch.setattr(Image, "open", unidentified)
     np.testing.assert_array_equal(read_array(str(path)), GRAY)
+
+
+@pytest.mark.parametrize("suffix", [".png", ".jpg", ".bmp", ".webp"])
+def test_a_file_read_whole_and_one_read_from_its_path_give_the_same_pixels(
+    tmp_path: Path, suffix: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Files up to 64 MiB are read in one system call and parsed from memory; a larger one
+    is still parsed from its path (nothing held twice): the pixels are imageio's either way."""
+    from graphvision_plugins.io import _image_file
+
+    path = tmp_path / f"image{suffix}"
+    iio.imwrite(path, RGB)
+    expected = iio.imread(path)
+    whole = read_array(str(path))
+    monkeypatch.setattr(_image_file, "_WHOLE", 0)  # every file "too large": its path
+    assert isinstance(_image_file._contents(path), Path)
+    from_path = read_array(str(path))
+    for data in (whole, from_path):
+        assert data.dtype == expected.dtype and np.array_equal(data, expected)
