@@ -6,10 +6,11 @@ PNG, JPEG, BMP and WebP, tifffile for TIFF. Its Pillow plugin then returns
 Reading a file through imageio opened it three times (``improps`` for the
 header, Pillow again for the CMYK check, ``imread`` to decode) and paid the
 plugin's start each time (a failed ``import pillow_heif``, a search of
-``sys.path``). For those suffixes, formats and modes graphvision opens the
-file once with Pillow: the header gives the size, checked against the pixel
-budget before a byte is decoded, the mode tells a CMYK image, and the same
-handle decodes, with the pixels, dtype and shape ``imread`` gives.
+``sys.path``). For those suffixes, formats and modes graphvision reads the
+file once (whole, in one system call: :func:`_contents`) and opens it once
+with Pillow: the header gives the size, checked against the pixel budget
+before a byte is decoded, the mode tells a CMYK image, and the same handle
+decodes, with the pixels, dtype and shape ``imread`` gives.
 
 Everything else goes through imageio as before, with the same handle for
 the CMYK check: TIFF (read by tifffile), GIF and APNG (read as a stack of
