@@ -42,7 +42,13 @@ counted twice); parts overlap where one calls another (thumbnails are inside the
 report, the report and outputs inside write). "engine" is the whole file less
 its compute. Wall time: run it on a quiet machine, and read ratios within one run.
 
-Run: ``python bench/profile_batch.py [FILES]``.
+:func:`waits` runs the count batch on ``sync`` and on threads (two files at once), its
+folders in memory, timing each part's wall and CPU (``time.thread_time``) in each thread:
+in the threads batch, a part's wall less its CPU is what it waited, for the GIL or, on a
+loaded machine, for a core. Each file's Python holds the GIL, and each system call
+releases it and takes it again (a wait when the other file's thread holds it).
+
+Run: ``python bench/profile_batch.py [FILES]`` (the threads table over twice as many).
 """
 
 from __future__ import annotations
@@ -53,6 +59,7 @@ import importlib
 import os
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -96,27 +103,42 @@ PARTS: dict[str, list[tuple[str, str]]] = {
 
 
 class _Clock:
-    """Seconds spent in each part, counted at its outermost call only."""
+    """Seconds spent in each part, wall and the thread's CPU (``time.thread_time``), counted
+    at its outermost call only, in each thread on its own (a batch on threads runs two
+    files at once): what a part waited (for the GIL, or for a core) is its wall less its CPU."""
 
     def __init__(self) -> None:
-        self.seconds = dict.fromkeys(PARTS, 0.0)
-        self.depth = dict.fromkeys(PARTS, 0)
+        self.threads: list[dict[str, list[float]]] = []  # per thread: part -> depth, wall, CPU
+        self.local = threading.local()
+
+    def _parts(self) -> dict[str, list[float]]:
+        parts = getattr(self.local, "parts", None)
+        if parts is None:
+            parts = self.local.parts = {part: [0, 0.0, 0.0] for part in PARTS}
+            self.threads.append(parts)
+        return parts
 
     def wrap(self, part: str, function: Callable[..., Any]) -> Callable[..., Any]:
-        clock, depth, seconds = time.perf_counter, self.depth, self.seconds
+        clock, cpu = time.perf_counter, time.thread_time
 
         @functools.wraps(function)
         def timed(*args: Any, **kwargs: Any) -> Any:
-            depth[part] += 1
-            began = clock()
+            counted = self._parts()[part]
+            counted[0] += 1
+            began, began_cpu = clock(), cpu()
             try:
                 return function(*args, **kwargs)
             finally:
-                depth[part] -= 1
-                if not depth[part]:
-                    seconds[part] += clock() - began
+                counted[0] -= 1
+                if not counted[0]:
+                    counted[1] += clock() - began
+                    counted[2] += cpu() - began_cpu
 
         return timed
+
+    def seconds(self, column: int) -> dict[str, float]:
+        """Each part's seconds over every thread: wall (``column`` 1) or CPU (2)."""
+        return {part: sum(parts[part][column] for parts in self.threads) for part in PARTS}
 
 
 def _subclasses(kind: type) -> list[type]:
@@ -171,11 +193,11 @@ def _install(clock: _Clock) -> Callable[[], None]:
 
 
 def measure(
-    files: int, outputs: list[str] | None = None, where: str | None = None
-) -> tuple[float, dict[str, float]]:
-    """Wall seconds of a sync batch of ``files`` coins images (writing ``outputs``, all
-    of them with None, into a folder in ``where``, default beside this file) and each
-    part's seconds."""
+    files: int, outputs: list[str] | None = None, where: str | None = None, executor: str = "sync"
+) -> tuple[float, dict[str, float], dict[str, float]]:
+    """Wall seconds of a batch of ``files`` coins images on ``executor`` (writing ``outputs``,
+    all of them with None, into a folder in ``where``, default beside this file), and each
+    part's wall and CPU seconds (over every thread; the process's CPU as ``CPU``)."""
     import bench_batch
 
     bench_batch.FILES = files
@@ -198,15 +220,14 @@ def measure(
                 input="image",
                 output_dir=Path(scratch) / "out",
                 outputs=outputs,
-                executor="sync",
+                executor=executor,
                 cache=None,
                 pages=pages,
             )
-            wall = time.perf_counter() - began
-            clock.seconds["CPU"] = time.process_time() - cpu
+            wall, used = time.perf_counter() - began, time.process_time() - cpu
         finally:
             restore()
-    return wall, clock.seconds
+    return wall, {**clock.seconds(1), "CPU": used}, clock.seconds(2)
 
 
 CASES: dict[str, tuple[list[str] | None, str | None]] = {
@@ -220,7 +241,7 @@ if os.path.isdir("/dev/shm"):  # the same batch, its folders in memory: the disk
 def profile(files: int) -> list[str]:
     """Per-file milliseconds of each part (perf_counter), for a sync batch of ``files``
     writing the output ``count`` (as ``bench_batch.py``), then all four outputs."""
-    measured = {case: measure(files, *how) for case, how in CASES.items()}
+    measured = {case: measure(files, *how)[:2] for case, how in CASES.items()}
     load = f"{os.getloadavg()[0]:.1f}"
     rows = [
         f"| part ({files} files, sync, perf_counter), wall ms per file | "
@@ -243,9 +264,41 @@ def profile(files: int) -> list[str]:
     return rows
 
 
+def waits(files: int) -> list[str]:
+    """Per file, each part's wall and CPU milliseconds (``thread_time``) in a sync batch and
+    in a batch on threads (two files at once, summed over both threads), folders in
+    ``/dev/shm`` (or beside this file): in the threads batch, a part's wall less its CPU is
+    what it waited, for the GIL or for a core (the load column says how busy the machine
+    was; on a quiet one it is the GIL). ``py-spy --gil`` samples a thread that holds the GIL
+    while the machine has put it aside, so under load it counted waits as GIL time."""
+    where = "/dev/shm" if os.path.isdir("/dev/shm") else None
+    runs = {name: measure(files, ["count"], where, name) for name in ("sync", "threads")}
+    rows = [
+        f"| part ({files} files, output count), ms per file | sync wall | sync CPU | "
+        "sync waited | threads wall | threads CPU | threads waited | load 1 min |",
+        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+    ]
+    load = f"{os.getloadavg()[0]:.1f}"
+    for part in PARTS:
+        cells = []
+        for name in runs:
+            wall, cpu = (runs[name][k][part] / files * 1e3 for k in (1, 2))
+            cells += [wall, cpu, wall - cpu]
+        rows.append(f"| {part} | " + " | ".join(f"{c:.2f}" for c in cells) + f" | {load} |")
+    cells = []
+    for name in runs:
+        wall, cpu = runs[name][0] / files * 1e3, runs[name][1]["CPU"] / files * 1e3
+        cells += [f"{wall:.2f}", f"{cpu:.2f}", ""]
+    rows.append(
+        f"| whole batch, elapsed (threads: two files at once) | {' | '.join(cells)} | {load} |"
+    )
+    return rows
+
+
 def main() -> list[str]:
-    return profile(50)
+    return [*profile(50), "", *waits(100)]
 
 
 if __name__ == "__main__":
-    print("\n".join(profile(int(sys.argv[1]) if len(sys.argv) > 1 else 50)))
+    count = int(sys.argv[1]) if len(sys.argv) > 1 else 50
+    print("\n".join([*profile(count), "", *waits(2 * count)]))
