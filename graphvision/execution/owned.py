@@ -189,7 +189,7 @@ def refuse_replacing(directory: Path, name: str) -> None:
     )
 
 
-_NEW_FILE = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_CLOEXEC
+_NEW_FILE = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0)  # (Windows: binary)
 
 
 def write_file(path: Path, data: bytes) -> None:

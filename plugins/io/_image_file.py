@@ -113,7 +113,7 @@ def _contents(file: Path) -> Path | io.BytesIO:
     each releasing the GIL and taking it again, a wait when another thread holds it (a
     batch on threads); here five: open, fstat, read, the read that finds the end, close.
     """
-    descriptor = os.open(file, os.O_RDONLY | os.O_CLOEXEC)
+    descriptor = os.open(file, os.O_RDONLY | getattr(os, "O_BINARY", 0))  # (binary on Windows)
     try:
         size = os.fstat(descriptor).st_size
         if size > _WHOLE:
