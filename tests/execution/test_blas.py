@@ -187,3 +187,43 @@ def test_a_batch_holds_one_blas_thread_from_file_to_file_and_gives_it_back(tmp_p
             input="image", output_dir=tmp_path / "stopped", executor="sync", on_item=stop,
         )  # fmt: skip
     assert set(blas_threads()) == set(before)
+
+
+def test_each_library_is_read_and_set_through_the_calls_threadpoolctl_makes():
+    """The getter and setter found once per library (C functions for OpenBLAS) read what
+    threadpoolctl reads and set what it then reports."""
+    from threadpoolctl import ThreadpoolController
+
+    from graphvision.execution.blas import _switch
+
+    libraries = ThreadpoolController().select(user_api="blas").lib_controllers
+    assert libraries
+    for library in libraries:
+        getter, setter = _switch(library)
+        had = library.get_num_threads()
+        assert getter() == had
+        setter(1)
+        try:
+            assert library.get_num_threads() == 1
+            assert getter() == 1
+        finally:
+            setter(had)
+        assert library.get_num_threads() == had
+
+
+def test_a_library_threadpoolctl_does_not_call_openblas_is_set_through_its_methods():
+    from graphvision.execution.blas import _switch
+
+    class OtherController:  # (an MKL or BLIS controller: no OpenBLAS symbols)
+        threads = 4
+
+        def get_num_threads(self) -> int:
+            return self.threads
+
+        def set_num_threads(self, count: int) -> None:
+            self.threads = count
+
+    other = OtherController()
+    getter, setter = _switch(other)
+    setter(1)
+    assert (getter(), other.threads) == (1, 1)
