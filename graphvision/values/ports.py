@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from operator import attrgetter
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -103,6 +104,8 @@ def freeze_all(arrays: Arrays) -> Arrays:
     """:func:`freeze` of each array, at the offsets :class:`Placed` arrays remember; those
     to copy share one buffer (one allocation for a table's columns instead of one each)."""
     offsets = getattr(arrays, "offsets", None) or {}
+    if not offsets and len(arrays) > 1 and all(map(_WRITEABLE, arrays.values())):
+        return dict(zip(arrays, frozen_copies(list(arrays.values())), strict=True))  # (fresh)
     thawed = [name for name, array in arrays.items() if not is_frozen(array)]
     if len(thawed) < 2:
         return {name: freeze(array, offsets.get(name, 0)) for name, array in arrays.items()}
@@ -111,6 +114,9 @@ def freeze_all(arrays: Arrays) -> Arrays:
     made = frozen_copies([arrays[n] for n in thawed], [offsets.get(n, 0) for n in thawed])
     copies = dict(zip(thawed, made, strict=True))
     return {name: copies.get(name, array) for name, array in arrays.items()}
+
+
+_WRITEABLE = attrgetter("flags.writeable")  # (a writable array is not frozen: no call more)
 
 
 def is_frozen(array: np.ndarray) -> bool:

@@ -189,3 +189,28 @@ def test_large_and_small_values_are_copied_the_same_way(rows):
             at = copy.__array_interface__["data"][0] - base
             buffer[at : at + copy.nbytes] = 0
         assert not buffer.any()
+
+
+def test_arrays_of_the_sizes_laid_out_before_are_copied_anew_each_time():
+    """The layout of arrays of the same sizes (and offsets) is worked out once and reused: each
+    call still copies its own values, at 64 bytes plus each offset, padding zeroed."""
+    first = [np.arange(5, dtype=np.int32), np.array([1.5, 2.5]), np.ones((2, 3), np.int16)]
+    second = [column * 3 for column in first]
+    for offsets in (None, [4, 8, 0]):
+        made = [frozen_copies(first, offsets), frozen_copies(second, offsets)]
+        for copies, columns in zip(made, (first, second), strict=True):
+            for index, (copy, column) in enumerate(zip(copies, columns, strict=True)):
+                assert copy.shape == column.shape and copy.dtype == column.dtype
+                assert copy.tolist() == column.tolist() and is_frozen(copy)
+                assert alignment_offset(copy) == (offsets[index] if offsets else 0)
+        assert made[1][0].tolist() == [0, 3, 6, 9, 12] and made[0][2].shape == (2, 3)
+        owner = made[0][0].base
+        assert isinstance(owner, bytes) and owner.count(0) >= len(owner) - 5 * 4 - 16 - 12
+
+
+@pytest.mark.parametrize("shape", [(5, 5), (3,), (0,), (70_000,)])
+def test_a_small_array_and_a_large_one_are_copied_to_their_bytes(shape):
+    values = (np.arange(int(np.prod(shape))) % 7 > 2).reshape(shape)
+    for offset in (0, 16):
+        copy = frozen_copy(values, offset)
+        assert copy.tobytes() == values.tobytes() and copy.shape == shape and is_frozen(copy)
