@@ -14,8 +14,8 @@ from typing import Any
 from graphvision.graph.model import Graph
 from graphvision.nodes.fingerprint import node_fingerprint
 from graphvision.nodes.spec import NodeSpec
-from graphvision.values.ports import ArrayPort, PortType
-from graphvision.values.scalars import FloatPort, _ScalarPort
+from graphvision.values.ports import ArrayPort, PortType, is_plain_array_port
+from graphvision.values.scalars import FloatPort, _ScalarPort, is_plain_table_port
 
 __all__ = ["CompiledGraph", "Schedule", "Step"]
 
@@ -23,6 +23,15 @@ __all__ = ["CompiledGraph", "Schedule", "Step"]
 _PLAIN_SCALARS = (_ScalarPort.validate.__func__, FloatPort.validate.__func__)  # type: ignore[attr-defined]
 """The ``validate`` of the built-in scalar ports: each returns a value of exactly its
 ``python_type`` at once."""
+
+
+def _sizing(kind: type[PortType]) -> str:
+    """How a run counts the bytes of a value of ``kind`` (see :attr:`Step.finish_plan`)."""
+    if is_plain_array_port(kind):
+        return "array"
+    if is_plain_table_port(kind):
+        return "table"
+    return "" if issubclass(kind, _ScalarPort) else "encoded"
 
 
 @dataclass(frozen=True)
@@ -104,11 +113,19 @@ class Step:
         return tuple((port, (self.name, port)) for port in self.outputs)
 
     @cached_property
-    def scalar_outputs(self) -> frozenset[str]:
-        """The output ports whose values are scalars (no arrays: nothing to count or freeze)."""
-        return frozenset(
-            port for port, kind in self.outputs.items() if issubclass(kind, _ScalarPort)
+    def finish_plan(
+        self,
+    ) -> tuple[str, str, bool, str, tuple[tuple[str, tuple[str, str], type[PortType], str], ...]]:
+        """What a run reads to store the node's outputs, in one tuple made once: the node's
+        name, its op, whether it is cached, its backend, and each output's port, the value it
+        makes, its type and how its size is counted: ``"array"`` (its one array's
+        ``nbytes``), ``"table"`` (its columns' ``nbytes``, as ``TablePort`` encodes it), ``""``
+        (a scalar: none) or ``"encoded"`` (the arrays its type encodes it as)."""
+        sized = tuple(
+            (port, (self.name, port), kind, _sizing(kind)) for port, kind in self.outputs.items()
         )
+        spec = self.spec
+        return self.name, spec.id, spec.cache, spec.backend, sized
 
     @cached_property
     def only_output(self) -> tuple[str, type[PortType], bool, bool] | None:

@@ -22,7 +22,7 @@ from collections.abc import Set as AbstractSet
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 from itertools import repeat
-from operator import call, is_
+from operator import attrgetter, call, is_
 from typing import Any
 
 from numpy import ndarray
@@ -53,7 +53,6 @@ from graphvision.execution.record import (
     intermediates,
     wrapped_failure,
 )
-from graphvision.values.ports import is_plain_array_port
 
 __all__ = ["RunState"]
 
@@ -61,6 +60,7 @@ __all__ = ["RunState"]
 # a fan-out of trivial nodes): a node faster than this gains nothing from a thread.
 _QUICK_SECONDS = 25e-6
 _NONE = object()  # (a value not produced)
+_NBYTES = attrgetter("nbytes")
 
 
 @dataclass(eq=False)
@@ -347,34 +347,35 @@ class RunState:
 
     def computed(self, step: Step, outputs: dict[str, Any], seconds: float) -> bool:
         """Store a step's accepted outputs (and in the cache), record it, release its inputs."""
-        name, spec = step.name, step.spec
+        name, op, caches, backend, made_by = step.finish_plan
         if seconds < _QUICK_SECONDS:
-            self.quick_ops.add(spec.id)
+            self.quick_ops.add(op)
         else:
-            self.quick_ops.discard(spec.id)
-        cache = self.cache if spec.cache else None
+            self.quick_ops.discard(op)
+        cache = self.cache if caches else None
         values, keys, made, size = self.values, self.keys, {}, 0
-        for port, source in step.output_sources:
+        for port, source, kind, sized in made_by:  # (how each is sized: Step.finish_plan)
             value = values[source] = outputs[port]
-            made[port] = keys[source]
+            key = made[port] = keys[source]
             if cache is not None:
-                size += cache.put(made[port], step.outputs[port], value)
-            elif port not in step.scalar_outputs:  # (an array's size is its nbytes)
-                kind = step.outputs[port]
-                plain = type(value) is ndarray and is_plain_array_port(kind)
-                size += value.nbytes if plain else value_bytes(kind, value)
+                size += cache.put(key, kind, value)
+            elif sized == "array" and type(value) is ndarray:
+                size += value.nbytes
+            elif sized == "table" and type(value) is dict:
+                size += sum(map(_NBYTES, value.values()))
+            elif sized:
+                size += value_bytes(kind, value)
         params = step.params
         self.nodes[name] = NodeRecord(
-            name, spec.id, "computed", seconds, size, "", dict(params) if params else {}, made,
-            spec.backend,
-        )  # fmt: skip
+            name, op, "computed", seconds, size, "", dict(params) if params else {}, made, backend
+        )
         consumers, pinned = self.consumers, self.pinned  # release the inputs it read
         for source in step.read:
             left = consumers[source] = consumers[source] - 1
             if not left and source not in pinned:
                 values.pop(source, None)
         for hook in self.hooks:
-            hook.node_finished(name=name, op=spec.id, status="computed", seconds=seconds)
+            hook.node_finished(name=name, op=op, status="computed", seconds=seconds)
         return True
 
     def result(self, wanted: list[str]) -> RunResult:

@@ -1,5 +1,6 @@
-"""What the per-node shortcuts of a run (issue 26 item 4) keep: a scalar is still checked by
-its port type, a failed node still records how long it ran."""
+"""What the per-node shortcuts of a run (issue 26 item 4, issue 25 item 5) keep: a scalar is
+still checked by its port type, a failed node still records how long it ran, each node's
+record counts the bytes of its outputs."""
 
 from __future__ import annotations
 
@@ -9,8 +10,9 @@ import graphvision as gv
 
 PLUGIN = '''
 import time
-from typing import Annotated
-from graphvision import Float, node
+from typing import Annotated, NamedTuple
+import numpy as np
+from graphvision import Array, Float, Int, Table, node
 from graphvision.errors import PortValueError
 from graphvision.values.scalars import FloatPort
 
@@ -35,6 +37,21 @@ def negative(*, value: float = -1.0) -> Positive:
 def whole(*, value: int = 3) -> Float:
     """Returns an int where a Float is declared."""
     return value
+
+class Parts(NamedTuple):
+    table: Table
+    values: Array
+    count: Int
+
+@node("cost.table")
+def table(*, rows: int = 5) -> Table:
+    """Two columns: int32 and float64."""
+    return {"a": np.arange(rows, dtype=np.int32), "b": np.ones(rows)}
+
+@node("cost.parts")
+def parts(*, rows: int = 5) -> Parts:
+    """A table, an array of 3000 int16 and a count."""
+    return Parts(table(rows=rows), np.zeros((30, 100), np.int16), rows)
 
 @node("cost.slow_failure")
 def slow_failure(*, seconds: float = 0.05) -> Float:
@@ -74,3 +91,13 @@ def test_a_failed_node_records_how_long_it_ran(registry):
         gv.run(one("cost.slow_failure"), registry, executor="sync")
     node = raised.value.record.nodes[0]
     assert node.status == "failed" and node.seconds >= 0.05  # it slept that long at least
+
+
+@pytest.mark.parametrize("executor", ["sync", "threads"])
+def test_each_node_records_the_bytes_of_its_outputs(registry, executor):
+    graph = gv.Graph("sizes")
+    graph.output("table", graph.add("table", "cost.table", {"rows": 7}))
+    graph.output("parts", graph.add("parts", "cost.parts")["values"])
+    nodes = {n.name: n for n in gv.run(graph, registry, executor=executor).record.nodes}
+    assert nodes["table"].output_bytes == 7 * 4 + 7 * 8
+    assert nodes["parts"].output_bytes == 5 * 4 + 5 * 8 + 3000 * 2  # (the count: none)
