@@ -12,13 +12,19 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from graphvision.cache.store import Cache
+from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import UnknownNameError, did_you_mean
+from graphvision.execution.executors import EXECUTORS
 from graphvision.execution.inputs import resolve_input
+from graphvision.execution.limits import current_limits
+from graphvision.execution.peak_memory import environment_memory
+from graphvision.graph.model import Graph
+from graphvision.values.budget import max_pixels as budget_in_force
 from graphvision.values.known import note, recall
 
 if TYPE_CHECKING:
-    from graphvision.compiler.compile import CompiledGraph, Schedule
-    from graphvision.graph.model import Graph
+    from graphvision.compiler.compile import Schedule
     from graphvision.nodes.registry import Registry
     from graphvision.values.ports import PortType
 
@@ -39,9 +45,6 @@ __all__ = [
 def graph_argument(graph: Any, backends: Any = None) -> Graph | CompiledGraph:
     """A ``Graph`` or ``CompiledGraph`` as given, or the pipeline file a path names; with
     ``backends`` (a lookup order), the graph with that order, to be compiled with it."""
-    from graphvision.compiler.compile import CompiledGraph
-    from graphvision.graph.model import Graph
-
     if backends is not None:
         given = graph_argument(graph)
         plain = given.graph if isinstance(given, CompiledGraph) else given
@@ -93,10 +96,6 @@ def environment_limits(*, max_pixels: int | None = None, max_memory: int | None 
     InputError
         Naming the variable, its value and what it takes.
     """
-    from graphvision.execution.limits import current_limits
-    from graphvision.execution.peak_memory import environment_memory
-    from graphvision.values.budget import max_pixels as budget_in_force
-
     if max_pixels is None:
         budget_in_force()
     current_limits()
@@ -107,9 +106,6 @@ def environment_limits(*, max_pixels: int | None = None, max_memory: int | None 
 def run_arguments(cache: Any, executor: Any, workers: Any, **limits: int | None) -> None:
     """Refuse a cache, executor or worker count of the wrong kind, saying what is taken, and
     a malformed limit in the environment (:func:`environment_limits`, given ``limits``)."""
-    from graphvision.cache.store import Cache
-    from graphvision.execution.executors import EXECUTORS
-
     if cache is not None and not isinstance(cache, Cache):
         hint = " (for a folder: gv.Cache.at(path))" if isinstance(cache, (str, os.PathLike)) else ""
         raise TypeError(f"cache must be a gv.Cache or None, got {cache!r}{hint}")
