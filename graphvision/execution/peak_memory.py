@@ -37,6 +37,7 @@ import numpy as np
 
 from graphvision.compiler.compile import CompiledGraph, Schedule
 from graphvision.errors import InputError
+from graphvision.execution.executors import executor_width
 from graphvision.values.budget import pixels_of
 from graphvision.values.ports import ArrayPort, PortType
 
@@ -113,8 +114,6 @@ def estimate_peak(
 
 def running_at_once(executor: Any, workers: int | None) -> int:
     """Nodes the executor may run at once: 1 on ``sync``, else its workers."""
-    from graphvision.execution.executors import executor_width
-
     if isinstance(executor, str):
         return 1 if executor == "sync" else workers or os.cpu_count() or 1
     return executor_width(executor)
