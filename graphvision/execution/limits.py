@@ -131,12 +131,21 @@ def current_limits() -> NodeLimits:
     )
 
 
-@contextlib.contextmanager
-def node_limits(timeout: float | None, memory: int | None) -> Iterator[None]:
-    """Within the block, :func:`current_limits` is ``timeout``/``memory`` where given."""
+def node_limits(
+    timeout: float | None, memory: int | None
+) -> contextlib.AbstractContextManager[None]:
+    """Within the block, :func:`current_limits` is ``timeout``/``memory`` where given (with
+    neither, nothing is entered: no generator made and run per run)."""
     if timeout is None and memory is None:
-        yield
-        return
+        return _UNCHANGED
+    return _limited(timeout, memory)
+
+
+_UNCHANGED = contextlib.nullcontext()
+
+
+@contextlib.contextmanager
+def _limited(timeout: float | None, memory: int | None) -> Iterator[None]:
     base = current_limits()
     token = _LIMITS.set(
         NodeLimits(
