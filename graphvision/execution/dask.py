@@ -19,7 +19,9 @@ Results are fetched where it costs least. A task submitted while others are in f
 has its result awaited on the client's event loop, so many results are fetched at once
 (a blocking fetch per task, one after another, made independent tasks cost twice what
 raw Dask's ``gather`` costs); a task submitted alone (a chain) is fetched by Dask's
-callback thread, one thread hop fewer.
+callback thread, one thread hop fewer. On a ``LocalCluster`` of this process, results come
+from the workers straight, not through the scheduler
+(:func:`~graphvision.execution.dask_fork.direct_gathers`).
 
 Without a client or an address, the executor starts a ``LocalCluster`` in a background
 thread when something first needs it: the files a batch's client runs while the workers
@@ -56,6 +58,7 @@ from graphvision.execution.batch_guard import guard_hint, refuse_in_bootstrap
 from graphvision.execution.dask_files import FILES_PER_TASK, GROUPS_PER_THREAD, FileGroups
 from graphvision.execution.dask_fork import (
     ForkedWorkers,
+    direct_gathers,
     start_forked_cluster,
     start_local_cluster,
 )
@@ -148,6 +151,7 @@ class DaskExecutor:
                     f"({type(error).__name__}); check the address, or leave out "
                     f"--scheduler and ${SCHEDULER_VARIABLE} to start a local cluster"
                 ) from None
+        self._direct = direct_gathers(self._client)  # the own cluster's client: its own
         if self._client is not None:
             self._started.set()
             return
@@ -268,7 +272,7 @@ class DaskExecutor:
             fire_and_forget(task)
             future = TaskFuture(task)
             future.set_running_or_notify_cancel()
-            task.add_done_callback(lambda done, future=future: _settle(done, future))
+            task.add_done_callback(lambda done, future=future: self._settle(done, future))
             futures.append(future)
         return futures
 
@@ -292,12 +296,13 @@ class DaskExecutor:
             self._in_flight += 1
         future.add_done_callback(self._landed)
         if alone:
-            task.add_done_callback(lambda done: _settle(done, future))
+            task.add_done_callback(lambda done: self._settle(done, future))
         else:
 
             async def fetch() -> None:
                 try:
-                    value = await task
+                    gathered = self.client.gather(task, direct=self._direct, asynchronous=True)
+                    value = await gathered
                 except BaseException as error:  # the run reports it as that node's failure
                     future.set_exception(error)
                 else:
@@ -305,6 +310,19 @@ class DaskExecutor:
 
             self.client.loop.add_callback(fetch)
         return future
+
+    def result(self, task: Any) -> Any:
+        """A finished Dask task's result, fetched from its worker straight when the workers are
+        this process's ``LocalCluster``'s (:func:`~graphvision.execution.dask_fork.direct_gathers`).
+        """
+        return task.client.gather(task, direct=self._direct)
+
+    def _settle(self, task: Any, future: Future) -> None:
+        """``future`` takes ``task``'s result or its error (the run reports it as the node's)."""
+        try:
+            future.set_result(self.result(task))
+        except BaseException as error:
+            future.set_exception(error)
 
     def _landed(self, _: Future) -> None:
         with self._in_flight_lock:
@@ -371,11 +389,3 @@ class TaskFuture(Future):
     def __init__(self, task: Any) -> None:
         super().__init__()
         self.task = task
-
-
-def _settle(task: Any, future: Future) -> None:
-    """``future`` takes ``task``'s result or its error (the run reports it as the node's)."""
-    try:
-        future.set_result(task.result())
-    except BaseException as error:
-        future.set_exception(error)

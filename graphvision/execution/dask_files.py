@@ -128,7 +128,7 @@ class FileGroups:
         outcomes: list[Any] = []
         if task is not None:
             try:
-                outcomes, seconds = task.result()
+                outcomes, seconds = self.executor.result(task)
             except BaseException as failed:  # the whole task failed (a worker died twice...)
                 error = failed
             else:

@@ -37,7 +37,7 @@ from typing import Any
 
 from graphvision.execution.worker_start import fork_context
 
-__all__ = ["ForkedWorkers", "start_forked_cluster", "start_local_cluster"]
+__all__ = ["ForkedWorkers", "direct_gathers", "start_forked_cluster", "start_local_cluster"]
 
 _JOIN_SECONDS = 5.0
 
@@ -131,8 +131,8 @@ def start_local_cluster(workers: int, threads_per_worker: int) -> tuple[Any, Any
             # each worker's "Compute Failed" traceback
             silence_logs=logging.CRITICAL,
         )
-    try:
-        return cluster, distributed.Client(cluster)
+    try:  # its results fetched from the workers straight (see direct_gathers)
+        return cluster, distributed.Client(cluster, direct_to_workers=True)
     except BaseException:
         cluster.close()
         raise
@@ -200,3 +200,19 @@ async def _worker(address: str, threads: int, pipe: int) -> None:
         _, pending = await asyncio.wait(waits, return_when=asyncio.FIRST_COMPLETED)
         for task in pending:
             task.cancel()
+
+
+def direct_gathers(client: Any) -> bool | None:
+    """Whether ``client`` fetches results from the workers straight (``direct_to_workers``):
+    its own setting, else yes for a ``LocalCluster`` of this process, else Dask's default
+    (through the scheduler: workers of a remote cluster may not be reachable from here).
+
+    Through the scheduler, each result made two round trips in this process (client to
+    scheduler, scheduler to worker) where one does: a ``LocalCluster``'s scheduler runs in
+    the client's process, on the cores its workers need.
+    """
+    if client is None or client.direct_to_workers is not None:
+        return None
+    import distributed
+
+    return True if isinstance(client.cluster, distributed.LocalCluster) else None

@@ -42,6 +42,9 @@ class _Executor:
     def _sent(self, job: Any) -> Any:
         return job
 
+    def result(self, task: Future) -> Any:
+        return task.result()
+
 
 def _sizes(cluster: _Cluster) -> list[int]:
     return [len(files) for files, _ in cluster.tasks]
