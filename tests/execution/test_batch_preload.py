@@ -57,6 +57,20 @@ def test_the_modules_a_node_imports_in_its_body_are_found_through_its_helpers(la
     assert "os" not in found  # imported by the module itself, not in a body
 
 
+def test_a_second_batch_finds_the_same_modules_without_reading_the_bytecode_again(
+    lazy_package, monkeypatch
+):
+    first = lazy_imports([lazy_package.node])
+
+    def unread(*_: object) -> None:
+        raise AssertionError("bytecode read again")
+
+    monkeypatch.setattr("graphvision.execution.batch_preload.dis.get_instructions", unread)
+    again = lazy_imports([lazy_package.node])
+    assert again == first
+    assert again == ["lazy_pkg_b3._kernels", "lazy_pkg_b3._kernels.kernel", "json.decoder"]
+
+
 def test_each_module_is_imported_on_its_own_whatever_it_raises(tmp_path, monkeypatch):
     (tmp_path / "raising_b3.py").write_text("raise RuntimeError('broken plugin module')\n")
     monkeypatch.syspath_prepend(str(tmp_path))
