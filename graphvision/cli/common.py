@@ -128,35 +128,44 @@ def read_each(
     return values, problems
 
 
-def check_overrides(
+def refused_overrides(
     graph: Graph,
     registry: Registry,
     overrides: dict[str, Any],
     flag: str,
     swept: bool = False,
     malformed: Sequence[str] = (),
-) -> None:
-    """Refuse, naming the command line, every override of a node or parameter that does not
-    exist and every value its parameter refuses (all of them at once, one line each, after
-    the ``malformed`` ones: values that could not be read); ``swept``: each override holds a
-    list of values (``--grid``)."""
-    problems, unknown = list(malformed), 0
+) -> tuple[list[str], int, int]:
+    """Every override of a node or parameter that does not exist and every value its
+    parameter refuses, one line each after the ``malformed`` ones (values that could not be
+    read), naming the command line; with how many overrides they concern, and how many of
+    those name nothing. ``swept``: each override holds a list of values (``--grid``)."""
+    problems, refused, unknown = list(malformed), len(malformed), 0
     for key, value in overrides.items():
         if problem := _unknown_target(graph, registry, key):
             problems.append(f"{flag} {key}={value!r}: {problem}")
-            unknown += 1
+            refused, unknown = refused + 1, unknown + 1
             continue
-        for each in value if swept else [value]:
-            problems += [
-                f"{flag} {key}={each!r}: {said}"
-                for said in _refused(graph, registry, key, each, overrides)
-            ]
+        found = [
+            f"{flag} {key}={each!r}: {said}"
+            for each in (value if swept else [value])
+            for said in _refused(graph, registry, key, each, overrides)
+        ]
+        problems += found
+        refused += bool(found)
+    return problems, refused, unknown
+
+
+def raise_refused(problems: list[str], refused: int, unknown: int) -> None:
+    """Refuse the overrides of :func:`refused_overrides`, all of them in one message."""
     if len(problems) == 1:
         raise UsageError(problems[0])
     if problems:
         listed = "".join(f"\n  - {problem}" for problem in problems)
-        what = "name nothing in the pipeline" if unknown == len(problems) else "are refused"
-        raise UsageError(f"{len(problems)} overrides {what}:{listed}")
+        if refused == 1:
+            raise UsageError(f"1 override is refused:{listed}")
+        what = "name nothing in the pipeline" if unknown == refused else "are refused"
+        raise UsageError(f"{refused} overrides {what}:{listed}")
 
 
 def _refused(
@@ -179,9 +188,11 @@ def _refused(
             and given.strip() == reference
             and f"{node}.{name}" not in overridden
         ]
-        return [
-            f"{said} (as {use})" for use in uses for said in _refused(graph, registry, use, value)
-        ]
+        uses_refusing: dict[str, list[str]] = {}  # the same words from nodes of one op: one line
+        for use in uses:
+            for said in _refused(graph, registry, use, value):
+                uses_refusing.setdefault(said, []).append(use)
+        return [f"{said} (as {', '.join(names)})" for said, names in uses_refusing.items()]
     spec = registry.nodes.get(graph.nodes[target].op) if target in graph.nodes else None
     if spec is None:
         return []
@@ -296,9 +307,11 @@ def executor_for(args: argparse.Namespace) -> Any:
 
 
 def load_run_arguments(
-    args: argparse.Namespace,
+    args: argparse.Namespace, grid: tuple[dict[str, Any], list[str]] | None = None
 ) -> tuple[Graph, Registry, dict[str, Any], dict[str, Any]]:
-    """The pipeline, its registry, the checked overrides (``--set``) and inputs (``--input``)."""
+    """The pipeline, its registry, the checked overrides (``--set``) and inputs (``--input``);
+    a sweep's ``grid`` (its values read, and the messages of those that could not be) is
+    checked with the overrides, every refused one of both named in one message."""
     from graphvision.execution.arguments import environment_limits
     from graphvision.graph.pipeline_file import load_pipeline
     from graphvision.values.budget import ENVIRONMENT_VARIABLE
@@ -315,7 +328,13 @@ def load_run_arguments(
     overrides, malformed = read_each(
         named_pairs(args.set, "--set"), lambda key, text: yaml_value(text, f"--set {key}={text}")
     )
-    check_overrides(graph, registry, overrides, "--set", malformed=malformed)
+    problems, refused, unknown = refused_overrides(
+        graph, registry, overrides, "--set", malformed=malformed
+    )
+    if grid is not None:
+        swept = refused_overrides(graph, registry, grid[0], "--grid", True, grid[1])
+        problems, refused, unknown = problems + swept[0], refused + swept[1], unknown + swept[2]
+    raise_refused(problems, refused, unknown)
     return graph, registry, overrides, dict(named_pairs(args.input, "--input"))
 
 

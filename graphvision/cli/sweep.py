@@ -14,7 +14,6 @@ from graphvision.cli.common import (
     EXIT_FAILED,
     EXIT_OK,
     UsageError,
-    check_overrides,
     disk_cache,
     executor_for,
     load_run_arguments,
@@ -37,11 +36,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from graphvision.execution.folder_lock import only_writer
     from graphvision.views.sweep_page import check_sweep_folder
 
-    graph, registry, overrides, inputs = load_run_arguments(args)
     grid, malformed = read_each(named_pairs(args.grid, "--grid"), _listed)
     if not grid and not malformed:
         raise UsageError("sweep needs at least one --grid NODE.PARAM=V1,V2,...")
-    check_overrides(graph, registry, grid, "--grid", swept=True, malformed=malformed)
+    graph, registry, overrides, inputs = load_run_arguments(args, (grid, malformed))
     both = sorted(set(grid) & set(overrides))
     if both:
         raise UsageError(f"{both[0]} is both swept (--grid) and set (--set); give one of them")

@@ -480,3 +480,35 @@ def test_a_value_that_is_no_yaml_is_named_with_the_other_refused_overrides(
     assert f"  - {shown} disk.size=" in err and "malformed YAML" in err
     assert f"  - {shown} binary.k='xyz': invalid value 'xyz'" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_sweeps_refused_set_and_grid_overrides_are_named_in_one_message(capsys, tmp_path):
+    coins = PIPELINES / "coins.yaml"
+    args = ["--grid", "params.window=31,abc", "-s", "disk.size=[1"]
+    status, _, err = cli(capsys, "sweep", coins, "-d", tmp_path / "out", "--no-cache", *args)
+    assert status == 2 and "2 overrides are refused:" in err, err
+    assert "  - --set disk.size=[1: malformed YAML" in err
+    assert "  - --grid params.window='abc': invalid value 'abc'" in err
+    assert "(as binary.window)" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_pipeline_param_two_nodes_refuse_alike_is_one_line_and_one_override(capsys, tmp_path):
+    """params.size stands for two footprints' size: one line names both, counted once."""
+    text = (PIPELINES / "coins.yaml").read_text()
+    assert "params:\n  window: 51\n" in text
+    text = text.replace("params:\n  window: 51\n", "params:\n  window: 51\n  size: 5\n")
+    text = text.replace(
+        "disk:      {op: morphology.footprint, params: {shape: disk, size: 5}}",
+        'disk:      {op: morphology.footprint, params: {shape: disk, size: "${params.size}"}}\n'
+        '  disk2:     {op: morphology.footprint, params: {shape: disk, size: "${params.size}"}}',
+    )
+    assert text.count("${params.size}") == 2
+    pipeline = tmp_path / "coins.yaml"
+    pipeline.write_text(text)
+    args = ["-s", "params.size=abc", "-s", "binary.k=zz"]
+    status, _, err = cli(capsys, "run", pipeline, "-d", tmp_path / "out", "--no-cache", *args)
+    assert status == 2 and "2 overrides are refused:" in err, err
+    assert "of morphology.footprint: Input should be a valid integer" in err
+    assert "(as disk.size, disk2.size)" in err
+    assert err.count("params.size=") == 1
