@@ -59,8 +59,14 @@ def only_writer(directory: Path, doing: str = "run") -> Iterator[None]:
         remove_empty_folders(made)
         raise
     try:
-        os.ftruncate(descriptor, 0)
-        os.pwrite(descriptor, f"{os.getpid()} {doing}\n".encode(), 0)
+        try:
+            os.ftruncate(descriptor, 0)
+            os.pwrite(descriptor, f"{os.getpid()} {doing}\n".encode(), 0)
+        except OSError as error:  # a full disk: say where
+            raise OutputFolderError(
+                f"{directory}: cannot write its lock file {LOCK_FILE} ({error.strerror}): "
+                "free space there or choose another output folder"
+            ) from None
         yield
     finally:
         with contextlib.suppress(OSError):

@@ -161,6 +161,23 @@ def test_a_folder_that_cannot_be_written_is_said_so(capsys, tmp_path, pipeline, 
     assert list(out.iterdir()) == []
 
 
+def test_a_full_disk_is_said_so_naming_the_folder(capsys, tmp_path, pipeline, monkeypatch):
+    """The lock's one line is the first thing written: a full disk refused it with a bare
+    "No space left on device" and no path."""
+    import errno
+
+    out = tmp_path / "a" / "out"
+
+    def full(*args):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "pwrite", full)
+    assert main(["run", str(pipeline), "-d", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"error: {out}: cannot write its lock file {LOCK_FILE} (No space left on device)" in err
+    assert not (tmp_path / "a").exists()  # made for the run, removed again
+
+
 def test_a_file_of_the_users_named_as_the_lock_is_refused_and_kept(capsys, tmp_path, pipeline):
     out = tmp_path / "out"
     out.mkdir()
