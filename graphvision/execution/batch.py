@@ -63,6 +63,7 @@ from graphvision.execution.batch_files import (
     common_parts,
     output_folders,
     pattern_root,
+    refuse_names_not_utf8,
     summary_text,
 )
 from graphvision.execution.batch_guard import refuse_in_bootstrap
@@ -237,6 +238,7 @@ def _batch_paths(
             )
         if not paths:
             raise InputError(f"batch input '{input}': no file matches '{files}'")
+        refuse_names_not_utf8(paths, input)
         if inside:  # the others run; these are named, not dropped without a word
             warnings.warn(
                 f"batch input '{input}': {len(inside)} file(s) '{files}' matches (such as "
@@ -246,6 +248,7 @@ def _batch_paths(
             )
         return paths, pattern_root(files)
     paths = [Path(f) for f in files]
+    refuse_names_not_utf8(paths, input)
     return paths, Path(*common_parts([p.parent.parts for p in paths])) if paths else Path()
 
 

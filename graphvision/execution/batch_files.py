@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from graphvision.errors import OutputFolderError
+from graphvision.errors import InputError, OutputFolderError
 from graphvision.execution.folders import RunPage
 from graphvision.execution.manifest import FolderFiles, check_folder_files
 from graphvision.execution.owned import check_output_folder
@@ -34,6 +34,7 @@ __all__ = [
     "output_folders",
     "pattern_root",
     "previous_folders",
+    "refuse_names_not_utf8",
     "summary_text",
     "unreadable_reason",
 ]
@@ -333,3 +334,20 @@ def _folded(name: str) -> str:
     """``name`` as a case-insensitive file system (macOS's, Windows') compares names: a
     folder made there under another case or Unicode form would be the same folder."""
     return unicodedata.normalize("NFC", name).casefold()
+
+
+def refuse_names_not_utf8(paths: list[Path], input: str) -> None:
+    """Refuse, before anything runs, files whose names are not UTF-8 (bytes that Python
+    holds as lone surrogates): batch.csv, record.json and the pages, which name each file,
+    are UTF-8, and the summary of a batch that ran them could not be written."""
+    bad = []
+    for path in paths:
+        try:
+            str(path).encode("utf-8")
+        except UnicodeEncodeError:
+            bad.append(os.fsencode(path).decode("utf-8", "backslashreplace"))
+    if bad:
+        raise InputError(
+            f"batch input '{input}': {len(bad)} file name(s) are not UTF-8 (such as {bad[0]}): "
+            "batch.csv, record.json and the pages name each file in UTF-8; rename them"
+        )

@@ -159,6 +159,28 @@ def test_a_glob_matching_nothing_is_a_usage_error(capsys, tmp_path):
     assert status == 2 and "no file matches" in capsys.readouterr().err
 
 
+def test_file_names_that_are_not_utf8_are_refused_before_anything_runs(capsys, tmp_path):
+    """A name with a Latin-1 byte (\\xe9) could not go into batch.csv: the batch ended with
+    an internal error after writing the other files, and wrote no summary."""
+    import os
+
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    photo(photos / "ok.png", 100)
+    latin = os.fsdecode(bytes(photos) + b"/caf\xe9.png")
+    photo(Path(latin), 120)
+    out = tmp_path / "out"
+    args = ["run", str(DEMO), "--no-cache", "-d", str(out), "-o", PSNR]
+    assert main([*args, "--batch", f"image={photos}/*.png"]) == 2
+    err = capsys.readouterr().err
+    assert f"1 file name(s) are not UTF-8 (such as {photos}/caf\\xe9.png)" in err, err
+    assert "internal error" not in err
+    assert not out.exists()
+    with pytest.raises(gv.InputError, match="are not UTF-8"):  # files given as a list too
+        gv.run_batch(gv.load_pipeline(DEMO), [latin], input="image", output_dir=out)
+    assert not out.exists()
+
+
 def test_a_pattern_whose_files_are_all_in_the_output_folder_says_so(capsys, tmp_path):
     """Not 'no file matches': they do, and are left out because a batch never reads its
     output folder (an adversary's case)."""
