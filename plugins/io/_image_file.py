@@ -49,6 +49,7 @@ _TRUNCATED = (
     "Truncated File Read",
     "failed to read ",  # tifffile's ValueError: "failed to read 4096 bytes, got 1920"
 )
+_NEEDS_CODECS = "requires the 'imagecodecs' package"  # tifffile, for LZW, JPEG, ZSTD ...
 _NO_READER = "Could not find a backend to open"  # imageio's OSError: no plugin reads the file
 
 
@@ -252,6 +253,12 @@ def _what_is_wrong(file: Path, error: Exception) -> str:
             return f"the file is truncated: its {size:,} bytes end before the image does"
     if str(error).startswith(_NO_READER):
         return "neither Pillow nor imageio knows its format: save it as PNG, JPEG or TIFF"
+    if _NEEDS_CODECS in str(error):  # tifffile: "<COMPRESSION.LZW: 5> requires the ..."
+        compression = str(error).split(_NEEDS_CODECS)[0].strip()
+        return (
+            f"its compression, {compression}, is decoded by tifffile only with the imagecodecs "
+            "package: pip install imagecodecs, or save it uncompressed"
+        )
     return type(error).__name__
 
 

@@ -430,3 +430,15 @@ def test_a_file_read_whole_and_one_read_from_its_path_give_the_same_pixels(
     from_path = read_array(str(path))
     for data in (whole, from_path):
         assert data.dtype == expected.dtype and np.array_equal(data, expected)
+
+
+@pytest.mark.skipif(
+    __import__("importlib").util.find_spec("imagecodecs") is not None,
+    reason="imagecodecs installed: tifffile decodes LZW",
+)
+def test_a_compressed_tiff_tifffile_cannot_decode_names_the_package(tmp_path):
+    """Pillow writes LZW, a common TIFF default; tifffile decodes it only with imagecodecs."""
+    pixels = np.random.default_rng(4).integers(0, 256, (32, 48), dtype=np.uint8)
+    Image.fromarray(pixels).save(tmp_path / "lzw.tiff", compression="tiff_lzw")
+    with pytest.raises(ValueError, match=r"its compression, <COMPRESSION.LZW: 5>, .*imagecodecs"):
+        read_array(str(tmp_path / "lzw.tiff"))
