@@ -298,6 +298,17 @@ class StopFlag:
         finally:  # cut short (Ctrl-C in the client's main thread): left for the client to clear
             os.close(fd)  # the lock goes with it
 
+    def written_whole(self, folder: str | Path) -> BatchItem | None:
+        """The item a writer that is gone kept in its claim on ``folder`` (the folder is
+        whole: a task run again after its worker died need not write it again), else None."""
+        name = self.name(folder)
+        if self.writer_alive(name):
+            return None
+        try:
+            return _json_item(Path(self.folder, name).read_text())
+        except OSError:  # no claim: not written in this batch
+            return None
+
     def dropped(self, folder: str | Path) -> None:
         """The client has the result of ``folder``'s file: its claim is no longer needed."""
         with contextlib.suppress(OSError):

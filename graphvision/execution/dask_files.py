@@ -29,8 +29,11 @@ A batch runs ``width × GROUPS_PER_THREAD × FILES_PER_TASK`` files at once on
 Dask (:attr:`DaskExecutor.files_at_once
 <graphvision.execution.dask.DaskExecutor.files_at_once>`), so that the tasks
 in flight can be full. Each file keeps its own outcome: one that raises fails
-alone, named (:class:`FileTaskError`); a task whose worker died runs again
-whole (``retries``) and each of its files is written again, whole, as before.
+alone, named (:class:`FileTaskError`). A task whose worker died runs again
+whole (``retries``, and Dask's own ``allowed-failures``), its files written
+whole before come back from their claims, not written again; a task of
+several files that fails whole (a node that kills every worker it runs on)
+sends each file again as a task of its own, so only the file at fault fails.
 """
 
 from __future__ import annotations
@@ -63,6 +66,8 @@ class FileGroups:
         self._measured = (0.0, 0)  # the job's files back so far: their CPU seconds, how many
         self._lock = threading.Lock()
         self._closed = False
+        self._alone: deque[tuple[Any, str, str, Future]] = deque()  # see _next_alone
+        self._isolating = False
 
     def submit(self, task: Any, job: Any, path: str, folder: str) -> Future:
         """A future of ``task(job, path, folder)``: the file's
@@ -129,10 +134,17 @@ class FileGroups:
         if task is not None:
             try:
                 outcomes, seconds = self.executor.result(task)
-            except BaseException as failed:  # the whole task failed (a worker died twice...)
+            except BaseException as failed:  # the whole task failed (its workers died...)
                 error = failed
             else:
                 self._measure(taken[0][0], seconds, len(outcomes))
+        if error is not None and task is not None and len(taken) > 1 and not self._closed:
+            with self._lock:  # each file again alone: only the one at fault fails
+                self._alone.extend(taken)
+                start, self._isolating = not self._isolating, True
+            if start:
+                self._next_alone()
+            taken = []
         for k, (*_, future) in enumerate(taken):
             found = error if error is not None else outcomes[k]
             if isinstance(found, BaseException):
@@ -142,6 +154,42 @@ class FileGroups:
         with self._lock:
             self._flying -= 1
         self._pump()
+
+    def _next_alone(self) -> None:
+        """The next file of the tasks of several that failed whole, as a task of its own,
+        one at a time (a file whose node kills its worker never shares a worker with another
+        of them, which Dask would count as that one's death too); its outcome or error to
+        its future. Those the tasks wrote whole come back from their claims
+        (:func:`~graphvision.execution.file_task.run_file_task`)."""
+        with self._lock:
+            if not self._alone:
+                self._isolating = False
+                return
+            job, path, folder, future = self._alone.popleft()
+
+        def landed(done: Any) -> None:
+            try:
+                found = self.executor.result(done)[0][0]
+            except BaseException as error:  # this file's worker died again: it is at fault
+                found = error
+            if isinstance(found, BaseException):
+                future.set_exception(found)
+            else:
+                future.set_result(found)
+            self._next_alone()
+
+        try:
+            if self._closed:
+                raise FileTaskError("the Dask executor was shut down")
+            task = self.executor.client.submit(
+                on_worker, run_files, self._task, self.executor._sent(job), [(path, folder)],
+                pure=False, retries=self.executor.retries,
+            )  # fmt: skip
+        except BaseException as error:  # a cluster that is closed
+            future.set_exception(error)
+            self._next_alone()
+            return
+        task.add_done_callback(landed)
 
     def _measure(self, job: Any, seconds: float, files: int) -> None:
         """``files`` of ``job`` took ``seconds`` of a worker thread's CPU time."""

@@ -289,6 +289,9 @@ def run_file_task(
     if job.stop is not None and job.stop.is_raised():  # stopped before it started: not run
         item.status, item.error = "interrupted", INTERRUPTED
         return FileOutcome(item)
+    kept = job.stop.written_whole(folder) if job.stop is not None else None
+    if kept is not None:  # written whole by this task's earlier run, whose worker died
+        return FileOutcome(kept)
     prepared = _prepared(job)
     memory = MemoryStore(max_bytes=2**40)
     for key, value, nbytes in prepared.seeds:

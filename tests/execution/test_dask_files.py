@@ -125,3 +125,54 @@ def test_a_batch_forks_the_workers_of_its_own_cluster_and_one_that_dies_costs_a_
     assert found["statuses"] == ["ok"] * len(levels)
     assert found["means"] == pytest.approx([level / 255.0 for level in levels], abs=1e-6)
     assert found["forked"] >= 1  # the surviving worker is a fork of the client
+
+
+ALWAYS_DYING_PLUGIN = '''
+import os
+from graphvision import Float, Image, node
+
+
+@node("always.mean")
+def mean(image: Image) -> Float:
+    """The image's mean; kills its worker on the darkest file, every time.
+
+    Parameters
+    ----------
+    image : the file's image
+    """
+    if float(image.mean()) < 0.1:
+        os._exit(1)
+    return float(image.mean())
+'''
+
+
+def test_a_file_that_kills_every_worker_fails_alone_and_no_file_is_written_twice(tmp_path):
+    """Its task of several files failed whole (KilledWorker: Dask gives up on a task whose
+    workers died): the healthy files in it failed too, and those it had written were
+    written again on each retry (history/ in a new folder). Now each file goes again alone;
+    those written whole come back from their claims."""
+    import dask
+
+    plugin = tmp_path / "always.py"
+    plugin.write_text(ALWAYS_DYING_PLUGIN)
+    registry = gv.discover([plugin])
+    graph = gv.Graph("always")
+    graph.output("mean", graph.add("mean", "always.mean", image=graph.input("image", "Image")))
+    levels = [200, 120, 60, 240, 180, 90, 10, 150, 220, 30, 70, 250]
+    files = _images(tmp_path / "in", levels)
+    with (
+        dask.config.set({"distributed.scheduler.allowed-failures": 2}),
+        distributed.LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as c,
+        distributed.Client(c) as client,
+    ):
+        batch = gv.run_batch(
+            graph, [str(f) for f in files], input="image", output_dir=tmp_path / "out",
+            registry=registry, executor=DaskExecutor(client), cache=None, client_files=False,
+        )  # fmt: skip
+    statuses = [item.status for item in batch.items]
+    assert statuses == ["failed" if level == 10 else "ok" for level in levels]
+    for item, level in zip(batch.items, levels, strict=True):
+        if level != 10:
+            assert item.scalars["mean"] == pytest.approx(level / 255.0, abs=1e-6)
+    assert not list((tmp_path / "out").glob("*/history"))  # no folder written twice
+    assert not (tmp_path / "out" / "06").exists()  # the file at fault has no folder
