@@ -44,11 +44,8 @@ PILLOW_SUFFIXES = frozenset({".bmp", ".jfif", ".jpe", ".jpeg", ".jpg", ".png", "
 
 _PILLOW_FORMATS = frozenset({"BMP", "JPEG", "PNG", "WEBP"})
 _PILLOW_MODES = frozenset({"1", "CMYK", "I;16", "L", "LA", "P", "RGB", "RGBA"})
-_TRUNCATED = (
-    "image file is truncated",  # Pillow's OSErrors
-    "Truncated File Read",
-    "failed to read ",  # tifffile's ValueError: "failed to read 4096 bytes, got 1920"
-)
+# Pillow's OSErrors, and tifffile's ValueError ("failed to read 4096 bytes, got 1920")
+_TRUNCATED = ("image file is truncated", "Truncated File Read", "failed to read ")
 _NEEDS_CODECS = "requires the 'imagecodecs' package"  # tifffile, for LZW, JPEG, ZSTD ...
 _NO_READER = "Could not find a backend to open"  # imageio's OSError: no plugin reads the file
 
