@@ -207,7 +207,7 @@ def load_pipeline(path: str | Path, *, allow_outside_plugins: bool = False) -> G
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")  # YAML files are UTF-8, whatever the locale
     except (OSError, UnicodeDecodeError) as error:
         reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
         problem = Problem(0, "file", f"cannot read pipeline: {reason}", str(path))

@@ -212,3 +212,21 @@ def test_merge_keys_and_aliases_within_the_budget_work():
 def test_one_document_per_file():
     with pytest.raises(gv.PipelineError, match=r"yaml at <string>:12: a pipeline file holds one"):
         gv.parse_pipeline(GOOD + "---\nname: second\n")
+
+
+def test_a_pipeline_file_is_read_as_utf8_under_an_ascii_locale(tmp_path):
+    """coins.yaml's description holds '·': under LC_ALL=C (no UTF-8 mode) it was read in the
+    locale's encoding and refused."""
+    import os
+    import subprocess
+    import sys
+
+    coins = PIPELINES / "coins.yaml"
+    assert "·" in coins.read_text(encoding="utf-8")
+    environment = {**os.environ, "LC_ALL": "C", "PYTHONUTF8": "0", "PYTHONCOERCECLOCALE": "0"}
+    done = subprocess.run(
+        [sys.executable, "-m", "graphvision", "validate", str(coins)],
+        capture_output=True, text=True, env=environment, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().endswith(": ok")
