@@ -180,6 +180,7 @@ def run_batch(
     registry = _checked_pipeline(graph, registry, inputs, input, outputs, overrides)
     out_dir = Path(output_dir)
     paths, root = _batch_paths(files, out_dir, input)
+    refuse_names_not_utf8(paths, input)
     folders = output_folders(paths, root, out_dir)
     stale = checked_folders(out_dir, folders, outputs if outputs is not None else graph.outputs)
     name = graph.name if isinstance(graph, Graph) else graph.graph.name
@@ -238,7 +239,6 @@ def _batch_paths(
             )
         if not paths:
             raise InputError(f"batch input '{input}': no file matches '{files}'")
-        refuse_names_not_utf8(paths, input)
         if inside:  # the others run; these are named, not dropped without a word
             warnings.warn(
                 f"batch input '{input}': {len(inside)} file(s) '{files}' matches (such as "
@@ -248,7 +248,6 @@ def _batch_paths(
             )
         return paths, pattern_root(files)
     paths = [Path(f) for f in files]
-    refuse_names_not_utf8(paths, input)
     return paths, Path(*common_parts([p.parent.parts for p in paths])) if paths else Path()
 
 

@@ -302,12 +302,11 @@ class StopFlag:
         """The item a writer that is gone kept in its claim on ``folder`` (the folder is
         whole: a task run again after its worker died need not write it again), else None."""
         name = self.name(folder)
-        if self.writer_alive(name):
-            return None
         try:
-            return _json_item(Path(self.folder, name).read_text())
-        except OSError:  # no claim: not written in this batch
+            item = _json_item(Path(self.folder, name).read_text())
+        except OSError:  # no claim (every first run): not written in this batch
             return None
+        return None if item is None or self.writer_alive(name) else item
 
     def dropped(self, folder: str | Path) -> None:
         """The client has the result of ``folder``'s file: its claim is no longer needed."""

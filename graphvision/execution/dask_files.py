@@ -110,17 +110,7 @@ class FileGroups:
         """Send tasks while fewer than enough are in flight and files wait."""
         while taken := self._take():
             try:
-                job = self.executor._sent(taken[0][0])
-                files = [(path, folder) for _, path, folder, _ in taken]
-                task = self.executor.client.submit(
-                    on_worker,
-                    run_files,
-                    self._task,
-                    job,
-                    files,
-                    pure=False,
-                    retries=self.executor.retries,
-                )
+                task = self._submit(taken[0][0], [(path, folder) for _, path, folder, _ in taken])
             except BaseException as error:  # a cluster that did not start, or is closed
                 self._landed(None, taken, error)
                 continue
@@ -155,6 +145,13 @@ class FileGroups:
             self._flying -= 1
         self._pump()
 
+    def _submit(self, job: Any, files: list[tuple[str, str]]) -> Any:
+        """A Dask task running ``files`` of ``job`` on a worker, one after another."""
+        return self.executor.client.submit(
+            on_worker, run_files, self._task, self.executor._sent(job), files,
+            pure=False, retries=self.executor.retries,
+        )  # fmt: skip
+
     def _next_alone(self) -> None:
         """The next file of the tasks of several that failed whole, as a task of its own,
         one at a time (a file whose node kills its worker never shares a worker with another
@@ -181,10 +178,7 @@ class FileGroups:
         try:
             if self._closed:
                 raise FileTaskError("the Dask executor was shut down")
-            task = self.executor.client.submit(
-                on_worker, run_files, self._task, self.executor._sent(job), [(path, folder)],
-                pure=False, retries=self.executor.retries,
-            )  # fmt: skip
+            task = self._submit(job, [(path, folder)])
         except BaseException as error:  # a cluster that is closed
             future.set_exception(error)
             self._next_alone()

@@ -104,13 +104,14 @@ _WHOLE = 64 << 20
 
 
 def _contents(file: Path) -> Path | io.BytesIO:
-    """``file``'s bytes in memory, or ``file`` itself when it holds more than :data:`_WHOLE`.
+    """``file``'s bytes in memory, or ``file`` itself when it holds more than :data:`_WHOLE`
+    or when Pillow will not decode it (a suffix imageio reads from the path itself: TIFF).
 
-    Pillow reading a PNG from its path made about 15 system calls (a ``read`` and
-    ``lseek`` for each chunk, ``fstat``, the ``ioctl`` asking whether it is a terminal),
-    each releasing the GIL and taking it again, a wait when another thread holds it (a
-    batch on threads); here five: open, fstat, read, the read that finds the end, close.
-    """
+    Pillow reading a PNG from its path made about 15 system calls (a ``read`` and ``lseek``
+    per chunk, ``fstat``, an ``ioctl``), each releasing the GIL and taking it again (a wait
+    on threads); here five: open, fstat, read, the read that finds the end, close."""
+    if file.suffix.lower() not in PILLOW_SUFFIXES:
+        return file
     descriptor = os.open(file, os.O_RDONLY | getattr(os, "O_BINARY", 0))  # (binary on Windows)
     try:
         size = os.fstat(descriptor).st_size

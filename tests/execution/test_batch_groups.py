@@ -58,29 +58,35 @@ def test_lanes_take_up_to_per_task_files_and_one_at_a_time_at_the_end():
         assert indices == list(range(indices[0], indices[0] + len(indices)))
 
 
-def test_a_node_that_kills_its_worker_in_a_task_of_several_files_fails_that_file_alone(
-    tmp_path, monkeypatch
-):
-    monkeypatch.setenv("CLIENT_PID", str(__import__("os").getpid()))
-    plugin = tmp_path / "crashy.py"
-    plugin.write_text(CRASHING_PLUGIN)
-    registry = gv.discover([plugin])
-    graph = gv.Graph("crashy")
-    graph.output("score", graph.add("score", "crashy.score", image=graph.input("image", "Image")))
-    levels = [10 + 3 * k for k in range(30)]
-    levels[3] = 77  # in the batch's first task of several files
+def _scored_on_processes(tmp_path: Path, source: str, family: str, levels: list[int]) -> Any:
+    """A batch on 2 worker processes of one image per level (``in/NN.png``), each scored by
+    the plugin ``source``'s node ``FAMILY.score``, into ``out/``; the workers run every file."""
+    plugin = tmp_path / f"{family}.py"
+    plugin.write_text(source)
+    graph = gv.Graph(family)
+    image = graph.input("image", "Image")
+    graph.output("score", graph.add("score", f"{family}.score", image=image))
     files = [photo(tmp_path / "in" / f"{k:02d}.png", level) for k, level in enumerate(levels)]
-    batch = gv.run_batch(
+    return gv.run_batch(
         graph,
         [str(f) for f in files],
         input="image",
         output_dir=tmp_path / "out",
-        registry=registry,
+        registry=gv.discover([plugin]),
         cache=None,
         executor="processes",
         workers=2,
         client_files=False,
     )
+
+
+def test_a_node_that_kills_its_worker_in_a_task_of_several_files_fails_that_file_alone(
+    tmp_path, monkeypatch
+):
+    monkeypatch.setenv("CLIENT_PID", str(__import__("os").getpid()))
+    levels = [10 + 3 * k for k in range(30)]
+    levels[3] = 77  # in the batch's first task of several files
+    batch = _scored_on_processes(tmp_path, CRASHING_PLUGIN, "crashy", levels)
     status = [item.status for item in batch.items]
     assert status == ["ok"] * 3 + ["failed"] + ["ok"] * 26, batch.items
     assert "again when retried alone" in batch.items[3].error
@@ -150,26 +156,9 @@ def score(image: Image) -> Float:
 
 
 def test_a_node_raising_keyboard_interrupt_on_a_worker_fails_its_file_alone(tmp_path):
-    plugin = tmp_path / "interrupting.py"
-    plugin.write_text(INTERRUPTING_PLUGIN)
-    registry = gv.discover([plugin])
-    graph = gv.Graph("interrupting")
-    image = graph.input("image", "Image")
-    graph.output("score", graph.add("score", "interrupting.score", image=image))
     levels = [10 + 3 * k for k in range(20)]
     levels[5] = 77  # not the first file: the client runs that one (its Ctrl-C stops the batch)
-    files = [photo(tmp_path / "in" / f"{k:02d}.png", level) for k, level in enumerate(levels)]
-    batch = gv.run_batch(
-        graph,
-        [str(f) for f in files],
-        input="image",
-        output_dir=tmp_path / "out",
-        registry=registry,
-        cache=None,
-        executor="processes",
-        workers=2,
-        client_files=False,
-    )
+    batch = _scored_on_processes(tmp_path, INTERRUPTING_PLUGIN, "interrupting", levels)
     status = [item.status for item in batch.items]
     assert status == ["ok"] * 5 + ["failed"] + ["ok"] * 14, batch.items
     assert batch.items[5].error == "a node raised KeyboardInterrupt on the worker"

@@ -8,6 +8,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -50,14 +51,22 @@ def _images(folder: Path, levels: list[int]) -> list[Path]:
     return sorted(folder.glob("*.png"))
 
 
+def _means(tmp_path: Path, source: str, family: str, levels: list[int], executor: Any) -> Any:
+    """A batch on ``executor`` of one image per level (``in/NN.png``), each measured by the
+    plugin ``source``'s node ``FAMILY.mean``, into ``out/``; the workers run every file."""
+    plugin = tmp_path / f"{family}.py"
+    plugin.write_text(source)
+    graph = gv.Graph(family)
+    graph.output("mean", graph.add("mean", f"{family}.mean", image=graph.input("image", "Image")))
+    return gv.run_batch(
+        graph, [str(f) for f in _images(tmp_path / "in", levels)], input="image",
+        output_dir=tmp_path / "out", registry=gv.discover([plugin]), executor=executor,
+        cache=None, client_files=False,
+    )  # fmt: skip
+
+
 def test_files_sent_several_to_a_task_keep_their_own_outcomes(tmp_path):
-    plugin = tmp_path / "picky.py"
-    plugin.write_text(PICKY_PLUGIN)
-    registry = gv.discover([plugin])
-    graph = gv.Graph("picky")
-    graph.output("mean", graph.add("mean", "picky.mean", image=graph.input("image", "Image")))
     levels = [200, 120, 60, 240, 180, 10, 90, 150, 220, 30, 70, 250]
-    files = _images(tmp_path / "in", levels)
     with (
         distributed.LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as c,
         distributed.Client(c) as client,
@@ -65,10 +74,7 @@ def test_files_sent_several_to_a_task_keep_their_own_outcomes(tmp_path):
         executor = DaskExecutor(client)
         assert executor.files_at_once == 2 * FILES_PER_TASK  # one thread, two tasks in flight
         with distributed.get_task_stream(client) as stream:
-            batch = gv.run_batch(
-                graph, [str(f) for f in files], input="image", output_dir=tmp_path / "out",
-                registry=registry, executor=executor, cache=None, client_files=False,
-            )  # fmt: skip
+            batch = _means(tmp_path, PICKY_PLUGIN, "picky", levels, executor)
     statuses = [item.status for item in batch.items]
     assert statuses == ["failed" if level == 10 else "ok" for level in levels]
     assert "too dark to measure" in batch.items[5].error
@@ -153,22 +159,13 @@ def test_a_file_that_kills_every_worker_fails_alone_and_no_file_is_written_twice
     those written whole come back from their claims."""
     import dask
 
-    plugin = tmp_path / "always.py"
-    plugin.write_text(ALWAYS_DYING_PLUGIN)
-    registry = gv.discover([plugin])
-    graph = gv.Graph("always")
-    graph.output("mean", graph.add("mean", "always.mean", image=graph.input("image", "Image")))
     levels = [200, 120, 60, 240, 180, 90, 10, 150, 220, 30, 70, 250]
-    files = _images(tmp_path / "in", levels)
     with (
         dask.config.set({"distributed.scheduler.allowed-failures": 2}),
         distributed.LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as c,
         distributed.Client(c) as client,
     ):
-        batch = gv.run_batch(
-            graph, [str(f) for f in files], input="image", output_dir=tmp_path / "out",
-            registry=registry, executor=DaskExecutor(client), cache=None, client_files=False,
-        )  # fmt: skip
+        batch = _means(tmp_path, ALWAYS_DYING_PLUGIN, "always", levels, DaskExecutor(client))
     statuses = [item.status for item in batch.items]
     assert statuses == ["failed" if level == 10 else "ok" for level in levels]
     for item, level in zip(batch.items, levels, strict=True):
