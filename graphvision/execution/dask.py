@@ -64,6 +64,7 @@ from graphvision.execution.dask_fork import (
 )
 from graphvision.execution.dask_shared import SharedValue
 from graphvision.execution.dask_worker import on_worker
+from graphvision.execution.worker_died import died_on_dask
 from graphvision.execution.worker_start import fork_context
 
 __all__ = [
@@ -304,7 +305,7 @@ class DaskExecutor:
                     gathered = self.client.gather(task, direct=self._direct, asynchronous=True)
                     value = await gathered
                 except BaseException as error:  # the run reports it as that node's failure
-                    future.set_exception(error)
+                    future.set_exception(died_on_dask(error))
                 else:
                     future.set_result(value)
 
@@ -315,7 +316,13 @@ class DaskExecutor:
         """A finished Dask task's result, fetched from its worker straight when the workers are
         this process's ``LocalCluster``'s (:func:`~graphvision.execution.dask_fork.direct_gathers`).
         """
-        return task.client.gather(task, direct=self._direct)
+        try:
+            return task.client.gather(task, direct=self._direct)
+        except BaseException as error:
+            told = died_on_dask(error)
+            if told is error:
+                raise
+            raise told from None
 
     def _settle(self, task: Any, future: Future) -> None:
         """``future`` takes ``task``'s result or its error (the run reports it as the node's)."""

@@ -7,7 +7,7 @@ import signal
 
 from graphvision.execution.batch_guard import guard_hint
 
-__all__ = ["WorkerDiedError", "died", "how_it_ended"]
+__all__ = ["WorkerDiedError", "died", "died_on_dask", "how_it_ended"]
 
 _UNKNOWN = "killed, or out of memory"
 _SIGNALS = {
@@ -46,4 +46,26 @@ def died(how: str, exitcode: int | None = None) -> WorkerDiedError:
     ended = how_it_ended(exitcode)
     return WorkerDiedError(
         f"the worker process running this node died ({ended}), {how}{guard_hint()}"
+    )
+
+
+def died_on_dask(error: BaseException) -> BaseException:
+    """``error`` as a node's failure says it: Dask's ``KilledWorker`` (the workers that ran a
+    task all died while running it, ``allowed-failures + 1`` of them) becomes a
+    :class:`WorkerDiedError` in the words of the ``processes`` executor's; any other error
+    is returned as it is.
+
+    Dask does not tell the client how its workers ended; each of graphvision's workers
+    prints it on its standard error (:mod:`graphvision.execution.crash_note`) before it ends.
+    """
+    kind = type(error)
+    if kind.__name__ != "KilledWorker" or not kind.__module__.startswith("distributed"):
+        return error
+    runs = getattr(error, "allowed_failures", 0) + 1
+    last = getattr(getattr(error, "last_worker", None), "address", "unknown")
+    return WorkerDiedError(
+        f"the Dask worker running this node died each of the {runs} times it was run "
+        f"(killed, crashed in native code, or out of memory; Dask gives up on a task after "
+        f"`distributed.scheduler.allowed-failures` deaths): each worker's standard error, or "
+        f"its log, says how it ended; the last ran at {last}"
     )

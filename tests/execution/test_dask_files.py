@@ -173,3 +173,30 @@ def test_a_file_that_kills_every_worker_fails_alone_and_no_file_is_written_twice
             assert item.scalars["mean"] == pytest.approx(level / 255.0, abs=1e-6)
     assert not list((tmp_path / "out").glob("*/history"))  # no folder written twice
     assert not (tmp_path / "out" / "06").exists()  # the file at fault has no folder
+    error = batch.items[levels.index(10)].error  # said as the processes executor says it
+    assert error.startswith("WorkerDiedError: the Dask worker running this node died each of the 3")
+
+
+def test_a_node_that_kills_every_worker_in_a_run_is_said_to_have_killed_them(tmp_path):
+    """``gv.run`` on Dask said Dask's ``KilledWorker`` ("Attempted to run task
+    'on_worker-…'"), not which node died nor in the words of the processes executor."""
+    import dask
+
+    plugin = tmp_path / "always.py"
+    plugin.write_text(ALWAYS_DYING_PLUGIN)
+    graph = gv.Graph("dies")
+    graph.output("mean", graph.add("mean", "always.mean", image=graph.input("image", "Image")))
+    with (
+        dask.config.set({"distributed.scheduler.allowed-failures": 1}),
+        distributed.LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as c,
+        distributed.Client(c) as client,
+        pytest.raises(gv.RunError) as raised,
+    ):
+        gv.run(
+            graph, inputs={"image": np.zeros((8, 8), np.float32)}, registry=gv.discover([plugin]),
+            executor=DaskExecutor(client), cache=None,
+        )  # fmt: skip
+    told = str(raised.value)
+    assert told.startswith("node 'mean' (op always.mean) failed: WorkerDiedError: the Dask worker")
+    assert "died each of the 2 times it was run" in told
+    assert "KilledWorker" not in told and "on_worker-" not in told
