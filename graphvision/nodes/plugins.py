@@ -51,11 +51,20 @@ __all__ = [
 ]
 
 
-def _summarise(error: BaseException) -> str:
+def _summarise(error: BaseException, plugin: Path | None = None) -> str:
+    """``error`` in one line, with the file and line it came from: a syntax error's own
+    place, else the innermost frame of the traceback in the local ``plugin`` (a file, or a
+    folder's files) when there is one, else its innermost frame in a file (not importlib's)."""
     if isinstance(error, GraphvisionError):
         return str(error)
-    frame = traceback.extract_tb(error.__traceback__)[-1:] if error.__traceback__ else []
-    where = f" ({frame[0].filename}:{frame[0].lineno})" if frame else ""
+    if isinstance(error, SyntaxError) and error.filename:
+        return f"{type(error).__name__}: {error.msg} ({error.filename}:{error.lineno})"
+    stack = traceback.extract_tb(error.__traceback__)
+    frames = [frame for frame in stack if not frame.filename.startswith("<")]
+    if plugin is not None:
+        mine = [f for f in frames if Path(f.filename).resolve().is_relative_to(plugin.resolve())]
+        frames = mine or frames
+    where = f" ({frames[-1].filename}:{frames[-1].lineno})" if frames else ""
     return f"{type(error).__name__}: {error}{where}"
 
 
@@ -218,7 +227,7 @@ def load_path(registry: Registry, path: str | Path) -> None:
         try:
             registry.add_plugin(import_file(target), name, name)
         except Exception as error:
-            registry.record_failure(name, name, _summarise(error))
+            registry.record_failure(name, name, _summarise(error, path))
 
 
 def discover(

@@ -264,11 +264,18 @@ class Registry:
 
     def unknown_op(self, op: str) -> str:
         """Why ``op`` is not here: renamed (naming the new id), a family no loaded plugin
-        provides (saying how to load one), or a misspelling (with the closest op)."""
+        provides (naming the plugins that failed to load, else saying how to load one), or
+        a misspelling (with the closest op)."""
         if op in self.renamed:
             return f"op '{op}' was renamed '{self.renamed[op]}': use the new name"
         family = op.split(".", 1)[0]
         families = {name.split(".", 1)[0] for name in self.nodes}
+        failed = [plugin.name for plugin in self.failed_plugins()]
+        if "." in op and family not in families and failed:
+            return (
+                f"unknown op '{op}': no loaded plugin provides the family '{family}', and "
+                f"plugin {', '.join(failed)} failed to load (its warning says where)"
+            )
         if "." in op and family not in families and self.unread_plugins:
             return (
                 f"unknown op '{op}': no loaded plugin provides the family '{family}'; the "
