@@ -120,3 +120,27 @@ def test_the_readme_stays_short_and_links_into_the_docs():
     assert len(text.splitlines()) <= 200
     for target in re.findall(r"\]\((docs/[^)#]+)", text):
         assert (ROOT / target).exists(), f"the README links to {target}, which does not exist"
+
+
+def test_the_readme_python_example_runs_with_its_files_in_another_folder(tmp_path, monkeypatch):
+    """Run from the folder above its files (``gv.load_pipeline("try/denoise.yaml")``), the
+    example still finds my_nodes.py beside the pipeline: it looked in the working folder."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("GRAPHVISION_MAX_PIXELS", raising=False)
+    found = blocks(README)
+    for block in found:
+        if block.title:
+            (tmp_path / "try").mkdir(exist_ok=True)
+            (tmp_path / "try" / block.title).write_text(block.code, encoding="utf-8")
+    code = "".join(b.code for b in found if b.lang == "python" and not b.title)
+    assert 'gv.load_pipeline("denoise.yaml")' in code
+    code = code.replace('gv.load_pipeline("denoise.yaml")', 'gv.load_pipeline("try/denoise.yaml")')
+    before = set(sys.modules)
+    try:
+        namespace: dict = {"__name__": "__docs__"}
+        exec(compile(code, "README.md", "exec"), namespace)
+    finally:
+        for name in set(sys.modules) - before:
+            if (getattr(sys.modules[name], "__file__", None) or "").startswith(str(tmp_path)):
+                del sys.modules[name]
+    assert namespace["graph"].plugins == ["try/my_nodes.py"]

@@ -37,6 +37,7 @@ from graphvision.graph.model import (
     Ref,
     output_name_problem,
 )
+from graphvision.graph.plugin_paths import PluginPaths
 from graphvision.graph.schema import InputModel, NodeModel, PipelineModel
 from graphvision.graph.yaml_reader import read_yaml
 
@@ -185,7 +186,8 @@ def _graph_from_model(model: PipelineModel, file: str, lines: dict[str, int]) ->
 
 
 def load_pipeline(path: str | Path, *, allow_outside_plugins: bool = False) -> Graph:
-    """Read and parse a pipeline file; ``plugins:`` paths are resolved against its folder.
+    """Read and parse a pipeline file; ``plugins:`` paths are resolved against its folder,
+    and so are those added to ``graph.plugins`` later (:class:`~.plugin_paths.PluginPaths`).
 
     Reading a pipeline never runs its code: its ``plugins:`` are only listed
     here (``graph.plugins``); a run imports them. A plugin must lie inside the
@@ -241,9 +243,8 @@ def load_pipeline(path: str | Path, *, allow_outside_plugins: bool = False) -> G
             )
     if problems:
         raise PipelineError(problems, str(path))
-    graph.plugins = [
-        str(path.parent / p) if not Path(p).is_absolute() else p for p in graph.plugins
-    ]
+    written, graph.plugins = graph.plugins, PluginPaths(folder=str(path.parent))
+    graph.plugins.extend(written)  # placed in the file's folder, as those added later are
     return graph
 
 
