@@ -95,18 +95,25 @@ class Problem:
     message : str
         What is wrong, in words a user can act on.
     file : str
-        The pipeline file ('' for graphs built in Python).
+        The pipeline file ('' for graphs built in Python), or the Python file that
+        added the part at fault (``graph.add``) when ``added`` says so.
+    added : str
+        How the part at fault came into the graph when not from ``file``'s YAML
+        (``"added in Python"``), else ''.
     """
 
     line: int
     where: str
     message: str
     file: str = ""
+    added: str = ""
 
     def __str__(self) -> str:
         place = self.where
         if self.file:
             place += f" at {self.file}:{self.line}" if self.line else f" in {self.file}"
+        if self.added:
+            place += f" ({self.added})"
         return f"{place}: {self.message}"
 
 

@@ -44,7 +44,7 @@ class _Checker:
         self.unresolved: set[str] = set()  # parameters naming an unknown ${params.NAME}
 
     def report(self, where: str, message: str) -> None:
-        self.problems.append(Problem(self.graph.line_of(where), where, message, self.graph.source))
+        self.problems.append(self.graph.problem(where, message))
 
     # -- parameters -------------------------------------------------------------
 

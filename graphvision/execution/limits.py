@@ -44,7 +44,7 @@ from pathlib import Path
 from typing import Any
 
 from graphvision.compiler.compiled import CompiledGraph
-from graphvision.errors import InputError, PipelineError, Problem
+from graphvision.errors import InputError, PipelineError
 from graphvision.execution.crash_note import real_exit
 
 __all__ = [
@@ -284,12 +284,10 @@ def refuse_declared_limits(compiled: CompiledGraph, executor: str) -> None:
         return
     graph = compiled.graph
     problems = [
-        Problem(
-            graph.line_of(f"nodes.{name}.timeout"),
+        graph.problem(
             f"nodes.{name}.timeout",
             "node time limits apply on sync, threads and processes, not dask "
             "(remove it or choose another --executor)",
-            graph.source,
         )
         for name, node in graph.nodes.items()
         if node.timeout is not None

@@ -18,11 +18,13 @@ from __future__ import annotations
 
 import copy
 import re
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from graphvision.errors import did_you_mean
+from graphvision.errors import Problem, did_you_mean
 
 if TYPE_CHECKING:
     import networkx as nx
@@ -152,6 +154,11 @@ class Graph:
     # "node.param" -> the value an override set (so a problem with it names the override)
     overrides_applied: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
     lines: dict[str, int] = field(default_factory=dict, compare=False, repr=False)
+    # "nodes.NAME", "inputs.NAME", "outputs.NAME" -> (file, line) of the Python call that
+    # added it (not from the YAML of ``source``: its problems are placed at the call)
+    added_in_python: dict[str, tuple[str, int]] = field(
+        default_factory=dict, compare=False, repr=False
+    )
 
     # -- builder ------------------------------------------------------------------
 
@@ -167,6 +174,7 @@ class Graph:
         it is the ground truth of (its default holds for their defaults only)."""
         self._check_new_name(name)
         self.inputs[name] = InputDecl(type, default, description, list(truth_of or []))
+        self.added_in_python[f"inputs.{name}"] = _caller()
         return Ref(name)
 
     def add(
@@ -185,6 +193,7 @@ class Graph:
             port: ref if isinstance(ref, Ref) else Ref.parse(ref) for port, ref in inputs.items()
         }
         self.nodes[name] = NodeDecl(op, refs, dict(params or {}), backend=backend)
+        self.added_in_python[f"nodes.{name}"] = _caller()
         return Ref(name)
 
     def output(self, name: str, ref: Ref | str) -> None:
@@ -196,6 +205,7 @@ class Graph:
         if not NAME.match(name):
             raise ValueError(output_name_problem(name))
         self.outputs[name] = ref if isinstance(ref, Ref) else Ref.parse(ref)
+        self.added_in_python[f"outputs.{name}"] = _caller()
 
     def _check_new_name(self, name: str) -> None:
         if not NAME.match(name):
@@ -281,6 +291,14 @@ class Graph:
         graph.lines = {k: v for k, v in graph.lines.items() if k.partition(".")[0] != "backends"}
         return graph
 
+    def problem(self, where: str, message: str) -> Problem:
+        """A problem at the dotted location ``where``: at its YAML line, or, for a node, an
+        input or an output added in Python, at the call that added it (named so)."""
+        added = self.added_in_python.get(".".join(where.split(".")[:2]))
+        if added is not None:
+            return Problem(added[1], where, message, added[0], "added in Python")
+        return Problem(self.line_of(where), where, message, self.source)
+
     def line_of(self, where: str) -> int:
         """The YAML line of the dotted location ``where`` (or of its closest parent)."""
         parts = where.split(".")
@@ -290,3 +308,15 @@ class Graph:
                 return line
             parts.pop()
         return 0
+
+
+_ENGINE = str(Path(__file__).resolve().parent.parent)
+
+
+def _caller() -> tuple[str, int]:
+    """The file and line of the first caller outside graphvision (a user's script or
+    notebook cell) of the builder method that calls this; ("", 0) if there is none."""
+    frame = sys._getframe(2)
+    while frame is not None and frame.f_code.co_filename.startswith(_ENGINE):
+        frame = frame.f_back  # type: ignore[assignment]
+    return (frame.f_code.co_filename, frame.f_lineno) if frame is not None else ("", 0)

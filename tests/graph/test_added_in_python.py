@@ -1,0 +1,68 @@
+"""A problem with a node, input or output added in Python to a loaded pipeline is placed
+at the call that added it, named so, not at the pipeline's ``nodes:`` line."""
+
+from __future__ import annotations
+
+import inspect
+
+import pytest
+
+import graphvision as gv
+
+PIPELINE = """version: 1
+name: p
+inputs:
+  image: {type: Image, default: "sample:camera"}
+nodes:
+  gray: {op: colour.to_gray, in: {image: image}}
+  blur: {op: filters.gaussian, in: {image: gray}, params: {sigma: -1}}
+outputs:
+  blur: blur
+"""
+
+
+def here() -> int:
+    """The line of the caller."""
+    frame = inspect.currentframe()
+    assert frame is not None and frame.f_back is not None
+    return frame.f_back.f_lineno
+
+
+def test_problems_of_nodes_added_in_python_are_placed_at_the_call(tmp_path):
+    path = tmp_path / "p.yaml"
+    path.write_text(PIPELINE)
+    graph = gv.load_pipeline(path)
+    line = here() + 1
+    graph.add("bad", "filters.median", image="nowhere", params={"size": -3})
+    graph.add("typo", "filters.medain", image="gray")
+    graph.output("late", "missing")
+    with pytest.raises(gv.PipelineError) as caught:
+        gv.compile_graph(graph, gv.discover())
+    problems = [str(p) for p in caught.value.problems]
+    place = f"at {__file__}:{{}} (added in Python)"
+    assert f"nodes.bad.in.image {place.format(line)}: unknown node or input 'nowhere'" in problems
+    assert any(
+        p.startswith(f"nodes.bad.params.size {place.format(line)}: invalid value -3")
+        for p in problems
+    )
+    assert any(
+        p.startswith(f"nodes.typo.op {place.format(line + 1)}: unknown op") for p in problems
+    )
+    assert any(p.startswith(f"outputs.late {place.format(line + 2)}: ") for p in problems)
+    # the file's own node keeps its line; nothing is placed at the nodes: line (5)
+    assert any(p.startswith(f"nodes.blur.params.sigma at {path}:7: ") for p in problems)
+    assert not any(f"{path}:5" in p for p in problems)
+    assert len(problems) == 5
+
+
+def test_a_graph_built_in_python_places_its_problems_at_its_calls():
+    graph = gv.Graph("built")
+    line = here() + 1
+    image = graph.input("image", "Image", default="sample:camera")
+    graph.output("out", graph.add("blur", "filters.gaussian", image=image, params={"sigma": 0}))
+    with pytest.raises(gv.PipelineError) as caught:
+        gv.compile_graph(graph, gv.discover())
+    (problem,) = caught.value.problems
+    assert str(problem).startswith(
+        f"nodes.blur.params.sigma at {__file__}:{line + 1} (added in Python): invalid value 0"
+    )
