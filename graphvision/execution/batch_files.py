@@ -280,11 +280,15 @@ def previous_folders(out_dir: Path) -> set[Path]:
 
 
 def summary_text(items: Sequence[BatchItem]) -> str:
-    """``batch.csv``: file, output_dir, status, seconds, error, then every scalar output."""
+    """``batch.csv``: file, output_dir, status, seconds, error, then every scalar output.
+
+    ``output_dir`` names a folder that is there: it is empty for a file that has none (one
+    that could not be read or failed, with no earlier run kept in its ``history/``, or that
+    did not run), so every folder the summary names can be opened."""
     rows = [
         {
             "file": str(item.file),
-            "output_dir": str(item.output_dir),
+            "output_dir": str(item.output_dir) if item.output_dir.is_dir() else "",
             "status": item.status,
             "seconds": round(item.seconds, 4),
             "error": item.error,

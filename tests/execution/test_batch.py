@@ -120,6 +120,22 @@ def test_batch_csv_names_the_folder_and_the_error(capsys, tmp_path):
     assert "bad.png is not a readable image" in rows["bad.png"]["error"]
     assert rows["good.png"]["output_dir"] == str(out / "good")
     assert float(rows["good.png"][PSNR]) > 15
+    # a file that could not be read has no folder: none is named (out/bad was)
+    assert rows["bad.png"]["output_dir"] == "" and not (out / "bad").exists()
+    assert f"{tmp_path}/in/bad.png FAILED" in err and f"-> {out / 'bad'}" not in err
+    assert f"{tmp_path}/in/good.png -> {out / 'good'} ok" in err
+
+
+def test_batch_csv_names_the_folder_of_a_failed_file_that_keeps_its_last_run(tmp_path):
+    """A file that failed keeps its previous run in history/: its folder is there, named."""
+    good, out = photo(tmp_path / "in" / "a.png", 100), tmp_path / "out"
+    graph = gv.load_pipeline(DEMO)
+    assert gv.run_batch(graph, [good], input="image", output_dir=out).items[0].status == "ok"
+    good.write_text("not an image any more")
+    (item,) = gv.run_batch(graph, [good], input="image", output_dir=out).items
+    rows = list(csv.DictReader((out / "batch.csv").open()))
+    assert item.status == "failed" and (out / "a" / "history").is_dir()
+    assert rows[0]["output_dir"] == str(out / "a")
 
 
 def test_run_batch_from_python(tmp_path):

@@ -126,7 +126,7 @@ def test_ctrl_c_in_a_batch_of_tasks_of_several_files_leaves_each_folder_whole_or
             on_item=stop_at_tenth,
         )
     with (tmp_path / "out" / "batch.csv").open() as summary:
-        rows = {Path(r["output_dir"]).name: r["status"] for r in csv.DictReader(summary)}
+        rows = {Path(r["file"]).stem: r["status"] for r in csv.DictReader(summary)}
     assert sorted(rows) == [f"{k:02d}" for k in range(40)]  # every file, done or not
     assert sum(status == "ok" for status in rows.values()) >= 10
     for name, status in rows.items():
