@@ -142,14 +142,20 @@ def raise_refused(problems: list[str], refused: int, unknown: int) -> None:
 
 
 def output_folder(text: str | None) -> Path | None:
-    """The output folder, checked now (a file, or a folder that cannot be made, is refused
-    before anything runs) and made when the first file is written into it: a command that
-    fails or is stopped first leaves no folder behind."""
+    """The output folder, checked now (a file, a folder that cannot be made, or a name that
+    is not UTF-8 is refused before anything runs) and made when the first file is written
+    into it: a command that fails or is stopped first leaves no folder behind."""
+    from graphvision.errors import OutputFolderError
+    from graphvision.execution.batch_files import refuse_folder_not_utf8
     from graphvision.execution.folders import missing_folders, remove_empty_folders
 
     if text is None:
         return None
     folder = Path(text)
+    try:  # its files name it in UTF-8 (record.json, batch.csv, the pages)
+        refuse_folder_not_utf8(folder, "--output-dir")
+    except OutputFolderError as error:
+        raise UsageError(str(error)) from None
     if folder.exists() and not folder.is_dir():
         raise UsageError(f"--output-dir {folder}: is a file, not a folder")
     made = missing_folders(folder)

@@ -63,6 +63,7 @@ from graphvision.execution.batch_files import (
     common_parts,
     output_folders,
     pattern_root,
+    refuse_folder_not_utf8,
     refuse_names_not_utf8,
     summary_text,
 )
@@ -167,9 +168,9 @@ def run_batch(
     ValueError
         When ``output_dir`` is an empty string (it would be this folder).
     OutputFolderError
-        When an item folder holds files graphvision did not write, or
-        ``batch.csv`` is not a graphvision summary (checked before anything
-        runs).
+        When an item folder holds files graphvision did not write,
+        ``batch.csv`` is not a graphvision summary, or ``output_dir``'s name is
+        not UTF-8 (checked before anything runs).
     """
     refuse_in_bootstrap("a batch")  # a worker importing an unguarded script
     run_arguments(cache, executor, workers)
@@ -179,6 +180,7 @@ def run_batch(
     _check_batch_arguments(output_dir, inputs, input)
     registry = _checked_pipeline(graph, registry, inputs, input, outputs, overrides)
     out_dir = Path(output_dir)
+    refuse_folder_not_utf8(out_dir)
     paths, root = _batch_paths(files, out_dir, input)
     refuse_names_not_utf8(paths, input)
     folders = output_folders(paths, root, out_dir)

@@ -34,6 +34,7 @@ __all__ = [
     "output_folders",
     "pattern_root",
     "previous_folders",
+    "refuse_folder_not_utf8",
     "refuse_names_not_utf8",
     "summary_text",
     "unreadable_reason",
@@ -340,18 +341,35 @@ def _folded(name: str) -> str:
     return unicodedata.normalize("NFC", name).casefold()
 
 
+def _not_utf8(path: Path) -> str | None:
+    """``path`` shown with its bytes that are not UTF-8 escaped (``out\\xff``), or None
+    when its name is UTF-8 (bytes that are not are held by Python as lone surrogates)."""
+    try:
+        str(path).encode("utf-8")
+    except UnicodeEncodeError:
+        return os.fsencode(path).decode("utf-8", "backslashreplace")
+    return None
+
+
 def refuse_names_not_utf8(paths: list[Path], input: str) -> None:
-    """Refuse, before anything runs, files whose names are not UTF-8 (bytes that Python
-    holds as lone surrogates): batch.csv, record.json and the pages, which name each file,
-    are UTF-8, and the summary of a batch that ran them could not be written."""
-    bad = []
-    for path in paths:
-        try:
-            str(path).encode("utf-8")
-        except UnicodeEncodeError:
-            bad.append(os.fsencode(path).decode("utf-8", "backslashreplace"))
+    """Refuse, before anything runs, files whose names are not UTF-8: batch.csv,
+    record.json and the pages, which name each file, are UTF-8, and the summary of a batch
+    that ran them could not be written."""
+    bad = [shown for shown in map(_not_utf8, paths) if shown is not None]
     if bad:
         raise InputError(
             f"batch input '{input}': {len(bad)} file name(s) are not UTF-8 (such as {bad[0]}): "
             "batch.csv, record.json and the pages name each file in UTF-8; rename them"
+        )
+
+
+def refuse_folder_not_utf8(folder: Path, option: str = "output folder") -> None:
+    """Refuse, before anything runs, an output folder whose name is not UTF-8, for the
+    reason of :func:`refuse_names_not_utf8` (its files could not name it: a batch ended
+    with an internal error on every file)."""
+    shown = _not_utf8(folder)
+    if shown is not None:
+        raise OutputFolderError(
+            f"{option} {shown}: its name is not UTF-8; record.json, batch.csv and the "
+            "pages name it in UTF-8: choose another name"
         )

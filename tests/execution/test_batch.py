@@ -197,6 +197,24 @@ def test_file_names_that_are_not_utf8_are_refused_before_anything_runs(capsys, t
     assert not out.exists()
 
 
+@pytest.mark.parametrize("batch", [True, False])
+def test_an_output_folder_whose_name_is_not_utf8_is_refused_naming_it(capsys, tmp_path, batch):
+    """A batch into out\\xff ended every file with an internal error (UnicodeEncodeError)."""
+    import os
+
+    good = photo(tmp_path / "photos" / "ok.png", 100)
+    out = Path(os.fsdecode(bytes(tmp_path) + b"/out\xff/sub"))
+    given = ["--batch", f"image={good}"] if batch else ["-i", f"image={good}"]
+    assert main(["run", str(DEMO), "--no-cache", "-d", str(out), *given]) == 2
+    err = capsys.readouterr().err
+    assert f"error: --output-dir {tmp_path}/out\\xff/sub: its name is not UTF-8;" in err, err
+    assert "Traceback" not in err and "internal error" not in err
+    assert not out.parent.exists()  # nothing made
+    with pytest.raises(gv.OutputFolderError, match=r"out\\xff/sub: its name is not UTF-8"):
+        gv.run_batch(gv.load_pipeline(DEMO), [good], input="image", output_dir=out)
+    assert not out.parent.exists()
+
+
 def test_a_pattern_whose_files_are_all_in_the_output_folder_says_so(capsys, tmp_path):
     """Not 'no file matches': they do, and are left out because a batch never reads its
     output folder (an adversary's case)."""
