@@ -130,15 +130,18 @@ def read_each(
 
 
 def raise_refused(problems: list[str], refused: int, unknown: int) -> None:
-    """Refuse the overrides of :func:`refused_overrides`, all of them in one message."""
+    """Refuse the overrides of :func:`refused_overrides`, all of them in one message: a
+    headline counting the overrides, and the problems when they are more (one value refused
+    by two nodes, or a --grid's two values), then one line per problem."""
     if len(problems) == 1:
         raise UsageError(problems[0])
     if problems:
         listed = "".join(f"\n  - {problem}" for problem in problems)
+        lines = f" ({len(problems)} problems)" if len(problems) != refused else ""
         if refused == 1:
-            raise UsageError(f"1 override is refused:{listed}")
+            raise UsageError(f"1 override is refused{lines}:{listed}")
         what = "name nothing in the pipeline" if unknown == refused else "are refused"
-        raise UsageError(f"{refused} overrides {what}:{listed}")
+        raise UsageError(f"{refused} overrides {what}{lines}:{listed}")
 
 
 def output_folder(text: str | None) -> Path | None:

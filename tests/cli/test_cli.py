@@ -443,6 +443,42 @@ def test_overrides_naming_nothing_and_values_refused_are_named_at_once(capsys, t
     assert not (tmp_path / "out").exists()
 
 
+GAUSS_AND_MEDIAN = """version: 1
+name: two
+inputs:
+  image: {type: Image, default: "sample:camera"}
+params:
+  s: 1.0
+nodes:
+  gray: {op: colour.to_gray, in: {image: image}}
+  blur: {op: filters.gaussian, in: {image: gray}, params: {sigma: "${params.s}"}}
+  med: {op: filters.median, in: {image: gray}, params: {size: "${params.s}"}}
+outputs: {b: blur, m: med}
+"""
+
+
+@pytest.mark.parametrize(
+    ("args", "headline", "lines"),
+    [
+        (["-s", "params.s=-1"], "1 override is refused (2 problems):", 2),
+        (["--grid", "blur.sigma=-1,-2"], "1 override is refused (2 problems):", 2),
+        (["-s", "params.s=-1", "-s", "gray.x=1"], "2 overrides are refused (3 problems):", 3),
+        (["-s", "blur.sigma=-1", "-s", "med.size=0"], "2 overrides are refused:", 2),
+    ],
+)
+def test_the_headline_counts_the_overrides_and_the_problems_listed(
+    capsys, tmp_path, args, headline, lines
+):
+    """One value two nodes refuse (params.s is blur.sigma and med.size), or a --grid's two
+    refused values: the headline said '1 override is refused:' above two lines."""
+    pipeline = tmp_path / "two.yaml"
+    pipeline.write_text(GAUSS_AND_MEDIAN)
+    command = "sweep" if args[0] == "--grid" else "run"
+    status, _, err = cli(capsys, command, pipeline, "-d", tmp_path / "out", "--no-cache", *args)
+    assert status == 2 and f"error: {headline}\n" in err, err
+    assert err.count("\n  - ") == lines, err
+
+
 def test_a_refused_value_inside_a_parameter_is_named_with_the_others(capsys, tmp_path):
     coins = PIPELINES / "coins.yaml"
     args = ["-s", "coins.ranges={area: [400]}", "-s", "disk.size=4x"]
