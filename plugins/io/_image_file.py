@@ -238,16 +238,16 @@ def _read_with_imageio(file: Path, image: PILImageType | None) -> np.ndarray:
 
 
 def _what_is_wrong(file: Path, error: Exception) -> str:
-    """Why a file is not a readable image, in words where they are known (empty,
-    truncated, a format nothing installed reads), or else the error's type."""
+    """Why a file is not a readable image: in words where known, else the error's type."""
+    from ._tiff_cut import tiff_data_cut  # (a TIFF cut in strips or tiles of any codec)
+
     with contextlib.suppress(OSError):
         size = file.stat().st_size
         if size == 0:
             return "the file is empty"
-        cut = _truncated_header(file)
-        if cut:
+        if cut := _truncated_header(file):
             return f"the file is truncated: {cut}"
-        if str(error).startswith(_TRUNCATED):
+        if str(error).startswith(_TRUNCATED) or tiff_data_cut(file, size):
             return f"the file is truncated: its {size:,} bytes end before the image does"
     if str(error).startswith(_NO_READER):
         return "neither Pillow nor imageio knows its format: save it as PNG, JPEG or TIFF"

@@ -221,6 +221,34 @@ def test_a_tiff_cut_in_its_pixels_says_it_is_truncated(tmp_path):
         read_array(str(tmp_path / "cut.tif"))
 
 
+@pytest.mark.parametrize(
+    "layout",
+    [
+        {"compression": "zlib"},
+        {"compression": "zlib", "rowsperstrip": 8, "predictor": True},
+        {"tile": (32, 32)},
+        {"tile": (32, 32), "compression": "zlib"},
+    ],
+    ids=["zlib", "zlib-strips", "tiled", "tiled-zlib"],
+)
+def test_a_tiff_cut_in_compressed_strips_or_tiles_says_it_is_truncated(tmp_path, layout):
+    """Cut inside zlib-compressed strips it said '(error)' (zlib's), inside tiles
+    '(TiffFileError)': the file's strip and tile offsets say it was cut, whatever the codec."""
+    import tifffile
+
+    pixels = np.random.default_rng(4).integers(0, 256, (96, 96), dtype=np.uint8)
+    tifffile.imwrite(tmp_path / "whole.tif", pixels, **layout)
+    with tifffile.TiffFile(tmp_path / "whole.tif") as tiff:
+        first = tiff.pages[0].dataoffsets[0]  # the tags lie before the pixels: kept whole
+    whole = (tmp_path / "whole.tif").read_bytes()
+    kept = (first + len(whole)) // 2
+    (tmp_path / "cut.tif").write_bytes(whole[:kept])
+    reason = rf"\(the file is truncated: its {kept:,} bytes end before the image does\)$"
+    with pytest.raises(ValueError, match=reason):
+        read_array(str(tmp_path / "cut.tif"))
+    assert read_array(str(tmp_path / "whole.tif")).shape == (96, 96)  # whole, it reads
+
+
 HEADERS = [".png", ".jpg", ".bmp", ".gif", ".tif", *([".webp"] if features.check("webp") else [])]
 
 
