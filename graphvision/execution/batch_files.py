@@ -10,6 +10,7 @@ import io
 import os
 import stat
 import unicodedata
+import warnings
 from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -98,18 +99,21 @@ def batch_files(pattern: str, exclude: Path | None = None) -> tuple[list[Path], 
     ``exclude`` is the batch's output folder, when it lies inside the searched
     folders: a batch never reads its own outputs, and the caller says so when
     that leaves nothing. A file reached by several paths (a folder symlink, a
-    link back up the tree) is taken once, by its shortest path. A match that
-    cannot be read as a file (a dangling or looping symbolic link, a pipe, and a
-    folder when the pattern's last part names a suffix, as ``*.png`` does) is
-    kept, for the batch to list it as failed with :func:`unreadable_reason`;
-    folders matched by a pattern that names no suffix (``photos/*``) are the
-    folders searched.
+    link back up the tree) is taken once, by its shortest path (the first in
+    name order among the shortest), so that it runs once and has one folder; a
+    warning names the path kept and those skipped (one line for the batch). A
+    match that cannot be read as a file (a dangling or looping symbolic link, a
+    pipe, and a folder when the pattern's last part names a suffix, as ``*.png``
+    does) is kept, for the batch to list it as failed with
+    :func:`unreadable_reason`; folders matched by a pattern that names no suffix
+    (``photos/*``) are the folders searched.
     """
     skipped = exclude.resolve() if exclude is not None else None
     folders_are_matches = "." in Path(pattern).name
-    found: dict[Path, Path] = {}
-    left_out: dict[Path, Path] = {}
-    for path in sorted(map(Path, glob.glob(pattern, recursive=True)), key=lambda p: len(p.parts)):
+    found: dict[Path, list[Path]] = {}
+    left_out: dict[Path, list[Path]] = {}
+    matches = sorted(map(Path, glob.glob(pattern, recursive=True)), key=lambda p: (len(p.parts), p))
+    for path in matches:
         if path.is_dir() and not folders_are_matches:
             continue
         try:
@@ -117,8 +121,26 @@ def batch_files(pattern: str, exclude: Path | None = None) -> tuple[list[Path], 
         except (OSError, RuntimeError):  # a symbolic link loop
             real = path.absolute()
         chosen = left_out if skipped is not None and skipped in real.parents else found
-        chosen.setdefault(real, path)
-    return sorted(found.values()), sorted(left_out.values())
+        chosen.setdefault(real, []).append(path)
+    _warn_of_paths_taken_once(pattern, [paths for paths in found.values() if len(paths) > 1])
+    return sorted(paths[0] for paths in found.values()), sorted(p[0] for p in left_out.values())
+
+
+def _warn_of_paths_taken_once(pattern: str, several: list[list[Path]]) -> None:
+    """One warning for the files ``pattern`` reaches by several paths (each list: the
+    path kept, then those skipped), naming the first such file's paths (three of them at
+    most: a link to its own folder reaches a file by dozens)."""
+    if several:
+        kept, *others = min(several)
+        named = ", ".join(map(str, others[:3])) + (
+            f" and {len(others) - 3} more paths" if len(others) > 3 else ""
+        )
+        more = f"; {len(several) - 1} more file(s) likewise" if len(several) > 1 else ""
+        warnings.warn(
+            f"batch '{pattern}': {kept} is also reached as {named} (symbolic links): "
+            f"taken once, as {kept}{more}",
+            stacklevel=4,
+        )
 
 
 def unreadable_reason(path: Path) -> str:

@@ -562,8 +562,37 @@ def test_a_file_reached_through_folder_links_is_taken_once(tmp_path):
     photo(photos / "sub" / "b.png", 20)
     (photos / "sub" / "up").symlink_to(photos, target_is_directory=True)  # a loop
     (tmp_path / "alias").symlink_to(photos, target_is_directory=True)
-    found = batch_files(f"{photos}/**/*.png")[0]
+    with pytest.warns(UserWarning) as warned:
+        found = batch_files(f"{photos}/**/*.png")[0]
     assert found == [photos / "a.png", photos / "sub" / "b.png"]
+    (said,) = [str(w.message) for w in warned]  # one line for the batch, not one a file
+    up = photos / "sub" / "up"
+    assert said.startswith(
+        f"batch '{photos}/**/*.png': {photos / 'a.png'} is also reached as {up / 'a.png'}, "
+        f"{up / 'sub' / 'up' / 'a.png'}, {up / 'sub' / 'up' / 'sub' / 'up' / 'a.png'} and "
+    )  # the three shortest skipped paths, then how many more (the loop reaches it by dozens)
+    assert said.endswith(
+        f"(symbolic links): taken once, as {photos / 'a.png'}; 1 more file(s) likewise"
+    )
+
+
+def test_a_file_reached_through_a_link_is_named_with_the_path_kept(capsys, tmp_path):
+    """Taken once without a word, a user whose photos/best.png links to a.png saw one
+    folder for two names; now a warning names both (and a batch with no link says nothing)."""
+    photos = tmp_path / "photos"
+    photo(photos / "a.png", 10)
+    photo(photos / "c.png", 30)
+    args = ["run", str(DEMO), "--no-cache", "-o", PSNR, "--batch", f"image={photos}/*.png"]
+    assert main([*args, "-d", str(tmp_path / "out1")]) == 0
+    assert "reached as" not in capsys.readouterr().err
+    (photos / "best.png").symlink_to("a.png")
+    assert main([*args, "-d", str(tmp_path / "out2")]) == 0
+    err = capsys.readouterr().err
+    assert (
+        f"warning: batch '{photos}/*.png': {photos / 'a.png'} is also reached as "
+        f"{photos / 'best.png'} (symbolic links): taken once, as {photos / 'a.png'}\n"
+    ) in err
+    assert sorted(p.name for p in (tmp_path / "out2").iterdir() if p.is_dir()) == ["a", "c"]
 
 
 def test_no_item_folder_takes_the_name_of_a_file_the_batch_writes_beside_them(tmp_path):
