@@ -239,12 +239,12 @@ def _read_with_imageio(file: Path, image: PILImageType | None) -> np.ndarray:
 
 def _what_is_wrong(file: Path, error: Exception) -> str:
     """Why a file is not a readable image: in words where known, else the error's type."""
-    from ._tiff_cut import tiff_data_cut  # (a TIFF cut in strips or tiles of any codec)
+    from ._unreadable import size_zero_reason, tiff_data_cut
 
     with contextlib.suppress(OSError):
         size = file.stat().st_size
-        if size == 0:
-            return "the file is empty"
+        if size == 0:  # (empty, or a file of /proc: bytes, and a size of 0)
+            return size_zero_reason(file)
         if cut := _truncated_header(file):
             return f"the file is truncated: {cut}"
         if str(error).startswith(_TRUNCATED) or tiff_data_cut(file, size):

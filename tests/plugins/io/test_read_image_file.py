@@ -249,6 +249,16 @@ def test_a_tiff_cut_in_compressed_strips_or_tiles_says_it_is_truncated(tmp_path,
     assert read_array(str(tmp_path / "whole.tif")).shape == (96, 96)  # whole, it reads
 
 
+@pytest.mark.skipif(not Path("/proc/self/status").is_file(), reason="needs Linux's /proc")
+@pytest.mark.parametrize("name", ["status.png", "status.tif", "status"])
+def test_a_file_whose_size_reads_0_but_holds_bytes_is_not_called_empty(tmp_path, name):
+    """A link to /proc/self/status (size 0, text inside) was 'the file is empty'."""
+    (tmp_path / name).symlink_to("/proc/self/status")
+    reason = r"\(its size reads 0 but it holds bytes, which are no image Pillow knows: .*\)$"
+    with pytest.raises(ValueError, match=rf"{name} is not a readable image {reason}"):
+        read_array(str(tmp_path / name))
+
+
 HEADERS = [".png", ".jpg", ".bmp", ".gif", ".tif", *([".webp"] if features.check("webp") else [])]
 
 
