@@ -38,7 +38,7 @@ import dataclasses
 import json
 from operator import attrgetter
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, BinaryIO, ClassVar
 
 import numpy as np
 
@@ -212,7 +212,7 @@ class PortType:
         arrays, meta = cls.encode(value)
         if list(arrays) == ["data"] and not meta:
             path = stem.with_suffix(".npy")
-            np.save(path, arrays["data"], allow_pickle=False)
+            _save_npy(path, arrays["data"])
             return [path]
         path = stem.with_suffix(".npz")
         np.savez(path, **arrays)  # type: ignore[arg-type]  # numpy's stub types **kwds as bool
@@ -361,3 +361,34 @@ class RecordPort(PortType):
     @classmethod
     def decode(cls, arrays: Arrays, meta: Meta) -> Any:
         return cls.value_class(**arrays, **meta)
+
+
+class _Writes:
+    """A file's ``write`` alone: ``np.save`` writes through it with Python's I/O, whose
+    errors carry their cause, where it writes a real file with C's ``fwrite``, whose
+    short count it reports as ``OSError('116352 requested and 39904 written')``."""
+
+    def __init__(self, handle: BinaryIO) -> None:
+        self.write = handle.write
+
+
+def _save_npy(path: Path, array: np.ndarray) -> None:
+    """``np.save(path, array)``, or the error that stopped it, naming ``path`` and its cause
+    (``No space left on device``, ``File too large``): a write C cut short is made again
+    through Python's I/O, which says why (or, the cause gone, writes the file whole).
+
+    Raises
+    ------
+    OSError
+        With ``errno``, ``strerror`` and ``filename`` (``path``) set.
+    """
+    try:
+        np.save(path, array, allow_pickle=False)
+    except OSError as error:
+        if error.errno is not None:
+            raise OSError(error.errno, error.strerror, str(path)) from None
+        try:
+            with path.open("wb") as handle:
+                np.lib.format.write_array(_Writes(handle), array, allow_pickle=False)
+        except OSError as again:
+            raise OSError(again.errno, again.strerror or str(again), str(path)) from None
