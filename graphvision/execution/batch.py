@@ -180,7 +180,6 @@ def run_batch(
     _check_batch_arguments(output_dir, inputs, input)
     registry = _checked_pipeline(graph, registry, inputs, input, outputs, overrides)
     out_dir = Path(output_dir)
-    refuse_folder_not_utf8(out_dir)
     paths, root = _batch_paths(files, out_dir, input)
     refuse_names_not_utf8(paths, input)
     folders = output_folders(paths, root, out_dir)
@@ -214,11 +213,13 @@ def run_batch(
 
 
 def _check_batch_arguments(output_dir: object, inputs: dict[str, Any], input: str) -> None:
-    """Refuse an output folder that is no path, and the batch's input given as well."""
+    """Refuse an output folder that is no path or whose name is not UTF-8, and the batch's
+    input given as well."""
     if not isinstance(output_dir, (str, os.PathLike)):
         raise TypeError(f"output_dir must be a folder's path, got {output_dir!r}")
     if not str(output_dir).strip():  # Path('') would be this folder
         raise ValueError("output_dir is an empty path: give a folder ('.' for this one)")
+    refuse_folder_not_utf8(Path(output_dir))
     if inputs and input in inputs:
         raise InputError(
             f"input '{input}' is given twice: once per file by the batch and once as"
