@@ -193,7 +193,8 @@ def registry_for(
 ) -> Registry:
     """The plugins: ``--plugins``, and with a pipeline only the installed families it uses
     (when the plugin index says which those are), else all of them; and the pipeline's
-    own ``plugins:`` when it is to run (announced), never when it is only read."""
+    own ``plugins:`` when it is to run or be validated (announced), never when it is only
+    drawn or described."""
     from graphvision.nodes.plugins import Needs, discover, discover_for
 
     for path in args.plugins:
@@ -322,7 +323,7 @@ def note_unread_plugins(graph: Graph, passed: Sequence[str | Path] = ()) -> list
     if unread:
         print(
             f"note: {graph.source} names local plugins {', '.join(unread)}; they are "
-            "not imported to check or draw it (nothing in a pipeline runs until `run`): "
+            "not imported to draw it (its code runs only with `run` or `validate`): "
             "pass --plugins PATH to load and check their ops",
             file=sys.stderr,
         )

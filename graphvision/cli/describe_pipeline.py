@@ -2,9 +2,10 @@
 
 Its inputs (type, default), its parameters (default, where each is used and
 the bounds those node parameters accept), its outputs (type, source) and the
-families of its nodes. The pipeline is read as ``validate`` reads it: the
+families of its nodes. The pipeline is read as ``graph`` reads it: the
 installed families it uses are loaded (their nodes' types and bounds), its own
-``plugins:`` are listed, never imported (reading a pipeline runs none of its code).
+``plugins:`` are listed, never imported (describing a pipeline runs none of its
+code; ``validate``, which checks what ``run`` would run, imports them).
 """
 
 from __future__ import annotations
