@@ -65,6 +65,8 @@ def _summarise(error: BaseException, plugin: Path | None = None) -> str:
         mine = [f for f in frames if Path(f.filename).resolve().is_relative_to(plugin.resolve())]
         frames = mine or frames
     where = f" ({frames[-1].filename}:{frames[-1].lineno})" if frames else ""
+    if isinstance(error, SystemExit):
+        return f"it called sys.exit({error.code!r}) while being imported{where}"
     return f"{type(error).__name__}: {error}{where}"
 
 
@@ -116,7 +118,7 @@ def _load_entry_point(registry: Registry, entry: EntryPoint, indexed: bool) -> N
         registry.add_plugin(module, entry.name, entry.value, params_checked=indexed)
         if entry.dist is not None:
             note_distribution(module.__name__.partition(".")[0], _distribution_name(entry))
-    except Exception as error:
+    except (Exception, SystemExit) as error:  # sys.exit() at import ended the command
         registry.record_failure(entry.name, entry.value, _summarise(error))
 
 
@@ -226,7 +228,7 @@ def load_path(registry: Registry, path: str | Path) -> None:
         name = str(target)
         try:
             registry.add_plugin(import_file(target), name, name)
-        except Exception as error:
+        except (Exception, SystemExit) as error:  # sys.exit() at import ended the command
             registry.record_failure(name, name, _summarise(error, path))
 
 

@@ -83,6 +83,7 @@ def test_validate_loads_a_pipelines_plugins_as_run_does(capsys, tmp_path):
         ("x = 1\ndef f(:\n    pass\n", 2, "SyntaxError: invalid syntax"),
         ("x = 1\nimport graphvision_no_such_module\n", 2, "ModuleNotFoundError: No module"),
         ("import numpy\n\nnumpy.zeros(-1)\n", 3, "ValueError: negative dimensions"),
+        ("import sys\nsys.exit(3)\n", 2, "it called sys.exit(3) while being imported"),
     ],
 )
 @pytest.mark.parametrize("command", ["validate", "run"])
@@ -90,7 +91,8 @@ def test_a_plugin_that_fails_to_load_is_named_with_its_file_and_line(
     capsys, tmp_path, code, line, error, command
 ):
     """The place is the plugin's line (a syntax error was placed in importlib, a library's
-    error in the library), and the op it should have given says the plugin failed."""
+    error in the library), and the op it should have given says the plugin failed; a plugin
+    calling sys.exit() at import ended the command with its status and not a word."""
     pipeline, _marker = setup(tmp_path, "evil.py")
     plugin = pipeline.parent / "evil.py"
     plugin.write_text(code)
