@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from graphvision.errors import InputError, OutputFolderError
+from graphvision.execution.folder_glob import glob_once
 from graphvision.execution.folders import RunPage
 from graphvision.execution.manifest import FolderFiles, check_folder_files
 from graphvision.execution.owned import check_output_folder
@@ -98,9 +99,10 @@ def batch_files(pattern: str, exclude: Path | None = None) -> tuple[list[Path], 
 
     ``exclude`` is the batch's output folder, when it lies inside the searched
     folders: a batch never reads its own outputs, and the caller says so when
-    that leaves nothing. A file reached by several paths (a folder symlink, a
-    link back up the tree) is taken once, by its shortest path (the first in
-    name order among the shortest), so that it runs once and has one folder; a
+    that leaves nothing. ``**`` searches each real folder once (:func:`.glob_once`).
+    A file reached by several paths (a folder symlink, a link back up the tree) is
+    taken once, by its shortest path (the first in name order among the shortest),
+    so that it runs once and has one folder; a
     warning names the path kept and those skipped (one line for the batch). A
     match that cannot be read as a file (a dangling or looping symbolic link, a
     pipe, and a folder when the pattern's last part names a suffix, as ``*.png``
@@ -112,7 +114,7 @@ def batch_files(pattern: str, exclude: Path | None = None) -> tuple[list[Path], 
     folders_are_matches = "." in Path(pattern).name
     found: dict[Path, list[Path]] = {}
     left_out: dict[Path, list[Path]] = {}
-    matches = sorted(map(Path, glob.glob(pattern, recursive=True)), key=lambda p: (len(p.parts), p))
+    matches = sorted(map(Path, glob_once(pattern)), key=lambda p: (len(p.parts), p))
     for path in matches:
         if path.is_dir() and not folders_are_matches:
             continue
@@ -139,7 +141,7 @@ def _warn_of_paths_taken_once(pattern: str, several: list[list[Path]]) -> None:
         warnings.warn(
             f"batch '{pattern}': {kept} is also reached as {named} (symbolic links): "
             f"taken once, as {kept}{more}",
-            stacklevel=4,
+            stacklevel=5,  # run_batch's caller: _batch_paths, run_batch, the user's call
         )
 
 

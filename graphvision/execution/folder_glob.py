@@ -1,0 +1,95 @@
+"""A batch's glob, ``**`` searching each real folder once (:func:`glob_once`).
+
+Python's ``glob.glob(pattern, recursive=True)`` follows symbolic links to folders
+wherever ``**`` descends, and searches a folder again for every path that reaches it.
+A link back up the tree (``photos/sub/up -> ..``) is searched until the paths grow too
+long for the system (about 40 links deep), and with a second link aliasing a folder
+(``photos/sub2 -> sub``) the paths multiply at each level: a batch over such a folder
+listed hundreds of thousands of paths and gigabytes of memory before it ran a file.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+from collections.abc import Iterator
+
+__all__ = ["glob_once"]
+
+RECURSIVE = "**"
+
+
+def glob_once(pattern: str) -> list[str]:
+    """The paths ``pattern`` matches, as ``glob.glob(pattern, recursive=True)`` gives them,
+    except that ``**`` searches each real folder once: by the shortest path that reaches it
+    (the first in name order among the shortest), breadth first. A folder reached again
+    through a link has the files directly in it matched (so that the caller can name the
+    paths a file is also reached by), and is not searched below.
+
+    Without ``**`` a pattern descends no folder, and ``glob.glob`` answers it.
+    """
+    parts = pattern.split(os.sep)
+    if RECURSIVE not in parts:
+        return glob.glob(pattern, recursive=True)
+    at = parts.index(RECURSIVE)
+    prefix, rest = os.sep.join(parts[:at]), os.sep.join(parts[at + 1 :])
+    tops = glob.glob(prefix) if prefix else ([os.sep] if pattern.startswith(os.sep) else [""])
+    tops = sorted(t for t in tops if os.path.isdir(t or "."))
+    found: list[str] = []
+    for searched, again in _folders_once(tops):
+        if rest:
+            found.extend(_matches(searched, rest, below=not again))
+        else:  # a pattern ending in **: the folders and their files, as glob gives them
+            itself = os.path.join(searched, "") if searched in tops else searched
+            inside = glob.glob(os.path.join(glob.escape(searched), "*"))
+            found.extend(([itself] if itself else []) + [p for p in inside if not os.path.isdir(p)])
+    return found
+
+
+def _matches(folder: str, rest: str, *, below: bool) -> list[str]:
+    """What ``rest`` matches in ``folder``; a further ``**`` in it is searched once below
+    ``folder`` too (``below``), or, in a folder searched before, stands for no folder."""
+    base = glob.escape(folder)
+    if RECURSIVE in rest.split(os.sep) and not below:
+        rest = os.sep.join(part for part in rest.split(os.sep) if part != RECURSIVE)
+    return glob_once(os.path.join(base, rest)) if below else glob.glob(os.path.join(base, rest))
+
+
+def _folders_once(tops: list[str]) -> Iterator[tuple[str, bool]]:
+    """Each folder below ``tops`` (themselves included) that is not hidden, breadth first
+    in name order, with whether its real folder was searched before (through another
+    path): such a folder is given once, and not gone below."""
+    seen: set[tuple[int, int]] = set()
+    level = tops
+    while level:
+        deeper: list[str] = []
+        for folder in level:
+            try:
+                status = os.stat(folder or ".")
+            except OSError:  # a link that loops or leads nowhere: nothing to search
+                continue
+            key = (status.st_dev, status.st_ino)
+            again = key in seen
+            seen.add(key)
+            yield folder, again
+            if not again:
+                deeper.extend(_subfolders(folder))
+        level = deeper
+
+
+def _subfolders(folder: str) -> list[str]:
+    """The folders (or links to folders) in ``folder`` that ``**`` descends: not hidden,
+    in name order."""
+    try:
+        with os.scandir(folder or ".") as entries:
+            names = sorted(e.name for e in entries if not e.name.startswith(".") and _is_dir(e))
+    except OSError:
+        return []
+    return [os.path.join(folder, name) for name in names]
+
+
+def _is_dir(entry: os.DirEntry[str]) -> bool:
+    try:
+        return entry.is_dir()
+    except OSError:
+        return False

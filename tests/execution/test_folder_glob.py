@@ -1,0 +1,45 @@
+"""The batch's glob: on a tree without links, exactly Python's recursive glob; with links,
+each real folder searched once."""
+
+from __future__ import annotations
+
+import glob
+import os
+
+import pytest
+
+from graphvision.execution.folder_glob import glob_once
+
+PATTERNS = [
+    "ph/**/*.png", "ph/**", "**", "**/*.png", "ph/*/**/*.png", "ph/**/deep/*.png",
+    "ph/**/**/*.png", "ph/*.png", "p*/**/b.png", "ph/**/sub", "ph/**/[bc].png",
+]  # fmt: skip
+
+
+@pytest.fixture
+def tree(tmp_path, monkeypatch):
+    for name in ["ph/a.png", "ph/sub/b.png", "ph/sub/deep/c.png", "ph/.hid.png", "ph/.h/d.png"]:
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_bytes(b"x")
+    (tmp_path / "ph" / "[odd]").mkdir()
+    (tmp_path / "ph" / "[odd]" / "e.png").write_bytes(b"x")
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+@pytest.mark.parametrize("pattern", PATTERNS)
+def test_without_links_it_matches_what_pythons_recursive_glob_matches(tree, pattern):
+    assert sorted(glob_once(pattern)) == sorted(glob.glob(pattern, recursive=True))
+    absolute = os.path.join(str(tree), pattern)
+    assert sorted(glob_once(absolute)) == sorted(glob.glob(absolute, recursive=True))
+
+
+def test_a_folder_reached_again_is_not_searched_below(tree):
+    os.symlink("..", "ph/sub/up")
+    os.symlink("sub", "ph/sub2")
+    found = sorted(glob_once("ph/**/*.png"))
+    assert found == [
+        "ph/[odd]/e.png", "ph/a.png", "ph/sub/b.png", "ph/sub/deep/c.png", "ph/sub/up/a.png",
+        "ph/sub2/b.png",
+    ]  # fmt: skip
+    assert len(glob.glob("ph/sub/up/sub/up/*.png")) == 1  # Python's glob would go on down
