@@ -249,6 +249,8 @@ def load_run_arguments(
     node_limit_options(args)
     environment_limits()  # a malformed variable refused once, before the pipeline is read
     order = backend_order(args)  # an empty entry is refused before the file is read
+    inputs = dict(named_pairs(args.input, "--input"))
+    refuse_paths_not_utf8(args.pipeline, inputs)
     graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
     graph = graph.with_backends(order)  # --backend: the run's order
     registry = registry_for(args, graph)
@@ -263,7 +265,24 @@ def load_run_arguments(
         swept = refused_overrides(graph, registry, grid[0], "--grid", True, grid[1])
         problems, refused, unknown = problems + swept[0], refused + swept[1], unknown + swept[2]
     raise_refused(problems, refused, unknown)
-    return graph, registry, overrides, dict(named_pairs(args.input, "--input"))
+    return graph, registry, overrides, inputs
+
+
+def refuse_paths_not_utf8(pipeline: str, inputs: dict[str, str]) -> None:
+    """A usage error for the pipeline file or an ``--input`` whose path is not UTF-8 (in
+    itself or through the working folder): record.json and the pages name them in UTF-8,
+    and a run that computed everything could not write them."""
+    from graphvision.execution.batch_files import not_utf8
+
+    given = [("pipeline file", pipeline)] + [(f"--input {k}", v) for k, v in inputs.items()]
+    for what, text in given:
+        path = Path(text)
+        shown = not_utf8(path) or (not_utf8(path.absolute()) if path.exists() else None)
+        if shown is not None:
+            raise UsageError(
+                f"{what} {shown}: its path is not UTF-8; record.json and the pages name it "
+                "in UTF-8: rename it or its folder"
+            )
 
 
 def backend_order(args: argparse.Namespace) -> list[str] | None:

@@ -33,6 +33,7 @@ __all__ = [
     "batch_files",
     "checked_folders",
     "common_parts",
+    "not_utf8",
     "output_folders",
     "pattern_root",
     "previous_folders",
@@ -365,7 +366,7 @@ def _folded(name: str) -> str:
     return unicodedata.normalize("NFC", name).casefold()
 
 
-def _not_utf8(path: Path) -> str | None:
+def not_utf8(path: Path) -> str | None:
     """``path`` shown with its bytes that are not UTF-8 escaped (``out\\xff``), or None
     when its name is UTF-8 (bytes that are not are held by Python as lone surrogates)."""
     try:
@@ -379,7 +380,7 @@ def refuse_names_not_utf8(paths: list[Path], input: str) -> None:
     """Refuse, before anything runs, files whose names are not UTF-8: batch.csv,
     record.json and the pages, which name each file, are UTF-8, and the summary of a batch
     that ran them could not be written."""
-    bad = [shown for shown in map(_not_utf8, paths) if shown is not None]
+    bad = [shown for path in paths if (shown := not_utf8(path.absolute())) is not None]
     if bad:
         raise InputError(
             f"batch input '{input}': {len(bad)} file name(s) are not UTF-8 (such as {bad[0]}): "
@@ -390,10 +391,10 @@ def refuse_names_not_utf8(paths: list[Path], input: str) -> None:
 def refuse_folder_not_utf8(folder: Path, option: str = "output folder") -> None:
     """Refuse, before anything runs, an output folder whose name is not UTF-8, for the
     reason of :func:`refuse_names_not_utf8` (its files could not name it: a batch ended
-    with an internal error on every file)."""
-    shown = _not_utf8(folder)
+    with an internal error on every file), nor one in a folder whose path is not."""
+    shown = not_utf8(folder) or not_utf8(folder.absolute())
     if shown is not None:
         raise OutputFolderError(
-            f"{option} {shown}: its name is not UTF-8; record.json, batch.csv and the "
-            "pages name it in UTF-8: choose another name"
+            f"{option} {shown}: its {'name' if not_utf8(folder) else 'path'} is not UTF-8; "
+            "record.json, batch.csv and the pages name it in UTF-8: choose another folder"
         )

@@ -1,0 +1,68 @@
+"""A run whose files would name a path that is not UTF-8 is refused before anything runs:
+record.json, batch.csv and the pages are UTF-8. Through the working folder too (found by
+the tryer: a run from a folder named cwd\\xff computed everything, then could not write)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from graphvision.cli import main
+
+from ..conftest import PIPELINES
+
+DEMO = PIPELINES / "denoise.yaml"
+
+
+@pytest.fixture
+def latin_folder(tmp_path, monkeypatch):
+    """The working folder ``cwd\\xff`` (not UTF-8), holding the demo pipeline and a photo."""
+    folder = Path(os.fsdecode(bytes(tmp_path) + b"/cwd\xff"))
+    (folder / "photos").mkdir(parents=True)
+    shutil.copy(DEMO, folder / "p.yaml")
+    iio.imwrite(folder / "photos" / "a.png", np.full((16, 16), 90, np.uint8))
+    monkeypatch.chdir(folder)
+    return folder
+
+
+@pytest.mark.parametrize(
+    ("args", "said"),
+    [
+        (["p.yaml", "-d", "out"], "pipeline file {cwd}/p.yaml: its path is not UTF-8"),
+        ([str(DEMO), "-d", "out"], "--output-dir out\\xff: its path is not UTF-8"),
+        (
+            [str(DEMO), "-d", "{tmp}/o", "-i", "image=photos/a.png"],
+            "--input image {cwd}/photos/a.png: its path is not UTF-8",
+        ),
+        (
+            [str(DEMO), "-d", "{tmp}/o", "--batch", "image=photos/*.png"],
+            "1 file name(s) are not UTF-8 (such as {cwd}/photos/a.png)",
+        ),
+    ],
+    ids=["pipeline", "output", "input", "batch"],
+)
+def test_a_path_not_utf8_through_the_working_folder_is_refused_up_front(
+    capsys, tmp_path, latin_folder, args, said
+):
+    cwd = os.fsencode(latin_folder).decode("utf-8", "backslashreplace")
+    given = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    before = sorted(os.listdir(latin_folder))
+    assert main(["run", *given, "--no-cache"]) == 2
+    err = capsys.readouterr().err
+    expected = said.format(cwd=cwd).replace("out\\xff", f"{cwd}/out")
+    assert err.startswith("error: ") and expected in err, err
+    assert "Traceback" not in err and "internal error" not in err
+    assert sorted(os.listdir(latin_folder)) == before  # nothing made
+    assert not (tmp_path / "o").exists()
+
+
+def test_an_input_named_not_utf8_is_refused_though_missing(capsys, tmp_path):
+    name = os.fsdecode(b"caf\xe9.png")
+    args = ["run", str(DEMO), "-d", str(tmp_path / "o"), "-i", f"image={name}", "--no-cache"]
+    assert main(args) == 2
+    assert "error: --input image caf\\xe9.png: its path is not UTF-8" in capsys.readouterr().err
