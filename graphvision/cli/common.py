@@ -258,11 +258,12 @@ def load_run_arguments(
     overrides, malformed = read_each(
         named_pairs(args.set, "--set"), lambda key, text: yaml_value(text, f"--set {key}={text}")
     )
+    swept_keys = grid[0] if grid is not None else {}
     problems, refused, unknown = refused_overrides(
-        graph, registry, overrides, "--set", malformed=malformed
+        graph, registry, overrides, "--set", malformed=malformed, also_overridden=swept_keys
     )
     if grid is not None:
-        swept = refused_overrides(graph, registry, grid[0], "--grid", True, grid[1])
+        swept = refused_overrides(graph, registry, grid[0], "--grid", True, grid[1], overrides)
         problems, refused, unknown = problems + swept[0], refused + swept[1], unknown + swept[2]
     raise_refused(problems, refused, unknown)
     return graph, registry, overrides, inputs

@@ -23,12 +23,16 @@ def refused_overrides(
     flag: str,
     swept: bool = False,
     malformed: Sequence[str] = (),
+    also_overridden: Iterable[str] = (),
 ) -> tuple[list[str], int, int]:
     """Every override of a node or parameter that does not exist and every value its
     parameter refuses, one line each after the ``malformed`` ones (values that could not be
     read), naming the command line; with how many overrides they concern, and how many of
-    those name nothing. ``swept``: each override holds a list of values (``--grid``)."""
+    those name nothing. ``swept``: each override holds a list of values (``--grid``).
+    ``also_overridden``: the node parameters the command line's other flag sets (a sweep's
+    ``-s`` and ``--grid``), which a pipeline param's value no longer reaches."""
     problems, refused, unknown = list(malformed), len(malformed), 0
+    overridden = {*overrides, *also_overridden}
     for key, value in overrides.items():
         if problem := _unknown_target(graph, registry, key):
             problems.append(f"{flag} {key}={value!r}: {problem}")
@@ -37,7 +41,7 @@ def refused_overrides(
         found = [
             f"{flag} {key}={each!r}: {said}"
             for each in (value if swept else [value])
-            for said in _refused(graph, registry, key, each, overrides)
+            for said in _refused(graph, registry, key, each, overridden)
         ]
         problems += found
         refused += bool(found)

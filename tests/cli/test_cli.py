@@ -548,3 +548,23 @@ def test_a_pipeline_param_two_nodes_refuse_alike_is_one_line_and_one_override(ca
     assert "of morphology.footprint: Input should be a valid integer" in err
     assert "(as disk.size, disk2.size)" in err
     assert err.count("params.size=") == 1
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["-s", "binary.window=31", "--grid", "params.window=abc,xyz"],
+        ["--grid", "binary.window=31,41", "-s", "params.window=abc"],
+    ],
+    ids=["set-node-grid-param", "grid-node-set-param"],
+)
+def test_a_sweeps_pipeline_param_is_not_checked_where_its_other_flag_sets_the_node(
+    capsys, tmp_path, args
+):
+    """binary.window is "${params.window}": with binary.window set by the other flag, the
+    param's value reaches no node, as `run -s binary.window=31 -s params.window=abc` accepts;
+    a sweep refused it (found by the tryer)."""
+    coins = PIPELINES / "coins.yaml"
+    status, _, err = cli(capsys, "sweep", coins, "-d", tmp_path / "out", "--no-cache", *args)
+    assert status == 0, err
+    assert "refused" not in err
