@@ -17,6 +17,7 @@ produce this same object.
 from __future__ import annotations
 
 import copy
+import os
 import re
 import sys
 from collections.abc import Sequence
@@ -310,7 +311,7 @@ class Graph:
         return 0
 
 
-_ENGINE = str(Path(__file__).resolve().parent.parent)
+_ENGINE = os.path.join(Path(__file__).resolve().parent.parent, "")  # its files, not a sibling's
 
 
 def _caller() -> tuple[str, int]:

@@ -66,3 +66,15 @@ def test_a_graph_built_in_python_places_its_problems_at_its_calls():
     assert str(problem).startswith(
         f"nodes.blur.params.sigma at {__file__}:{line + 1} (added in Python): invalid value 0"
     )
+
+
+def test_a_script_in_a_folder_named_like_the_package_is_the_callers_place():
+    """graphvision_examples/script.py began with the package's folder name and was taken
+    for the engine's own: its problems had no place (found by the tryer)."""
+    from pathlib import Path
+
+    root = Path(gv.__file__).resolve().parent
+    script = str(root.parent / f"{root.name}_examples" / "script.py")
+    graph = gv.Graph("built")
+    exec(compile('graph.add("blur", "filters.gaussian")\n', script, "exec"), {"graph": graph})
+    assert graph.added_in_python["nodes.blur"] == (script, 1)
