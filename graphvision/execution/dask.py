@@ -312,14 +312,14 @@ class DaskExecutor:
             self.client.loop.add_callback(fetch)
         return future
 
-    def result(self, task: Any) -> Any:
+    def result(self, task: Any, running: str = "node") -> Any:
         """A finished Dask task's result, fetched from its worker straight when the workers are
         this process's ``LocalCluster``'s (:func:`~graphvision.execution.dask_fork.direct_gathers`).
         """
         try:
             return task.client.gather(task, direct=self._direct)
         except BaseException as error:
-            told = died_on_dask(error)
+            told = died_on_dask(error, running)
             if told is error:
                 raise
             raise told from None

@@ -123,7 +123,7 @@ class FileGroups:
         outcomes: list[Any] = []
         if task is not None:
             try:
-                outcomes, seconds = self.executor.result(task)
+                outcomes, seconds = self.executor.result(task, "file")
             except BaseException as failed:  # the whole task failed (its workers died...)
                 error = failed
             else:
@@ -166,7 +166,7 @@ class FileGroups:
 
         def landed(done: Any) -> None:
             try:
-                found = self.executor.result(done)[0][0]
+                found = self.executor.result(done, "file")[0][0]
             except BaseException as error:  # this file's worker died again: it is at fault
                 found = error
             if isinstance(found, BaseException):

@@ -49,14 +49,15 @@ def died(how: str, exitcode: int | None = None) -> WorkerDiedError:
     )
 
 
-def died_on_dask(error: BaseException) -> BaseException:
+def died_on_dask(error: BaseException, running: str = "node") -> BaseException:
     """``error`` as a node's failure says it: Dask's ``KilledWorker`` (the workers that ran a
     task all died while running it, ``allowed-failures + 1`` of them) becomes a
     :class:`WorkerDiedError` in the words of the ``processes`` executor's; any other error
-    is returned as it is.
+    is returned as it is. ``running``: what the task ran (``node``, or a batch's ``file``).
 
     Dask does not tell the client how its workers ended; each of graphvision's workers
-    prints it on its standard error (:mod:`graphvision.execution.crash_note`) before it ends.
+    prints it, and the node it ran, on its standard error
+    (:mod:`graphvision.execution.crash_note`) before it ends.
     """
     kind = type(error)
     if kind.__name__ != "KilledWorker" or not kind.__module__.startswith("distributed"):
@@ -64,8 +65,8 @@ def died_on_dask(error: BaseException) -> BaseException:
     runs = getattr(error, "allowed_failures", 0) + 1
     last = getattr(getattr(error, "last_worker", None), "address", "unknown")
     return WorkerDiedError(
-        f"the Dask worker running this node died each of the {runs} times it was run "
+        f"the Dask worker running this {running} died each of the {runs} times it was run "
         f"(killed, crashed in native code, or out of memory; Dask gives up on a task after "
         f"`distributed.scheduler.allowed-failures` deaths): each worker's standard error, or "
-        f"its log, says how it ended; the last ran at {last}"
+        f"its log, says how it ended and in which node; the last ran at {last}"
     )

@@ -174,7 +174,7 @@ def test_a_file_that_kills_every_worker_fails_alone_and_no_file_is_written_twice
     assert not list((tmp_path / "out").glob("*/history"))  # no folder written twice
     assert not (tmp_path / "out" / "06").exists()  # the file at fault has no folder
     error = batch.items[levels.index(10)].error  # said as the processes executor says it
-    assert error.startswith("WorkerDiedError: the Dask worker running this node died each of the 3")
+    assert error.startswith("WorkerDiedError: the Dask worker running this file died each of the 3")
 
 
 def test_a_node_that_kills_every_worker_in_a_run_is_said_to_have_killed_them(tmp_path):
