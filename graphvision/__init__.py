@@ -89,6 +89,7 @@ if TYPE_CHECKING:
     )
     from graphvision.values.budget import check_array_file, check_pixels, max_pixels
     from graphvision.values.dtype_policy import to_float_image
+    from graphvision.values.file_bytes import read_file_bytes
     from graphvision.values.geometry import (
         DescriptorsPort,
         HomographyPort,
@@ -263,6 +264,7 @@ __all__ = [
     "parse_pipeline",
     "pipeline_json_schema",
     "port_of",
+    "read_file_bytes",
     "rewrite_report",
     "run",
     "run_batch",

@@ -32,6 +32,7 @@ def test_all_is_unique_and_exported():
     [
         "graphvision.execution.scheduler",
         "graphvision.graph.order",
+        "graphvision.values.file_bytes",
         "graphvision_plugins.colour._intensity",
         "graphvision_plugins.filters._linear",
         "graphvision_plugins.metrics._quality",

@@ -32,6 +32,7 @@ from graphvision.execution.git_state import file_stamp, git_state, git_state_sta
 from graphvision.nodes.fingerprint import distributions_of
 from graphvision.nodes.registry import PluginStatus, Registry
 from graphvision.values.dtype_policy import dtype_name
+from graphvision.values.file_bytes import read_before
 
 if TYPE_CHECKING:
     from graphvision.execution.record import RunRecord
@@ -273,12 +274,20 @@ def _date_now() -> str:
 
 
 def _describe_input(given: Any, key: str) -> dict[str, str]:
-    """What was given for an input, a file's path and SHA-256 if it is one, its content key."""
+    """What was given for an input, a file's path and SHA-256 if it is one, its content key.
+
+    The SHA-256 and the resolved path are those of the file as the reader read it
+    (:func:`~graphvision.values.file_bytes.read_before`), when it has not changed since:
+    one ``stat``, where hashing the file again and resolving its path made 13 system calls
+    (each releasing the GIL and taking it back: a wait on a batch on threads)."""
     if isinstance(given, str):
         entry = {"given": given, "key": key}
         info = _file_stat(given)
         if info is not None:
-            entry |= {"path": str(Path(given).resolve()), "sha256": _known_sha256(given, info)}
+            read = read_before(Path(given), info)
+            path = read[1] if read is not None and read[1] else str(Path(given).resolve())
+            digest = read[0] if read is not None else _known_sha256(given, info)
+            entry |= {"path": path, "sha256": digest}
         return entry
     if type(given) is np.ndarray:  # (described by its shape and dtype: made once for them)
         described = _ARRAYS.get((given.shape, given.dtype))

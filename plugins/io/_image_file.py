@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import os
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -32,7 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from graphvision import InputError, check_pixels
+from graphvision import InputError, check_pixels, read_file_bytes
 
 if TYPE_CHECKING:
     from PIL.Image import Image as PILImageType
@@ -109,20 +108,13 @@ def _contents(file: Path) -> Path | io.BytesIO:
 
     Pillow reading a PNG from its path made about 15 system calls (a ``read`` and ``lseek``
     per chunk, ``fstat``, an ``ioctl``), each releasing the GIL and taking it again (a wait
-    on threads); here five: open, fstat, read, the read that finds the end, close."""
+    on threads); here five (:func:`graphvision.read_file_bytes`: open, fstat, read, the read
+    that finds the end, close), which also keeps the SHA-256 of the bytes for the run's
+    provenance (the file is not read again to hash it)."""
     if file.suffix.lower() not in PILLOW_SUFFIXES:
         return file
-    descriptor = os.open(file, os.O_RDONLY | getattr(os, "O_BINARY", 0))  # (binary on Windows)
-    try:
-        size = os.fstat(descriptor).st_size
-        if size > _WHOLE:
-            return file
-        chunks = []
-        while chunk := os.read(descriptor, max(size, 1 << 16)):  # (all of one grown since)
-            chunks.append(chunk)
-    finally:
-        os.close(descriptor)
-    return io.BytesIO(b"".join(chunks))
+    data = read_file_bytes(file, _WHOLE)
+    return file if data is None else io.BytesIO(data)
 
 
 _ORIENTATION_TAG = 0x0112
