@@ -5,6 +5,7 @@ every mode and format graphvision reads; other files still go through imageio.""
 from __future__ import annotations
 
 import contextlib
+import os
 import re
 import struct
 import zlib
@@ -480,3 +481,16 @@ def test_a_compressed_tiff_tifffile_cannot_decode_names_the_package(tmp_path):
     Image.fromarray(pixels).save(tmp_path / "lzw.tiff", compression="tiff_lzw")
     with pytest.raises(ValueError, match=r"its compression, <COMPRESSION.LZW: 5>, .*imagecodecs"):
         read_array(str(tmp_path / "lzw.tiff"))
+
+
+def test_what_is_not_a_regular_file_is_refused_by_name_after_one_stat(tmp_path: Path) -> None:
+    (tmp_path / "folder.png").mkdir()
+    (tmp_path / "a.png").write_bytes(b"")
+    os.mkfifo(tmp_path / "pipe.png")
+    with pytest.raises(IsADirectoryError, match=r"folder\.png is a folder, not an image file"):
+        read_array(str(tmp_path / "folder.png"))
+    for missing in ("nothing.png", "a.png/b.png", "nul\0.png"):  # (ENOENT, ENOTDIR, a NUL)
+        with pytest.raises(FileNotFoundError, match="no such file: "):
+            read_array(str(tmp_path / missing))
+    with pytest.raises(ValueError, match=r"pipe\.png is not a regular file"):
+        read_array(str(tmp_path / "pipe.png"))  # refused, not opened (it would block)
