@@ -19,7 +19,6 @@ What a report page shows is not decided here: pages are writers passed in
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import shutil
 import stat
@@ -31,7 +30,7 @@ from typing import Any
 
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import OutputFolderError
-from graphvision.execution.history import keep_previous_run
+from graphvision.execution.history import Earlier, earlier_runs, keep_previous_run
 from graphvision.execution.owned import (
     OUTPUT_SUFFIXES,
     RECORD,
@@ -45,12 +44,14 @@ from graphvision.execution.owned import (
 )
 from graphvision.execution.provenance import file_sha256
 from graphvision.execution.record import RunResult
+from graphvision.execution.unchanged import previous_record, unchanged_outputs
 from graphvision.graph.model import NAME, output_name_problem
 
 __all__ = [
     "STAGING",
     "RunPage",
     "clear_unfinished",
+    "earlier_of",
     "missing_folders",
     "new_folder",
     "remove_empty_folders",
@@ -76,6 +77,16 @@ def run_folder(directory: Path) -> Path:
     if directory.name.startswith(NEW):
         return directory.with_name(directory.name[len(NEW) :])
     return directory.parent if directory.name.startswith(STAGING) else directory
+
+
+def earlier_of(directory: Path) -> list[Earlier]:
+    """The runs kept in the history of the folder a page writer is writing for
+    (:func:`run_folder`); none, without a look, for a new folder written whole beside its
+    place: it is renamed only onto nothing, or onto an empty folder (an ``lstat`` fewer per
+    page, each releasing the GIL and taking it back)."""
+    if directory.name.startswith(NEW):
+        return []
+    return earlier_runs(run_folder(directory))
 
 
 def new_folder(directory: Path) -> Path:
@@ -153,7 +164,7 @@ def clear_unfinished(directory: Path, outputs: Iterable[str], *, placed: bool = 
         owned = owned_files(directory)
     except OutputFolderError:
         owned = set()
-    record = _previous_record(directory)
+    record = previous_record(directory)
     found = record.get("file_sha256")
     digests: dict[str, Any] = found if isinstance(found, dict) else {}
     intact = (
@@ -217,17 +228,23 @@ def write_run(
     """
     made = missing_folders(directory)
     try:
-        return _write_run(result, directory, pages, inside)
+        return _write_run(result, directory, pages, inside, directory in made)
     except BaseException:
         remove_empty_folders(made)
         raise
 
 
 def _write_run(
-    result: RunResult, directory: Path, pages: Sequence[RunPage], inside: Path | None
+    result: RunResult,
+    directory: Path,
+    pages: Sequence[RunPage],
+    inside: Path | None,
+    absent: bool,
 ) -> dict[str, list[str]]:
-    owned = check_output_folder(directory, result.compiled.outputs, inside)
-    if inside is not None and not os.path.lexists(directory):
+    """:func:`write_run` into ``directory``, ``absent`` when it was not there (nothing in the
+    way, no link: looked at once, where each check looked again)."""
+    owned = check_output_folder(directory, result.compiled.outputs, inside, absent=absent)
+    if inside is not None and absent:
         written = _write_new(result, directory, pages)
         if written is not None:
             return written
@@ -237,10 +254,10 @@ def _write_run(
         shutil.rmtree(left, ignore_errors=True)
     if owned:  # the run now in the folder stays readable, its report and its files
         keep_previous_run(directory, owned)
-    kept = _unchanged_outputs(result, directory, owned)
+    kept = unchanged_outputs(result, directory, owned)
     staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=directory))
     try:
-        files, new = _write_files(result, staging, pages, kept, _previous_record(directory))
+        files, new = _write_files(result, staging, pages, kept, previous_record(directory))
         for name in new:
             if os.path.lexists(directory / name) and name not in owned:
                 refuse_replacing(directory, name)
@@ -307,7 +324,7 @@ def _write_files(
     record and its pages, written to ``staging``: output name -> file names, and the names
     written there (outputs, pages, the record last)."""
     changed = {name: v for name, v in result.outputs.items() if name not in kept}
-    written = write_outputs(result.compiled, changed, staging)
+    written = write_outputs(result.compiled, changed, staging, made=True)
     digests = {f: file_sha256(staging / f) for names in written.values() for f in names}
     for names in kept.values():
         digests.update({f: previous["file_sha256"][f] for f in names})
@@ -319,61 +336,12 @@ def _write_files(
     return files, [name for names in written.values() for name in names] + shown + [RECORD]
 
 
-def _previous_record(directory: Path) -> dict[str, Any]:
-    """The last run's record in ``directory`` as JSON, or ``{}`` if there is none to trust."""
-    try:
-        content = json.loads((directory / RECORD).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    return content if isinstance(content, dict) else {}
-
-
-def _unchanged_outputs(result: RunResult, directory: Path, owned: set[str]) -> dict[str, list[str]]:
-    """Outputs whose files the last run in ``directory`` wrote for the same value (the same
-    cache key) and that nobody changed since (their SHA-256 as recorded): kept as they are,
-    so a warm re-run does not encode its images again."""
-    previous = _previous_record(directory)
-    try:
-        old_keys = {
-            (node["name"], port): key
-            for node in previous["nodes"]
-            for port, key in node["keys"].items()
-        }
-        old_files, old_digests = previous["files"], previous["file_sha256"]
-    except (KeyError, TypeError, AttributeError):
-        return {}
-    new_keys = {
-        (node.name, port): key for node in result.record.nodes for port, key in node.keys.items()
-    }
-    kept: dict[str, list[str]] = {}
-    for name, source in result.compiled.outputs.items():
-        files = old_files.get(name) if isinstance(old_files, dict) else None
-        if (
-            name not in result.outputs
-            or not isinstance(files, list)
-            or not files
-            or source not in new_keys
-            or old_keys.get(source) != new_keys[source]
-        ):
-            continue
-        intact = all(
-            isinstance(f, str)
-            and f in owned
-            and (directory / f).is_file()
-            and not (directory / f).is_symlink()
-            and old_digests.get(f) == file_sha256(directory / f)
-            for f in files
-        )
-        if intact:
-            kept[name] = list(files)
-    return kept
-
-
 def write_outputs(
-    compiled: CompiledGraph, outputs: dict[str, Any], directory: Path
+    compiled: CompiledGraph, outputs: dict[str, Any], directory: Path, *, made: bool = False
 ) -> dict[str, list[str]]:
-    """Write every produced output to ``directory``; return output name -> file names."""
-    if not directory.is_dir():  # (a run's staging folder is: one stat, not mkdir and stat)
+    """Write every produced output to ``directory`` (made first, unless ``made`` says the
+    caller has just made it: a run's staging folder); return output name -> file names."""
+    if not made and not directory.is_dir():
         directory.mkdir(parents=True, exist_ok=True)
     written = {}
     for name, value in outputs.items():

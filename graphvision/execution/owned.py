@@ -78,7 +78,7 @@ def owned_files(directory: Path) -> set[str]:
 
 
 def check_output_folder(
-    directory: Path, outputs: Iterable[str], inside: Path | None = None
+    directory: Path, outputs: Iterable[str], inside: Path | None = None, *, absent: bool = False
 ) -> set[str]:
     """Refuse, before a run, a folder where the run's files would replace files not
     graphvision's, or replace the previous run without keeping it.
@@ -96,6 +96,9 @@ def check_output_folder(
     inside : Path, optional
         The batch's folder, when ``directory`` is one of its item folders: no
         symbolic link may lie between the two (:func:`refuse_links`).
+    absent : bool
+        Whether the caller found nothing at ``directory`` (not even a link) just before:
+        then it is not looked at again.
 
     Raises
     ------
@@ -104,9 +107,9 @@ def check_output_folder(
         ``record`` (its file would be the record's).
     """
     if inside is not None:
-        refuse_links(inside, directory)
+        refuse_links(inside, directory, absent=absent)
     stems = set(outputs)
-    there = os.path.lexists(directory)  # a new folder (a batch's, mostly): nothing in the way
+    there = not absent and os.path.lexists(directory)  # new (a batch's mostly): nothing in the way
     if there and directory.exists() and not directory.is_dir():
         raise OutputFolderError(f"output folder {directory} is a file")
     if Path(RECORD).stem in stems:
@@ -155,10 +158,11 @@ def _what(path: Path) -> str:
     return "a folder" if path.is_dir() else "not a regular file"
 
 
-def refuse_links(inside: Path, directory: Path) -> None:
+def refuse_links(inside: Path, directory: Path, *, absent: bool = False) -> None:
     """Refuse a symbolic link, or a file, on the way from ``inside`` (a batch's folder) down
-    to ``directory`` (one of its item folders), ``directory`` included: writing there would
-    write outside ``inside``, or fail half-way.
+    to ``directory`` (one of its item folders), ``directory`` included (unless ``absent``
+    says the caller has just found nothing there): writing there would write outside
+    ``inside``, or fail half-way.
 
     Raises
     ------
@@ -168,6 +172,8 @@ def refuse_links(inside: Path, directory: Path) -> None:
     path = inside
     for part in directory.relative_to(inside).parts:
         path = path / part
+        if absent and path == directory:
+            return
         if path.is_symlink():
             raise OutputFolderError(
                 f"{path} is a symbolic link to {os.readlink(path)}: the batch would write "

@@ -31,7 +31,7 @@ import numpy as np
 
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import OutputFolderError
-from graphvision.execution.folders import STAGING, RunPage, run_folder
+from graphvision.execution.folders import STAGING, RunPage, earlier_of
 from graphvision.execution.history import earlier_runs
 from graphvision.execution.owned import RECORD, REPORT, REPORT_HTML, write_file
 from graphvision.execution.provenance import file_sha256
@@ -79,7 +79,7 @@ def write_report(
         lines += ["", *[f"![{f}]({f})" for f in images]]
     lines += ["", "## Provenance", "", *_provenance_lines(record)]
     lines += ["", "## Run record", "", "```", record.table(), "```", ""]
-    earlier = earlier_runs(run_folder(directory))
+    earlier = earlier_of(directory)
     if earlier:
         lines += ["## Earlier runs (newest first)", ""]
         lines += [
@@ -299,7 +299,7 @@ def html_page(result: RunResult, directory: Path) -> list[str]:
         directory,
         failures={name: str(error) for name, error in result.failures.items()},
         intermediates=result.intermediates,
-        earlier=earlier_runs(run_folder(directory)),
+        earlier=earlier_of(directory),
     )
     return [REPORT_HTML]
 
