@@ -98,13 +98,14 @@ class Claim:
     def written(self, item: BatchItem) -> None:
         """The folder is written (whole, or cleared when the file failed): ``item`` is kept
         in the claim, for a client whose result from this writer never comes (written over
-        what the claim held, which is shorter: never an empty claim, even if killed now)."""
+        what the claim held: never an empty claim, even if killed now). What it held, the
+        claim's own field, is shorter than the item, which holds that field too: nothing
+        of it is left past the item's end, so the claim is not truncated (a system call
+        fewer, each releasing the GIL and taking it back)."""
         self.done = True
         if self.fd < 0:
             return
-        data = json.dumps({**_item_json(item), _RECORD_KEY: self.record}).encode()
-        os.pwrite(self.fd, data, 0)
-        os.ftruncate(self.fd, len(data))
+        os.pwrite(self.fd, json.dumps({**_item_json(item), _RECORD_KEY: self.record}).encode(), 0)
 
 
 def _item_json(item: BatchItem) -> dict:
