@@ -8,10 +8,11 @@ kernels). Each part's wall time, divided by the files, gives milliseconds per fi
 
 - compute: the node functions themselves;
 - planning: compiling the graph, keying the steps, the cache plan;
-- read: decoding the input image file (its header checked against the pixel
-  budget, then its pixels: one Pillow handle for a PNG);
-- hashing: content keys of the inputs, SHA-256 of the input file and of the
-  files written (provenance, ``record.json``'s ``file_sha256``);
+- read: reading and decoding the input image file (its bytes read whole and
+  hashed for the provenance, its header checked against the pixel budget, then
+  its pixels: one Pillow handle for a PNG);
+- hashing: content keys of the inputs, SHA-256 of the files written
+  (``record.json``'s ``file_sha256``; the input file's is taken as it is read);
 - transport: port types' encode/decode (cache entries, values to and from
   other processes);
 - record: the run's provenance (versions, git state) and ``record.json``;
@@ -46,7 +47,8 @@ its compute. Wall time: run it on a quiet machine, and read ratios within one ru
 folders in memory, timing each part's wall and CPU (``time.thread_time``) in each thread:
 in the threads batch, a part's wall less its CPU is what it waited, for the GIL or, on a
 loaded machine, for a core. Each file's Python holds the GIL, and each system call
-releases it and takes it again (a wait when the other file's thread holds it).
+releases it and takes it again (a wait when the other file's thread holds it):
+:func:`system_calls` counts them per file, by name (``strace -f``, where it is installed).
 
 Run: ``python bench/profile_batch.py [FILES]`` (the threads table over twice as many).
 """
@@ -57,10 +59,12 @@ import dataclasses
 import functools
 import importlib
 import os
+import re
 import sys
 import tempfile
 import threading
 import time
+from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -295,10 +299,69 @@ def waits(files: int) -> list[str]:
     return rows
 
 
+_BATCH = """
+import os, sys
+sys.path.insert(0, {here!r})
+from pathlib import Path
+import bench_batch, graphvision as gv
+paths = [str(p) for p in bench_batch._write_images(Path({scratch!r}) / "in")[:{files}]]
+graph = gv.load_pipeline(bench_batch.PIPELINE)
+for name, chosen in (("warm", paths[:1]), ("out", paths)):
+    os.path.exists({mark!r} + name)
+    gv.run_batch(graph, chosen, input="image", output_dir=Path({scratch!r}) / name,
+                 outputs=["count"], executor={executor!r}, workers=2, cache=None)
+os.path.exists({mark!r} + "end")
+"""
+_MARK = "/graphvision-profile-mark-"  # a path looked at (not found) around the timed batch
+
+
+def _strace_calls(files: int, executor: str, where: str | None) -> Counter[str]:
+    """Calls by system call name (``strace -f``, every thread) of a batch of ``files`` on
+    ``executor``, run after a one-file batch in the same process (the plugins loaded)."""
+    import subprocess
+
+    with tempfile.TemporaryDirectory(dir=where) as scratch:
+        trace = Path(scratch) / "strace.txt"
+        code = _BATCH.format(here=str(Path(__file__).parent), scratch=scratch, files=files,
+                             executor=executor, mark=_MARK)  # fmt: skip
+        subprocess.run(["strace", "-f", "-o", str(trace), sys.executable, "-c", code], check=True)
+        calls: Counter[str] = Counter()
+        inside = False
+        for line in trace.read_text().splitlines():
+            if _MARK in line:
+                inside = _MARK + "out" in line
+            elif inside and (call := re.match(r"\d+\s+(\w+)\(", line)):
+                calls[call.group(1)] += 1  # (a call resumed after a thread switch: once)
+        return calls
+
+
+def system_calls(executor: str = "threads") -> list[str]:
+    """System calls per batch file (each releases the GIL and takes it back, a wait on
+    threads when the other file's thread holds it): ``strace -f`` of a batch of 12 files
+    and of one of 36 (each after a one-file batch in its process, which loads the plugins),
+    the difference over 24 files (what every batch does once cancels), folders in
+    ``/dev/shm``; not ``futex``, the GIL's own waits, which strace's stops change. Needs
+    ``strace``."""
+    import shutil
+
+    if shutil.which("strace") is None:
+        return ["(strace is not installed: no table of system calls)"]
+    where = "/dev/shm" if os.path.isdir("/dev/shm") else None
+    few, many = (_strace_calls(n, executor, where) for n in (12, 36))
+    per = {name: (many[name] - few[name]) / 24 for name in {*few, *many}}
+    shown = sorted((n for n in per if abs(per[n]) >= 0.5 and n != "futex"), key=lambda n: -per[n])
+    rows = [
+        f"| system calls per file ({executor}, folders in memory) | calls |",
+        "| --- | ---: |",
+        f"| all but futex (the GIL's waits) | {sum(per.values()) - per.get('futex', 0):.1f} |",
+    ]
+    return rows + [f"| {name} | {per[name]:.1f} |" for name in shown]
+
+
 def main() -> list[str]:
-    return [*profile(50), "", *waits(100)]
+    return [*profile(50), "", *waits(100), "", *system_calls()]
 
 
 if __name__ == "__main__":
     count = int(sys.argv[1]) if len(sys.argv) > 1 else 50
-    print("\n".join([*profile(count), "", *waits(2 * count)]))
+    print("\n".join([*profile(count), "", *waits(2 * count), "", *system_calls()]))
