@@ -224,9 +224,13 @@ def write_run(
         kept, or (with ``inside``) a link would take the writes outside the batch.
 
     A folder made for the run (``directory`` and its missing parents) is
-    removed again when writing fails or is interrupted before a file is in it.
+    removed again when writing fails or is interrupted before a file is in it (of a
+    batch's item folder, only itself: the batch made its own folder, ``inside``).
     """
-    made = missing_folders(directory)
+    if directory.parent == inside:  # (one lstat: whether the item folder is there)
+        made = [] if os.path.lexists(directory) else [directory]
+    else:
+        made = missing_folders(directory)
     try:
         return _write_run(result, directory, pages, inside, directory in made)
     except BaseException:

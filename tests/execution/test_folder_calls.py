@@ -9,6 +9,8 @@ import os
 import stat
 from pathlib import Path
 
+import pytest
+
 import graphvision as gv
 from graphvision.execution.folders import missing_folders, new_folder, write_run
 from graphvision.execution.history import earlier_runs
@@ -74,3 +76,26 @@ def test_a_folder_without_history_has_no_earlier_runs_nor_one_with_a_file_there(
     assert earlier_runs(tmp_path) == []
     (tmp_path / "history").write_text("a file, not graphvision's folder")
     assert earlier_runs(tmp_path) == []
+
+
+def test_a_batch_item_folder_that_fails_is_removed_and_the_batchs_folder_kept(
+    tmp_path: Path,
+) -> None:
+    """The item folder is looked at once (the batch made its own folder): what a failed
+    write made is removed, the batch's folder stays; a deeper folder's parents go too."""
+
+    def failing(result: gv.RunResult, directory: Path) -> list[str]:
+        raise OSError("the page cannot be written")
+
+    batch = tmp_path / "batch"
+    batch.mkdir()
+    result = _result()
+    for folder in (batch / "item", batch / "a" / "b" / "item"):
+        with pytest.raises(OSError, match="the page cannot be written"):
+            write_run(result, folder, [failing], inside=batch)
+        assert list(batch.iterdir()) == []  # the item folder, its parents, its new sibling
+    (batch / "item").mkdir()
+    (batch / "item" / "mine.txt").write_text("a user's file")
+    with pytest.raises(OSError, match="the page cannot be written"):
+        write_run(result, batch / "item", [failing], inside=batch)
+    assert [p.name for p in (batch / "item").iterdir()] == ["mine.txt"]  # there before
