@@ -48,7 +48,8 @@ def read_file_bytes(path: str | Path, limit: int | None = None) -> bytes | None:
     its size, the read that finds its end, the ``readlink`` naming it, close). The SHA-256
     of the bytes and the path resolved are kept for the provenance of the run reading the
     file (:func:`read_before`) when the bytes are as many as ``fstat`` said (else the file
-    changed while it was read: the provenance hashes it again).
+    changed while it was read: the provenance hashes it again); a file read again with the
+    same stamp is not hashed again (as the provenance kept a file's digest by its stamp).
 
     Raises
     ------
@@ -79,9 +80,12 @@ def read_file_bytes(path: str | Path, limit: int | None = None) -> bytes | None:
         os.close(descriptor)
     data = b"".join(chunks)
     if len(data) == info.st_size:
+        key = _key(path, info)
+        known = _READ.get(key)  # read before, unchanged since: the same bytes, hashed once
+        digest = known[0] if known is not None else hashlib.sha256(data).hexdigest()
         if len(_READ) >= _KEEP:
             _READ.clear()
-        _READ[_key(path, info)] = (hashlib.sha256(data).hexdigest(), where)  # (GIL released)
+        _READ[key] = (digest, where)
     return data
 
 

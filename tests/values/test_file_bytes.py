@@ -56,3 +56,29 @@ def test_a_missing_file_is_refused_as_open_refuses_it(tmp_path: Path) -> None:
     with pytest.raises(FileNotFoundError) as caught:
         gv.read_file_bytes(tmp_path / "nothing.png")
     assert caught.value.filename == str(tmp_path / "nothing.png")
+
+
+def test_a_file_read_again_unchanged_is_hashed_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from graphvision.values import file_bytes
+
+    hashed: list[int] = []
+    sha256 = file_bytes.hashlib.sha256
+
+    class Counted:
+        @staticmethod
+        def sha256(data: bytes) -> object:
+            hashed.append(len(data))
+            return sha256(data)
+
+    monkeypatch.setattr(file_bytes, "hashlib", Counted)
+    file = tmp_path / "a.txt"
+    file.write_bytes(b"abc")
+    for _ in range(3):
+        assert gv.read_file_bytes(file) == b"abc"
+    assert hashed == [3]
+    file.write_bytes(b"abcd")  # changed: hashed again
+    assert gv.read_file_bytes(file) == b"abcd"
+    assert hashed == [3, 4]
+    assert read_before(file, os.stat(file))[0] == sha256(b"abcd").hexdigest()
