@@ -19,12 +19,13 @@ What a report page shows is not decided here: pages are writers passed in
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
 import shutil
 import stat
 import tempfile
 import warnings
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -261,7 +262,8 @@ def _write_run(
     kept = unchanged_outputs(result, directory, owned)
     staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=directory))
     try:
-        files, new = _write_files(result, staging, pages, kept, previous_record(directory))
+        with _named_in(directory, staging):
+            files, new = _write_files(result, staging, pages, kept, previous_record(directory))
         for name in new:
             if os.path.lexists(directory / name) and name not in owned:
                 refuse_replacing(directory, name)
@@ -272,6 +274,20 @@ def _write_run(
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return files
+
+
+@contextlib.contextmanager
+def _named_in(directory: Path, staging: Path) -> Iterator[None]:
+    """An ``OSError`` writing a file into ``staging`` names the file of ``directory`` it was
+    written for (``out/k.npy``), not the hidden folder the run writes first."""
+    try:
+        yield
+    except OSError as error:
+        where = Path(error.filename) if isinstance(error.filename, str) else None
+        if where is None or not where.is_relative_to(staging):
+            raise
+        shown = str(directory / where.relative_to(staging))
+        raise OSError(error.errno, error.strerror, shown) from None
 
 
 def _write_new(
@@ -285,7 +301,8 @@ def _write_new(
         return None
     placed = False
     try:
-        files = _write_files(result, staging, pages, {}, {})[0]
+        with _named_in(directory, staging):
+            files = _write_files(result, staging, pages, {}, {})[0]
         try:
             os.rename(staging, directory)  # onto nothing, or onto a folder made meanwhile, empty
             placed = True
@@ -352,7 +369,13 @@ def write_outputs(
         if not NAME.match(name):  # compile_graph refuses these; a port type may not add any
             raise OutputFolderError(output_name_problem(name))
         kind = compiled.output_type(name)
-        files = kind.write(value, directory / name)
+        try:
+            files = kind.write(value, directory / name)
+        except OSError as error:  # a port type's writer (Pillow's) may name no file
+            if error.filename is not None:
+                raise
+            begun = next(directory.glob(f"{glob.escape(name)}.*"), directory / name)
+            raise OSError(error.errno, error.strerror or str(error), str(begun)) from None
         for file in files:
             if file.parent != directory or not _plain_file(file):
                 raise OutputFolderError(

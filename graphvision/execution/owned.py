@@ -209,5 +209,7 @@ def write_file(path: Path, data: bytes) -> None:
         view = memoryview(data)
         while view:  # (a regular file takes it all at once, but a signal may cut it short)
             view = view[os.write(descriptor, view) :]
+    except OSError as error:  # os.write's error names no file (a full disk, ulimit -f)
+        raise OSError(error.errno, error.strerror, str(path)) from None
     finally:
         os.close(descriptor)
