@@ -42,7 +42,7 @@ class _Executor:
     def _sent(self, job: Any) -> Any:
         return job
 
-    def result(self, task: Future) -> Any:
+    def result(self, task: Future, running: str = "node") -> Any:
         return task.result()
 
 
