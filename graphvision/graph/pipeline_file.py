@@ -253,10 +253,8 @@ def graph_to_dict(graph: Graph) -> dict[str, Any]:
     data: dict[str, Any] = {"version": 1, "name": graph.name}
     if graph.description:
         data["description"] = graph.description
-    if graph.plugins:  # as the file writes them, relative to its folder
-        plugins = graph.plugins
-        written = plugins.as_written() if isinstance(plugins, PluginPaths) else list(plugins)
-        data["plugins"] = written
+    if graph.plugins:
+        data["plugins"] = list(graph.plugins)
     if graph.backends:
         data["backends"] = list(graph.backends)
     inputs = {}

@@ -55,18 +55,6 @@ class PluginPaths(list[str]):
             return text
         return str(Path(self.folder) / text)
 
-    def as_written(self) -> list[str]:
-        """The paths as the pipeline file writes them: relative to its folder (where
-        :meth:`placed` put them), so that a pipeline dumped beside the one it was read
-        from reads the same plugins back."""
-        if self.folder in ("", "."):
-            return list(self)
-        folder = Path(self.folder)
-        return [
-            str(Path(path).relative_to(folder)) if Path(path).is_relative_to(folder) else path
-            for path in self
-        ]
-
     def append(self, path: str) -> None:
         super().append(self.placed(path))
 

@@ -79,16 +79,3 @@ def test_a_copy_or_a_pickle_of_the_plugins_is_not_placed_twice(folder):
         again.plugins.append("my_nodes.py")  # still placed in the file's folder
         assert again.plugins == ["try/first.py", "try/my_nodes.py"]
     assert copy.copy(PluginPaths(["a.py"], "x")) == ["a.py"]
-
-
-def test_a_loaded_pipeline_dumped_beside_its_file_reads_its_plugins_back(folder):
-    """The dump wrote the paths as placed (try/first.py), which the copy beside the file
-    read as try/try/first.py: 'plugin path ... does not exist' (found by the tryer)."""
-    graph = gv.load_pipeline("try/p.yaml")
-    graph.plugins.append("my_nodes.py")
-    text = gv.dump_pipeline(graph)
-    assert "plugins:\n- first.py\n- my_nodes.py\n" in text
-    (folder / "again.yaml").write_text(text)
-    again = gv.load_pipeline("try/again.yaml")
-    assert again.plugins == ["try/first.py", "try/my_nodes.py"]
-    assert gv.dump_pipeline(again) == text
