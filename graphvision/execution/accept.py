@@ -6,6 +6,8 @@ from __future__ import annotations
 import sys
 from typing import Any
 
+from numpy import ndarray
+
 from graphvision.compiler.compile import Step
 from graphvision.errors import PortValueError
 from graphvision.execution.inputs import freeze_value
@@ -39,10 +41,14 @@ def accepted(step: Step, result: Any, held: int, encoded: bool) -> dict[str, Any
         port, kind, scalar, plain = only
         if not scalar and recall(result, kind):  # frozen, accepted as ``kind`` before
             return {port: result}
-        try:
-            value = kind.validate(result)
-        except PortValueError as error:
-            raise invalid_output(port, error) from None
+        check = step.array_checks[port]  # (its type's validate in one call: values.checks)
+        if check is not None and type(result) is ndarray and check(result):
+            value = result
+        else:
+            try:
+                value = kind.validate(result)
+            except PortValueError as error:
+                raise invalid_output(port, error) from None
         if scalar:
             return {port: value}
         if plain and value is result and getrefcount(value) <= held + _OWN_REFS:
@@ -59,13 +65,15 @@ def _accepted_outputs(step: Step, result: Any, alone: bool) -> dict[str, Any]:
     """:func:`accepted` of a node with several outputs (a tuple); ``alone``: nothing but the
     caller holds the tuple, so an array that nothing but the tuple (and this loop) holds is
     frozen where it lies, as a node's one output is; the others are copied."""
-    outputs, kinds = {}, step.outputs
+    outputs, kinds, checks = {}, step.outputs, step.array_checks
     ports = list(step.spec.split_outputs(result))  # (which checks the tuple; an iterator over
     for index, port in enumerate(ports):  # its pairs would hold the last value once more)
         kind, value = kinds[port], result[index]
         try:
             if alone and is_plain_array_port(kind) and not recall(value, kind):
-                checked_value = kind.validate(value)
+                check = checks[port]
+                fresh = check is not None and type(value) is ndarray and check(value)
+                checked_value = value if fresh else kind.validate(value)
                 if checked_value is value and getrefcount(value) <= _IN_TUPLE_REFS:
                     frozen = frozen_in_place(value)
                     if frozen is not None:
