@@ -12,12 +12,14 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph
 from graphvision.errors import UnknownNameError, did_you_mean
 from graphvision.execution.executors import EXECUTORS
 from graphvision.execution.inputs import resolve_input
-from graphvision.execution.limits import current_limits
+from graphvision.execution.limits import NodeLimits, current_limits
 from graphvision.execution.peak_memory import environment_memory
 from graphvision.graph.model import Graph
 from graphvision.values.budget import max_pixels as budget_in_force
@@ -79,12 +81,27 @@ def mapping_argument(value: Any, what: str) -> dict[str, Any]:
     strings (a path given as ``Path`` reads like the same path given as ``str``)."""
     if value is None:
         return {}
-    if not isinstance(value, Mapping) or not all(isinstance(key, str) for key in value):
+    if type(value) is not dict and not isinstance(value, Mapping):  # (a dict: no ABC check)
         raise TypeError(f"{what} must be a dict from names to values, got {value!r}")
-    return {key: os.fspath(v) if isinstance(v, os.PathLike) else v for key, v in value.items()}
+    if not all(isinstance(key, str) for key in value):
+        raise TypeError(f"{what} must be a dict from names to values, got {value!r}")
+    return {key: _text_if_path(v) for key, v in value.items()}
 
 
-def environment_limits(*, max_pixels: int | None = None, max_memory: int | None = None) -> None:
+_NO_PATHS = frozenset({str, int, float, bool, type(None), np.ndarray})
+"""Types whose values are no ``os.PathLike`` (decided without the ABC's check: an array
+given as an input is the common case)."""
+
+
+def _text_if_path(value: Any) -> Any:
+    if type(value) in _NO_PATHS or not isinstance(value, os.PathLike):
+        return value
+    return os.fspath(value)
+
+
+def environment_limits(
+    *, max_pixels: int | None = None, max_memory: int | None = None
+) -> NodeLimits:
     """Refuse a limit the environment sets that is malformed (``GRAPHVISION_MAX_PIXELS``,
     ``GRAPHVISION_NODE_TIMEOUT``, ``GRAPHVISION_NODE_MEMORY``, ``GRAPHVISION_MAX_MEMORY``),
     naming the variable and its value, before any work: each was read only where it is
@@ -95,17 +112,25 @@ def environment_limits(*, max_pixels: int | None = None, max_memory: int | None 
     ------
     InputError
         Naming the variable, its value and what it takes.
+
+    Returns
+    -------
+    NodeLimits
+        The node limits in force (:func:`~graphvision.execution.limits.current_limits`), as
+        read here: a run takes them instead of reading the environment again.
     """
     if max_pixels is None:
         budget_in_force()
-    current_limits()
+    limits = current_limits()
     if max_memory is None:
         environment_memory()
+    return limits
 
 
-def run_arguments(cache: Any, executor: Any, workers: Any, **limits: int | None) -> None:
+def run_arguments(cache: Any, executor: Any, workers: Any, **limits: int | None) -> NodeLimits:
     """Refuse a cache, executor or worker count of the wrong kind, saying what is taken, and
-    a malformed limit in the environment (:func:`environment_limits`, given ``limits``)."""
+    a malformed limit in the environment (:func:`environment_limits`, given ``limits``);
+    the node limits in force."""
     if cache is not None and not isinstance(cache, Cache):
         hint = " (for a folder: gv.Cache.at(path))" if isinstance(cache, (str, os.PathLike)) else ""
         raise TypeError(f"cache must be a gv.Cache or None, got {cache!r}{hint}")
@@ -121,7 +146,7 @@ def run_arguments(cache: Any, executor: Any, workers: Any, **limits: int | None)
         raise TypeError(f"workers must be a whole number, got {workers!r}")
     if isinstance(workers, int) and workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
-    environment_limits(**limits)
+    return environment_limits(**limits)
 
 
 def wanted_outputs(
@@ -181,15 +206,16 @@ def checked_run_arguments(
     running: tuple[Any, Any, Any],
     max_pixels: Any,
     max_memory: Any,
-) -> tuple[Graph | CompiledGraph, dict[str, Any], list[str] | None, dict[str, Any]]:
+) -> tuple[Graph | CompiledGraph, dict[str, Any], list[str] | None, dict[str, Any], NodeLimits]:
     """The arguments of :func:`~graphvision.execution.run.run` as it uses them, or a
     TypeError naming the wrong one; ``running``: its cache, executor and workers. A
     malformed limit in the environment is refused (an InputError) unless the argument of
-    that limit supersedes it."""
-    run_arguments(*running, max_pixels=max_pixels, max_memory=max_memory)
+    that limit supersedes it. Last, the node limits in force, as read for that check."""
+    limits = run_arguments(*running, max_pixels=max_pixels, max_memory=max_memory)
     return (
         graph_argument(graph),
         mapping_argument(inputs, "inputs"),
         names_argument(outputs, "outputs"),
         mapping_argument(overrides, "overrides"),
+        limits,
     )

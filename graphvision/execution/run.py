@@ -164,7 +164,7 @@ def run(
         Nodes failed; ``error.failures`` names them, ``error.result`` holds
         the outputs that were produced and the record.
     """
-    graph, inputs, outputs, overrides = checked_run_arguments(
+    graph, inputs, outputs, overrides, limits = checked_run_arguments(
         graph, inputs, outputs, overrides, (cache, executor, workers), max_pixels, max_memory
     )
     limit = BlasLimit()  # one BLAS thread while nodes run here (see graphvision.execution.blas)
@@ -174,7 +174,7 @@ def run(
         return _run(
             graph, registry, inputs, outputs, overrides, executor, workers, cache, keep_going,
             hooks, keep_intermediates, max_pixels, node_timeout, node_memory, max_memory,
-            backends, limit,
+            backends, (limit, limits),
         )  # fmt: skip
     finally:
         limit.release()  # BLAS has its threads back when the run returns
@@ -197,9 +197,11 @@ def _run(
     node_memory: int | None,
     max_memory: int | None,
     backends: Sequence[str] | str | None,
-    limit: BlasLimit,
+    held: tuple[BlasLimit, NodeLimits],
 ) -> RunResult:
-    """:func:`run` after its arguments are checked; ``limit`` released by the caller."""
+    """:func:`run` after its arguments are checked; ``held``: the BLAS limit (released by the
+    caller) and the node limits the environment sets, as read by the check."""
+    limit, limits = held
     compiled, registry = _compiled(graph, registry, inputs, overrides, backends)
     wanted = _wanted_outputs(compiled, outputs, inputs)
     wanted = outputs_with_truth(compiled, wanted, set(inputs), asked=outputs is not None)
@@ -209,7 +211,9 @@ def _run(
     with pixel_budget(max_pixels), node_limits(node_timeout, node_memory):
         where = executor_name(executor)
         refuse_declared_limits(compiled, where)
-        (limits := current_limits()).check_executor(where)  # (read once: the state takes them)
+        if node_timeout is not None or node_memory is not None:  # (else as read by the check)
+            limits = current_limits()
+        limits.check_executor(where)  # (read once: the state takes them)
         values = {
             name: partial(resolve_input, name, compiled.input_types[name], value, registry)
             if name in reference_keys
