@@ -11,6 +11,7 @@ from numpy import ndarray
 from graphvision.compiler.compile import Step
 from graphvision.errors import PortValueError
 from graphvision.execution.inputs import freeze_value
+from graphvision.values.checks import frozen_fresh_table
 from graphvision.values.known import checked, frozen_value, note, recall
 from graphvision.values.memory import frozen_in_place
 from graphvision.values.ports import is_plain_array_port
@@ -41,6 +42,8 @@ def accepted(step: Step, result: Any, held: int, encoded: bool) -> dict[str, Any
         port, kind, scalar, plain = only
         if not scalar and recall(result, kind):  # frozen, accepted as ``kind`` before
             return {port: result}
+        if port in step.table_ports and (table := frozen_fresh_table(result)) is not None:
+            return {port: table}  # (a new table: checked and frozen in one pass)
         check = step.array_checks[port]  # (its type's validate in one call: values.checks)
         if check is not None and type(result) is ndarray and check(result):
             value = result
@@ -65,7 +68,8 @@ def _accepted_outputs(step: Step, result: Any, alone: bool) -> dict[str, Any]:
     """:func:`accepted` of a node with several outputs (a tuple); ``alone``: nothing but the
     caller holds the tuple, so an array that nothing but the tuple (and this loop) holds is
     frozen where it lies, as a node's one output is; the others are copied."""
-    outputs, kinds, checks = {}, step.outputs, step.array_checks
+    outputs: dict[str, Any] = {}
+    kinds, checks = step.outputs, step.array_checks
     ports = list(step.spec.split_outputs(result))  # (which checks the tuple; an iterator over
     for index, port in enumerate(ports):  # its pairs would hold the last value once more)
         kind, value = kinds[port], result[index]
@@ -82,7 +86,8 @@ def _accepted_outputs(step: Step, result: Any, alone: bool) -> dict[str, Any]:
                         continue
                 outputs[port] = frozen_value(kind, checked_value)
                 continue
-            outputs[port] = checked(kind, value)
+            table = frozen_fresh_table(value) if port in step.table_ports else None
+            outputs[port] = checked(kind, value) if table is None else table
         except PortValueError as error:
             raise invalid_output(port, error) from None
     return outputs

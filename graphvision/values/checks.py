@@ -21,15 +21,18 @@ check: its ``validate`` is called.
 from __future__ import annotations
 
 from collections.abc import Callable
+from operator import attrgetter
 from typing import Any
 
 import numpy as np
 
 from graphvision.values.dtype_policy import in_unit_range
 from graphvision.values.images import FloatImagePort, ImagePort, LabelImagePort
+from graphvision.values.memory import frozen_copies
 from graphvision.values.ports import ArrayPort, PortType
+from graphvision.values.scalars import TablePort, is_plain_table_port
 
-__all__ = ["ArrayCheck", "array_check"]
+__all__ = ["ArrayCheck", "array_check", "frozen_fresh_table", "is_fresh_table_port"]
 
 ArrayCheck = Callable[[np.ndarray], bool]
 """Whether an ``ndarray`` is valid for a port type as it is (False: ask its ``validate``)."""
@@ -87,3 +90,35 @@ def _made(kind: type[PortType]) -> ArrayCheck | None:
         return data is None or data(array)
 
     return check
+
+
+def is_fresh_table_port(kind: type[PortType]) -> bool:
+    """Whether ``kind`` validates and encodes its tables as :class:`TablePort` does (a node's
+    new table of it may then be taken by :func:`frozen_fresh_table`)."""
+    validate = getattr(kind.validate, "__func__", None)
+    return validate is TablePort.validate.__func__ and is_plain_table_port(kind)  # type: ignore[attr-defined]
+
+
+def frozen_fresh_table(value: Any) -> dict[str, np.ndarray] | None:
+    """A node's new table checked as :meth:`TablePort.validate` checks it and frozen as
+    :func:`~graphvision.values.ports.freeze_all` freezes it (its columns copied into one
+    immutable buffer), in one pass of C calls over its columns, no Python step per column;
+    None when it is not a non-empty ``dict`` of text to writable 1-D numeric arrays of one
+    length (the caller then validates it, which raises the type's message, and freezes it
+    as any value)."""
+    if type(value) is not dict or not value:
+        return None
+    columns = list(value.values())
+    if (
+        set(map(type, value)) != {str}
+        or set(map(type, columns)) != {np.ndarray}
+        or set(map(_NDIM, columns)) != {1}
+        or len(set(map(len, columns))) != 1
+        or any(map(_HASOBJECT, columns))
+        or not all(map(_WRITEABLE, columns))
+    ):
+        return None
+    return dict(zip(value, frozen_copies(columns), strict=True))
+
+
+_NDIM, _HASOBJECT, _WRITEABLE = map(attrgetter, ("ndim", "dtype.hasobject", "flags.writeable"))

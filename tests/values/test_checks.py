@@ -8,7 +8,8 @@ import pytest
 
 import graphvision as gv
 from graphvision.errors import PortValueError
-from graphvision.values.checks import array_check
+from graphvision.values.checks import array_check, frozen_fresh_table, is_fresh_table_port
+from graphvision.values.ports import is_frozen
 
 BAD = {  # for each port type with a check: arrays its validate refuses, one per condition
     gv.ImagePort: [
@@ -122,3 +123,66 @@ def test_a_run_refuses_a_node_output_the_check_refuses(registry, value, message)
     good = np.full((4, 4), 0.25, np.float32)
     frozen = accepted(step, good, 1, False)["out"]
     assert not frozen.flags.writeable and np.array_equal(frozen, np.full((4, 4), 0.25))
+
+
+BAD_TABLES = [  # what TablePort.validate refuses, one per condition
+    {1: np.arange(3.0)},
+    {"a": [1.0, 2.0]},
+    {"a": np.zeros((2, 2))},
+    {"a": np.arange(3.0), "b": np.arange(4.0)},
+    {"a": np.array([None, 1], dtype=object)},
+]
+
+
+@pytest.mark.parametrize("table", BAD_TABLES)
+def test_a_new_table_the_table_type_refuses_is_left_to_its_validate(table):
+    assert frozen_fresh_table(table) is None
+    with pytest.raises(PortValueError):
+        gv.TablePort.validate(table)
+
+
+def test_a_new_table_is_checked_and_frozen_in_one_buffer():
+    table = {"label": np.arange(1, 4, dtype=np.int32), "area": np.array([5.0, 6.5, 7.0])}
+    frozen = frozen_fresh_table(table)
+    assert list(frozen) == ["label", "area"]
+    assert [c.dtype for c in frozen.values()] == [np.int32, np.float64]
+    assert frozen["label"].tolist() == [1, 2, 3] and frozen["area"].tolist() == [5.0, 6.5, 7.0]
+    assert all(is_frozen(c) for c in frozen.values())
+    assert frozen["label"].base is not None and frozen["label"].base is frozen["area"].base
+    with pytest.raises(ValueError, match="read-only"):
+        frozen["area"][0] = 1.0
+    held = {"a": np.arange(3.0)}
+    held["a"].flags.writeable = False  # (maybe frozen already: freeze_all decides)
+    assert frozen_fresh_table(held) is None and frozen_fresh_table({}) is None
+
+
+def test_only_types_that_validate_and_encode_tables_as_table_does_take_it():
+    class Renamed(gv.TablePort):
+        """Same validate and encoding."""
+
+    class Checked(gv.TablePort):
+        @classmethod
+        def validate(cls, value):
+            return super().validate(value)
+
+    assert is_fresh_table_port(gv.TablePort) and is_fresh_table_port(Renamed)
+    assert not is_fresh_table_port(Checked) and not is_fresh_table_port(gv.ImagePort)
+
+
+@pytest.mark.parametrize(
+    ("table", "message"),
+    [
+        ({"a": np.arange(3.0), "b": np.arange(4.0)}, r"columns of equal length, got \[3, 4\]"),
+        ({"a": np.zeros((2, 2))}, r"column 'a' to be a 1-D numeric array"),
+    ],
+)
+def test_a_run_refuses_a_new_table_its_type_refuses(registry, table, message):
+    from pathlib import Path
+
+    from graphvision.execution.accept import accepted
+
+    coins = Path(__file__).parents[2] / "pipelines" / "coins.yaml"
+    step = gv.compile_graph(gv.load_pipeline(coins), registry).steps["measured"]
+    assert step.table_ports == {"out"}
+    with pytest.raises(PortValueError, match=rf"invalid output 'out': expected Table {message}"):
+        accepted(step, table, 1, False)
