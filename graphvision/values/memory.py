@@ -86,7 +86,7 @@ def _window(address: int, nbytes: int, writable: bool = False) -> memoryview:
     """The ``nbytes`` at ``address`` as a memoryview that refers to no object (format ``B``):
     a slice of a window of :data:`_SPANS`."""
     if not _SPANS:
-        _SPANS.extend(_from_memory(1, 1 << 62, flag) for flag in (_READ_ONLY, _WRITABLE))
+        _SPANS[:] = [_from_memory(1, 1 << 62, flag) for flag in (_READ_ONLY, _WRITABLE)]
     return _SPANS[writable][address - 1 : address - 1 + nbytes]
 
 
