@@ -27,14 +27,13 @@ How
 ---
 A ``bytes`` object is allocated ``ALIGNMENT`` bytes (plus the offset asked for)
 larger than needed and filled exactly once, right after it is made and before
-anything else can see it, through a window at the first aligned address inside
-it (plus that offset): a slice of a writable ``memoryview`` of the address space
-(:data:`_SPANS`), cut in C. What callers keep is a read-only ``memoryview`` of that
-window. A large object is made uninitialised (``PyBytes_FromStringAndSize(NULL, n)``,
-as CPython itself makes one it is about to fill): zeroing it first was a third of
-the cost of freezing a 1.4 MB image, for bytes overwritten at once (the padding
-around the window is never read); a small one is made by ``bytes(n)``, zeroed, with
-no ``ctypes`` call.
+anything else can see it, through a ``ctypes`` window at the first aligned
+address inside it (plus that offset). What
+callers keep is a read-only ``memoryview`` of that window. The object is made
+uninitialised (``PyBytes_FromStringAndSize(NULL, n)``, as CPython itself makes
+one it is about to fill): zeroing it first was a third of the cost of freezing
+a 1.4 MB image, for bytes overwritten at once (the padding around the window is
+never read).
 """
 
 from __future__ import annotations
@@ -67,27 +66,6 @@ ALIGNMENT = 64
 _new_bytes = ctypes.pythonapi.PyBytes_FromStringAndSize
 _new_bytes.restype = ctypes.py_object
 _new_bytes.argtypes = (ctypes.c_void_p, ctypes.c_ssize_t)
-
-
-_from_memory = ctypes.pythonapi.PyMemoryView_FromMemory
-_from_memory.restype = ctypes.py_object
-_from_memory.argtypes = (ctypes.c_void_p, ctypes.c_ssize_t, ctypes.c_int)
-_READ_ONLY, _WRITABLE = 0x100, 0x200  # PyBUF_READ, PyBUF_WRITE
-
-_SPANS: list[memoryview] = []
-"""Two windows over the process's address space (from address 1, 2**62 bytes): read-only
-and writable, made at first use (:func:`_window`). A window at an address is a slice of one,
-cut in C, where each was a ``ctypes`` call (through libffi, code the nodes run between two
-freezes sent out of the caches: 13 calls per run of ``coins.yaml``). The writable one only
-fills new ``bytes`` objects before anyone else sees them. Never read whole."""
-
-
-def _window(address: int, nbytes: int, writable: bool = False) -> memoryview:
-    """The ``nbytes`` at ``address`` as a memoryview that refers to no object (format ``B``):
-    a slice of a window of :data:`_SPANS`."""
-    if not _SPANS:
-        _SPANS[:] = [_from_memory(1, 1 << 62, flag) for flag in (_READ_ONLY, _WRITABLE)]
-    return _SPANS[writable][address - 1 : address - 1 + nbytes]
 
 
 def _data_offset() -> int:
@@ -125,13 +103,10 @@ def aligned_bytes(nbytes: int, fill: Callable[[memoryview], None]) -> memoryview
 
 
 def _new_aligned(nbytes: int, shift: int = 0) -> tuple[bytes, int, int]:
-    """A new ``bytes`` object of ``nbytes`` and the padding, with the address and the
-    offset of its first aligned byte (to be written once, at once); ``shift`` more bytes of
-    padding after that byte, for a value placed there. Uninitialised above
-    :data:`JOINED_BYTES` (zeroing them would cost a pass more), else zeroed by ``bytes``
-    itself: no ``ctypes`` call for a small one."""
-    size = nbytes + ALIGNMENT + shift
-    owner: bytes = _new_bytes(None, size) if size > JOINED_BYTES else bytes(size)
+    """A new uninitialised ``bytes`` object of ``nbytes`` and the padding, with the
+    address and the offset of its first aligned byte (to be written once, at once);
+    ``shift`` more bytes of padding after that byte, for a value placed there."""
+    owner: bytes = _new_bytes(None, nbytes + ALIGNMENT + shift)
     start = id(owner) + _DATA_OFFSET  # (the address ctypes.c_char_p(owner) gives)
     return owner, start, -start % ALIGNMENT
 
@@ -162,14 +137,14 @@ def frozen_copy(array: np.ndarray, offset: int = 0) -> np.ndarray:
     first += shift
     if not array.flags.c_contiguous:  # one pass from the strided array into the window
         if array.nbytes:
-            window = _window(start + first, array.nbytes, writable=True)
-            target = np.frombuffer(window, dtype).reshape(shape)
+            window = (ctypes.c_char * array.nbytes).from_address(start + first)
+            target = np.frombuffer(memoryview(window).cast("B"), dtype).reshape(shape)
             np.copyto(target, array, casting="no")
             del target, window
     elif array.nbytes > JOINED_BYTES:
         _fill(start + first, array)
-    elif array.nbytes:  # (a small one: its bytes, copied at once)
-        _window(start + first, array.nbytes, writable=True)[:] = array.tobytes()
+    elif array.nbytes:  # (a small one: its bytes and one memmove, a window less to make)
+        ctypes.memmove(start + first, array.tobytes(), array.nbytes)
     return _view(owner, dtype, array.size, first, shape)
 
 
@@ -182,7 +157,8 @@ def _view(owner: bytes, dtype: np.dtype, size: int, at: int, shape: tuple[int, .
 
 def _fill(address: int, array: np.ndarray) -> None:
     """Copy the C-contiguous ``array`` to ``address``."""
-    with _window(address, array.nbytes, writable=True) as window:
+    window = memoryview((ctypes.c_char * array.nbytes).from_address(address)).cast("B")
+    with window:
         _copy(window, 0, array, address)
 
 
@@ -201,6 +177,11 @@ def _copy(window: memoryview, begin: int, array: np.ndarray, address: int) -> No
 
 IN_PLACE_BYTES = 16384
 """Arrays smaller than this are copied: a copy costs no more than freezing in place."""
+
+_from_memory = ctypes.pythonapi.PyMemoryView_FromMemory
+_from_memory.restype = ctypes.py_object
+_from_memory.argtypes = (ctypes.c_void_p, ctypes.c_ssize_t, ctypes.c_int)
+_READ_ONLY = 0x100  # PyBUF_READ
 
 _KEPT: dict[int, tuple[np.ndarray, weakref.ref[memoryview]]] = {}
 """The arrays :func:`frozen_in_place` froze, by the ``id`` of the read-only window every
@@ -221,9 +202,9 @@ def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
     dtype that owns its memory, or a view of one (``reshape`` of a result) that nothing
     but the view holds and that covers at least 7/8 of its memory. Its ``writeable``
     flag (and its owner's) is cleared and what the caller keeps is a view through a
-    read-only ``memoryview`` over that memory that refers to no object (a slice of the
-    read-only window of :data:`_SPANS`): the array is no base of the view and the window
-    does not name it, so no flag set on the view or anything it refers to makes it writable,
+    read-only ``memoryview`` over that memory that refers to no object
+    (``PyMemoryView_FromMemory``): the array is no base of the view and the window does
+    not name it, so no flag set on the view or anything it refers to makes it writable,
     as with a copy in ``bytes``; the array is kept alive by the window (held by every
     view of it) and freed with it. The copy (0.8 ms of a 12 ms pipeline's
     run for 3.3 MB of images) is saved.
@@ -255,7 +236,7 @@ def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
     # released at once (a microsecond less than the dict ``__array_interface__`` builds)
     address = ctypes.addressof(ctypes.c_char.from_buffer(array))  # type: ignore[arg-type]
     flags.writeable = False  # (an array over the window at once: no 1-D one to reshape)
-    frozen = np.ndarray(array.shape, array.dtype, _window(address, array.nbytes))
+    frozen = np.ndarray(array.shape, array.dtype, _from_memory(address, array.nbytes, _READ_ONLY))
     window = frozen.base  # the memoryview numpy holds (every view of ``frozen`` rests on it)
     if not isinstance(window, memoryview):  # (not how numpy holds a buffer: copy instead)
         flags.writeable = True
@@ -361,9 +342,10 @@ def _write(address: int, parts: list[Any], size: int) -> None:
     """Copy ``parts`` (C-contiguous arrays and ``bytes``), one after the other, to the
     ``size`` bytes at ``address``."""
     if size <= JOINED_BYTES:
-        _window(address, size, writable=True)[:] = b"".join(parts)
+        ctypes.memmove(address, b"".join(parts), size)
         return
-    with _window(address, size, writable=True) as window:
+    window = memoryview((ctypes.c_char * size).from_address(address)).cast("B")
+    with window:
         at = 0
         for part in parts:
             if type(part) is bytes:

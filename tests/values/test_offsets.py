@@ -151,26 +151,6 @@ def test_a_nodes_own_array_is_frozen_where_it_lies_at_any_aligned_offset(offset)
         frozen.flags.writeable = True
 
 
-def test_an_array_frozen_in_place_rests_on_a_read_only_window_naming_no_object():
-    from graphvision.values import memory
-
-    array = np.arange(5000.0)
-    frozen = frozen_in_place(array)
-    del array  # (the window alone keeps it alive)
-    window = frozen.base
-    assert isinstance(window, memoryview) and window.obj is None and window.readonly
-    assert len(window) == frozen.nbytes == 40_000
-    with pytest.raises(TypeError, match="read-only"):
-        window[0] = 1
-    with pytest.raises(ValueError, match="WRITEABLE"):
-        np.frombuffer(window, np.float64).flags.writeable = True
-    assert np.array_equal(frozen, np.arange(5000.0)) and is_frozen(frozen)
-    key = id(window)
-    assert key in memory._KEPT
-    del frozen, window
-    assert key not in memory._KEPT  # the array is released with its last view
-
-
 def test_a_view_is_not_frozen_in_place_while_its_owner_is_held_elsewhere():
     owner = np.zeros((100, 100), np.float32)
     assert frozen_in_place(owner[1:]) is None  # ``owner`` is held here: a copy is made
