@@ -67,6 +67,7 @@ from graphvision.execution.batch_files import (
     refuse_names_not_utf8,
     summary_text,
 )
+from graphvision.execution.batch_forked import forked_files
 from graphvision.execution.batch_guard import refuse_in_bootstrap
 from graphvision.execution.batch_lanes import FileLanes
 from graphvision.execution.batch_run import BatchRun
@@ -366,6 +367,10 @@ def _stream(batch: BatchRun, at_once: int) -> Iterator[tuple[int, BatchItem]]:
     :mod:`graphvision.execution.batch_lanes`)."""
     run_one, count = batch.run_one, len(batch.paths)
     if count == 0:
+        return
+    forked = forked_files(batch, at_once)  # every file on workers, the first one included
+    if forked is not None:
+        yield from forked.stream()
         return
     yield 0, run_one(0)
     if batch.one_task_per_file and at_once > 1:

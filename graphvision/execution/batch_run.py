@@ -84,6 +84,7 @@ class BatchRun:
         # output folder they share
         self.stop = StopFlag.planned(out_dir if hasattr(pool, "share") else None)
         self.workers_ready = threading.Event()  # a worker has started (or could not)
+        self.first_where = "first file in this process"  # its record's executor says so
 
     def run_one(self, index: int) -> BatchItem:
         if index > 0 or not self.one_task_per_file:
@@ -91,27 +92,31 @@ class BatchRun:
         fork = hasattr(self.pool, "fork_workers") and fork_context() is not None
         if not fork:
             self._warm_workers()  # while the first file runs here
-        try:
-            item = self._run_one(0)
-        finally:  # a first file that failed early: the others' job has no shared values
-            if self.job is None:
-                with contextlib.suppress(Exception):
-                    self.job_sent = self._file_job(None)
-                    self.job = self._share(self.job_sent)
+        item = self.run_first()
         if fork:  # not after Ctrl-C: only when the first file returned
             self._fork_workers()
         return item
 
+    def run_first(self) -> BatchItem:
+        """The first file, in this process, and the others' job made from its run."""
+        try:
+            return self._run_one(0)
+        finally:  # a first file that failed early: the others' job has no shared values
+            if self.job is None:
+                with contextlib.suppress(Exception):
+                    self.job_sent = self.file_job(None)
+                    self.job = self._share(self.job_sent)
+
     def _run_one(self, index: int) -> BatchItem:
         path, folder = self.paths[index], self.folders[index]
-        unreadable = self._started(index)
+        unreadable = self.note_started(index)
         if unreadable is not None:
             return unreadable
         try:
             if index > 0 and self.one_task_per_file:  # the worker writes the folder
                 outcome = self._on_worker(index)
                 self.outcomes.append(outcome)
-                return self._received(index, outcome.item)
+                return self.received(index, outcome.item)
             item, result = self._run(index)
             with writing(self.stop, folder, lambda: self.stopped) as claim:
                 if not claim:  # the batch was interrupted meanwhile: its folder is not written
@@ -119,11 +124,11 @@ class BatchRun:
                     return item
                 item = finish_item(item, result, self.pages.run, self.out_dir)
                 claim.written(item)
-            return self._received(index, item)
+            return self.received(index, item)
         except Exception as error:  # whatever it is, it fails this file alone
             return BatchItem(path, folder, "failed", error=failure_reason(error))
 
-    def _started(self, index: int) -> BatchItem | None:
+    def note_started(self, index: int) -> BatchItem | None:
         """Note file ``index`` as started; its failed item when it is matched by the pattern
         but is not a file that can be read (else None)."""
         self.started.add(index)
@@ -133,7 +138,7 @@ class BatchRun:
             return BatchItem(path, self.folders[index], "failed", error=f"{path} {reason}")
         return None
 
-    def _received(self, index: int, item: BatchItem) -> BatchItem:
+    def received(self, index: int, item: BatchItem) -> BatchItem:
         """The file's item has reached the client: counted, its claim dropped (a file not
         written since the batch stopped is neither)."""
         if item.status != "interrupted":
@@ -151,7 +156,7 @@ class BatchRun:
             return [(index, self.run_one(index)) for index in indices]
         found, sent = {}, []
         for index in indices:
-            unreadable = self._started(index)
+            unreadable = self.note_started(index)
             if unreadable is not None:
                 found[index] = unreadable
             else:
@@ -162,9 +167,9 @@ class BatchRun:
             outcomes = self.pool.submit(run_files, run_file_task, self.job, files).result()[0]
         for index, outcome in zip(sent, outcomes, strict=True):
             if not isinstance(outcome, FileOutcome):  # it raised, or its worker died
-                outcome = self._settled(index) or self._alone(index)
+                outcome = self.settled(index) or self._alone(index)
             self.outcomes.append(outcome)
-            found[index] = self._received(index, outcome.item)
+            found[index] = self.received(index, outcome.item)
         return [(index, found[index]) for index in indices]
 
     def _alone(self, index: int) -> FileOutcome:
@@ -179,20 +184,20 @@ class BatchRun:
     def _on_worker(self, index: int) -> FileOutcome:
         """One file as one task of the executor. A task whose worker died (and died again,
         or could not start again: the executor retries once) counts as its claim says
-        (:meth:`_settled`); when no worker could start, the file runs once more here, as the
+        (:meth:`settled`); when no worker could start, the file runs once more here, as the
         client's own files do."""
         path, folder = self.paths[index], self.folders[index]
         outcome, died = run_file(self.pool, self.job, path, folder)
         if died is None:
             return outcome
-        kept = self._settled(index)
+        kept = self.settled(index)
         if kept is not None:
             return kept
         if could_not_start(died) and self.job_sent is not None and not self.stopped:
             return FileOutcome(self.run_in_client(index, "in the client: no worker could start"))
         return outcome
 
-    def _settled(self, index: int) -> FileOutcome | None:
+    def settled(self, index: int) -> FileOutcome | None:
         """A file whose task failed, as its claim says: its folder written whole is the
         file's (its outcome); one left half-way is cleared, its claim dropped (None)."""
         folder = self.folders[index]
@@ -254,7 +259,7 @@ class BatchRun:
         """A further file run here as a worker would run it (while the workers start: see
         :mod:`graphvision.execution.batch_lanes`); its folder is not written once stopped."""
         path, folder = self.paths[index], self.folders[index]
-        unreadable = self._started(index)
+        unreadable = self.note_started(index)
         if unreadable is not None:
             return unreadable
         try:
@@ -263,7 +268,7 @@ class BatchRun:
             name = f"{executor_name(self.pool)}, {where}"
             job = dataclasses.replace(self.job_sent, executor=name)
             item = run_file_task(job, str(path), str(folder), lambda: self.stopped).item
-            return self._received(index, item)
+            return self.received(index, item)
         except Exception as error:  # whatever it is, it fails this file alone
             return BatchItem(path, folder, "failed", error=failure_reason(error))
 
@@ -274,7 +279,7 @@ class BatchRun:
         options = {**options, "inputs": item_inputs}
         if index == 0 and self.one_task_per_file:  # here, while the workers load the plugins
             options["executor"] = SyncExecutor()
-            options["executor"].name = f"{executor_name(self.pool)}, first file in this process"
+            options["executor"].name = f"{executor_name(self.pool)}, {self.first_where}"
         elif index > 0 and self.file_threads:  # each file in its thread, one node at a time
             options["executor"] = SyncExecutor()
             options["executor"].name = f"{executor_name(self.pool)}, one file per thread"
@@ -285,11 +290,11 @@ class BatchRun:
         if index == 0 and result is not None:
             self.compiled = result.compiled
         if index == 0 and self.one_task_per_file:
-            self.job_sent = self._file_job(result)
+            self.job_sent = self.file_job(result)
             self.job = self._share(self.job_sent)
         return item, result
 
-    def _file_job(self, first: RunResult | None) -> FileJob:
+    def file_job(self, first: RunResult | None) -> FileJob:
         """What each further file's task needs, with the shared values the first file cached."""
         options, cache = self.options, self.options["cache"]
         seeds: list[Seed] = []

@@ -32,12 +32,17 @@ from graphvision.execution.worker_start import (
     start_server,
 )
 
-__all__ = ["ProcessExecutor"]
+__all__ = ["ProcessExecutor", "client_setup", "worker_setup"]
 
 EXIT_WAIT = 30.0  # seconds a broken pool's workers get to exit before its tasks fail anyway
 
 
-def _worker_setup(environment: dict[str, str], _: ClientStdio) -> None:
+def client_setup() -> tuple[dict[str, str], ClientStdio]:
+    """The arguments of :func:`worker_setup` for workers started now."""
+    return dict(os.environ), ClientStdio()
+
+
+def worker_setup(environment: dict[str, str], _: ClientStdio) -> None:
     """In each worker: the client's environment variables, standard output and error (a
     worker forked from the server has the server's), leave Ctrl-C to the client, end on
     SIGTERM as a worker does (a fork of the client carries its handler, which stopped the
@@ -91,18 +96,19 @@ class ProcessExecutor:
 
     encodes_values = True
     name = "processes"
-    files_per_task = 8  # files a batch's lane sends as one task (execution.batch_lanes)
+    files_per_task = 8  # files a batch sends as one task (execution.batch_forked)
+    forks_file_workers = True  # a batch's files run on workers forked from the client
 
     def __init__(self, workers: int) -> None:
         self._workers = workers
         self.width = workers
+        self.file_workers: list[Any] = []  # a batch's (execution.file_workers): joined here
         self._lock = threading.Lock()
         start_server(start=False)  # the server imports graphvision (a batch adds its plugins)
         self._pool = self._new_pool()
 
     def _new_pool(self, workers: int = 0) -> ProcessPoolExecutor:
-        setup = (dict(os.environ), ClientStdio())
-        return process_pool(workers or self._workers, context(), _worker_setup, setup)
+        return process_pool(workers or self._workers, context(), worker_setup, client_setup())
 
     def preload(self, modules: list[str]) -> None:
         """Start the workers' server in the background, importing ``modules`` too (the
@@ -116,11 +122,10 @@ class ProcessExecutor:
         forked = fork_context()
         if forked is None:
             return False
-        setup = (dict(os.environ), ClientStdio())
         with self._lock:
             old, self._pool = (
                 self._pool,
-                process_pool(self._workers, forked, _worker_setup, setup),
+                process_pool(self._workers, forked, worker_setup, client_setup()),
             )
         old.shutdown(wait=False)
         return True
@@ -201,6 +206,10 @@ class ProcessExecutor:
             return self._pool
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        for workers in self.file_workers:
+            workers.shutdown(wait=wait)
+        if wait:
+            self.file_workers.clear()
         self._pool.shutdown(wait=wait, cancel_futures=cancel_futures)
 
 

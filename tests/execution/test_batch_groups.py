@@ -133,8 +133,8 @@ def test_ctrl_c_in_a_batch_of_tasks_of_several_files_leaves_each_folder_whole_or
         folder = tmp_path / "out" / name
         if status == "ok":
             record = json.loads((folder / "record.json").read_text())
-            first = name == "00"  # run in the client
-            assert record["executor"].endswith("first file in this process" if first else "a task")
+            first = name == "00"  # run node by node, on a worker forked from the client
+            assert record["executor"].endswith("first file on a worker" if first else "a task")
         else:
             assert status in ("interrupted", "not run") and not folder.exists()
 

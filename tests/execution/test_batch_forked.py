@@ -1,0 +1,133 @@
+"""A batch on processes runs every file on workers forked from the client, the first one
+included (graphvision.execution.batch_forked): a node that kills its process on the
+batch's first file fails that file alone, the others complete and batch.csv is written
+(issue 26 item 1; the client used to run that file and die with it)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import multiprocessing
+import os
+import signal
+from typing import Any
+
+import pytest
+
+from graphvision.execution.file_workers import FileWorkers
+
+from .test_batch_groups import _scored_on_processes
+
+KILLING_PLUGIN = '''
+import os
+import signal
+
+import numpy as np
+
+from graphvision import Float, Image, node
+
+
+@node("killing.score")
+def score(image: Image) -> Float:
+    """The image's mean; a process other than the test's given the image of level 77 ends
+    itself as KILL_BY says."""
+    mean = float(np.mean(image))
+    if round(mean * 255) == 77 and os.getpid() != int(os.environ["CLIENT_PID"]):
+        if os.environ["KILL_BY"] == "exit":
+            os._exit(3)
+        os.kill(os.getpid(), getattr(signal, os.environ["KILL_BY"]))
+    return mean
+'''
+
+
+@pytest.mark.parametrize(
+    ("kill_by", "said"),
+    [
+        ("exit", "it exited with status 3"),
+        ("SIGKILL", "killed by SIGKILL"),
+        ("SIGSEGV", "crashed in native code: SIGSEGV"),
+    ],
+)
+def test_a_node_that_kills_its_process_on_the_first_file_fails_that_file_alone(
+    tmp_path, monkeypatch, kill_by, said
+):
+    monkeypatch.setenv("CLIENT_PID", str(os.getpid()))  # never this process: the test's
+    monkeypatch.setenv("KILL_BY", kill_by)
+    levels = [77] + [10 + 3 * k for k in range(1, 12)]
+    batch = _scored_on_processes(tmp_path, KILLING_PLUGIN, "killing", levels)
+    status = [item.status for item in batch.items]
+    assert status == ["failed"] + ["ok"] * 11, batch.items
+    error = batch.items[0].error
+    assert error.startswith("the worker process running this node died") and said in error
+    assert "again when retried alone" in error
+    assert not (tmp_path / "out" / "00").exists()  # no half of a folder
+    with (tmp_path / "out" / "batch.csv").open() as summary:
+        rows = {row["output_dir"]: row["status"] for row in csv.DictReader(summary)}
+    assert sorted(rows.values()) == ["failed"] + ["ok"] * 11
+    for item, level in zip(batch.items[1:], levels[1:], strict=True):
+        assert item.scalars["score"] == pytest.approx(level / 255.0, abs=1e-6)
+
+
+def test_the_first_file_runs_node_by_node_on_a_worker(tmp_path, monkeypatch):
+    """Its record says where it ran; the files after it run in tasks of several files."""
+    monkeypatch.setenv("CLIENT_PID", str(os.getpid()))
+    monkeypatch.setenv("KILL_BY", "exit")
+    batch = _scored_on_processes(tmp_path, KILLING_PLUGIN, "killing", [20, 30, 40, 50])
+    records = [json.loads((i.output_dir / "record.json").read_text()) for i in batch.items]
+    executors = [record["executor"] for record in records]
+    assert executors[0] == "processes, first file on a worker"
+    assert set(executors[1:]) == {"processes, up to 8 files a task"}
+    assert [item.scalars["score"] for item in batch.items] == pytest.approx(
+        [level / 255.0 for level in (20, 30, 40, 50)], abs=1e-6
+    )
+
+
+def _answer(state: Any, payload: Any) -> Any:
+    """A worker's task: ``payload`` back with the worker's state, or its exit when asked."""
+    if payload == "exit":
+        os._exit(5)
+    if payload == "raise":
+        raise ValueError("no such thing")
+    return payload, state
+
+
+def test_a_dead_workers_task_is_seen_on_its_sentinel_and_the_other_goes_on():
+    workers = FileWorkers(multiprocessing.get_context("fork"))
+    first, second = workers.start("one"), workers.start("two")
+    try:
+        workers.send(first, "task a", _answer, "exit")
+        workers.send(second, "task b", _answer, 7)
+        workers.send(second, "task c", _answer, "raise")
+        answers: list[Any] = []
+        dead: list[Any] = []
+        while len(answers) < 2 or not dead:
+            found, ended = workers.answers()
+            answers += found
+            dead += ended
+        assert [(task, answer) for _, task, answer in answers[:1]] == [("task b", (7, "two"))]
+        assert answers[1][1] == "task c" and isinstance(answers[1][2], ValueError)
+        assert str(answers[1][2]) == "no such thing"
+        assert dead == [first] and first.held == ["task a"]  # what it ran, unanswered
+        assert first.process.exitcode == 5
+        assert workers.workers == [second]  # the other goes on
+        workers.send(second, "task d", _answer, 8)
+        assert workers.answers()[0][0][1:] == ("task d", (8, "two"))
+    finally:
+        workers.shutdown()
+    assert second.process._closed  # type: ignore[attr-defined]  # joined
+
+
+def test_a_worker_ignores_ctrl_c_and_ends_on_sigterm():
+    workers = FileWorkers(multiprocessing.get_context("fork"))
+    worker = workers.start()
+    try:
+        workers.send(worker, "ready", _answer, 1)
+        assert workers.answers()[0][0][1] == "ready"  # set up: its signal handlers too
+        os.kill(worker.process.pid, signal.SIGINT)
+        workers.send(worker, "after Ctrl-C", _answer, 2)
+        assert workers.answers()[0][0][1:] == ("after Ctrl-C", (2, None))
+        os.kill(worker.process.pid, signal.SIGTERM)
+        found, dead = workers.answers()
+        assert (found, dead) == ([], [worker]) and worker.process.exitcode == -signal.SIGTERM
+    finally:
+        workers.shutdown()
