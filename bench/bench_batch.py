@@ -34,9 +34,10 @@ stay flat.
 
 :func:`startup` times a processes batch's start-up (run it alone, in a fresh
 process: ``python bench/bench_batch.py startup``): when its first file is done
-in the client, how many files the client ran itself while the workers started
-(``batch_lanes``), when the first file is done on a worker, with the workers
-forked from the client (the default) and from the fork server, and the fork
+(on the first worker when they are forked from the client, the default; in the client
+from the fork server), how many files the client ran itself while the workers started
+(``batch_lanes``: none when forked), when the first further file is done on a worker,
+with the workers forked from the client and from the fork server, and the fork
 server's steps one by one. :func:`main` also runs the first 50 files alone on
 sync and processes.
 
@@ -418,9 +419,10 @@ def scaling(sizes: tuple[int, ...] = (50, 200, 1000)) -> list[str]:
 
 def startup(files: int = 200) -> list[str]:
     """Where a processes batch's start-up goes: seconds from the batch's start until its
-    first file (run in the client), the files the client ran itself while the workers
-    started, the first file done on a worker, then per further file; once with the workers
-    forked from the client after its first file (the default), once from the fork server
+    first file (on the first worker when they are forked from the client, else in the
+    client), the files the client ran itself while the workers started (none when forked),
+    the first further file done on a worker, then per further file; once with the workers
+    forked from the client as the batch starts (the default), once from the fork server
     (``GRAPHVISION_WORKER_START=forkserver``, what a client with other threads gets); and
     the fork server's steps, replayed one by one in a fresh interpreter
     (:func:`server_steps`). Meaningful for the first processes batch of a process (the
@@ -477,10 +479,10 @@ def _startup_run(graph: gv.Graph, files: int, start: str) -> list[tuple[str, str
     workers = [t for (t, _), w in zip(done, where, strict=True) if w.endswith(" a task")]
     rest = (workers[-1] - workers[0]) / max(len(workers) - 1, 1)
     return [
-        ("first file done (in the client), s", f"{done[0][0]:.2f}"),
+        ("first file done (forked: on a worker; else in the client), s", f"{done[0][0]:.2f}"),
         ("files the client ran while the workers started", f"{len(client)}"),
         ("the last of them done at, s", f"{client[-1]:.2f}" if client else "-"),
-        ("first file done on a worker, s", f"{workers[0]:.2f}"),
+        ("first further file done on a worker, s", f"{workers[0]:.2f}"),
         (f"each further file on the workers ({len(workers)} files, 2 workers), s", f"{rest:.3f}"),
         ("whole batch, s", f"{total:.2f}"),
     ]
