@@ -10,6 +10,7 @@ import json
 import multiprocessing
 import os
 import signal
+import threading
 from typing import Any
 
 import pytest
@@ -17,6 +18,7 @@ import pytest
 from graphvision.execution.file_workers import FileWorkers
 
 from .test_batch_groups import _scored_on_processes
+from .test_batch_workers import _no_parallel_layer
 
 KILLING_PLUGIN = '''
 import os
@@ -40,6 +42,14 @@ def score(image: Image) -> Float:
 '''
 
 
+@pytest.fixture
+def alone(monkeypatch):
+    """No thread but this one (earlier tests of this process may have left some): the
+    batch forks its workers from the client (its plugin runs no numba code)."""
+    monkeypatch.setattr(threading, "enumerate", lambda: [threading.current_thread()])
+    _no_parallel_layer(monkeypatch)
+
+
 @pytest.mark.parametrize(
     ("kill_by", "said"),
     [
@@ -49,7 +59,7 @@ def score(image: Image) -> Float:
     ],
 )
 def test_a_node_that_kills_its_process_on_the_first_file_fails_that_file_alone(
-    tmp_path, monkeypatch, kill_by, said
+    tmp_path, monkeypatch, alone, kill_by, said
 ):
     monkeypatch.setenv("CLIENT_PID", str(os.getpid()))  # never this process: the test's
     monkeypatch.setenv("KILL_BY", kill_by)
@@ -68,7 +78,7 @@ def test_a_node_that_kills_its_process_on_the_first_file_fails_that_file_alone(
         assert item.scalars["score"] == pytest.approx(level / 255.0, abs=1e-6)
 
 
-def test_the_first_file_runs_node_by_node_on_a_worker(tmp_path, monkeypatch):
+def test_the_first_file_runs_node_by_node_on_a_worker(tmp_path, monkeypatch, alone):
     """Its record says where it ran; the files after it run in tasks of several files."""
     monkeypatch.setenv("CLIENT_PID", str(os.getpid()))
     monkeypatch.setenv("KILL_BY", "exit")
