@@ -15,7 +15,7 @@ import signal
 import threading
 import time
 from collections.abc import Callable
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import CancelledError, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from multiprocessing.connection import wait
 from typing import Any
@@ -150,6 +150,9 @@ class ProcessExecutor:
         workers = _workers(pool)
 
         def settle(done: Future) -> None:
+            if done.cancelled():  # a stop's shutdown(cancel_futures=True): so is this one
+                outer.set_exception(CancelledError())
+                return
             if isinstance(done.exception(), BrokenProcessPool):
                 self._replace(pool)
                 _after_exit(list(workers.values()), lambda: self._broken(outer, fn, args))
