@@ -224,7 +224,9 @@ class ForkedFiles:
                 self._settle(index, kept)
             elif ran.alone:
                 item = BatchItem(self.batch.paths[index], self.batch.folders[index], "failed")
-                item.error = str(died("and again when retried alone", code))
+                forked = self.workers.start_method.get_start_method() == "fork"
+                error = died("and again when retried alone", code, "file", forked=forked)
+                item.error = f"{type(error).__name__}: {error}"  # as batch.csv names any error
                 self._settle(index, FileOutcome(item))
             else:
                 self.again.append(index)

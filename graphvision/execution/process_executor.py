@@ -223,7 +223,9 @@ def _died_again(fn: Callable[..., Any], args: tuple, ended: list[Any]) -> BaseEx
     for worker in ended:
         with contextlib.suppress(ValueError):  # a process object already closed
             codes.append(worker.exitcode)
-    return ended_by_limit(fn, args) or died("and again when retried alone", *codes[:1])
+    running = "file" if getattr(fn, "__name__", "") in ("run_files", "run_file_task") else "node"
+    code = codes[0] if codes else None
+    return ended_by_limit(fn, args) or died("and again when retried alone", code, running)
 
 
 def _copy(source: Future, target: Future) -> None:

@@ -39,14 +39,16 @@ def how_it_ended(exitcode: int | None) -> str:
     return _SIGNALS.get(ended, f"ended by {ended.name}")
 
 
-def died(how: str, exitcode: int | None = None) -> WorkerDiedError:
+def died(
+    how: str, exitcode: int | None = None, running: str = "node", forked: bool = False
+) -> WorkerDiedError:
     """:class:`WorkerDiedError` saying ``how`` and how the worker ended (:func:`how_it_ended`),
     naming the main guard when the script lacks it: the retry's worker comes from the fork
-    server and imports the script first."""
+    server and imports the script first (not one ``forked`` from the client). ``running``:
+    what the worker ran (``node``, or a batch's ``file``)."""
     ended = how_it_ended(exitcode)
-    return WorkerDiedError(
-        f"the worker process running this node died ({ended}), {how}{guard_hint()}"
-    )
+    hint = "" if forked else guard_hint()
+    return WorkerDiedError(f"the worker process running this {running} died ({ended}), {how}{hint}")
 
 
 def died_on_dask(error: BaseException, running: str = "node") -> BaseException:
