@@ -14,7 +14,6 @@ from typing import Any
 from graphvision.graph.model import Graph
 from graphvision.nodes.fingerprint import node_fingerprint
 from graphvision.nodes.spec import NodeSpec
-from graphvision.values.checks import ArrayCheck, array_check, is_fresh_table_port
 from graphvision.values.ports import ArrayPort, PortType, is_plain_array_port
 from graphvision.values.scalars import FloatPort, _ScalarPort, is_plain_table_port
 
@@ -143,18 +142,6 @@ class Step:
             and kind.decode.__func__ is ArrayPort.decode.__func__  # type: ignore[attr-defined]
         )
         return port, kind, issubclass(kind, _ScalarPort), plain
-
-    @cached_property
-    def array_checks(self) -> dict[str, ArrayCheck | None]:
-        """Each output port's check of a fresh array, made once: its type's ``validate`` in
-        one function (:func:`~graphvision.values.checks.array_check`), or None."""
-        return {port: array_check(kind) for port, kind in self.outputs.items()}
-
-    @cached_property
-    def table_ports(self) -> frozenset[str]:
-        """The output ports whose type takes a node's new table in one pass
-        (:func:`~graphvision.values.checks.frozen_fresh_table`), made once."""
-        return frozenset(port for port, kind in self.outputs.items() if is_fresh_table_port(kind))
 
 
 @dataclass(frozen=True)

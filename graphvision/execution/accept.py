@@ -6,12 +6,9 @@ from __future__ import annotations
 import sys
 from typing import Any
 
-from numpy import ndarray
-
 from graphvision.compiler.compile import Step
 from graphvision.errors import PortValueError
 from graphvision.execution.inputs import freeze_value
-from graphvision.values.checks import frozen_fresh_table
 from graphvision.values.known import checked, frozen_value, note, recall
 from graphvision.values.memory import frozen_in_place
 from graphvision.values.ports import is_plain_array_port
@@ -42,16 +39,10 @@ def accepted(step: Step, result: Any, held: int, encoded: bool) -> dict[str, Any
         port, kind, scalar, plain = only
         if not scalar and recall(result, kind):  # frozen, accepted as ``kind`` before
             return {port: result}
-        if port in step.table_ports and (table := frozen_fresh_table(result)) is not None:
-            return {port: table}  # (a new table: checked and frozen in one pass)
-        check = step.array_checks[port]  # (its type's validate in one call: values.checks)
-        if check is not None and type(result) is ndarray and check(result):
-            value = result
-        else:
-            try:
-                value = kind.validate(result)
-            except PortValueError as error:
-                raise invalid_output(port, error) from None
+        try:
+            value = kind.validate(result)
+        except PortValueError as error:
+            raise invalid_output(port, error) from None
         if scalar:
             return {port: value}
         if plain and value is result and getrefcount(value) <= held + _OWN_REFS:
@@ -68,16 +59,13 @@ def _accepted_outputs(step: Step, result: Any, alone: bool) -> dict[str, Any]:
     """:func:`accepted` of a node with several outputs (a tuple); ``alone``: nothing but the
     caller holds the tuple, so an array that nothing but the tuple (and this loop) holds is
     frozen where it lies, as a node's one output is; the others are copied."""
-    outputs: dict[str, Any] = {}
-    kinds, checks = step.outputs, step.array_checks
+    outputs, kinds = {}, step.outputs
     ports = list(step.spec.split_outputs(result))  # (which checks the tuple; an iterator over
     for index, port in enumerate(ports):  # its pairs would hold the last value once more)
         kind, value = kinds[port], result[index]
         try:
             if alone and is_plain_array_port(kind) and not recall(value, kind):
-                check = checks[port]
-                fresh = check is not None and type(value) is ndarray and check(value)
-                checked_value = value if fresh else kind.validate(value)
+                checked_value = kind.validate(value)
                 if checked_value is value and getrefcount(value) <= _IN_TUPLE_REFS:
                     frozen = frozen_in_place(value)
                     if frozen is not None:
@@ -86,8 +74,7 @@ def _accepted_outputs(step: Step, result: Any, alone: bool) -> dict[str, Any]:
                         continue
                 outputs[port] = frozen_value(kind, checked_value)
                 continue
-            table = frozen_fresh_table(value) if port in step.table_ports else None
-            outputs[port] = checked(kind, value) if table is None else table
+            outputs[port] = checked(kind, value)
         except PortValueError as error:
             raise invalid_output(port, error) from None
     return outputs

@@ -103,13 +103,12 @@ def batch_files(pattern: str, exclude: Path | None = None) -> tuple[list[Path], 
     that leaves nothing. ``**`` searches each real folder once (:func:`.glob_once`).
     A file reached by several paths (a folder symlink, a link back up the tree) is
     taken once, by its shortest path (the first in name order among the shortest),
-    so that it runs once and has one folder; a
-    warning names the path kept and those skipped (one line for the batch). A
-    match that cannot be read as a file (a dangling or looping symbolic link, a
-    pipe, and a folder when the pattern's last part names a suffix, as ``*.png``
-    does) is kept, for the batch to list it as failed with
-    :func:`unreadable_reason`; folders matched by a pattern that names no suffix
-    (``photos/*``) are the folders searched.
+    so that it runs once and has one folder; a warning names the path kept and
+    those skipped (one line for the batch). A match that cannot be read as a file
+    (a dangling or looping symbolic link, a pipe, and a folder when the pattern's
+    last part names a suffix, as ``*.png`` does) is kept, for the batch to list it
+    as failed with :func:`unreadable_reason`; folders matched by a pattern that
+    names no suffix (``photos/*``) are the folders searched.
     """
     skipped = exclude.resolve() if exclude is not None else None
     folders_are_matches = "." in Path(pattern).name
@@ -392,9 +391,10 @@ def refuse_folder_not_utf8(folder: Path, option: str = "output folder") -> None:
     """Refuse, before anything runs, an output folder whose name is not UTF-8, for the
     reason of :func:`refuse_names_not_utf8` (its files could not name it: a batch ended
     with an internal error on every file), nor one in a folder whose path is not."""
-    shown = not_utf8(folder) or not_utf8(folder.absolute())
+    given = not_utf8(folder)
+    shown = given or not_utf8(folder.absolute())
     if shown is not None:
         raise OutputFolderError(
-            f"{option} {shown}: its {'name' if not_utf8(folder) else 'path'} is not UTF-8; "
+            f"{option} {shown}: its {'name' if given else 'path'} is not UTF-8; "
             "record.json, batch.csv and the pages name it in UTF-8: choose another folder"
         )

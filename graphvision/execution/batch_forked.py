@@ -173,10 +173,7 @@ class ForkedFiles:
             if kept is not None:
                 self._settle(index, kept)
             elif task.alone:  # it failed again, on its own: with its reason
-                reason = f"{type(outcome).__name__}: {outcome}"
-                item = BatchItem(self.batch.paths[index], self.batch.folders[index], "failed")
-                item.error = reason
-                self._settle(index, FileOutcome(item))
+                self._failed(index, f"{type(outcome).__name__}: {outcome}")
             else:
                 self.again.append(index)
 
@@ -199,6 +196,12 @@ class ForkedFiles:
         if job is None:
             job = self.batch.file_job(None)
         self.job = self.batch.job_sent = job
+
+    def _failed(self, index: int, reason: str) -> None:
+        """File ``index`` failed on its own, for ``reason`` (what batch.csv says)."""
+        item = BatchItem(self.batch.paths[index], self.batch.folders[index], "failed")
+        item.error = reason
+        self._settle(index, FileOutcome(item))
 
     def _settle(self, index: int, outcome: FileOutcome) -> None:
         self.batch.outcomes.append(outcome)
@@ -223,11 +226,9 @@ class ForkedFiles:
             if kept is not None:
                 self._settle(index, kept)
             elif ran.alone:
-                item = BatchItem(self.batch.paths[index], self.batch.folders[index], "failed")
                 forked = self.workers.start_method.get_start_method() == "fork"
                 error = died("and again when retried alone", code, "file", forked=forked)
-                item.error = f"{type(error).__name__}: {error}"  # as batch.csv names any error
-                self._settle(index, FileOutcome(item))
+                self._failed(index, failure_reason(error))
             else:
                 self.again.append(index)
         if self.todo or self.again:
