@@ -270,11 +270,11 @@ class Registry:
             return f"op '{op}' was renamed '{self.renamed[op]}': use the new name"
         family = op.split(".", 1)[0]
         families = {name.split(".", 1)[0] for name in self.nodes}
-        failed = [plugin.name for plugin in self.failed_plugins()]
-        if "." in op and family not in families and failed:
+        failed = [f"{plugin.name} ({plugin.error})" for plugin in self.failed_plugins()]
+        if "." in op and family not in families and failed:  # why, as Python prints no warning
             return (
                 f"unknown op '{op}': no loaded plugin provides the family '{family}', and "
-                f"plugin {', '.join(failed)} failed to load (its warning says where)"
+                f"plugin {'; '.join(failed)} failed to load"
             )
         if "." in op and family not in families and self.unread_plugins:
             return (

@@ -79,3 +79,16 @@ def test_a_copy_or_a_pickle_of_the_plugins_is_not_placed_twice(folder):
         again.plugins.append("my_nodes.py")  # still placed in the file's folder
         assert again.plugins == ["try/first.py", "try/my_nodes.py"]
     assert copy.copy(PluginPaths(["a.py"], "x")) == ["a.py"]
+
+
+def test_an_op_of_a_plugin_that_failed_to_load_says_why_in_python(folder):
+    """Python prints no warning for a plugin that fails to load: the error pointed at one
+    ('its warning says where') that never came (found by the new user)."""
+    graph = gv.Graph("built")
+    graph.plugins.append("try/missing.py")
+    graph.output("one", graph.add("one", "mine.one"))
+    with pytest.raises(gv.PipelineError) as caught:
+        gv.run(graph)
+    said = str(caught.value)
+    assert "plugin try/missing.py (plugin path try/missing.py does not exist) failed" in said
+    assert "warning" not in said
