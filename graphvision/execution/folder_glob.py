@@ -39,6 +39,8 @@ def glob_once(pattern: str) -> list[str]:
     for searched, again in _folders_once(tops):
         if rest:
             found.extend(_matches(searched, rest, below=not again))
+        elif pattern.endswith(os.sep):  # ending in **/: the folders alone, as glob gives them
+            found.extend([os.path.join(searched, "")] if searched else [])
         else:  # a pattern ending in **: the folders and their files, as glob gives them
             itself = os.path.join(searched, "") if searched in tops else searched
             inside = glob.glob(os.path.join(glob.escape(searched), "*"))

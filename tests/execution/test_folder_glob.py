@@ -12,7 +12,8 @@ from graphvision.execution.folder_glob import glob_once
 
 PATTERNS = [
     "ph/**/*.png", "ph/**", "**", "**/*.png", "ph/*/**/*.png", "ph/**/deep/*.png",
-    "ph/**/**/*.png", "ph/*.png", "p*/**/b.png", "ph/**/sub", "ph/**/[bc].png",
+    "ph/**/**/*.png", "ph/*.png", "p*/**/b.png", "ph/**/sub", "ph/**/[bc].png", "ph/**/",
+    "**/",
 ]  # fmt: skip
 
 
