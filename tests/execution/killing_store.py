@@ -6,7 +6,6 @@ from __future__ import annotations
 import os
 import signal
 import uuid
-from pathlib import Path
 from typing import Any
 
 from graphvision.cache.format import encode_blob
@@ -25,13 +24,25 @@ class KillingStore(FsspecStore):
         return (KillingStore, (self.url, self.max_bytes, self.storage_options, self.marker))
 
     def put(self, key: str, entry: Any) -> None:
-        if _on_a_worker() and not Path(self.marker).exists():
-            Path(self.marker).write_text(key)
+        if _on_a_worker() and _first(self.marker, key):
             blob = b"".join(bytes(c) for c in encode_blob(entry))
             temp = f"{self.root}/{key[:2]}/.tmp-{uuid.uuid4().hex}.gvc"
             self.fs.pipe_file(temp, blob[: len(blob) // 2])
             os.kill(os.getpid(), signal.SIGKILL)
         super().put(key, entry)
+
+
+def _first(marker: str, key: str) -> bool:
+    """Whether this is the first write to kill its worker: ``marker`` made now, holding
+    ``key`` (made exclusively: two workers writing at once, which both found no marker when
+    it was looked at before it was written, both killed themselves)."""
+    try:
+        descriptor = os.open(marker, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except FileExistsError:
+        return False
+    with os.fdopen(descriptor, "w") as handle:
+        handle.write(key)
+    return True
 
 
 def _on_a_worker() -> bool:
