@@ -108,13 +108,18 @@ class Problem:
     file: str = ""
     added: str = ""
 
-    def __str__(self) -> str:
+    @property
+    def place(self) -> str:
+        """Where the problem is: ``nodes.blur.params.sigma at p.yaml:14``."""
         place = self.where
         if self.file:
             place += f" at {self.file}:{self.line}" if self.line else f" in {self.file}"
         if self.added:
             place += f" ({self.added})"
-        return f"{place}: {self.message}"
+        return place
+
+    def __str__(self) -> str:
+        return f"{self.place}: {self.message}"
 
 
 class PipelineError(GraphvisionError):

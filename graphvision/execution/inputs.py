@@ -11,15 +11,28 @@ import yaml
 from graphvision.errors import (
     InputError,
     PortValueError,
+    Problem,
 )
+from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
 from graphvision.values.ports import PortType, freeze_all
 from graphvision.values.scalars import TextPort, _ScalarPort
 
-__all__ = ["freeze_value", "resolve_input", "value_bytes"]
+__all__ = ["default_problems", "freeze_value", "resolve_input", "value_bytes"]
 
 
-def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Registry) -> Any:
+class _RefusedError(Exception):
+    """Why a value is not a valid input (the message, without the input's name)."""
+
+
+def resolve_input(
+    name: str,
+    port_type: type[PortType],
+    value: Any,
+    registry: Registry,
+    *,
+    graph: Graph | None = None,
+) -> Any:
     """Turn a given value into a validated port value.
 
     A string for a non-``Text`` port is a reference: ``scheme:rest`` goes to the
@@ -32,15 +45,51 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
     (:meth:`PortType.coerce`), so a ``uint8`` array from OpenCV is the same
     image as the PNG it was read from.
 
+    Parameters
+    ----------
+    graph : Graph, optional
+        The pipeline whose default ``value`` is (None: a value the caller gave). An
+        error then names the default's place: ``inputs.image.default at p.yaml:4``,
+        or the Python line that declared the input.
+
     Raises
     ------
     InputError
         Naming the input, the value and what is wrong.
     """
+    try:
+        return _resolved(port_type, value, registry)
+    except _RefusedError as refused:
+        where = f"input '{name}'"
+        if graph is not None:
+            where = graph.problem(f"inputs.{name}.default", "").place
+        raise InputError(f"{where}: {refused}") from refused.__cause__
+
+
+def default_problems(
+    graph: Graph, types: dict[str, type[PortType]], registry: Registry
+) -> list[Problem]:
+    """A problem for each default of ``graph`` that does not load as its input's port type
+    (``types``), placed at its line: what ``validate`` reports of a default a run would
+    refuse (a sample's name mistyped, a missing file)."""
+    problems = []
+    for name, port_type in types.items():
+        default = graph.inputs[name].default
+        if default is None:
+            continue
+        try:
+            _resolved(port_type, default, registry)
+        except _RefusedError as refused:
+            problems.append(graph.problem(f"inputs.{name}.default", str(refused)))
+    return problems
+
+
+def _resolved(port_type: type[PortType], value: Any, registry: Registry) -> Any:
+    """:func:`resolve_input`, its errors (``_RefusedError``) saying what is wrong, not where."""
     origin = f"'{value}'" if isinstance(value, str) else f"the {type(value).__name__} given"
     empty = isinstance(value, str) and not value  # Path('') would be this folder
     if empty and not issubclass(port_type, (TextPort, _ScalarPort)):
-        raise InputError(f"input '{name}' is empty: give a file, or a source such as sample:NAME")
+        raise _RefusedError("is empty: give a file, or a source such as sample:NAME")
     if isinstance(value, str) and not issubclass(port_type, TextPort):
         scheme, sep, rest = value.partition(":")
         try:
@@ -54,16 +103,16 @@ def resolve_input(name: str, port_type: type[PortType], value: Any, registry: Re
                 value = registry.source("file").func(value)
         except Exception as error:
             told = str(error)
-            what = told if str(value) in told else f"cannot load '{value}': {told}"
-            raise InputError(f"input '{name}': {what}") from error
+            raise _RefusedError(
+                told if str(value) in told else f"cannot load '{value}': {told}"
+            ) from error
     try:
         return freeze_value(port_type, port_type.admit(value, origin))
     except PortValueError as error:
-        raise InputError(f"input '{name}': {error}") from None
+        raise _RefusedError(str(error)) from None
     except (Exception, RecursionError) as error:  # a port type's check undone by hostile data
-        raise InputError(
-            f"input '{name}': not a valid {port_type.type_name()} ({type(error).__name__}: "
-            f"{str(error)[:200]})"
+        raise _RefusedError(
+            f"not a valid {port_type.type_name()} ({type(error).__name__}: {str(error)[:200]})"
         ) from None
 
 

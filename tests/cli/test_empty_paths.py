@@ -55,7 +55,7 @@ def test_an_empty_input_file_is_refused_naming_the_input(capsys, pipeline):
     err = capsys.readouterr().err
     assert status == 2, err
     assert err.strip() == (
-        "error: input 'image' is empty: give a file, or a source such as sample:NAME"
+        "error: input 'image': is empty: give a file, or a source such as sample:NAME"
     )
 
 
