@@ -186,13 +186,15 @@ def given_inputs(
     }
 
 
-def admitted(name: str, kind: type[PortType], value: Any, registry: Registry) -> Any:
-    """:func:`~graphvision.execution.inputs.resolve_input`; a frozen array given again, that
-    it returned as it was the last time, as it is (:mod:`graphvision.values.known`: no
-    pass over its data)."""
+def admitted(
+    name: str, kind: type[PortType], value: Any, registry: Registry, graph: Graph | None = None
+) -> Any:
+    """:func:`~graphvision.execution.inputs.resolve_input` (``graph``: the pipeline whose
+    default ``value`` is, if it is one); a frozen array given again, that it returned as it
+    was the last time, as it is (:mod:`graphvision.values.known`: no pass over its data)."""
     if recall(value, (resolve_input, kind)):
         return value
-    resolved = resolve_input(name, kind, value, registry)
+    resolved = resolve_input(name, kind, value, registry, graph=graph)
     if resolved is value:
         note(value, (resolve_input, kind), True)
     return resolved

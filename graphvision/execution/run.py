@@ -214,12 +214,16 @@ def _run(
         if node_timeout is not None or node_memory is not None:  # (else as read by the check)
             limits = current_limits()
         limits.check_executor(where)  # (read once: the state takes them)
+        defaults = {name: None if name in inputs else compiled.graph for name in given}
         values = {
-            name: partial(resolve_input, name, compiled.input_types[name], value, registry)
+            name: partial(
+                resolve_input, name, compiled.input_types[name], value, registry,
+                graph=defaults[name],
+            )
             if name in reference_keys
-            else admitted(name, compiled.input_types[name], value, registry)
+            else admitted(name, compiled.input_types[name], value, registry, defaults[name])
             for name, value in given.items()
-        }
+        }  # fmt: skip
         width = running_at_once(executor, workers)
         check_peak_memory(compiled, schedule, values, width, max_memory)
         state = _execute(

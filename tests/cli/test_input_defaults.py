@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+import graphvision as gv
 from graphvision.cli import main
 
 PIPELINE = """name: small
@@ -46,6 +47,34 @@ def test_validate_refuses_a_default_that_does_not_load_at_its_line(
     err = capsys.readouterr().err
     assert status == 2, err
     assert f"  - inputs.image.default at {path}:5: {reason}" in err
+
+
+def test_run_names_the_default_and_its_line(tmp_path, capsys):
+    path = _pipeline(tmp_path, "sample:camra")
+    status = main(["run", str(path), "--no-cache", "--output-dir", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert err.startswith(
+        f"error: inputs.image.default at {path}:5: cannot load 'sample:camra': unknown sample "
+        "image 'camra' (did you mean 'camera'?); samples: astronaut,"
+    )
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_value_given_for_the_input_is_named_as_given(tmp_path, capsys):
+    path = _pipeline(tmp_path, "sample:camera")
+    status = main(["run", str(path), "--no-cache", "-i", "image=sample:camra"])
+    assert capsys.readouterr().err.startswith("error: input 'image': cannot load 'sample:camra'")
+    assert status == 2
+
+
+def test_python_run_names_the_default_at_the_line_that_declared_it():
+    graph = gv.Graph("small")
+    image = graph.input("image", "Image", default="sample:camra")  # the line named
+    graph.output("gray", graph.add("gray", "colour.to_gray", image=image))
+    line = test_python_run_names_the_default_at_the_line_that_declared_it.__code__.co_firstlineno
+    with pytest.raises(gv.InputError, match=rf"^inputs\.image\.default at {__file__}:{line + 2} "):
+        gv.run(graph, cache=None)
 
 
 def test_good_defaults_validate(tmp_path, capsys):
