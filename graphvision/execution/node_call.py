@@ -12,6 +12,7 @@ from typing import Any
 from graphvision.execution import crash_note
 from graphvision.execution.crash_note import call_named
 from graphvision.execution.warnings import running
+from graphvision.nodes.loading import note_plugin_line
 
 __all__ = ["began_before", "call_labelled", "call_node"]
 
@@ -26,7 +27,9 @@ def call_node(
     wrote the output folder a second time; on threads its idle pool kept the
     command's pipes open, so the run never ended): the child is ended here,
     with one line naming the node. The node runs in a frame named after it
-    (:mod:`~graphvision.execution.crash_note`: a fault handler's traceback names it).
+    (:mod:`~graphvision.execution.crash_note`: a fault handler's traceback names it). An
+    error a local plugin's node raises notes the plugin's line it came from
+    (:func:`~graphvision.nodes.loading.note_plugin_line`), for the run's message.
     """
     mark = getattr(func, "__graphvision_node__", None)
     op = mark.id if mark is not None else getattr(func, "__qualname__", "")
@@ -72,8 +75,9 @@ def call_labelled(
     began = _clock()
     try:
         result = trampoline(func, kwargs)
-    except BaseException:
+    except BaseException as error:
         _BEGAN[ident] = began
+        note_plugin_line(error, func)
         raise
     finally:
         if _FORKS[0] != forks:
@@ -104,8 +108,9 @@ def _first_call(
     began = time.perf_counter()
     try:
         result = call_named(label, func, kwargs)
-    except BaseException:
+    except BaseException as error:
         _BEGAN[_get_ident()] = began
+        note_plugin_line(error, func)
         raise
     finally:
         if _FORKS[0] != forks:

@@ -17,6 +17,7 @@ from graphvision.errors import (
     NodeExecutionError,
 )
 from graphvision.execution.display import html_of
+from graphvision.nodes.loading import plugin_line
 from graphvision.values.ports import PortType
 
 __all__ = ["NodeRecord", "RunHooks", "RunRecord", "RunResult", "intermediates", "wrapped_failure"]
@@ -224,13 +225,18 @@ def intermediates(
 def wrapped_failure(
     step: Step, error: BaseException, values: dict[tuple[str, str], Any]
 ) -> NodeExecutionError:
-    """A node's error as the run reports it: the node, its parameters, its inputs' summaries."""
+    """A node's error as the run reports it: the node, its parameters, its inputs' summaries,
+    and the line of a local plugin it came from (``NameError: ... (/me/my_nodes.py:17)``)."""
     summary = {}
     for port, source in step.inputs.items():
         value = values.get(source)
         summary[port] = step.spec.inputs[port].type.summary(value) if value is not None else "?"
     wrapped = NodeExecutionError(
-        step.name, step.spec.id, step.params, summary, f"{type(error).__name__}: {error}"
+        step.name,
+        step.spec.id,
+        step.params,
+        summary,
+        f"{type(error).__name__}: {error}{plugin_line(error)}",
     )
     wrapped.__cause__ = error
     return wrapped

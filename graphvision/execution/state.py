@@ -53,6 +53,7 @@ from graphvision.execution.record import (
     intermediates,
     wrapped_failure,
 )
+from graphvision.nodes.loading import plugin_line
 
 __all__ = ["RunState"]
 
@@ -336,7 +337,7 @@ class RunState:
     def failed(self, step: Step, error: BaseException) -> bool:
         node = self.record_of(step, "failed")
         node.seconds = time.perf_counter() - self.started[step.name]
-        node.error = f"{type(error).__name__}: {error}"
+        node.error = f"{type(error).__name__}: {error}{plugin_line(error)}"
         self.failures[step.name] = wrapped_failure(step, error, self.values)
         self.release_inputs(step)
         for hook in self.hooks:
