@@ -17,7 +17,10 @@ Replacing is done in three steps, so that a writer killed at any point leaves a 
 the next one accepts: the manifest first lists the old and the new digest of every file
 about to change, then each file is replaced whole (a temporary file beside it and a
 rename: a link in its place is replaced, never written through), the files no longer
-written are removed, and the manifest lists the new digests only.
+written are removed, and the manifest lists the new digests only. Every file is
+written whole beside its place before the first step, so a file that cannot be written
+(a full disk, ``ulimit -f``) changes nothing: the folder and its manifest stay as they
+were, and the error, an ``OSError`` (:class:`FileWriteError`), names the file.
 """
 
 from __future__ import annotations
@@ -36,7 +39,13 @@ from pathlib import Path
 from graphvision.errors import OutputFolderError
 from graphvision.execution.provenance import file_sha256
 
-__all__ = ["FolderFiles", "check_folder_files", "replace_bytes", "replace_folder_files"]
+__all__ = [
+    "FileWriteError",
+    "FolderFiles",
+    "check_folder_files",
+    "replace_bytes",
+    "replace_folder_files",
+]
 
 Digests = frozenset[str] | None  # the digests a listed file may have; None: any (no digests)
 
@@ -169,10 +178,16 @@ def replace_folder_files(
     replacing the previous ones and removing those no longer written, then the manifest
     (in the three steps of the module docstring). Returns the paths written.
 
+    All or nothing: every file is first written whole beside its place; one that cannot
+    be (a full disk, a size limit) leaves the folder and its manifest as they were.
+
     Raises
     ------
     OutputFolderError
         As :func:`check_folder_files` (checked again here: a file may have come since).
+    FileWriteError
+        Naming the file that could not be written (an ``OSError``: exit 1, as any
+        failure of the environment).
     """
     listed, held = _checked_files(directory, kind, contents)
     directory.mkdir(parents=True, exist_ok=True)
@@ -182,15 +197,21 @@ def replace_folder_files(
     during = {name: {digest} for name, digest in new.items()}
     for name, digest in held.items():  # each is a file the kind wrote (checked): kept too
         during.setdefault(name, set()).add(digest)
-    _write_manifest(directory, kind, during)  # a writer killed from here on: either is its
-    written = []
-    for name, content in data.items():
-        replace_bytes(directory / name, content)
-        written.append(directory / name)
+    staged: dict[Path, Path] = {}
+    try:
+        for name, content in data.items():
+            staged[directory / name] = _staged(directory / name, content)
+        _write_manifest(directory, kind, during)  # a writer killed from here on: either is its
+        for path, temp in staged.items():
+            _published(temp, path)
+    finally:
+        for temp in staged.values():  # (a file published has none left)
+            with contextlib.suppress(OSError):
+                temp.unlink(missing_ok=True)
     for name in sorted(set(listed) - set(data)):
         (directory / name).unlink(missing_ok=True)
     _write_manifest(directory, kind, {name: {digest} for name, digest in new.items()})
-    return written
+    return list(staged)
 
 
 def _remove_dead_writers_temporaries(directory: Path, kind: FolderFiles) -> None:
@@ -228,13 +249,38 @@ def _sha256(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
+class FileWriteError(OSError):
+    """A file could not be written (a full disk, a size limit, a folder in its place): a
+    failure of the environment, named by the file meant, not the temporary one beside it."""
+
+    def __str__(self) -> str:
+        return f"cannot write {self.filename}: {self.strerror}"
+
+
 def replace_bytes(path: Path, data: bytes) -> None:
     """Write ``path`` whole or not at all (a temporary file beside it, then a rename: a
     link in its place is replaced, not written through).
 
     A file replaced keeps its permissions; a new one gets the process's default (its
     umask). The temporary file's name is this thread's own, so two threads writing the
-    same path at once each publish a whole file."""
+    same path at once each publish a whole file.
+
+    Raises
+    ------
+    FileWriteError
+        Naming ``path``; nothing is left beside it.
+    """
+    temp = _staged(path, data)
+    try:
+        _published(temp, path)
+    finally:
+        with contextlib.suppress(OSError):
+            temp.unlink(missing_ok=True)
+
+
+def _staged(path: Path, data: bytes) -> Path:
+    """The temporary file beside ``path`` holding ``data`` whole, with ``path``'s permissions
+    if it exists; a FileWriteError naming ``path`` (and no temporary file left) if not."""
     temp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
     try:
         temp.unlink(missing_ok=True)  # a killed writer's, or a link put there: made anew
@@ -242,9 +288,16 @@ def replace_bytes(path: Path, data: bytes) -> None:
             out.write(data)
         with contextlib.suppress(FileNotFoundError):
             os.chmod(temp, stat.S_IMODE(path.stat().st_mode))
-        os.replace(temp, path)
-    except OSError as error:  # named by the file meant, not the temporary one
-        raise OutputFolderError(f"cannot write {path}: {error.strerror or error}") from None
-    finally:
+    except OSError as error:
         with contextlib.suppress(OSError):
             temp.unlink(missing_ok=True)
+        raise FileWriteError(error.errno, error.strerror or str(error), str(path)) from None
+    return temp
+
+
+def _published(temp: Path, path: Path) -> None:
+    """Rename ``temp`` to ``path`` (a FileWriteError naming ``path`` if it cannot be)."""
+    try:
+        os.replace(temp, path)
+    except OSError as error:
+        raise FileWriteError(error.errno, error.strerror or str(error), str(path)) from None

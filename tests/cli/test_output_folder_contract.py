@@ -121,16 +121,16 @@ def test_a_folder_of_a_batch_that_kept_no_manifest_is_taken_by_its_summary_only(
 def test_a_batch_killed_while_it_replaces_its_files_leaves_a_folder_the_next_accepts(tmp_path):
     folder = tmp_path / "out"
     manifest.replace_folder_files(folder, BATCH_FILES, {"batch.csv": "file,status\n"})
-    real = manifest.replace_bytes
+    real = manifest._published
 
-    def killed_after_one(path: Path, data: bytes) -> None:
-        real(path, data)
+    def killed_after_one(temp: Path, path: Path) -> None:
+        real(temp, path)
         if path.name == "batch.csv":
             raise KeyboardInterrupt  # killed: batch.html and the last manifest not written
 
     contents = {"batch.csv": "file,status\nx,ok\n", "batch.html": "<p>x</p>"}
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(manifest, "replace_bytes", killed_after_one)
+        patch.setattr(manifest, "_published", killed_after_one)
         with pytest.raises(KeyboardInterrupt):
             manifest.replace_folder_files(folder, BATCH_FILES, contents)
     assert (folder / "batch.csv").read_text() == "file,status\nx,ok\n"
