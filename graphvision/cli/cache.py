@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from graphvision.cli.common import EXIT_OK
+from graphvision.cli.common import EXIT_OK, refuse_cache_dir_not_utf8
 
 if TYPE_CHECKING:
     pass
@@ -15,6 +15,7 @@ def cmd_cache(args: argparse.Namespace) -> int:
     from graphvision.cache.disk import DiskStore
     from graphvision.locations import default_cache_dir
 
+    refuse_cache_dir_not_utf8(args.cache_dir)
     folder = default_cache_dir() if args.cache_dir is None else args.cache_dir
     store = DiskStore(folder, args.cache_max_bytes)
     if args.action == "info":

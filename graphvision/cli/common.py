@@ -200,6 +200,11 @@ def registry_for(
     for path in args.plugins:
         if not Path(path).exists():
             raise UsageError(f"--plugins {path}: no such file or folder")
+    named = [("--plugins", path) for path in args.plugins]
+    if graph is not None and run_its_plugins:
+        named += [(f"{graph.source or graph.name}: plugin", path) for path in graph.plugins]
+    for what, path in named:  # (it would fail to load: a warning, then its nodes unknown)
+        _refuse_not_utf8(what, path, "a plugin is loaded and recorded by its path in UTF-8")
     if graph is None:
         registry = discover(args.plugins)
     elif run_its_plugins:
@@ -251,6 +256,7 @@ def load_run_arguments(
     order = backend_order(args)  # an empty entry is refused before the file is read
     inputs = dict(named_pairs(args.input, "--input"))
     refuse_paths_not_utf8(args.pipeline, inputs)
+    refuse_cache_dir_not_utf8(args.cache_dir)
     graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
     graph = graph.with_backends(order)  # --backend: the run's order
     registry = registry_for(args, graph)
@@ -284,6 +290,26 @@ def refuse_paths_not_utf8(pipeline: str, inputs: dict[str, str]) -> None:
                 f"{what} {shown}: its path is not UTF-8; record.json and the pages name it "
                 "in UTF-8: rename it or its folder"
             )
+
+
+def refuse_cache_dir_not_utf8(folder: str | None) -> None:
+    """A usage error for a ``--cache-dir`` whose path is not UTF-8 (in itself or through the
+    working folder): ``cache info`` and the messages about the cache name it in UTF-8 (in a
+    UTF-8 locale, ``cache info`` ended with an internal error)."""
+    if folder is not None:
+        _refuse_not_utf8(
+            "--cache-dir", folder, "cache info and the messages about the cache name it in UTF-8"
+        )
+
+
+def _refuse_not_utf8(what: str, text: str, why: str) -> None:
+    """A usage error naming ``what`` when the path ``text`` is not UTF-8, in itself or
+    through the working folder; ``why`` it must be."""
+    from graphvision.execution.batch_files import not_utf8
+
+    shown = not_utf8(Path(text)) or not_utf8(Path(text).absolute())
+    if shown is not None:
+        raise UsageError(f"{what} {shown}: its path is not UTF-8; {why}: rename it or its folder")
 
 
 def backend_order(args: argparse.Namespace) -> list[str] | None:

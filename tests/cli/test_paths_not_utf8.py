@@ -66,3 +66,52 @@ def test_an_input_named_not_utf8_is_refused_though_missing(capsys, tmp_path):
     args = ["run", str(DEMO), "-d", str(tmp_path / "o"), "-i", f"image={name}", "--no-cache"]
     assert main(args) == 2
     assert "error: --input image caf\\xe9.png: its path is not UTF-8" in capsys.readouterr().err
+
+
+PLUGIN = '''from graphvision import GrayImage, node
+
+
+@node("own.half")
+def half(image: GrayImage) -> GrayImage:
+    """Half of each pixel."""
+    return image / 2
+'''
+
+
+@pytest.mark.parametrize("command", ["run", "validate", "nodes"])
+def test_a_plugin_named_not_utf8_is_refused_up_front(capsys, tmp_path, latin_folder, command):
+    """It was a warning (its import failed on the name), then every node of it unknown."""
+    (latin_folder / "own.py").write_text(PLUGIN)
+    cwd = os.fsencode(latin_folder).decode("utf-8", "backslashreplace")
+    tail = [str(DEMO), "-d", str(tmp_path / "o")] if command == "run" else []
+    tail = [str(DEMO)] if command == "validate" else tail
+    assert main([command, "--plugins", "own.py", *tail]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        f"error: --plugins {cwd}/own.py: its path is not UTF-8; a plugin is loaded and "
+        "recorded by its path in UTF-8: rename it or its folder\n"
+    )
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_pipeline_plugin_in_a_folder_not_utf8_is_refused_by_validate(capsys, latin_folder):
+    (latin_folder / "own.py").write_text(PLUGIN)
+    (latin_folder / "p.yaml").write_text("plugins: [own.py]\n" + DEMO.read_text())
+    assert main(["validate", "p.yaml"]) == 2
+    cwd = os.fsencode(latin_folder).decode("utf-8", "backslashreplace")
+    assert capsys.readouterr().err.startswith(
+        f"error: p.yaml: plugin {cwd}/own.py: its path is not UTF-8; "
+    )
+
+
+@pytest.mark.parametrize("command", ["run", "cache"])
+def test_a_cache_folder_not_utf8_is_refused_up_front(capsys, tmp_path, command):
+    """It was used, and ``cache info`` then ended with an internal error (UTF-8 stdout)."""
+    cache = os.fsdecode(bytes(tmp_path) + b"/cache\xff")
+    args = [str(DEMO), "-d", str(tmp_path / "o")] if command == "run" else ["info"]
+    assert main([command, *args, "--cache-dir", cache]) == 2
+    assert capsys.readouterr().err == (
+        f"error: --cache-dir {tmp_path}/cache\\xff: its path is not UTF-8; cache info and the "
+        "messages about the cache name it in UTF-8: rename it or its folder\n"
+    )
+    assert sorted(os.listdir(tmp_path)) == []
