@@ -73,7 +73,7 @@ def note_plugin_line(error: BaseException, func: Callable[..., Any]) -> None:
     process sends the error without its traceback). Nothing for an installed plugin."""
     module = sys.modules.get(getattr(func, "__module__", "") or "")
     plugin = getattr(module, "__graphvision_path__", None)
-    if plugin is None or getattr(error, "__graphvision_line__", ""):
+    if plugin is None or hasattr(error, "__graphvision_line__"):
         return
     root = Path(plugin)
     for frame in reversed(traceback.extract_tb(error.__traceback__)):
