@@ -149,8 +149,8 @@ def output_folder(text: str | None) -> Path | None:
     is not UTF-8 is refused before anything runs) and made when the first file is written
     into it: a command that fails or is stopped first leaves no folder behind."""
     from graphvision.errors import OutputFolderError
-    from graphvision.execution.batch_files import refuse_folder_not_utf8
     from graphvision.execution.folders import missing_folders, remove_empty_folders
+    from graphvision.execution.utf8_names import refuse_folder_not_utf8
 
     if text is None:
         return None
@@ -279,7 +279,7 @@ def refuse_paths_not_utf8(pipeline: str, inputs: dict[str, str]) -> None:
     """A usage error for the pipeline file or an ``--input`` whose path is not UTF-8 (in
     itself or through the working folder): record.json and the pages name them in UTF-8,
     and a run that computed everything could not write them."""
-    from graphvision.execution.batch_files import not_utf8
+    from graphvision.execution.utf8_names import not_utf8
 
     given = [("pipeline file", pipeline)] + [(f"--input {k}", v) for k, v in inputs.items()]
     for what, text in given:
@@ -305,7 +305,7 @@ def refuse_cache_dir_not_utf8(folder: str | None) -> None:
 def _refuse_not_utf8(what: str, text: str, why: str) -> None:
     """A usage error naming ``what`` when the path ``text`` is not UTF-8, in itself or
     through the working folder; ``why`` it must be."""
-    from graphvision.execution.batch_files import not_utf8
+    from graphvision.execution.utf8_names import not_utf8
 
     shown = not_utf8(Path(text)) or not_utf8(Path(text).absolute())
     if shown is not None:

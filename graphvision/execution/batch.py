@@ -63,8 +63,6 @@ from graphvision.execution.batch_files import (
     common_parts,
     output_folders,
     pattern_root,
-    refuse_folder_not_utf8,
-    refuse_names_not_utf8,
     summary_text,
 )
 from graphvision.execution.batch_forked import forked_files
@@ -73,6 +71,7 @@ from graphvision.execution.batch_lanes import FileLanes
 from graphvision.execution.batch_run import BatchRun
 from graphvision.execution.batch_signals import signals_held
 from graphvision.execution.batch_stop import INTERRUPTED
+from graphvision.execution.batch_write import settle_folders
 from graphvision.execution.blas import one_blas_thread
 from graphvision.execution.closing import Closing
 from graphvision.execution.executors import (
@@ -85,6 +84,7 @@ from graphvision.execution.folder_lock import only_writer
 from graphvision.execution.folders import missing_folders, remove_empty_folders, retire_left_files
 from graphvision.execution.manifest import replace_folder_files
 from graphvision.execution.record import RunHooks
+from graphvision.execution.utf8_names import refuse_folder_not_utf8, refuse_names_not_utf8
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
 
@@ -353,6 +353,7 @@ def _summarise(
     """``batch.csv`` for ``items``, and the summary page when there is one; the folders of
     files a previous batch listed and this one does not (``stale``) lose their files."""
     retire_left_files(stale, out_dir)  # their files are no longer in the batch
+    settle_folders(items)  # an item without a folder says so, as batch.csv does
     contents = {SUMMARY: summary_text(items)}
     if pages.summary is not None:
         contents[SUMMARY_PAGE] = pages.summary(items, out_dir)

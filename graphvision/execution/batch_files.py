@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from graphvision.errors import InputError, OutputFolderError
+from graphvision.errors import OutputFolderError
 from graphvision.execution.folder_glob import glob_once
 from graphvision.execution.folders import RunPage
 from graphvision.execution.manifest import FolderFiles, check_folder_files
@@ -33,12 +33,9 @@ __all__ = [
     "batch_files",
     "checked_folders",
     "common_parts",
-    "not_utf8",
     "output_folders",
     "pattern_root",
     "previous_folders",
-    "refuse_folder_not_utf8",
-    "refuse_names_not_utf8",
     "summary_text",
     "unreadable_reason",
 ]
@@ -51,10 +48,12 @@ _COLUMNS = ("file", "output_dir", "status", "seconds", "error")  # batch.csv's f
 
 @dataclass
 class BatchItem:
-    """One file of a batch: where its outputs went, how it went, its scalar outputs."""
+    """One file of a batch: where its outputs went (None, as in ``batch.csv``, when it has
+    no folder: it could not be read, failed with no earlier run kept, or did not run), how
+    it went, its scalar outputs."""
 
     file: Path
-    output_dir: Path
+    output_dir: Path | None
     status: str = "ok"
     seconds: float = 0.0
     error: str = ""
@@ -309,11 +308,12 @@ def summary_text(items: Sequence[BatchItem]) -> str:
 
     ``output_dir`` names a folder that is there: it is empty for a file that has none (one
     that could not be read or failed, with no earlier run kept in its ``history/``, or that
-    did not run), so every folder the summary names can be opened."""
+    did not run), so every folder the summary names can be opened; the items say the same
+    (:func:`~graphvision.execution.batch_write.settle_folders`)."""
     rows = [
         {
             "file": str(item.file),
-            "output_dir": str(item.output_dir) if item.output_dir.is_dir() else "",
+            "output_dir": "" if item.output_dir is None else str(item.output_dir),
             "status": item.status,
             "seconds": round(item.seconds, 4),
             "error": item.error,
@@ -363,38 +363,3 @@ def _folded(name: str) -> str:
     """``name`` as a case-insensitive file system (macOS's, Windows') compares names: a
     folder made there under another case or Unicode form would be the same folder."""
     return unicodedata.normalize("NFC", name).casefold()
-
-
-def not_utf8(path: Path) -> str | None:
-    """``path`` shown with its bytes that are not UTF-8 escaped (``out\\xff``), or None
-    when its name is UTF-8 (bytes that are not are held by Python as lone surrogates)."""
-    try:
-        str(path).encode("utf-8")
-    except UnicodeEncodeError:
-        return os.fsencode(path).decode("utf-8", "backslashreplace")
-    return None
-
-
-def refuse_names_not_utf8(paths: list[Path], input: str) -> None:
-    """Refuse, before anything runs, files whose names are not UTF-8: batch.csv,
-    record.json and the pages, which name each file, are UTF-8, and the summary of a batch
-    that ran them could not be written."""
-    bad = [shown for path in paths if (shown := not_utf8(path.absolute())) is not None]
-    if bad:
-        raise InputError(
-            f"batch input '{input}': {len(bad)} file name(s) are not UTF-8 (such as {bad[0]}): "
-            "batch.csv, record.json and the pages name each file in UTF-8; rename them"
-        )
-
-
-def refuse_folder_not_utf8(folder: Path, option: str = "output folder") -> None:
-    """Refuse, before anything runs, an output folder whose name is not UTF-8, for the
-    reason of :func:`refuse_names_not_utf8` (its files could not name it: a batch ended
-    with an internal error on every file), nor one in a folder whose path is not."""
-    given = not_utf8(folder)
-    shown = given or not_utf8(folder.absolute())
-    if shown is not None:
-        raise OutputFolderError(
-            f"{option} {shown}: its {'name' if given else 'path'} is not UTF-8; "
-            "record.json, batch.csv and the pages name it in UTF-8: choose another folder"
-        )

@@ -122,7 +122,7 @@ class BatchRun:
                 if not claim:  # the batch was interrupted meanwhile: its folder is not written
                     item.status, item.error = "interrupted", INTERRUPTED
                     return item
-                item = finish_item(item, result, self.pages.run, self.out_dir)
+                item = finish_item(item, folder, result, self.pages.run, self.out_dir)
                 claim.written(item)
             return self.received(index, item)
         except Exception as error:  # whatever it is, it fails this file alone

@@ -12,7 +12,7 @@ from graphvision.execution.batch_files import BatchItem
 from graphvision.execution.folders import RunPage, retire_run, write_run
 from graphvision.execution.record import RunResult
 
-__all__ = ["failure_reason", "finish_item"]
+__all__ = ["failure_reason", "finish_item", "settle_folders"]
 
 
 def failure_reason(error: BaseException) -> str:
@@ -28,11 +28,15 @@ def failure_reason(error: BaseException) -> str:
 
 
 def finish_item(
-    item: BatchItem, result: RunResult | None, pages: Sequence[RunPage], inside: Path
+    item: BatchItem,
+    folder: Path,
+    result: RunResult | None,
+    pages: Sequence[RunPage],
+    inside: Path,
 ) -> BatchItem:
-    """Write the item's folder from its result (or clear it when there is none); ``inside``
-    is the batch's folder, the only place it writes (no link below it is followed)."""
-    folder = item.output_dir
+    """Write the item's ``folder`` from its result (or clear it when there is none);
+    ``inside`` is the batch's folder, the only place it writes (no link below it is
+    followed)."""
     if result is None:  # nothing produced: what a previous run left there must not look current
         retire_run(folder, inside)
         return item
@@ -49,3 +53,12 @@ def finish_item(
         if isinstance(value, int | float | str | bool)
     }
     return item
+
+
+def settle_folders(items: Sequence[BatchItem]) -> None:
+    """Set ``output_dir`` to None for each item whose folder is not there once the batch is
+    done (a file that could not be read, failed with no earlier run kept, or did not run):
+    the items then say what ``batch.csv`` says (an empty ``output_dir``)."""
+    for item in items:
+        if item.output_dir is not None and not item.output_dir.is_dir():
+            item.output_dir = None

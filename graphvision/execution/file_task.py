@@ -326,7 +326,7 @@ def run_file_task(
         if not claim:  # the batch stopped meanwhile: no folder written
             item.status, item.error = "interrupted", INTERRUPTED
             return FileOutcome(item)
-        outcome = FileOutcome(finish_item(item, result, job.pages, job.out_dir))
+        outcome = FileOutcome(finish_item(item, Path(folder), result, job.pages, job.out_dir))
         claim.written(outcome.item)  # the client counts it, should this process die now
     if result is not None:
         outcome.keys, outcome.value_bytes = _output_keys(result.record, result.compiled)

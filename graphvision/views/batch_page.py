@@ -38,6 +38,8 @@ _STYLE = (
 def _pipeline(items: Sequence[BatchItem]) -> tuple[str, str]:
     """The pipeline's name and file, from the first item folder whose record is readable."""
     for item in items:
+        if item.output_dir is None:
+            continue
         try:
             record = json.loads((Path(item.output_dir) / "record.json").read_text("utf-8"))
             return str(record.get("pipeline", "")), str(record.get("pipeline_file", ""))
@@ -59,8 +61,8 @@ def _metrics(item: BatchItem) -> str:
 
 def _card(item: BatchItem, out_dir: str) -> str:
     """One file's card; ``out_dir`` is the batch's folder as an absolute path."""
-    folder = os.path.abspath(item.output_dir)
-    names = _file_names(folder)
+    folder = os.path.abspath(item.output_dir) if item.output_dir is not None else ""
+    names = _file_names(folder) if folder else set()
     pictures = sorted(name for name in names if name.endswith(".png"))
     image = (
         f'<img loading="lazy" alt="{escape(pictures[0])}" '

@@ -135,7 +135,26 @@ def test_batch_csv_names_the_folder_of_a_failed_file_that_keeps_its_last_run(tmp
     (item,) = gv.run_batch(graph, [good], input="image", output_dir=out).items
     rows = list(csv.DictReader((out / "batch.csv").open()))
     assert item.status == "failed" and (out / "a" / "history").is_dir()
-    assert rows[0]["output_dir"] == str(out / "a")
+    assert rows[0]["output_dir"] == str(out / "a") and item.output_dir == out / "a"
+
+
+@pytest.mark.parametrize("executor", ["sync", "processes"])
+def test_an_item_without_a_folder_names_none_as_batch_csv_does(tmp_path, executor):
+    """A file that could not be read, or that failed with no earlier run: its item's
+    ``output_dir`` is None, where it named a folder that is not there (batch.csv: empty)."""
+    good = photo(tmp_path / "in" / "good.png", 100)
+    (tmp_path / "in" / "bad.png").write_text("not an image")
+    (tmp_path / "in" / "gone.png").symlink_to(tmp_path / "nowhere.png")
+    out = tmp_path / "out"
+    batch = gv.run_batch(DEMO, f"{tmp_path}/in/*.png", input="image", output_dir=out,
+                         executor=executor)  # fmt: skip
+    folders = {item.file.name: item.output_dir for item in batch.items}
+    assert folders == {"bad.png": None, "gone.png": None, "good.png": out / "good"}
+    rows = {
+        Path(r["file"]).name: r["output_dir"] for r in csv.DictReader((out / "batch.csv").open())
+    }
+    assert rows == {"bad.png": "", "gone.png": "", "good.png": str(out / "good")}
+    assert good.is_file()
 
 
 def test_run_batch_from_python(tmp_path):
