@@ -6,13 +6,19 @@ A link back up the tree (``photos/sub/up -> ..``) is searched until the paths gr
 long for the system (about 40 links deep), and with a second link aliasing a folder
 (``photos/sub2 -> sub``) the paths multiply at each level: a batch over such a folder
 listed hundreds of thousands of paths and gigabytes of memory before it ran a file.
+
+A link to a folder that holds the one searched (``photos/all -> /``, ``photos/up ->
+../..``) is not followed, and a warning names it: through it ``**`` would search all
+of that folder (the whole file system for ``/``), far from what the pattern names.
 """
 
 from __future__ import annotations
 
 import glob
 import os
+import warnings
 from collections.abc import Iterator
+from pathlib import Path
 
 __all__ = ["glob_once"]
 
@@ -36,7 +42,8 @@ def glob_once(pattern: str) -> list[str]:
     tops = glob.glob(prefix) if prefix else ([os.sep] if pattern.startswith(os.sep) else [""])
     tops = sorted(t for t in tops if os.path.isdir(t or "."))
     found: list[str] = []
-    for searched, again in _folders_once(tops):
+    around: list[str] = []  # the links to a folder holding a top, not followed
+    for searched, again in _folders_once(tops, around):
         if rest:
             found.extend(_matches(searched, rest, below=not again))
         elif pattern.endswith(os.sep):  # ending in **/: the folders alone, as glob gives them
@@ -45,6 +52,14 @@ def glob_once(pattern: str) -> list[str]:
             itself = os.path.join(searched, "") if searched in tops else searched
             inside = glob.glob(os.path.join(glob.escape(searched), "*"))
             found.extend(([itself] if itself else []) + [p for p in inside if not os.path.isdir(p)])
+    if around:
+        more = f" and {len(around) - 1} more" if len(around) > 1 else ""
+        warnings.warn(
+            f"batch '{pattern}': {around[0]}{more} not searched: a link to "
+            f"{os.path.realpath(around[0])}, a folder that holds the folder searched (** "
+            "would search all of it)",
+            stacklevel=5,  # run_batch's caller: batch_files, _batch_paths, run_batch, the user's
+        )
     return found
 
 
@@ -57,11 +72,13 @@ def _matches(folder: str, rest: str, *, below: bool) -> list[str]:
     return glob_once(os.path.join(base, rest)) if below else glob.glob(os.path.join(base, rest))
 
 
-def _folders_once(tops: list[str]) -> Iterator[tuple[str, bool]]:
+def _folders_once(tops: list[str], around: list[str]) -> Iterator[tuple[str, bool]]:
     """Each folder below ``tops`` (themselves included) that is not hidden, breadth first
     in name order, with whether its real folder was searched before (through another
-    path): such a folder is given once, and not gone below."""
+    path): such a folder is given once, and not gone below. A link to a folder that holds
+    a top is neither: it is added to ``around``."""
     seen: set[tuple[int, int]] = set()
+    holding = _holding(tops)
     level = tops
     while level:
         deeper: list[str] = []
@@ -71,12 +88,28 @@ def _folders_once(tops: list[str]) -> Iterator[tuple[str, bool]]:
             except OSError:  # a link that loops or leads nowhere: nothing to search
                 continue
             key = (status.st_dev, status.st_ino)
+            if key in holding:
+                around.append(folder)
+                continue
             again = key in seen
             seen.add(key)
             yield folder, again
             if not again:
                 deeper.extend(_subfolders(folder))
         level = deeper
+
+
+def _holding(tops: list[str]) -> set[tuple[int, int]]:
+    """The real folders that hold a top (its parents, up to ``/``), as (device, inode)."""
+    keys = set()
+    for top in tops:
+        for parent in Path(os.path.realpath(top or ".")).parents:
+            try:
+                status = os.stat(parent)
+            except OSError:
+                continue
+            keys.add((status.st_dev, status.st_ino))
+    return keys
 
 
 def _subfolders(folder: str) -> list[str]:

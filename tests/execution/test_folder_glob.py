@@ -44,3 +44,24 @@ def test_a_folder_reached_again_is_not_searched_below(tree):
         "ph/sub2/b.png",
     ]  # fmt: skip
     assert len(glob.glob("ph/sub/up/sub/up/*.png")) == 1  # Python's glob would go on down
+
+
+@pytest.mark.parametrize("target", ["/", "../.."])
+def test_a_link_to_a_folder_holding_the_search_is_not_followed_and_named(tree, target):
+    """A tryer's link to / made ** search the whole file system (it ended, with no word)."""
+    os.symlink(target, "ph/sub/all")
+    with pytest.warns(UserWarning) as caught:
+        found = sorted(glob_once("ph/**/*.png"))
+    assert found == ["ph/[odd]/e.png", "ph/a.png", "ph/sub/b.png", "ph/sub/deep/c.png"]
+    real = os.path.realpath(os.path.join("ph/sub", target))
+    assert [str(w.message) for w in caught] == [
+        f"batch 'ph/**/*.png': ph/sub/all not searched: a link to {real}, a folder that holds the "
+        "folder searched (** would search all of it)"
+    ]
+
+
+def test_a_link_to_a_folder_beside_the_search_is_followed(tree):
+    (tree / "other").mkdir()
+    (tree / "other" / "f.png").write_bytes(b"x")
+    os.symlink(tree / "other", "ph/other")
+    assert "ph/other/f.png" in glob_once("ph/**/*.png")
