@@ -208,8 +208,11 @@ def registry_for(
     if graph is None:
         registry = discover(args.plugins)
     elif run_its_plugins:
-        if graph.plugins:
-            print(f"loading local plugins: {', '.join(graph.plugins)}", file=sys.stderr)
+        if graph.plugins:  # (each from the working folder, when it is in it)
+            here = Path.cwd()
+            shown = [os.path.relpath(p, here) if Path(p).is_relative_to(here) else p
+                     for p in graph.plugins]  # fmt: skip
+            print(f"loading local plugins: {', '.join(shown)}", file=sys.stderr)
         registry = discover_for(graph, args.plugins)
     else:
         registry = discover(args.plugins, needs=Needs.of(graph))

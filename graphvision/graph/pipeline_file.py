@@ -37,7 +37,7 @@ from graphvision.graph.model import (
     Ref,
     output_name_problem,
 )
-from graphvision.graph.plugin_paths import PluginPaths
+from graphvision.graph.plugin_paths import PluginPaths, written_plugins
 from graphvision.graph.schema import InputModel, NodeModel, PipelineModel
 from graphvision.graph.yaml_reader import read_yaml
 
@@ -248,13 +248,14 @@ def load_pipeline(path: str | Path, *, allow_outside_plugins: bool = False) -> G
     return graph
 
 
-def graph_to_dict(graph: Graph) -> dict[str, Any]:
-    """The canonical mapping of a graph, as written to YAML."""
+def graph_to_dict(graph: Graph, path: str | Path | None = None) -> dict[str, Any]:
+    """The canonical mapping of a graph, as written to YAML in the file ``path`` (its
+    plugins named from there: :func:`~.plugin_paths.written_plugins`)."""
     data: dict[str, Any] = {"version": 1, "name": graph.name}
     if graph.description:
         data["description"] = graph.description
     if graph.plugins:
-        data["plugins"] = list(graph.plugins)
+        data["plugins"] = written_plugins(graph.plugins, path)
     if graph.backends:
         data["backends"] = list(graph.backends)
     inputs = {}
@@ -291,6 +292,18 @@ def graph_to_dict(graph: Graph) -> dict[str, Any]:
     return data
 
 
-def dump_pipeline(graph: Graph) -> str:
-    """YAML text of ``graph``; :func:`parse_pipeline` reads it back to an equal graph."""
-    return yaml.safe_dump(graph_to_dict(graph), sort_keys=False, allow_unicode=True, width=100)
+def dump_pipeline(graph: Graph, path: str | Path | None = None) -> str:
+    """YAML text of ``graph``; :func:`parse_pipeline` reads it back to an equal graph.
+
+    Parameters
+    ----------
+    graph : Graph
+        The graph.
+    path : str or Path, optional
+        The file the text is for: its plugins are named from that file's folder (a plugin
+        inside it relative to it, any other absolute), so the file loads them. Without it,
+        a loaded pipeline's plugins are named as its own file names them (relative to its
+        folder: the text written beside it loads them), a built graph's as given.
+    """
+    data = graph_to_dict(graph, path)
+    return yaml.safe_dump(data, sort_keys=False, allow_unicode=True, width=100)

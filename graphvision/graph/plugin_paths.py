@@ -4,21 +4,26 @@ A pipeline read from a file names its plugins relative to that file: the paths
 in its ``plugins:`` and the paths added later in Python (``graph.plugins.append
 ("my_nodes.py")`` on a loaded pipeline) are both read from the file's folder, so
 a script that loads ``try/denoise.yaml`` finds ``try/my_nodes.py`` wherever it
-runs. A graph built in Python has no such folder: its plugins are read from the
-working folder, as ``open`` reads a path.
+runs. The folder is made absolute when the file is read, so a script that changes
+its working folder afterwards (``os.chdir``) still finds them. A graph built in
+Python has no such folder: its plugins are read from the working folder, as
+``open`` reads a path.
 
-The list holds each path as the process can open it: relative to the working
-folder (``try/my_nodes.py``) or absolute, so every consumer (discovery, a
-worker process, the messages) reads it as it is.
+The list holds each path as the process opens it (absolute, for a pipeline read from
+a file), so every consumer (discovery, a worker process, the messages) reads it as it
+is. It compares equal to the paths its file names (``["my_nodes.py"]``) as well, and a
+pipeline's text writes them so (:func:`written_plugins`): ``parse_pipeline(
+dump_pipeline(graph)) == graph``, and the text written beside the pipeline loads them.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+import os
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any, SupportsIndex
 
-__all__ = ["PluginPaths"]
+__all__ = ["PluginPaths", "written_plugins"]
 
 
 class PluginPaths(list[str]):
@@ -27,25 +32,38 @@ class PluginPaths(list[str]):
     Parameters
     ----------
     paths : iterable of str
-        Paths already placed (relative to the working folder, or absolute).
+        Paths already placed (absolute, or relative to the working folder).
     folder : str
-        The pipeline file's folder, as given when it was read; a relative path added
-        later is joined to it. Empty: paths are taken as given.
+        The pipeline file's folder (made absolute); a relative path added later is
+        joined to it. Empty: paths are taken as given.
 
     Examples
     --------
-    >>> plugins = PluginPaths(["try/a.py"], folder="try")
+    >>> plugins = PluginPaths(["/try/a.py"], folder="/try")
     >>> plugins.append("b.py"); plugins += ["/abs/c.py"]
     >>> plugins
-    ['try/a.py', 'try/b.py', '/abs/c.py']
+    ['/try/a.py', '/try/b.py', '/abs/c.py']
+    >>> plugins == ["a.py", "b.py", "/abs/c.py"]  # as its file names them
+    True
     """
 
     def __init__(self, paths: Iterable[str] = (), folder: str = "") -> None:
         super().__init__(paths)
-        self.folder = folder
+        self.folder = os.path.abspath(folder) if folder else ""
 
     def __reduce__(self) -> tuple[Any, ...]:  # a copy or a pickle is not placed again
         return (PluginPaths, (list(self), self.folder))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, list):
+            return NotImplemented
+        return list(self) == [self.placed(path) for path in other]
+
+    def __ne__(self, other: object) -> bool:
+        equal = self.__eq__(other)
+        return equal if equal is NotImplemented else not equal
+
+    __hash__ = None  # (a list: mutable)
 
     def placed(self, path: str | Path) -> str:
         """``path`` as the process opens it: a relative path joined to the file's folder
@@ -73,3 +91,29 @@ class PluginPaths(list[str]):
             super().__setitem__(index, [self.placed(path) for path in value])
         else:
             super().__setitem__(index, self.placed(value))
+
+
+def written_plugins(plugins: Sequence[str], file: str | Path | None = None) -> list[str]:
+    """``plugins`` as a pipeline file in ``file``'s folder names them: each path inside
+    that folder relative to it, any other absolute. Without ``file``: a loaded pipeline's
+    as its own file names them (relative to its folder), a built graph's as given.
+
+    Examples
+    --------
+    >>> written_plugins(PluginPaths(["/try/a.py", "/lib/b.py"], folder="/try"))
+    ['a.py', '/lib/b.py']
+    >>> written_plugins(["/try/a.py"], "/try/sub/p.yaml")
+    ['/try/a.py']
+    """
+    if file is not None:
+        folder = os.path.dirname(os.path.abspath(file))
+    elif isinstance(plugins, PluginPaths) and plugins.folder:
+        folder = plugins.folder
+    else:
+        return list(plugins)
+    written = []
+    for path in plugins:
+        absolute = os.path.abspath(path) if path.strip() else path
+        inside = path.strip() and Path(absolute).is_relative_to(folder)
+        written.append(os.path.relpath(absolute, folder) if inside else absolute)
+    return written

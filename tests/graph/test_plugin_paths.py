@@ -4,6 +4,7 @@ the file's folder; a graph built in Python reads its plugins from the working fo
 from __future__ import annotations
 
 import copy
+import os
 import pickle
 from pathlib import Path
 
@@ -47,9 +48,11 @@ def test_a_plugin_added_to_a_loaded_pipeline_is_read_from_its_folder(folder, tmp
     graph.plugins.append("my_nodes.py")
     graph.plugins += [str(tmp_path / "abs.py")]  # an absolute path is kept
     graph.plugins.insert(0, "lib")
-    assert graph.plugins == ["try/lib", "try/first.py", "try/my_nodes.py", str(tmp_path / "abs.py")]
+    placed = [str(folder / name) for name in ("lib", "first.py", "my_nodes.py")]
+    assert list(graph.plugins) == [*placed, str(tmp_path / "abs.py")]  # as the process opens
+    assert graph.plugins == ["lib", "first.py", "my_nodes.py", str(tmp_path / "abs.py")]
     graph.plugins[-1] = "second.py"
-    assert graph.plugins[-1] == "try/second.py"
+    assert graph.plugins[-1] == str(folder / "second.py")
 
 
 def test_a_loaded_pipeline_runs_a_node_of_a_plugin_added_beside_it(folder):
@@ -75,10 +78,10 @@ def test_a_copy_or_a_pickle_of_the_plugins_is_not_placed_twice(folder):
         pickle.loads(pickle.dumps(graph)),
         graph.with_backends("numpy"),
     ):
-        assert again.plugins == ["try/first.py"]
+        assert list(again.plugins) == [str(folder / "first.py")]
         again.plugins.append("my_nodes.py")  # still placed in the file's folder
-        assert again.plugins == ["try/first.py", "try/my_nodes.py"]
-    assert copy.copy(PluginPaths(["a.py"], "x")) == ["a.py"]
+        assert list(again.plugins) == [str(folder / "first.py"), str(folder / "my_nodes.py")]
+    assert list(copy.copy(PluginPaths(["a.py"], "x"))) == ["a.py"]
 
 
 def test_an_op_of_a_plugin_that_failed_to_load_says_why_in_python(folder):
@@ -92,3 +95,46 @@ def test_an_op_of_a_plugin_that_failed_to_load_says_why_in_python(folder):
     said = str(caught.value)
     assert "plugin try/missing.py (plugin path try/missing.py does not exist) failed" in said
     assert "warning" not in said
+
+
+def test_a_loaded_pipeline_finds_its_plugins_after_the_working_folder_changes(folder):
+    """Its folder was kept relative: after os.chdir its plugins were looked up from there."""
+    (folder / "p.yaml").write_text(PIPELINE.replace("first.py", "my_nodes.py"))
+    graph = gv.load_pipeline("try/p.yaml")
+    graph.output("one", graph.add("one", "mine.one"))
+    os.chdir(folder.parent.parent)
+    assert gv.run(graph, cache=None).outputs["one"] == 1.0
+
+
+def test_the_text_of_a_loaded_pipeline_names_its_plugins_as_its_file_does(folder):
+    """It named them as the process opens them (try/my_nodes.py), so the text written
+    beside the pipeline did not load; read back, it still gives an equal graph."""
+    graph = gv.load_pipeline("try/p.yaml")
+    graph.plugins.append("my_nodes.py")
+    graph.plugins.append("/elsewhere/x.py")
+    text = gv.dump_pipeline(graph)
+    assert "plugins:\n- first.py\n- my_nodes.py\n- /elsewhere/x.py\n" in text
+    assert gv.parse_pipeline(text) == graph
+    assert graph == gv.parse_pipeline(text)
+    graph.plugins.pop()
+    (folder / "copy.yaml").write_text(gv.dump_pipeline(graph))
+    again = gv.load_pipeline(folder / "copy.yaml")
+    assert again == graph and list(again.plugins) == list(graph.plugins)
+
+
+def test_the_text_for_another_file_names_the_plugins_from_its_folder(folder, tmp_path):
+    graph = gv.load_pipeline("try/p.yaml")
+    (tmp_path / "other").mkdir()
+    for_other = gv.dump_pipeline(graph, path=tmp_path / "other" / "p.yaml")
+    assert f"plugins:\n- {folder / 'first.py'}\n" in for_other  # outside its folder
+    for_parent = gv.dump_pipeline(graph, path="p.yaml")  # the working folder: tmp
+    assert "plugins:\n- try/first.py\n" in for_parent
+    (tmp_path / "p.yaml").write_text(for_parent)
+    assert list(gv.load_pipeline("p.yaml").plugins) == list(graph.plugins)
+
+
+def test_a_graph_built_in_python_writes_its_plugins_as_given(folder):
+    graph = gv.Graph("built")
+    graph.plugins.append("try/my_nodes.py")
+    assert "plugins:\n- try/my_nodes.py\n" in gv.dump_pipeline(graph)
+    assert "plugins:\n- my_nodes.py\n" in gv.dump_pipeline(graph, path="try/p.yaml")
