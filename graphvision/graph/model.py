@@ -20,6 +20,7 @@ import copy
 import os
 import re
 import sys
+import types
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -175,7 +176,7 @@ class Graph:
         it is the ground truth of (its default holds for their defaults only)."""
         self._check_new_name(name)
         self.inputs[name] = InputDecl(type, default, description, list(truth_of or []))
-        self.added_in_python[f"inputs.{name}"] = _caller()
+        self.added_in_python[f"inputs.{name}"] = _caller(self)
         return Ref(name)
 
     def add(
@@ -194,7 +195,7 @@ class Graph:
             port: ref if isinstance(ref, Ref) else Ref.parse(ref) for port, ref in inputs.items()
         }
         self.nodes[name] = NodeDecl(op, refs, dict(params or {}), backend=backend)
-        self.added_in_python[f"nodes.{name}"] = _caller()
+        self.added_in_python[f"nodes.{name}"] = _caller(self)
         return Ref(name)
 
     def output(self, name: str, ref: Ref | str) -> None:
@@ -206,7 +207,7 @@ class Graph:
         if not NAME.match(name):
             raise ValueError(output_name_problem(name))
         self.outputs[name] = ref if isinstance(ref, Ref) else Ref.parse(ref)
-        self.added_in_python[f"outputs.{name}"] = _caller()
+        self.added_in_python[f"outputs.{name}"] = _caller(self)
 
     def _check_new_name(self, name: str) -> None:
         if not NAME.match(name):
@@ -314,10 +315,30 @@ class Graph:
 _ENGINE = os.path.join(Path(__file__).resolve().parent.parent, "")  # its files, not a sibling's
 
 
-def _caller() -> tuple[str, int]:
-    """The file and line of the first caller outside graphvision (a user's script or
-    notebook cell) of the builder method that calls this; ("", 0) if there is none."""
+def _caller(graph: Graph) -> tuple[str, int]:
+    """The file and line of the user's call (a script or a notebook cell) that added a part
+    to ``graph`` through the builder method that calls this; ("", 0) if there is none.
+
+    That is the first caller outside graphvision, unless it is a helper the graph was
+    passed to (``def smooth(graph, name, sigma): return graph.add(...)``): then the call
+    of the helper, going out while the graph is an argument of the function, so that each
+    node a helper adds is placed where its own name and parameters were given. A builder
+    that holds the graph itself (made there, or an attribute) is where its ``add`` is.
+    """
     frame = sys._getframe(2)
     while frame is not None and frame.f_code.co_filename.startswith(_ENGINE):
         frame = frame.f_back  # type: ignore[assignment]
+    while frame is not None and _passed(frame, graph):
+        outer = frame.f_back
+        if outer is None or outer.f_code.co_filename.startswith(_ENGINE):
+            break
+        frame = outer
     return (frame.f_code.co_filename, frame.f_lineno) if frame is not None else ("", 0)
+
+
+def _passed(frame: types.FrameType, graph: Graph) -> bool:
+    """Whether ``graph`` is one of the arguments of the function ``frame`` runs."""
+    code = frame.f_code
+    count = code.co_argcount + code.co_kwonlyargcount
+    names = code.co_varnames[:count]
+    return any(frame.f_locals.get(name) is graph for name in names)

@@ -78,3 +78,36 @@ def test_a_script_in_a_folder_named_like_the_package_is_the_callers_place():
     graph = gv.Graph("built")
     exec(compile('graph.add("blur", "filters.gaussian")\n', script, "exec"), {"graph": graph})
     assert graph.added_in_python["nodes.blur"] == (script, 1)
+
+
+def smooth(graph: gv.Graph, name: str, sigma: float) -> gv.Ref:
+    """A helper the graph is passed to: its nodes are placed where it is called."""
+    return graph.add(name, "filters.gaussian", image="gray", params={"sigma": sigma})
+
+
+def two_blurs() -> gv.Graph:
+    """A builder that makes its graph: its nodes are placed at its own calls."""
+    graph = gv.parse_pipeline(PIPELINE.replace("sigma: -1", "sigma: 1"), "p.yaml")
+    graph.add("own", "filters.gaussian", image="gray", params={"sigma": -2})
+    return graph
+
+
+def test_a_node_a_helper_adds_is_placed_where_the_helper_is_called():
+    """It was placed at the helper's line, the same for every node it adds."""
+    graph = gv.parse_pipeline(PIPELINE.replace("sigma: -1", "sigma: 1"), "p.yaml")
+    first = here() + 1
+    smooth(graph, "one", -1.0)
+    smooth(graph, "two", -2.0)
+    with pytest.raises(gv.PipelineError) as caught:
+        gv.compile_graph(graph, gv.discover())
+    places = {p.where: (p.file, p.line) for p in caught.value.problems}
+    assert places["nodes.one.params.sigma"] == (__file__, first)
+    assert places["nodes.two.params.sigma"] == (__file__, first + 1)
+
+
+def test_a_node_a_builder_adds_to_its_own_graph_is_placed_at_its_add():
+    with pytest.raises(gv.PipelineError) as caught:
+        gv.compile_graph(two_blurs(), gv.discover())
+    (problem,) = caught.value.problems
+    line = two_blurs.__code__.co_firstlineno + 3
+    assert (problem.where, problem.file, problem.line) == ("nodes.own.params.sigma", __file__, line)
