@@ -1,22 +1,31 @@
 """Importing a local plugin file or package folder under a stable module name, so that a
 worker process importing the same file gets the same module (and the same node ids); and
-the line of a local plugin where one of its nodes failed."""
+the line of a local plugin where one of its nodes failed.
+
+A plugin that calls ``os._exit`` while it is imported ends the process at once: no
+exception, no ``atexit``, nothing a caller can catch. While a plugin is imported
+(:func:`exit_noted`), ``os._exit`` first writes one line naming it (``graphvision:
+os._exit(3) while importing plugin /me/my_nodes.py``); nothing is written otherwise, so a
+command that loads plugins says nothing more than it did.
+"""
 
 from __future__ import annotations
 
 import contextlib
 import hashlib
 import importlib.util
+import os
 import sys
+import threading
 import traceback
 import types
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from graphvision.errors import PluginLoadError
 
-__all__ = ["import_file", "note_plugin_line", "plugin_line"]
+__all__ = ["exit_noted", "import_file", "note_plugin_line", "plugin_line"]
 
 
 def import_file(path: str | Path, module_name: str = "") -> types.ModuleType:
@@ -48,11 +57,32 @@ def import_file(path: str | Path, module_name: str = "") -> types.ModuleType:
     module.__graphvision_digest__ = content  # type: ignore[attr-defined]
     sys.modules[name] = module
     try:
-        spec.loader.exec_module(module)
+        with exit_noted(f"plugin {path}"):
+            spec.loader.exec_module(module)
     except BaseException:
         del sys.modules[name]
         raise
     return module
+
+
+@contextlib.contextmanager
+def exit_noted(label: str) -> Iterator[None]:
+    """While the block runs, ``os._exit`` called by its thread first writes
+    ``graphvision: os._exit(STATUS) while importing LABEL`` to stderr."""
+    previous, ident, active = os._exit, threading.get_ident(), [True]
+
+    def noting(status: int) -> NoReturn:
+        if active and threading.get_ident() == ident:
+            os.write(2, f"graphvision: os._exit({status}) while importing {label}\n".encode())
+        previous(status)
+
+    os._exit = noting
+    try:
+        yield
+    finally:
+        active.clear()  # (kept by whoever took it meanwhile: it says nothing now)
+        if os._exit is noting:
+            os._exit = previous
 
 
 def _content_digest(path: Path) -> str:

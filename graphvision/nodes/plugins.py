@@ -26,7 +26,7 @@ from pathlib import Path
 from graphvision.errors import GraphvisionError, PluginLoadError
 from graphvision.graph.model import Graph
 from graphvision.nodes.fingerprint import note_distribution
-from graphvision.nodes.loading import import_file
+from graphvision.nodes.loading import exit_noted, import_file
 from graphvision.nodes.node import script_nodes
 from graphvision.nodes.plugin_index import (
     ENTRY_POINT_GROUP,
@@ -112,7 +112,8 @@ def load_entry_points(registry: Registry, needs: Needs | None = None) -> None:
 def _load_entry_point(registry: Registry, entry: EntryPoint, indexed: bool) -> None:
     """Import ``entry``'s module and register it, or record why it failed."""
     try:
-        module = entry.load()
+        with exit_noted(f"plugin '{entry.name}' ({entry.value})"):
+            module = entry.load()
         if not isinstance(module, types.ModuleType):
             raise PluginLoadError(f"entry point must name a module, got {module!r}")
         registry.add_plugin(module, entry.name, entry.value, params_checked=indexed)
