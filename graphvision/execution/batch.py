@@ -323,9 +323,13 @@ def _checked_pipeline(
 
     per_file = {**(inputs or {}), input: ""}
     compiled, found = _compiled(graph, registry, per_file, overrides or {})
-    _wanted_outputs(compiled, outputs, per_file)
+    read = compiled.schedule_for(_wanted_outputs(compiled, outputs, per_file)).inputs
     for name, value in (inputs or {}).items():  # every file's: one that cannot be read fails all
         resolve_input(name, compiled.input_types[name], value, found)
+    for name in sorted(set(read) - set(per_file)):  # so are the defaults the outputs read
+        default = compiled.graph.inputs[name].default
+        if default is not None:
+            resolve_input(name, compiled.input_types[name], default, found, graph=compiled.graph)
     return found
 
 

@@ -80,3 +80,29 @@ def test_python_run_names_the_default_at_the_line_that_declared_it():
 def test_good_defaults_validate(tmp_path, capsys):
     assert main(["validate", str(_pipeline(tmp_path, "sample:camera"))]) == 0
     assert capsys.readouterr().out.endswith(": ok\n")
+
+
+TWO = """name: two
+inputs:
+  image: {type: Image}
+  other: {type: Image, default: "sample:camra"}
+nodes:
+  a: {op: colour.to_gray, in: {image: image}}
+  b: {op: colour.to_gray, in: {image: other}}
+outputs: {a: a, b: b}
+"""
+
+
+def test_a_batch_refuses_a_default_its_outputs_read_before_any_file(tmp_path, capsys):
+    """Each file failed alike, naming the default; the batch now stops before it starts."""
+    (tmp_path / "p.yaml").write_text(TWO)
+    (tmp_path / "in").mkdir()
+    (tmp_path / "in" / "x.png").write_bytes(b"not read")
+    out = tmp_path / "out"
+    batch = ["--batch", f"image={tmp_path}/in/*.png", "-d", str(out), "--no-cache"]
+    assert main(["run", str(tmp_path / "p.yaml"), *batch]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: inputs.other.default at {tmp_path / 'p.yaml'}:4: cannot load")
+    assert not out.exists()
+    assert main(["run", str(tmp_path / "p.yaml"), *batch, "-o", "a"]) == 1  # b is not read
+    assert "inputs.other" not in capsys.readouterr().err
