@@ -143,4 +143,5 @@ def test_the_readme_python_example_runs_with_its_files_in_another_folder(tmp_pat
         for name in set(sys.modules) - before:
             if (getattr(sys.modules[name], "__file__", None) or "").startswith(str(tmp_path)):
                 del sys.modules[name]
-    assert namespace["graph"].plugins == ["try/my_nodes.py"]
+    assert list(namespace["graph"].plugins) == [str(tmp_path / "try" / "my_nodes.py")]
+    assert namespace["graph"].plugins == ["my_nodes.py"]  # as the file would name it

@@ -146,8 +146,7 @@ def run_batch_command(
             shown.append(FileProgress(total, bar=None if progress else False, began=began))
         if item.error:
             print(f"error: {item.file}: {item.error}", file=sys.stderr)
-        there = item.output_dir is not None and item.output_dir.is_dir()
-        folder = f" -> {item.output_dir}" if there else ""  # as batch.csv
+        folder = f" -> {item.output_dir}" if item.output_dir and item.output_dir.is_dir() else ""
         shown[0].finished(f"{item.file}{folder}", not item.error, item.seconds)
 
     executor = executor_for(args)

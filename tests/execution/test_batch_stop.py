@@ -257,8 +257,9 @@ def test_a_file_whose_claim_cannot_be_made_fails_naming_why(tmp_path, monkeypatc
         executor="sync", cache=None,
     )  # fmt: skip
     for item in result.items:
-        assert item.status == "failed" and not item.output_dir.exists()
-        assert f"cannot mark {item.output_dir} as being written in" in item.error
+        assert item.status == "failed" and item.output_dir is None  # none made
+        folder = tmp_path / "out" / item.file.stem
+        assert f"cannot mark {folder} as being written in" in item.error
         assert "No space left on device" in item.error
 
 
@@ -289,7 +290,7 @@ def test_files_after_their_flag_was_removed_are_interrupted_not_ok(tmp_path, mon
     )
     statuses = [item.status for item in result.items]
     assert statuses[0] == "ok" and statuses[1:] == ["interrupted", "interrupted"]
-    assert [item.output_dir.exists() for item in result.items] == [True, False, False]
+    assert [item.output_dir for item in result.items] == [tmp_path / "out" / "p0", None, None]
 
 
 def _bytes_refused_in(folder: Any, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -339,6 +340,7 @@ def test_a_claim_whose_bytes_are_refused_fails_its_file_naming_why(tmp_path, mon
         executor="sync", cache=None,
     )  # fmt: skip
     for item in result.items:
-        assert item.status == "failed" and not item.output_dir.exists()
-        assert f"cannot mark {item.output_dir} as being written in" in item.error
+        assert item.status == "failed" and item.output_dir is None  # none made
+        folder = tmp_path / "out" / item.file.stem
+        assert f"cannot mark {folder} as being written in" in item.error
         assert "No space left on device" in item.error
