@@ -3,12 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING
 
 from graphvision.cli.common import EXIT_OK, refuse_cache_dir_not_utf8
-
-if TYPE_CHECKING:
-    pass
 
 
 def cmd_cache(args: argparse.Namespace) -> int:

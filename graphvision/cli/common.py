@@ -259,7 +259,8 @@ def load_run_arguments(
     order = backend_order(args)  # an empty entry is refused before the file is read
     inputs = dict(named_pairs(args.input, "--input"))
     refuse_paths_not_utf8(args.pipeline, inputs)
-    refuse_cache_dir_not_utf8(args.cache_dir)
+    if not getattr(args, "no_cache", False):
+        refuse_cache_dir_not_utf8(args.cache_dir)
     graph = load_pipeline(args.pipeline, allow_outside_plugins=args.allow_outside_plugins)
     graph = graph.with_backends(order)  # --backend: the run's order
     registry = registry_for(args, graph)
@@ -296,13 +297,22 @@ def refuse_paths_not_utf8(pipeline: str, inputs: dict[str, str]) -> None:
 
 
 def refuse_cache_dir_not_utf8(folder: str | None) -> None:
-    """A usage error for a ``--cache-dir`` whose path is not UTF-8 (in itself or through the
-    working folder): ``cache info`` and the messages about the cache name it in UTF-8 (in a
-    UTF-8 locale, ``cache info`` ended with an internal error)."""
+    """A usage error for a cache folder whose path is not UTF-8 (in itself or through the
+    working folder): ``--cache-dir``, else the environment's (``$GRAPHVISION_CACHE_DIR``,
+    ``$XDG_CACHE_HOME``); ``cache info`` and the messages about the cache name it in UTF-8
+    (in a UTF-8 locale, ``cache info`` ended with an internal error)."""
+    from graphvision.locations import default_cache_dir
+
     if folder is not None:
-        _refuse_not_utf8(
-            "--cache-dir", folder, "cache info and the messages about the cache name it in UTF-8"
+        what = "--cache-dir"
+    else:
+        folder = str(default_cache_dir())
+        variable = next(
+            (name for name in ("GRAPHVISION_CACHE_DIR", "XDG_CACHE_HOME") if os.environ.get(name)),
+            "HOME",
         )
+        what = f"the cache folder (from ${variable})"
+    _refuse_not_utf8(what, folder, "cache info and the messages about the cache name it in UTF-8")
 
 
 def _refuse_not_utf8(what: str, text: str, why: str) -> None:

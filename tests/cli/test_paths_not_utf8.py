@@ -115,3 +115,26 @@ def test_a_cache_folder_not_utf8_is_refused_up_front(capsys, tmp_path, command):
         "messages about the cache name it in UTF-8: rename it or its folder\n"
     )
     assert sorted(os.listdir(tmp_path)) == []
+
+
+@pytest.mark.parametrize("variable", ["GRAPHVISION_CACHE_DIR", "XDG_CACHE_HOME"])
+@pytest.mark.parametrize("command", ["run", "cache"])
+def test_a_cache_folder_not_utf8_from_the_environment_is_refused(
+    capsys, tmp_path, monkeypatch, command, variable
+):
+    """``cache info`` ended with an internal error on a UTF-8 stdout."""
+    monkeypatch.delenv("GRAPHVISION_CACHE_DIR", raising=False)
+    monkeypatch.setenv(variable, os.fsdecode(bytes(tmp_path) + b"/c\xff"))
+    args = [str(DEMO), "-d", str(tmp_path / "o")] if command == "run" else ["info"]
+    assert main([command, *args]) == 2
+    shown = f"{tmp_path}/c\\xff" + ("/graphvision" if variable == "XDG_CACHE_HOME" else "")
+    assert capsys.readouterr().err == (
+        f"error: the cache folder (from ${variable}) {shown}: its path is not UTF-8; cache info "
+        "and the messages about the cache name it in UTF-8: rename it or its folder\n"
+    )
+    assert sorted(os.listdir(tmp_path)) == []
+
+
+def test_a_run_without_a_cache_does_not_look_at_the_cache_folder(tmp_path, monkeypatch):
+    monkeypatch.setenv("GRAPHVISION_CACHE_DIR", os.fsdecode(bytes(tmp_path) + b"/c\xff"))
+    assert main(["run", str(DEMO), "-d", str(tmp_path / "o"), "--no-cache", "-o", "psnr_noisy_gaussian"]) == 0
