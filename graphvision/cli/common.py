@@ -204,7 +204,9 @@ def registry_for(
     if graph is not None and run_its_plugins:
         named += [(f"{graph.source or graph.name}: plugin", path) for path in graph.plugins]
     for what, path in named:  # (it would fail to load: a warning, then its nodes unknown)
-        _refuse_not_utf8(what, path, "a plugin is loaded and recorded by its path in UTF-8")
+        files = sorted(Path(path).glob("*.py")) if Path(path).is_dir() else []
+        for text in [path, *map(str, files)]:  # (a folder's files are plugins too)
+            _refuse_not_utf8(what, text, "a plugin is loaded and recorded by its path in UTF-8")
     if graph is None:
         registry = discover(args.plugins)
     elif run_its_plugins:

@@ -50,6 +50,8 @@ __all__ = [
     "load_path",
 ]
 
+_ENGINE = Path(__file__).resolve().parent.parent  # graphvision's own files
+
 
 def _summarise(error: BaseException, plugin: Path | None = None) -> str:
     """``error`` in one line, with the file and line it came from: a syntax error's own
@@ -61,9 +63,10 @@ def _summarise(error: BaseException, plugin: Path | None = None) -> str:
         return f"{type(error).__name__}: {error.msg} ({error.filename}:{error.lineno})"
     stack = traceback.extract_tb(error.__traceback__)
     frames = [frame for frame in stack if not frame.filename.startswith("<")]
-    if plugin is not None:
+    if plugin is not None:  # its own line, else one outside graphvision's loading code
         mine = [f for f in frames if Path(f.filename).resolve().is_relative_to(plugin.resolve())]
-        frames = mine or frames
+        outside = [f for f in frames if not Path(f.filename).resolve().is_relative_to(_ENGINE)]
+        frames = mine or outside
     where = f" ({frames[-1].filename}:{frames[-1].lineno})" if frames else ""
     if isinstance(error, SystemExit):
         return f"it called sys.exit({error.code!r}) while being imported{where}"

@@ -137,4 +137,27 @@ def test_a_cache_folder_not_utf8_from_the_environment_is_refused(
 
 def test_a_run_without_a_cache_does_not_look_at_the_cache_folder(tmp_path, monkeypatch):
     monkeypatch.setenv("GRAPHVISION_CACHE_DIR", os.fsdecode(bytes(tmp_path) + b"/c\xff"))
-    assert main(["run", str(DEMO), "-d", str(tmp_path / "o"), "--no-cache", "-o", "psnr_noisy_gaussian"]) == 0
+    args = ["-d", str(tmp_path / "o"), "--no-cache", "-o", "psnr_noisy_gaussian"]
+    assert main(["run", str(DEMO), *args]) == 0
+
+
+def test_a_plugin_folder_holding_a_file_not_utf8_is_refused_up_front(capsys, tmp_path):
+    """It was a warning naming graphvision's own loading line as the plugin's, then unknown ops."""
+    folder = tmp_path / "plg"
+    folder.mkdir()
+    (folder / "fine.py").write_text(PLUGIN)
+    Path(os.fsdecode(bytes(folder) + b"/q\xff.py")).write_text(PLUGIN)
+    assert main(["run", str(DEMO), "-d", str(tmp_path / "o"), "--plugins", str(folder)]) == 2
+    assert capsys.readouterr().err.startswith(
+        f"error: --plugins {folder}/q\\xff.py: its path is not UTF-8; "
+    )
+
+
+def test_a_plugin_file_not_utf8_fails_to_load_naming_it_from_python(tmp_path):
+    from graphvision.nodes.plugins import discover
+
+    folder = tmp_path / "plg"
+    folder.mkdir()
+    Path(os.fsdecode(bytes(folder) + b"/q\xff.py")).write_text(PLUGIN)
+    (failed,) = discover([folder], entry_points=False).failed_plugins()
+    assert failed.error == f"plugin {folder}/q\\xff.py: its path is not UTF-8: rename it"
