@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from graphvision.errors import Problem, did_you_mean
+from graphvision.graph.plugin_paths import PluginPaths
 
 if TYPE_CHECKING:
     import networkx as nx
@@ -161,6 +162,15 @@ class Graph:
     added_in_python: dict[str, tuple[str, int]] = field(
         default_factory=dict, compare=False, repr=False
     )
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        """A list given to a loaded pipeline's ``plugins`` is read from its file's folder,
+        as the paths appended to it are (:class:`~.plugin_paths.PluginPaths`)."""
+        held = self.__dict__.get("plugins") if name == "plugins" else None
+        if isinstance(held, PluginPaths) and held.folder and not isinstance(value, PluginPaths):
+            value, given = PluginPaths(folder=held.folder), value
+            value.extend(given)
+        object.__setattr__(self, name, value)
 
     # -- builder ------------------------------------------------------------------
 

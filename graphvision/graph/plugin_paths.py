@@ -5,7 +5,8 @@ in its ``plugins:`` and the paths added later in Python (``graph.plugins.append
 ("my_nodes.py")`` on a loaded pipeline) are both read from the file's folder, so
 a script that loads ``try/denoise.yaml`` finds ``try/my_nodes.py`` wherever it
 runs. The folder is made absolute when the file is read, so a script that changes
-its working folder afterwards (``os.chdir``) still finds them. A graph built in
+its working folder afterwards (``os.chdir``) still finds them; a list given in its
+place (``graph.plugins = ["my_nodes.py"]``) is read from there too. A graph built in
 Python has no such folder: its plugins are read from the working folder, as
 ``open`` reads a path.
 
@@ -71,7 +72,7 @@ class PluginPaths(list[str]):
         text = str(path)
         if not self.folder or not text.strip() or Path(text).is_absolute():
             return text
-        return str(Path(self.folder) / text)
+        return os.path.normpath(os.path.join(self.folder, text))
 
     def append(self, path: str) -> None:
         super().append(self.placed(path))

@@ -138,3 +138,19 @@ def test_a_graph_built_in_python_writes_its_plugins_as_given(folder):
     graph.plugins.append("try/my_nodes.py")
     assert "plugins:\n- try/my_nodes.py\n" in gv.dump_pipeline(graph)
     assert "plugins:\n- my_nodes.py\n" in gv.dump_pipeline(graph, path="try/p.yaml")
+
+
+def test_a_list_given_to_a_loaded_pipeline_is_read_from_its_folder(folder):
+    """It stayed a plain list, read from the working folder ('plugin path my_nodes.py does
+    not exist'), where appending to it read the path beside the pipeline (found by TRY44)."""
+    graph = gv.load_pipeline("try/p.yaml")
+    graph.plugins = ["my_nodes.py"]
+    assert list(graph.plugins) == [str(folder / "my_nodes.py")]
+    graph.output("one", graph.add("one", "mine.one"))
+    assert gv.run(graph).outputs["one"] == 1.0
+
+
+def test_a_path_up_and_back_names_the_plugin_once(folder):
+    graph = gv.load_pipeline("try/p.yaml")
+    graph.plugins.append("../try/first.py")
+    assert list(graph.plugins) == [str(folder / "first.py")] * 2
