@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from graphvision.compiler.compile import CompiledGraph, compile_graph
     from graphvision.errors import (
         DuplicateNodeError,
+        FileWriteError,
         GraphvisionError,
         InputError,
         NodeExecutionError,
@@ -185,6 +186,7 @@ __all__ = [
     "DescriptorsPort",
     "DiskStore",
     "DuplicateNodeError",
+    "FileWriteError",
     "Float",
     "FloatImage",
     "FloatImagePort",

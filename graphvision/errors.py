@@ -82,6 +82,16 @@ class OutputFolderError(GraphvisionError):
     """An output folder cannot take a run's files without losing files graphvision did not write."""
 
 
+class FileWriteError(OSError):
+    """A file could not be written (a full disk, a size limit, a folder in its place): a
+    failure of the environment, not of the pipeline (exit 1), named by the file meant, not
+    the temporary one beside it. An ``OSError``: ``errno``, ``strerror`` and ``filename``
+    are set."""
+
+    def __str__(self) -> str:
+        return f"cannot write {self.filename}: {self.strerror}"
+
+
 @dataclass(frozen=True, order=True)
 class Problem:
     """One problem found in a pipeline, located in its file when known.

@@ -36,11 +36,10 @@ from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from graphvision.errors import OutputFolderError
+from graphvision.errors import FileWriteError, OutputFolderError
 from graphvision.execution.provenance import file_sha256
 
 __all__ = [
-    "FileWriteError",
     "FolderFiles",
     "check_folder_files",
     "replace_bytes",
@@ -247,14 +246,6 @@ def _write_manifest(directory: Path, kind: FolderFiles, files: Mapping[str, set[
 
 def _sha256(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
-
-
-class FileWriteError(OSError):
-    """A file could not be written (a full disk, a size limit, a folder in its place): a
-    failure of the environment, named by the file meant, not the temporary one beside it."""
-
-    def __str__(self) -> str:
-        return f"cannot write {self.filename}: {self.strerror}"
 
 
 def replace_bytes(path: Path, data: bytes) -> None:
