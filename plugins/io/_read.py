@@ -123,8 +123,9 @@ def read_array(path: str) -> np.ndarray:
     mode = _mode(file)
     if mode is not None and stat.S_ISDIR(mode):
         raise IsADirectoryError(f"{file} is a folder, not an image file")
-    if mode is None:
-        raise FileNotFoundError(f"no such file: {file}")
+    if mode is None:  # (a relative path is read from the working folder: say which)
+        where = "" if file.is_absolute() else f" (looked for from the working folder {Path.cwd()})"
+        raise FileNotFoundError(f"no such file: {file}{where}")
     if not stat.S_ISREG(mode):  # a device, a pipe, a socket: endless or blocking to read
         raise ValueError(f"{file} is not a regular file (a device, pipe or socket)")
     if file.suffix.lower() == ".npy":

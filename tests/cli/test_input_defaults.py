@@ -106,3 +106,19 @@ def test_a_batch_refuses_a_default_its_outputs_read_before_any_file(tmp_path, ca
     assert not out.exists()
     assert main(["run", str(tmp_path / "p.yaml"), *batch, "-o", "a"]) == 1  # b is not read
     assert "inputs.other" not in capsys.readouterr().err
+
+
+def test_a_relative_default_missing_names_the_working_folder_it_was_looked_for_from(
+    tmp_path, capsys, monkeypatch
+):
+    """A default's path is read from the working folder (pipeline-files.md), where plugins
+    are read beside the pipeline: the message said only 'no such file: missing.png'."""
+    path = _pipeline(tmp_path, "missing.png")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    assert main(["validate", str(path)]) == 2
+    assert (
+        f"  - inputs.image.default at {path}:5: no such file: missing.png (looked for from the "
+        f"working folder {elsewhere})\n"
+    ) in capsys.readouterr().err
