@@ -101,13 +101,14 @@ def batch_files(pattern: str, exclude: Path | None = None) -> tuple[list[Path], 
     folders: a batch never reads its own outputs, and the caller says so when
     that leaves nothing. ``**`` searches each real folder once (:func:`.glob_once`).
     A file reached by several paths (a folder symlink, a link back up the tree) is
-    taken once, by its shortest path (the first in name order among the shortest),
-    so that it runs once and has one folder; a warning names the path kept and
-    those skipped (one line for the batch). A match that cannot be read as a file
-    (a dangling or looping symbolic link, a pipe, and a folder when the pattern's
-    last part names a suffix, as ``*.png`` does) is kept, for the batch to list it
-    as failed with :func:`unreadable_reason`; folders matched by a pattern that
-    names no suffix (``photos/*``) are the folders searched.
+    taken once, by its shortest path (among the shortest, the one through the fewest
+    symbolic links, then the first in name order), so that it runs once and has one
+    folder; a warning names the path kept and those skipped (one line for the batch).
+    A match that cannot be read as a file (a dangling or looping symbolic link, a
+    pipe, and a folder when the pattern's last part names a suffix, as ``*.png``
+    does) is kept, for the batch to list it as failed with :func:`unreadable_reason`;
+    folders matched by a pattern that names no suffix (``photos/*``) are the folders
+    searched.
     """
     skipped = exclude.resolve() if exclude is not None else None
     folders_are_matches = "." in Path(pattern).name
@@ -123,8 +124,17 @@ def batch_files(pattern: str, exclude: Path | None = None) -> tuple[list[Path], 
             real = path.absolute()
         chosen = left_out if skipped is not None and skipped in real.parents else found
         chosen.setdefault(real, []).append(path)
-    _warn_of_paths_taken_once(pattern, [paths for paths in found.values() if len(paths) > 1])
-    return sorted(paths[0] for paths in found.values()), sorted(p[0] for p in left_out.values())
+    several = [_kept_first(paths) for paths in found.values() if len(paths) > 1]
+    _warn_of_paths_taken_once(pattern, several)
+    kept = [paths[0] for paths in found.values() if len(paths) == 1] + [p[0] for p in several]
+    return sorted(kept), sorted(p[0] for p in left_out.values())
+
+
+def _kept_first(paths: list[Path]) -> list[Path]:
+    """``paths`` (the same file's) with the one to keep first: the shortest, then the one
+    through the fewest symbolic links (the real folder before a link beside it), then by name."""
+    kept = min(paths, key=lambda p: (len(p.parts), sum(q.is_symlink() for q in (p, *p.parents)), p))
+    return [kept, *(p for p in paths if p != kept)]
 
 
 def _warn_of_paths_taken_once(pattern: str, several: list[list[Path]]) -> None:

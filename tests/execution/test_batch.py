@@ -592,6 +592,18 @@ def test_a_file_reached_through_folder_links_is_taken_once(tmp_path):
     )  # the loop's folder is searched once: up/sub/up/a.png and deeper are not listed
 
 
+def test_a_file_reached_as_long_through_a_link_is_taken_by_its_real_folder(tmp_path, monkeypatch):
+    """``alias -> photos`` sorts first: the batch took alias/a.png, its folder named after
+    the link, where photos/a.png is the file's own path (found by TRY44)."""
+    from graphvision.execution.batch_files import batch_files
+
+    photo(tmp_path / "photos" / "a.png", 10)
+    (tmp_path / "alias").symlink_to("photos", target_is_directory=True)
+    monkeypatch.chdir(tmp_path)
+    with pytest.warns(UserWarning, match=r"also reached as alias/a.png .* taken once, as photos"):
+        assert batch_files("**/a.png")[0] == [Path("photos/a.png")]
+
+
 def test_folders_reached_by_several_links_are_searched_once(tmp_path):
     """A link back up the tree and a second link aliasing a folder made Python's recursive
     glob list paths by the hundred thousand (gigabytes, never a file run): each real folder
