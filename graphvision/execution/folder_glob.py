@@ -53,14 +53,21 @@ def glob_once(pattern: str) -> list[str]:
             inside = glob.glob(os.path.join(glob.escape(searched), "*"))
             found.extend(([itself] if itself else []) + [p for p in inside if not os.path.isdir(p)])
     if around:
-        more = f" and {len(around) - 1} more" if len(around) > 1 else ""
-        warnings.warn(
-            f"batch '{pattern}': {around[0]}{more} not searched: a link to "
-            f"{os.path.realpath(around[0])}, a folder that holds the folder searched (** "
-            "would search all of it)",
-            stacklevel=5,  # run_batch's caller: batch_files, _batch_paths, run_batch, the user's
-        )
+        _warn_of_links_up(pattern, around)
     return found
+
+
+def _warn_of_links_up(pattern: str, around: list[str]) -> None:
+    """One warning naming the links ``pattern``'s ``**`` did not follow (three at most),
+    each with the folder it leads to."""
+    named = ", ".join(f"{link} (to {os.path.realpath(link)})" for link in around[:3])
+    more = f" and {len(around) - 3} more" if len(around) > 3 else ""
+    which = "a link to a folder that holds" if len(around) == 1 else "links to folders that hold"
+    warnings.warn(
+        f"batch '{pattern}': {named}{more} not searched: {which} the folder searched (** would "
+        "search all of it)",
+        stacklevel=6,  # run_batch's caller: here, glob_once, batch_files, _batch_paths, run_batch
+    )
 
 
 def _matches(folder: str, rest: str, *, below: bool) -> list[str]:

@@ -55,8 +55,21 @@ def test_a_link_to_a_folder_holding_the_search_is_not_followed_and_named(tree, t
     assert found == ["ph/[odd]/e.png", "ph/a.png", "ph/sub/b.png", "ph/sub/deep/c.png"]
     real = os.path.realpath(os.path.join("ph/sub", target))
     assert [str(w.message) for w in caught] == [
-        f"batch 'ph/**/*.png': ph/sub/all not searched: a link to {real}, a folder that holds the "
-        "folder searched (** would search all of it)"
+        f"batch 'ph/**/*.png': ph/sub/all (to {real}) not searched: a link to a folder that holds "
+        "the folder searched (** would search all of it)"
+    ]
+
+
+def test_each_link_up_not_followed_is_named_with_its_folder(tree):
+    """The warning named the first link and 'and 2 more', with the first one's folder alone."""
+    for name, target in [("all", "/"), ("far", "../../.."), ("top", "../..")]:
+        os.symlink(target, f"ph/sub/{name}")
+    with pytest.warns(UserWarning) as caught:
+        glob_once("ph/**/*.png")
+    far, top = os.path.realpath(".."), os.path.realpath(".")
+    assert [str(w.message) for w in caught] == [
+        f"batch 'ph/**/*.png': ph/sub/all (to /), ph/sub/far (to {far}), ph/sub/top (to {top}) "
+        "not searched: links to folders that hold the folder searched (** would search all of it)"
     ]
 
 
