@@ -26,7 +26,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 __all__ = [
+    "CopiedError",
     "DuplicateNodeError",
+    "FileWriteError",
     "GraphvisionError",
     "InputError",
     "NodeExecutionError",
@@ -40,6 +42,7 @@ __all__ = [
     "RunError",
     "UnknownNameError",
     "did_you_mean",
+    "error_text",
 ]
 
 
@@ -90,6 +93,32 @@ class FileWriteError(OSError):
 
     def __str__(self) -> str:
         return f"cannot write {self.filename}: {self.strerror}"
+
+
+class CopiedError(Exception):
+    """What a node raised in a worker process, when that exception could not travel back
+    as itself (it does not pickle, or does not unpickle: a lock or a lambda in its
+    arguments, an ``__init__`` that takes other arguments than it gives its base): its
+    type's name and its message, as the run reports them (:func:`error_text`)."""
+
+    def __init__(self, type_name: str, message: str) -> None:
+        super().__init__(type_name, message)
+        self.type_name, self.message = type_name, message
+
+    def __str__(self) -> str:
+        return self.message
+
+
+def error_text(error: BaseException) -> str:
+    """``Type: message`` of an exception as a run reports it: a copy by its original's
+    type (:class:`CopiedError`); one whose message cannot be made (its ``__str__`` raised)
+    says so, where the run ended with an internal error."""
+    name = error.type_name if isinstance(error, CopiedError) else type(error).__name__
+    try:
+        message = str(error)
+    except Exception as broken:  # (a user's exception class: anything can happen)
+        message = f"(its message could not be made: {type(broken).__name__})"
+    return f"{name}: {message}"
 
 
 @dataclass(frozen=True, order=True)

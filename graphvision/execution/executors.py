@@ -27,6 +27,7 @@ from typing import Any, Protocol
 from graphvision.execution.node_call import began_before, call_labelled, call_node
 from graphvision.execution.node_imports import import_ahead
 from graphvision.execution.process_executor import ProcessExecutor
+from graphvision.execution.sendable import sendable
 from graphvision.execution.worker_died import WorkerDiedError
 from graphvision.nodes.spec import FunctionRef
 from graphvision.values.ports import PortType, freeze_all
@@ -192,8 +193,23 @@ def call_node_encoded(
     ``upstream`` holds the inputs submitted before they were computed: by
     port, the producing task's result (what this function returned there) and
     the producer's output port. A chaining executor (:func:`chains_tasks`)
-    puts the result there.
+    puts the result there. What the node raises goes back as itself, or as its copy when
+    it cannot (:mod:`~graphvision.execution.sendable`).
     """
+    try:
+        return _call_decoded(ref, params, inputs, outputs, output_tuple, upstream)
+    except Exception as error:  # it goes back pickled: as a copy when it cannot be
+        raise sendable(error) from None
+
+
+def _call_decoded(
+    ref: FunctionRef,
+    params: dict[str, Any],
+    inputs: Payload,
+    outputs: dict[str, type[PortType]],
+    output_tuple: bool,
+    upstream: dict[str, tuple[tuple[Payload, float], str]] | None,
+) -> tuple[Payload, float]:
     func = ref.resolve()
     import_ahead([func])  # its imports one thread at a time (a Dask worker's threads)
     if upstream:

@@ -3,10 +3,12 @@ the process pool: :mod:`graphvision.execution.batch_lanes`), each with its own o
 
 from __future__ import annotations
 
-import pickle
 import time
 from collections.abc import Callable
 from typing import Any
+
+from graphvision.errors import error_text
+from graphvision.execution.sendable import pickles
 
 __all__ = ["FileTaskError", "run_files"]
 
@@ -31,19 +33,8 @@ def run_files(
         try:
             found.append(task(job, path, folder))
         except Exception as error:  # this file fails alone, with its reason
-            found.append(
-                error if _pickles(error) else FileTaskError(f"{type(error).__name__}: {error}")
-            )
+            found.append(error if pickles(error) else FileTaskError(error_text(error)))
     return found, time.thread_time() - began
-
-
-def _pickles(error: Exception) -> bool:
-    """Whether ``error`` goes back to the client as it is (else as a :class:`FileTaskError`)."""
-    try:
-        pickle.loads(pickle.dumps(error))
-    except Exception:
-        return False
-    return True
 
 
 run_files.settles_its_files = True  # type: ignore[attr-defined]

@@ -12,10 +12,7 @@ from typing import Any
 import numpy as np
 
 from graphvision.compiler.compile import CompiledGraph, Step
-from graphvision.errors import (
-    GraphvisionError,
-    NodeExecutionError,
-)
+from graphvision.errors import GraphvisionError, NodeExecutionError, error_text
 from graphvision.execution.display import html_of
 from graphvision.nodes.loading import plugin_line
 from graphvision.values.ports import PortType
@@ -236,7 +233,7 @@ def wrapped_failure(
         step.spec.id,
         step.params,
         summary,
-        f"{type(error).__name__}: {error}{plugin_line(error)}",
+        f"{error_text(error)}{plugin_line(error)}",
     )
     wrapped.__cause__ = error
     return wrapped

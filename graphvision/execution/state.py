@@ -30,7 +30,7 @@ from numpy import ndarray
 from graphvision.cache.keys import known_content_key
 from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, Schedule, Step
-from graphvision.errors import GraphvisionError, PortValueError
+from graphvision.errors import GraphvisionError, PortValueError, error_text
 from graphvision.execution.accept import accepted, invalid_output
 from graphvision.execution.encoded import submit_encoded
 from graphvision.execution.executors import (
@@ -337,7 +337,7 @@ class RunState:
     def failed(self, step: Step, error: BaseException) -> bool:
         node = self.record_of(step, "failed")
         node.seconds = time.perf_counter() - self.started[step.name]
-        node.error = f"{type(error).__name__}: {error}{plugin_line(error)}"
+        node.error = f"{error_text(error)}{plugin_line(error)}"
         self.failures[step.name] = wrapped_failure(step, error, self.values)
         self.release_inputs(step)
         for hook in self.hooks:
