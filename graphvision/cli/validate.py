@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from graphvision.cli.common import EXIT_OK, EXIT_USAGE, registry_for
+from graphvision.cli.common import EXIT_OK, EXIT_USAGE, refuse_paths_not_utf8, registry_for
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
@@ -24,6 +24,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
     status = EXIT_OK
     for path in args.pipelines:
+        refuse_paths_not_utf8(path, {})  # as `run` refuses it (its messages name it in UTF-8)
         try:
             graph = load_pipeline(path, allow_outside_plugins=args.allow_outside_plugins)
             registry = registry_for(args, graph)  # as `run` makes it: the same plugins

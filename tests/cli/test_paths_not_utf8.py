@@ -94,16 +94,6 @@ def test_a_plugin_named_not_utf8_is_refused_up_front(capsys, tmp_path, latin_fol
     assert not (tmp_path / "o").exists()
 
 
-def test_a_pipeline_plugin_in_a_folder_not_utf8_is_refused_by_validate(capsys, latin_folder):
-    (latin_folder / "own.py").write_text(PLUGIN)
-    (latin_folder / "p.yaml").write_text("plugins: [own.py]\n" + DEMO.read_text())
-    assert main(["validate", "p.yaml"]) == 2
-    cwd = os.fsencode(latin_folder).decode("utf-8", "backslashreplace")
-    assert capsys.readouterr().err.startswith(
-        f"error: p.yaml: plugin {cwd}/own.py: its path is not UTF-8; "
-    )
-
-
 @pytest.mark.parametrize("command", ["run", "cache"])
 def test_a_cache_folder_not_utf8_is_refused_up_front(capsys, tmp_path, command):
     """It was used, and ``cache info`` then ended with an internal error (UTF-8 stdout)."""
@@ -161,3 +151,12 @@ def test_a_plugin_file_not_utf8_fails_to_load_naming_it_from_python(tmp_path):
     Path(os.fsdecode(bytes(folder) + b"/q\xff.py")).write_text(PLUGIN)
     (failed,) = discover([folder], entry_points=False).failed_plugins()
     assert failed.error == f"plugin {folder}/q\\xff.py: its path is not UTF-8: rename it"
+
+
+def test_validate_refuses_a_pipeline_whose_path_is_not_utf8_as_run_does(capsys, latin_folder):
+    """validate named it with a surrogate and went on to its plugins, where run refused it."""
+    cwd = os.fsencode(latin_folder).decode("utf-8", "backslashreplace")
+    assert main(["validate", "p.yaml"]) == 2
+    assert capsys.readouterr().err.startswith(
+        f"error: pipeline file {cwd}/p.yaml: its path is not UTF-8; "
+    )
