@@ -13,8 +13,8 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	@echo "results and report in out/homography (open out/homography/report.html in a browser)"
 	$(BIN)/graphvision run pipelines/homography.yaml --output-dir out/homography
+	@echo "results and report in out/homography (open out/homography/report.html in a browser)"
 
 test: $(STAMP)
 	@start=$$(date +%s); $(BIN)/python -m pytest -n 2 --dist worksteal; status=$$?; \
