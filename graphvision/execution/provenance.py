@@ -5,7 +5,9 @@ the git commit of the pipeline's folder, every used input (what was given,
 a file's SHA-256, its content key), pipeline parameters and overrides,
 package versions (Python, graphvision, numpy, scipy, each plugin: a
 distribution's version, or a local plugin file's SHA-256), the date, and each
-node's parameters and cache keys.
+node's parameters and cache keys. The pipeline file is described once per compiled
+graph, at its first run (:func:`_graph_file`): its later runs run the graph as it was
+loaded.
 """
 
 from __future__ import annotations
@@ -318,6 +320,32 @@ def _described(given: Any) -> str:
 _ARRAYS: dict[tuple[tuple[int, ...], np.dtype], str] = {}
 
 
+_GRAPH_FILES: dict[int, tuple[weakref.ref[CompiledGraph], _PipelineFile | None]] = {}
+"""What :func:`_pipeline_file` found at the first run of each compiled graph (held weakly: a
+key whose graph is gone never matches)."""
+
+
+def _graph_file(compiled: CompiledGraph) -> _PipelineFile | None:
+    """:func:`_pipeline_file` of the compiled graph's pipeline file, as its first run found it.
+
+    Its later runs (a script's loop over ``gv.run(compiled, ...)``, a batch's files) run the
+    graph as it was loaded, whatever happens to the file since, and record it as that first
+    run did, without a system call (the four ``os.stat`` of :func:`_pipeline_file` were a
+    fifth of the engine's cost on ``coins.yaml`` with the OpenCV backend, after the
+    script's calls had left the kernel's caches cold). A graph loaded or compiled again
+    (every command, ``gv.run`` of a path or of a ``Graph``) is looked at anew.
+    """
+    known = _GRAPH_FILES.get(id(compiled))
+    if known is not None and known[0]() is compiled:
+        return known[1]
+    source = compiled.graph.source
+    found = _pipeline_file(source) if source else None
+    if len(_GRAPH_FILES) > 64:
+        _GRAPH_FILES.clear()
+    _GRAPH_FILES[id(compiled)] = (weakref.ref(compiled), found)
+    return found
+
+
 def describe_run(
     record: RunRecord,
     compiled: CompiledGraph,
@@ -329,7 +357,7 @@ def describe_run(
     """Fill ``record``'s provenance fields (each node's record holds its parameters and
     cache keys from the start)."""
     record.date = _date_now()
-    found = _pipeline_file(compiled.graph.source) if compiled.graph.source else None
+    found = _graph_file(compiled)
     if found is not None:
         record.pipeline_file, record.pipeline_sha256, record.git_commit, record.git_dirty = found
     record.inputs = {

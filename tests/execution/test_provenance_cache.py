@@ -243,3 +243,34 @@ def test_an_array_input_is_described_by_its_shape_and_dtype_each_run():
         }
         assert provenance._describe_input(np.zeros(2, ">i2"), "k")["given"] == "ndarray (2,) >i2"
         assert provenance._describe_input(3.5, "k")["given"] == "3.5"
+
+
+def test_runs_of_one_compiled_graph_record_its_pipeline_file_as_the_first_found_it(
+    tmp_path, monkeypatch
+):
+    """The later runs of a compiled graph run it as it was loaded: they record the pipeline
+    file (path, SHA-256) as its first run found it, without looking at the file again; a
+    graph compiled again from the edited file records the edit."""
+    plugin = tmp_path / "cachedprov.py"
+    plugin.write_text(PLUGIN)
+    registry = gv.discover([plugin], entry_points=False)
+    pipeline = _pipeline(tmp_path)
+    loaded = hashlib.sha256(pipeline.read_bytes()).hexdigest()
+    compiled = gv.compile_graph(gv.load_pipeline(pipeline), registry)
+    inputs = {"image": np.zeros((4, 4), np.float32)}
+    first = gv.run(compiled, registry, inputs=inputs).record
+    assert (first.pipeline_file, first.pipeline_sha256) == (str(pipeline.resolve()), loaded)
+    pipeline.write_text(pipeline.read_text() + "# edited after the graph was loaded\n")
+    looked: list[str] = []
+    original = provenance._file_stat
+
+    def counted(path: str):
+        looked.append(path)
+        return original(path)
+
+    monkeypatch.setattr(provenance, "_file_stat", counted)
+    again = gv.run(compiled, registry, inputs=inputs).record
+    assert (again.pipeline_file, again.pipeline_sha256, looked) == (first.pipeline_file, loaded, [])
+    anew = gv.run(gv.compile_graph(gv.load_pipeline(pipeline), registry), registry, inputs=inputs)
+    assert anew.record.pipeline_sha256 == hashlib.sha256(pipeline.read_bytes()).hexdigest()
+    assert anew.record.pipeline_sha256 != loaded and looked == [str(pipeline)]
