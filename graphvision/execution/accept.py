@@ -9,7 +9,7 @@ from typing import Any
 from graphvision.compiler.compile import Step
 from graphvision.errors import PortValueError
 from graphvision.execution.inputs import freeze_value
-from graphvision.values.known import checked, frozen_value, note, recall
+from graphvision.values.known import checked, frozen_value, noted_new, recall
 from graphvision.values.memory import frozen_in_place
 from graphvision.values.ports import is_plain_array_port
 
@@ -48,8 +48,7 @@ def accepted(step: Step, result: Any, held: int, encoded: bool) -> dict[str, Any
         if plain and value is result and getrefcount(value) <= held + _OWN_REFS:
             frozen = frozen_in_place(value)  # nothing else holds it: no copy
             if frozen is not None:
-                note(frozen, kind, True, frozen=True)
-                return {port: frozen}
+                return {port: noted_new(frozen, kind)}
         return {port: frozen_value(kind, value)}
     alone = getrefcount(result) <= held + _TUPLE_REFS  # (counted before the call holds it)
     return _accepted_outputs(step, result, alone)
@@ -69,8 +68,7 @@ def _accepted_outputs(step: Step, result: Any, alone: bool) -> dict[str, Any]:
                 if checked_value is value and getrefcount(value) <= _IN_TUPLE_REFS:
                     frozen = frozen_in_place(value)
                     if frozen is not None:
-                        note(frozen, kind, True, frozen=True)
-                        outputs[port] = frozen
+                        outputs[port] = noted_new(frozen, kind)
                         continue
                 outputs[port] = frozen_value(kind, checked_value)
                 continue

@@ -28,7 +28,7 @@ import numpy as np
 from graphvision.values.ports import PortType, freeze, freeze_all, is_frozen, is_plain_array_port
 from graphvision.values.scalars import _ScalarPort, is_plain_table_port
 
-__all__ = ["checked", "frozen_value", "note", "recall"]
+__all__ = ["checked", "frozen_value", "note", "noted_new", "recall"]
 
 _Stamp = tuple[tuple[int, ...], tuple[int, ...]]  # shape, strides
 _NOTES: dict[int, tuple[weakref.ref[np.ndarray], _Stamp, np.dtype, dict[Any, Any]]] = {}
@@ -72,6 +72,18 @@ def note(value: Any, what: Any, fact: Any, frozen: bool = False) -> None:
         entry[3].clear()
         entry = _NOTES[key] = (entry[0], (value.shape, value.strides), value.dtype, entry[3])
     entry[3][what] = fact
+
+
+def noted_new(value: np.ndarray, what: Any) -> np.ndarray:
+    """:func:`note` that ``value`` passed ``what``, for an array object just made over
+    immutable memory (:func:`~graphvision.values.memory.frozen_in_place`'s): no note of it
+    can be alive (one under its ``id`` is of an array that died), so it is made without
+    the look-ups :func:`note` makes (a run notes each array a node returns). Returns it."""
+    if len(_NOTES) >= _SWEEP_AT[0]:
+        _sweep()
+    stamp = (value.shape, value.strides)
+    _NOTES[id(value)] = (weakref.ref(value), stamp, value.dtype, {what: True})
+    return value
 
 
 def checked(kind: type[PortType], value: Any) -> Any:

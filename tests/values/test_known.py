@@ -11,8 +11,8 @@ import pytest
 import graphvision as gv
 from graphvision.errors import PortValueError
 from graphvision.values.images import GrayImagePort, ImagePort
-from graphvision.values.known import checked, note, recall
-from graphvision.values.memory import frozen_copy
+from graphvision.values.known import checked, note, noted_new, recall
+from graphvision.values.memory import frozen_copy, frozen_in_place
 
 
 def test_a_frozen_array_accepted_once_is_not_checked_again(monkeypatch):
@@ -53,6 +53,23 @@ def test_a_note_does_not_outlive_its_array_nor_a_change_of_shape():
     gc.collect()
     other = frozen_copy(np.zeros((4, 6), dtype=np.float32))
     assert id(other) != address or recall(other, "fact") is None
+
+
+def test_a_node_output_frozen_in_place_is_noted_as_its_port_type_took_it():
+    """A node's array frozen where it lies is noted at once (without :func:`note`'s look-ups):
+    accepted again as the same port type it is not checked again, as any other type it is;
+    the note of an array that died at the same ``id`` is replaced, not added to."""
+    array = np.full((128, 64), 0.5, dtype=np.float32)
+    dead = noted_new(frozen_copy(array), GrayImagePort)
+    note(dead, "other fact", 1)
+    address = id(dead)
+    del dead
+    gc.collect()
+    frozen = frozen_in_place(array)
+    assert frozen is not None and noted_new(frozen, GrayImagePort) is frozen
+    assert recall(frozen, GrayImagePort) is True and recall(frozen, ImagePort) is None
+    assert id(frozen) != address or recall(frozen, "other fact") is None
+    assert checked(GrayImagePort, frozen) is frozen
 
 
 def test_a_frozen_input_given_again_is_keyed_and_checked_once(monkeypatch):
