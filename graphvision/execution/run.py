@@ -203,9 +203,7 @@ def _run(
     caller) and the node limits the environment sets, as read by the check."""
     limit, limits = held
     compiled, registry = _compiled(graph, registry, inputs, overrides, backends)
-    wanted = _wanted_outputs(compiled, outputs, inputs)
-    wanted = outputs_with_truth(compiled, wanted, set(inputs), asked=outputs is not None)
-    schedule = compiled.schedule_for(wanted)
+    wanted, schedule = _wanted_and_schedule(compiled, outputs, inputs)
     given = _given_inputs(compiled, schedule, inputs)
     reference_keys = _referenced_inputs(compiled, given, registry)
     with pixel_budget(max_pixels), node_limits(node_timeout, node_memory):
@@ -237,6 +235,21 @@ def _run(
         failure.result = result  # type: ignore[attr-defined]  # read by callers as error.result
         raise failure
     return result
+
+
+def _wanted_and_schedule(
+    compiled: CompiledGraph, outputs: list[str] | None, inputs: dict[str, Any]
+) -> tuple[list[str], Schedule]:
+    """The outputs the run produces (each name checked, those whose ground truth is missing
+    left out) and what computing them involves; every output and the schedule made once per
+    compiled graph when no output is named, no input given is unknown and no input is the
+    truth of another (the checks then have nothing to say)."""
+    every = outputs is None and not compiled.truth_marks  # (inputs: a dict's keys, in C)
+    if every and inputs.keys() <= compiled.input_types.keys():
+        return list(compiled.outputs), compiled.full_schedule
+    wanted = _wanted_outputs(compiled, outputs, inputs)
+    wanted = outputs_with_truth(compiled, wanted, set(inputs), asked=outputs is not None)
+    return wanted, compiled.schedule_for(wanted)
 
 
 def _runs_here(executor: str | Executor) -> bool:

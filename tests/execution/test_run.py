@@ -38,6 +38,17 @@ def test_only_what_requested_outputs_need_runs(registry):
         gv.run(chain(registry), registry, outputs=["cc"])
 
 
+def test_a_compiled_graph_runs_every_output_and_refuses_an_unknown_input(registry):
+    """Run as compiled, with no output named: every output, and an input it does not declare
+    named (as on a graph compiled for the run)."""
+    compiled = gv.compile_graph(chain(registry), registry)
+    for _ in range(2):  # (the second from what the first made once)
+        result = gv.run(compiled, registry, inputs={"x": 2.0})
+        assert result.outputs == {"b": 9.0, "c": 14.0} and list(result.outputs) == ["b", "c"]
+    with pytest.raises(gv.UnknownNameError, match=r"unknown input 'y'; inputs: x$"):
+        gv.run(compiled, registry, inputs={"x": 2.0, "y": 1.0})
+
+
 def test_inputs_override_defaults(registry):
     assert gv.run(chain(registry), registry, inputs={"x": 2.0}).outputs == {"b": 9.0, "c": 14.0}
     assert gv.run(chain(registry), registry, inputs={"x": "3"}).outputs["c"] == 16.0
