@@ -214,3 +214,14 @@ def test_a_small_array_and_a_large_one_are_copied_to_their_bytes(shape):
     for offset in (0, 16):
         copy = frozen_copy(values, offset)
         assert copy.tobytes() == values.tobytes() and copy.shape == shape and is_frozen(copy)
+
+
+def test_an_arrays_address_is_read_from_its_data_pointer_as_numpy_gives_it():
+    """What :func:`frozen_in_place` takes for an array's address (its data pointer, read
+    without asking NumPy for the buffer) is where NumPy says the data lies, for an owner and
+    for views at an offset into theirs."""
+    from graphvision.values.memory import _address_of
+
+    owner = np.arange(4096, dtype=np.float64).reshape(64, 64)
+    for array in (owner, owner[3:], owner.reshape(-1)[17:], at(owner, 36), owner.view(np.uint8)):
+        assert _address_of(array) == array.__array_interface__["data"][0]
