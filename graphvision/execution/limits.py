@@ -126,9 +126,14 @@ def current_limits() -> NodeLimits:
     given = _LIMITS.get()
     if given is not None:
         return given
-    return NodeLimits(
-        _from_environment(TIMEOUT_VARIABLE, float), _from_environment(MEMORY_VARIABLE, int)
-    )
+    timeout = _from_environment(TIMEOUT_VARIABLE, float)
+    memory = _from_environment(MEMORY_VARIABLE, int)
+    if timeout is None and memory is None:  # (none set: one frozen value, not one per run)
+        return _UNLIMITED
+    return NodeLimits(timeout, memory)
+
+
+_UNLIMITED = NodeLimits()
 
 
 def node_limits(
