@@ -33,6 +33,8 @@ from collections.abc import Callable, Iterable
 from importlib.util import resolve_name
 from typing import Any
 
+from graphvision.execution.batch_signals import signals_deferred
+
 __all__ = ["import_modules", "lazy_imports", "load_kernels"]
 
 _MOST_FUNCTIONS = 500  # a bound on the walk, whatever the plugins' code
@@ -131,10 +133,14 @@ def load_kernels(modules: list[Any]) -> None:
 
 def _load_cached(kernel: Any) -> None:
     """Every signature numba's cache holds for ``kernel``'s code on this machine, loaded (a
-    signature whose entry is missing or stale is left to the kernel's first call)."""
+    signature whose entry is missing or stale is left to the kernel's first call). A Ctrl-C
+    meanwhile is raised after each signature's code: raised inside llvmlite's object cache,
+    which LLVM calls back, it was dropped there and LLVM read a missing buffer (the
+    client crashed, SIGSEGV; :mod:`graphvision.execution.batch_signals`)."""
     cache = kernel._cache
     codegen = kernel.targetctx.codegen()
     for key in list(cache._cache_file._load_index()):
         signature = key[0]
         if cache._index_key(signature, codegen) == key:  # this machine's, for this code
-            kernel.compile(signature)
+            with signals_deferred():
+                kernel.compile(signature)

@@ -1,13 +1,37 @@
-"""A stopped batch's second Ctrl-C (or SIGTERM, SIGHUP) held off while it finishes stopping."""
+"""The signals that stop a batch (Ctrl-C, SIGTERM, SIGHUP): held off while a stopped batch
+finishes stopping (:func:`signals_held`), and deferred across a fork and native code that
+calls back into Python (:func:`signals_deferred`).
+
+Why a fork loses a Ctrl-C
+-------------------------
+A signal's Python handler does not run when the signal comes: the C handler notes it,
+and the main thread runs the Python handler at its next bytecode. ``os.fork`` runs the
+Python callbacks registered with :func:`os.register_at_fork` (``logging``'s, which takes
+and releases its lock, in every process that imported it), and an exception such a
+callback raises is printed (``Exception ignored in: <function _releaseLock>``) and
+dropped. A Ctrl-C that came while the client forked a worker (a fork of a client that
+has imported numpy, numba and the plugins copies its page tables: milliseconds) had its
+``KeyboardInterrupt`` raised inside ``logging``'s callback, and dropped: the batch ran to
+its end and exited 0 (3 times in 60 Ctrl-C's sent in a processes batch's first second).
+The same holds for a Python callback that native code calls through ``ctypes``: a
+Ctrl-C while numba loaded its kernels from its cache raised inside llvmlite's object
+cache callback, which LLVM then read as a missing buffer, and the client crashed
+(SIGSEGV). Blocking the signals (``pthread_sigmask``) would not do: the kernel hands a
+signal the main thread blocks to another thread (OpenBLAS's), whose C handler notes it
+all the same. So the handlers themselves are swapped for one that only notes the
+signal, and the first signal noted is sent again once the handlers are back.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
-__all__ = ["signals_held"]
+__all__ = ["signals_deferred", "signals_held"]
 
 _STOPPING = (signal.SIGINT, signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else []))
 """The signals that stop a command (SIGHUP: the terminal closed; not on Windows)."""
@@ -25,13 +49,74 @@ def signals_held() -> Iterator[None]:
         return
     held = {s: signal.getsignal(s) for s in _STOPPING}
     held = {s: handler for s, handler in held.items() if handler is not None}
-    for number in held:
-        signal.signal(number, _ignored)
     try:
+        _set_handlers(dict.fromkeys(held, _ignored))  # a stop that comes meanwhile: ignored
         yield
     finally:
-        for number, handler in held.items():
-            signal.signal(number, handler)
+        _raise(_set_handlers(held))
+
+
+@contextlib.contextmanager
+def signals_deferred() -> Iterator[None]:
+    """Ctrl-C, SIGTERM and SIGHUP noted meanwhile, the first one sent again at the end (its
+    handler then raises as usual): for a fork, and for native code that calls back into
+    Python, where a handler's exception would be dropped (see the module docstring). Only
+    the main thread's Python handlers are swapped; a process forked meanwhile that gets one
+    of these signals before it sets its own handlers runs the handler it would have run.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Or what the handler of the first signal noted raises (the command line's
+        ``Terminated`` for SIGTERM and SIGHUP), once the body is done.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    handlers = {s: signal.getsignal(s) for s in _STOPPING}
+    handlers = {s: handler for s, handler in handlers.items() if callable(handler)}
+    noted: list[int] = []
+    try:
+        _raise(_set_handlers(dict.fromkeys(handlers, _noting(handlers, noted))))
+        yield
+    finally:
+        _raise(_set_handlers(handlers))
+        if noted:
+            signal.raise_signal(noted[0])
+
+
+def _noting(handlers: dict[signal.Signals, Any], noted: list[int]) -> Callable[[int, Any], None]:
+    """A handler that notes its signal in ``noted``; in a process forked meanwhile, the
+    signal's own handler from ``handlers`` runs instead."""
+    client = os.getpid()
+
+    def note(signum: int, frame: Any) -> None:
+        if os.getpid() != client:
+            handlers[signal.Signals(signum)](signum, frame)
+        else:
+            noted.append(signum)
+
+    return note
+
+
+def _set_handlers(handlers: dict[signal.Signals, Any]) -> BaseException | None:
+    """Each signal's handler set, every one of them even when a signal that comes meanwhile
+    runs a handler that raises (Python runs it as ``signal.signal`` is called, before the
+    handler changes: set again); the first such exception, or None."""
+    raised: BaseException | None = None
+    for number, handler in handlers.items():
+        while True:
+            try:
+                signal.signal(number, handler)
+                break
+            except BaseException as error:  # a signal's handler ran meanwhile
+                raised = raised or error
+    return raised
+
+
+def _raise(error: BaseException | None) -> None:
+    if error is not None:
+        raise error
 
 
 def _ignored(signum: int, frame: object) -> None:

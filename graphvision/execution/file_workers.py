@@ -24,7 +24,10 @@ first.
 
 Each worker runs :func:`~graphvision.execution.process_executor.worker_setup`
 first (Ctrl-C left to the client, SIGTERM's default, exit with the client even
-after ``kill -9``), as the pool's workers do.
+after ``kill -9``), as the pool's workers do. A Ctrl-C (SIGTERM, SIGHUP) that comes
+while the client forks a worker is delivered once the fork is done
+(:func:`~graphvision.execution.batch_signals.signals_deferred`): raised during the fork,
+it was dropped and the batch ran on.
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ from multiprocessing.context import BaseContext
 from multiprocessing.process import BaseProcess
 from typing import Any
 
+from graphvision.execution.batch_signals import signals_deferred
 from graphvision.execution.process_executor import client_setup, worker_setup
 
 __all__ = ["FileWorker", "FileWorkers", "Handler"]
@@ -81,7 +85,7 @@ class FileWorkers:
             name=f"graphvision-file-worker-{len(self.workers) + len(self.ended)}",
             daemon=True,
         )
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), signals_deferred():  # a Ctrl-C meanwhile is not lost
             warnings.simplefilter("ignore", DeprecationWarning)  # 3.12's os.fork note on threads
             process.start()
         worker_end.close()
