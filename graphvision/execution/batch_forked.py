@@ -2,14 +2,16 @@
 first one included (:mod:`graphvision.execution.file_workers`).
 
 The workers are forked as the batch starts, when forking the client is safe then
-(:func:`~graphvision.execution.worker_start.fork_context`). The first worker runs the
-first file as the client ran it before (node by node, filling the cache with the
-nodes every file shares) and sends back its item and the others' job (the graph,
-those shared values, the options); the others load the plugins and their kernels
-meanwhile. Each worker is then sent the job once, and tasks of up to
-``files_per_task`` files (a ``2 × at_once``-th of the files left, so tasks shrink
-to one file as the batch ends), two at a time: the next one waits in its pipe
-while it runs the first.
+(:func:`~graphvision.execution.worker_start.fork_context`), the first one sent the
+first file before the next one is forked (a fork of the client takes milliseconds).
+The first worker runs the first file as the client ran it before (node by node,
+filling the cache with the nodes every file shares) and sends back its item and the
+others' job (the graph, those shared values, the options); the others load the
+plugins and their kernels meanwhile. Each worker is then sent the job once, and tasks
+of up to ``files_per_task`` files (a ``2 × at_once``-th of the files left, so tasks
+shrink to one file as the batch ends), two at a time: the next one waits in its pipe
+while it runs the first. The first worker's next task is sent with the first file: it
+runs it with the job it made, without waiting for the client.
 
 No file runs in the client: a node that kills its process (``os._exit``,
 SIGSEGV, SIGKILL) on any file, the first one included, kills a worker. The files
@@ -24,7 +26,8 @@ shared values.
 
 Stopped (Ctrl-C, SIGTERM, an error in the caller), no task is sent; each worker
 ends once its task is done, and a file it runs writes no folder once the batch has
-stopped (the stop flag: :mod:`graphvision.execution.batch_stop`).
+stopped (the stop flag: :mod:`graphvision.execution.batch_stop`). The files of a task
+still waiting in a worker's pipe are listed ``not run``, not ``interrupted``.
 """
 
 from __future__ import annotations
@@ -105,19 +108,24 @@ class ForkedFiles:
                     left -= 1
                     yield self.done.pop(0)
         finally:  # each worker ends once its task is done; joined by the executor's shutdown
-            self.workers.shutdown(wait=False)
+            try:
+                self._not_begun()
+            finally:
+                self.workers.shutdown(wait=False)
 
     def _start(self, batch: BatchRun) -> None:
-        """The workers, forked now; the first file sent to the first, a warm-up to the others."""
+        """The workers, forked now: the first file sent to the first as soon as it is forked
+        (each fork of the client takes milliseconds), a warm-up to each of the others."""
         _load_kernels(batch)
         state = {"batch": batch}
-        for _ in range(max(1, int(getattr(batch.pool, "width", 1)))):
-            self.workers.start(state)
         batch.started.add(0)
-        first, *others = self.workers.workers
+        first = self.workers.start(state)
         self.workers.send(first, _Task((0,), first=True), _first_file, None)
-        for worker in others:
-            self.workers.send(worker, _Task(()), _warm, None)
+        ahead = self._take()  # run with the job the first worker makes: no wait for the client
+        if ahead is not None:
+            self.workers.send(first, ahead, _run_files, (None, self._files(ahead)))
+        for _ in range(1, max(1, int(getattr(batch.pool, "width", 1)))):
+            self.workers.send(self.workers.start(state), _Task(()), _warm, None)
 
     def _dispatch(self) -> None:
         """Tasks for the workers that can take one: a file to retry goes alone to a worker
@@ -150,11 +158,28 @@ class ForkedFiles:
         return _Task(tuple(indices)) if indices else None
 
     def _send(self, worker: FileWorker, task: _Task) -> None:
-        paths, folders = self.batch.paths, self.batch.folders
-        files = [(str(paths[k]), str(folders[k])) for k in task.indices]
         job = None if worker.has_job else self.job
         worker.has_job = True
-        self.workers.send(worker, task, _run_files, (job, files))
+        self.workers.send(worker, task, _run_files, (job, self._files(task)))
+
+    def _files(self, task: _Task) -> list[tuple[str, str]]:
+        """Each file of ``task``: its path and its folder."""
+        paths, folders = self.batch.paths, self.batch.folders
+        return [(str(paths[k]), str(folders[k])) for k in task.indices]
+
+    def _not_begun(self) -> None:
+        """The batch ends (stopped): the files of each task that waits in a worker's pipe
+        behind the one it runs are not started (``not run`` in batch.csv, not
+        ``interrupted``: their worker writes no folder once the batch has stopped). The
+        answers already sent are read first: the task a worker runs is then the first it
+        holds (one it began since writes no folder either)."""
+        for worker in self.workers.workers:
+            with contextlib.suppress(EOFError, OSError):  # it died: what it held is settled
+                while worker.held and worker.conn.poll():
+                    worker.conn.recv()  # a task done: its folders' claims say how it ended
+                    worker.held.pop(0)
+            for task in worker.held[1:]:
+                self.batch.started.difference_update(task.indices)
 
     def _answered(self, worker: FileWorker, task: _Task, answer: Any) -> None:
         """What a worker sent back for ``task``: each file's outcome, or why it failed."""
@@ -302,4 +327,6 @@ def _run_files(state: dict[str, Any], payload: tuple[Any, list[tuple[str, str]]]
     job, files = payload
     if job is not None:
         state["job"] = job
+    if "job" not in state:  # sent ahead of the first file, which made none
+        raise RuntimeError("the batch's first file did not prepare the other files' job")
     return run_files(run_file_task, state["job"], files)[0]

@@ -142,3 +142,50 @@ def test_a_worker_ignores_ctrl_c_and_ends_on_sigterm():
         assert (found, dead) == ([], [worker]) and worker.process.exitcode == -signal.SIGTERM
     finally:
         workers.shutdown()
+
+
+STOPPING_PLUGIN = '''
+import os
+import signal
+import time
+
+import numpy as np
+
+from graphvision import Float, Image, node
+
+
+@node("stopping.score")
+def score(image: Image) -> Float:
+    """The image's mean; the worker given the image of level 77 sends Ctrl-C to the client,
+    then takes a second more."""
+    mean = float(np.mean(image))
+    if round(mean * 255) == 77 and os.getpid() != int(os.environ["CLIENT_PID"]):
+        os.kill(int(os.environ["CLIENT_PID"]), signal.SIGINT)
+        time.sleep(1.0)
+    return mean
+'''
+
+
+def test_files_waiting_in_a_workers_pipe_when_the_batch_stops_are_not_run(
+    tmp_path, monkeypatch, alone
+):
+    """Stopped while each worker runs a task and holds the next one: the held tasks' files
+    never started (they were listed interrupted); the running file wrote nothing."""
+    monkeypatch.setenv("CLIENT_PID", str(os.getpid()))
+    levels = [10 + 3 * k for k in range(60)]
+    levels[1] = 77  # in the first worker's first task after the first file: 8 files
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            _scored_on_processes(tmp_path, STOPPING_PLUGIN, "stopping", levels)
+    finally:
+        signal.signal(signal.SIGINT, before)
+    with (tmp_path / "out" / "batch.csv").open() as summary:
+        status = [row["status"] for row in csv.DictReader(summary)]
+    assert status[0] == "ok" and status[1] == "interrupted"
+    assert not (tmp_path / "out" / "01").exists()
+    assert status[2:9].count("not run") == 0  # the task it ran: stopped while it ran
+    # the other worker ran one task of 8 files and held the next; the rest never left
+    assert status.count("not run") >= 60 - 1 - 8 - 8
+    assert set(status[9:]) <= {"ok", "interrupted", "not run"}
+    assert status[9:].count("interrupted") <= 8, status
