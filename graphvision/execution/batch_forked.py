@@ -93,7 +93,9 @@ class ForkedFiles:
     def stream(self) -> Iterator[tuple[int, BatchItem]]:
         """``(index, item)`` as files complete, the first file's included."""
         batch = self.batch
-        batch.pool.file_workers.append(self.workers)  # type: ignore[attr-defined]  # joined
+        earlier = batch.pool.file_workers  # type: ignore[attr-defined]  # joined at its shutdown
+        earlier[:] = [workers for workers in earlier if not workers.reaped()]  # (a long script's)
+        earlier.append(self.workers)
         try:
             self._start(batch)
             left = len(batch.paths)

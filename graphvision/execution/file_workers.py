@@ -128,6 +128,18 @@ class FileWorkers:
         self.ended.append(worker.process)
         worker.conn.close()
 
+    def reaped(self) -> bool:
+        """Whether every worker has ended (each then joined and closed, nothing left to
+        wait for at the executor's shutdown); a worker still running is left alone."""
+        running = []
+        for process in self.ended:
+            if process.exitcode is None:  # (polls it: reaped when it has exited)
+                running.append(process)
+            else:
+                process.close()
+        self.ended = running
+        return not (self.workers or self.ended)
+
     def shutdown(self, wait: bool = True) -> None:
         """Every worker exits once its task is done (now when it has none); all of them
         joined with ``wait``."""

@@ -17,6 +17,7 @@ import pytest
 
 from graphvision.execution.file_workers import FileWorkers
 
+from .test_batch import photo
 from .test_batch_groups import _scored_on_processes
 from .test_batch_workers import _no_parallel_layer
 
@@ -189,3 +190,29 @@ def test_files_waiting_in_a_workers_pipe_when_the_batch_stops_are_not_run(
     assert status.count("not run") >= 60 - 1 - 8 - 8
     assert set(status[9:]) <= {"ok", "interrupted", "not run"}
     assert status[9:].count("interrupted") <= 8, status
+
+
+def test_an_executor_given_to_several_batches_keeps_only_the_workers_still_running(tmp_path, alone):
+    """Its list of batches' workers (joined at its shutdown) used to grow by one a batch."""
+    from multiprocessing.connection import wait
+
+    import graphvision as gv
+
+    plugin = tmp_path / "stopping.py"
+    plugin.write_text(STOPPING_PLUGIN)
+    graph = gv.Graph("stopping")
+    graph.output("score", graph.add("score", "stopping.score", image=graph.input("image", "Image")))
+    files = [str(photo(tmp_path / "in" / f"{k}.png", 20 + k)) for k in range(4)]
+    executor = gv.make_executor("processes", 2)
+    try:
+        for run in range(3):
+            batch = gv.run_batch(
+                graph, files, input="image", output_dir=tmp_path / f"out{run}",
+                registry=gv.discover([plugin]), executor=executor,
+            )  # fmt: skip
+            assert [item.status for item in batch.items] == ["ok"] * 4
+            assert len(executor.file_workers) == 1  # the batch before had ended: joined
+            ended = [p for workers in executor.file_workers for p in workers.ended]
+            wait([p.sentinel for p in ended], timeout=30)  # each exits once told to
+    finally:
+        executor.shutdown()
