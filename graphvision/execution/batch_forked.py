@@ -35,8 +35,9 @@ from __future__ import annotations
 import collections
 import contextlib
 import sys
+import time
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from graphvision.execution.batch_files import BatchItem
@@ -59,11 +60,12 @@ FIRST_WHERE = "first file on a worker"  # its record's executor says so
 @dataclass(frozen=True)
 class _Task:
     """Files sent as one task: the first file (which makes the job), a retry alone, or
-    files of the queue."""
+    files of the queue; ``sent`` when (``time.perf_counter``)."""
 
     indices: tuple[int, ...]
     first: bool = False
     alone: bool = False
+    sent: float = field(default_factory=time.perf_counter, compare=False)
 
 
 def forked_files(batch: BatchRun, at_once: int) -> ForkedFiles | None:
@@ -200,7 +202,7 @@ class ForkedFiles:
             if kept is not None:
                 self._settle(index, kept)
             elif task.alone:  # it failed again, on its own: with its reason
-                self._failed(index, f"{type(outcome).__name__}: {outcome}")
+                self._failed(index, f"{type(outcome).__name__}: {outcome}", task)
             else:
                 self.again.append(index)
 
@@ -224,10 +226,11 @@ class ForkedFiles:
             job = self.batch.file_job(None)
         self.job = self.batch.job_sent = job
 
-    def _failed(self, index: int, reason: str) -> None:
-        """File ``index`` failed on its own, for ``reason`` (what batch.csv says)."""
+    def _failed(self, index: int, reason: str, task: _Task) -> None:
+        """File ``index`` failed on its own, for ``reason`` (what batch.csv says), in
+        ``task``: its seconds are the task's, from when it was sent."""
         item = BatchItem(self.batch.paths[index], self.batch.folders[index], "failed")
-        item.error = reason
+        item.error, item.seconds = reason, time.perf_counter() - task.sent
         self._settle(index, FileOutcome(item))
 
     def _settle(self, index: int, outcome: FileOutcome) -> None:
@@ -255,7 +258,7 @@ class ForkedFiles:
             elif ran.alone:
                 forked = self.workers.start_method.get_start_method() == "fork"
                 error = died("and again when retried alone", code, "file", forked=forked)
-                self._failed(index, failure_reason(error))
+                self._failed(index, failure_reason(error), ran)
             else:
                 self.again.append(index)
         if self.todo or self.again:

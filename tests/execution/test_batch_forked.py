@@ -72,6 +72,7 @@ def test_a_node_that_kills_its_process_on_the_first_file_fails_that_file_alone(
     assert error.startswith("WorkerDiedError: the worker process running this file died")
     assert said in error and "__main__" not in error  # a fork imports no script
     assert "again when retried alone" in error
+    assert batch.items[0].seconds > 0  # the retry's, until its worker died (it said 0.0)
     assert not (tmp_path / "out" / "00").exists()  # no half of a folder
     with (tmp_path / "out" / "batch.csv").open() as summary:
         rows = {row["output_dir"]: row["status"] for row in csv.DictReader(summary)}
