@@ -172,16 +172,17 @@ class ForkedFiles:
         return [(str(paths[k]), str(folders[k])) for k in task.indices]
 
     def _not_begun(self) -> None:
-        """The batch ends (stopped): the files of each task that waits in a worker's pipe
-        behind the one it runs are not started (``not run`` in batch.csv, not
-        ``interrupted``: their worker writes no folder once the batch has stopped). The
-        answers already sent are read first: the task a worker runs is then the first it
-        holds (one it began since writes no folder either)."""
+        """The batch ends (stopped): the answers already in the workers' pipes are read,
+        then the files of each task that waits in a worker's pipe behind the first it holds
+        are not started (``not run`` in batch.csv, not ``interrupted``). Its worker may have
+        begun one since: a file of it whose folder is whole counts as done (its claim says
+        so), and one it was running writes nothing once the batch has stopped. Of the
+        answers read, the first file's is taken (its worker dropped its claim); the others'
+        files count as their claims say."""
         for worker in self.workers.workers:
-            with contextlib.suppress(EOFError, OSError):  # it died: what it held is settled
-                while worker.held and worker.conn.poll():
-                    worker.conn.recv()  # a task done: its folders' claims say how it ended
-                    worker.held.pop(0)
+            for task, answer in _unread(worker):
+                if task.first:
+                    self._first_answered(worker, answer)
             for task in worker.held[1:]:
                 self.batch.started.difference_update(task.indices)
 
@@ -282,6 +283,17 @@ class ForkedFiles:
             self.done.append((index, self.batch.run_in_client(index, where)))
         self.again.clear()
         self.todo.clear()
+
+
+def _unread(worker: FileWorker) -> list[tuple[_Task, Any]]:
+    """The answers already in ``worker``'s pipe, each with its task, taken from those it
+    holds."""
+    found = []
+    with contextlib.suppress(Exception):  # it died, or a Ctrl-C cut a message short: its
+        while worker.held and worker.conn.poll():  # files' claims say the rest
+            answer = worker.conn.recv()
+            found.append((worker.held.pop(0), answer))
+    return found
 
 
 def _load_kernels(batch: BatchRun) -> None:
