@@ -37,7 +37,7 @@ import time
 import traceback
 import warnings
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from graphvision.cli.common import (
     EXIT_FAILED,
@@ -51,9 +51,6 @@ from graphvision.cli.common import (
 from graphvision.cli.parser import build_parser
 from graphvision.errors import GraphvisionError
 from graphvision.execution.warnings import show_warning
-
-if TYPE_CHECKING:
-    pass
 
 
 def main(argv: Sequence[str] | None = None) -> int:
