@@ -5,13 +5,10 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from graphvision.cli.common import EXIT_OK, registry_for
 from graphvision.errors import UnknownNameError, did_you_mean
-
-if TYPE_CHECKING:
-    pass
 
 
 def listed_nodes(

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
 from graphvision.cli.cache import cmd_cache
 from graphvision.cli.common import (
@@ -25,9 +24,6 @@ from graphvision.cli.schema import cmd_schema
 from graphvision.cli.studio import cmd_studio, studio_options
 from graphvision.cli.sweep import cmd_sweep
 from graphvision.cli.validate import cmd_validate
-
-if TYPE_CHECKING:
-    pass
 
 
 def global_options(parser: argparse.ArgumentParser, top: bool) -> None:

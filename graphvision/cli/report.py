@@ -5,12 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from graphvision.cli.common import EXIT_OK, registry_for
-
-if TYPE_CHECKING:
-    pass
 
 
 def cmd_report(args: argparse.Namespace) -> int:
