@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Mapping, Sequence
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -36,6 +37,7 @@ __all__ = [
     "environment_limits",
     "given_inputs",
     "graph_argument",
+    "input_values",
     "mapping_argument",
     "names_argument",
     "refuse_unknown_inputs",
@@ -198,6 +200,26 @@ def admitted(
     if resolved is value:
         note(value, (resolve_input, kind), True)
     return resolved
+
+
+def input_values(
+    compiled: CompiledGraph,
+    given: dict[str, Any],
+    inputs: dict[str, Any],
+    reference_keys: Any,
+    registry: Registry,
+) -> dict[str, Any]:
+    """Each input's value as the run takes it: :func:`admitted`, or, for an input named
+    by a reference (``reference_keys``: resolved only if a node needs it), a call that
+    resolves it; a default is resolved with its pipeline (its errors at its line)."""
+    values: dict[str, Any] = {}
+    for name, value in given.items():
+        kind, graph = compiled.input_types[name], None if name in inputs else compiled.graph
+        if name in reference_keys:
+            values[name] = partial(resolve_input, name, kind, value, registry, graph=graph)
+        else:
+            values[name] = admitted(name, kind, value, registry, graph)
+    return values
 
 
 def checked_run_arguments(

@@ -45,15 +45,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping, Sequence
 from collections.abc import Set as AbstractSet
-from functools import partial
 from typing import Any
 
 from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, Schedule, compile_graph
 from graphvision.errors import RunError, UnknownNameError
 from graphvision.execution.arguments import (
-    admitted,
     checked_run_arguments,
+    input_values,
     refuse_unknown_inputs,
 )
 from graphvision.execution.arguments import given_inputs as _given_inputs
@@ -67,7 +66,6 @@ from graphvision.execution.executors import (
     make_executor,
 )
 from graphvision.execution.heap import keep_freed_memory
-from graphvision.execution.inputs import resolve_input
 from graphvision.execution.limits import (
     NodeLimits,
     current_limits,
@@ -212,16 +210,7 @@ def _run(
         if node_timeout is not None or node_memory is not None:  # (else as read by the check)
             limits = current_limits()
         limits.check_executor(where)  # (read once: the state takes them)
-        defaults = {name: None if name in inputs else compiled.graph for name in given}
-        values = {
-            name: partial(
-                resolve_input, name, compiled.input_types[name], value, registry,
-                graph=defaults[name],
-            )
-            if name in reference_keys
-            else admitted(name, compiled.input_types[name], value, registry, defaults[name])
-            for name, value in given.items()
-        }  # fmt: skip
+        values = input_values(compiled, given, inputs, reference_keys, registry)
         width = running_at_once(executor, workers)
         check_peak_memory(compiled, schedule, values, width, max_memory)
         state = _execute(
