@@ -62,6 +62,7 @@ from graphvision.execution.dask_fork import (
     start_forked_cluster,
     start_local_cluster,
 )
+from graphvision.execution.dask_results import Landed, fetch_on_loop, settle
 from graphvision.execution.dask_shared import SharedValue
 from graphvision.execution.dask_worker import on_worker
 from graphvision.execution.worker_died import died_on_dask
@@ -298,19 +299,14 @@ class DaskExecutor:
         future.add_done_callback(self._landed)
         if alone:
             task.add_done_callback(lambda done: self._settle(done, future))
-        else:
-
-            async def fetch() -> None:
-                try:
-                    gathered = self.client.gather(task, direct=self._direct, asynchronous=True)
-                    value = await gathered
-                except BaseException as error:  # the run reports it as that node's failure
-                    future.set_exception(died_on_dask(error))
-                else:
-                    future.set_result(value)
-
-            self.client.loop.add_callback(fetch)
+        else:  # the run reports an error as that node's failure
+            self.when_done(task, lambda value, error: settle(future, value, error))
         return future
+
+    def when_done(self, task: Any, landed: Landed, running: str = "node") -> None:
+        """``landed(result, None)`` or ``landed(None, error)`` on the client's event loop once
+        ``task`` is done (:func:`~graphvision.execution.dask_results.fetch_on_loop`)."""
+        fetch_on_loop(self.client, task, self._direct, landed, running)
 
     def result(self, task: Any, running: str = "node") -> Any:
         """A finished Dask task's result, fetched from its worker straight when the workers are

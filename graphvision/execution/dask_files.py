@@ -23,7 +23,11 @@ worker thread that would wait otherwise (fewer tasks in flight than threads:
 the batch's start and its last files); one to queue behind a running task
 waits until it is full. Without that rule, each task that came back let the
 first file resubmitted leave alone: a quarter of a coins batch's tasks held
-one file.
+one file. Each task's result is awaited on the client's event loop
+(:func:`~graphvision.execution.dask_results.fetch_on_loop`), which hands its
+files their outcomes and sends the next task from there, so nothing sent from
+there may wait for the scheduler (the cluster's width and the job's task are
+read as each file is submitted).
 
 A batch runs ``width × GROUPS_PER_THREAD × FILES_PER_TASK`` files at once on
 Dask (:attr:`DaskExecutor.files_at_once
@@ -52,6 +56,10 @@ FILES_PER_TASK = 8
 GROUPS_PER_THREAD = 2
 TASK_SECONDS = 0.1  # a task's files take about this long (Dask's advice: tasks of 100 ms or more)
 
+Call = tuple[Any, Any, str, str, Future]
+"""A file submitted: its job, what stands for the job in a task, its path, its folder, its
+future."""
+
 
 class FileGroups:
     """Files of a batch submitted one at a time, sent to ``executor``'s cluster several to a task
@@ -59,15 +67,16 @@ class FileGroups:
 
     def __init__(self, executor: Any) -> None:
         self.executor = executor
-        self._waiting: deque[tuple[Any, str, str, Future]] = deque()
+        self._waiting: deque[Call] = deque()
         self._task: Any = None  # the function that runs one file (file_task.run_file_task)
         self._job: Any = None  # the batch's job whose files are measured
         self._flying = 0
         self._measured = (0.0, 0)  # the job's files back so far: their CPU seconds, how many
         self._lock = threading.Lock()
         self._closed = False
-        self._alone: deque[tuple[Any, str, str, Future]] = deque()  # see _next_alone
+        self._alone: deque[Call] = deque()  # see _next_alone
         self._isolating = False
+        self._width = 1  # the cluster's, as last read by submit
 
     def submit(self, task: Any, job: Any, path: str, folder: str) -> Future:
         """A future of ``task(job, path, folder)``: the file's
@@ -75,19 +84,21 @@ class FileGroups:
         self._task = task
         future: Future = Future()
         future.set_running_or_notify_cancel()
-        with self._lock:
+        width, sent = max(1, self.executor.width), self.executor._sent(job)  # here, not on
+        with self._lock:  # the event loop, which must not wait for the scheduler (see _pump)
             if self._job is not job:  # another batch's files: measured afresh
                 self._job, self._measured = job, (0.0, 0)
-            self._waiting.append((job, path, folder, future))
+            self._width = width
+            self._waiting.append((job, sent, path, folder, future))
         self._pump()
         return future
 
-    def _take(self) -> list[tuple[Any, str, str, Future]]:
+    def _take(self) -> list[Call]:
         """The next task's files (the same job's, in order), or none while enough fly or
         while a task that would queue behind a running one is not full (see the module's
         docstring)."""
         with self._lock:
-            width = max(1, self.executor.width)
+            width = self._width
             if self._closed or not self._waiting or self._flying >= width * GROUPS_PER_THREAD:
                 return []
             job, size = self._waiting[0][0], self._size()
@@ -107,36 +118,53 @@ class FileGroups:
         return max(1, min(FILES_PER_TASK, round(TASK_SECONDS * count / seconds)))
 
     def _pump(self) -> None:
-        """Send tasks while fewer than enough are in flight and files wait."""
+        """Send tasks while fewer than enough are in flight and files wait; each task's result
+        is fetched on the client's event loop (:meth:`_fetched`), which then pumps again. Called
+        from the batch's lanes and from that loop: it asks the scheduler nothing (the width
+        and the job's task are read by :meth:`submit`)."""
         while taken := self._take():
             try:
-                task = self._submit(taken[0][0], [(path, folder) for _, path, folder, _ in taken])
+                files = [(path, folder) for _, _, path, folder, _ in taken]
+                task = self._submit(files, taken[0][1])
             except BaseException as error:  # a cluster that did not start, or is closed
-                self._landed(None, taken, error)
+                self._landed(taken, error=error)
                 continue
-            task.add_done_callback(lambda done, taken=taken: self._landed(done, taken))
+            self.executor.when_done(
+                task, lambda found, error, taken=taken: self._fetched(taken, found, error), "file"
+            )
+
+    def _fetched(self, taken: list[Call], found: Any, error: BaseException | None) -> None:
+        """A task's result, fetched on the client's event loop (a done-callback's thread,
+        waiting in turn for the loop's fetch, cost two thread hops a task), or the error of
+        the whole task (its workers died...)."""
+        if error is not None:
+            self._landed(taken, error=error, whole=True)
+            return
+        outcomes, seconds = found
+        self._measure(taken[0][0], seconds, len(outcomes))
+        self._landed(taken, outcomes)
 
     def _landed(
-        self, task: Any, taken: list[tuple[Any, str, str, Future]], error: Any = None
+        self,
+        taken: list[Call],
+        outcomes: list[Any] | None = None,
+        error: BaseException | None = None,
+        whole: bool = False,
     ) -> None:
-        """A task came back: each of its files' futures takes its outcome or error."""
-        outcomes: list[Any] = []
-        if task is not None:
-            try:
-                outcomes, seconds = self.executor.result(task, "file")
-            except BaseException as failed:  # the whole task failed (its workers died...)
-                error = failed
-            else:
-                self._measure(taken[0][0], seconds, len(outcomes))
-        if error is not None and task is not None and len(taken) > 1 and not self._closed:
+        """A task came back (``outcomes``), or failed whole (``error``, ``whole``: its workers
+        died...), or could not be sent (``error``): each of its files' futures takes its
+        outcome or the error."""
+        if whole and len(taken) > 1 and not self._closed:
             with self._lock:  # each file again alone: only the one at fault fails
                 self._alone.extend(taken)
                 start, self._isolating = not self._isolating, True
-            if start:
-                self._next_alone()
+            if start:  # in a thread of its own: it waits for the scheduler
+                threading.Thread(
+                    target=self._next_alone, daemon=True, name="graphvision-dask-alone"
+                ).start()
             taken = []
         for k, (*_, future) in enumerate(taken):
-            found = error if error is not None else outcomes[k]
+            found = error if error is not None or outcomes is None else outcomes[k]
             if isinstance(found, BaseException):
                 future.set_exception(found)
             else:
@@ -145,10 +173,12 @@ class FileGroups:
             self._flying -= 1
         self._pump()
 
-    def _submit(self, job: Any, files: list[tuple[str, str]]) -> Any:
-        """A Dask task running ``files`` of ``job`` on a worker, one after another."""
+    def _submit(self, files: list[tuple[str, str]], job: Any) -> Any:
+        """A Dask task running ``files`` on a worker, one after another; ``job``: what stands
+        for their job in a task (:meth:`DaskExecutor._sent
+        <graphvision.execution.dask.DaskExecutor._sent>`)."""
         return self.executor.client.submit(
-            on_worker, run_files, self._task, self.executor._sent(job), files,
+            on_worker, run_files, self._task, job, files,
             pure=False, retries=self.executor.retries,
         )  # fmt: skip
 
@@ -162,7 +192,7 @@ class FileGroups:
             if not self._alone:
                 self._isolating = False
                 return
-            job, path, folder, future = self._alone.popleft()
+            job, _, path, folder, future = self._alone.popleft()
 
         def landed(done: Any) -> None:
             try:
@@ -178,7 +208,7 @@ class FileGroups:
         try:
             if self._closed:
                 raise FileTaskError("the Dask executor was shut down")
-            task = self._submit(job, [(path, folder)])
+            task = self._submit([(path, folder)], self.executor._sent(job))
         except BaseException as error:  # a cluster that is closed
             future.set_exception(error)
             self._next_alone()

@@ -4,6 +4,7 @@ this process (``direct_gathers``), through the scheduler elsewhere, as Dask does
 from __future__ import annotations
 
 import operator
+import threading
 
 import pytest
 
@@ -48,3 +49,32 @@ def test_a_clients_own_setting_is_kept_and_its_results_arrive_whole(cluster):
 
 def test_no_client_yet_leaves_it_to_the_client_the_executor_makes():
     assert direct_gathers(None) is None
+
+
+def _fails(path: str) -> None:
+    raise ValueError(f"{path} is unreadable")
+
+
+def test_a_tasks_result_or_error_is_handed_on_by_the_clients_event_loop(cluster):
+    with distributed.Client(cluster) as client:
+        executor = DaskExecutor(client)
+        landed: list[tuple[object, object, str]] = []
+        done = threading.Event()
+
+        def record(value: object, error: BaseException | None) -> None:
+            landed.append((value, error, threading.current_thread().name))
+            if len(landed) == 2:
+                done.set()
+
+        executor.when_done(client.submit(operator.mul, 6, 7, pure=False), record, "file")
+        executor.when_done(client.submit(_fails, "a.png", pure=False), record, "file")
+        assert done.wait(30)
+        results = sorted(landed, key=lambda found: found[1] is not None)
+        assert results[0][:2] == (42, None)
+        assert results[1][0] is None
+        assert type(results[1][1]) is ValueError and str(results[1][1]) == "a.png is unreadable"
+        on_loop: list[str] = []  # the name of the thread the client's event loop runs in
+        client.loop.add_callback(lambda: on_loop.append(threading.current_thread().name))
+        client.submit(operator.add, 1, 1, pure=False).result()
+        assert on_loop and on_loop[0] != threading.current_thread().name
+        assert {name for *_, name in landed} == {on_loop[0]}

@@ -45,6 +45,9 @@ class _Executor:
     def result(self, task: Future, running: str = "node") -> Any:
         return task.result()
 
+    def when_done(self, task: Future, landed: Any, running: str = "node") -> None:
+        task.add_done_callback(lambda done: landed(done.result(), None))
+
 
 def _sizes(cluster: _Cluster) -> list[int]:
     return [len(files) for files, _ in cluster.tasks]
