@@ -158,10 +158,8 @@ class FileGroups:
             with self._lock:  # each file again alone: only the one at fault fails
                 self._alone.extend(taken)
                 start, self._isolating = not self._isolating, True
-            if start:  # in a thread of its own: it waits for the scheduler
-                threading.Thread(
-                    target=self._next_alone, daemon=True, name="graphvision-dask-alone"
-                ).start()
+            if start:  # the first of them leaves before any file still waiting
+                self._next_alone()
             taken = []
         for k, (*_, future) in enumerate(taken):
             found = error if error is not None or outcomes is None else outcomes[k]
@@ -192,7 +190,7 @@ class FileGroups:
             if not self._alone:
                 self._isolating = False
                 return
-            job, _, path, folder, future = self._alone.popleft()
+            _, job, path, folder, future = self._alone.popleft()  # the job's task: no wait
 
         def landed(done: Any) -> None:
             try:
@@ -208,7 +206,7 @@ class FileGroups:
         try:
             if self._closed:
                 raise FileTaskError("the Dask executor was shut down")
-            task = self._submit([(path, folder)], self.executor._sent(job))
+            task = self._submit([(path, folder)], job)
         except BaseException as error:  # a cluster that is closed
             future.set_exception(error)
             self._next_alone()
