@@ -283,7 +283,7 @@ def _dask_rows(graph: gv.Graph, paths: list[Path], folder: Path) -> list[str]:
 
 
 DASK_RUNS = 3
-RAW_FILES_PER_TASK = 8  # as many as a graphvision task's most (dask_files.FILES_PER_TASK)
+RAW_FILES_PER_TASK = 16  # as many as a graphvision task's most (dask_files.FILES_PER_TASK)
 RAW_TASKS = f"client.map, {RAW_FILES_PER_TASK} files a task"
 
 

@@ -14,7 +14,7 @@ same tasks. Aim (issue 15): within
 :func:`timeline` says where a 200-file coins batch's seconds go on a given
 ``LocalCluster(2)``, its workers' first batch and the next: timestamps from the
 client (each file done, and where it ran) and from the workers (each task's
-start and end, from Dask's task stream: a task carries up to eight files,
+start and end, from Dask's task stream: a task carries up to sixteen files,
 :mod:`graphvision.execution.dask_files`), and the CPU seconds of the client's
 process (with the cluster's scheduler) and of the workers.
 

@@ -361,7 +361,7 @@ def test_a_batch_runs_files_in_the_client_while_the_workers_are_not_ready(dask_e
     assert where == [
         "dask, first file in this process",
         *["dask, in the client while the workers started"] * 3,
-        *["dask, up to 8 files a task"] * 4,
+        *["dask, up to 16 files a task"] * 4,
     ]
 
 

@@ -70,7 +70,7 @@ def test_workers_write_the_values_to_the_shared_store_and_send_back_keys(
     store = gv.FsspecStore(url, storage_options=s3_options)
     for item in batch.items[1:]:  # files done by a worker: every computed value is in S3
         record = json.loads((item.output_dir / "record.json").read_text())
-        assert record["executor"] == "dask, up to 8 files a task"
+        assert record["executor"] == "dask, up to 16 files a task"
         assert (item.output_dir / "overlay.png").is_file() and (item.output_dir / "report.html")
         for node in record["nodes"]:
             if node["status"] == "computed":
