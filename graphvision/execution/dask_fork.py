@@ -35,6 +35,7 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
 
+from graphvision.execution.batch_signals import signals_deferred
 from graphvision.execution.worker_start import fork_context
 
 __all__ = ["ForkedWorkers", "direct_gathers", "start_forked_cluster", "start_local_cluster"]
@@ -53,24 +54,29 @@ class ForkedWorkers:
         self.closing = False
         self._pipes: list[int] = []
         self.processes: list[Any] = []
-        mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-        try:
-            for k in range(count):
-                read, write = os.pipe()
-                process = found.Process(  # type: ignore[attr-defined]
-                    target=_serve,
-                    args=(read, threads, tuple(self._pipes)),
-                    name=f"graphvision-dask-worker-{k}",
-                    daemon=True,
-                )
-                with warnings.catch_warnings():  # 3.12's os.fork note on threads
-                    warnings.simplefilter("ignore", DeprecationWarning)
-                    process.start()
-                os.close(read)
-                self._pipes.append(write)
-                self.processes.append(process)
-        finally:
-            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        with signals_deferred():  # a Ctrl-C meanwhile is not dropped by a fork's callbacks
+            mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})  # (the workers')
+            try:
+                for k in range(count):
+                    self._fork(found, k, threads)
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+    def _fork(self, found: Any, k: int, threads: int) -> None:
+        """Worker ``k``, forked, with its pipe."""
+        read, write = os.pipe()
+        process = found.Process(
+            target=_serve,
+            args=(read, threads, tuple(self._pipes)),
+            name=f"graphvision-dask-worker-{k}",
+            daemon=True,
+        )
+        with warnings.catch_warnings():  # 3.12's os.fork note on threads
+            warnings.simplefilter("ignore", DeprecationWarning)
+            process.start()
+        os.close(read)
+        self._pipes.append(write)
+        self.processes.append(process)
 
     def connect(self, address: str) -> None:
         """Each worker connects to the scheduler at ``address``."""

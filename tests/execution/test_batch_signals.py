@@ -179,3 +179,28 @@ def test_a_stop_while_held_is_ignored(ctrl_c):
         steps = [k for k in range(1000)]  # the handler runs at the next bytecodes
     assert steps[-1] == 999
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+DASK_WORKERS = """
+import numpy  # OpenBLAS's threads: native, not Python's (the fork is refused with those)
+
+from graphvision.execution.dask_fork import ForkedWorkers
+
+try:
+    workers = ForkedWorkers(1, 1)
+except KeyboardInterrupt:
+    print("interrupted")
+else:
+    workers.close()
+    print("went on")
+"""
+
+
+def test_ctrl_c_while_the_dask_executor_forks_its_workers_is_raised_once_they_are_forked():
+    """Blocking SIGINT in the forking thread did not keep it out of the fork's callbacks:
+    the kernel gave it to another thread, and the main thread ran its handler inside
+    logging's at-fork callback, which dropped the KeyboardInterrupt."""
+    pytest.importorskip("distributed", reason="Dask is an optional extra: graphvision[dask]")
+    done = _python(DURING_FORK + DASK_WORKERS)
+    assert done.stdout.strip() == "interrupted", done.stderr
+    assert "Exception ignored" not in done.stderr
