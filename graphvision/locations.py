@@ -9,7 +9,7 @@ import stat
 from pathlib import Path
 from typing import BinaryIO
 
-__all__ = ["default_cache_dir", "open_regular"]
+__all__ = ["default_cache_dir", "not_utf8", "open_regular"]
 
 
 def default_cache_dir() -> Path:
@@ -18,6 +18,18 @@ def default_cache_dir() -> Path:
         return Path(os.environ["GRAPHVISION_CACHE_DIR"])
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     return Path(base) / "graphvision"
+
+
+def not_utf8(path: Path) -> str | None:
+    """``path`` shown with its bytes that are not UTF-8 escaped (``out\\xff``), or None
+    when its name is UTF-8 (bytes that are not are held by Python as lone surrogates).
+    graphvision names every file in UTF-8 (records, pages, messages): such a path is refused
+    where it is given."""
+    try:
+        str(path).encode("utf-8")
+    except UnicodeEncodeError:
+        return os.fsencode(path).decode("utf-8", "backslashreplace")
+    return None
 
 
 def open_regular(path: str | Path) -> BinaryIO:

@@ -195,7 +195,7 @@ def registry_for(
     (when the plugin index says which those are), else all of them; and the pipeline's
     own ``plugins:`` when it is to run or be validated (announced), never when it is only
     drawn or described."""
-    from graphvision.nodes.plugins import Needs, discover, discover_for
+    from graphvision.nodes.plugins import Needs, discover, discover_for, plugin_files
 
     for path in args.plugins:
         if not Path(path).exists():
@@ -204,8 +204,7 @@ def registry_for(
     if graph is not None and run_its_plugins:
         named += [(f"{graph.source or graph.name}: plugin", path) for path in graph.plugins]
     for what, path in named:  # (it would fail to load: a warning, then its nodes unknown)
-        files = sorted(Path(path).glob("*.py")) if Path(path).is_dir() else []
-        for text in [path, *map(str, files)]:  # (a folder's files are plugins too)
+        for text in [path, *map(str, plugin_files(Path(path)))]:  # (a folder's files too)
             _refuse_not_utf8(what, text, "a plugin is loaded and recorded by its path in UTF-8")
     if graph is None:
         registry = discover(args.plugins)
@@ -283,19 +282,13 @@ def load_run_arguments(
 
 def refuse_paths_not_utf8(pipeline: str, inputs: dict[str, str]) -> None:
     """A usage error for the pipeline file or an ``--input`` whose path is not UTF-8 (in
-    itself or through the working folder): record.json and the pages name them in UTF-8,
-    and a run that computed everything could not write them."""
-    from graphvision.execution.utf8_names import not_utf8
-
+    itself, or through the working folder when it is a file there: an input may be a
+    source such as ``sample:camera``): record.json and the pages name them in UTF-8, and a
+    run that computed everything could not write them."""
     given = [("pipeline file", pipeline)] + [(f"--input {k}", v) for k, v in inputs.items()]
     for what, text in given:
-        path = Path(text)
-        shown = not_utf8(path) or (not_utf8(path.absolute()) if path.exists() else None)
-        if shown is not None:
-            raise UsageError(
-                f"{what} {shown}: its path is not UTF-8; record.json and the pages name it "
-                "in UTF-8: rename it or its folder"
-            )
+        why = "record.json and the pages name it in UTF-8"
+        _refuse_not_utf8(what, text, why, through_working_folder=Path(text).exists())
 
 
 def refuse_cache_dir_not_utf8(folder: str | None) -> None:
@@ -317,12 +310,13 @@ def refuse_cache_dir_not_utf8(folder: str | None) -> None:
     _refuse_not_utf8(what, folder, "cache info and the messages about the cache name it in UTF-8")
 
 
-def _refuse_not_utf8(what: str, text: str, why: str) -> None:
+def _refuse_not_utf8(what: str, text: str, why: str, through_working_folder: bool = True) -> None:
     """A usage error naming ``what`` when the path ``text`` is not UTF-8, in itself or
-    through the working folder; ``why`` it must be."""
-    from graphvision.execution.utf8_names import not_utf8
+    (``through_working_folder``) through the working folder; ``why`` it must be."""
+    from graphvision.locations import not_utf8
 
-    shown = not_utf8(Path(text)) or not_utf8(Path(text).absolute())
+    path = Path(text)
+    shown = not_utf8(path) or (not_utf8(path.absolute()) if through_working_folder else None)
     if shown is not None:
         raise UsageError(f"{what} {shown}: its path is not UTF-8; {why}: rename it or its folder")
 

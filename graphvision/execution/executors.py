@@ -196,20 +196,6 @@ def call_node_encoded(
     puts the result there. What the node raises goes back as itself, or as its copy when
     it cannot (:mod:`~graphvision.execution.sendable`).
     """
-    try:
-        return _call_decoded(ref, params, inputs, outputs, output_tuple, upstream)
-    except Exception as error:  # it goes back pickled: as a copy when it cannot be
-        raise sendable(error) from None
-
-
-def _call_decoded(
-    ref: FunctionRef,
-    params: dict[str, Any],
-    inputs: Payload,
-    outputs: dict[str, type[PortType]],
-    output_tuple: bool,
-    upstream: dict[str, tuple[tuple[Payload, float], str]] | None,
-) -> tuple[Payload, float]:
     func = ref.resolve()
     import_ahead([func])  # its imports one thread at a time (a Dask worker's threads)
     if upstream:
@@ -218,7 +204,10 @@ def _call_decoded(
     values = {  # read-only for good, as under threads
         port: kind.decode(freeze_all(arrays), meta) for port, (kind, arrays, meta) in inputs.items()
     }
-    result, seconds = call_node(func, params, values)
+    try:
+        result, seconds = call_node(func, params, values)
+    except Exception as error:  # it goes back pickled: as a copy when it cannot be
+        raise sendable(error) from None
     parts = dict(zip(outputs, result, strict=True)) if output_tuple else {"out": result}
     encoded: Payload = {}
     for port, value in parts.items():

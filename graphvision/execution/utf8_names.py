@@ -4,22 +4,12 @@ bytes that are not UTF-8 escaped (``caf\\xe9.png``)."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from graphvision.errors import InputError, OutputFolderError
+from graphvision.locations import not_utf8
 
-__all__ = ["not_utf8", "refuse_folder_not_utf8", "refuse_names_not_utf8"]
-
-
-def not_utf8(path: Path) -> str | None:
-    """``path`` shown with its bytes that are not UTF-8 escaped (``out\\xff``), or None
-    when its name is UTF-8 (bytes that are not are held by Python as lone surrogates)."""
-    try:
-        str(path).encode("utf-8")
-    except UnicodeEncodeError:
-        return os.fsencode(path).decode("utf-8", "backslashreplace")
-    return None
+__all__ = ["refuse_folder_not_utf8", "refuse_names_not_utf8"]
 
 
 def refuse_names_not_utf8(paths: list[Path], input: str) -> None:

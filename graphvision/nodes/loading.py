@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from graphvision.errors import PluginLoadError
+from graphvision.locations import not_utf8
 
 __all__ = ["exit_noted", "import_file", "note_plugin_line", "plugin_line"]
 
@@ -37,11 +38,9 @@ def import_file(path: str | Path, module_name: str = "") -> types.ModuleType:
     after an edit runs, and fingerprints, the edited code).
     """
     path = Path(path).resolve()
-    try:  # (its module name, its record and the messages name it in UTF-8)
-        str(path).encode()
-    except UnicodeEncodeError:
-        shown = os.fsencode(path).decode("utf-8", "backslashreplace")
-        raise PluginLoadError(f"plugin {shown}: its path is not UTF-8: rename it") from None
+    shown = not_utf8(path)  # (its module name, its record and the messages name it in UTF-8)
+    if shown is not None:
+        raise PluginLoadError(f"plugin {shown}: its path is not UTF-8: rename it")
     target = path / "__init__.py" if path.is_dir() else path
     digest = hashlib.blake2b(str(path).encode(), digest_size=4).hexdigest()
     name = module_name or f"graphvision_local_{path.stem}_{digest}"

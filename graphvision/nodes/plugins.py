@@ -48,6 +48,7 @@ __all__ = [
     "discover_for",
     "load_entry_points",
     "load_path",
+    "plugin_files",
 ]
 
 _ENGINE = Path(__file__).resolve().parent.parent  # graphvision's own files
@@ -224,16 +225,20 @@ def load_path(registry: Registry, path: str | Path) -> None:
     if not path.exists():
         registry.record_failure(str(path), str(path), f"plugin path {path} does not exist")
         return
-    if path.is_dir() and not (path / "__init__.py").exists():
-        targets = sorted(p for p in path.glob("*.py") if not p.name.startswith("_"))
-    else:
-        targets = [path]
-    for target in targets:
+    for target in plugin_files(path):
         name = str(target)
         try:
             registry.add_plugin(import_file(target), name, name)
         except (Exception, SystemExit) as error:  # sys.exit() at import ended the command
             registry.record_failure(name, name, _summarise(error, path))
+
+
+def plugin_files(path: Path) -> list[Path]:
+    """What a local plugin path imports: a folder of ``.py`` files, each of them (not those
+    named ``_*``); a file or a package folder, itself."""
+    if path.is_dir() and not (path / "__init__.py").exists():
+        return sorted(p for p in path.glob("*.py") if not p.name.startswith("_"))
+    return [path]
 
 
 def discover(
