@@ -197,6 +197,13 @@ class CompiledGraph:
         return set()
 
     @cached_property
+    def first_found(self) -> dict[str, Any]:
+        """What the first run of this graph found of its pipeline file (path, SHA-256, git
+        state: :mod:`graphvision.execution.provenance` keeps it), for its later runs: they
+        run the graph as it was loaded."""
+        return {}
+
+    @cached_property
     def has_timeouts(self) -> bool:
         """Whether some node declares its own ``timeout:``."""
         return any(node.timeout is not None for node in self.graph.nodes.values())

@@ -320,13 +320,9 @@ def _described(given: Any) -> str:
 _ARRAYS: dict[tuple[tuple[int, ...], np.dtype], str] = {}
 
 
-_GRAPH_FILES: dict[int, tuple[weakref.ref[CompiledGraph], _PipelineFile | None]] = {}
-"""What :func:`_pipeline_file` found at the first run of each compiled graph (held weakly: a
-key whose graph is gone never matches)."""
-
-
 def _graph_file(compiled: CompiledGraph) -> _PipelineFile | None:
-    """:func:`_pipeline_file` of the compiled graph's pipeline file, as its first run found it.
+    """:func:`_pipeline_file` of the compiled graph's pipeline file, as its first run found it
+    (kept by the graph: :attr:`~graphvision.compiler.compiled.CompiledGraph.first_found`).
 
     Its later runs (a script's loop over ``gv.run(compiled, ...)``, a batch's files) run the
     graph as it was loaded, whatever happens to the file since, and record it as that first
@@ -335,15 +331,11 @@ def _graph_file(compiled: CompiledGraph) -> _PipelineFile | None:
     script's calls had left the kernel's caches cold). A graph loaded or compiled again
     (every command, ``gv.run`` of a path or of a ``Graph``) is looked at anew.
     """
-    known = _GRAPH_FILES.get(id(compiled))
-    if known is not None and known[0]() is compiled:
-        return known[1]
-    source = compiled.graph.source
-    found = _pipeline_file(source) if source else None
-    if len(_GRAPH_FILES) > 64:
-        _GRAPH_FILES.clear()
-    _GRAPH_FILES[id(compiled)] = (weakref.ref(compiled), found)
-    return found
+    found = compiled.first_found
+    if "file" not in found:
+        source = compiled.graph.source
+        found["file"] = _pipeline_file(source) if source else None
+    return found["file"]
 
 
 def describe_run(

@@ -303,9 +303,9 @@ def dump_pipeline(graph: Graph, path: str | Path | None = None) -> str:
         The file the text is for: its plugins are named from that file's folder (a plugin
         inside it relative to it, any other absolute: loading that file then asks for
         ``allow_outside_plugins``, as any pipeline whose plugins are outside its folder
-        does). Without it,
-        a loaded pipeline's plugins are named as its own file names them (relative to its
-        folder: the text written beside it loads them), a built graph's as given.
+        does). Without it, a loaded pipeline's plugins are named as its own file names
+        them (relative to its folder: the text written beside it loads them), a built
+        graph's as given.
     """
     data = graph_to_dict(graph, path)
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True, width=100)
