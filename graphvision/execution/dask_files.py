@@ -50,6 +50,7 @@ from collections import deque
 from concurrent.futures import Future
 from typing import Any
 
+from graphvision.execution.dask_results import settle_found
 from graphvision.execution.dask_worker import on_worker
 from graphvision.execution.file_group import FileTaskError, run_files
 
@@ -165,11 +166,7 @@ class FileGroups:
                 self._next_alone()
             taken = []
         for k, (*_, future) in enumerate(taken):
-            found = error if error is not None or outcomes is None else outcomes[k]
-            if isinstance(found, BaseException):
-                future.set_exception(found)
-            else:
-                future.set_result(found)
+            settle_found(future, error if error is not None or outcomes is None else outcomes[k])
         with self._lock:
             self._flying -= 1
         self._pump()
@@ -200,10 +197,7 @@ class FileGroups:
                 found = self.executor.result(done, "file")[0][0]
             except BaseException as error:  # this file's worker died again: it is at fault
                 found = error
-            if isinstance(found, BaseException):
-                future.set_exception(found)
-            else:
-                future.set_result(found)
+            settle_found(future, found)
             self._next_alone()
 
         try:

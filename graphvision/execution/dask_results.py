@@ -15,7 +15,7 @@ from typing import Any
 
 from graphvision.execution.worker_died import died_on_dask
 
-__all__ = ["Landed", "fetch_on_loop", "settle"]
+__all__ = ["Landed", "fetch_on_loop", "settle", "settle_found"]
 
 Landed = Callable[[Any, "BaseException | None"], None]
 """Called with a task's result and None, or None and the task's error."""
@@ -47,3 +47,12 @@ def settle(future: Future, value: Any, error: BaseException | None) -> None:
         future.set_exception(error)
     else:
         future.set_result(value)
+
+
+def settle_found(future: Future, found: Any) -> None:
+    """``future`` takes ``found``: a result, or the exception it is (a file's outcome or what
+    the file raised)."""
+    if isinstance(found, BaseException):
+        settle(future, None, found)
+    else:
+        settle(future, found, None)
