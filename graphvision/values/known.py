@@ -65,9 +65,7 @@ def note(value: Any, what: Any, fact: Any, frozen: bool = False) -> None:
     if entry is None or entry[0]() is not value:
         if not frozen and not is_frozen(value):
             return
-        if len(_NOTES) >= _SWEEP_AT[0]:
-            _sweep()
-        entry = _NOTES[key] = (weakref.ref(value), (value.shape, value.strides), value.dtype, {})
+        entry = _new_entry(value, {})
     elif entry[1] != (value.shape, value.strides) or entry[2] != value.dtype:
         entry[3].clear()
         entry = _NOTES[key] = (entry[0], (value.shape, value.strides), value.dtype, entry[3])
@@ -79,11 +77,22 @@ def noted_new(value: np.ndarray, what: Any) -> np.ndarray:
     immutable memory (:func:`~graphvision.values.memory.frozen_in_place`'s): no note of it
     can be alive (one under its ``id`` is of an array that died), so it is made without
     the look-ups :func:`note` makes (a run notes each array a node returns). Returns it."""
+    _new_entry(value, {what: True})
+    return value
+
+
+def _new_entry(value: np.ndarray, facts: dict[Any, Any]) -> Any:
+    """The note of ``value`` made anew, holding ``facts`` (the notes of dead arrays swept
+    first when they are many)."""
     if len(_NOTES) >= _SWEEP_AT[0]:
         _sweep()
-    stamp = (value.shape, value.strides)
-    _NOTES[id(value)] = (weakref.ref(value), stamp, value.dtype, {what: True})
-    return value
+    entry = _NOTES[id(value)] = (
+        weakref.ref(value),
+        (value.shape, value.strides),
+        value.dtype,
+        facts,
+    )
+    return entry
 
 
 def checked(kind: type[PortType], value: Any) -> Any:
