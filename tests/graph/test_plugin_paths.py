@@ -154,3 +154,14 @@ def test_a_path_up_and_back_names_the_plugin_once(folder):
     graph = gv.load_pipeline("try/p.yaml")
     graph.plugins.append("../try/first.py")
     assert list(graph.plugins) == [str(folder / "first.py")] * 2
+
+
+@pytest.mark.parametrize("given", ["x/nasty.py", Path("x/nasty.py")])
+def test_one_path_in_place_of_the_list_is_refused(folder, given):
+    """It was taken letter by letter ('.' the pipeline's folder, '/' the root), found by an
+    adversary."""
+    for graph in (gv.load_pipeline("try/p.yaml"), gv.Graph("built")):
+        with pytest.raises(
+            TypeError, match=r"graph.plugins takes a list of paths \(\['x/nasty.py'\]\)"
+        ):
+            graph.plugins = given
