@@ -51,10 +51,10 @@ import tempfile
 import threading
 import time
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from graphvision.cache.entries import CacheWarning, Encoded, NotACacheError
 from graphvision.cache.format import decode_blob, encode_blob
@@ -78,6 +78,7 @@ MARKER_TEXT = (
     "# This file is a cache directory tag created by graphvision.\n"
     "# For information about cache directory tags see https://bford.info/cachedir/\n"
 )
+EntryPath = TypeVar("EntryPath", Path, str)
 _TEMP = re.compile(r"^\.tmp-[A-Za-z0-9_]+\.gvc$")
 
 
@@ -87,6 +88,21 @@ class CacheInfo:
     entries: int
     bytes: int
     max_bytes: int
+
+
+def evict_oldest(
+    entries: list[tuple[float, int, EntryPath]], limit: int, remove: Callable[[EntryPath], None]
+) -> int:
+    """Remove the oldest of ``(time, size, path)`` entries until their sizes sum to at
+    most ``limit`` (least recently used first). Returns the bytes freed."""
+    total, freed = sum(size for _, size, _ in entries), 0
+    for _, size, path in sorted(entries):
+        if total <= limit:
+            break
+        remove(path)
+        total -= size
+        freed += size
+    return freed
 
 
 def warn_dropped(path: object, reason: str) -> None:
@@ -271,21 +287,14 @@ class DiskStore:
         Also removes temporary files left by interrupted writers. Returns bytes freed.
         """
         limit = self.max_bytes if max_bytes is None else max_bytes
-        now, freed, entries = time.time(), 0, []
+        now, entries = time.time(), []
         for path, stat in self._files():
             if path.name.startswith(".tmp-"):
                 if now - stat.st_mtime > STALE_TEMP_SECONDS:
                     path.unlink(missing_ok=True)
                 continue
             entries.append((stat.st_mtime, stat.st_size, path))
-        total = sum(size for _, size, _ in entries)
-        for _, size, path in sorted(entries):
-            if total <= limit:
-                break
-            path.unlink(missing_ok=True)
-            total -= size
-            freed += size
-        return freed
+        return evict_oldest(entries, limit, lambda path: path.unlink(missing_ok=True))
 
     def clear(self) -> int:
         """Remove every entry (and stray temporary files). Returns the number removed."""

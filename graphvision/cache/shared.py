@@ -43,6 +43,7 @@ from graphvision.cache.disk import (
     STALE_TEMP_SECONDS,
     SUFFIX,
     CacheInfo,
+    evict_oldest,
     warn_dropped,
 )
 from graphvision.cache.entries import Encoded, NotACacheError
@@ -175,7 +176,7 @@ class FsspecStore:
         """Evict the oldest entries until at most ``max_bytes`` remain; remove stale
         temporaries of killed writers. Returns bytes freed."""
         limit = self.max_bytes if max_bytes is None else max_bytes
-        now, freed, entries = time.time(), 0, []
+        now, entries = time.time(), []
         for path, details in self._files():
             written = _modified(details)
             if _name(path).startswith(".tmp-"):
@@ -183,14 +184,7 @@ class FsspecStore:
                     self.fs.rm_file(path)
                 continue
             entries.append((written, int(details.get("size") or 0), path))
-        total = sum(size for _, size, _ in entries)
-        for _, size, path in sorted(entries):
-            if total <= limit:
-                break
-            self.fs.rm_file(path)
-            total -= size
-            freed += size
-        return freed
+        return evict_oldest(entries, limit, self.fs.rm_file)
 
     def clear(self) -> int:
         """Remove every entry and temporary. Returns the number of entries removed."""
