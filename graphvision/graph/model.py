@@ -164,17 +164,13 @@ class Graph:
     )
 
     def __setattr__(self, name: str, value: Any) -> None:
-        """A list given to a loaded pipeline's ``plugins`` is read from its file's folder,
-        as the paths appended to it are (:class:`~.plugin_paths.PluginPaths`); one path in
-        place of the list is refused (it was taken letter by letter: ``.`` the pipeline's
-        folder, ``/`` the root, each a plugin path)."""
-        if name == "plugins" and isinstance(value, str | bytes | os.PathLike):  # (each letter)
-            raise TypeError(
-                f"graph.plugins takes a list of paths ([{str(value)!r}]), not {value!r}"
-            )
-        held = self.__dict__.get("plugins") if name == "plugins" else None
-        if isinstance(held, PluginPaths) and held.folder and not isinstance(value, PluginPaths):
-            value, given = PluginPaths(folder=held.folder), value
+        """``plugins`` is held as a :class:`~.plugin_paths.PluginPaths`: a list given to a
+        loaded pipeline's ``plugins`` is read from its file's folder, as the paths appended
+        to it are; each item must be a path, and one path in place of the list is refused
+        (it was taken letter by letter: ``.`` the pipeline's folder, ``/`` the root)."""
+        if name == "plugins" and not isinstance(value, PluginPaths):
+            held = self.__dict__.get("plugins")
+            value, given = PluginPaths(folder=getattr(held, "folder", "")), value
             value.extend(given)
         object.__setattr__(self, name, value)
 

@@ -49,7 +49,7 @@ class PluginPaths(list[str]):
     """
 
     def __init__(self, paths: Iterable[str] = (), folder: str = "") -> None:
-        super().__init__(paths)
+        super().__init__(_path_texts(paths))
         self.folder = os.path.abspath(folder) if folder else ""
 
     def __reduce__(self) -> tuple[Any, ...]:  # a copy or a pickle is not placed again
@@ -58,6 +58,8 @@ class PluginPaths(list[str]):
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, list):
             return NotImplemented
+        if isinstance(other, PluginPaths) and other.folder and not self.folder:
+            return other == list(self)  # (a file's paths placed from its folder)
         return list(self) == [self.placed(path) for path in other]
 
     def __ne__(self, other: object) -> bool:
@@ -66,10 +68,16 @@ class PluginPaths(list[str]):
 
     __hash__ = None  # (a list: mutable)
 
-    def placed(self, path: str | Path) -> str:
+    def placed(self, path: str | os.PathLike[str]) -> str:
         """``path`` as the process opens it: a relative path joined to the file's folder
-        (an empty one kept as it is, for the discovery to refuse it by name)."""
-        text = str(path)
+        (an empty one kept as it is, for the discovery to refuse it by name).
+
+        Raises
+        ------
+        TypeError
+            ``path`` is not a ``str`` or a ``pathlib.Path`` (bytes, a number, a list).
+        """
+        text = _path_text(path)
         if not self.folder or not text.strip() or Path(text).is_absolute():
             return text
         return os.path.normpath(os.path.join(self.folder, text))
@@ -81,7 +89,7 @@ class PluginPaths(list[str]):
         super().insert(index, self.placed(path))
 
     def extend(self, paths: Iterable[str]) -> None:
-        super().extend(self.placed(path) for path in paths)
+        super().extend(self.placed(path) for path in _path_texts(paths))
 
     def __iadd__(self, paths: Iterable[str]) -> PluginPaths:  # type: ignore[override,misc]
         self.extend(paths)
@@ -89,9 +97,46 @@ class PluginPaths(list[str]):
 
     def __setitem__(self, index: Any, value: Any) -> None:
         if isinstance(index, slice):
-            super().__setitem__(index, [self.placed(path) for path in value])
+            super().__setitem__(index, [self.placed(path) for path in _path_texts(value)])
         else:
             super().__setitem__(index, self.placed(value))
+
+    # A path as its file names it is found as the list holds it (placed).
+    def __contains__(self, path: object) -> bool:
+        return super().__contains__(self._found(path))
+
+    def count(self, path: Any) -> int:
+        return super().count(self._found(path))
+
+    def index(self, path: Any, *bounds: SupportsIndex) -> int:
+        return super().index(self._found(path), *bounds)
+
+    def remove(self, path: Any) -> None:
+        super().remove(self._found(path))
+
+    def _found(self, path: Any) -> Any:
+        return self.placed(path) if isinstance(path, str | os.PathLike) else path
+
+
+def _path_texts(paths: Iterable[str]) -> list[str]:
+    """The paths of a list given for ``graph.plugins``, each checked (:func:`_path_text`);
+    one path in place of the list is refused (it would be taken letter by letter: ``.``
+    the pipeline's folder, ``/`` the root, each a plugin path)."""
+    if isinstance(paths, str | bytes | os.PathLike):
+        raise TypeError(f"graph.plugins takes a list of paths ([{str(paths)!r}]), not {paths!r}")
+    if not isinstance(paths, Iterable):
+        raise TypeError(f"graph.plugins takes a list of paths, not {paths!r}")
+    return [_path_text(path) for path in paths]
+
+
+def _path_text(path: object) -> str:
+    """One plugin path as text: a ``str`` or an ``os.PathLike`` naming one."""
+    text = os.fspath(path) if isinstance(path, os.PathLike) else path
+    if not isinstance(text, str):
+        raise TypeError(
+            f"graph.plugins holds paths (str or pathlib.Path), not {type(path).__name__} {path!r}"
+        )
+    return text
 
 
 def written_plugins(plugins: Sequence[str], file: str | Path | None = None) -> list[str]:

@@ -165,3 +165,55 @@ def test_one_path_in_place_of_the_list_is_refused(folder, given):
             TypeError, match=r"graph.plugins takes a list of paths \(\['x/nasty.py'\]\)"
         ):
             graph.plugins = given
+
+
+ONE_PATH_ADDED = [
+    lambda plugins: plugins.__iadd__("a.py"),
+    lambda plugins: plugins.extend("a.py"),
+    lambda plugins: plugins.__setitem__(slice(None), "a.py"),
+]
+
+
+@pytest.mark.parametrize("adds", ONE_PATH_ADDED, ids=["+=", "extend", "slice"])
+def test_one_path_added_in_place_of_a_list_is_refused(folder, adds):
+    """``+=``, ``extend`` and a slice took it letter by letter ('.' imported every module
+    of the pipeline's folder; found by TRY45), where ``=`` refused it."""
+    for graph in (gv.load_pipeline("try/p.yaml"), gv.Graph("built")):
+        before = list(graph.plugins)
+        with pytest.raises(TypeError, match=r"takes a list of paths \(\['a.py'\]\)"):
+            adds(graph.plugins)
+        assert list(graph.plugins) == before
+
+
+@pytest.mark.parametrize(
+    ("given", "named"),
+    [(1, "int 1"), (["x.py"], "list ['x.py']"), (b"x.py", "bytes b'x.py'")],
+)
+def test_an_item_that_is_not_a_path_is_refused(folder, given, named):
+    """They were written as text ('/try/1', "/try/['x.py']")."""
+    graph = gv.load_pipeline("try/p.yaml")
+    message = rf"holds paths \(str or pathlib.Path\), not {named}"
+    with pytest.raises(TypeError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        graph.plugins.append(given)
+    with pytest.raises(TypeError, match="holds paths"):
+        graph.plugins = [given]
+    with pytest.raises(TypeError, match=r"takes a list of paths, not None"):
+        graph.plugins = None
+    assert list(graph.plugins) == [str(folder / "first.py")]
+
+
+def test_a_path_as_its_file_names_it_is_found_in_the_list(folder):
+    """``in``, ``index``, ``count`` and ``remove`` found only the placed path."""
+    graph = gv.load_pipeline("try/p.yaml")
+    graph.plugins.append(Path("my_nodes.py"))
+    assert "first.py" in graph.plugins and Path("my_nodes.py") in graph.plugins
+    assert graph.plugins.index("my_nodes.py") == 1 and graph.plugins.count("first.py") == 1
+    graph.plugins.remove("first.py")
+    assert list(graph.plugins) == [str(folder / "my_nodes.py")]
+
+
+def test_a_built_graphs_plugins_are_checked_as_a_loaded_ones(folder):
+    graph = gv.Graph("built", plugins=["a.py"])
+    assert isinstance(graph.plugins, PluginPaths) and graph.plugins == ["a.py"]
+    with pytest.raises(TypeError, match="holds paths"):
+        gv.Graph("built", plugins=[3])
