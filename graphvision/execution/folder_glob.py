@@ -28,7 +28,8 @@ RECURSIVE = "**"
 def glob_once(pattern: str) -> list[str]:
     """The paths ``pattern`` matches, as ``glob.glob(pattern, recursive=True)`` gives them,
     except that ``**`` searches each real folder once: by the shortest path that reaches it
-    (the first in name order among the shortest), breadth first. A folder reached again
+    (among the shortest, the one through the fewest symbolic links, then the first in
+    name order), breadth first. A folder reached again
     through a link has the files directly in it matched (so that the caller can name the
     paths a file is also reached by), and is not searched below.
 
@@ -80,16 +81,18 @@ def _matches(folder: str, rest: str, *, below: bool) -> list[str]:
 
 
 def _folders_once(tops: list[str], around: list[str]) -> Iterator[tuple[str, bool]]:
-    """Each folder below ``tops`` (themselves included) that is not hidden, breadth first
-    in name order, with whether its real folder was searched before (through another
-    path): such a folder is given once, and not gone below. A link to a folder that holds
+    """Each folder below ``tops`` (themselves included) that is not hidden, breadth first,
+    at each depth those reached through fewer symbolic links first, then in name order
+    (``photos/sub`` before ``photos/alias -> sub``), with whether its real folder was
+    searched before (through another path): such a folder is given once (its files
+    named), and not gone below. A link to a folder that holds
     a top is neither: it is added to ``around``."""
     seen: set[tuple[int, int]] = set()
     holding = _holding(tops)
-    level = tops
+    level = [(0, top) for top in tops]
     while level:
-        deeper: list[str] = []
-        for folder in level:
+        deeper: list[tuple[int, str]] = []
+        for links, folder in sorted(level):
             try:
                 status = os.stat(folder or ".")
             except OSError:  # a link that loops or leads nowhere: nothing to search
@@ -102,7 +105,7 @@ def _folders_once(tops: list[str], around: list[str]) -> Iterator[tuple[str, boo
             seen.add(key)
             yield folder, again
             if not again:
-                deeper.extend(_subfolders(folder))
+                deeper.extend((links + link, sub) for link, sub in _subfolders(folder))
         level = deeper
 
 
@@ -119,15 +122,18 @@ def _holding(tops: list[str]) -> set[tuple[int, int]]:
     return keys
 
 
-def _subfolders(folder: str) -> list[str]:
+def _subfolders(folder: str) -> list[tuple[int, str]]:
     """The folders (or links to folders) in ``folder`` that ``**`` descends: not hidden,
-    in name order."""
+    each with 1 if it is a link, else 0."""
     try:
         with os.scandir(folder or ".") as entries:
-            names = sorted(e.name for e in entries if not e.name.startswith(".") and _is_dir(e))
+            return [
+                (int(entry.is_symlink()), os.path.join(folder, entry.name))
+                for entry in entries
+                if not entry.name.startswith(".") and _is_dir(entry)
+            ]
     except OSError:
         return []
-    return [os.path.join(folder, name) for name in names]
 
 
 def _is_dir(entry: os.DirEntry[str]) -> bool:

@@ -78,3 +78,14 @@ def test_a_link_to_a_folder_beside_the_search_is_followed(tree):
     (tree / "other" / "f.png").write_bytes(b"x")
     os.symlink(tree / "other", "ph/other")
     assert "ph/other/f.png" in glob_once("ph/**/*.png")
+
+
+@pytest.mark.parametrize("link", ["alias", "Alias", "0link"])
+def test_a_folder_is_searched_below_by_its_own_path_before_a_link_to_it(tree, link):
+    """A link sorting before the folder it names (``ph/alias -> sub``) was searched below,
+    so a file two levels down was named only through it (``ph/alias/deep/c.png``; found by
+    TRY45)."""
+    os.symlink("sub", f"ph/{link}")
+    found = sorted(glob_once("ph/**/*.png"))
+    assert "ph/sub/deep/c.png" in found and f"ph/{link}/deep/c.png" not in found
+    assert f"ph/{link}/b.png" in found  # reached again: its files named, for the warning
