@@ -95,7 +95,7 @@ def _content_digest(path: Path) -> str:
     hasher = hashlib.blake2b(digest_size=16)
     for file in files:
         with contextlib.suppress(OSError):
-            hasher.update(str(file.relative_to(path.parent)).encode())
+            hasher.update(os.fsencode(file.relative_to(path.parent)))
             hasher.update(file.read_bytes())
     return hasher.hexdigest()
 

@@ -160,3 +160,18 @@ def test_validate_refuses_a_pipeline_whose_path_is_not_utf8_as_run_does(capsys, 
     assert capsys.readouterr().err.startswith(
         f"error: pipeline file {cwd}/p.yaml: its path is not UTF-8; "
     )
+
+
+def test_a_package_plugin_holding_a_module_not_utf8_loads(tmp_path):
+    """The package's digest encoded its files' names as UTF-8: the whole package failed to
+    load (``UnicodeEncodeError``, no file named) for a module it never imports (found by
+    TRY45). Its own modules are imported by Python's names, which are UTF-8."""
+    from graphvision.nodes.plugins import discover
+
+    package = tmp_path / "pkgp" / "mypkg"
+    package.mkdir(parents=True)
+    (package / "__init__.py").write_text(PLUGIN)
+    Path(os.fsdecode(bytes(package) + b"/b\xe9d.py")).write_text("raise SystemExit(3)\n")
+    registry = discover([package], entry_points=False)
+    assert registry.failed_plugins() == []
+    assert registry.node("own.half").id == "own.half"
