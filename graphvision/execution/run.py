@@ -273,9 +273,11 @@ def _compiled(
 
 
 def _discover_for(graph: Graph) -> Registry:
-    from graphvision.nodes.plugins import discover_for  # the plugins are imported only for a run
+    from graphvision.nodes.plugins import discover_for, warn_of_failed_plugins  # (for a run)
 
-    return discover_for(graph)
+    registry = discover_for(graph)
+    warn_of_failed_plugins(registry)
+    return registry
 
 
 def _execute(

@@ -163,9 +163,10 @@ def sweep(
     if not isinstance(grid, Mapping):
         raise TypeError(f"grid must be a dict from 'node.param' to a list of values, got {grid!r}")
     if registry is None:
-        from graphvision.nodes.plugins import discover_for
+        from graphvision.nodes.plugins import discover_for, warn_of_failed_plugins
 
         registry = discover_for(graph)
+        warn_of_failed_plugins(registry)
     keys = list(grid)
     values = grid_values(graph, grid, keys)
     base, wanted = checked_combinations(graph, registry, keys, values, inputs, outputs)

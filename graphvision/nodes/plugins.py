@@ -18,6 +18,7 @@ import sys
 import time
 import traceback
 import types
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
 from importlib.metadata import EntryPoint
@@ -49,6 +50,7 @@ __all__ = [
     "load_entry_points",
     "load_path",
     "plugin_files",
+    "warn_of_failed_plugins",
 ]
 
 _ENGINE = Path(__file__).resolve().parent.parent  # graphvision's own files
@@ -273,3 +275,14 @@ def discover_for(graph: Graph, paths: Iterable[str | Path] = ()) -> Registry:
             setattr(module, f"node_{index}", func)
         registry.add_plugin(module, "__main__", "defined in __main__ (a script or a notebook)")
     return registry
+
+
+def warn_of_failed_plugins(registry: Registry) -> None:
+    """A warning, at the user's call, for each plugin of ``registry`` that failed to load
+    (as the command line prints one): a run from Python whose ops were all found went on
+    without a word, where a file of ``graph.plugins`` was missing or raised."""
+    level, frame = 1, sys._getframe(0)
+    while frame.f_back is not None and str(_ENGINE) in frame.f_code.co_filename:
+        level, frame = level + 1, frame.f_back
+    for plugin in registry.failed_plugins():
+        warnings.warn(f"plugin '{plugin.name}' failed to load: {plugin.error}", stacklevel=level)

@@ -85,12 +85,12 @@ def test_a_copy_or_a_pickle_of_the_plugins_is_not_placed_twice(folder):
 
 
 def test_an_op_of_a_plugin_that_failed_to_load_says_why_in_python(folder):
-    """Python prints no warning for a plugin that fails to load: the error pointed at one
-    ('its warning says where') that never came (found by the new user)."""
+    """The error says why itself: it pointed at a warning ('its warning says where') that
+    Python did not print then (found by the new user)."""
     graph = gv.Graph("built")
     graph.plugins.append("try/missing.py")
     graph.output("one", graph.add("one", "mine.one"))
-    with pytest.raises(gv.PipelineError) as caught:
+    with pytest.raises(gv.PipelineError) as caught, pytest.warns(UserWarning, match="missing"):
         gv.run(graph)
     said = str(caught.value)
     assert "plugin try/missing.py (plugin path try/missing.py does not exist) failed" in said
@@ -217,3 +217,21 @@ def test_a_built_graphs_plugins_are_checked_as_a_loaded_ones(folder):
     assert isinstance(graph.plugins, PluginPaths) and graph.plugins == ["a.py"]
     with pytest.raises(TypeError, match="holds paths"):
         gv.Graph("built", plugins=[3])
+
+
+def test_a_plugin_that_fails_to_load_is_warned_of_at_the_users_run(folder):
+    """From Python a run whose ops were all found went on without a word (the command line
+    warned; found by TRY45)."""
+    (folder / "bad.py").write_text("raise RuntimeError('boom')\n")
+    graph = gv.load_pipeline("try/p.yaml")
+    graph.plugins[:] = ["bad.py", "missing.py"]
+    with pytest.warns(UserWarning) as warned:
+        gv.run(graph)
+        gv.sweep(graph, {"z.size": [16, 32]})
+    messages = [str(w.message) for w in warned if "failed to load" in str(w.message)]
+    assert messages == 2 * [
+        f"plugin '{folder / 'bad.py'}' failed to load: RuntimeError: boom ({folder / 'bad.py'}:1)",
+        f"plugin '{folder / 'missing.py'}' failed to load: plugin path {folder / 'missing.py'} "
+        "does not exist",
+    ]
+    assert {w.filename for w in warned if "failed to load" in str(w.message)} == {__file__}
