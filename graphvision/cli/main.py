@@ -9,7 +9,7 @@
     graphvision sweep PIPELINE --grid NODE.PARAM=V1,V2,... [--grid ...] -d DIR [--plot OUTPUT]
     graphvision studio PIPELINE [-i NAME=VALUE]... [-s NODE.PARAM=VALUE]... [--no-browser]
                                 [--port N] [--host ADDRESS]
-    graphvision validate PIPELINE...
+    graphvision validate PIPELINE... [-i NAME=VALUE]...
     graphvision nodes [--json]
     graphvision describe OP|PIPELINE [--json]
     graphvision schema

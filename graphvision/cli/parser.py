@@ -100,6 +100,19 @@ def backend_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def input_option(parser: argparse.ArgumentParser) -> None:
+    """``--input NAME=VALUE`` (``-i``): of ``run``, ``sweep``, ``studio`` and ``validate``,
+    read by :func:`~graphvision.cli.common.named_pairs`."""
+    parser.add_argument(
+        "--input",
+        "-i",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="graph input: a path, sample:NAME, or a literal",
+    )
+
+
 def run_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``run`` and ``sweep``."""
     parser.add_argument("pipeline", type=path_text, help="the pipeline file (YAML)")
@@ -111,14 +124,7 @@ def run_options(parser: argparse.ArgumentParser) -> None:
         "declare more are refused before they are decoded)",
     )
     limit_options(parser)
-    parser.add_argument(
-        "--input",
-        "-i",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="graph input: a path, sample:NAME, or a literal",
-    )
+    input_option(parser)
     parser.add_argument(
         "--set",
         "-s",
@@ -252,6 +258,7 @@ def _validate(command: Command) -> None:
     p.add_argument(
         "pipelines", nargs="+", type=path_text, metavar="PIPELINE", help="pipeline files"
     )
+    input_option(p)  # loaded as `run` loads it, in place of the input's default
     p.set_defaults(func=cmd_validate)
 
 

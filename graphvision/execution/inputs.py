@@ -3,6 +3,7 @@ wrote, validated by their port type and frozen."""
 
 from __future__ import annotations
 
+import difflib
 from pathlib import Path
 from typing import Any
 
@@ -12,6 +13,7 @@ from graphvision.errors import (
     InputError,
     PortValueError,
     Problem,
+    did_you_mean,
 )
 from graphvision.graph.model import Graph
 from graphvision.nodes.registry import Registry
@@ -67,20 +69,35 @@ def resolve_input(
 
 
 def default_problems(
-    graph: Graph, types: dict[str, type[PortType]], registry: Registry
+    graph: Graph,
+    types: dict[str, type[PortType]],
+    registry: Registry,
+    given: dict[str, str] | None = None,
 ) -> list[Problem]:
     """A problem for each default of ``graph`` that does not load as its input's port type
     (``types``), placed at its line: what ``validate`` reports of a default a run would
-    refuse (a sample's name mistyped, a missing file)."""
-    problems = []
+    refuse (a sample's name mistyped, a missing file). A value ``given`` for an input
+    (``validate -i NAME=VALUE``) is loaded in place of its default, and a problem of it
+    or of a name ``graph`` does not declare is placed at ``--input NAME=VALUE``."""
+    given = given or {}
+    problems = [
+        Problem(0, f"--input {name}={value}", f"unknown input{did_you_mean(name, types)}; "
+                f"inputs: {', '.join(types) or 'none'}")
+        for name, value in given.items() if name not in types
+    ]  # fmt: skip
     for name, port_type in types.items():
-        default = graph.inputs[name].default
-        if default is None:
+        value = given.get(name, graph.inputs[name].default)
+        if value is None:
             continue
         try:
-            _resolved(port_type, default, registry)
+            _resolved(port_type, value, registry)
         except _RefusedError as refused:
-            problems.append(graph.problem(f"inputs.{name}.default", str(refused)))
+            place = f"inputs.{name}.default"
+            problems.append(
+                Problem(0, f"--input {name}={value}", str(refused))
+                if name in given
+                else graph.problem(place, str(refused))
+            )
     return problems
 
 
@@ -103,9 +120,10 @@ def _resolved(port_type: type[PortType], value: Any, registry: Registry) -> Any:
                 value = registry.source("file").func(value)
         except Exception as error:
             told = str(error)
-            raise _RefusedError(
-                told if str(value) in told else f"cannot load '{value}': {told}"
-            ) from error
+            told = told if str(value) in told else f"cannot load '{value}': {told}"
+            if isinstance(error, FileNotFoundError):  # `samples:camera`: a scheme mistyped?
+                told += _scheme_hint(value, registry)
+            raise _RefusedError(told) from error
     try:
         return freeze_value(port_type, port_type.admit(value, origin))
     except PortValueError as error:
@@ -114,6 +132,16 @@ def _resolved(port_type: type[PortType], value: Any, registry: Registry) -> Any:
         raise _RefusedError(
             f"not a valid {port_type.type_name()} ({type(error).__name__}: {str(error)[:200]})"
         ) from None
+
+
+def _scheme_hint(value: str, registry: Registry) -> str:
+    """`` (did you mean 'sample:camera'?)`` for a ``value`` such as ``samples:camera``,
+    found as no file, whose part before its colon is close to a source's scheme; or ''."""
+    scheme, sep, rest = value.partition(":")
+    if not sep or scheme in registry.sources:
+        return ""
+    close = difflib.get_close_matches(scheme, list(registry.sources), n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}:{rest}'?)" if close else ""
 
 
 def _read_written(port_type: type[PortType], archive: Path) -> Any:

@@ -122,3 +122,28 @@ def test_a_relative_default_missing_names_the_working_folder_it_was_looked_for_f
         f"  - inputs.image.default at {path}:5: no such file: missing.png (looked for from the "
         f"working folder {elsewhere})\n"
     ) in capsys.readouterr().err
+
+
+def test_validate_takes_a_value_for_an_input_in_place_of_its_default(tmp_path, capsys):
+    """``validate -i`` stands in for an input without a default (a placeholder), read by the
+    same parsing as ``run -i``; it had no such option (a usage error)."""
+    (tmp_path / "p.yaml").write_text(TWO)
+    path = tmp_path / "p.yaml"
+    given = ["-i", "image=sample:camera", "-i", "other=sample:coins"]
+    assert main(["validate", str(path), *given]) == 0
+    assert capsys.readouterr().out == f"{path}: ok\n"
+    assert main(["validate", str(path), "-i", "image=sample:camra", "-i", "imgae=x"]) == 2
+    err = capsys.readouterr().err
+    assert "  - --input image=sample:camra: cannot load 'sample:camra': unknown sample" in err
+    assert (
+        "  - --input imgae=x: unknown input (did you mean 'image'?); inputs: image, other\n" in err
+    )
+    assert f"  - inputs.other.default at {path}:4: cannot load 'sample:camra'" in err  # not given
+
+
+@pytest.mark.parametrize("given", ["image", "=x"])
+def test_validate_reads_its_inputs_as_run_does(tmp_path, capsys, given):
+    path = _pipeline(tmp_path, "sample:camera")
+    assert main(["validate", str(path), "-i", given]) == main(["run", str(path), "-i", given]) == 2
+    expected = f"error: --input expects NAME=VALUE, got '{given}'\n"
+    assert capsys.readouterr().err == expected * 2
