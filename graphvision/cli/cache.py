@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from graphvision.cli.common import EXIT_OK, refuse_cache_dir_not_utf8
+from graphvision.cli.common import refuse_cache_dir_not_utf8
+from graphvision.cli.exits import EXIT_OK
 
 
 def cmd_cache(args: argparse.Namespace) -> int:

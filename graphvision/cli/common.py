@@ -19,8 +19,6 @@ if TYPE_CHECKING:
     from graphvision.graph.model import Graph
     from graphvision.nodes.registry import Registry
 
-EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
-EXIT_HUNG_UP = 129  # SIGHUP: 128 + its number, as a shell reports a command it ended
 EXECUTORS = ("threads", "sync", "processes", "dask")
 MAX_WORKERS = 256  # workers of one machine's pool or local cluster (each is a thread or a process)
 CACHE_DIR_HELP = "$GRAPHVISION_CACHE_DIR, else $XDG_CACHE_HOME/graphvision or ~/.cache/graphvision"

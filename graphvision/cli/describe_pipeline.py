@@ -17,7 +17,8 @@ import textwrap
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from graphvision.cli.common import EXIT_OK, registry_for
+from graphvision.cli.common import registry_for
+from graphvision.cli.exits import EXIT_OK
 
 if TYPE_CHECKING:
     from graphvision.graph.model import Graph, Ref

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from graphvision.cli.common import EXIT_OK, note_unread_plugins, registry_for
+from graphvision.cli.common import note_unread_plugins, registry_for
+from graphvision.cli.exits import EXIT_OK
 
 
 def cmd_graph(args: argparse.Namespace) -> int:

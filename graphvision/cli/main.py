@@ -27,30 +27,26 @@ the command that needs them, so ``--help`` is quick.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
-import faulthandler
 import os
 import signal
 import sys
 import time
-import traceback
-import warnings
-from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from graphvision.cli.common import (
+from graphvision.cli.exits import (
     EXIT_FAILED,
     EXIT_HUNG_UP,
     EXIT_INTERRUPTED,
     EXIT_OK,
     EXIT_TERMINATED,
     EXIT_USAGE,
-    UsageError,
 )
-from graphvision.cli.parser import build_parser
-from graphvision.errors import GraphvisionError
-from graphvision.execution.warnings import show_warning
+from graphvision.execution.batch_signals import defer_signals_in_imports
+
+if TYPE_CHECKING:
+    import argparse
+    from collections.abc import Callable, Sequence
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -62,9 +58,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
-    warnings.showwarning = show_warning
     began = time.perf_counter()
-    try:
+    try:  # (the imports in here: a Ctrl-C that comes meanwhile is answered as any other)
+        import warnings
+
+        from graphvision.cli.common import UsageError
+        from graphvision.cli.parser import build_parser
+        from graphvision.execution.warnings import show_warning
+
+        warnings.showwarning = show_warning
         parser = build_parser()
         if not argv:
             parser.print_usage(sys.stderr)
@@ -80,17 +82,42 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise UsageError("give a command: " + ", ".join(_commands(parser)))
         return int(args.func(args))
     except KeyboardInterrupt as stop:
-        what, status = _stopped_by(stop)
-        with contextlib.suppress(OSError):  # (a hung-up terminal refuses the line: EIO)
-            print(f"{what} after {time.perf_counter() - began:.1f} s", file=sys.stderr)
-        return status
+        return _report_stop(stop, began)
     except BrokenPipeError:  # `graphvision nodes | head -1`: the reader has what it wanted
         _silence_stdout()
         return EXIT_OK
     except Exception as error:
+        wrapped = _interrupt_in(error)
+        if wrapped is not None:  # raised where Python wraps it: a class's __set_name__
+            return _report_stop(wrapped, began)
         if debug:
+            import traceback
+
             traceback.print_exc()
         return _report_error(error)
+
+
+def _interrupt_in(error: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C (or SIGTERM, SIGHUP) in ``error``'s chain of causes and contexts, if any:
+    the stop, wrapped by code it interrupted (a ``RuntimeError`` from a class's
+    ``__set_name__``), is answered as a stop, not as an internal error."""
+    seen: set[int] = set()
+    found: BaseException | None = error
+    while found is not None and id(found) not in seen:
+        if isinstance(found, KeyboardInterrupt):
+            return found
+        seen.add(id(found))
+        found = found.__cause__ or found.__context__
+    return None
+
+
+def _report_stop(stop: KeyboardInterrupt, began: float) -> int:
+    """One line for the stop (``interrupted after 2.1 s``, a command started at ``began``);
+    its exit status."""
+    what, status = _stopped_by(stop)
+    with contextlib.suppress(OSError):  # (a hung-up terminal refuses the line: EIO)
+        print(f"{what} after {time.perf_counter() - began:.1f} s", file=sys.stderr)
+    return status
 
 
 def _stopped_by(stop: KeyboardInterrupt) -> tuple[str, int]:
@@ -103,7 +130,7 @@ def _stopped_by(stop: KeyboardInterrupt) -> tuple[str, int]:
 
 
 def _report_error(error: Exception) -> int:
-    from graphvision.errors import RunError
+    from graphvision.errors import GraphvisionError, RunError
 
     if isinstance(error, RunError):
         print(f"error: {error}", file=sys.stderr)
@@ -124,6 +151,8 @@ def _report_error(error: Exception) -> int:
 
 
 def _commands(parser: argparse.ArgumentParser) -> list[str]:
+    import argparse
+
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
             return list(action.choices)
@@ -141,12 +170,19 @@ def entry() -> None:
 
     On Ctrl-C the process exits without waiting for worker threads to finish
     the node they run (cache entries and outputs are written atomically, so
-    nothing is left half-written; worker processes see their parent go and exit).
+    nothing is left half-written; worker processes see their parent go and exit). A
+    Ctrl-C (SIGTERM, SIGHUP) during an import stops it once the import is done
+    (:func:`~graphvision.execution.batch_signals.defer_signals_in_imports`, set first:
+    this module imports only what that needs, and the command's modules are imported
+    by :func:`main`); one that comes before, while Python starts, is Python's.
     """
+    defer_signals_in_imports()
     terminate = _terminator(os.getpid(), _terminals())
     signal.signal(signal.SIGTERM, terminate)
     if HANG_UP is not None and signal.getsignal(HANG_UP) is not signal.SIG_IGN:
         signal.signal(HANG_UP, terminate)  # (under nohup, the command outlives its terminal)
+    import faulthandler
+
     faulthandler.enable(all_threads=True)  # a node that crashes the process: where it was
     quiet_resource_tracker()
     status = main()

@@ -7,7 +7,8 @@ import argparse
 from collections.abc import Callable
 from typing import Any
 
-from graphvision.cli.common import EXIT_OK, registry_for
+from graphvision.cli.common import registry_for
+from graphvision.cli.exits import EXIT_OK
 from graphvision.errors import UnknownNameError, did_you_mean
 
 

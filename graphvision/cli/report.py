@@ -6,7 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from graphvision.cli.common import EXIT_OK, registry_for
+from graphvision.cli.common import registry_for
+from graphvision.cli.exits import EXIT_OK
 
 
 def cmd_report(args: argparse.Namespace) -> int:

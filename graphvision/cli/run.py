@@ -10,8 +10,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from graphvision.cli.common import (
-    EXIT_FAILED,
-    EXIT_OK,
     UsageError,
     disk_cache,
     executor_for,
@@ -20,6 +18,7 @@ from graphvision.cli.common import (
     named_pairs,
     output_folder,
 )
+from graphvision.cli.exits import EXIT_FAILED, EXIT_OK
 
 if TYPE_CHECKING:
     from graphvision.execution.record import RunResult

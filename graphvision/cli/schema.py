@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from graphvision.cli.common import EXIT_OK
+from graphvision.cli.exits import EXIT_OK
 
 
 def cmd_schema(args: argparse.Namespace) -> int:

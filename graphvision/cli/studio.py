@@ -6,7 +6,12 @@ import argparse
 import sys
 import webbrowser
 
-from graphvision.cli.common import EXIT_OK, UsageError, disk_cache, load_run_arguments
+from graphvision.cli.common import (
+    UsageError,
+    disk_cache,
+    load_run_arguments,
+)
+from graphvision.cli.exits import EXIT_OK
 
 __all__ = ["cmd_studio", "studio_options"]
 

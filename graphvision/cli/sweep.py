@@ -11,8 +11,6 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from graphvision.cli.common import (
-    EXIT_FAILED,
-    EXIT_OK,
     UsageError,
     disk_cache,
     executor_for,
@@ -22,6 +20,7 @@ from graphvision.cli.common import (
     read_each,
     yaml_value,
 )
+from graphvision.cli.exits import EXIT_FAILED, EXIT_OK
 from graphvision.errors import did_you_mean
 
 if TYPE_CHECKING:

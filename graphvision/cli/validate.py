@@ -16,12 +16,11 @@ import argparse
 import sys
 
 from graphvision.cli.common import (
-    EXIT_OK,
-    EXIT_USAGE,
     named_pairs,
     refuse_paths_not_utf8,
     registry_for,
 )
+from graphvision.cli.exits import EXIT_OK, EXIT_USAGE
 
 
 def cmd_validate(args: argparse.Namespace) -> int:

@@ -20,6 +20,16 @@ cache callback, which LLVM then read as a missing buffer, and the client crashed
 signal the main thread blocks to another thread (OpenBLAS's), whose C handler notes it
 all the same. So the handlers themselves are swapped for one that only notes the
 signal, and the first signal noted is sent again once the handlers are back.
+
+Why an import loses a Ctrl-C
+----------------------------
+The same holds inside an import: the import system drops a module's lock through a
+weak reference's callback, and a ``KeyboardInterrupt`` raised there is printed and
+dropped (the command went on: 3 times in ~790 Ctrl-C's sent in a command's first
+second); one raised inside a class's ``__set_name__`` (a dataclass's fields) comes out
+wrapped in a ``RuntimeError`` (an internal error: 2 in ~790). The command line
+therefore imports under :func:`signals_deferred` (:func:`defer_signals_in_imports`): a
+signal that comes during an import stops the command once the import is done.
 """
 
 from __future__ import annotations
@@ -27,11 +37,12 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from typing import Any
 
-__all__ = ["signals_deferred", "signals_held"]
+__all__ = ["defer_signals_in_imports", "signals_deferred", "signals_held"]
 
 _STOPPING = (signal.SIGINT, signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else []))
 """The signals that stop a command (SIGHUP: the terminal closed; not on Windows)."""
@@ -57,12 +68,14 @@ def signals_held() -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def signals_deferred() -> Iterator[None]:
+def signals_deferred(*, insisted: bool = False) -> Iterator[None]:
     """Ctrl-C, SIGTERM and SIGHUP noted meanwhile, the first one sent again at the end (its
     handler then raises as usual): for a fork, and for native code that calls back into
     Python, where a handler's exception would be dropped (see the module docstring). Only
     the main thread's Python handlers are swapped; a process forked meanwhile that gets one
     of these signals before it sets its own handlers runs the handler it would have run.
+    ``insisted``: a signal that comes again meanwhile runs its handler at once (a body
+    that may not end soon, such as an import: the second Ctrl-C stops it).
 
     Raises
     ------
@@ -77,7 +90,7 @@ def signals_deferred() -> Iterator[None]:
     handlers = {s: handler for s, handler in handlers.items() if callable(handler)}
     noted: list[int] = []
     try:
-        _raise(_set_handlers(dict.fromkeys(handlers, _noting(handlers, noted))))
+        _raise(_set_handlers(dict.fromkeys(handlers, _noting(handlers, noted, insisted))))
         yield
     finally:
         _raise(_set_handlers(handlers))
@@ -85,18 +98,54 @@ def signals_deferred() -> Iterator[None]:
             signal.raise_signal(noted[0])
 
 
-def _noting(handlers: dict[signal.Signals, Any], noted: list[int]) -> Callable[[int, Any], None]:
-    """A handler that notes its signal in ``noted``; in a process forked meanwhile, the
-    signal's own handler from ``handlers`` runs instead."""
+def _noting(
+    handlers: dict[signal.Signals, Any], noted: list[int], insisted: bool = False
+) -> Callable[[int, Any], None]:
+    """A handler that notes its signal in ``noted``; in a process forked meanwhile (or,
+    ``insisted``, for a signal noted already), the signal's own handler from ``handlers``
+    runs instead."""
     client = os.getpid()
 
     def note(signum: int, frame: Any) -> None:
-        if os.getpid() != client:
+        if os.getpid() != client or (insisted and signum in noted):
             handlers[signal.Signals(signum)](signum, frame)
         else:
             noted.append(signum)
 
     return note
+
+
+def defer_signals_in_imports() -> None:
+    """From now on, each import the main thread makes (the outermost one: the modules it
+    imports in turn are part of it) runs under :func:`signals_deferred` (``insisted``), so
+    that a Ctrl-C, SIGTERM or SIGHUP that comes meanwhile stops the process once the import
+    is done, never lost in the import system's callbacks (see the module docstring). For
+    the command line, which calls it first thing; a program that imports graphvision is
+    left as it is.
+
+    Every import of a module not yet loaded (``import``, ``importlib.import_module``)
+    goes through the import system's ``_find_and_load`` (a private function, the same from
+    Python 3.3 to 3.13), which is wrapped; a second call does nothing.
+    """
+    bootstrap = sys.modules["importlib._bootstrap"]
+    find_and_load = getattr(bootstrap, "_find_and_load")  # noqa: B009  # (private: not typed)
+    if getattr(find_and_load, "__wrapped__", None) is not None:
+        return
+    main = threading.main_thread()
+    depth = [0]  # imports of the main thread under way
+
+    def deferring(*args: Any, **kwargs: Any) -> Any:
+        if depth[0] or threading.current_thread() is not main:
+            return find_and_load(*args, **kwargs)
+        depth[0] += 1
+        try:
+            with signals_deferred(insisted=True):
+                return find_and_load(*args, **kwargs)
+        finally:
+            depth[0] -= 1
+
+    deferring.__wrapped__ = find_and_load  # type: ignore[attr-defined]
+    setattr(bootstrap, "_find_and_load", deferring)  # noqa: B010
 
 
 def _set_handlers(handlers: dict[signal.Signals, Any]) -> BaseException | None:
