@@ -177,8 +177,9 @@ class ForkedFiles:
         are not started (``not run`` in batch.csv, not ``interrupted``). Its worker may have
         begun one since: a file of it whose folder is whole counts as done (its claim says
         so), and one it was running writes nothing once the batch has stopped. Of the
-        answers read, the first file's is taken (its worker dropped its claim); the others'
-        files count as their claims say."""
+        answers read, the first file's is taken (with its job); the others' files count as
+        their claims say, the first one's too when its answer is not read (its worker keeps
+        its claim: :meth:`~graphvision.execution.batch_stop.StopFlag.in_worker`)."""
         for worker in self.workers.workers:
             for task, answer in _unread(worker):
                 if task.first:
@@ -324,6 +325,7 @@ def _first_file(state: dict[str, Any], _: Any) -> tuple[BatchItem, Any]:
     the others made from its run (kept here for this worker's next tasks)."""
     batch: BatchRun = state["batch"]
     batch.first_where = FIRST_WHERE
+    batch.stop = batch.stop.in_worker()  # its claim left for the client, which has no result yet
     item = batch.run_first()
     state["job"] = batch.job_sent
     return item, batch.job_sent

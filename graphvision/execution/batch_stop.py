@@ -109,14 +109,8 @@ class Claim:
 
 
 def _item_json(item: BatchItem) -> dict:
-    return {
-        "file": str(item.file),
-        "output_dir": str(item.output_dir),
-        "status": item.status,
-        "seconds": item.seconds,
-        "error": item.error,
-        "scalars": item.scalars,
-    }
+    kept = {name: getattr(item, name) for name in ("status", "seconds", "error", "scalars")}
+    return {"file": str(item.file), "output_dir": str(item.output_dir), **kept}
 
 
 def _unwritten(fd: int) -> bool:
@@ -314,6 +308,12 @@ class StopFlag:
         with contextlib.suppress(OSError):
             Path(self.folder, self.name(folder)).unlink()
 
+    def in_worker(self) -> StopFlag:
+        """This flag for a worker that runs the first file the client's way: it drops no
+        claim (the client does, once it has the result; stopped before, it counts the
+        folder from the claim; dropped here, a whole folder was listed ``interrupted``)."""
+        return _WorkersFlag(self.folder)
+
     def claims(self) -> set[str]:
         with contextlib.suppress(OSError):
             return {p.name for p in Path(self.folder).glob(_CLAIM + "*")}
@@ -377,6 +377,11 @@ class StopFlag:
         fd = _OWNED.pop(self.folder, None)
         if fd is not None:
             os.close(fd)
+
+
+class _WorkersFlag(StopFlag):
+    def dropped(self, folder: str | Path) -> None:  # (:meth:`StopFlag.in_worker`)
+        """Left to the client."""
 
 
 @contextlib.contextmanager

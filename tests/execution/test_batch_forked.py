@@ -11,6 +11,7 @@ import multiprocessing
 import os
 import signal
 import threading
+import time
 from typing import Any
 
 import pytest
@@ -223,3 +224,39 @@ def test_an_executor_given_to_several_batches_keeps_only_the_workers_still_runni
                 process.join(timeout=30)  # each exits once told to
     finally:
         executor.shutdown()
+
+
+def test_the_first_files_whole_folder_counts_when_the_batch_stops_before_its_answer(
+    tmp_path, monkeypatch, alone
+):
+    """The first file's worker has written its folder whole and the client stops (Ctrl-C)
+    before the worker's answer reaches it: the file is ``ok``, as its folder is. The worker
+    dropped the file's claim as it finished, so the client knew nothing of it: listed
+    ``interrupted`` beside its whole folder."""
+    from graphvision.execution.batch_run import BatchRun
+
+    client = os.getpid()
+    run_first = BatchRun.run_first
+
+    def then_stopped(batch: BatchRun) -> Any:  # in the first file's worker (a fork)
+        item = run_first(batch)
+        os.kill(client, signal.SIGINT)
+        time.sleep(1.0)  # the client stops meanwhile: the answer comes too late
+        return item
+
+    monkeypatch.setattr(BatchRun, "run_first", then_stopped)
+    monkeypatch.setenv("CLIENT_PID", str(client))
+    monkeypatch.setenv("KILL_BY", "exit")
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            _scored_on_processes(tmp_path, KILLING_PLUGIN, "killing", [20, 30, 40, 50])
+    finally:
+        signal.signal(signal.SIGINT, before)
+    with (tmp_path / "out" / "batch.csv").open() as summary:
+        rows = list(csv.DictReader(summary))
+    assert [row["status"] for row in rows] == ["ok", "not run", "not run", "not run"], rows
+    assert float(rows[0]["score"]) == pytest.approx(20 / 255.0, abs=1e-6)
+    record = json.loads((tmp_path / "out" / "00" / "record.json").read_text())
+    assert record["executor"] == "processes, first file on a worker"
+    assert [p.name for p in (tmp_path / "out").iterdir() if p.is_dir()] == ["00"]
