@@ -193,7 +193,7 @@ def registry_for(
     (when the plugin index says which those are), else all of them; and the pipeline's
     own ``plugins:`` when it is to run or be validated (announced), never when it is only
     drawn or described."""
-    from graphvision.nodes.plugins import Needs, discover, discover_for, plugin_files
+    from graphvision.nodes.plugins import Needs, discover, discover_for
 
     for path in args.plugins:
         if not Path(path).exists():
@@ -201,9 +201,11 @@ def registry_for(
     named = [("--plugins", path) for path in args.plugins]
     if graph is not None and run_its_plugins:
         named += [(f"{graph.source or graph.name}: plugin", path) for path in graph.plugins]
+    why = "a plugin is loaded and recorded by its path in UTF-8"
     for what, path in named:  # (it would fail to load: a warning, then its nodes unknown)
-        for text in [path, *map(str, plugin_files(Path(path)))]:  # (a folder's files too)
-            _refuse_not_utf8(what, text, "a plugin is loaded and recorded by its path in UTF-8")
+        for given, read in _plugin_paths(Path(path)):
+            _refuse_not_utf8(what, str(given), why)
+            _refuse_not_utf8(f"{what} {given} leads to", str(read), why)
     if graph is None:
         registry = discover(args.plugins)
     elif run_its_plugins:
@@ -218,6 +220,16 @@ def registry_for(
     for plugin in registry.failed_plugins():
         print(f"warning: plugin '{plugin.name}' failed to load: {plugin.error}", file=sys.stderr)
     return registry
+
+
+def _plugin_paths(path: Path) -> list[tuple[Path, Path]]:
+    """Each path the loading of the local plugin ``path`` reads, as given and as read (its
+    links followed, as the loader follows them): ``path``, each file a folder of ``.py``
+    files imports (:func:`~graphvision.nodes.plugins.plugin_files`)."""
+    from graphvision.nodes.plugins import plugin_files
+
+    given = [path, *plugin_files(path)]
+    return [(file, file.resolve()) for file in given]
 
 
 def disk_cache(args: argparse.Namespace) -> Cache | None:

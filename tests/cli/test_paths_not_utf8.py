@@ -175,3 +175,44 @@ def test_a_package_plugin_holding_a_module_not_utf8_loads(tmp_path):
     registry = discover([package], entry_points=False)
     assert registry.failed_plugins() == []
     assert registry.node("own.half").id == "own.half"
+
+
+def _latin(folder: Path, name: bytes) -> Path:
+    return Path(os.fsdecode(bytes(folder) + b"/" + name))
+
+
+def _plugin_layouts(tmp_path: Path) -> dict[str, tuple[str, str]]:
+    """Plugins given by a UTF-8 path whose loading reads a path that is not: each with the
+    path ``--plugins`` names and what the refusal names."""
+    package = _latin(tmp_path, b"pack\xff")
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (tmp_path / "to_package").symlink_to(package)
+    flat = tmp_path / "flat"
+    flat.mkdir()
+    (flat / "m.py").symlink_to(package / "__init__.py")
+    return {  # each given from tmp_path
+        "a link to a folder": ("to_package", f"to_package leads to {tmp_path}/pack\\xff"),
+        "a file that is a link": ("flat", f"flat/m.py leads to {tmp_path}/pack\\xff/__init__.py"),
+    }
+
+
+@pytest.mark.parametrize(
+    "layout",
+    ["a link to a folder", "a file that is a link"],
+)
+@pytest.mark.parametrize("command", ["run", "validate"])
+def test_a_plugin_read_through_a_path_not_utf8_is_refused_up_front(
+    capsys, tmp_path, monkeypatch, layout, command
+):
+    """As a folder named so is: it was a warning (the loader resolves links), then an
+    unknown op. (A package's own module named so is not read by name: the package loads.)"""
+    given, named = _plugin_layouts(tmp_path)[layout]
+    monkeypatch.chdir(tmp_path)
+    tail = ["-d", str(tmp_path / "o")] if command == "run" else []
+    assert main([command, str(DEMO), *tail, "--plugins", given]) == 2
+    assert capsys.readouterr().err == (
+        f"error: --plugins {named}: its path is not UTF-8; a plugin is loaded and recorded by "
+        "its path in UTF-8: rename it or its folder\n"
+    )
+    assert not (tmp_path / "o").exists()
