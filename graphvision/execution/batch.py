@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Callable, Collection, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
@@ -51,10 +51,7 @@ from graphvision.execution.arguments import (
     run_arguments,
 )
 from graphvision.execution.batch_files import (
-    BATCH_FILES,
     NO_PAGES,
-    SUMMARY,
-    SUMMARY_PAGE,
     BatchItem,
     BatchPages,
     BatchResult,
@@ -63,7 +60,6 @@ from graphvision.execution.batch_files import (
     common_parts,
     output_folders,
     pattern_root,
-    summary_text,
 )
 from graphvision.execution.batch_forked import forked_files
 from graphvision.execution.batch_guard import refuse_in_bootstrap
@@ -71,7 +67,7 @@ from graphvision.execution.batch_lanes import FileLanes
 from graphvision.execution.batch_run import BatchRun
 from graphvision.execution.batch_signals import signals_held
 from graphvision.execution.batch_stop import INTERRUPTED
-from graphvision.execution.batch_write import settle_folders
+from graphvision.execution.batch_summary import summarise
 from graphvision.execution.blas import one_blas_thread
 from graphvision.execution.closing import Closing
 from graphvision.execution.executors import (
@@ -81,8 +77,7 @@ from graphvision.execution.executors import (
     make_executor,
 )
 from graphvision.execution.folder_lock import only_writer
-from graphvision.execution.folders import missing_folders, remove_empty_folders, retire_left_files
-from graphvision.execution.manifest import replace_folder_files
+from graphvision.execution.folders import missing_folders, remove_empty_folders
 from graphvision.execution.record import RunHooks
 from graphvision.execution.utf8_names import refuse_folder_not_utf8, refuse_names_not_utf8
 from graphvision.graph.model import Graph
@@ -206,7 +201,7 @@ def run_batch(
         finished = _run_files(batch, width, on_item, own, (out_dir, stale, made))
         closing = Closing(pool) if own else None  # its workers end while the summary is made
         try:
-            summary = _summarise(finished, out_dir, pages, stale)
+            summary = summarise(finished, out_dir, pages, stale)
         finally:
             if closing is not None:
                 closing.wait()
@@ -301,7 +296,7 @@ def _stop(
         batch.pool.shutdown(wait=False, cancel_futures=True)
     try:
         not_run = _not_run(items, batch.paths, batch.folders, batch.started)
-        _summarise(not_run, out_dir, batch.pages, stale)
+        summarise(not_run, out_dir, batch.pages, stale)
     finally:
         batch.remove_stop_flag()  # a writer that looks now sees it gone: stopped
         remove_empty_folders(made)
@@ -349,20 +344,6 @@ def _not_run(
             reason = "the batch stopped before this file started"
             marked.append(BatchItem(path, folder, "not run", error=reason))
     return marked
-
-
-def _summarise(
-    items: list[BatchItem], out_dir: Path, pages: BatchPages, stale: Collection[Path] = ()
-) -> Path:
-    """``batch.csv`` for ``items``, and the summary page when there is one; the folders of
-    files a previous batch listed and this one does not (``stale``) lose their files."""
-    retire_left_files(stale, out_dir)  # their files are no longer in the batch
-    settle_folders(items)  # an item without a folder says so, as batch.csv does
-    contents = {SUMMARY: summary_text(items)}
-    if pages.summary is not None:
-        contents[SUMMARY_PAGE] = pages.summary(items, out_dir)
-    replace_folder_files(out_dir, BATCH_FILES, contents)  # each whole, the manifest last
-    return out_dir / SUMMARY
 
 
 def _stream(batch: BatchRun, at_once: int) -> Iterator[tuple[int, BatchItem]]:

@@ -1,6 +1,9 @@
-"""A batch whose ``batch.html`` cannot be written (``ulimit -f``, a full disk) changes none
-of its summary files and exits 1, as a single run's failed write does: a tryer's batch left
-a ``batch.json`` listing files that were not there, and exited 2 (a usage error)."""
+"""A batch whose ``batch.html`` cannot be written (``ulimit -f``, a full disk) leaves no
+summary half-written and exits 1, as a single run's failed write does: a tryer's batch left
+a ``batch.json`` listing files that were not there, and exited 2 (a usage error). The summary
+and the folders agree: the previous summary, whose rows name runs this batch replaced (kept in
+their folders' ``history/``), is removed, and the folders of files no longer in the batch keep
+their runs (they were retired to ``history/`` while the previous summary still listed them)."""
 
 from __future__ import annotations
 
@@ -41,15 +44,31 @@ def batch(tmp_path: Path) -> tuple[Path, list[str]]:
     return out, [*argv, "-d", str(out), "--no-cache", "--no-progress"]
 
 
-def test_a_summary_that_cannot_be_written_changes_nothing_and_exits_1(batch):
-    out, argv = batch
-    assert main(argv) == 0
-    before = {name: (out / name).read_bytes() for name in ("batch.csv", "batch.html", "batch.json")}
-    assert len(before["batch.html"]) > 1024 > len(before["batch.csv"])
-    done = subprocess.run(
+def _limited(argv: list[str]) -> subprocess.CompletedProcess:
+    return subprocess.run(
         [sys.executable, "-c", LIMITED, *argv], capture_output=True, text=True, timeout=120
     )
+
+
+def test_a_summary_that_cannot_be_written_is_not_left_naming_replaced_runs(batch, tmp_path):
+    out, argv = batch
+    assert main(argv) == 0
+    sizes = {name: (out / name).stat().st_size for name in ("batch.csv", "batch.html")}
+    assert sizes["batch.html"] > 1024 > sizes["batch.csv"]
+    (tmp_path / "imgs" / "b.png").unlink()  # b's folder: no longer in the batch
+    done = _limited([*argv, "-s", "gray.method=luminance"])  # a's run is replaced
     assert done.returncode == 1, done.stderr
-    assert done.stderr.splitlines()[-1] == f"error: File too large: {out / 'batch.html'}"
-    assert {name: (out / name).read_bytes() for name in before} == before  # as they were
-    assert sorted(p.name for p in out.iterdir() if p.is_file()) == sorted(before)  # no .tmp
+    assert done.stderr.splitlines()[-2:] == [
+        f"warning: the previous summary in {out} (batch.csv, batch.html, batch.json) is "
+        "removed: its rows name runs this batch replaced (each kept in its folder's history/)",
+        f"error: File too large: {out / 'batch.html'}",
+    ]
+    assert sorted(p.name for p in out.iterdir()) == ["a", "b"]  # no summary, no .tmp
+    (kept,) = (out / "a" / "history").glob("0*")  # a's first run, which batch.csv named
+    assert (kept / "record.json").is_file()
+    assert sorted(p.name for p in (out / "b").iterdir()) == [  # b's run, not retired
+        "m.json",
+        "record.json",
+        "report.html",
+        "report.md",
+    ]
