@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from graphvision.cli.common import refuse_cache_dir_not_utf8
 from graphvision.cli.exits import EXIT_OK
+from graphvision.cli.utf8_paths import refuse_cache_dir_not_utf8
 
 
 def cmd_cache(args: argparse.Namespace) -> int:

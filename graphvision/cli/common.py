@@ -12,7 +12,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from graphvision.cli.overrides import refused_overrides
-from graphvision.errors import GraphvisionError
+from graphvision.cli.usage import UsageError
+from graphvision.cli.utf8_paths import (
+    plugin_paths,
+    refuse_cache_dir_not_utf8,
+    refuse_not_utf8,
+    refuse_paths_not_utf8,
+)
 
 if TYPE_CHECKING:
     from graphvision.cache.store import Cache
@@ -22,10 +28,6 @@ if TYPE_CHECKING:
 EXECUTORS = ("threads", "sync", "processes", "dask")
 MAX_WORKERS = 256  # workers of one machine's pool or local cluster (each is a thread or a process)
 CACHE_DIR_HELP = "$GRAPHVISION_CACHE_DIR, else $XDG_CACHE_HOME/graphvision or ~/.cache/graphvision"
-
-
-class UsageError(GraphvisionError):
-    """A command-line mistake (exit status 2)."""
 
 
 class Parser(argparse.ArgumentParser):
@@ -193,7 +195,7 @@ def registry_for(
     (when the plugin index says which those are), else all of them; and the pipeline's
     own ``plugins:`` when it is to run or be validated (announced), never when it is only
     drawn or described."""
-    from graphvision.nodes.plugins import Needs, discover, discover_for
+    from graphvision.execution.batch_signals import signals_deferred
 
     for path in args.plugins:
         if not Path(path).exists():
@@ -203,33 +205,33 @@ def registry_for(
         named += [(f"{graph.source or graph.name}: plugin", path) for path in graph.plugins]
     why = "a plugin is loaded and recorded by its path in UTF-8"
     for what, path in named:  # (it would fail to load: a warning, then its nodes unknown)
-        for given, read in _plugin_paths(Path(path)):
-            _refuse_not_utf8(what, str(given), why)
-            _refuse_not_utf8(f"{what} {given} leads to", str(read), why)
-    if graph is None:
-        registry = discover(args.plugins)
-    elif run_its_plugins:
-        if graph.plugins:  # (each from the working folder, when it is in it)
-            here = Path.cwd()
-            shown = [os.path.relpath(p, here) if Path(p).is_relative_to(here) else p
-                     for p in graph.plugins]  # fmt: skip
-            print(f"loading local plugins: {', '.join(shown)}", file=sys.stderr)
-        registry = discover_for(graph, args.plugins)
-    else:
-        registry = discover(args.plugins, needs=Needs.of(graph))
+        for given, read in plugin_paths(Path(path)):
+            refuse_not_utf8(what, str(given), why)
+            refuse_not_utf8(f"{what} {given} leads to", str(read), why)
+    with signals_deferred(insisted=True):  # a Ctrl-C in a plugin's own lines: not lost either
+        registry = _discovered(args, graph, run_its_plugins)
     for plugin in registry.failed_plugins():
         print(f"warning: plugin '{plugin.name}' failed to load: {plugin.error}", file=sys.stderr)
     return registry
 
 
-def _plugin_paths(path: Path) -> list[tuple[Path, Path]]:
-    """Each path the loading of the local plugin ``path`` reads, as given and as read (its
-    links followed, as the loader follows them): ``path``, each file a folder of ``.py``
-    files imports (:func:`~graphvision.nodes.plugins.plugin_files`)."""
-    from graphvision.nodes.plugins import plugin_files
+def _discovered(args: argparse.Namespace, graph: Graph | None, run_its_plugins: bool) -> Registry:
+    """The registry of :func:`registry_for`, its plugins imported. (Imported from a plugin
+    file by the loader, not by an import statement, a plugin's own lines are not deferred
+    by :func:`~graphvision.execution.batch_signals.defer_signals_in_imports`: a Ctrl-C
+    raised in its class's ``__set_name__`` made it a plugin that failed to load.)"""
+    from graphvision.nodes.plugins import Needs, discover, discover_for
 
-    given = [path, *plugin_files(path)]
-    return [(file, file.resolve()) for file in given]
+    if graph is None:
+        return discover(args.plugins)
+    if not run_its_plugins:
+        return discover(args.plugins, needs=Needs.of(graph))
+    if graph.plugins:  # (each from the working folder, when it is in it)
+        here = Path.cwd()
+        shown = [os.path.relpath(p, here) if Path(p).is_relative_to(here) else p
+                 for p in graph.plugins]  # fmt: skip
+        print(f"loading local plugins: {', '.join(shown)}", file=sys.stderr)
+    return discover_for(graph, args.plugins)
 
 
 def disk_cache(args: argparse.Namespace) -> Cache | None:
@@ -288,47 +290,6 @@ def load_run_arguments(
         problems, refused, unknown = problems + swept[0], refused + swept[1], unknown + swept[2]
     raise_refused(problems, refused, unknown)
     return graph, registry, overrides, inputs
-
-
-def refuse_paths_not_utf8(pipeline: str, inputs: dict[str, str]) -> None:
-    """A usage error for the pipeline file or an ``--input`` whose path is not UTF-8 (in
-    itself, or through the working folder when it is a file there: an input may be a
-    source such as ``sample:camera``): record.json and the pages name them in UTF-8, and a
-    run that computed everything could not write them."""
-    given = [("pipeline file", pipeline)] + [(f"--input {k}", v) for k, v in inputs.items()]
-    for what, text in given:
-        why = "record.json and the pages name it in UTF-8"
-        _refuse_not_utf8(what, text, why, through_working_folder=Path(text).exists())
-
-
-def refuse_cache_dir_not_utf8(folder: str | None) -> None:
-    """A usage error for a cache folder whose path is not UTF-8 (in itself or through the
-    working folder): ``--cache-dir``, else the environment's (``$GRAPHVISION_CACHE_DIR``,
-    ``$XDG_CACHE_HOME``); ``cache info`` and the messages about the cache name it in UTF-8
-    (in a UTF-8 locale, ``cache info`` ended with an internal error)."""
-    from graphvision.locations import default_cache_dir
-
-    if folder is not None:
-        what = "--cache-dir"
-    else:
-        folder = str(default_cache_dir())
-        variable = next(
-            (name for name in ("GRAPHVISION_CACHE_DIR", "XDG_CACHE_HOME") if os.environ.get(name)),
-            "HOME",
-        )
-        what = f"the cache folder (from ${variable})"
-    _refuse_not_utf8(what, folder, "cache info and the messages about the cache name it in UTF-8")
-
-
-def _refuse_not_utf8(what: str, text: str, why: str, through_working_folder: bool = True) -> None:
-    """A usage error naming ``what`` when the path ``text`` is not UTF-8, in itself or
-    (``through_working_folder``) through the working folder; ``why`` it must be."""
-    from graphvision.locations import not_utf8
-
-    path = Path(text)
-    shown = not_utf8(path) or (not_utf8(path.absolute()) if through_working_folder else None)
-    if shown is not None:
-        raise UsageError(f"{what} {shown}: its path is not UTF-8; {why}: rename it or its folder")
 
 
 def backend_order(args: argparse.Namespace) -> list[str] | None:

@@ -15,12 +15,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from graphvision.cli.common import (
-    named_pairs,
-    refuse_paths_not_utf8,
-    registry_for,
-)
+from graphvision.cli.common import named_pairs, registry_for
 from graphvision.cli.exits import EXIT_OK, EXIT_USAGE
+from graphvision.cli.utf8_paths import refuse_paths_not_utf8
 
 
 def cmd_validate(args: argparse.Namespace) -> int:

@@ -101,17 +101,25 @@ def signals_deferred(*, insisted: bool = False) -> Iterator[None]:
 def _noting(
     handlers: dict[signal.Signals, Any], noted: list[int], insisted: bool = False
 ) -> Callable[[int, Any], None]:
-    """A handler that notes its signal in ``noted``; in a process forked meanwhile (or,
-    ``insisted``, for a signal noted already), the signal's own handler from ``handlers``
-    runs instead."""
+    """A handler that notes its signal in ``noted``; in a process forked meanwhile, the
+    signal's own handler from ``handlers`` runs instead, and so, ``insisted``, for a signal
+    noted already: the handler outside every ``insisted`` deferral this one is in (one
+    not insisted, around a fork, notes it)."""
     client = os.getpid()
 
     def note(signum: int, frame: Any) -> None:
-        if os.getpid() != client or (insisted and signum in noted):
-            handlers[signal.Signals(signum)](signum, frame)
+        number = signal.Signals(signum)
+        if os.getpid() != client:
+            handlers[number](signum, frame)
+        elif insisted and signum in noted:
+            handler = handlers[number]
+            while getattr(handler, "insisted", False):  # an insisted deferral's, around this
+                handler = handler.handlers[number]
+            handler(signum, frame)
         else:
             noted.append(signum)
 
+    note.insisted, note.handlers = insisted, handlers  # type: ignore[attr-defined]
     return note
 
 

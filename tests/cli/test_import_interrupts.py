@@ -53,13 +53,20 @@ send()  # the second one stops it
 Path(__file__).with_name("went_on").touch()
 """,
 }
+OWN_LINES = STOPS_HERE["a plugin file's own lines"] = STOPS_HERE["__set_name__"] + "\n"
 
 
 def _plugin(folder: Path, signal_name: str, stops_here: str) -> Path:
+    """A plugin package that imports the module ``stops_here``; or, for a plugin file's own
+    lines (which the loader runs, not an import statement), that file."""
     plugin = folder / "plug"
     plugin.mkdir()
+    sends = SENDS.replace("{signal}", signal_name)
+    if stops_here == OWN_LINES:
+        (plugin / "own.py").write_text(sends + stops_here.replace("from .send import send", ""))
+        return plugin / "own.py"
     (plugin / "__init__.py").write_text("from . import stops\n")
-    (plugin / "send.py").write_text(SENDS.replace("{signal}", signal_name))
+    (plugin / "send.py").write_text(sends)
     (plugin / "stops.py").write_text(stops_here)
     return plugin
 

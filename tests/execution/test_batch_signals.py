@@ -5,6 +5,7 @@ llvmlite's object cache), and the batch ran to its end and exited 0, or crashed.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import ctypes
 import os
@@ -179,6 +180,36 @@ def test_a_stop_while_held_is_ignored(ctrl_c):
         steps = [k for k in range(1000)]  # the handler runs at the next bytecodes
     assert steps[-1] == 999
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def _ctrl_c(steps: list[str], step: str) -> None:
+    os.kill(os.getpid(), signal.SIGINT)
+    [0 for _ in range(10)]  # (a call: the handler runs here)
+    steps.append(step)
+
+
+@pytest.mark.parametrize("nested", [False, True])
+def test_insisted_a_second_ctrl_c_is_raised_at_once(ctrl_c, nested):
+    """An import deferred (``insisted``) must not make a Ctrl-C wait for a body that never
+    ends; deferrals within such deferrals (a plugin's import while plugins load) alike."""
+    steps: list[str] = []
+    inner = signals_deferred(insisted=True) if nested else contextlib.nullcontext()
+    with pytest.raises(KeyboardInterrupt), signals_deferred(insisted=True), inner:
+        _ctrl_c(steps, "noted")
+        _ctrl_c(steps, "went on after the second")
+    assert steps == ["noted"]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_insisted_inside_a_deferral_that_is_not_waits_for_its_end(ctrl_c):
+    """An import inside a fork's deferral: the second Ctrl-C waits for the fork to be done."""
+    steps: list[str] = []
+    with pytest.raises(KeyboardInterrupt), signals_deferred():
+        with signals_deferred(insisted=True):
+            _ctrl_c(steps, "noted")
+            _ctrl_c(steps, "noted by the fork's deferral")
+        steps.append("end of the fork")
+    assert steps == ["noted", "noted by the fork's deferral", "end of the fork"]
 
 
 DASK_WORKERS = """
