@@ -62,8 +62,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:  # (the imports in here: a Ctrl-C that comes meanwhile is answered as any other)
         import warnings
 
-        from graphvision.cli.common import UsageError
         from graphvision.cli.parser import build_parser
+        from graphvision.cli.usage import UsageError
         from graphvision.execution.warnings import show_warning
 
         warnings.showwarning = show_warning

@@ -132,12 +132,13 @@ def defer_signals_in_imports() -> None:
     left as it is.
 
     Every import of a module not yet loaded (``import``, ``importlib.import_module``)
-    goes through the import system's ``_find_and_load`` (a private function, the same from
-    Python 3.3 to 3.13), which is wrapped; a second call does nothing.
+    goes through the import system's ``_find_and_load``, which CPython's C code looks up
+    by name each time (a private function, the same from Python 3.3 to 3.13): it is
+    wrapped. A second call does nothing; so does a Python without it (nothing deferred).
     """
     bootstrap = sys.modules["importlib._bootstrap"]
-    find_and_load = getattr(bootstrap, "_find_and_load")  # noqa: B009  # (private: not typed)
-    if getattr(find_and_load, "__wrapped__", None) is not None:
+    find_and_load = getattr(bootstrap, "_find_and_load", None)  # (private: not typed)
+    if find_and_load is None or getattr(find_and_load, "__wrapped__", None) is not None:
         return
     main = threading.main_thread()
     depth = [0]  # imports of the main thread under way
