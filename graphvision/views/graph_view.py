@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import re
 import threading
+import weakref
 from collections.abc import Mapping
 from html import escape
 from pathlib import Path
@@ -30,6 +32,7 @@ __all__ = [
     "graph_data",
     "graph_drawing",
     "graph_html",
+    "graph_json",
     "layout_script",
 ]
 
@@ -114,10 +117,10 @@ def graph_data(compiled: Any, status: dict[str, str], seconds: dict[str, float])
     return {"nodes": nodes, "edges": edges}
 
 
-def graph_html(svg: str, data: dict | None = None) -> str:
+def graph_html(svg: str, data: dict | str | None = None) -> str:
     """``svg`` (a graph drawing) made to shrink to its container (never enlarged beyond
-    its own size), with zoom buttons; with ``data`` (:func:`graph_data`) the page lays
-    the graph out again (see the module)."""
+    its own size), with zoom buttons; with ``data`` (:func:`graph_data`, or its JSON text:
+    :func:`graph_json`) the page lays the graph out again (see the module)."""
     size = re.search(r'<svg[^>]*? width="([\d.]+)" height="[\d.]+"', svg)
     fitted = re.sub(r'(<svg[^>]*?) width="[\d.]+" height="[\d.]+"', r"\1", svg, count=1)
     largest = f' style="max-width: {size.group(1)}px"' if size else ""
@@ -125,16 +128,66 @@ def graph_html(svg: str, data: dict | None = None) -> str:
     buttons = "".join(f'<button type="button">{b}</button>' for b in ("+", "\u2212", "fit"))
     if data is None:
         return f'<div class="graph"><div class="zoom">{buttons}</div>{fitted}</div>'
-    text = json.dumps(data).replace("</", "<\\/")
+    text = (data if isinstance(data, str) else json.dumps(data)).replace("</", "<\\/")
     return (
         f'<div class="graph"><div class="zoom">{buttons}</div>{fitted}'
         f'<script type="application/json" data-graph="1">{text}</script></div>'
     )
 
 
-_DRAWINGS: dict[tuple[Any, ...], tuple[str, dict[str, str]]] = {}
+def graph_json(compiled: Any, status: Mapping[str, str], seconds: Mapping[str, float]) -> str:
+    """``json.dumps(graph_data(compiled, status, seconds))``, the same text, from the
+    graph's parts encoded once per compiled graph (:func:`_encoded_parts`): a batch's
+    files have one graph, and only their nodes' states and times differ (``json``
+    encoding the whole of it was a fifth of a count-only page's own Python, holding
+    the GIL)."""
+    inputs, nodes, edges = _encoded_parts(compiled)
+    shown = [
+        f"{head}{_json_scalar(status.get(name, ''))}, "
+        f'"seconds": {_json_scalar(seconds.get(name))}}}'
+        for name, head in nodes
+    ]
+    return f'{{"nodes": [{", ".join([*inputs, *shown])}], "edges": {edges}}}'
+
+
+def _json_scalar(value: Any) -> str:
+    """``json.dumps(value)``, a finite float and None written directly."""
+    if value is None:
+        return "null"
+    if type(value) is float and math.isfinite(value):
+        return float.__repr__(value)  # (as json writes a float)
+    return json.dumps(value)
+
+
 _KEPT = 8  # drawings kept (a batch draws one graph, a sweep a few)
 _KEEPING = threading.Lock()
+
+_PARTS: dict[int, tuple[weakref.ref[Any], tuple[list[str], list[tuple[str, str]], str]]] = {}
+
+
+def _encoded_parts(compiled: Any) -> tuple[list[str], list[tuple[str, str]], str]:
+    """:func:`graph_data` of ``compiled`` as JSON, in parts: its inputs' entries, each node's
+    name and its entry's text up to its state (``..., "status": ``), and the edges; made
+    once per compiled graph (kept while it lives, a few at a time)."""
+    kept = _PARTS.get(id(compiled))
+    if kept is not None and kept[0]() is compiled:
+        return kept[1]
+    data = graph_data(compiled, {}, {})
+    inputs = [json.dumps(node) for node in data["nodes"] if node["kind"] == "input"]
+    nodes = []
+    for node in data["nodes"]:
+        if node["kind"] != "input":
+            fixed = {key: value for key, value in node.items() if key not in ("status", "seconds")}
+            nodes.append((node["id"], f'{json.dumps(fixed)[:-1]}, "status": '))
+    parts = (inputs, nodes, json.dumps(data["edges"]))
+    with _KEEPING:
+        while len(_PARTS) >= _KEPT:
+            _PARTS.pop(next(iter(_PARTS)))
+        _PARTS[id(compiled)] = (weakref.ref(compiled), parts)
+    return parts
+
+
+_DRAWINGS: dict[tuple[Any, ...], tuple[list[str], tuple[str, ...]]] = {}
 
 
 def _drawn_key(graph: Any, status: Mapping[str, str], labels: Mapping[str, str]) -> tuple:
@@ -154,25 +207,28 @@ def _drawn_key(graph: Any, status: Mapping[str, str], labels: Mapping[str, str])
     )
 
 
-def _relabelled(svg: str, old: Mapping[str, str], new: Mapping[str, str]) -> str | None:
-    """``svg`` with each node's time label ``old[name]`` (its box's last line) made
-    ``new[name]``; None when a box does not end with its old label."""
-    parts, at = [], 0
-    for name, label in old.items():
+def _label_cuts(svg: str, labels: Mapping[str, str]) -> list[str] | None:
+    """``svg`` cut around each node's time label ``labels[name]`` (its box's last line), in
+    the order of ``labels``: the text before the first, between each two, after the last
+    (``svg`` is the cuts joined by the labels' texts); None when a box does not end with
+    its label."""
+    cuts, at = [], 0
+    for name, label in labels.items():
         start = svg.find(f'<g class="node" data-name="{escape(name)}"', at)
         tail = f">{escape(label)}</text></g>"
         end = svg.find("</g>", start) + len("</g>") if start >= 0 else -1
         if start < 0 or not svg.startswith(tail, end - len(tail)):
             return None
-        parts += [svg[at : end - len(tail)], f">{escape(new[name])}</text></g>"]
+        cuts.append(svg[at : end - len(tail)])
         at = end
-    return "".join(parts) + svg[at:]
+    return [*cuts, svg[at:]]
 
 
 def graph_drawing(graph: Any, status: Mapping[str, str], seconds: Mapping[str, float]) -> str:
     """:func:`~graphvision.graph.svg.graph_svg` of ``graph``, its layout made once per
     graph, nodes' states and lengths of their time labels: a batch's files draw the same
-    graph with other times (2 ms a file's report), which only change the labels' text."""
+    graph with other times (2 ms a file's report), which only change the labels' text,
+    written between the drawing's parts cut around them once (:func:`_label_cuts`)."""
     from graphvision.graph.svg import graph_svg, time_label
 
     labels = {name: time_label(s) for name, s in seconds.items() if name in graph.nodes}
@@ -180,13 +236,17 @@ def graph_drawing(graph: Any, status: Mapping[str, str], seconds: Mapping[str, f
     key = _drawn_key(graph, status, order)
     kept = _DRAWINGS.get(key)
     if kept is not None:
-        redrawn = _relabelled(kept[0], kept[1], order)
-        if redrawn is not None:
-            return redrawn
+        cuts, names = kept
+        texts = [
+            f">{escape(order[name])}</text></g>{cut}"
+            for name, cut in zip(names, cuts[1:], strict=True)
+        ]
+        return cuts[0] + "".join(texts)
     svg = graph_svg(graph, status, seconds)
-    if _relabelled(svg, order, order) == svg:  # its labels found where they are replaced
+    made = _label_cuts(svg, order)
+    if made is not None:  # its labels found where they are replaced
         with _KEEPING:  # a batch on threads writes reports at once
             while len(_DRAWINGS) >= _KEPT:
                 _DRAWINGS.pop(next(iter(_DRAWINGS)))
-            _DRAWINGS[key] = (svg, order)
+            _DRAWINGS[key] = (made, tuple(order))
     return svg

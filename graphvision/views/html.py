@@ -19,6 +19,7 @@ import functools
 import json
 from collections.abc import Mapping, Sequence
 from html import escape
+from operator import attrgetter
 from pathlib import Path
 from typing import Any
 from urllib.parse import quote
@@ -32,9 +33,9 @@ from graphvision.values.scalars import TablePort
 from graphvision.views.graph_view import (
     GRAPH_SCRIPT,
     GRAPH_STYLE,
-    graph_data,
     graph_drawing,
     graph_html,
+    graph_json,
     layout_script,
 )
 from graphvision.views.linked import LINKED_STYLE, shown_html
@@ -125,7 +126,7 @@ def _page(
             for name, message in failures.items()
         )
         body.append(f'<ul class="failed">{items}</ul>')
-    drawn = graph_html(graph_drawing(graph, status, seconds), graph_data(compiled, status, seconds))
+    drawn = graph_html(graph_drawing(graph, status, seconds), graph_json(compiled, status, seconds))
     body += ["<h2>Graph</h2>", drawn]
     found = outputs_by_ref(compiled, outputs, intermediates)
     page = PageValues(compiled, found)
@@ -255,18 +256,22 @@ when given ``default``)."""
 
 def _provenance_html(record: RunRecord) -> str:
     """Every field of the record but its nodes and outputs, as a two-column table."""
-    fields = {
-        f.name: getattr(record, f.name)
-        for f in dataclasses.fields(record)
-        if f.name not in ("nodes", "outputs")
-    }
     rows = "".join(
-        f'<tr><th>{escape(key)}</th><td class="text"><code>'
-        f"{escape(value if isinstance(value, str) else _JSON_TEXT(value))}"
-        "</code></td></tr>"
-        for key, value in fields.items()
+        f"{head}{escape(value if isinstance(value, str) else _JSON_TEXT(value))}</code></td></tr>"
+        for head, value in zip(_PROVENANCE_HEADS, attrgetter(*_PROVENANCE)(record), strict=True)
     )
     return f"<table>{rows}</table>"
+
+
+_PROVENANCE = tuple(
+    f.name for f in dataclasses.fields(RunRecord) if f.name not in ("nodes", "outputs")
+)
+"""The record's fields :func:`_provenance_html` shows, in their order."""
+
+_PROVENANCE_HEADS = tuple(
+    f'<tr><th>{escape(name)}</th><td class="text"><code>' for name in _PROVENANCE
+)
+"""Each of their rows up to its value (the same for every page)."""
 
 
 def write_html_report(
