@@ -55,11 +55,13 @@ Run: ``python bench/profile_batch.py [FILES]`` (the threads table over twice as 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import importlib
 import os
 import re
+import subprocess
 import sys
 import tempfile
 import threading
@@ -315,16 +317,21 @@ os.path.exists({mark!r} + "end")
 _MARK = "/graphvision-profile-mark-"  # a path looked at (not found) around the timed batch
 
 
-def _strace_calls(files: int, executor: str, where: str | None) -> Counter[str]:
+def _strace_calls(
+    files: int, executor: str, where: str | None, only: tuple[str, ...] = ()
+) -> Counter[str]:
     """Calls by system call name (``strace -f``, every thread) of a batch of ``files`` on
-    ``executor``, run after a one-file batch in the same process (the plugins loaded)."""
+    ``executor``, run after a one-file batch in the same process (the plugins loaded); with
+    ``only``, those calls alone are traced (``--seccomp-bpf``: the others run unstopped)."""
     import subprocess
 
     with tempfile.TemporaryDirectory(dir=where) as scratch:
         trace = Path(scratch) / "strace.txt"
         code = _BATCH.format(here=str(Path(__file__).parent), scratch=scratch, files=files,
                              executor=executor, mark=_MARK)  # fmt: skip
-        subprocess.run(["strace", "-f", "-o", str(trace), sys.executable, "-c", code], check=True)
+        traced = ["--seccomp-bpf", "-e", f"trace={','.join(('%%stat', *only))}"] if only else []
+        command = ["strace", "-f", *traced, "-o", str(trace), sys.executable, "-c", code]
+        subprocess.run(command, check=True)
         calls: Counter[str] = Counter()
         inside = False
         for line in trace.read_text().splitlines():
@@ -335,27 +342,41 @@ def _strace_calls(files: int, executor: str, where: str | None) -> Counter[str]:
         return calls
 
 
+def _per_file(executor: str, where: str | None, only: tuple[str, ...] = ()) -> dict[str, float]:
+    """System calls per file by name: batches of 12 and of 36 files, the difference over 24
+    (what every batch does once cancels)."""
+    few, many = (_strace_calls(n, executor, where, only) for n in (12, 36))
+    return {name: (many[name] - few[name]) / 24 for name in {*few, *many}}
+
+
 def system_calls(executor: str = "threads") -> list[str]:
     """System calls per batch file (each releases the GIL and takes it back, a wait on
     threads when the other file's thread holds it): ``strace -f`` of a batch of 12 files
     and of one of 36 (each after a one-file batch in its process, which loads the plugins),
-    the difference over 24 files (what every batch does once cancels), folders in
-    ``/dev/shm``; not ``futex``, the GIL's own waits, which strace's stops change. Needs
-    ``strace``."""
+    the difference over 24 files, folders in ``/dev/shm``; not ``futex``, the GIL's own
+    waits, which strace's stops change. Then the ``futex`` calls traced alone (with the
+    ``stat`` that finds the marks around the timed batch): the threads' hand-offs of the GIL
+    (a thread that finds it held waits in one, the holder wakes it in another), which each
+    system call's stop multiplied. Needs ``strace`` (5.3 or later for the last row)."""
     import shutil
 
     if shutil.which("strace") is None:
         return ["(strace is not installed: no table of system calls)"]
     where = "/dev/shm" if os.path.isdir("/dev/shm") else None
-    few, many = (_strace_calls(n, executor, where) for n in (12, 36))
-    per = {name: (many[name] - few[name]) / 24 for name in {*few, *many}}
+    per = _per_file(executor, where)
     shown = sorted((n for n in per if abs(per[n]) >= 0.5 and n != "futex"), key=lambda n: -per[n])
     rows = [
         f"| system calls per file ({executor}, folders in memory) | calls |",
         "| --- | ---: |",
         f"| all but futex (the GIL's waits) | {sum(per.values()) - per.get('futex', 0):.1f} |",
     ]
-    return rows + [f"| {name} | {per[name]:.1f} |" for name in shown]
+    rows += [f"| {name} | {per[name]:.1f} |" for name in shown]
+    with contextlib.suppress(subprocess.CalledProcessError):  # (an strace without seccomp)
+        handoffs = _per_file(executor, where, ("futex",)).get("futex", 0.0)
+        rows.append(
+            f"| futex traced alone (the GIL's hand-offs between threads) | {handoffs:.1f} |"
+        )
+    return rows
 
 
 def main() -> list[str]:
