@@ -96,10 +96,13 @@ class FileWriteError(OSError):
 
 
 class CopiedError(Exception):
-    """What a node raised in a worker process, when that exception could not travel back
-    as itself (it does not pickle, or does not unpickle: a lock or a lambda in its
-    arguments, an ``__init__`` that takes other arguments than it gives its base): its
-    type's name and its message, as the run reports them (:func:`error_text`)."""
+    """What a node raised, as its type's name and its message, as the run reports them
+    (:func:`error_text`): an exception raised in a worker process that could not travel
+    back as itself (it does not pickle, or does not unpickle in the client: a lock or a
+    lambda in its arguments, an ``__init__`` that takes other arguments than it gives its
+    base, a class only the workers import), or one that is not an ``Exception``
+    (``SystemExit``, a ``BaseException`` of the node's own), the node's failure all the
+    same (:mod:`graphvision.execution.node_raised`)."""
 
     def __init__(self, type_name: str, message: str) -> None:
         super().__init__(type_name, message)

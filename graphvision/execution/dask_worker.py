@@ -12,6 +12,7 @@ from typing import Any
 
 from graphvision.errors import GraphvisionError
 from graphvision.execution.blas import one_blas_thread, one_blas_thread_for_good
+from graphvision.execution.sendable import sent_back
 from graphvision.nodes.spec import FunctionRef
 
 __all__ = ["hold", "keep_freed_memory", "on_worker", "shared"]
@@ -45,7 +46,10 @@ def hold(value: Any) -> None:
 
 
 def on_worker(fn: Callable[..., Any], *args: Any) -> Any:
-    """``fn(*args)`` on a worker; a node the worker cannot import is named with the worker."""
+    """``fn(*args)`` on a worker; a node the worker cannot import is named with the worker;
+    what it raises reaches the client whole, or as its copy
+    (:func:`~graphvision.execution.sendable.sent_back`: Dask sent the bytes of one that does
+    not unpickle there)."""
     ref = args[0] if args and isinstance(args[0], FunctionRef) else None
     if ref is not None:
         try:
@@ -62,6 +66,6 @@ def on_worker(fn: Callable[..., Any], *args: Any) -> Any:
     if multiprocessing.parent_process() is not None:  # a worker process: nodes only
         one_blas_thread_for_good()  # set by the first task, a flag read after
         keep_freed_memory()
-        return fn(*args)
+        return sent_back(fn, *args)
     with one_blas_thread():  # a worker thread in the client's process (processes=False)
-        return fn(*args)
+        return sent_back(fn, *args)

@@ -27,7 +27,6 @@ from typing import Any, Protocol
 from graphvision.execution.node_call import began_before, call_labelled, call_node
 from graphvision.execution.node_imports import import_ahead
 from graphvision.execution.process_executor import ProcessExecutor
-from graphvision.execution.sendable import sendable
 from graphvision.execution.worker_died import WorkerDiedError
 from graphvision.nodes.spec import FunctionRef
 from graphvision.values.ports import PortType, freeze_all
@@ -193,8 +192,8 @@ def call_node_encoded(
     ``upstream`` holds the inputs submitted before they were computed: by
     port, the producing task's result (what this function returned there) and
     the producer's output port. A chaining executor (:func:`chains_tasks`)
-    puts the result there. What the node raises goes back as itself, or as its copy when
-    it cannot (:mod:`~graphvision.execution.sendable`).
+    puts the result there. What the node raises goes back as the executor sends what a
+    task raises: pickled with its copy (:func:`~graphvision.execution.sendable.sent_back`).
     """
     func = ref.resolve()
     import_ahead([func])  # its imports one thread at a time (a Dask worker's threads)
@@ -204,10 +203,7 @@ def call_node_encoded(
     values = {  # read-only for good, as under threads
         port: kind.decode(freeze_all(arrays), meta) for port, (kind, arrays, meta) in inputs.items()
     }
-    try:
-        result, seconds = call_node(func, params, values)
-    except Exception as error:  # it goes back pickled: as a copy when it cannot be
-        raise sendable(error) from None
+    result, seconds = call_node(func, params, values)
     parts = dict(zip(outputs, result, strict=True)) if output_tuple else {"out": result}
     encoded: Payload = {}
     for port, value in parts.items():

@@ -7,15 +7,13 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from graphvision.errors import error_text
-from graphvision.execution.sendable import pickles
+from graphvision.execution.sendable import sendable
 
 __all__ = ["FileTaskError", "run_files"]
 
 
 class FileTaskError(Exception):
-    """What a file of a task of several files raised, as its type's name and message (when the
-    exception itself does not pickle: it would have failed the task's other files)."""
+    """A file of a task of several files that could not run: the executor was shut down."""
 
 
 def run_files(
@@ -33,7 +31,7 @@ def run_files(
         try:
             found.append(task(job, path, folder))
         except Exception as error:  # this file fails alone, with its reason
-            found.append(error if pickles(error) else FileTaskError(error_text(error)))
+            found.append(sendable(error))  # itself in the client, or its copy (not the task's)
     return found, time.thread_time() - began
 
 

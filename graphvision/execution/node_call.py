@@ -11,6 +11,7 @@ from typing import Any
 
 from graphvision.execution import crash_note
 from graphvision.execution.crash_note import call_named
+from graphvision.execution.node_raised import node_failure
 from graphvision.execution.warnings import running
 from graphvision.nodes.loading import note_plugin_line
 
@@ -29,7 +30,9 @@ def call_node(
     with one line naming the node. The node runs in a frame named after it
     (:mod:`~graphvision.execution.crash_note`: a fault handler's traceback names it). An
     error a local plugin's node raises notes the plugin's line it came from
-    (:func:`~graphvision.nodes.loading.note_plugin_line`), for the run's message.
+    (:func:`~graphvision.nodes.loading.note_plugin_line`), for the run's message; one that is
+    not an ``Exception`` is the node's failure all the same, unless it is the user's stop
+    (:mod:`~graphvision.execution.node_raised`).
     """
     mark = getattr(func, "__graphvision_node__", None)
     op = mark.id if mark is not None else getattr(func, "__qualname__", "")
@@ -78,6 +81,8 @@ def call_labelled(
     except BaseException as error:
         _BEGAN[ident] = began
         note_plugin_line(error, func)
+        if not isinstance(error, Exception) and (failure := node_failure(error)) is not None:
+            raise failure from error  # SystemExit, a BaseException of its own: the node's
         raise
     finally:
         if _FORKS[0] != forks:
@@ -111,6 +116,8 @@ def _first_call(
     except BaseException as error:
         _BEGAN[_get_ident()] = began
         note_plugin_line(error, func)
+        if not isinstance(error, Exception) and (failure := node_failure(error)) is not None:
+            raise failure from error
         raise
     finally:
         if _FORKS[0] != forks:

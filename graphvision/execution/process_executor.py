@@ -22,6 +22,7 @@ from typing import Any
 
 from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.pickled_once import PickledOnce
+from graphvision.execution.sendable import sent_back
 from graphvision.execution.warnings import show_warning
 from graphvision.execution.worker_died import WorkerDiedError, died
 from graphvision.execution.worker_start import (
@@ -89,7 +90,9 @@ class ProcessExecutor:
     When a worker dies, ``concurrent.futures`` breaks the whole pool and fails
     every node running in it. Here the pool is replaced and each node whose
     future broke runs again, once, in a worker of its own: a node that kills
-    its worker again fails (it is the culprit), the others complete. Workers ignore Ctrl-C (the
+    its worker again fails (it is the culprit), the others complete. What a task
+    raises comes back whole, or as its copy, and never breaks the pool
+    (:func:`~graphvision.execution.sendable.sent_back`). Workers ignore Ctrl-C (the
     parent handles it) and exit when their parent process is gone, even after
     ``kill -9``.
     """
@@ -140,10 +143,10 @@ class ProcessExecutor:
         outer.set_running_or_notify_cancel()
         pool = self._pool
         try:
-            inner = pool.submit(fn, *args)
+            inner = pool.submit(sent_back, fn, *args)
         except BrokenProcessPool:
             pool = self._replace(pool)
-            inner = pool.submit(fn, *args)
+            inner = pool.submit(sent_back, fn, *args)
         except (OSError, EOFError) as error:  # no worker starts (the fork server killed, say)
             outer.set_exception(WorkerDiedError(f"no worker process could start ({error!r})"))
             return outer
@@ -182,7 +185,7 @@ class ProcessExecutor:
         """
         alone = self._new_pool(workers=1)
         try:
-            retry = alone.submit(fn, *args)
+            retry = alone.submit(sent_back, fn, *args)
         except Exception as error:  # no worker starts (the fork server killed, say): say so
             alone.shutdown(wait=False)
             why = f"{type(error).__name__}: {error}"

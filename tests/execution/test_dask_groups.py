@@ -4,6 +4,7 @@ of fewer files only for a worker thread that would wait otherwise."""
 
 from __future__ import annotations
 
+import pickle
 from concurrent.futures import Future
 from pathlib import Path
 from typing import Any
@@ -104,5 +105,6 @@ def _busy(job: Any, path: str, folder: str) -> str:
 def test_a_task_of_files_reports_each_outcome_and_the_cpu_time_they_took():
     found, seconds = run_files(_busy, "job", [("a.png", "out/a"), ("bad.png", "out/bad")])
     assert found[0] == "job:a.png->out/a:19999900000"
-    assert isinstance(found[1], ValueError) and str(found[1]) == "bad.png is unreadable"
+    back = pickle.loads(pickle.dumps(found[1]))  # as the task's result reaches the client
+    assert isinstance(back, ValueError) and str(back) == "bad.png is unreadable"
     assert 0.0 < seconds < 60.0

@@ -94,4 +94,8 @@ def test_a_copy_pickles_with_its_type_name_message_and_line():
     assert isinstance(copy, CopiedError) and error_text(copy) == "LocalError: bad"
     assert copy.__graphvision_line__ == "/me/my_nodes.py:3"
     plain = ValueError("fine")
-    assert sendable(plain) is plain  # one that travels as itself is not copied
+    plain.__graphvision_line__ = "/me/my_nodes.py:4"  # type: ignore[attr-defined]
+    back = pickle.loads(pickle.dumps(sendable(plain)))  # itself where it unpickles
+    assert type(back) is ValueError and back.args == ("fine",)
+    assert back.__graphvision_line__ == "/me/my_nodes.py:4"
+    assert error_text(sendable(plain)) == "ValueError: fine"  # the copy, where not pickled

@@ -1,0 +1,224 @@
+"""Whatever a node raises is that node's error, the same on every executor (FIX6).
+
+An exception that pickles in the worker and does not unpickle in the client (a class whose
+``__reduce__`` names what only a worker has, a ``__setstate__`` that raises) broke the process
+pool (reported as the worker dying, the node run twice) and reached the client as its bytes on
+Dask; a ``BaseException`` of a node's own (``class Stop(BaseException)``) escaped the engine
+with a traceback on ``sync`` and ``threads`` and hung Dask; ``SystemExit`` killed Dask's
+workers; a ``KeyboardInterrupt`` a node raised itself stopped the run as Ctrl-C does. A real
+Ctrl-C still stops it.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+
+import pytest
+
+import graphvision as gv
+from graphvision.execution.node_raised import signalled
+
+PLUGIN = '''import os
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+
+from graphvision import Float, node
+
+
+def _rebuilt(message):
+    if os.environ.get("GV_TEST_CLIENT") == str(os.getpid()):
+        raise ImportError("No module named 'only_on_workers'")
+    return WorkersOnly(message)
+
+
+class WorkersOnly(Exception):
+    def __reduce__(self):
+        return (_rebuilt, (str(self),))
+
+
+class BadState(Exception):
+    def __setstate__(self, state):
+        if os.environ.get("GV_TEST_CLIENT") == str(os.getpid()):
+            raise RuntimeError("no state here")
+        self.__dict__.update(state)
+
+
+class Stop(BaseException):
+    pass
+
+
+@node("odd.workers_only")
+def workers_only(*, runs: str = "") -> Float:
+    """Raises an exception the client cannot unpickle; notes each run in ``runs``."""
+    with open(runs, "a") as noted:
+        noted.write("ran\\n")
+    raise WorkersOnly("made on a worker")
+
+
+@node("odd.bad_state")
+def bad_state(*, runs: str = "") -> Float:
+    """Raises an exception whose __setstate__ fails in the client."""
+    error = BadState("state lost")
+    error.detail = 1
+    raise error
+
+
+@node("odd.stop")
+def stop(*, runs: str = "") -> Float:
+    """Raises a BaseException of its own."""
+    raise Stop("halt")
+
+
+@node("odd.exit")
+def exit_(*, runs: str = "") -> Float:
+    """Calls sys.exit."""
+    sys.exit(3)
+
+
+@node("odd.generator_exit")
+def generator_exit(*, runs: str = "") -> Float:
+    """Raises GeneratorExit."""
+    raise GeneratorExit("closed")
+
+
+@node("odd.interrupt")
+def interrupt(*, runs: str = "") -> Float:
+    """Raises KeyboardInterrupt itself."""
+    raise KeyboardInterrupt("from the node")
+
+
+@node("odd.ctrl_c")
+def ctrl_c() -> Float:
+    """Is interrupted by a real Ctrl-C."""
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(10)
+    return 1.0
+
+
+class Locked(Exception):
+    def __init__(self, message):
+        super().__init__(message)
+        self.lock = threading.Lock()
+
+
+@node("odd.locked")
+def locked(*, runs: str = "") -> Float:
+    """Raises an exception that does not pickle."""
+    raise Locked("holds a lock")
+'''
+
+SAID = {  # op -> what the run says (the plugin line is added)
+    "workers_only": ("WorkersOnly: made on a worker", 38),
+    "bad_state": ("BadState: state lost", 46),
+    "stop": ("Stop: halt", 52),
+    "exit": ("SystemExit: 3", 58),
+    "generator_exit": ("GeneratorExit: closed", 64),
+    "interrupt": ("KeyboardInterrupt: from the node", 70),
+    "locked": ("Locked: holds a lock", 90),
+}
+
+
+@pytest.fixture(scope="module")
+def plugin(tmp_path_factory):
+    path = tmp_path_factory.mktemp("odd") / "odd_nodes.py"
+    path.write_text(PLUGIN)
+    return gv.discover([path]), path.resolve()
+
+
+@pytest.fixture(scope="module")
+def dask_executor():
+    pytest.importorskip("distributed", reason="Dask is an optional extra: graphvision[dask]")
+    from graphvision.execution.dask import DaskExecutor
+
+    executor = DaskExecutor(workers=1, threads_per_worker=2)
+    yield executor
+    executor.shutdown()
+
+
+@pytest.fixture(params=["sync", "threads", "processes", "dask"])
+def executor(request):
+    if request.param == "dask":
+        return request.getfixturevalue("dask_executor")
+    return request.param
+
+
+@pytest.mark.parametrize("op", sorted(SAID))
+def test_a_node_error_is_the_nodes_on_every_executor(plugin, executor, op, tmp_path, monkeypatch):
+    monkeypatch.setenv("GV_TEST_CLIENT", str(os.getpid()))  # where the odd ones do not unpickle
+    registry, path = plugin
+    runs = tmp_path / "runs.txt"
+    graph = gv.Graph("odd")
+    graph.output("out", graph.add("x", f"odd.{op}", {"runs": str(runs)}))
+    with pytest.raises(gv.RunError) as caught:
+        gv.run(graph, registry, executor=executor, cache=None)
+    said, line = SAID[op]
+    assert str(caught.value.failures["x"]).splitlines()[0] == (
+        f"node 'x' (op odd.{op}) failed: {said} ({path}:{line})"
+    )
+    (node,) = (n for n in caught.value.record.nodes if n.name == "x")
+    assert node.error == f"{said} ({path}:{line})"
+    if op == "workers_only" and executor == "processes":  # not a worker that died, run again
+        assert runs.read_text() == "ran\n"  # (Dask runs a task that raised again: retries)
+
+
+def test_a_real_ctrl_c_in_a_node_still_stops_the_run(plugin):
+    registry, _ = plugin
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        graph = gv.Graph("odd")
+        graph.output("out", graph.add("x", "odd.ctrl_c"))
+        with pytest.raises(KeyboardInterrupt) as caught:
+            gv.run(graph, registry, executor="sync", cache=None)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert not isinstance(caught.value, gv.RunError)
+
+
+def _caught(raising) -> KeyboardInterrupt:
+    try:
+        raising()
+    except KeyboardInterrupt as error:
+        return error
+    raise AssertionError("nothing raised")
+
+
+def _raise_own() -> None:
+    raise KeyboardInterrupt("own")
+
+
+def _signalled_in_a_loop() -> None:
+    os.kill(os.getpid(), signal.SIGINT)
+    while True:
+        pass
+
+
+def _caught_and_raised_again() -> None:
+    try:
+        _signalled_in_a_loop()
+    except KeyboardInterrupt:
+        raise KeyboardInterrupt("cleaned up") from None
+
+
+@pytest.mark.parametrize("handler", ["default", "python"])
+def test_a_signal_is_told_from_a_raise(handler):
+    def python_handler(signum, frame):
+        raise KeyboardInterrupt
+
+    installed = signal.default_int_handler if handler == "default" else python_handler
+    previous = signal.signal(signal.SIGINT, installed)
+    try:
+        assert not signalled(_caught(_raise_own))
+        assert signalled(_caught(_signalled_in_a_loop))
+        assert signalled(_caught(_caught_and_raised_again))  # the Ctrl-C is its context
+        found = []
+        thread = threading.Thread(target=lambda: found.append(signalled(_caught(_raise_own))))
+        thread.start()
+        thread.join()
+        assert found == [False]  # a signal raises in the main thread only
+    finally:
+        signal.signal(signal.SIGINT, previous)
