@@ -14,12 +14,14 @@ import os
 import signal
 import threading
 import time
+import warnings
 from collections.abc import Callable
 from concurrent.futures import CancelledError, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from multiprocessing.connection import wait
 from typing import Any
 
+from graphvision.execution.batch_signals import signals_deferred
 from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.pickled_once import PickledOnce
 from graphvision.execution.sendable import sent_back
@@ -50,8 +52,6 @@ def worker_setup(environment: dict[str, str], _: ClientStdio) -> None:
     whole batch when one worker was sent SIGTERM), exit when
     the client is gone (even after ``kill -9``), and print warnings as the command line
     does (one line naming the node)."""
-    import warnings
-
     from graphvision.execution.blas import one_blas_thread_for_good
 
     if environment != os.environ:
@@ -119,18 +119,21 @@ class ProcessExecutor:
         start_server(modules)
 
     def fork_workers(self) -> bool:
-        """Have the workers be forks of this process, all started at the next task (when it
-        is safe now: :func:`~graphvision.execution.worker_start.fork_context`; a pool made
-        again after a worker died uses the server); False when not."""
+        """Have the workers be forks of this process, all started now (when it is safe now:
+        :func:`~graphvision.execution.worker_start.fork_context`; a pool made again after a
+        worker died uses the server); False when not. A Ctrl-C that comes while they fork is
+        raised once they have (:func:`~graphvision.execution.batch_signals.signals_deferred`:
+        its exception was dropped in a fork's callback, and the batch ran on)."""
         forked = fork_context()
         if forked is None:
             return False
+        pool = process_pool(self._workers, forked, worker_setup, client_setup())
         with self._lock:
-            old, self._pool = (
-                self._pool,
-                process_pool(self._workers, forked, worker_setup, client_setup()),
-            )
+            old, self._pool = self._pool, pool
         old.shutdown(wait=False)
+        with warnings.catch_warnings(), signals_deferred():
+            warnings.simplefilter("ignore", DeprecationWarning)  # 3.12's os.fork note on threads
+            pool.submit(os.getpid)  # a fork pool forks all its workers at its first task
         return True
 
     def sent_once(self, value: Any) -> PickledOnce:

@@ -235,3 +235,27 @@ def test_ctrl_c_while_the_dask_executor_forks_its_workers_is_raised_once_they_ar
     done = _python(DURING_FORK + DASK_WORKERS)
     assert done.stdout.strip() == "interrupted", done.stderr
     assert "Exception ignored" not in done.stderr
+
+
+PROCESS_POOL = """
+from graphvision.execution.process_executor import ProcessExecutor
+
+pool = ProcessExecutor(2)
+try:
+    pool.fork_workers()
+    pool.submit(int).result()
+except KeyboardInterrupt:
+    print("interrupted")
+else:
+    print("went on")
+finally:
+    pool.shutdown()
+"""
+
+
+def test_ctrl_c_while_the_processes_pool_forks_its_workers_is_raised_once_they_are_forked():
+    """The pool a batch with run hooks forks from the client after its first file: its
+    forks' callbacks dropped the KeyboardInterrupt too."""
+    done = _python(DURING_FORK + PROCESS_POOL)
+    assert done.stdout.strip() == "interrupted", done.stderr
+    assert "Exception ignored" not in done.stderr
