@@ -21,6 +21,7 @@ from concurrent.futures.process import BrokenProcessPool
 from multiprocessing.connection import wait
 from typing import Any
 
+from graphvision.execution.batch_guard import bootstrapping
 from graphvision.execution.batch_signals import signals_deferred
 from graphvision.execution.limits import ended_by_limit
 from graphvision.execution.pickled_once import PickledOnce
@@ -92,7 +93,11 @@ class ProcessExecutor:
     future broke runs again, once, in a worker of its own: a node that kills
     its worker again fails (it is the culprit), the others complete. What a task
     raises comes back whole, or as its copy, and never breaks the pool
-    (:func:`~graphvision.execution.sendable.sent_back`). Workers ignore Ctrl-C (the
+    (:func:`~graphvision.execution.sendable.sent_back`). A worker
+    that imports its client's script (the fork server's, as ``spawn``'s do) and
+    finds a process pool made there (a script without ``if __name__ ==
+    "__main__":``) ends at once without a word: its client says why, once,
+    where each worker printed a traceback of its own. Workers ignore Ctrl-C (the
     parent handles it) and exit when their parent process is gone, even after
     ``kill -9``.
     """
@@ -103,6 +108,8 @@ class ProcessExecutor:
     forks_file_workers = True  # a batch's files run on workers forked from the client
 
     def __init__(self, workers: int) -> None:
+        if bootstrapping():  # a worker importing its client's script, which has no guard
+            raise SystemExit(1)  # it ends without a traceback; its client names the guard
         self._workers = workers
         self.width = workers
         self.file_workers: list[Any] = []  # a batch's (execution.file_workers): joined here

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import os
 import signal
+import subprocess
+import sys
 import threading
 
 import pytest
@@ -222,3 +224,28 @@ def test_a_signal_is_told_from_a_raise(handler):
         assert found == [False]  # a signal raises in the main thread only
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+UNGUARDED = """
+import graphvision as gv
+
+graph = gv.Graph("unguarded")
+graph.output("out", graph.add("x", "odd.stop"))
+try:
+    gv.run(graph, gv.discover([{plugin!r}]), executor="processes", workers=2, cache=None)
+except gv.RunError as error:
+    print(error)
+"""
+
+
+def test_a_script_without_the_main_guard_says_so_once_without_tracebacks(plugin, tmp_path):
+    """Each worker the fork server starts imports the client's script; one without
+    ``if __name__ == "__main__":`` ran its work again there, and each such worker printed a
+    traceback (90 lines each, 180 for one node on two workers)."""
+    script = tmp_path / "unguarded.py"
+    script.write_text(UNGUARDED.format(plugin=str(plugin[1])))
+    done = subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=120
+    )
+    assert "Traceback" not in done.stderr, done.stderr
+    assert done.stdout.count(f'{script} has no `if __name__ == "__main__":`') == 1, done.stdout
