@@ -55,14 +55,14 @@ def signalled(error: KeyboardInterrupt) -> bool:
         return True  # a Ctrl-C the node's code caught and raised again as its own
     if threading.current_thread() is not threading.main_thread():
         return False
-    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:  # a worker: Ctrl-C is the client's
-        return False
     innermost = _innermost(error.__traceback__)
     if innermost is None:
         return True
     handlers = [getattr(signal.getsignal(number), "__code__", None) for number in _STOPPING]
-    if innermost.tb_frame.f_code in handlers:
+    if innermost.tb_frame.f_code in handlers:  # (SIGTERM's, in a process ignoring Ctrl-C too)
         return True
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:  # a worker: Ctrl-C is the client's
+        return False
     code = innermost.tb_frame.f_code.co_code
     return not (0 <= innermost.tb_lasti < len(code) and code[innermost.tb_lasti] == _RAISE)
 

@@ -226,6 +226,29 @@ def test_a_signal_is_told_from_a_raise(handler):
         signal.signal(signal.SIGINT, previous)
 
 
+def test_a_stop_by_a_python_handler_is_told_where_ctrl_c_is_ignored():
+    """A command started in the background ignores Ctrl-C; its SIGTERM still stops it."""
+
+    def terminate(signum, frame):
+        raise KeyboardInterrupt("terminated")
+
+    def signalled_in_a_loop() -> None:
+        os.kill(os.getpid(), signal.SIGTERM)
+        while True:
+            pass
+
+    previous = (
+        signal.signal(signal.SIGINT, signal.SIG_IGN),
+        signal.signal(signal.SIGTERM, terminate),
+    )
+    try:
+        assert signalled(_caught(signalled_in_a_loop))
+        assert not signalled(_caught(_raise_own))  # a node's own, where Ctrl-C cannot come
+    finally:
+        signal.signal(signal.SIGINT, previous[0])
+        signal.signal(signal.SIGTERM, previous[1])
+
+
 UNGUARDED = """
 import graphvision as gv
 
