@@ -89,10 +89,10 @@ def arrived(pickled: bytes | None, type_name: str, message: str, line: str) -> B
             error = None
     if not isinstance(error, BaseException):
         error = CopiedError(type_name, message)
-    if line and not getattr(error, "__graphvision_line__", ""):
-        try:
+    try:
+        if line and not getattr(error, "__graphvision_line__", ""):
             error.__graphvision_line__ = line  # type: ignore[attr-defined]
-        except Exception:  # a class that refuses attributes: the copy says it
-            error = CopiedError(type_name, message)
-            error.__graphvision_line__ = line  # type: ignore[attr-defined]
+    except Exception:  # a class whose attributes raise: the copy says it
+        error = CopiedError(type_name, message)
+        error.__graphvision_line__ = line  # type: ignore[attr-defined]
     return error

@@ -13,7 +13,7 @@ import pytest
 
 import graphvision as gv
 from graphvision.errors import CopiedError, error_text
-from graphvision.execution.sendable import sendable
+from graphvision.execution.sendable import arrived, sendable
 
 PLUGIN = '''import threading
 
@@ -99,3 +99,19 @@ def test_a_copy_pickles_with_its_type_name_message_and_line():
     assert type(back) is ValueError and back.args == ("fine",)
     assert back.__graphvision_line__ == "/me/my_nodes.py:4"
     assert error_text(sendable(plain)) == "ValueError: fine"  # the copy, where not pickled
+
+
+class FrozenError(Exception):
+    """An exception that unpickles, and raises when asked for an attribute it lacks."""
+
+    def __reduce__(self):
+        return (FrozenError, self.args)
+
+    def __getattr__(self, name):
+        raise RuntimeError(f"no {name} here")
+
+
+def test_an_exception_that_fails_at_its_plugin_line_arrives_as_its_copy():
+    got = arrived(pickle.dumps(FrozenError("cold")), "FrozenError", "cold", "/me/my_nodes.py:8")
+    assert isinstance(got, CopiedError) and error_text(got) == "FrozenError: cold"
+    assert got.__graphvision_line__ == "/me/my_nodes.py:8"
