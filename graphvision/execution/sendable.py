@@ -30,8 +30,8 @@ __all__ = ["arrived", "copy_of", "sendable", "sent_back"]
 
 
 class _SentError(CopiedError):
-    """A copy with its original's pickle, which unpickles as the original where it can
-    (:func:`arrived`)."""
+    """A copy with its original's pickle (None: it does not pickle), which unpickles as
+    the original where it can, else as a plain copy (:func:`arrived`)."""
 
     def __init__(self, type_name: str, message: str, pickled: bytes | None) -> None:
         super().__init__(type_name, message)
@@ -40,6 +40,18 @@ class _SentError(CopiedError):
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
         line = getattr(self, "__graphvision_line__", "")
         return (arrived, (self.pickled, self.type_name, self.message, line))
+
+    def __str__(self) -> str:
+        """The message as the worker's side shows it: cut to its first 2,000 characters.
+        Dask replaces an exception whose text is longer than 10,000 with ``Exception(
+        "Long error message", …)`` (its type, its pickle and its line lost); the whole
+        message travels in the pickle."""
+        cut = self.message[:_SHOWN_IN_WORKER]
+        more = len(self.message) - len(cut)
+        return cut + (f"... ({more} more characters sent)" if more else "")
+
+
+_SHOWN_IN_WORKER = 2000
 
 
 def sent_back(fn: Callable[..., Any], /, *args: Any) -> Any:
@@ -54,7 +66,7 @@ def sent_back(fn: Callable[..., Any], /, *args: Any) -> Any:
 
 def copy_of(error: BaseException) -> CopiedError:
     """``error``'s copy: its type's name, its message and its plugin line."""
-    return _copy(error, None)
+    return _copy(error, None, sent=False)
 
 
 def sendable(error: BaseException) -> CopiedError:
@@ -64,12 +76,12 @@ def sendable(error: BaseException) -> CopiedError:
         pickled: bytes | None = pickle.dumps(error)
     except Exception:  # (a user's exception class: anything can happen)
         pickled = None
-    return _copy(error, pickled)
+    return _copy(error, pickled, sent=True)
 
 
-def _copy(error: BaseException, pickled: bytes | None) -> CopiedError:
+def _copy(error: BaseException, pickled: bytes | None, *, sent: bool) -> CopiedError:
     name, _, message = error_text(error).partition(": ")
-    copy = CopiedError(name, message) if pickled is None else _SentError(name, message, pickled)
+    copy = _SentError(name, message, pickled) if sent else CopiedError(name, message)
     line = getattr(error, "__graphvision_line__", "")
     if line:
         copy.__graphvision_line__ = line  # type: ignore[attr-defined]

@@ -112,6 +112,18 @@ class Locked(Exception):
 def locked(*, runs: str = "") -> Float:
     """Raises an exception that does not pickle."""
     raise Locked("holds a lock")
+
+
+@node("odd.long_locked")
+def long_locked(*, runs: str = "") -> Float:
+    """Raises an exception that does not pickle, its message longer than Dask keeps."""
+    raise Locked("y" * 12000)
+
+
+@node("odd.long_plain")
+def long_plain(*, runs: str = "") -> Float:
+    """Raises an exception that pickles, its message longer than Dask keeps."""
+    raise ValueError("z" * 12000)
 '''
 
 SAID = {  # op -> what the run says (the plugin line is added)
@@ -122,6 +134,16 @@ SAID = {  # op -> what the run says (the plugin line is added)
     "generator_exit": ("GeneratorExit: closed", 64),
     "interrupt": ("KeyboardInterrupt: from the node", 70),
     "locked": ("Locked: holds a lock", 90),
+    # Dask replaced an exception whose text is over 10,000 characters with "Long error
+    # message" (its type and line lost; found by TRY45)
+    "long_locked": (
+        "Locked: " + "y" * 12000,
+        PLUGIN.splitlines().index('    raise Locked("y" * 12000)') + 1,
+    ),
+    "long_plain": (
+        "ValueError: " + "z" * 12000,
+        PLUGIN.splitlines().index('    raise ValueError("z" * 12000)') + 1,
+    ),
 }
 
 
