@@ -66,7 +66,7 @@ from graphvision.execution.batch_guard import refuse_in_bootstrap
 from graphvision.execution.batch_lanes import FileLanes
 from graphvision.execution.batch_run import BatchRun
 from graphvision.execution.batch_signals import signals_held
-from graphvision.execution.batch_stop import INTERRUPTED
+from graphvision.execution.batch_stop import INTERRUPTED, NOT_STARTED
 from graphvision.execution.batch_summary import summarise
 from graphvision.execution.blas import one_blas_thread
 from graphvision.execution.closing import Closing
@@ -341,8 +341,7 @@ def _not_run(
         elif index in started:
             marked.append(BatchItem(path, folder, "interrupted", error=INTERRUPTED))
         else:
-            reason = "the batch stopped before this file started"
-            marked.append(BatchItem(path, folder, "not run", error=reason))
+            marked.append(BatchItem(path, folder, "not run", error=NOT_STARTED))
     return marked
 
 

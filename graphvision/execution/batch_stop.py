@@ -65,9 +65,10 @@ try:
 except ImportError:  # pragma: no cover - Windows: a claim is a live writer's until it is written
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["INTERRUPTED", "STOP_FOLDER", "Claim", "StopFlag", "writing"]
+__all__ = ["INTERRUPTED", "NOT_STARTED", "STOP_FOLDER", "Claim", "StopFlag", "writing"]
 
 INTERRUPTED = "the batch stopped while this file ran; re-run the batch to finish it"
+NOT_STARTED = "the batch stopped before this file started"
 
 STOP_FOLDER = ".graphvision-stop-"  # a Dask batch's flag, in its output folder
 _STOPPED = "stopped"

@@ -49,7 +49,7 @@ from graphvision.cache.store import Cache
 from graphvision.compiler.compile import CompiledGraph, compile_graph
 from graphvision.errors import InputError, RunError
 from graphvision.execution.batch_files import BatchItem
-from graphvision.execution.batch_stop import INTERRUPTED, StopFlag, writing
+from graphvision.execution.batch_stop import INTERRUPTED, NOT_STARTED, StopFlag, writing
 from graphvision.execution.batch_write import finish_item
 from graphvision.execution.folders import RunPage
 from graphvision.execution.record import RunRecord
@@ -287,7 +287,7 @@ def run_file_task(
 
     item = BatchItem(Path(path), Path(folder))
     if job.stop is not None and job.stop.is_raised():  # stopped before it started: not run
-        item.status, item.error = "interrupted", INTERRUPTED
+        item.status, item.error = "not run", NOT_STARTED
         return FileOutcome(item)
     kept = job.stop.written_whole(folder) if job.stop is not None else None
     if kept is not None:  # written whole by this task's earlier run, whose worker died

@@ -36,3 +36,24 @@ def test_a_shared_value_is_frozen_on_the_worker_as_in_the_client():
     assert key == "key" and nbytes == shared.nbytes
     assert not value.flags.writeable and is_frozen(value)
     np.testing.assert_array_equal(value, shared)
+
+
+def test_a_file_a_worker_takes_after_the_stop_is_not_run(tmp_path):
+    """Such a file never started: it was listed 'interrupted' ('the batch stopped while this
+    file ran'; found by TRY45 on Dask, where a task's files after the stop are skipped)."""
+    from graphvision.execution.batch_stop import StopFlag
+    from graphvision.execution.file_task import run_file_task
+
+    stop = StopFlag.make(tmp_path)
+    stop.raise_()
+    graph = gv.Graph("stopped")
+    graph.output("out", graph.input("image", "GrayImage"))
+    job = FileJob(
+        token="stopped-job", graph=graph, plugin_paths=(), input="image", inputs={},
+        outputs=None, keep_going=False, seeds=[], pages=(), store=None, executor="dask",
+        out_dir=tmp_path / "out", stop=stop,
+    )  # fmt: skip
+    item = run_file_task(job, str(tmp_path / "a.png"), str(tmp_path / "out" / "a")).item
+    assert (item.status, item.error) == ("not run", "the batch stopped before this file started")
+    assert not (tmp_path / "out").exists()
+    stop.remove()
