@@ -56,11 +56,14 @@ def run_file(
     """One file as one task of the executor, which writes the file's folder there
     (:func:`~graphvision.execution.file_task.run_file_task`); ``job`` is the batch's
     :class:`~graphvision.execution.file_task.FileJob`, or the executor's handle on it. With
-    the error when the task itself failed (a worker that died twice, ...)."""
+    the error when the task itself failed (a worker that died twice, ...): then the item's
+    seconds are the task's, from when it was sent."""
+    began = time.perf_counter()
     try:
         outcome: FileOutcome = pool.submit(run_file_task, job, str(path), str(folder)).result()
     except Exception as error:  # the task itself failed (a worker that died twice, ...)
         item = BatchItem(path, folder, "failed", error=f"{type(error).__name__}: {error}")
+        item.seconds = time.perf_counter() - began
         return FileOutcome(item), error
     return outcome, None
 

@@ -175,6 +175,7 @@ def test_a_file_that_kills_every_worker_fails_alone_and_no_file_is_written_twice
     assert not (tmp_path / "out" / "06").exists()  # the file at fault has no folder
     error = batch.items[levels.index(10)].error  # said as the processes executor says it
     assert error.startswith("WorkerDiedError: the Dask worker running this file died each of the 3")
+    assert batch.items[levels.index(10)].seconds > 0  # its tries' time (was 0.0; TRY45)
 
 
 def test_a_node_that_kills_every_worker_in_a_run_is_said_to_have_killed_them(tmp_path):
