@@ -93,7 +93,7 @@ def _folder_sha256(folder: Path) -> str:
     if known is None:
         digest = hashlib.sha256()
         for path in files:
-            digest.update(str(path.relative_to(folder)).encode() + b"\0")
+            digest.update(os.fsencode(path.relative_to(folder)) + b"\0")  # (any name)
             digest.update(path.read_bytes())
         known = digest.hexdigest()
         _remember(stamp, known)

@@ -213,7 +213,7 @@ def package_digest(name: str) -> bytes:
 
     hasher = xxhash.xxh3_128()
     for file in package_files(name):
-        hasher.update(f"{file}\n".encode())
+        hasher.update(os.fsencode(file) + b"\n")  # (a name not UTF-8 too)
         hasher.update(_file_digest(file))
     return hasher.digest()
 

@@ -216,3 +216,19 @@ def test_a_plugin_read_through_a_path_not_utf8_is_refused_up_front(
         "its path in UTF-8: rename it or its folder\n"
     )
     assert not (tmp_path / "o").exists()
+
+
+def test_a_package_plugin_holding_a_module_not_utf8_runs(tmp_path):
+    """The run's provenance digested the package's files' names as UTF-8: every run ended
+    with an internal error (found by TRY45b)."""
+    package = tmp_path / "mypkg"
+    package.mkdir()
+    (package / "__init__.py").write_text(PLUGIN)
+    Path(os.fsdecode(bytes(package) + b"/\xe9d.py")).write_text("X = 1\n")
+    (tmp_path / "p.yaml").write_text(
+        "version: 1\nname: p\nplugins: [mypkg]\n"
+        "inputs: {image: {type: GrayImage, default: 'sample:camera'}}\n"
+        "nodes: {h: {op: own.half, in: {image: image}}}\noutputs: {half: h}\n"
+    )
+    assert main(["run", str(tmp_path / "p.yaml"), "-d", str(tmp_path / "o"), "--no-cache"]) == 0
+    assert (tmp_path / "o" / "record.json").is_file()
