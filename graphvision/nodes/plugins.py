@@ -125,7 +125,9 @@ def _load_entry_point(registry: Registry, entry: EntryPoint, indexed: bool) -> N
         registry.add_plugin(module, entry.name, entry.value, params_checked=indexed)
         if entry.dist is not None:
             note_distribution(module.__name__.partition(".")[0], _distribution_name(entry))
-    except (Exception, SystemExit) as error:  # sys.exit() at import ended the command
+    except KeyboardInterrupt:  # (Ctrl-C: the user's stop)
+        raise
+    except BaseException as error:  # sys.exit(), a BaseException of its own: the command ended
         registry.record_failure(entry.name, entry.value, _summarise(error))
 
 
@@ -231,8 +233,10 @@ def load_path(registry: Registry, path: str | Path) -> None:
         name = str(target)
         try:
             registry.add_plugin(import_file(target), name, name)
-        except (Exception, SystemExit) as error:  # sys.exit() at import ended the command
-            registry.record_failure(name, name, _summarise(error, path))
+        except KeyboardInterrupt:  # (Ctrl-C: the user's stop)
+            raise
+        except BaseException as error:  # sys.exit(), a BaseException of its own: it ended
+            registry.record_failure(name, name, _summarise(error, path))  # the command
 
 
 def plugin_files(path: Path) -> list[Path]:

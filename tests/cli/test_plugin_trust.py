@@ -84,6 +84,9 @@ def test_validate_loads_a_pipelines_plugins_as_run_does(capsys, tmp_path):
         ("x = 1\nimport graphvision_no_such_module\n", 2, "ModuleNotFoundError: No module"),
         ("import numpy\n\nnumpy.zeros(-1)\n", 3, "ValueError: negative dimensions"),
         ("import sys\nsys.exit(3)\n", 2, "it called sys.exit(3) while being imported"),
+        # a traceback, the command ended (found by TRY45b)
+        ("class B(BaseException):\n    pass\nraise B('at import')\n", 3, "B: at import"),
+        ("raise GeneratorExit('closed')\n", 1, "GeneratorExit: closed"),
     ],
 )
 @pytest.mark.parametrize("command", ["validate", "run"])
