@@ -131,9 +131,10 @@ def batch_files(pattern: str, exclude: Path | None = None) -> tuple[list[Path], 
 
 
 def _kept_first(paths: list[Path]) -> list[Path]:
-    """``paths`` (the same file's) with the one to keep first: the shortest, then the one
-    through the fewest symbolic links (the real folder before a link beside it), then by name."""
-    kept = min(paths, key=lambda p: (len(p.parts), sum(q.is_symlink() for q in (p, *p.parents)), p))
+    """``paths`` (the same file's) with the one to keep first: the one through the fewest
+    symbolic links (its real folder before a link to it, shorter though the link may be),
+    then the shortest, then by name."""
+    kept = min(paths, key=lambda p: (sum(q.is_symlink() for q in (p, *p.parents)), len(p.parts), p))
     return [kept, *(p for p in paths if p != kept)]
 
 

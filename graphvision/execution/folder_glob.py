@@ -15,6 +15,7 @@ of that folder (the whole file system for ``/``), far from what the pattern name
 from __future__ import annotations
 
 import glob
+import heapq
 import os
 import warnings
 from collections.abc import Iterator
@@ -27,9 +28,9 @@ RECURSIVE = "**"
 
 def glob_once(pattern: str) -> list[str]:
     """The paths ``pattern`` matches, as ``glob.glob(pattern, recursive=True)`` gives them,
-    except that ``**`` searches each real folder once: by the shortest path that reaches it
-    (among the shortest, the one through the fewest symbolic links, then the first in
-    name order), breadth first. A folder reached again
+    except that ``**`` searches each real folder once: by the path through the fewest
+    symbolic links that reaches it (its own, where it is inside the search), then the
+    shortest, then the first in name order. A folder reached again
     through a link has the files directly in it matched (so that the caller can name the
     paths a file is also reached by), and is not searched below.
 
@@ -81,32 +82,33 @@ def _matches(folder: str, rest: str, *, below: bool) -> list[str]:
 
 
 def _folders_once(tops: list[str], around: list[str]) -> Iterator[tuple[str, bool]]:
-    """Each folder below ``tops`` (themselves included) that is not hidden, breadth first,
-    at each depth those reached through fewer symbolic links first, then in name order
-    (``photos/sub`` before ``photos/alias -> sub``), with whether its real folder was
-    searched before (through another path): such a folder is given once (its files
-    named), and not gone below. A link to a folder that holds
-    a top is neither: it is added to ``around``."""
+    """Each folder below ``tops`` (themselves included) that is not hidden, those reached
+    through fewer symbolic links first, then the shallower, then in name order: every
+    folder by its own path before any through a link (``photos/sub/deeper`` before
+    ``photos/aa -> sub/deeper``, shorter though the link is), with whether its real folder
+    was searched before (through another path): such a folder is given once (its files
+    named), and not gone below. A link to a folder that holds a top is neither: it is
+    added to ``around``."""
     seen: set[tuple[int, int]] = set()
     holding = _holding(tops)
-    level = [(0, top) for top in tops]
-    while level:
-        deeper: list[tuple[int, str]] = []
-        for links, folder in sorted(level):
-            try:
-                status = os.stat(folder or ".")
-            except OSError:  # a link that loops or leads nowhere: nothing to search
-                continue
-            key = (status.st_dev, status.st_ino)
-            if key in holding:
-                around.append(folder)
-                continue
-            again = key in seen
-            seen.add(key)
-            yield folder, again
-            if not again:
-                deeper.extend((links + link, sub) for link, sub in _subfolders(folder))
-        level = deeper
+    waiting = [(0, 0, top) for top in tops]  # (links, depth, folder): a heap
+    heapq.heapify(waiting)
+    while waiting:
+        links, depth, folder = heapq.heappop(waiting)
+        try:
+            status = os.stat(folder or ".")
+        except OSError:  # a link that loops or leads nowhere: nothing to search
+            continue
+        key = (status.st_dev, status.st_ino)
+        if key in holding:
+            around.append(folder)
+            continue
+        again = key in seen
+        seen.add(key)
+        yield folder, again
+        if not again:
+            for link, sub in _subfolders(folder):
+                heapq.heappush(waiting, (links + link, depth + 1, sub))
 
 
 def _holding(tops: list[str]) -> set[tuple[int, int]]:

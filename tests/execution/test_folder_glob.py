@@ -89,3 +89,14 @@ def test_a_folder_is_searched_below_by_its_own_path_before_a_link_to_it(tree, li
     found = sorted(glob_once("ph/**/*.png"))
     assert "ph/sub/deep/c.png" in found and f"ph/{link}/deep/c.png" not in found
     assert f"ph/{link}/b.png" in found  # reached again: its files named, for the warning
+
+
+def test_a_folder_is_searched_by_its_own_path_before_a_shorter_link_to_it(tree):
+    """A link to a deeper folder (``ph/aa -> sub/deep``) was shorter, so the folder was
+    searched below through it and its files named by it (found by TRY45b)."""
+    os.symlink("sub/deep", "ph/aa")
+    os.makedirs("ph/sub/deep/more")
+    open("ph/sub/deep/more/f.png", "wb").close()
+    found = sorted(glob_once("ph/**/*.png"))
+    assert "ph/sub/deep/more/f.png" in found and "ph/aa/more/f.png" not in found
+    assert "ph/aa/c.png" in found  # reached again: its files named, for the warning
