@@ -11,7 +11,7 @@ from typing import Any
 
 from graphvision.execution import crash_note
 from graphvision.execution.crash_note import call_named
-from graphvision.execution.node_raised import node_failure
+from graphvision.execution.node_raised import node_failure, stop_within
 from graphvision.execution.warnings import running
 from graphvision.nodes.loading import note_plugin_line
 
@@ -81,6 +81,8 @@ def call_labelled(
     except BaseException as error:
         _BEGAN[ident] = began
         note_plugin_line(error, func)
+        if (stop := stop_within(error)) is not None and stop is not error:
+            raise stop from None  # Ctrl-C, which the node's code turned into another error
         if not isinstance(error, Exception) and (failure := node_failure(error)) is not None:
             raise failure from error  # SystemExit, a BaseException of its own: the node's
         raise
@@ -116,6 +118,8 @@ def _first_call(
     except BaseException as error:
         _BEGAN[_get_ident()] = began
         note_plugin_line(error, func)
+        if (stop := stop_within(error)) is not None and stop is not error:
+            raise stop from None  # (as above)
         if not isinstance(error, Exception) and (failure := node_failure(error)) is not None:
             raise failure from error
         raise

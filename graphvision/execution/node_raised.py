@@ -31,7 +31,7 @@ from types import TracebackType
 from graphvision.errors import CopiedError
 from graphvision.execution.sendable import copy_of
 
-__all__ = ["node_failure", "signalled"]
+__all__ = ["node_failure", "signalled", "stop_within"]
 
 _RAISE = dis.opmap["RAISE_VARARGS"]
 _STOPPING = [
@@ -45,6 +45,22 @@ def node_failure(error: BaseException) -> CopiedError | None:
     if isinstance(error, KeyboardInterrupt) and signalled(error):
         return None
     return copy_of(error)
+
+
+def stop_within(error: BaseException) -> KeyboardInterrupt | None:
+    """The user's stop that ``error`` carries: a ``KeyboardInterrupt`` a signal raised
+    (:func:`signalled`), ``error`` itself or one in its chain of causes and contexts (a
+    node that caught Ctrl-C and raised ``SystemExit`` or an error of its own in its place,
+    ``from None`` too: the run stops, as it does when the node runs on another thread);
+    else None."""
+    seen: set[int] = set()
+    found: BaseException | None = error
+    while found is not None and id(found) not in seen:
+        seen.add(id(found))
+        if isinstance(found, KeyboardInterrupt) and signalled(found):
+            return found
+        found = found.__cause__ or found.__context__
+    return None
 
 
 def signalled(error: KeyboardInterrupt) -> bool:

@@ -124,6 +124,28 @@ def long_locked(*, runs: str = "") -> Float:
 def long_plain(*, runs: str = "") -> Float:
     """Raises an exception that pickles, its message longer than Dask keeps."""
     raise ValueError("z" * 12000)
+
+
+@node("odd.ctrl_c_exit")
+def ctrl_c_exit() -> Float:
+    """Turns a real Ctrl-C into SystemExit."""
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(10)
+    except KeyboardInterrupt:
+        raise SystemExit(4)
+    return 1.0
+
+
+@node("odd.ctrl_c_error")
+def ctrl_c_error() -> Float:
+    """Turns a real Ctrl-C into an error of its own, its context hidden."""
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(10)
+    except KeyboardInterrupt:
+        raise ValueError("stopped") from None
+    return 1.0
 '''
 
 SAID = {  # op -> what the run says (the plugin line is added)
@@ -190,12 +212,15 @@ def test_a_node_error_is_the_nodes_on_every_executor(plugin, executor, op, tmp_p
         assert runs.read_text() == "ran\n"  # (Dask runs a task that raised again: retries)
 
 
-def test_a_real_ctrl_c_in_a_node_still_stops_the_run(plugin):
+@pytest.mark.parametrize("op", ["ctrl_c", "ctrl_c_exit", "ctrl_c_error"])
+def test_a_real_ctrl_c_in_a_node_still_stops_the_run(plugin, op):
+    """Also when the node's code turns it into SystemExit or an error of its own: that was
+    the node's failure on sync (exit 1), a stop on threads (found by TRY45b)."""
     registry, _ = plugin
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         graph = gv.Graph("odd")
-        graph.output("out", graph.add("x", "odd.ctrl_c"))
+        graph.output("out", graph.add("x", f"odd.{op}"))
         with pytest.raises(KeyboardInterrupt) as caught:
             gv.run(graph, registry, executor="sync", cache=None)
     finally:
