@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from functools import partial
+from itertools import repeat
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -85,8 +86,10 @@ def mapping_argument(value: Any, what: str) -> dict[str, Any]:
         return {}
     if type(value) is not dict and not isinstance(value, Mapping):  # (a dict: no ABC check)
         raise TypeError(f"{what} must be a dict from names to values, got {value!r}")
-    if not all(isinstance(key, str) for key in value):
+    if not all(map(isinstance, value, repeat(str))):  # (in C: no Python step per name)
         raise TypeError(f"{what} must be a dict from names to values, got {value!r}")
+    if all(map(_NO_PATHS.__contains__, map(type, value.values()))):  # (none is a path)
+        return dict(value)
     return {key: _text_if_path(v) for key, v in value.items()}
 
 

@@ -28,6 +28,7 @@ counted (scikit-image's samples are small).
 from __future__ import annotations
 
 import os
+import time
 import weakref
 from dataclasses import dataclass
 from pathlib import Path
@@ -162,20 +163,32 @@ def _surely_available(peak: int) -> bool:
     the kernel's ``MemAvailable`` is at least its free memory less its reserves, far under a
     sixteenth of the memory (``sysinfo``, through ``os.sysconf``; the memory's size read
     once per process, a system call less per run: the reserves are set from it at boot, so
-    memory added since only widens the margin). Never without a limit from the
+    memory added since only widens the margin). A peak under half the margin found less
+    than :data:`FRESH_SECONDS` ago is settled by it, without a system call (the runs of a
+    script's loop, a sweep's or a batch's: half of the free memory is not taken in a
+    second unnoticed more than during the run itself). Never without a limit from the
     environment, which is checked as given."""
     if os.environ.get(MEMORY_VARIABLE):
         return False
+    now = time.monotonic()  # (no system call: the vDSO's clock)
+    if _MARGIN and now - _MARGIN[0] < FRESH_SECONDS and 2 * peak <= _MARGIN[1]:
+        return True
     try:
         page = _PAGE_SIZE or 0
         free = os.sysconf("SC_AVPHYS_PAGES") * page
         total = _PHYSICAL[0] if _PHYSICAL else _physical(os.sysconf("SC_PHYS_PAGES") * page)
     except (ValueError, OSError):  # a system without these names
         return False
-    return peak <= free - total // 16
+    _MARGIN[:] = (now, free - total // 16)
+    return peak <= _MARGIN[1]
 
+
+FRESH_SECONDS = 1.0
+"""How long the free memory read for one run settles the peaks of the next ones that take
+at most half of it (:func:`_surely_available`)."""
 
 _PHYSICAL: list[int] = []  # the memory's size, read at the first run
+_MARGIN: list[Any] = []  # when the free memory was last read, and it less the reserves
 
 
 def _physical(total: int) -> int:

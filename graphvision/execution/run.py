@@ -318,7 +318,7 @@ def _execute(
         state.keep_intermediates = keep_intermediates
         state.key_inputs(values, reference_keys or {})
         state.key_steps(schedule.steps)
-        sources = [compiled.outputs[o] for o in wanted]
+        sources = list(map(compiled.outputs.__getitem__, wanted))
         if keep_intermediates:  # every value of the run, loaded from the cache if it is there
             sources += [(n, port) for n in schedule.steps for port in compiled.steps[n].outputs]
         compute = state.plan(schedule.steps, sources)

@@ -42,6 +42,7 @@ import ctypes
 import sys
 import weakref
 from collections.abc import Callable
+from functools import partial
 from itertools import repeat
 from operator import attrgetter
 from typing import Any, BinaryIO
@@ -184,8 +185,8 @@ _from_memory.argtypes = (ctypes.c_void_p, ctypes.c_ssize_t, ctypes.c_int)
 _READ_ONLY = 0x100  # PyBUF_READ
 
 _KEPT: dict[int, tuple[np.ndarray, weakref.ref[memoryview]]] = {}
-"""The arrays :func:`frozen_in_place` froze, by the ``id`` of the read-only window every
-view of them rests on: each is kept alive by its window, and only by it."""
+"""The arrays :func:`frozen_in_place` froze, by the ``id`` of the read-only window every view
+of them rests on: each is kept alive by its window, and only by it."""
 
 
 def _release(key: int, ref: weakref.ref[memoryview]) -> None:
@@ -242,7 +243,7 @@ def frozen_in_place(array: np.ndarray) -> np.ndarray | None:
     if owner is not None:
         owner.flags.writeable = False
     key = id(window)
-    _KEPT[key] = (array, weakref.ref(window, lambda ref: _release(key, ref)))
+    _KEPT[key] = (array, weakref.ref(window, partial(_release, key)))  # (no frame more)
     return frozen
 
 
@@ -268,9 +269,8 @@ def _address_of(array: np.ndarray) -> int:
 
 
 _VIEW_ONLY_REFS = 3 if sys.version_info < (3, 14) else -(2**20)
-"""References to a view's owner in :func:`frozen_in_place` when only the view holds it (the
-view's ``base``, the name ``owner`` and ``getrefcount``'s argument; Python 3.14 counts the
-stack otherwise: there, no view is frozen in place)."""
+"""References to a view's owner in :func:`frozen_in_place` held by the view alone (its ``base``,
+``owner``, ``getrefcount``'s argument; on 3.14, which counts the stack otherwise, no view is)."""
 
 
 def is_frozen_window(window: memoryview) -> bool:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+from itertools import repeat
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -100,7 +101,7 @@ class TablePort(PortType):
 
     @classmethod
     def validate(cls, value: Any) -> dict[str, np.ndarray]:
-        if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
+        if not isinstance(value, dict) or not all(map(isinstance, value, repeat(str))):
             raise _fail(cls, "dict of column name to 1-D array", value)
         lengths = set()
         for name, column in value.items():

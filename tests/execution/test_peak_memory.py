@@ -130,6 +130,7 @@ def test_the_memory_available_is_read_only_when_the_free_memory_does_not_settle_
     monkeypatch.setattr(peak_memory.os, "sysconf", lambda name: asked.append(name) or pages[name])
     monkeypatch.setattr(peak_memory, "_PAGE_SIZE", 4096)
     monkeypatch.setattr(peak_memory, "_PHYSICAL", [])  # (as in a process that ran nothing)
+    monkeypatch.setattr(peak_memory, "_MARGIN", [])
     monkeypatch.delenv("GRAPHVISION_MAX_MEMORY", raising=False)
     sure = (1000 - 1600 // 16) * 4096
     assert peak_memory._surely_available(sure)
@@ -137,3 +138,32 @@ def test_the_memory_available_is_read_only_when_the_free_memory_does_not_settle_
     assert asked.count("SC_PHYS_PAGES") == 1 and asked.count("SC_AVPHYS_PAGES") == 2
     monkeypatch.setenv("GRAPHVISION_MAX_MEMORY", "1e12")
     assert not peak_memory._surely_available(0)
+
+
+def test_a_peak_under_half_the_margin_read_within_a_second_is_settled_by_that_reading(monkeypatch):
+    """The runs after one that read the free memory take it as read for a second when they
+    need at most half of what it left (no ``sysinfo`` per run); a larger peak, or a later
+    run, reads it again, and a drop in the free memory is then seen."""
+    from graphvision.execution import peak_memory
+
+    pages = {"SC_AVPHYS_PAGES": 1000, "SC_PHYS_PAGES": 1600}
+    asked: list[str] = []
+    clock = [100.0]
+    monkeypatch.setattr(peak_memory.os, "sysconf", lambda name: asked.append(name) or pages[name])
+    monkeypatch.setattr(peak_memory.time, "monotonic", lambda: clock[0])
+    monkeypatch.setattr(peak_memory, "_PAGE_SIZE", 4096)
+    monkeypatch.setattr(peak_memory, "_PHYSICAL", [])
+    monkeypatch.setattr(peak_memory, "_MARGIN", [])
+    monkeypatch.delenv("GRAPHVISION_MAX_MEMORY", raising=False)
+    margin = (1000 - 100) * 4096
+    assert peak_memory._surely_available(margin)  # read: 1 reading
+    clock[0] += 0.9
+    assert peak_memory._surely_available(margin // 2)  # settled by it
+    assert asked.count("SC_AVPHYS_PAGES") == 1
+    assert peak_memory._surely_available(margin // 2 + 1)  # over half of it: read again
+    assert asked.count("SC_AVPHYS_PAGES") == 2
+    pages["SC_AVPHYS_PAGES"] = 300  # the free memory drops: margin (300 - 100) pages
+    clock[0] += 1.0
+    assert not peak_memory._surely_available(margin // 2)  # a second on: read, and seen
+    assert asked.count("SC_AVPHYS_PAGES") == 3
+    assert peak_memory._surely_available(100 * 4096) and asked.count("SC_AVPHYS_PAGES") == 3
