@@ -6,6 +6,8 @@ from __future__ import annotations
 import sys
 from typing import Any
 
+from numpy import ndarray
+
 from graphvision.compiler.compile import Step
 from graphvision.errors import PortValueError
 from graphvision.execution.inputs import freeze_value
@@ -37,7 +39,9 @@ def accepted(step: Step, result: Any, held: int, encoded: bool) -> dict[str, Any
     only = step.only_output
     if only is not None:  # one output: no tuple to split
         port, kind, scalar, plain = only
-        if not scalar and recall(result, kind):  # frozen, accepted as ``kind`` before
+        # frozen, accepted as ``kind`` before (a writable array is not: no note to look up)
+        fresh = type(result) is ndarray and result.flags.writeable
+        if not scalar and not fresh and recall(result, kind):
             return {port: result}
         try:
             value = kind.validate(result)
