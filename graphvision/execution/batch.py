@@ -176,7 +176,7 @@ def run_batch(
     _check_batch_arguments(output_dir, inputs, input)
     registry = _checked_pipeline(graph, registry, inputs, input, outputs, overrides)
     out_dir = Path(output_dir)
-    paths, root = _batch_paths(files, out_dir, input)
+    paths, root = _batch_paths(files, out_dir, input, registry)
     refuse_names_not_utf8(paths, input)
     folders = output_folders(paths, root, out_dir)
     stale = checked_folders(out_dir, folders, outputs if outputs is not None else graph.outputs)
@@ -223,10 +223,24 @@ def _check_batch_arguments(output_dir: object, inputs: dict[str, Any], input: st
         )
 
 
+def _source_hint(pattern: str, registry: Registry) -> str:
+    """Why a pattern that names a source, or one mistyped (``file:photos/*.png``,
+    ``smaple:camera``), matched no file: a batch's pattern names files."""
+    from graphvision.execution.inputs import scheme_hint
+
+    scheme, sep, rest = pattern.partition(":")
+    if sep and scheme in registry.sources:
+        return (
+            f" (a batch's pattern names files, without a source's scheme: did you mean '{rest}'?)"
+        )
+    return scheme_hint(pattern, registry)
+
+
 def _batch_paths(
-    files: str | Sequence[str | Path], out_dir: Path, input: str
+    files: str | Sequence[str | Path], out_dir: Path, input: str, registry: Registry
 ) -> tuple[list[Path], Path]:
-    """The files of a batch and the folder their output folders are named below."""
+    """The files of a batch and the folder their output folders are named below; none
+    matched is an error, with a hint for a pattern that names a source (``sample:…``)."""
     if isinstance(files, str):
         paths, inside = batch_files(files, exclude=out_dir)
         if not paths and inside:
@@ -237,7 +251,9 @@ def _batch_paths(
                 "out of it, or choose another --output-dir"
             )
         if not paths:
-            raise InputError(f"batch input '{input}': no file matches '{files}'")
+            raise InputError(
+                f"batch input '{input}': no file matches '{files}'" + _source_hint(files, registry)
+            )
         if inside:  # the others run; these are named, not dropped without a word
             warnings.warn(
                 f"batch input '{input}': {len(inside)} file(s) '{files}' matches (such as "

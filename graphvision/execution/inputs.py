@@ -122,7 +122,7 @@ def _resolved(port_type: type[PortType], value: Any, registry: Registry) -> Any:
             told = str(error)
             told = told if str(value) in told else f"cannot load '{value}': {told}"
             if isinstance(error, FileNotFoundError):  # `samples:camera`: a scheme mistyped?
-                told += _scheme_hint(value, registry)
+                told += scheme_hint(value, registry)
             raise _RefusedError(told) from error
     try:
         return freeze_value(port_type, port_type.admit(value, origin))
@@ -134,14 +134,16 @@ def _resolved(port_type: type[PortType], value: Any, registry: Registry) -> Any:
         ) from None
 
 
-def _scheme_hint(value: str, registry: Registry) -> str:
-    """`` (did you mean 'sample:camera'?)`` for a ``value`` such as ``samples:camera``,
-    found as no file, whose part before its colon is close to a source's scheme; or ''."""
+def scheme_hint(value: str, registry: Registry) -> str:
+    """`` (did you mean 'sample:camera'?)`` for a ``value`` such as ``samples:camera`` (or
+    ``SAMPLE:camera``), found as no file, whose part before its colon is close to a
+    source's scheme; or ''."""
     scheme, sep, rest = value.partition(":")
     if not sep or scheme in registry.sources:
         return ""
-    close = difflib.get_close_matches(scheme, list(registry.sources), n=1, cutoff=0.6)
-    return f" (did you mean '{close[0]}:{rest}'?)" if close else ""
+    lowered = {name.lower(): name for name in registry.sources}
+    close = difflib.get_close_matches(scheme.lower(), list(lowered), n=1, cutoff=0.6)
+    return f" (did you mean '{lowered[close[0]]}:{rest}'?)" if close else ""
 
 
 def _read_written(port_type: type[PortType], archive: Path) -> Any:

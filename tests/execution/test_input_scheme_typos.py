@@ -24,6 +24,7 @@ outputs: {gray: gray}
         ("samples:camera", "sample:camera"),
         ("smaple:camera", "sample:camera"),
         ("Sample:coins", "sample:coins"),
+        ("SAMPLE:coins", "sample:coins"),  # (no hint: compared case by case; TRY45b)
         ("fil:x.png", "file:x.png"),
     ],
 )
@@ -59,3 +60,25 @@ def test_a_file_whose_name_looks_like_a_mistyped_scheme_is_read(tmp_path, monkey
     assert main(["run", "p.yaml", "--no-cache", "-i", "image=sample:camera", "-d", "a"]) == 0
     (tmp_path / "a" / "gray.png").rename(tmp_path / "samples:camera")
     assert main(["run", "p.yaml", "--no-cache", "-i", "image=samples:camera"]) == 0
+
+
+@pytest.mark.parametrize(
+    ("pattern", "hint"),
+    [
+        ("smaple:camera", "did you mean 'sample:camera'?"),
+        ("file:imgs/*.png",
+         "a batch's pattern names files, without a source's scheme: did you mean 'imgs/*.png'?"),
+    ],
+)  # fmt: skip
+def test_a_batch_pattern_with_a_scheme_says_what_was_meant(
+    tmp_path, capsys, monkeypatch, pattern, hint
+):
+    """A batch said only 'no file matches', where -i hinted (found by TRY45b)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "p.yaml").write_text(PIPELINE % "sample:camera")
+    assert main(["run", "p.yaml", "--no-cache", "-d", "out", "--batch", f"image={pattern}"]) == 2
+    assert capsys.readouterr().err == (
+        f"error: --batch image={pattern}: batch input 'image': no file matches '{pattern}' "
+        f"({hint})\n"
+    )
+    assert not (tmp_path / "out").exists()
