@@ -113,15 +113,15 @@ class CopiedError(Exception):
 
 
 def error_text(error: BaseException) -> str:
-    """``Type: message`` of an exception as a run reports it: a copy by its original's
-    type (:class:`CopiedError`); one whose message cannot be made (its ``__str__`` raised)
-    says so, where the run ended with an internal error."""
+    """``Type: message`` of an exception as a run reports it (``Type`` alone for an empty
+    message): a copy by its original's type (:class:`CopiedError`); one whose message cannot
+    be made (its ``__str__`` raised) says so, where the run ended with an internal error."""
     name = error.type_name if isinstance(error, CopiedError) else type(error).__name__
     try:
         message = str(error)
     except Exception as broken:  # (a user's exception class: anything can happen)
         message = f"(its message could not be made: {type(broken).__name__})"
-    return f"{name}: {message}"
+    return f"{name}: {message}" if message else name  # (as Python's traceback: no colon)
 
 
 @dataclass(frozen=True, order=True)

@@ -164,5 +164,5 @@ def test_a_node_raising_keyboard_interrupt_on_a_worker_fails_its_file_alone(tmp_
     status = [item.status for item in batch.items]
     assert status == ["ok"] * 5 + ["failed"] + ["ok"] * 14, batch.items
     plugin = (tmp_path / "interrupting.py").resolve()  # the node's error, as any other's
-    said = f"node 'score' (op interrupting.score) failed: KeyboardInterrupt:  ({plugin}:12)"
+    said = f"node 'score' (op interrupting.score) failed: KeyboardInterrupt ({plugin}:12)"
     assert batch.items[5].error == said

@@ -146,6 +146,12 @@ def ctrl_c_error() -> Float:
     except KeyboardInterrupt:
         raise ValueError("stopped") from None
     return 1.0
+
+
+@node("odd.bare_interrupt")
+def bare_interrupt(*, runs: str = "") -> Float:
+    """Raises KeyboardInterrupt itself, with no message."""
+    raise KeyboardInterrupt
 '''
 
 SAID = {  # op -> what the run says (the plugin line is added)
@@ -156,6 +162,11 @@ SAID = {  # op -> what the run says (the plugin line is added)
     "generator_exit": ("GeneratorExit: closed", 64),
     "interrupt": ("KeyboardInterrupt: from the node", 70),
     "locked": ("Locked: holds a lock", 90),
+    # an empty message: no colon, as Python's traceback (it said 'KeyboardInterrupt:  (…)')
+    "bare_interrupt": (
+        "KeyboardInterrupt",
+        PLUGIN.splitlines().index("    raise KeyboardInterrupt") + 1,
+    ),
     # Dask replaced an exception whose text is over 10,000 characters with "Long error
     # message" (its type and line lost; found by TRY45)
     "long_locked": (
