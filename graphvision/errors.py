@@ -22,8 +22,9 @@ failed run). Anything else is a bug and keeps its traceback.
 from __future__ import annotations
 
 import difflib
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import TypeVar
 
 __all__ = [
     "CopiedError",
@@ -41,6 +42,7 @@ __all__ = [
     "RegistrationError",
     "RunError",
     "UnknownNameError",
+    "chained",
     "did_you_mean",
     "error_text",
 ]
@@ -122,6 +124,25 @@ def error_text(error: BaseException) -> str:
     except Exception as broken:  # (a user's exception class: anything can happen)
         message = f"(its message could not be made: {type(broken).__name__})"
     return f"{name}: {message}" if message else name  # (as Python's traceback: no colon)
+
+
+_Found = TypeVar("_Found", bound=BaseException)
+
+
+def chained(
+    error: BaseException, kind: type[_Found], test: Callable[[_Found], bool] = bool
+) -> _Found | None:
+    """The first exception of ``kind`` that passes ``test`` among ``error`` and the chain of
+    exceptions it came from (each one's ``__cause__``, else its ``__context__``), or None:
+    a Ctrl-C that code it interrupted wrapped in an error of its own."""
+    seen: set[int] = set()
+    found: BaseException | None = error
+    while found is not None and id(found) not in seen:
+        if isinstance(found, kind) and test(found):
+            return found
+        seen.add(id(found))
+        found = found.__cause__ or found.__context__
+    return None
 
 
 @dataclass(frozen=True, order=True)

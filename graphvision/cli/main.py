@@ -87,28 +87,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         _silence_stdout()
         return EXIT_OK
     except Exception as error:
-        wrapped = _interrupt_in(error)
-        if wrapped is not None:  # raised where Python wraps it: a class's __set_name__
+        from graphvision.errors import chained
+
+        wrapped = chained(error, KeyboardInterrupt)
+        if wrapped is not None:  # a stop wrapped by code it interrupted: a __set_name__
             return _report_stop(wrapped, began)
         if debug:
             import traceback
 
             traceback.print_exc()
         return _report_error(error)
-
-
-def _interrupt_in(error: BaseException) -> KeyboardInterrupt | None:
-    """The Ctrl-C (or SIGTERM, SIGHUP) in ``error``'s chain of causes and contexts, if any:
-    the stop, wrapped by code it interrupted (a ``RuntimeError`` from a class's
-    ``__set_name__``), is answered as a stop, not as an internal error."""
-    seen: set[int] = set()
-    found: BaseException | None = error
-    while found is not None and id(found) not in seen:
-        if isinstance(found, KeyboardInterrupt):
-            return found
-        seen.add(id(found))
-        found = found.__cause__ or found.__context__
-    return None
 
 
 def _report_stop(stop: KeyboardInterrupt, began: float) -> int:

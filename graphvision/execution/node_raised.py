@@ -28,7 +28,7 @@ import signal
 import threading
 from types import TracebackType
 
-from graphvision.errors import CopiedError
+from graphvision.errors import CopiedError, chained
 from graphvision.execution.sendable import copy_of
 
 __all__ = ["node_failure", "signalled", "stop_within"]
@@ -53,14 +53,7 @@ def stop_within(error: BaseException) -> KeyboardInterrupt | None:
     node that caught Ctrl-C and raised ``SystemExit`` or an error of its own in its place,
     ``from None`` too: the run stops, as it does when the node runs on another thread);
     else None."""
-    seen: set[int] = set()
-    found: BaseException | None = error
-    while found is not None and id(found) not in seen:
-        seen.add(id(found))
-        if isinstance(found, KeyboardInterrupt) and signalled(found):
-            return found
-        found = found.__cause__ or found.__context__
-    return None
+    return chained(error, KeyboardInterrupt, signalled)
 
 
 def signalled(error: KeyboardInterrupt) -> bool:
