@@ -225,14 +225,16 @@ def _check_batch_arguments(output_dir: object, inputs: dict[str, Any], input: st
 
 def _source_hint(pattern: str, registry: Registry) -> str:
     """Why a pattern that names a source, or one mistyped (``file:photos/*.png``,
-    ``smaple:camera``), matched no file: a batch's pattern names files."""
+    ``sample:camera``, ``smaple:camera``), matched no file: a batch's pattern names files."""
     from graphvision.execution.inputs import scheme_hint
 
     scheme, sep, rest = pattern.partition(":")
-    if sep and scheme in registry.sources:
+    if sep and scheme == "file":
         return (
             f" (a batch's pattern names files, without a source's scheme: did you mean '{rest}'?)"
         )
+    if sep and scheme in registry.sources:  # one value, not files: a single run's input
+        return f" (a batch runs over files; '{pattern}' is one value: give it with -i, or inputs=)"
     return scheme_hint(pattern, registry)
 
 

@@ -68,6 +68,9 @@ def test_a_file_whose_name_looks_like_a_mistyped_scheme_is_read(tmp_path, monkey
         ("smaple:camera", "did you mean 'sample:camera'?"),
         ("file:imgs/*.png",
          "a batch's pattern names files, without a source's scheme: did you mean 'imgs/*.png'?"),
+        # it suggested 'camera', which matches no file either (found by NU45)
+        ("sample:camera",
+         "a batch runs over files; 'sample:camera' is one value: give it with -i, or inputs="),
     ],
 )  # fmt: skip
 def test_a_batch_pattern_with_a_scheme_says_what_was_meant(
