@@ -179,6 +179,9 @@ def entry() -> None:
     if status in (EXIT_INTERRUPTED, EXIT_TERMINATED, EXIT_HUNG_UP):
         _release_process_resources()
         os._exit(status)
+    # Done and said: a Ctrl-C while Python tears down (half a second) no longer ends it
+    # by the signal, with no word (SIG_IGN outlasts the teardown; SIGTERM still ends it)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     sys.exit(status)
 
 

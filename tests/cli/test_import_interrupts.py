@@ -118,3 +118,18 @@ def test_a_stop_wrapped_in_another_error_is_answered_as_a_stop(monkeypatch, caps
     monkeypatch.setattr("graphvision.cli.parser.cmd_schema", lambda args: 1 / 0)
     assert main(["schema"]) == 1
     assert "internal error (ZeroDivisionError" in capsys.readouterr().err
+
+
+def test_a_ctrl_c_while_python_tears_down_after_the_command_is_done_changes_nothing():
+    """The command had said all and written all; a Ctrl-C in the half second Python takes
+    to tear down ended it by the signal, with no word (found by NU45)."""
+    script = (
+        "import atexit, os, signal, sys, time\n"
+        "from graphvision.cli.main import entry\n"
+        "atexit.register(lambda: (os.kill(os.getpid(), signal.SIGINT), time.sleep(0.2)))\n"
+        "sys.argv = ['graphvision', 'schema']\n"
+        "entry()\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 0
+    assert "KeyboardInterrupt" not in done.stderr and done.stdout.startswith("{")
